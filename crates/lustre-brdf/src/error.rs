@@ -1,0 +1,83 @@
+//! Errors of the readers and model constructors: each names the file (when there is one) and the
+//! problem, and no reader panics on bad input.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong when loading data or building a model.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// The file could not be opened or read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        source: std::io::Error,
+    },
+    /// The file was read but its contents are not valid for its format.
+    #[error("{path}: {problem}")]
+    Format {
+        /// The file (or a pseudo-path such as `<memory>`).
+        path: PathBuf,
+        /// What is wrong, in words.
+        problem: String,
+    },
+    /// A model parameter is out of its valid range.
+    #[error("invalid parameter {name} = {value}: {reason}")]
+    Parameter {
+        /// The parameter.
+        name: String,
+        /// The offending value.
+        value: f64,
+        /// Why it is rejected.
+        reason: String,
+    },
+    /// A name (material, model) was not found.
+    #[error("{0}")]
+    NotFound(String),
+}
+
+/// Result alias for this crate.
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// A format error for `path`.
+    pub fn format(path: impl Into<PathBuf>, problem: impl Into<String>) -> Self {
+        Error::Format { path: path.into(), problem: problem.into() }
+    }
+
+    /// An I/O error for `path`.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io { path: path.into(), source }
+    }
+
+    /// A parameter error.
+    pub fn param(name: &str, value: f64, reason: impl Into<String>) -> Self {
+        Error::Parameter { name: name.to_string(), value, reason: reason.into() }
+    }
+}
+
+/// Checks that a parameter is finite and within [lo, hi].
+pub fn check_range(name: &str, value: f64, lo: f64, hi: f64) -> Result<f64> {
+    if !value.is_finite() {
+        return Err(Error::param(name, value, "not a finite number"));
+    }
+    if value < lo || value > hi {
+        return Err(Error::param(name, value, format!("must lie in [{lo}, {hi}]")));
+    }
+    Ok(value)
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file in the same folder, then a rename.
+pub fn write_atomic(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
+    use std::io::Write;
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(|e| Error::io(&dir, e))?;
+    tmp.write_all(bytes).map_err(|e| Error::io(path, e))?;
+    tmp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
+    tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
+    Ok(())
+}

@@ -1,0 +1,92 @@
+//! Published fits of the MERL materials (`../shared/data/fits/`), loaded by material name.
+
+pub mod abc;
+pub mod lafortune;
+pub mod sgd;
+
+use crate::error::{Error, Result};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// A CSV table of one row per material: header names to column index, rows of raw fields.
+#[derive(Clone, Debug)]
+pub struct FitTable {
+    /// The file the table came from.
+    pub path: std::path::PathBuf,
+    columns: HashMap<String, usize>,
+    rows: Vec<Vec<String>>,
+    name_column: usize,
+}
+
+impl FitTable {
+    /// Reads a comma-separated table whose material names are in column `name_column`.
+    pub fn read(path: &Path, name_column: &str) -> Result<Self> {
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        Self::parse(path, &bytes, name_column)
+    }
+
+    /// Parses a table from memory; `path` is used in error messages.
+    pub fn parse(path: &Path, bytes: &[u8], name_column: &str) -> Result<Self> {
+        let mut rdr = csv::ReaderBuilder::new().has_headers(true).from_reader(bytes);
+        let headers = rdr
+            .headers()
+            .map_err(|e| Error::format(path, format!("unreadable CSV header: {e}")))?
+            .clone();
+        let columns: HashMap<String, usize> =
+            headers.iter().enumerate().map(|(i, h)| (h.trim().to_string(), i)).collect();
+        let name_col = *columns
+            .get(name_column)
+            .ok_or_else(|| Error::format(path, format!("no column named {name_column:?}")))?;
+        let mut rows = Vec::new();
+        for (i, rec) in rdr.records().enumerate() {
+            let rec = rec.map_err(|e| Error::format(path, format!("row {}: {e}", i + 2)))?;
+            if rec.len() != headers.len() {
+                return Err(Error::format(
+                    path,
+                    format!("row {} has {} fields, the header has {}", i + 2, rec.len(), headers.len()),
+                ));
+            }
+            rows.push(rec.iter().map(|s| s.trim().to_string()).collect());
+        }
+        if rows.is_empty() {
+            return Err(Error::format(path, "the table has no rows"));
+        }
+        Ok(FitTable { path: path.to_path_buf(), columns, rows, name_column: name_col })
+    }
+
+    /// Material names in file order.
+    pub fn names(&self) -> Vec<&str> {
+        self.rows.iter().map(|r| r[self.name_column].as_str()).collect()
+    }
+
+    /// The finite number in column `col` of the row for `material`.
+    pub fn value(&self, material: &str, col: &str) -> Result<f64> {
+        let row = self
+            .rows
+            .iter()
+            .find(|r| r[self.name_column] == material)
+            .ok_or_else(|| {
+                Error::NotFound(format!("{}: no material named {material:?}", self.path.display()))
+            })?;
+        let c = *self
+            .columns
+            .get(col)
+            .ok_or_else(|| Error::format(&self.path, format!("no column named {col:?}")))?;
+        let v: f64 = row[c].parse().map_err(|_| {
+            Error::format(&self.path, format!("{material}: column {col} is not a number: {:?}", row[c]))
+        })?;
+        if !v.is_finite() {
+            return Err(Error::format(&self.path, format!("{material}: column {col} is not finite")));
+        }
+        Ok(v)
+    }
+
+    /// The three values of columns `{prefix}_r`, `{prefix}_g`, `{prefix}_b`.
+    pub fn rgb(&self, material: &str, prefix: &str) -> Result<[f64; 3]> {
+        Ok([
+            self.value(material, &format!("{prefix}_r"))?,
+            self.value(material, &format!("{prefix}_g"))?,
+            self.value(material, &format!("{prefix}_b"))?,
+        ])
+    }
+}

@@ -1,0 +1,1 @@
+//! Plots of BSDF lobes (in progress).

@@ -1,0 +1,2 @@
+//! The lustre command line.
+fn main() {}
