@@ -25,3 +25,12 @@ pub use bsdf::{Bsdf, BsdfFlags, BsdfSample};
 pub use error::{Error, Result};
 pub use glam::DVec3;
 pub use rgb::Rgb;
+
+/// The project's shared third-party data folder: `$LUSTRE_DATA` if set, else `../shared/data`
+/// beside the repository (where CI and every checkout have it).
+pub fn shared_data_dir() -> std::path::PathBuf {
+    if let Some(p) = std::env::var_os("LUSTRE_DATA") {
+        return p.into();
+    }
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data")
+}
