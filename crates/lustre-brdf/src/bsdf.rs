@@ -103,7 +103,7 @@ impl<T: Bsdf + ?Sized> Bsdf for Box<T> {
 /// Returns `None` when all weights are zero.
 pub fn select_component(weights: &[f64], u: f64) -> Option<(usize, f64)> {
     let total: f64 = weights.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return None;
     }
     let target = u * total;

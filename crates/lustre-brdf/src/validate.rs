@@ -109,7 +109,7 @@ pub fn chi2_test(bsdf: &dyn Bsdf, wo: DVec3, res_theta: usize, samples: usize, s
     let mut inconsistent = 0usize;
     for _ in 0..samples {
         if let Some(s) = bsdf.sample(wo, rng.next_f64(), rng.next_f64()) {
-            if !(s.pdf > 0.0) || !s.pdf.is_finite() || !s.wi.is_finite() {
+            if s.pdf.is_nan() || s.pdf <= 0.0 || !s.pdf.is_finite() || !s.wi.is_finite() {
                 inconsistent += 1;
                 continue;
             }
@@ -126,7 +126,7 @@ pub fn chi2_test(bsdf: &dyn Bsdf, wo: DVec3, res_theta: usize, samples: usize, s
     }
     // Expected counts: integrate the pdf over each cell with a Gauss rule in (cos θ, φ).
     let rule = GaussRule::new(6);
-    let sub = 3; // sub-panels per cell edge
+    let sub = 8; // sub-panels per cell edge: resolves lobes a few degrees wide
     let mut expected = vec![0.0f64; cells];
     for it in 0..res_theta {
         let z1 = 1.0 - 2.0 * it as f64 / res_theta as f64;
