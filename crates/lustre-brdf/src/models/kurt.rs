@@ -228,15 +228,13 @@ impl Kurt {
     }
 
     /// Component selection weights: luminance of kd, of each ks, then of each kt.
-    fn weights(&self) -> Vec<f64> {
-        std::iter::once(self.kd.luminance())
-            .chain(
-                self.reflection
-                    .iter()
-                    .chain(&self.transmission)
-                    .map(|l| l.ks.luminance()),
-            )
-            .collect()
+    fn weights(&self) -> impl Iterator<Item = f64> + '_ {
+        std::iter::once(self.kd.luminance()).chain(
+            self.reflection
+                .iter()
+                .chain(&self.transmission)
+                .map(|l| l.ks.luminance()),
+        )
     }
 
     /// Maps a pair to the side where `wo` is above the surface (the thin two-sided convention).
@@ -288,7 +286,8 @@ impl Bsdf for Kurt {
         if !(wo_u.z > 0.0) {
             return None;
         }
-        let (idx, u1) = select_component(&self.weights(), u1)?;
+        let weights: Vec<f64> = self.weights().collect();
+        let (idx, u1) = select_component(&weights, u1)?;
         let nr = self.reflection.len();
         let wi_u = if idx == 0 {
             cosine_hemisphere(u1, u2)
@@ -329,26 +328,26 @@ impl Bsdf for Kurt {
         if !(wo.z > 0.0) {
             return 0.0;
         }
-        let w = self.weights();
-        let total: f64 = w.iter().sum();
+        let total: f64 = self.weights().sum();
         if !(total > 0.0) {
             return 0.0;
         }
-        let nr = self.reflection.len();
         let p = if wi.z > 0.0 {
-            let mut p = w[0] * cosine_hemisphere_pdf(wi);
-            for (l, wl) in self.reflection.iter().zip(&w[1..=nr]) {
-                if *wl > 0.0 {
-                    p += wl * lobe_pdf(l, wi, wo);
+            let mut p = self.kd.luminance() * cosine_hemisphere_pdf(wi);
+            for l in &self.reflection {
+                let w = l.ks.luminance();
+                if w > 0.0 {
+                    p += w * lobe_pdf(l, wi, wo);
                 }
             }
             p
         } else if wi.z < 0.0 {
             let wm = mirror_z(wi);
             let mut p = 0.0;
-            for (l, wl) in self.transmission.iter().zip(&w[1 + nr..]) {
-                if *wl > 0.0 {
-                    p += wl * lobe_pdf(l, wm, wo);
+            for l in &self.transmission {
+                let w = l.ks.luminance();
+                if w > 0.0 {
+                    p += w * lobe_pdf(l, wm, wo);
                 }
             }
             p
@@ -443,6 +442,11 @@ mod tests {
             let wi = -spherical(t, 0.4);
             assert!(k.eval(wi, wo)[0] < peak);
         }
+        // By hand: the mirrored pair is the mirror configuration, h = n, ωo·h = cos θo, so
+        // f = kt (1 − F(cos θo)) / (π mx my · 4 cos θo).
+        let c = wo.z;
+        let want = (1.0 - (1.0 - c).powi(5)) / (PI * 0.01 * 4.0 * c);
+        assert!((peak - want).abs() < 1e-12 * want, "{peak} vs {want}");
         // Nothing in the reflection hemisphere.
         assert_eq!(k.eval(reflect(wo, DVec3::Z), wo), Rgb::ZERO);
     }
