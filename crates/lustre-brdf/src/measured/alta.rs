@@ -218,17 +218,18 @@ impl AltaTable {
                     "PARAM_IN" => param_in = toks.next().map(str::to_string),
                     "PARAM_OUT" => param_out = toks.next().map(str::to_string),
                     "SAMPLE" => {
-                        name = Some(h["SAMPLE".len()..].trim().trim_matches('"').to_string())
+                        let rest = h.trim_start().strip_prefix("SAMPLE").unwrap_or("");
+                        name = Some(rest.trim().trim_matches('"').to_string());
                     }
-                    "VS" => {
-                        if toks.next() != Some("0") {
-                            return Err(Error::format(
-                                path,
-                                format!("line {no}: vertical segments ({h}) are not supported; only #VS 0"),
-                            ));
-                        }
+                    "VS" if toks.next() != Some("0") => {
+                        return Err(Error::format(
+                            path,
+                            format!(
+                                "line {no}: vertical segments ({h}) are not supported; only #VS 0"
+                            ),
+                        ));
                     }
-                    // Other `#` lines (#ORIGIN, #URL, #CMD, comments) carry no data.
+                    // #VS 0 and other `#` lines (#ORIGIN, #URL, #CMD, comments) carry no data.
                     _ => {}
                 }
                 continue;

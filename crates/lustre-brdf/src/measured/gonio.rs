@@ -148,7 +148,7 @@ impl GonioAxes {
         transmission: bool,
     ) -> Result<Self> {
         let steps = |step: f64, end: f64, inclusive: bool| -> Result<Vec<f64>> {
-            if !(step > 0.0) || !step.is_finite() {
+            if !step.is_finite() || step <= 0.0 {
                 return Err(Error::param(
                     "step",
                     step,
@@ -201,7 +201,7 @@ impl GonioAxes {
                         ),
                     ));
                 }
-                if k > 0 && !(x > v[k - 1]) {
+                if k > 0 && x <= v[k - 1] {
                     return Err(Error::format(
                         path,
                         format!("axis {name} is not strictly increasing at entry {k}"),
@@ -441,17 +441,18 @@ impl GonioTable {
                         });
                     }
                     "#angles" => {
-                        degrees =
-                            Some(match toks.next().unwrap_or("") {
-                                "degrees" => true,
-                                "radians" => false,
-                                other => return Err(Error::format(
+                        degrees = Some(match toks.next().unwrap_or("") {
+                            "degrees" => true,
+                            "radians" => false,
+                            other => {
+                                return Err(Error::format(
                                     path,
                                     format!(
                                         "line {no}: unknown #angles {other:?} (degrees or radians)"
                                     ),
-                                )),
-                            })
+                                ))
+                            }
+                        })
                     }
                     "#name" => name = Some(line["#name".len()..].trim().to_string()),
                     k if AXES.contains(&k) => {
@@ -876,7 +877,7 @@ impl GonioBsdf {
         let flip = wi.z < 0.0;
         let wi_u = upper(wi);
         let (m, z) = self.bound_and_norm(wi_u);
-        if !(m > 0.0) || !(z > 0.0) {
+        if m.is_nan() || z.is_nan() || m <= 0.0 || z <= 0.0 {
             return None;
         }
         for _ in 0..MAX_REJECTION_CANDIDATES {
