@@ -452,3 +452,45 @@ impl Bsdf for AltaTable {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::SplitMix64;
+
+    /// The bucket search finds the same neighbours as a brute-force scan.
+    #[test]
+    fn bucket_search_matches_brute_force() {
+        let mut rng = SplitMix64::new(2);
+        let mut pts = Vec::new();
+        for _ in 0..500 {
+            let (r, a) = (rng.next_f64() * FRAC_PI_2, rng.next_f64() * 6.283);
+            pts.push([r * a.cos(), r * a.sin(), rng.next_f64()]);
+        }
+        // A dense cluster, as around the retro direction.
+        for k in 0..200 {
+            let a = k as f64 * 0.1;
+            pts.push([0.3 + 0.01 * a.cos(), 0.01 * a.sin(), rng.next_f64()]);
+        }
+        let s = Slice::new(0.3, pts.clone());
+        for _ in 0..300 {
+            let (r, a) = (rng.next_f64() * FRAC_PI_2, rng.next_f64() * 6.283);
+            let (x, y) = (r * a.cos(), r * a.sin());
+            let mut d: Vec<(f64, f64)> = pts
+                .iter()
+                .map(|p| ((p[0] - x).powi(2) + (p[1] - y).powi(2), p[2]))
+                .collect();
+            d.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (num, den) = d[..NEIGHBOURS]
+                .iter()
+                .fold((0.0, 0.0), |(n, w), &(d2, v)| (n + v / d2, w + 1.0 / d2));
+            let v = s.value(x, y);
+            assert!(
+                (v - num / den).abs() < 1e-12,
+                "({x}, {y}): {v} vs {}",
+                num / den
+            );
+        }
+        assert_eq!(s.value(pts[3][0], pts[3][1]), pts[3][2]);
+    }
+}
