@@ -464,7 +464,10 @@ mod tests {
         let mut rng = SplitMix64::new(2);
         let mut pts = Vec::new();
         for _ in 0..500 {
-            let (r, a) = (rng.next_f64() * FRAC_PI_2, rng.next_f64() * 6.283);
+            let (r, a) = (
+                rng.next_f64() * FRAC_PI_2,
+                rng.next_f64() * std::f64::consts::TAU,
+            );
             pts.push([r * a.cos(), r * a.sin(), rng.next_f64()]);
         }
         // A dense cluster, as around the retro direction.
@@ -474,7 +477,10 @@ mod tests {
         }
         let s = Slice::new(0.3, pts.clone());
         for _ in 0..300 {
-            let (r, a) = (rng.next_f64() * FRAC_PI_2, rng.next_f64() * 6.283);
+            let (r, a) = (
+                rng.next_f64() * FRAC_PI_2,
+                rng.next_f64() * std::f64::consts::TAU,
+            );
             let (x, y) = (r * a.cos(), r * a.sin());
             let mut d: Vec<(f64, f64)> = pts
                 .iter()
