@@ -1,1 +1,502 @@
-//! (in progress)
+//! ALTA data files (belcour/alta): `#` header lines, then one row per sample. Only the isotropic
+//! 3D input parameterization `ISOTROPIC_TL_TV_PROJ_DPHI` with one output value is read, as in the
+//! CEA retro-reflection measurements in `shared/data/measured/goniometric/`.
+//!
+//! # Meaning of the coordinates (ALTA `sources/core/params.h`, `params.cpp`)
+//!
+//! `params.h` documents ISOTROPIC_TL_TV_PROJ_DPHI as "3D Parametrization where the phi component
+//! is projected. Coordinates are: [θl, θv cos(Δφ), θv sin(Δφ)]", and `params::to_cartesian`
+//! builds the light L = (sin θl, 0, cos θl) (azimuth 0) and the view
+//! V = (x/θv · sin θv, y/θv · sin θv, cos θv) with θv = √(x² + y²): (x, y) are the polar
+//! coordinates (θv, Δφ = φv − φl) of the view direction, flattened onto a plane. x = −θl, y = 0
+//! is the mirror direction and x = +θl, y = 0 the retro-reflection direction. ALTA's light is
+//! our `wi`, its view our `wo`.
+//!
+//! # Output unit
+//!
+//! `params.h`: INV_STERADIAN: "Output values in inverse steradian (sr-1). This is the standard
+//! definition for a BRDF." INV_STERADIAN_COSINE_FACTOR: "Output values in inverse steradian
+//! (sr-1) weighted by the cosine factor of the output direction", i.e. value = f·cos θv (θv the
+//! view, the outgoing direction). Supported: [`AltaUnit::InvSteradian`] and
+//! [`AltaUnit::InvSteradianCosineFactor`]; ENERGY, RGB_COLOR, XYZ_COLOR and unknown or missing
+//! `#PARAM_OUT` are errors unless the caller supplies the unit. (ALTA's own diffuse bootstrap in
+//! `diffuse_function::bootstrap` divides cosine-weighted data by cos θv·cos θl; we follow the
+//! documented definition, one cosine of the outgoing direction.)
+//!
+//! # Reconstruction
+//!
+//! The rows come in a few θl slices (15°, 30°, 60° in the CEA files), each a scattered set in the
+//! (x, y) plane: a polar grid (θv every 3°, Δφ every 10°, with occluded holes) overlaid with
+//! fine polar grids (1° rings, 5° azimuths) around the mirror and retro directions. Within a
+//! slice the value is interpolated by inverse-distance weighting (Shepard, power 2) of the
+//! [`NEIGHBOURS`] nearest samples in the (x, y) plane, found through a bucket grid; it reproduces
+//! every sample exactly. Between slices it is linear in θl, clamped to the first and last
+//! slice outside their range. f = value / max(cos θv, [`ALTA_COS_FLOOR`]) for cosine-weighted
+//! data.
+
+use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample};
+use crate::error::{Error, Result};
+use crate::frame::{phi, theta};
+use crate::rgb::Rgb;
+use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
+use glam::DVec3;
+use std::f64::consts::FRAC_PI_2;
+use std::path::{Path, PathBuf};
+
+/// Samples blended by the inverse-distance interpolation within a slice.
+pub const NEIGHBOURS: usize = 6;
+
+/// The smallest cos θv that cosine-weighted values are divided by: cos 87°, the last ring below
+/// grazing in the CEA files (their 90° ring has cos θv = 0).
+pub const ALTA_COS_FLOOR: f64 = 0.052_335_956_242_943_835;
+
+const CELL: f64 = 0.05; // bucket size in the (x, y) plane, radians
+const HALF_EXTENT: f64 = FRAC_PI_2 + 1e-6;
+
+/// What an ALTA table's values are (`#PARAM_OUT`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AltaUnit {
+    /// `INV_STERADIAN`: the BRDF f in 1/sr.
+    InvSteradian,
+    /// `INV_STERADIAN_COSINE_FACTOR`: f·cos θv (cosine of the outgoing/view direction).
+    InvSteradianCosineFactor,
+}
+
+impl AltaUnit {
+    /// The ALTA name of the unit.
+    pub fn alta_name(self) -> &'static str {
+        match self {
+            AltaUnit::InvSteradian => "INV_STERADIAN",
+            AltaUnit::InvSteradianCosineFactor => "INV_STERADIAN_COSINE_FACTOR",
+        }
+    }
+}
+
+/// One θl slice: scattered (x, y, value) samples and a bucket grid over them.
+#[derive(Clone, Debug)]
+struct Slice {
+    theta_l: f64,
+    pts: Vec<[f64; 3]>,
+    /// Per bucket: start offset into `order` (CSR), `n_cells² + 1` entries.
+    starts: Vec<usize>,
+    order: Vec<usize>,
+    n_cells: usize,
+}
+
+impl Slice {
+    fn new(theta_l: f64, pts: Vec<[f64; 3]>) -> Self {
+        let n_cells = ((2.0 * HALF_EXTENT) / CELL).ceil() as usize;
+        let cell_of = |x: f64, y: f64| -> usize {
+            let cx = (((x + HALF_EXTENT) / CELL) as usize).min(n_cells - 1);
+            let cy = (((y + HALF_EXTENT) / CELL) as usize).min(n_cells - 1);
+            cy * n_cells + cx
+        };
+        let mut counts = vec![0usize; n_cells * n_cells + 1];
+        for p in &pts {
+            counts[cell_of(p[0], p[1]) + 1] += 1;
+        }
+        for k in 1..counts.len() {
+            counts[k] += counts[k - 1];
+        }
+        let starts = counts.clone();
+        let mut fill = counts;
+        let mut order = vec![0usize; pts.len()];
+        for (i, p) in pts.iter().enumerate() {
+            let c = cell_of(p[0], p[1]);
+            order[fill[c]] = i;
+            fill[c] += 1;
+        }
+        Slice {
+            theta_l,
+            pts,
+            starts,
+            order,
+            n_cells,
+        }
+    }
+
+    /// Shepard interpolation of the `NEIGHBOURS` nearest samples to (x, y).
+    fn value(&self, x: f64, y: f64) -> f64 {
+        let n = self.n_cells as isize;
+        let cx = (((x + HALF_EXTENT) / CELL).floor() as isize).clamp(0, n - 1);
+        let cy = (((y + HALF_EXTENT) / CELL).floor() as isize).clamp(0, n - 1);
+        let mut best: Vec<(f64, f64)> = Vec::with_capacity(NEIGHBOURS + 1); // (d², value)
+        for r in 0..n {
+            // Every point outside rings 0..r is at least (r)·CELL − (offset in cell) away; a
+            // safe lower bound is (r − 1)·CELL.
+            if best.len() == NEIGHBOURS {
+                let lim = ((r - 1).max(0) as f64) * CELL;
+                if best[NEIGHBOURS - 1].0 <= lim * lim {
+                    break;
+                }
+            }
+            for iy in (cy - r)..=(cy + r) {
+                for ix in (cx - r)..=(cx + r) {
+                    if (iy - cy).abs() != r && (ix - cx).abs() != r {
+                        continue; // interior of the ring, already visited
+                    }
+                    if ix < 0 || iy < 0 || ix >= n || iy >= n {
+                        continue;
+                    }
+                    let c = (iy * n + ix) as usize;
+                    for &i in &self.order[self.starts[c]..self.starts[c + 1]] {
+                        let p = self.pts[i];
+                        let d2 = (p[0] - x).powi(2) + (p[1] - y).powi(2);
+                        if best.len() < NEIGHBOURS || d2 < best[best.len() - 1].0 {
+                            let at = best.partition_point(|b| b.0 <= d2);
+                            best.insert(at, (d2, p[2]));
+                            best.truncate(NEIGHBOURS);
+                        }
+                    }
+                }
+            }
+        }
+        match best.first() {
+            None => 0.0,
+            Some(&(d2, v)) if d2 < 1e-24 => v,
+            Some(_) => {
+                let (mut num, mut den) = (0.0, 0.0);
+                for &(d2, v) in &best {
+                    num += v / d2;
+                    den += 1.0 / d2;
+                }
+                num / den
+            }
+        }
+    }
+}
+
+/// An ALTA table in `ISOTROPIC_TL_TV_PROJ_DPHI`, evaluated as an isotropic BRDF.
+#[derive(Clone, Debug)]
+pub struct AltaTable {
+    /// The file the table came from.
+    pub path: PathBuf,
+    /// `#SAMPLE` (or the file stem).
+    pub name: String,
+    unit: AltaUnit,
+    slices: Vec<Slice>,
+    rows: usize,
+}
+
+impl AltaTable {
+    /// Reads an ALTA file; `unit_override`, when given, replaces (or supplies) `#PARAM_OUT`.
+    pub fn read(path: &Path, unit_override: Option<AltaUnit>) -> Result<Self> {
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        Self::parse(path, &bytes, unit_override)
+    }
+
+    /// Parses an ALTA file from memory; `path` names it in messages.
+    pub fn parse(path: &Path, bytes: &[u8], unit_override: Option<AltaUnit>) -> Result<Self> {
+        let text = std::str::from_utf8(bytes)
+            .map_err(|e| Error::format(path, format!("not UTF-8 text ({e})")))?;
+        let mut dim: Option<(usize, usize)> = None;
+        let mut param_in: Option<String> = None;
+        let mut param_out: Option<String> = None;
+        let mut name: Option<String> = None;
+        let mut rows: Vec<[f64; 4]> = Vec::new();
+        for (i, raw) in text.lines().enumerate() {
+            let no = i + 1;
+            let line = raw.trim();
+            if line.is_empty() {
+                continue;
+            }
+            if let Some(h) = line.strip_prefix('#') {
+                let mut toks = h.split_whitespace();
+                match toks.next().unwrap_or("") {
+                    "DIM" => {
+                        let mut num = || -> Option<usize> { toks.next()?.parse().ok() };
+                        match (num(), num()) {
+                            (Some(a), Some(b)) => dim = Some((a, b)),
+                            _ => {
+                                return Err(Error::format(
+                                    path,
+                                    format!("line {no}: bad #DIM {h:?}"),
+                                ))
+                            }
+                        }
+                    }
+                    "PARAM_IN" => param_in = toks.next().map(str::to_string),
+                    "PARAM_OUT" => param_out = toks.next().map(str::to_string),
+                    "SAMPLE" => {
+                        let rest = h.trim_start().strip_prefix("SAMPLE").unwrap_or("");
+                        name = Some(rest.trim().trim_matches('"').to_string());
+                    }
+                    "VS" if toks.next() != Some("0") => {
+                        return Err(Error::format(
+                            path,
+                            format!(
+                                "line {no}: vertical segments ({h}) are not supported; only #VS 0"
+                            ),
+                        ));
+                    }
+                    // #VS 0 and other `#` lines (#ORIGIN, #URL, #CMD, comments) carry no data.
+                    _ => {}
+                }
+                continue;
+            }
+            // A data row: check the header first.
+            if rows.is_empty() {
+                match param_in.as_deref() {
+                    Some("ISOTROPIC_TL_TV_PROJ_DPHI") => {}
+                    Some(other) => {
+                        return Err(Error::format(
+                            path,
+                            format!("unsupported #PARAM_IN {other}; this reader knows ISOTROPIC_TL_TV_PROJ_DPHI"),
+                        ))
+                    }
+                    None => return Err(Error::format(path, "missing #PARAM_IN before the data")),
+                }
+                match dim {
+                    Some((3, 1)) => {}
+                    Some((a, b)) => {
+                        return Err(Error::format(
+                            path,
+                            format!("#DIM {a} {b}: ISOTROPIC_TL_TV_PROJ_DPHI with one output needs #DIM 3 1"),
+                        ))
+                    }
+                    None => return Err(Error::format(path, "missing #DIM before the data")),
+                }
+            }
+            let toks: Vec<&str> = line.split_whitespace().collect();
+            if toks.len() != 4 {
+                return Err(Error::format(
+                    path,
+                    format!(
+                        "line {no}: {} fields, #DIM 3 1 needs 4 (theta_l x y value)",
+                        toks.len()
+                    ),
+                ));
+            }
+            let mut r = [0.0; 4];
+            for k in 0..4 {
+                r[k] = toks[k].parse::<f64>().map_err(|_| {
+                    Error::format(path, format!("line {no}: {:?} is not a number", toks[k]))
+                })?;
+                if !r[k].is_finite() {
+                    return Err(Error::format(
+                        path,
+                        format!("line {no}: field {} is not finite ({})", k + 1, toks[k]),
+                    ));
+                }
+            }
+            if !(0.0..=FRAC_PI_2 + 1e-9).contains(&r[0]) {
+                return Err(Error::format(
+                    path,
+                    format!("line {no}: theta_l = {} outside [0, π/2]", r[0]),
+                ));
+            }
+            if r[1].hypot(r[2]) > FRAC_PI_2 + 1e-6 {
+                return Err(Error::format(
+                    path,
+                    format!("line {no}: view angle √(x²+y²) exceeds π/2"),
+                ));
+            }
+            if r[3] < 0.0 {
+                return Err(Error::format(
+                    path,
+                    format!("line {no}: negative value {}", r[3]),
+                ));
+            }
+            rows.push(r);
+        }
+        if rows.is_empty() {
+            return Err(Error::format(path, "no data rows"));
+        }
+        let unit = match (unit_override, param_out.as_deref()) {
+            (Some(u), _) => u,
+            (None, Some("INV_STERADIAN")) => AltaUnit::InvSteradian,
+            (None, Some("INV_STERADIAN_COSINE_FACTOR")) => AltaUnit::InvSteradianCosineFactor,
+            (None, Some(other)) => {
+                return Err(Error::format(
+                    path,
+                    format!(
+                        "unsupported #PARAM_OUT {other} (supported: INV_STERADIAN, INV_STERADIAN_COSINE_FACTOR); supply the unit to read it"
+                    ),
+                ))
+            }
+            (None, None) => {
+                return Err(Error::format(
+                    path,
+                    "missing #PARAM_OUT: the unit of the values is unknown (supported: INV_STERADIAN, INV_STERADIAN_COSINE_FACTOR); supply the unit to read it",
+                ))
+            }
+        };
+        let n_rows = rows.len();
+        rows.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        let mut slices = Vec::new();
+        let mut start = 0;
+        while start < rows.len() {
+            let t = rows[start][0];
+            let mut end = start;
+            while end < rows.len() && (rows[end][0] - t).abs() <= 1e-9 {
+                end += 1;
+            }
+            let pts = rows[start..end]
+                .iter()
+                .map(|r| [r[1], r[2], r[3]])
+                .collect();
+            slices.push(Slice::new(t, pts));
+            start = end;
+        }
+        let name = name.unwrap_or_else(|| {
+            path.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        });
+        Ok(AltaTable {
+            path: path.to_path_buf(),
+            name,
+            unit,
+            slices,
+            rows: n_rows,
+        })
+    }
+
+    /// The unit of the values.
+    pub fn unit(&self) -> AltaUnit {
+        self.unit
+    }
+
+    /// Number of data rows.
+    pub fn len(&self) -> usize {
+        self.rows
+    }
+
+    /// True when the table has no rows (never, for a parsed table).
+    pub fn is_empty(&self) -> bool {
+        self.rows == 0
+    }
+
+    /// The θl of the slices, increasing (radians).
+    pub fn theta_l_slices(&self) -> Vec<f64> {
+        self.slices.iter().map(|s| s.theta_l).collect()
+    }
+
+    /// The interpolated raw value (in the file's unit) at ALTA coordinates (θl, x, y).
+    pub fn value(&self, theta_l: f64, x: f64, y: f64) -> f64 {
+        let s = &self.slices;
+        let k = s.partition_point(|sl| sl.theta_l <= theta_l);
+        if k == 0 {
+            return s[0].value(x, y);
+        }
+        if k == s.len() {
+            return s[k - 1].value(x, y);
+        }
+        let (a, b) = (&s[k - 1], &s[k]);
+        let t = (theta_l - a.theta_l) / (b.theta_l - a.theta_l);
+        if t <= 0.0 {
+            return a.value(x, y);
+        }
+        (1.0 - t) * a.value(x, y) + t * b.value(x, y)
+    }
+
+    /// ALTA coordinates (θl, θv cos Δφ, θv sin Δφ) of a light `wi` and viewer `wo`.
+    pub fn coordinates(wi: DVec3, wo: DVec3) -> [f64; 3] {
+        let tv = theta(wo);
+        let dphi = phi(wo) - phi(wi);
+        [theta(wi), tv * dphi.cos(), tv * dphi.sin()]
+    }
+
+    /// The BRDF f(wi, wo) in 1/sr; zero when either direction is below the surface.
+    pub fn brdf(&self, wi: DVec3, wo: DVec3) -> f64 {
+        if wi.z <= 0.0 || wo.z <= 0.0 {
+            return 0.0;
+        }
+        let [tl, x, y] = Self::coordinates(wi, wo);
+        let v = self.value(tl, x, y);
+        match self.unit {
+            AltaUnit::InvSteradian => v,
+            AltaUnit::InvSteradianCosineFactor => v / wo.z.max(ALTA_COS_FLOOR),
+        }
+    }
+}
+
+/// Isotropic, reflection only; sampled by cosine-weighted hemisphere sampling of wi.
+impl Bsdf for AltaTable {
+    fn name(&self) -> String {
+        format!("ALTA {}", self.name)
+    }
+
+    fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
+        Rgb::splat(self.brdf(wi, wo))
+    }
+
+    fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let wi = cosine_hemisphere(u1, u2);
+        if wi.z <= 0.0 {
+            return None;
+        }
+        Some(BsdfSample {
+            wi,
+            value: self.eval(wi, wo),
+            pdf: self.pdf(wi, wo),
+        })
+    }
+
+    fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
+        if wo.z <= 0.0 {
+            return 0.0;
+        }
+        cosine_hemisphere_pdf(wi)
+    }
+
+    fn flags(&self) -> BsdfFlags {
+        BsdfFlags {
+            reciprocal: false,
+            energy_conserving: false,
+            transmission: false,
+            anisotropic: false,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::SplitMix64;
+
+    /// The bucket search finds the same neighbours as a brute-force scan.
+    #[test]
+    fn bucket_search_matches_brute_force() {
+        let mut rng = SplitMix64::new(2);
+        let mut pts = Vec::new();
+        for _ in 0..500 {
+            let (r, a) = (
+                rng.next_f64() * FRAC_PI_2,
+                rng.next_f64() * std::f64::consts::TAU,
+            );
+            pts.push([r * a.cos(), r * a.sin(), rng.next_f64()]);
+        }
+        // A dense cluster, as around the retro direction.
+        for k in 0..200 {
+            let a = k as f64 * 0.1;
+            pts.push([0.3 + 0.01 * a.cos(), 0.01 * a.sin(), rng.next_f64()]);
+        }
+        let s = Slice::new(0.3, pts.clone());
+        for _ in 0..300 {
+            let (r, a) = (
+                rng.next_f64() * FRAC_PI_2,
+                rng.next_f64() * std::f64::consts::TAU,
+            );
+            let (x, y) = (r * a.cos(), r * a.sin());
+            let mut d: Vec<(f64, f64)> = pts
+                .iter()
+                .map(|p| ((p[0] - x).powi(2) + (p[1] - y).powi(2), p[2]))
+                .collect();
+            d.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (num, den) = d[..NEIGHBOURS]
+                .iter()
+                .fold((0.0, 0.0), |(n, w), &(d2, v)| (n + v / d2, w + 1.0 / d2));
+            let v = s.value(x, y);
+            assert!(
+                (v - num / den).abs() < 1e-12,
+                "({x}, {y}): {v} vs {}",
+                num / den
+            );
+        }
+        assert_eq!(s.value(pts[3][0], pts[3][1]), pts[3][2]);
+    }
+}
