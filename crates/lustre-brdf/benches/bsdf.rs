@@ -71,7 +71,9 @@ fn bench_models(c: &mut Criterion) {
     let mut sample = c.benchmark_group("sample");
     sample.throughput(Throughput::Elements(pool.len() as u64));
     let mut rng = SplitMix64::new(11);
-    let us: Vec<(f64, f64)> = (0..pool.len()).map(|_| (rng.next_f64(), rng.next_f64())).collect();
+    let us: Vec<(f64, f64)> = (0..pool.len())
+        .map(|_| (rng.next_f64(), rng.next_f64()))
+        .collect();
     for (name, b) in &materials {
         sample.bench_with_input(BenchmarkId::from_parameter(name), b, |bch, b| {
             bch.iter(|| {

@@ -11,7 +11,6 @@
 //! - a path ending in `.binary` (MERL), `.bsdf` (RGL tensor), `.dat` (ALTA table) or
 //!   `.gonio` (lustre goniometric table).
 
-
 use crate::error::{Error, Result};
 use std::collections::BTreeMap;
 
@@ -42,13 +41,22 @@ impl Params {
                 Error::NotFound(format!("{spec:?}: expected key=value, found {kv:?}"))
             })?;
             let v: f64 = v.trim().parse().map_err(|_| {
-                Error::NotFound(format!("{spec:?}: the value of {} is not a number: {v:?}", k.trim()))
+                Error::NotFound(format!(
+                    "{spec:?}: the value of {} is not a number: {v:?}",
+                    k.trim()
+                ))
             })?;
             if values.insert(k.trim().to_string(), v).is_some() {
-                return Err(Error::NotFound(format!("{spec:?}: {} is given twice", k.trim())));
+                return Err(Error::NotFound(format!(
+                    "{spec:?}: {} is given twice",
+                    k.trim()
+                )));
             }
         }
-        Ok(Params { model: model.to_string(), values })
+        Ok(Params {
+            model: model.to_string(),
+            values,
+        })
     }
 
     /// The model name.
