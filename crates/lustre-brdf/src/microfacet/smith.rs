@@ -302,7 +302,7 @@ impl SgdG1Approx {
             theta.iter().zip(&target).find(|(_, &g)| g < 1.0 - thr).map(|(&t, _)| t).unwrap_or(1.5)
         };
         let mut best: Option<(Vector3<f64>, f64)> = None;
-        for &thr in &[1e-5, 1e-3, 1e-1] {
+        for &thr in &[1e-6, 1e-4, 1e-2, 0.2] {
             let t0 = first_below(thr);
             for &k in &[2.0, 6.0, 20.0, 60.0] {
                 for &lam in &[0.3, 3.0] {
