@@ -33,7 +33,9 @@ fn raw(f: &SgdFits, name: &str) -> [[f64; 11]; 3] {
     let ps = f.params(name).unwrap();
     std::array::from_fn(|i| {
         let q = ps[i];
-        [q.rho_d, q.rho_s, q.alpha, q.p, q.f0, q.f1, q.kap, q.lambda, q.c, q.k, q.theta0]
+        [
+            q.rho_d, q.rho_s, q.alpha, q.p, q.f0, q.f1, q.kap, q.lambda, q.c, q.k, q.theta0,
+        ]
     })
 }
 
@@ -42,7 +44,15 @@ fn model_matches_readme_formula() {
     let f = SgdFits::load_default().unwrap();
     let mut rng = SplitMix64::new(42);
     let mut worst = 0.0f64;
-    for name in ["alum-bronze", "gold-paint", "chrome", "aluminium", "beige-fabric", "nickel", "brass"] {
+    for name in [
+        "alum-bronze",
+        "gold-paint",
+        "chrome",
+        "aluminium",
+        "beige-fabric",
+        "nickel",
+        "brass",
+    ] {
         let m = f.cook_torrance(name).unwrap();
         let q = raw(&f, name);
         for _ in 0..2000 {
@@ -53,14 +63,21 @@ fn model_matches_readme_formula() {
                 let t = (ti + 0.01 * (rng.next_f64() - 0.5)).clamp(0.0, 1.56);
                 spherical(t, wi.y.atan2(wi.x) + PI + 0.01 * (rng.next_f64() - 0.5))
             } else {
-                spherical((rng.next_f64() * 0.99).acos().min(1.56), 2.0 * PI * rng.next_f64())
+                spherical(
+                    (rng.next_f64() * 0.99).acos().min(1.56),
+                    2.0 * PI * rng.next_f64(),
+                )
             };
             let got = m.eval(wi, wo);
             for c in 0..3 {
                 let want = readme_formula(&q[c], wi, wo);
                 let rel = (got[c] - want).abs() / want.abs().max(1e-300);
                 worst = worst.max(rel);
-                assert!(rel < 1e-6, "{name} ch{c} wi={wi} wo={wo}: {} vs {want}", got[c]);
+                assert!(
+                    rel < 1e-6,
+                    "{name} ch{c} wi={wi} wo={wo}: {} vs {want}",
+                    got[c]
+                );
             }
         }
     }
@@ -84,7 +101,10 @@ fn table_kap_is_the_normalization() {
             }
         }
     }
-    println!("worst kap relative difference: {:.3e} ({})", worst.0, worst.1);
+    println!(
+        "worst kap relative difference: {:.3e} ({})",
+        worst.0, worst.1
+    );
     println!("worst kap relative difference without chrome: {worst_non_chrome:.3e}");
     // Six printed digits.
     assert!(worst_non_chrome < 1e-5);
@@ -97,13 +117,25 @@ fn published_g1_approximation_vs_numeric_g1() {
     let f = SgdFits::load_default().unwrap();
     let mut worst_pub = 0.0f64;
     let mut worst_fit = 0.0f64;
-    for name in ["alum-bronze", "aventurnine", "brass", "gold-paint", "blue-acrylic", "nickel", "pvc", "teflon"] {
+    for name in [
+        "alum-bronze",
+        "aventurnine",
+        "brass",
+        "gold-paint",
+        "blue-acrylic",
+        "nickel",
+        "pvc",
+        "teflon",
+    ] {
         let q = f.params(name).unwrap()[1];
         let t = G1Table::new(&Ndf::sgd(q.alpha, q.p).unwrap());
         let publ = SgdG1Approx::new(q.lambda, q.c, q.k, q.theta0).unwrap();
         let pl2 = publ.l2_error(&t);
         let (_, fl2) = SgdG1Approx::fit(&t);
-        println!("{name} (g): α={:.4e} p={:.4}: published RMS {pl2:.3e}, our LM fit RMS {fl2:.3e}", q.alpha, q.p);
+        println!(
+            "{name} (g): α={:.4e} p={:.4}: published RMS {pl2:.3e}, our LM fit RMS {fl2:.3e}",
+            q.alpha, q.p
+        );
         worst_pub = worst_pub.max(pl2);
         worst_fit = worst_fit.max(fl2);
     }

@@ -8,6 +8,9 @@
 //! kap (the published model as evaluated) and [`SgdFits::cook_torrance_normalized`] recomputes
 //! it.
 
+// `!(x > 0.0)` is used on purpose: it is true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::FitTable;
 use crate::error::Result;
 use crate::microfacet::fresnel::Fresnel;
@@ -62,12 +65,16 @@ impl SgdFits {
 
     /// Reads a table from `path`.
     pub fn read(path: &Path) -> Result<Self> {
-        Ok(SgdFits { table: FitTable::read(path, "name")? })
+        Ok(SgdFits {
+            table: FitTable::read(path, "name")?,
+        })
     }
 
     /// Parses a table from memory (`path` is only used in messages).
     pub fn parse(path: &Path, bytes: &[u8]) -> Result<Self> {
-        Ok(SgdFits { table: FitTable::parse(path, bytes, "name")? })
+        Ok(SgdFits {
+            table: FitTable::parse(path, bytes, "name")?,
+        })
     }
 
     /// Material names in file order.
@@ -80,10 +87,22 @@ impl SgdFits {
     pub fn params(&self, material: &str) -> Result<[SgdChannelParams; 3]> {
         let t = &self.table;
         let col = |p: &str| t.rgb(material, p);
-        let (rd, rs, a, p, f0, f1) =
-            (col("rhoD")?, col("rhoS")?, col("alpha")?, col("p")?, col("f0")?, col("f1")?);
-        let (kap, lam, c, k, t0, e) =
-            (col("kap")?, col("lambda")?, col("c")?, col("k")?, col("theta0")?, col("error")?);
+        let (rd, rs, a, p, f0, f1) = (
+            col("rhoD")?,
+            col("rhoS")?,
+            col("alpha")?,
+            col("p")?,
+            col("f0")?,
+            col("f1")?,
+        );
+        let (kap, lam, c, k, t0, e) = (
+            col("kap")?,
+            col("lambda")?,
+            col("c")?,
+            col("k")?,
+            col("theta0")?,
+            col("error")?,
+        );
         Ok(std::array::from_fn(|i| SgdChannelParams {
             rho_d: rd[i],
             rho_s: rs[i],
@@ -113,8 +132,11 @@ impl SgdFits {
     fn build(&self, material: &str, normalized: bool) -> Result<CookTorrance> {
         let ps = self.params(material)?;
         let ch = |q: &SgdChannelParams| -> Result<CtChannel> {
-            let ndf =
-                if normalized { Ndf::sgd(q.alpha, q.p)? } else { Ndf::sgd_with_kap(q.alpha, q.p, q.kap)? };
+            let ndf = if normalized {
+                Ndf::sgd(q.alpha, q.p)?
+            } else {
+                Ndf::sgd_with_kap(q.alpha, q.p, q.kap)?
+            };
             Ok(CtChannel::new(
                 q.rho_d,
                 q.rho_s,
@@ -169,7 +191,8 @@ mod tests {
         let f = SgdFits::load_default().unwrap();
         for n in f.list_materials() {
             f.cook_torrance(&n).unwrap_or_else(|e| panic!("{n}: {e}"));
-            f.cook_torrance_normalized(&n).unwrap_or_else(|e| panic!("{n}: {e}"));
+            f.cook_torrance_normalized(&n)
+                .unwrap_or_else(|e| panic!("{n}: {e}"));
         }
     }
 }

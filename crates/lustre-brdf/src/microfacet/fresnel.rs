@@ -1,6 +1,9 @@
 //! Fresnel terms of the microfacet models: Schlick (004 §III.4.4.4.2), the generalized Schlick of
 //! the SGD fits (004 Eq. V.5) and Lazányi's metal approximation (004 §III.4.4.4.2).
 
+// `!(x > 0.0)` is used on purpose: it is true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::error::{check_range, Result};
 
 /// A Fresnel reflectance as a function of cos θ_d = i·h.
@@ -33,7 +36,9 @@ pub enum Fresnel {
 impl Fresnel {
     /// Schlick with a validated F0 (finite, ≥ 0).
     pub fn schlick(f0: f64) -> Result<Fresnel> {
-        Ok(Fresnel::Schlick { f0: check_range("f0", f0, 0.0, f64::MAX)? })
+        Ok(Fresnel::Schlick {
+            f0: check_range("f0", f0, 0.0, f64::MAX)?,
+        })
     }
 
     /// Eq. V.5 with finite F0, F1 (any sign, as in the published table).
@@ -55,7 +60,11 @@ impl Fresnel {
     /// F(cos θ_d); the argument is clamped to [0, 1].
     #[inline]
     pub fn eval(&self, cos_theta_d: f64) -> f64 {
-        let c = if cos_theta_d > 0.0 { cos_theta_d.min(1.0) } else { 0.0 };
+        let c = if cos_theta_d > 0.0 {
+            cos_theta_d.min(1.0)
+        } else {
+            0.0
+        };
         let m = 1.0 - c;
         let m5 = (m * m) * (m * m) * m;
         match *self {
@@ -81,7 +90,9 @@ impl Fresnel {
             Fresnel::GeneralizedSchlick { f0, f1 } => {
                 let n = 4096;
                 let h = 1.0 / n as f64;
-                let m = (0..=n).map(|i| self.eval(i as f64 * h)).fold(f64::MIN, f64::max);
+                let m = (0..=n)
+                    .map(|i| self.eval(i as f64 * h))
+                    .fold(f64::MIN, f64::max);
                 m + (f1.abs() + 5.0 * (1.0 - f0).abs()) * h * 0.5
             }
         }

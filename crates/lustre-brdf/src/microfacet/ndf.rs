@@ -27,6 +27,9 @@
 //! median tan²θ (= α²) far from the SGD's; we instead pick the proxy α so that both have the same
 //! median of tan²θ (GGX's median x is α_ggx²), computed once at construction.
 
+// `!(x > 0.0)` is used on purpose: it is true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::error::{check_range, Error, Result};
 use crate::numeric::upper_gamma;
 use glam::DVec3;
@@ -114,17 +117,23 @@ fn check_alpha(alpha: f64) -> Result<f64> {
 impl Ndf {
     /// A Beckmann distribution; α must lie in [`ALPHA_RANGE`].
     pub fn beckmann(alpha: f64) -> Result<Ndf> {
-        Ok(Ndf::Beckmann { alpha: check_alpha(alpha)? })
+        Ok(Ndf::Beckmann {
+            alpha: check_alpha(alpha)?,
+        })
     }
 
     /// A GGX distribution; α must lie in [`ALPHA_RANGE`].
     pub fn ggx(alpha: f64) -> Result<Ndf> {
-        Ok(Ndf::Ggx { alpha: check_alpha(alpha)? })
+        Ok(Ndf::Ggx {
+            alpha: check_alpha(alpha)?,
+        })
     }
 
     /// An exponential distribution; α must lie in [`ALPHA_RANGE`].
     pub fn exponential(alpha: f64) -> Result<Ndf> {
-        Ok(Ndf::Exponential { alpha: check_alpha(alpha)? })
+        Ok(Ndf::Exponential {
+            alpha: check_alpha(alpha)?,
+        })
     }
 
     /// A normalized SGD: α in [`ALPHA_RANGE`], p in [`SGD_P_RANGE`], kap = 1/(αΓ(1−p, α)).
@@ -133,7 +142,11 @@ impl Ndf {
         let p = check_range("p", p, SGD_P_RANGE.0, SGD_P_RANGE.1)?;
         let gamma0 = upper_gamma(1.0 - p, alpha);
         if !(gamma0.is_finite() && gamma0 > 0.0) {
-            return Err(Error::param("p", p, format!("Γ(1−p, α) = {gamma0} for α = {alpha}")));
+            return Err(Error::param(
+                "p",
+                p,
+                format!("Γ(1−p, α) = {gamma0} for α = {alpha}"),
+            ));
         }
         Self::sgd_with_kap(alpha, p, 1.0 / (alpha * gamma0))
     }
@@ -146,9 +159,20 @@ impl Ndf {
         let kap = check_range("kap", kap, f64::MIN_POSITIVE, f64::MAX)?;
         let gamma0 = upper_gamma(1.0 - p, alpha);
         if !(gamma0.is_finite() && gamma0 > 0.0) {
-            return Err(Error::param("p", p, format!("Γ(1−p, α) = {gamma0} for α = {alpha}")));
+            return Err(Error::param(
+                "p",
+                p,
+                format!("Γ(1−p, α) = {gamma0} for α = {alpha}"),
+            ));
         }
-        let mut s = Sgd { alpha, p, kap, ln_kap: kap.ln(), gamma0, proxy_alpha: alpha };
+        let mut s = Sgd {
+            alpha,
+            p,
+            kap,
+            ln_kap: kap.ln(),
+            gamma0,
+            proxy_alpha: alpha,
+        };
         s.proxy_alpha = sgd_median_x(&s).sqrt().max(1e-300);
         Ok(Ndf::Sgd(s))
     }
@@ -268,7 +292,13 @@ impl Ndf {
             return 0.0;
         }
         match *self {
-            Ndf::Sgd(ref s) => Ndf::Ggx { alpha: s.proxy_alpha }.d(h.z) * h.z,
+            Ndf::Sgd(ref s) => {
+                Ndf::Ggx {
+                    alpha: s.proxy_alpha,
+                }
+                .d(h.z)
+                    * h.z
+            }
             _ => self.d(h.z) * h.z,
         }
     }
@@ -285,7 +315,11 @@ fn invert_exponential_cdf(xi: f64) -> f64 {
     let (mut lo, mut hi) = (0.0f64, 2.0 * big_l + 2.0);
     // h(u) = ln(1+u) − u − ln q, decreasing from −ln q ≥ 0 at u = 0.
     let h = |u: f64| u.ln_1p() - u - lnq;
-    let mut u = if xi < 0.5 { (2.0 * xi).sqrt() } else { big_l + (1.0 + big_l).ln() };
+    let mut u = if xi < 0.5 {
+        (2.0 * xi).sqrt()
+    } else {
+        big_l + (1.0 + big_l).ln()
+    };
     u = u.clamp(lo, hi);
     for _ in 0..100 {
         let hu = h(u);
@@ -295,7 +329,11 @@ fn invert_exponential_cdf(xi: f64) -> f64 {
             hi = u;
         }
         let dh = -u / (1.0 + u);
-        let mut next = if dh < 0.0 { u - hu / dh } else { 0.5 * (lo + hi) };
+        let mut next = if dh < 0.0 {
+            u - hu / dh
+        } else {
+            0.5 * (lo + hi)
+        };
         if !(next > lo && next < hi) {
             next = 0.5 * (lo + hi);
         }
@@ -468,10 +506,16 @@ mod tests {
     #[test]
     fn sgd_proxy_matches_median() {
         for &(a, p) in &[(1e-4, 1.5), (0.01, 0.5), (0.3, 0.0), (0.05, 1.2)] {
-            let Ndf::Sgd(s) = Ndf::sgd(a, p).unwrap() else { unreachable!() };
+            let Ndf::Sgd(s) = Ndf::sgd(a, p).unwrap() else {
+                unreachable!()
+            };
             let x = s.proxy_alpha() * s.proxy_alpha();
             let ndf = Ndf::Sgd(s);
-            assert!((ndf.cdf_x(x) - 0.5).abs() < 1e-9, "{a} {p}: {}", ndf.cdf_x(x));
+            assert!(
+                (ndf.cdf_x(x) - 0.5).abs() < 1e-9,
+                "{a} {p}: {}",
+                ndf.cdf_x(x)
+            );
             // GGX's median is α²: half of the proxy's samples fall below it.
             assert!((Ndf::ggx(s.proxy_alpha()).unwrap().cdf_x(x) - 0.5).abs() < 1e-12);
         }
@@ -497,7 +541,9 @@ mod tests {
             let mut xs = Vec::with_capacity(n);
             let mut phis = Vec::with_capacity(n);
             let cdf_ref = match ndf {
-                Ndf::Sgd(s) => Ndf::Ggx { alpha: s.proxy_alpha() },
+                Ndf::Sgd(s) => Ndf::Ggx {
+                    alpha: s.proxy_alpha(),
+                },
                 o => o,
             };
             for _ in 0..n {
@@ -519,7 +565,10 @@ mod tests {
 
     #[test]
     fn pdf_h_integrates_to_one() {
-        for ndf in [Ndf::sgd(1e-3, 1.2).unwrap(), Ndf::exponential(0.05).unwrap()] {
+        for ndf in [
+            Ndf::sgd(1e-3, 1.2).unwrap(),
+            Ndf::exponential(0.05).unwrap(),
+        ] {
             let v = integrate_sphere(|h| ndf.pdf_h(h), DVec3::Z, &fine());
             assert!((v - 1.0).abs() < 1e-6, "{}: {v}", ndf.name());
         }

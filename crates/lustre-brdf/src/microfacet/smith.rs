@@ -25,6 +25,9 @@
 //! [`G1Table`] stores G1 and dG1/d(ln μ) on a uniform grid in ln μ and interpolates with cubic
 //! Hermite polynomials.
 
+// `!(x > 0.0)` is used on purpose: it is true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::ndf::Ndf;
 use crate::error::{check_range, Result};
 use crate::numeric::gauss_legendre;
@@ -189,7 +192,16 @@ impl G1Table {
             g.push(PI * mu / den);
             dg.push(PI * mu * (j + mu * k) / (den * den));
         }
-        G1Table { s0, inv_ds: 1.0 / ds, ds, g, dg, mu_min, j_min, k_min }
+        G1Table {
+            s0,
+            inv_ds: 1.0 / ds,
+            ds,
+            g,
+            dg,
+            mu_min,
+            j_min,
+            k_min,
+        }
     }
 
     /// G1 at cos θ (0 at and below the horizon, 1 at normal incidence).
@@ -220,7 +232,10 @@ impl G1Table {
         let h10 = t3 - 2.0 * t2 + t;
         let h01 = -2.0 * t3 + 3.0 * t2;
         let h11 = t3 - t2;
-        (h00 * self.g[i] + h10 * self.ds * self.dg[i] + h01 * self.g[i + 1] + h11 * self.ds * self.dg[i + 1])
+        (h00 * self.g[i]
+            + h10 * self.ds * self.dg[i]
+            + h01 * self.g[i + 1]
+            + h11 * self.ds * self.dg[i + 1])
             .clamp(0.0, 1.0)
     }
 
@@ -259,7 +274,13 @@ impl SgdG1Approx {
         check_range("c", c, f64::MIN_POSITIVE, f64::MAX)?;
         check_range("k", k, f64::MIN_POSITIVE, f64::MAX)?;
         check_range("theta0", theta0, -f64::MAX, f64::MAX)?;
-        Ok(SgdG1Approx { lambda, c, k, theta0, ln_c: c.ln() })
+        Ok(SgdG1Approx {
+            lambda,
+            c,
+            k,
+            theta0,
+            ln_c: c.ln(),
+        })
     }
 
     /// The approximation with θ0 = π/2 − (ln(1 + 1/λ)/c)^{1/k} (Eq. V.3).
@@ -295,11 +316,18 @@ impl SgdG1Approx {
     /// are tried and the best kept.
     pub fn fit(table: &G1Table) -> (SgdG1Approx, f64) {
         let n = FIT_GRID_POINTS;
-        let theta: Vec<f64> = (0..n).map(|i| FRAC_PI_2 * i as f64 / (n - 1) as f64).collect();
+        let theta: Vec<f64> = (0..n)
+            .map(|i| FRAC_PI_2 * i as f64 / (n - 1) as f64)
+            .collect();
         let target: Vec<f64> = theta.iter().map(|&t| table.eval_theta(t)).collect();
         // Start θ0 where G1 first drops below thresholds.
         let first_below = |thr: f64| -> f64 {
-            theta.iter().zip(&target).find(|(_, &g)| g < 1.0 - thr).map(|(&t, _)| t).unwrap_or(1.5)
+            theta
+                .iter()
+                .zip(&target)
+                .find(|(_, &g)| g < 1.0 - thr)
+                .map(|(&t, _)| t)
+                .unwrap_or(1.5)
         };
         let mut best: Option<(Vector3<f64>, f64)> = None;
         for &thr in &[1e-6, 1e-4, 1e-2, 0.2] {
@@ -312,7 +340,9 @@ impl SgdG1Approx {
                         target: &target,
                         x: Vector3::new(f64::ln(lam), w.ln(), f64::ln(k)),
                     };
-                    let (done, _report) = LevenbergMarquardt::new().with_patience(200).minimize(problem);
+                    let (done, _report) = LevenbergMarquardt::new()
+                        .with_patience(200)
+                        .minimize(problem);
                     let x = done.x;
                     let r = done.rms();
                     if r.is_finite() && best.as_ref().is_none_or(|b| r < b.1) {
@@ -325,7 +355,13 @@ impl SgdG1Approx {
         let (lambda, w, k) = params_of(&x);
         let l = (1.0 / lambda).ln_1p();
         let ln_c = l.ln() - k * w.ln();
-        let approx = SgdG1Approx { lambda, c: ln_c.exp(), k, theta0: FRAC_PI_2 - w, ln_c };
+        let approx = SgdG1Approx {
+            lambda,
+            c: ln_c.exp(),
+            k,
+            theta0: FRAC_PI_2 - w,
+            ln_c,
+        };
         (approx, rms)
     }
 
@@ -344,7 +380,11 @@ impl SgdG1Approx {
 
 /// Clamped (λ, w, k) from the LM parameter vector.
 fn params_of(x: &Vector3<f64>) -> (f64, f64, f64) {
-    (x[0].clamp(-30.0, 30.0).exp(), x[1].clamp(-14.0, 1.2).exp(), x[2].clamp(-3.0, 8.0).exp())
+    (
+        x[0].clamp(-30.0, 30.0).exp(),
+        x[1].clamp(-14.0, 1.2).exp(),
+        x[2].clamp(-3.0, 8.0).exp(),
+    )
 }
 
 struct G1Fit<'a> {
@@ -370,12 +410,19 @@ impl G1Fit<'_> {
         let dg_dy = -lambda * q * l;
         let dy_dw = k * y * (1.0 / delta - 1.0 / w);
         let dy_dk = y * ratio.ln();
-        (g, [lambda * dg_dlambda, w * dg_dy * dy_dw, k * dg_dy * dy_dk])
+        (
+            g,
+            [lambda * dg_dlambda, w * dg_dy * dy_dw, k * dg_dy * dy_dk],
+        )
     }
 
     fn rms(&self) -> f64 {
-        let s: f64 =
-            self.theta.iter().zip(self.target).map(|(&t, &g)| (self.model(t).0 - g).powi(2)).sum();
+        let s: f64 = self
+            .theta
+            .iter()
+            .zip(self.target)
+            .map(|(&t, &g)| (self.model(t).0 - g).powi(2))
+            .sum();
         (s / self.theta.len() as f64).sqrt()
     }
 }
@@ -394,8 +441,15 @@ impl LeastSquaresProblem<f64, Dyn, U3> for G1Fit<'_> {
     }
 
     fn residuals(&self) -> Option<Vector<f64, Dyn, Self::ResidualStorage>> {
-        let r: Vec<f64> = self.theta.iter().zip(self.target).map(|(&t, &g)| self.model(t).0 - g).collect();
-        r.iter().all(|v| v.is_finite()).then(|| nalgebra::DVector::from_vec(r))
+        let r: Vec<f64> = self
+            .theta
+            .iter()
+            .zip(self.target)
+            .map(|(&t, &g)| self.model(t).0 - g)
+            .collect();
+        r.iter()
+            .all(|v| v.is_finite())
+            .then(|| nalgebra::DVector::from_vec(r))
     }
 
     fn jacobian(&self) -> Option<Matrix<f64, Dyn, U3, Self::JacobianStorage>> {
@@ -430,13 +484,21 @@ mod tests {
                     let want = g1_closed(&ndf, c).unwrap();
                     let got = t.eval(c);
                     worst = worst.max((got - want).abs());
-                    assert!((got - want).abs() < 1e-6, "{} θ={th}: {got} vs {want}", ndf.name());
+                    assert!(
+                        (got - want).abs() < 1e-6,
+                        "{} θ={th}: {got} vs {want}",
+                        ndf.name()
+                    );
                 }
                 // Direct quadrature of Λ at a few angles.
                 for &c in &[0.9, 0.5, 0.1, 0.01] {
                     let lam = lambda_numeric(&ndf, c);
                     let want = 1.0 / g1_closed(&ndf, c).unwrap() - 1.0;
-                    assert!((lam - want).abs() < 1e-8 * want.max(1e-3), "{} c={c}: {lam} vs {want}", ndf.name());
+                    assert!(
+                        (lam - want).abs() < 1e-8 * want.max(1e-3),
+                        "{} c={c}: {lam} vs {want}",
+                        ndf.name()
+                    );
                 }
             }
         }
@@ -454,7 +516,11 @@ mod tests {
 
     #[test]
     fn table_is_fast_and_monotone() {
-        for ndf in [Ndf::sgd(1e-4, 1.5).unwrap(), Ndf::sgd(0.3, 0.0).unwrap(), Ndf::ggx(0.01).unwrap()] {
+        for ndf in [
+            Ndf::sgd(1e-4, 1.5).unwrap(),
+            Ndf::sgd(0.3, 0.0).unwrap(),
+            Ndf::ggx(0.01).unwrap(),
+        ] {
             let start = std::time::Instant::now();
             let t = G1Table::new(&ndf);
             let ms = start.elapsed().as_secs_f64() * 1e3;
@@ -491,9 +557,24 @@ mod tests {
     /// Published per-material (α, p) of several MERL materials (red channel unless noted).
     /// With the published (λ, c, k, θ0) of the same channel.
     const MATERIALS: [(&str, f64, f64, [f64; 4]); 5] = [
-        ("alum-bronze", 0.014832, 0.459076, [2.60672, 1.12717e-07, 47.783, 0.205635]),
-        ("aventurnine", 0.000328039, 0.387167, [3.12126, 1.03849e-07, 251.265, 0.510125]),
-        ("alumina-oxide", 0.000159222, 0.377727, [3.31076, 6.72897e-08, 354.275, 0.52701]),
+        (
+            "alum-bronze",
+            0.014832,
+            0.459076,
+            [2.60672, 1.12717e-07, 47.783, 0.205635],
+        ),
+        (
+            "aventurnine",
+            0.000328039,
+            0.387167,
+            [3.12126, 1.03849e-07, 251.265, 0.510125],
+        ),
+        (
+            "alumina-oxide",
+            0.000159222,
+            0.377727,
+            [3.31076, 6.72897e-08, 354.275, 0.52701],
+        ),
         ("black-soft-plastic", 0.0926904, 0.14163, [f64::NAN; 4]),
         ("sgd-max-p", 0.01, 1.5, [f64::NAN; 4]),
     ];

@@ -16,6 +16,9 @@
 //! w_spec = 4ρs/p_spec F D G cos³θm (α²+tan²θm)²/α², times |o·m|/cos θi, a Jacobian factor the
 //! paper's expression omits (test `weight_is_the_papers_up_to_the_jacobian`).
 
+// `!(x > 0.0)` is used on purpose: it is true for NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::bsdf::{select_component, Bsdf, BsdfFlags, BsdfSample};
 use crate::error::{check_range, Error, Result};
 use crate::frame::reflect;
@@ -65,7 +68,13 @@ pub struct CtChannel {
 impl CtChannel {
     /// A channel; see [`CookTorrance::new`] for the checks.
     pub fn new(rho_d: f64, rho_s: f64, ndf: Ndf, g1: G1Model, fresnel: Fresnel) -> Self {
-        CtChannel { rho_d, rho_s, ndf, g1, fresnel }
+        CtChannel {
+            rho_d,
+            rho_s,
+            ndf,
+            g1,
+            fresnel,
+        }
     }
 
     #[inline]
@@ -124,7 +133,9 @@ impl CookTorrance {
             }
         }
         let gray = channels[0] == channels[1] && channels[1] == channels[2];
-        let needs_theta = channels.iter().any(|c| matches!(c.g1, G1Model::SgdApprox(_)));
+        let needs_theta = channels
+            .iter()
+            .any(|c| matches!(c.g1, G1Model::SgdApprox(_)));
         let rd = channels.iter().map(|c| c.rho_d).sum::<f64>() / 3.0;
         let rs = channels.iter().map(|c| c.rho_s).sum::<f64>() / 3.0;
         let p_spec = if rd + rs > 0.0 { rs / (rd + rs) } else { 0.0 };
@@ -212,7 +223,11 @@ impl Bsdf for CookTorrance {
         let inv = 1.0 / hv.length();
         let ch = hv.z * inv;
         let cd = wi.dot(hv) * inv;
-        let (ti, to) = if self.needs_theta { (ci.min(1.0).acos(), co.min(1.0).acos()) } else { (0.0, 0.0) };
+        let (ti, to) = if self.needs_theta {
+            (ci.min(1.0).acos(), co.min(1.0).acos())
+        } else {
+            (0.0, 0.0)
+        };
         if self.gray {
             return Rgb::splat(self.ch[0].eval(ci, co, ch, cd, ti, to));
         }
@@ -242,7 +257,11 @@ impl Bsdf for CookTorrance {
         if !(pdf > 0.0) {
             return None;
         }
-        Some(BsdfSample { wi, value: self.eval(wi, wo), pdf })
+        Some(BsdfSample {
+            wi,
+            value: self.eval(wi, wo),
+            pdf,
+        })
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
@@ -286,9 +305,24 @@ mod tests {
     fn variants() -> Vec<CookTorrance> {
         let schlick = Fresnel::schlick(0.04).unwrap();
         vec![
-            CookTorrance::gray("ct-beckmann", 0.3, 0.2, Ndf::beckmann(0.2).unwrap(), G1Model::Closed, schlick)
-                .unwrap(),
-            CookTorrance::gray("ct-ggx", 0.2, 0.3, Ndf::ggx(0.1).unwrap(), G1Model::Closed, schlick).unwrap(),
+            CookTorrance::gray(
+                "ct-beckmann",
+                0.3,
+                0.2,
+                Ndf::beckmann(0.2).unwrap(),
+                G1Model::Closed,
+                schlick,
+            )
+            .unwrap(),
+            CookTorrance::gray(
+                "ct-ggx",
+                0.2,
+                0.3,
+                Ndf::ggx(0.1).unwrap(),
+                G1Model::Closed,
+                schlick,
+            )
+            .unwrap(),
             CookTorrance::gray(
                 "ct-exponential",
                 0.25,
@@ -300,7 +334,8 @@ mod tests {
             .unwrap(),
             {
                 let n = Ndf::sgd(0.01, 0.6).unwrap();
-                CookTorrance::gray("ct-sgd-numeric", 0.1, 0.5, n, G1Model::numeric(&n), schlick).unwrap()
+                CookTorrance::gray("ct-sgd-numeric", 0.1, 0.5, n, G1Model::numeric(&n), schlick)
+                    .unwrap()
             },
             // Per-channel SGD with the published approximation and Eq. V.5 (alum-bronze, r/g/b).
             CookTorrance::new(
@@ -310,21 +345,27 @@ mod tests {
                         0.0478786,
                         0.0364976,
                         Ndf::sgd_with_kap(0.014832, 0.459076, 46.3841).unwrap(),
-                        G1Model::SgdApprox(SgdG1Approx::new(2.60672, 1.12717e-07, 47.783, 0.205635).unwrap()),
+                        G1Model::SgdApprox(
+                            SgdG1Approx::new(2.60672, 1.12717e-07, 47.783, 0.205635).unwrap(),
+                        ),
                         Fresnel::generalized_schlick(6.05524, 5.05524).unwrap(),
                     ),
                     CtChannel::new(
                         0.0313514,
                         0.664975,
                         Ndf::sgd_with_kap(0.0300126, 0.450056, 24.5961).unwrap(),
-                        G1Model::SgdApprox(SgdG1Approx::new(2.97371, 1.06401e-07, 36.2767, 0.066289).unwrap()),
+                        G1Model::SgdApprox(
+                            SgdG1Approx::new(2.97371, 1.06401e-07, 36.2767, 0.066289).unwrap(),
+                        ),
                         Fresnel::generalized_schlick(0.235756, 0.182842).unwrap(),
                     ),
                     CtChannel::new(
                         0.0200638,
                         0.268836,
                         Ndf::sgd_with_kap(0.0490339, 0.529272, 14.8261).unwrap(),
-                        G1Model::SgdApprox(SgdG1Approx::new(2.7827, 5.27952e-08, 31.6066, -0.0661091).unwrap()),
+                        G1Model::SgdApprox(
+                            SgdG1Approx::new(2.7827, 5.27952e-08, 31.6066, -0.0661091).unwrap(),
+                        ),
                         Fresnel::generalized_schlick(0.580647, 0.476088).unwrap(),
                     ),
                 ],
@@ -334,7 +375,12 @@ mod tests {
     }
 
     fn q() -> SphereQuadrature {
-        SphereQuadrature { phi_points: 96, uniform_panels: 32, theta_min: 1e-5, ..Default::default() }
+        SphereQuadrature {
+            phi_points: 96,
+            uniform_panels: 32,
+            theta_min: 1e-5,
+            ..Default::default()
+        }
     }
 
     #[test]
@@ -343,7 +389,11 @@ mod tests {
             for wo in test_directions() {
                 let i = pdf_integral(&m, wo, &q());
                 let f = sample_success_fraction(&m, wo, 100_000, 3);
-                assert!((i - f).abs() < 1e-2, "{} wo={wo}: ∫pdf {i} vs fraction {f}", m.name());
+                assert!(
+                    (i - f).abs() < 1e-2,
+                    "{} wo={wo}: ∫pdf {i} vs fraction {f}",
+                    m.name()
+                );
                 assert!(i <= 1.0 + 1e-4, "{} wo={wo}: ∫pdf {i}", m.name());
             }
         }
@@ -384,12 +434,19 @@ mod tests {
             if m.flags().energy_conserving {
                 for wo in test_directions() {
                     let a = albedo_quadrature(&m, wo, &q());
-                    assert!(a.iter().all(|&v| v <= 1.0 + 1e-6), "{} wo={wo}: {a:?}", m.name());
+                    assert!(
+                        a.iter().all(|&v| v <= 1.0 + 1e-6),
+                        "{} wo={wo}: {a:?}",
+                        m.name()
+                    );
                 }
             }
         }
         // The first four promise energy conservation, the published SGD fit does not.
-        let f: Vec<bool> = variants().iter().map(|m| m.flags().energy_conserving).collect();
+        let f: Vec<bool> = variants()
+            .iter()
+            .map(|m| m.flags().energy_conserving)
+            .collect();
         assert_eq!(f, vec![true, true, true, true, false]);
     }
 
@@ -397,7 +454,11 @@ mod tests {
     fn physical_microfacet_is_white_furnace_bounded() {
         // ρs = π/4, F = 1, exact G1: albedo ≤ 1 and close to 1 near normal incidence for a smooth
         // surface (the missing part is multiple scattering).
-        for ndf in [Ndf::ggx(0.05).unwrap(), Ndf::sgd(0.001, 0.8).unwrap(), Ndf::exponential(0.1).unwrap()] {
+        for ndf in [
+            Ndf::ggx(0.05).unwrap(),
+            Ndf::sgd(0.001, 0.8).unwrap(),
+            Ndf::exponential(0.1).unwrap(),
+        ] {
             let m = CookTorrance::microfacet("m", ndf, Fresnel::One).unwrap();
             assert!(m.flags().energy_conserving);
             for wo in test_directions() {
@@ -413,7 +474,15 @@ mod tests {
     #[test]
     fn known_value_by_hand() {
         let ndf = Ndf::beckmann(0.3).unwrap();
-        let m = CookTorrance::gray("b", 0.2, 0.5, ndf, G1Model::Closed, Fresnel::schlick(0.05).unwrap()).unwrap();
+        let m = CookTorrance::gray(
+            "b",
+            0.2,
+            0.5,
+            ndf,
+            G1Model::Closed,
+            Fresnel::schlick(0.05).unwrap(),
+        )
+        .unwrap();
         let wi = spherical(0.4, 0.0);
         let wo = spherical(0.7, 2.0);
         let h = (wi + wo).normalize();
@@ -444,19 +513,30 @@ mod tests {
         let mut n = 0;
         for k in 0..200 {
             let (u1, u2) = crate::sampling::hammersley(k, 200);
-            let Some(smp) = m.sample(wo, u1, u2) else { continue };
+            let Some(smp) = m.sample(wo, u1, u2) else {
+                continue;
+            };
             n += 1;
             let h = (smp.wi + wo).normalize();
             let a = s.proxy_alpha();
             let t2 = (1.0 - h.z * h.z) / (h.z * h.z);
-            let paper = 4.0 * 0.7 * fr.eval(smp.wi.dot(h)) * ndf.d(h.z) * g1.eval(smp.wi.z) * g1.eval(wo.z)
+            let paper = 4.0
+                * 0.7
+                * fr.eval(smp.wi.dot(h))
+                * ndf.d(h.z)
+                * g1.eval(smp.wi.z)
+                * g1.eval(wo.z)
                 * h.z.powi(3)
                 * (a * a + t2).powi(2)
                 / (a * a);
             // Here the paper's i is our wo (the fixed direction), its o our sampled wi.
             let jac = smp.wi.dot(h) / wo.z;
             let w = smp.weight()[0];
-            assert!((w - paper * jac).abs() < 1e-9 * w.abs().max(1e-12), "{w} vs {}", paper * jac);
+            assert!(
+                (w - paper * jac).abs() < 1e-9 * w.abs().max(1e-12),
+                "{w} vs {}",
+                paper * jac
+            );
         }
         assert!(n > 150);
     }
@@ -468,7 +548,9 @@ mod tests {
         assert!(CookTorrance::gray("x", -0.1, 0.1, n, G1Model::None, Fresnel::One).is_err());
         assert!(CookTorrance::gray("x", 0.1, f64::NAN, n, G1Model::None, Fresnel::One).is_err());
         let z = CookTorrance::gray("x", 0.0, 0.0, n, G1Model::None, Fresnel::One).unwrap();
-        assert!(z.sample(DVec3::Z, 0.3, 0.4).is_none_or(|s| s.value == Rgb::ZERO));
+        assert!(z
+            .sample(DVec3::Z, 0.3, 0.4)
+            .is_none_or(|s| s.value == Rgb::ZERO));
         assert_eq!(z.eval(DVec3::Z, DVec3::Z), Rgb::ZERO);
     }
 
