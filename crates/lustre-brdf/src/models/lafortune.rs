@@ -293,5 +293,7 @@ mod tests {
         assert!(Lafortune::new(Rgb::ZERO, vec![bad]).is_err());
         let bad = LafortuneLobe::ngan(0.0, 0.0, 10.0, Rgb::ONE);
         assert!(Lafortune::new(Rgb::ZERO, vec![bad]).is_err());
+        let bad = LafortuneLobe::raw(DVec3::new(-1.5, -1.5, 1.5), 5000.0, Rgb::ONE);
+        assert!(Lafortune::new(Rgb::ZERO, vec![bad]).is_err());
     }
 }
