@@ -189,7 +189,7 @@ impl Bsdf for Abc {
             return None;
         }
         let pdf = self.pdf(wi, wo);
-        if !(pdf > 0.0) || !pdf.is_finite() {
+        if !pdf.is_finite() || pdf <= 0.0 {
             return None;
         }
         Some(BsdfSample {
@@ -205,7 +205,7 @@ impl Bsdf for Abc {
         }
         let [wd, ws] = self.weights();
         let total = wd + ws;
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return 0.0;
         }
         (wd * cosine_hemisphere_pdf(wi) + ws * self.spec_pdf(wi, wo)) / total

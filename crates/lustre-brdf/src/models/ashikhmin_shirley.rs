@@ -126,7 +126,7 @@ impl Bsdf for AshikhminShirley {
             return None;
         }
         let pdf = self.pdf(wi, wo);
-        if !(pdf > 0.0) || !pdf.is_finite() {
+        if !pdf.is_finite() || pdf <= 0.0 {
             return None;
         }
         Some(BsdfSample {
@@ -142,7 +142,7 @@ impl Bsdf for AshikhminShirley {
         }
         let [wd, ws] = self.weights();
         let total = wd + ws;
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return 0.0;
         }
         let spec = match half_vector(wi, wo) {

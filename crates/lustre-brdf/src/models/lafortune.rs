@@ -110,7 +110,7 @@ impl LafortuneLobe {
     fn axis(&self, v: DVec3) -> Option<(DVec3, f64)> {
         let a = self.c * v;
         let la = a.length();
-        if !(la > 0.0) || !la.is_finite() {
+        if !la.is_finite() || la <= 0.0 {
             return None;
         }
         let (k, m) = self.scale();
@@ -212,7 +212,7 @@ impl Bsdf for Lafortune {
             return None;
         }
         let pdf = self.pdf(wi, wo);
-        if !(pdf > 0.0) || !pdf.is_finite() {
+        if !pdf.is_finite() || pdf <= 0.0 {
             return None;
         }
         Some(BsdfSample {
@@ -228,7 +228,7 @@ impl Bsdf for Lafortune {
         }
         let w = self.weights(wo);
         let total: f64 = w.iter().sum();
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return 0.0;
         }
         let mut p = w[0] * cosine_hemisphere_pdf(wi);

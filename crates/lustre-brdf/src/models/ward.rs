@@ -116,7 +116,7 @@ impl WardCore {
     fn specular_pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
         let h = wi + wo;
         let len = h.length();
-        if !(len > 0.0) || h.z <= 0.0 {
+        if len.is_nan() || len <= 0.0 || h.z <= 0.0 {
             return 0.0;
         }
         let hn = h / len;
@@ -134,7 +134,7 @@ impl WardCore {
         }
         let [wd, ws] = self.weights();
         let total = wd + ws;
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return 0.0;
         }
         (wd * cosine_hemisphere_pdf(wi) + ws * self.specular_pdf(wi, wo)) / total
@@ -161,7 +161,7 @@ impl WardCore {
             return None;
         }
         let pdf = self.pdf(wi, wo);
-        if !(pdf > 0.0) || !pdf.is_finite() {
+        if !pdf.is_finite() || pdf <= 0.0 {
             return None;
         }
         Some(BsdfSample {
