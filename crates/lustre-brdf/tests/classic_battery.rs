@@ -276,6 +276,13 @@ proptest! {
             Box::new(AshikhminShirley::new(n, n * a, Rgb::splat(rs), Rgb::splat(rd)).unwrap()),
             Box::new(Abc::new(Rgb::splat(rd), Rgb::splat(rs * 1000.0), bb, cc, ior).unwrap()),
         ];
+        // Unscaled raw lobes: either rejected (max|C|^n overflows) or finite everywhere.
+        if let Ok(m) = Lafortune::new(
+            Rgb::splat(rd),
+            vec![LafortuneLobe::raw(DVec3::new(cxy, -cxy, cz), n, Rgb::splat(rs))],
+        ) {
+            check_finite(&m, wi, wo, u1, u2)?;
+        }
         for m in &models {
             check_finite(m.as_ref(), wi, wo, u1, u2)?;
         }

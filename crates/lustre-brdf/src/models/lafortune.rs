@@ -78,14 +78,20 @@ impl LafortuneLobe {
         check_range("lobe.Cz", self.c.z, -1e3, 1e3)?;
         check_range("lobe.n", self.n, 0.0, 1e6)?;
         check_rgb("lobe.rho", self.rho, 0.0, 1e3)?;
-        if self.norm == LobeNorm::Peak && self.c.abs().max_element() == 0.0 {
-            return Err(Error::param(
+        let cmax = self.c.abs().max_element();
+        match self.norm {
+            LobeNorm::Peak if cmax == 0.0 => Err(Error::param(
                 "lobe.C",
                 0.0,
                 "a peak-normalized lobe needs a non-zero C",
-            ));
+            )),
+            LobeNorm::Raw if cmax > 1.0 && self.n * cmax.ln() > 600.0 => Err(Error::param(
+                "lobe.n",
+                self.n,
+                format!("max|C|^n = {cmax}^n overflows: reduce n or |C|"),
+            )),
+            _ => Ok(()),
         }
-        Ok(())
     }
 
     /// (scale K, divisor m) with lobe = ρ·K·(C·(u∘v)/m)^n.
