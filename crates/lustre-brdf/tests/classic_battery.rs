@@ -499,3 +499,45 @@ fn lafortune_fit_convention_matches_sgd_albedo() {
         "the raw reading is not negligible: {raw_median}"
     );
 }
+
+#[test]
+fn abc_fits_albedo_matches_sgd() {
+    // The ABC transcription (dj_brdf's 1/(π cosθi cosθo)) against Bagher's SGD of the same
+    // material: both are fits of the same measurement, so their albedos must agree in order.
+    let path = lustre_brdf::shared_data_dir().join("fits/merl_sgd_fits_bagher2012.csv");
+    let sgd = FitTable::read(&path, "name").expect("SGD table");
+    let abc = abc_fits();
+    let q = quad();
+    let cols = [
+        "rhoD", "rhoS", "alpha", "p", "f0", "f1", "kap", "lambda", "c", "k", "theta0",
+    ];
+    let mut logs = Vec::new();
+    for name in sgd.names() {
+        let Ok(m) = abc.material(name) else { continue };
+        let mut p = [0.0; 11];
+        for (i, c) in cols.iter().enumerate() {
+            p[i] = sgd.value(name, &format!("{c}_g")).unwrap();
+        }
+        let s = Sgd { p };
+        for &t in &[0.05, 0.7] {
+            let wo = spherical(t, 0.0);
+            let a_sgd = integrate_reflection(|wi| s.eval(wi, wo) * wi.z, wo, &q);
+            let a_abc = albedo_quadrature(&m, wo, &q)[1];
+            logs.push((name.to_string(), t, a_abc, a_sgd, (a_abc / a_sgd).ln()));
+        }
+    }
+    logs.sort_by(|a, b| a.4.total_cmp(&b.4));
+    let n = logs.len();
+    let median = logs[n / 2].4.exp();
+    let within3 = logs.iter().filter(|r| r.4.abs() < 3f64.ln()).count();
+    println!("ABC/SGD green albedo ratio over {n} (material, θo) pairs: median {median:.3}, within ×3: {within3}");
+    for r in logs.iter().take(3).chain(logs.iter().rev().take(3)) {
+        println!("  {} θo={}: ABC {:.4} SGD {:.4}", r.0, r.1, r.2, r.3);
+    }
+    assert!(n >= 140);
+    assert!((0.5..2.0).contains(&median), "median ratio {median}");
+    assert!(
+        within3 as f64 >= 0.8 * n as f64,
+        "{within3} of {n} within a factor 3"
+    );
+}
