@@ -640,3 +640,128 @@ proptest! {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// Anisotropic layout (no real anisotropic file is available): paper_white's tables replicated
+// over several φi nodes. The φ axis of the vndf/rgb tables then means absolute φm instead of
+// φm − φi, so the material differs from the isotropic one except at φo = 0, where both agree.
+
+fn synthetic_anisotropic(phi: &[f32]) -> Vec<u8> {
+    let t = RglTensorFile::read(path("paper_white_rgb")).expect("parses");
+    let f = |n: &str| t.field(n).expect("present");
+    let rep = |n: &'static str| {
+        let field = f(n);
+        let mut shape: Vec<u64> = field.shape.iter().map(|&d| d as u64).collect();
+        shape[0] = phi.len() as u64;
+        let data = field.data.repeat(phi.len());
+        (n, 10u8, shape, data)
+    };
+    let keep = |n: &'static str| {
+        let field = f(n);
+        let code = if field.dtype == TensorDtype::UInt8 {
+            1
+        } else {
+            10
+        };
+        (
+            n,
+            code,
+            field.shape.iter().map(|&d| d as u64).collect(),
+            field.data.clone(),
+        )
+    };
+    tensor_bytes(&[
+        keep("description"),
+        ("phi_i", 10, vec![phi.len() as u64], f32s(phi)),
+        keep("theta_i"),
+        keep("sigma"),
+        keep("ndf"),
+        rep("vndf"),
+        rep("luminance"),
+        rep("rgb"),
+        keep("jacobian"),
+    ])
+}
+
+#[test]
+fn anisotropic_layout_and_symmetry_reductions() {
+    use std::f32::consts::PI as P;
+    let iso = material("paper_white_rgb");
+    let aniso = RglBsdf::parse("aniso.bsdf", &synthetic_anisotropic(&[-P, 0.0, P])).expect("valid");
+    assert!(!aniso.is_isotropic() && aniso.reduction() == 1 && aniso.flags().anisotropic);
+    let mut rng = SplitMix64::new(3);
+    for _ in 0..200 {
+        let wo = spherical(1.4 * rng.next_f64(), 0.0);
+        let mut wi = uniform_sphere(rng.next_f64(), rng.next_f64());
+        wi.z = wi.z.abs();
+        let (a, b) = (aniso.eval(wi, wo), iso.eval(wi, wo));
+        for c in 0..3 {
+            assert!(
+                (a[c] - b[c]).abs() <= 1e-9 * b[c].max(1e-3),
+                "{a:?} vs {b:?}"
+            );
+        }
+        assert!((aniso.pdf(wi, wo) - iso.pdf(wi, wo)).abs() <= 1e-9 * iso.pdf(wi, wo).max(1e-3));
+    }
+    // Away from φo = 0 the two differ, and the anisotropic sampler still matches its pdf.
+    let wo = spherical(0.7, 1.2);
+    let wi = spherical(0.5, -2.0);
+    assert!((aniso.eval(wi, wo)[0] - iso.eval(wi, wo)[0]).abs() > 1e-6);
+
+    let half =
+        RglBsdf::parse("r2.bsdf", &synthetic_anisotropic(&[-P, -P / 2.0, 0.0])).expect("valid");
+    assert_eq!(half.reduction(), 2);
+    let quarter = RglBsdf::parse(
+        "r4.bsdf",
+        &synthetic_anisotropic(&[-P, -0.75 * P, -P / 2.0]),
+    )
+    .expect("valid");
+    assert_eq!(quarter.reduction(), 4);
+    let e = RglBsdf::parse(
+        "bad.bsdf",
+        &synthetic_anisotropic(&[-P, -P + 1.0, -P + 2.0]),
+    )
+    .expect_err("reduction 3")
+    .to_string();
+    assert!(e.contains("bad.bsdf") && e.contains("reduction"), "{e}");
+    // Symmetries the reductions impose (Mitsuba folds with sx = sy = sign(wo.y) for 2, i.e. a
+    // half turn about the normal; with sx = sign(wo.x), sy = sign(wo.y) for 4, two mirrors).
+    let my = |w: DVec3| DVec3::new(w.x, -w.y, w.z);
+    let rot = |w: DVec3| DVec3::new(-w.x, -w.y, w.z);
+    let mx = |w: DVec3| DVec3::new(-w.x, w.y, w.z);
+    for _ in 0..200 {
+        let mut wo = uniform_sphere(rng.next_f64(), rng.next_f64());
+        let mut wi = uniform_sphere(rng.next_f64(), rng.next_f64());
+        wo.z = wo.z.abs();
+        wi.z = wi.z.abs();
+        let close = |a: lustre_brdf::Rgb, b: lustre_brdf::Rgb| {
+            (0..3).all(|c| (a[c] - b[c]).abs() <= 1e-9 * a[c].max(b[c]).max(1e-3))
+        };
+        assert!(close(half.eval(wi, wo), half.eval(rot(wi), rot(wo))));
+        assert!(
+            (half.pdf(wi, wo) - half.pdf(rot(wi), rot(wo))).abs()
+                <= 1e-9 * half.pdf(wi, wo).max(1e-3)
+        );
+        assert!(close(quarter.eval(wi, wo), quarter.eval(mx(wi), mx(wo))));
+        assert!(close(quarter.eval(wi, wo), quarter.eval(my(wi), my(wo))));
+    }
+    let q = SphereQuadrature::default();
+    for (name, b) in [
+        ("aniso", &aniso),
+        ("reduction 2", &half),
+        ("reduction 4", &quarter),
+    ] {
+        for wo in [spherical(0.6, 1.2), spherical(1.1, -2.5)] {
+            let (p, int, frac) = chi2_half_vector(b, wo, 12, 40_000, 29);
+            let pint = pdf_integral(b, wo, &q);
+            eprintln!(
+                "{name} θo={:.1}: p = {p:.3}, ∫pdf {int:.4} / {pint:.4}, fraction {frac:.4}",
+                wo.z.acos()
+            );
+            assert!(
+                p > 1e-3 && (pint - frac).abs() < 5e-3,
+                "{name}: p = {p}, {pint} vs {frac}"
+            );
+        }
+    }
+}
