@@ -5,3 +5,4 @@ pub mod gonio;
 pub mod merl;
 pub mod nbrdf;
 pub mod rgl;
+pub mod rgl_warp;
