@@ -115,9 +115,18 @@ impl Params {
 /// The built-in materials, resolvable by name, with a one-line description each.
 pub fn builtins() -> Vec<(&'static str, &'static str)> {
     vec![
-        ("kurt-demo", "brushed, slightly coloured metal: Kurt, two anisotropic lobes"),
-        ("kurt-glass", "frosted glass sheet: Kurt reflection lobe + transmission lobe"),
-        ("kurt-plastic", "glossy red plastic: Kurt, diffuse + one lobe with a strong Fresnel effect"),
+        (
+            "kurt-demo",
+            "brushed, slightly coloured metal: Kurt, two anisotropic lobes",
+        ),
+        (
+            "kurt-glass",
+            "frosted glass sheet: Kurt reflection lobe + transmission lobe",
+        ),
+        (
+            "kurt-plastic",
+            "glossy red plastic: Kurt, diffuse + one lobe with a strong Fresnel effect",
+        ),
     ]
 }
 
@@ -139,8 +148,14 @@ pub fn models() -> Vec<(&'static str, &'static str)> {
             "kd; lobe 1: ks, mx, my, r0, alpha; lobe 2: ks2, mx2, my2, r02, alpha2; \
              transmission: kt, mxt, myt, r0t, alphat",
         ),
-        ("beckmann | ggx | exponential", "rho_d, rho_s, alpha, f0, f1  (Cook-Torrance)"),
-        ("sgd", "rho_d, rho_s, alpha, p, f0, f1  (Cook-Torrance, numeric Smith G1)"),
+        (
+            "beckmann | ggx | exponential",
+            "rho_d, rho_s, alpha, f0, f1  (Cook-Torrance)",
+        ),
+        (
+            "sgd",
+            "rho_d, rho_s, alpha, p, f0, f1  (Cook-Torrance, numeric Smith G1)",
+        ),
     ]
 }
 
@@ -262,6 +277,7 @@ fn resolve_path(
             };
             Box::new(alta::AltaTable::read(path, unit)?)
         }
+        "bsdf" => Box::new(crate::measured::rgl::RglBsdf::read(path)?),
         "gonio" => {
             let recon = match fragment {
                 None | Some("half-vector") => gonio::Reconstruction::HalfVector,
@@ -273,7 +289,10 @@ fn resolve_path(
                     )))
                 }
             };
-            Box::new(gonio::GonioBsdf::new(gonio::GonioTable::read(path, None)?, recon))
+            Box::new(gonio::GonioBsdf::new(
+                gonio::GonioTable::read(path, None)?,
+                recon,
+            ))
         }
         _ => return Ok(None),
     }))
@@ -400,8 +419,20 @@ mod tests {
             resolve(name).unwrap_or_else(|e| panic!("{name}: {e}"));
         }
         for m in [
-            "lambert", "oren-nayar", "phong", "blinn-phong", "ward", "ward-duer", "ward-gmd",
-            "lafortune", "ashikhmin-shirley", "abc", "kurt", "beckmann", "ggx", "exponential",
+            "lambert",
+            "oren-nayar",
+            "phong",
+            "blinn-phong",
+            "ward",
+            "ward-duer",
+            "ward-gmd",
+            "lafortune",
+            "ashikhmin-shirley",
+            "abc",
+            "kurt",
+            "beckmann",
+            "ggx",
+            "exponential",
             "sgd",
         ] {
             resolve(m).unwrap_or_else(|e| panic!("{m}: {e}"));
@@ -410,7 +441,12 @@ mod tests {
 
     #[test]
     fn published_fits_and_files_resolve() {
-        for s in ["sgd:nickel", "sgd-numeric:nickel", "abc:nickel", "lafortune:nickel"] {
+        for s in [
+            "sgd:nickel",
+            "sgd-numeric:nickel",
+            "abc:nickel",
+            "lafortune:nickel",
+        ] {
             let b = resolve(s).unwrap_or_else(|e| panic!("{s}: {e}"));
             assert!(b.eval(DVec3::Z, DVec3::Z).is_finite());
         }
@@ -419,5 +455,8 @@ mod tests {
         let d = dat.to_string_lossy();
         assert!(resolve(&d).is_err(), "missing PARAM_OUT must be an error");
         resolve(&format!("{d}#inv-sr-cos")).expect("unit supplied");
+        let rgl = crate::shared_data_dir().join("measured/rgl/paper_white_rgb.bsdf");
+        let b = resolve(&rgl.to_string_lossy()).expect("rgl file");
+        assert!(b.eval(DVec3::Z, DVec3::Z).max_component() > 0.0);
     }
 }
