@@ -1,13 +1,24 @@
-//! Published-fit CSV tables: any bytes give a table or an error, never a panic.
+//! Published-fit CSV tables (SGD, ABC, Lafortune): any bytes give tables or errors, never a panic.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
+use lustre_brdf::fits::{abc::AbcFits, lafortune::LafortuneFits, sgd::SgdFits};
 use std::path::Path;
 
 fuzz_target!(|data: &[u8]| {
-    if let Ok(t) = lustre_brdf::fits::FitTable::parse(Path::new("<fuzz>"), data, "name") {
+    let p = Path::new("<fuzz>");
+    if let Ok(t) = SgdFits::parse(p, data) {
+        for n in t.list_materials() {
+            let _ = t.cook_torrance(&n);
+        }
+    }
+    if let Ok(t) = AbcFits::parse(p, data) {
         for n in t.names() {
-            let _ = t.value(n, "kD_r");
-            let _ = t.rgb(n, "alpha");
+            let _ = t.material(&n);
+        }
+    }
+    if let Ok(t) = LafortuneFits::parse(p, data) {
+        for n in t.names() {
+            let _ = t.material(&n);
         }
     }
 });
