@@ -437,7 +437,14 @@ impl PolarFigure {
 
         // The lobes.
         for (b, c) in curves.iter().enumerate() {
-            for ch in 0..self.opts.channels.count() {
+            // Colourless lobes draw one grey curve instead of three coinciding ones.
+            let grey = self.opts.channels == Channels::Rgb
+                && c.samples.iter().all(|s| {
+                    let v = s.value;
+                    (v[0] - v[1]).abs().max((v[1] - v[2]).abs()) <= 1e-6 * self.vmax
+                });
+            let count = if grey { 1 } else { self.opts.channels.count() };
+            for ch in 0..count {
                 let pts: Vec<(i32, i32)> = c
                     .samples
                     .iter()
@@ -448,7 +455,7 @@ impl PolarFigure {
                         to_px(x, y)
                     })
                     .collect();
-                self.draw_curve(area, pts, b, ch)?;
+                self.draw_curve(area, pts, b, ch, grey)?;
             }
         }
         t.text(
@@ -469,9 +476,11 @@ impl PolarFigure {
         pts: Vec<(i32, i32)>,
         b: usize,
         ch: usize,
+        grey: bool,
     ) -> DrawResult {
         let (color, dash) = match self.opts.channels {
             Channels::Luminance => (PALETTE[b % PALETTE.len()], b / PALETTE.len()),
+            Channels::Rgb if grey => (RGBColor(70, 70, 70), b),
             Channels::Rgb => (CHANNEL[ch], b),
         };
         let style = color.stroke_width(2);
@@ -493,7 +502,7 @@ impl PolarFigure {
         for (b, label) in self.labels.iter().enumerate() {
             let pts = vec![(x, y), (x + 34, y)];
             match self.opts.channels {
-                Channels::Luminance => self.draw_curve(area, pts, b, 0)?,
+                Channels::Luminance => self.draw_curve(area, pts, b, 0, false)?,
                 Channels::Rgb => {
                     // A black sample of the dash style.
                     let style = BLACK.stroke_width(2);
@@ -519,14 +528,14 @@ impl PolarFigure {
         if self.opts.channels == Channels::Rgb {
             t.text(
                 area,
-                "(curve colour = R, G, B channel)",
+                "(curve colour = R, G, B channel; grey where all coincide)",
                 (x, y),
                 14.0,
                 RGBColor(90, 90, 90),
                 HPos::Left,
                 VPos::Center,
             )?;
-            x += 250;
+            x += 370;
         }
         area.draw(&Circle::new((x + 6, y), 6, RED.filled()))
             .map_err(de)?;
@@ -567,7 +576,11 @@ impl Figure for PolarFigure {
             .iter()
             .map(|l| 70 + 8 * l.chars().count() as u32)
             .sum::<u32>()
-            + 420;
+            + if self.opts.channels == Channels::Rgb {
+                790
+            } else {
+                420
+            };
         let h = TITLE_H + self.rows as i32 * self.panel_h() + LEGEND_H;
         (w.max(legend_w).max(520), h as u32)
     }
