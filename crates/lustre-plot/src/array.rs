@@ -6,11 +6,10 @@
 //! two BSDFs' arrays side by side on one shared scale.
 
 use crate::color::{byte, colormap};
-use crate::draw::{de, fmt_deg, fmt_value, nice_ceil, write_png, DrawResult, Figure, Texter};
+use crate::draw::{de, fmt_deg, fmt_value, nice_ceil, write_png, DrawResult, Figure, Pen};
 use crate::{check_angle, clean, with_suffix, PlotError, PlotFiles, Result};
 use lustre_brdf::frame::{deg, spherical};
 use lustre_brdf::{Bsdf, DVec3, Rgb};
-use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, VPos};
 use rayon::prelude::*;
@@ -469,15 +468,15 @@ impl Figure for ArrayFigure {
         (w.max(640) as u32, h as u32)
     }
 
-    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>, t: &Texter) -> DrawResult {
+    fn draw<DB: DrawingBackend>(&self, pen: &Pen<'_, DB>) -> DrawResult {
+        let area = pen.area;
         let (w, h) = self.size();
         let buf = self.raster();
         let bitmap = BitMapElement::<(i32, i32)>::with_ref((0, 0), (w, h), &buf)
             .ok_or_else(|| "raster size mismatch".to_string())?;
         area.draw(&bitmap).map_err(de)?;
         let grey = RGBColor(90, 90, 90);
-        t.text(
-            area,
+        pen.text(
             &self.title(),
             (w as i32 / 2, 12),
             20.0,
@@ -490,9 +489,7 @@ impl Figure for ArrayFigure {
         } else {
             "RGB"
         };
-        t.text(
-            area,
-            &format!("rows θi, columns φi; θo = 0° at the centre, 90° at the rim; light azimuth up; {mapping}"),
+        pen.text(&format!("rows θi, columns φi; θo = 0° at the centre, 90° at the rim; light azimuth up; {mapping}"),
             (w as i32 / 2, 38),
             14.0,
             grey,
@@ -510,8 +507,7 @@ impl Figure for ArrayFigure {
                     Hemisphere::Reflection => "reflection (upper hemisphere)",
                     Hemisphere::Transmission => "transmission (lower hemisphere, seen from above)",
                 };
-                t.text(
-                    area,
+                pen.text(
                     &format!("{label} — {hname}"),
                     (sx + sw / 2, sy + 6),
                     17.0,
@@ -522,8 +518,7 @@ impl Figure for ArrayFigure {
                 for (col, &phi) in self.opts.phis_deg.iter().enumerate() {
                     let (x0, _) = self.disc_origin(hi, b, 0, col);
                     let s = format!("φi = {}", fmt_deg(phi));
-                    t.text(
-                        area,
+                    pen.text(
                         &s,
                         (x0 + d / 2, sy + SUB_H + HEAD_H / 2),
                         13.0,
@@ -535,8 +530,7 @@ impl Figure for ArrayFigure {
                 for (row, &theta) in self.opts.thetas_deg.iter().enumerate() {
                     let (_, y0) = self.disc_origin(hi, b, row, 0);
                     let s = format!("θi = {}", fmt_deg(theta));
-                    t.text(
-                        area,
+                    pen.text(
                         &s,
                         (sx + ROW_W - 4, y0 + d / 2),
                         13.0,
@@ -577,8 +571,7 @@ impl Figure for ArrayFigure {
             grey.stroke_width(1),
         ))
         .map_err(de)?;
-        t.text(
-            area,
+        pen.text(
             "p",
             (bx + 9, by - 6),
             15.0,
@@ -594,8 +587,7 @@ impl Figure for ArrayFigure {
                 grey.stroke_width(1),
             ))
             .map_err(de)?;
-            t.text(
-                area,
+            pen.text(
                 &fmt_value(self.value_at(tk)),
                 (bx + 26, y),
                 12.0,
@@ -604,9 +596,7 @@ impl Figure for ArrayFigure {
                 VPos::Center,
             )?;
         }
-        t.text(
-            area,
-            "red dot: light position; green tick: tangent (+x) direction; one shared intensity scale",
+        pen.text("red dot: light position; green tick: tangent (+x) direction; one shared intensity scale",
             (w as i32 / 2, h as i32 - FOOT_H / 2),
             13.0,
             grey,

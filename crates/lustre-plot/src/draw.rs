@@ -3,8 +3,10 @@
 
 use crate::{parent_dir, PlotError, Result};
 use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
+use rayon::prelude::*;
 use std::path::Path;
 
 /// Backend errors flattened to text (they differ per backend type).
@@ -17,37 +19,121 @@ pub(crate) fn de<E: std::fmt::Display>(e: E) -> String {
 
 /// A figure that can be drawn on any plotters backend.
 pub(crate) trait Figure: Sync {
-    /// Width and height in pixels.
+    /// Width and height in logical pixels (the PNG's size).
     fn size(&self) -> (u32, u32);
-    /// Draws the figure. `text` is false when text must be skipped (PNG without a font).
-    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>, text: &Texter) -> DrawResult;
+    /// PNGs are drawn at this many times the size and box-filtered down (anti-aliased lines).
+    fn supersample(&self) -> u32 {
+        1
+    }
+    /// Draws the figure in logical coordinates through `pen`.
+    fn draw<DB: DrawingBackend>(&self, pen: &Pen<'_, DB>) -> DrawResult;
 }
 
-/// Draws text only when a font is available to the backend.
-pub(crate) struct Texter {
-    enabled: bool,
+/// A position in logical pixels, integer or not.
+pub(crate) trait Point {
+    /// The position as floating point.
+    fn f(self) -> (f64, f64);
 }
 
-impl Texter {
-    /// Draws `s` at `pos` with its anchor at `(h, v)`.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn text<DB: DrawingBackend>(
+impl Point for (f64, f64) {
+    fn f(self) -> (f64, f64) {
+        self
+    }
+}
+
+impl Point for (i32, i32) {
+    fn f(self) -> (f64, f64) {
+        (self.0 as f64, self.1 as f64)
+    }
+}
+
+/// Line dash patterns, in logical pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Dash {
+    /// A continuous line.
+    Solid,
+    /// Dashes of the first length separated by gaps of the second.
+    Dashed(f64, f64),
+}
+
+/// Draws in logical (floating-point) coordinates scaled by `k` onto a drawing area, skipping
+/// text when no font is available to the backend.
+pub(crate) struct Pen<'a, DB: DrawingBackend> {
+    /// The drawing area (device pixels).
+    pub(crate) area: &'a DrawingArea<DB, Shift>,
+    k: f64,
+    text: bool,
+}
+
+impl<DB: DrawingBackend> Pen<'_, DB> {
+    fn p(&self, (x, y): (f64, f64)) -> (i32, i32) {
+        ((x * self.k).round() as i32, (y * self.k).round() as i32)
+    }
+
+    fn len(&self, v: f64) -> u32 {
+        (v * self.k).round().max(1.0) as u32
+    }
+
+    /// A polyline of `width` logical pixels.
+    pub(crate) fn path(
         &self,
-        area: &DrawingArea<DB, Shift>,
+        pts: &[(f64, f64)],
+        color: RGBColor,
+        width: f64,
+        dash: Dash,
+    ) -> DrawResult {
+        let pts: Vec<(i32, i32)> = pts.iter().map(|&q| self.p(q)).collect();
+        let style = color.stroke_width(self.len(width));
+        match dash {
+            Dash::Solid => self.area.draw(&PathElement::new(pts, style)),
+            Dash::Dashed(on, off) => self.area.draw(&DashedPathElement::new(
+                pts,
+                self.len(on) as i32,
+                self.len(off) as i32,
+                style,
+            )),
+        }
+        .map_err(de)
+    }
+
+    /// A circle of radius `r` (logical pixels), filled or outlined.
+    pub(crate) fn circle(
+        &self,
+        c: (f64, f64),
+        r: f64,
+        color: RGBColor,
+        filled: bool,
+    ) -> DrawResult {
+        let style = if filled {
+            color.filled()
+        } else {
+            color.stroke_width(self.len(1.0))
+        };
+        self.area
+            .draw(&Circle::new(self.p(c), self.len(r), style))
+            .map_err(de)
+    }
+
+    /// Text of `size` logical pixels with its anchor at `(h, v)`.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn text(
+        &self,
         s: &str,
-        pos: (i32, i32),
+        pos: impl Point,
         size: f64,
         color: RGBColor,
         h: HPos,
         v: VPos,
     ) -> DrawResult {
-        if !self.enabled {
+        if !self.text {
             return Ok(());
         }
-        let style = TextStyle::from(("sans-serif", size).into_font())
+        let style = TextStyle::from(("sans-serif", size * self.k).into_font())
             .color(&color)
             .pos(Pos::new(h, v));
-        area.draw(&Text::new(s.to_string(), pos, style)).map_err(de)
+        self.area
+            .draw(&Text::new(s.to_string(), self.p(pos.f()), style))
+            .map_err(de)
     }
 }
 
@@ -65,17 +151,44 @@ pub(crate) fn write_png<F: Figure>(fig: &F, path: &Path) -> Result<()> {
         path: path.to_path_buf(),
         message,
     };
+    let text = crate::font::font_available();
+    let (w, h) = fig.size();
+    let k = fig.supersample().clamp(1, 4);
+    // Supersampled figures are drawn into a k-times larger buffer first.
+    let small = if k > 1 {
+        let (bw, bh) = (w * k, h * k);
+        let mut big = vec![255u8; 3 * bw as usize * bh as usize];
+        {
+            let area = BitMapBackend::with_buffer(&mut big, (bw, bh)).into_drawing_area();
+            fig.draw(&Pen {
+                area: &area,
+                k: k as f64,
+                text,
+            })
+            .map_err(draw_err)?;
+            area.present().map_err(de).map_err(draw_err)?;
+        }
+        Some(downsample(&big, w as usize, h as usize, k as usize))
+    } else {
+        None
+    };
     {
-        let backend = BitMapBackend::new(tmp.path(), fig.size());
-        let area = backend.into_drawing_area();
+        let area = BitMapBackend::new(tmp.path(), (w, h)).into_drawing_area();
         area.fill(&WHITE).map_err(de).map_err(draw_err)?;
-        fig.draw(
-            &area,
-            &Texter {
-                enabled: crate::font::font_available(),
-            },
-        )
-        .map_err(draw_err)?;
+        match &small {
+            Some(buf) => {
+                let bitmap = BitMapElement::<(i32, i32)>::with_ref((0, 0), (w, h), buf)
+                    .ok_or_else(|| draw_err("raster size mismatch".into()))?;
+                area.draw(&bitmap).map_err(de).map_err(draw_err)?;
+            }
+            None => fig
+                .draw(&Pen {
+                    area: &area,
+                    k: 1.0,
+                    text,
+                })
+                .map_err(draw_err)?,
+        }
         area.present().map_err(de).map_err(draw_err)?;
     }
     // The encoder wrote through its own handle; flushing the inode through ours makes the rename
@@ -91,6 +204,26 @@ pub(crate) fn write_png<F: Figure>(fig: &F, path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Box-filters an RGB image of (w·k)×(h·k) pixels down to w×h.
+fn downsample(big: &[u8], w: usize, h: usize, k: usize) -> Vec<u8> {
+    let bw = w * k;
+    let mut out = vec![0u8; 3 * w * h];
+    out.par_chunks_mut(3 * w).enumerate().for_each(|(y, row)| {
+        for x in 0..w {
+            for c in 0..3 {
+                let mut sum = 0u32;
+                for dy in 0..k {
+                    for dx in 0..k {
+                        sum += big[3 * ((y * k + dy) * bw + x * k + dx) + c] as u32;
+                    }
+                }
+                row[3 * x + c] = ((sum + (k * k) as u32 / 2) / (k * k) as u32) as u8;
+            }
+        }
+    });
+    out
+}
+
 /// Renders `fig` into an SVG at `path` atomically. SVG text needs no font file.
 pub(crate) fn write_svg<F: Figure>(fig: &F, path: &Path) -> Result<()> {
     let draw_err = |message: String| PlotError::Draw {
@@ -101,8 +234,12 @@ pub(crate) fn write_svg<F: Figure>(fig: &F, path: &Path) -> Result<()> {
     {
         let area = SVGBackend::with_string(&mut svg, fig.size()).into_drawing_area();
         area.fill(&WHITE).map_err(de).map_err(draw_err)?;
-        fig.draw(&area, &Texter { enabled: true })
-            .map_err(draw_err)?;
+        fig.draw(&Pen {
+            area: &area,
+            k: 1.0,
+            text: true,
+        })
+        .map_err(draw_err)?;
         area.present().map_err(de).map_err(draw_err)?;
     }
     write_bytes_atomic(path, svg.as_bytes())

@@ -5,13 +5,11 @@
 
 use crate::color::{CHANNEL, PALETTE};
 use crate::draw::{
-    de, fmt_deg, fmt_value, nice_ceil, write_png, write_svg, DrawResult, Figure, Texter,
+    fmt_deg, fmt_value, nice_ceil, write_png, write_svg, Dash, DrawResult, Figure, Pen,
 };
 use crate::{check_angle, clean, with_suffix, PlotError, PlotFiles, Result};
 use lustre_brdf::frame::{deg, spherical};
 use lustre_brdf::{Bsdf, DVec3, Rgb};
-use plotters::coord::Shift;
-use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, VPos};
 use rayon::prelude::*;
@@ -323,21 +321,18 @@ impl PolarFigure {
         )
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn draw_panel<DB: DrawingBackend>(
         &self,
-        area: &DrawingArea<DB, Shift>,
-        t: &Texter,
+        pen: &Pen<'_, DB>,
         curves: &[PolarCurve],
         x0: i32,
         y0: i32,
     ) -> DrawResult {
-        let p = self.opts.panel_px as i32;
-        let r = self.radius();
-        let rf = r as f64;
-        let cx = x0 + p / 2;
-        let cy = y0 + PANEL_TITLE_H + 26 + r;
-        let to_px = |x: f64, y: f64| (cx + x.round() as i32, cy - y.round() as i32);
+        let p = self.opts.panel_px as f64;
+        let rf = self.radius() as f64;
+        let cx = x0 as f64 + p / 2.0;
+        let cy = (y0 + PANEL_TITLE_H + 26 + self.radius()) as f64;
+        let to_px = |x: f64, y: f64| (cx + x, cy - y);
         let grid = RGBColor(215, 215, 215);
         let label = RGBColor(90, 90, 90);
         let theta_i = curves.first().map_or(0.0, |c| c.theta_i_deg);
@@ -350,23 +345,23 @@ impl PolarFigure {
         // Rings with their values along the surface line.
         for k in 1..=4 {
             let fr = k as f64 / 4.0;
-            let pts: Vec<(i32, i32)> = (lo..=hi)
+            let pts: Vec<(f64, f64)> = (2 * lo..=2 * hi)
                 .map(|a| {
-                    let a = deg(a as f64);
+                    let a = deg(a as f64 / 2.0);
                     to_px(fr * rf * a.sin(), fr * rf * a.cos())
                 })
                 .collect();
-            let style = if k == 4 {
-                RGBColor(150, 150, 150).stroke_width(1)
+            let color = if k == 4 {
+                RGBColor(150, 150, 150)
             } else {
-                grid.stroke_width(1)
+                grid
             };
-            area.draw(&PathElement::new(pts, style)).map_err(de)?;
+            pen.path(&pts, color, 1.0, Dash::Solid)?;
             let (lx, ly) = to_px(fr * rf, 0.0);
-            t.text(
-                area,
-                &fmt_value(self.value_at(fr)),
-                (lx - 2, ly + 5),
+            let v = fmt_value(self.value_at(fr));
+            pen.text(
+                &v,
+                (lx - 2.0, ly + 5.0),
                 12.0,
                 label,
                 HPos::Right,
@@ -379,38 +374,36 @@ impl PolarFigure {
             let inner = if a % 30 == 0 { 0.0 } else { 0.25 };
             let p0 = to_px(inner * rf * ar.sin(), inner * rf * ar.cos());
             let p1 = to_px(rf * ar.sin(), rf * ar.cos());
-            area.draw(&PathElement::new(vec![p0, p1], grid.stroke_width(1)))
-                .map_err(de)?;
+            pen.path(&[p0, p1], grid, 1.0, Dash::Solid)?;
             if a % 30 == 0 && a.abs() != 90 && a != -180 {
-                let (lx, ly) = to_px((rf + 14.0) * ar.sin(), (rf + 14.0) * ar.cos());
+                let lp = to_px((rf + 14.0) * ar.sin(), (rf + 14.0) * ar.cos());
                 let s = if a == 0 {
                     "θo = 0°".to_string()
                 } else {
                     fmt_deg(a.abs() as f64)
                 };
-                t.text(area, &s, (lx, ly), 12.0, label, HPos::Center, VPos::Center)?;
+                pen.text(&s, lp, 12.0, label, HPos::Center, VPos::Center)?;
             }
         }
         // The surface.
         let dark = RGBColor(60, 60, 60);
-        area.draw(&PathElement::new(
-            vec![(cx - r - 10, cy), (cx + r + 10, cy)],
-            dark.stroke_width(2),
-        ))
-        .map_err(de)?;
-        t.text(
-            area,
+        pen.path(
+            &[(cx - rf - 10.0, cy), (cx + rf + 10.0, cy)],
+            dark,
+            2.0,
+            Dash::Solid,
+        )?;
+        pen.text(
             "90°",
-            (cx - r - 12, cy),
+            (cx - rf - 12.0, cy),
             12.0,
             label,
             HPos::Right,
             VPos::Center,
         )?;
-        t.text(
-            area,
+        pen.text(
             "90°",
-            (cx + r + 12, cy),
+            (cx + rf + 12.0, cy),
             12.0,
             label,
             HPos::Left,
@@ -420,20 +413,14 @@ impl PolarFigure {
         let ti = deg(theta_i);
         let light = to_px(-rf * ti.sin(), rf * ti.cos());
         let mirror = to_px(rf * ti.sin(), rf * ti.cos());
-        area.draw(&PathElement::new(
-            vec![(cx, cy), light],
-            RGBColor(255, 160, 0).stroke_width(2),
-        ))
-        .map_err(de)?;
-        area.draw(&DashedPathElement::new(
-            vec![(cx, cy), mirror],
-            6,
-            5,
-            RGBColor(120, 120, 120).stroke_width(1),
-        ))
-        .map_err(de)?;
-        area.draw(&Circle::new(light, 6, RED.filled()))
-            .map_err(de)?;
+        pen.path(&[(cx, cy), light], RGBColor(255, 160, 0), 2.0, Dash::Solid)?;
+        pen.path(
+            &[(cx, cy), mirror],
+            RGBColor(120, 120, 120),
+            1.0,
+            Dash::Dashed(6.0, 5.0),
+        )?;
+        pen.circle(light, 6.0, RED, true)?;
 
         // The lobes.
         for (b, c) in curves.iter().enumerate() {
@@ -445,7 +432,7 @@ impl PolarFigure {
                 });
             let count = if grey { 1 } else { self.opts.channels.count() };
             for ch in 0..count {
-                let pts: Vec<(i32, i32)> = c
+                let pts: Vec<(f64, f64)> = c
                     .samples
                     .iter()
                     .filter(|s| self.transmission || s.angle_deg.abs() <= 90.0)
@@ -455,13 +442,13 @@ impl PolarFigure {
                         to_px(x, y)
                     })
                     .collect();
-                self.draw_curve(area, pts, b, ch, grey)?;
+                self.draw_curve(pen, &pts, b, ch, grey)?;
             }
         }
-        t.text(
-            area,
-            &format!("θi = {}", fmt_deg(theta_i)),
-            (cx, y0 + 6),
+        let title = format!("θi = {}", fmt_deg(theta_i));
+        pen.text(
+            &title,
+            (cx, y0 as f64 + 6.0),
             19.0,
             BLACK,
             HPos::Center,
@@ -469,11 +456,20 @@ impl PolarFigure {
         )
     }
 
-    /// Draws a curve of BSDF `b`, channel `ch` in its style.
+    /// The dash pattern of the `b`-th BSDF's curves.
+    fn dash(b: usize) -> Dash {
+        match b % 3 {
+            0 => Dash::Solid,
+            1 => Dash::Dashed(9.0, 5.0),
+            _ => Dash::Dashed(2.0, 4.0),
+        }
+    }
+
+    /// Draws a curve of BSDF `b`, channel `ch` in its style (`grey`: one curve for all channels).
     fn draw_curve<DB: DrawingBackend>(
         &self,
-        area: &DrawingArea<DB, Shift>,
-        pts: Vec<(i32, i32)>,
+        pen: &Pen<'_, DB>,
+        pts: &[(f64, f64)],
         b: usize,
         ch: usize,
         grey: bool,
@@ -483,85 +479,49 @@ impl PolarFigure {
             Channels::Rgb if grey => (RGBColor(70, 70, 70), b),
             Channels::Rgb => (CHANNEL[ch], b),
         };
-        let style = color.stroke_width(2);
-        match dash % 3 {
-            0 => area.draw(&PathElement::new(pts, style)),
-            1 => area.draw(&DashedPathElement::new(pts, 9, 5, style)),
-            _ => area.draw(&DashedPathElement::new(pts, 2, 4, style)),
-        }
-        .map_err(de)
+        pen.path(pts, color, 2.0, Self::dash(dash))
     }
 
-    fn draw_legend<DB: DrawingBackend>(
-        &self,
-        area: &DrawingArea<DB, Shift>,
-        t: &Texter,
-        y: i32,
-    ) -> DrawResult {
-        let mut x = 20;
+    fn draw_legend<DB: DrawingBackend>(&self, pen: &Pen<'_, DB>, y: i32) -> DrawResult {
+        let y = y as f64;
+        let grey = RGBColor(90, 90, 90);
+        let mut x = 20.0;
         for (b, label) in self.labels.iter().enumerate() {
-            let pts = vec![(x, y), (x + 34, y)];
+            let pts = [(x, y), (x + 34.0, y)];
             match self.opts.channels {
-                Channels::Luminance => self.draw_curve(area, pts, b, 0, false)?,
-                Channels::Rgb => {
-                    // A black sample of the dash style.
-                    let style = BLACK.stroke_width(2);
-                    match b % 3 {
-                        0 => area.draw(&PathElement::new(pts, style)),
-                        1 => area.draw(&DashedPathElement::new(pts, 9, 5, style)),
-                        _ => area.draw(&DashedPathElement::new(pts, 2, 4, style)),
-                    }
-                    .map_err(de)?;
-                }
+                Channels::Luminance => self.draw_curve(pen, &pts, b, 0, false)?,
+                // A black sample of the dash style.
+                Channels::Rgb => pen.path(&pts, BLACK, 2.0, Self::dash(b))?,
             }
-            t.text(
-                area,
-                label,
-                (x + 42, y),
-                16.0,
-                BLACK,
-                HPos::Left,
-                VPos::Center,
-            )?;
-            x += 42 + 8 * label.chars().count() as i32 + 28;
+            pen.text(label, (x + 42.0, y), 16.0, BLACK, HPos::Left, VPos::Center)?;
+            x += 70.0 + 8.0 * label.chars().count() as f64;
         }
         if self.opts.channels == Channels::Rgb {
-            t.text(
-                area,
-                "(curve colour = R, G, B channel; grey where all coincide)",
-                (x, y),
-                14.0,
-                RGBColor(90, 90, 90),
-                HPos::Left,
-                VPos::Center,
-            )?;
-            x += 370;
+            let note = "(curve colour = R, G, B channel; grey where all coincide)";
+            pen.text(note, (x, y), 14.0, grey, HPos::Left, VPos::Center)?;
+            x += 370.0;
         }
-        area.draw(&Circle::new((x + 6, y), 6, RED.filled()))
-            .map_err(de)?;
-        t.text(
-            area,
+        pen.circle((x + 6.0, y), 6.0, RED, true)?;
+        pen.text(
             "light ωi",
-            (x + 18, y),
+            (x + 18.0, y),
             14.0,
-            RGBColor(90, 90, 90),
+            grey,
             HPos::Left,
             VPos::Center,
         )?;
-        let x = x + 90;
-        area.draw(&DashedPathElement::new(
-            vec![(x, y), (x + 30, y)],
-            6,
-            5,
-            RGBColor(120, 120, 120).stroke_width(1),
-        ))
-        .map_err(de)?;
-        t.text(
-            area,
+        let x = x + 90.0;
+        pen.path(
+            &[(x, y), (x + 30.0, y)],
+            RGBColor(120, 120, 120),
+            1.0,
+            Dash::Dashed(6.0, 5.0),
+        )?;
+        pen.text(
             "mirror direction",
-            (x + 38, y),
+            (x + 38.0, y),
             14.0,
-            RGBColor(90, 90, 90),
+            grey,
             HPos::Left,
             VPos::Center,
         )
@@ -585,11 +545,14 @@ impl Figure for PolarFigure {
         (w.max(legend_w).max(520), h as u32)
     }
 
-    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>, t: &Texter) -> DrawResult {
+    fn supersample(&self) -> u32 {
+        2
+    }
+
+    fn draw<DB: DrawingBackend>(&self, pen: &Pen<'_, DB>) -> DrawResult {
         let (w, h) = self.size();
         let x_off = (w as i32 - self.cols as i32 * self.opts.panel_px as i32) / 2;
-        t.text(
-            area,
+        pen.text(
             &self.title(),
             (w as i32 / 2, 14),
             21.0,
@@ -601,8 +564,8 @@ impl Figure for PolarFigure {
             let (row, col) = (i / self.cols, i % self.cols);
             let x0 = x_off + col as i32 * self.opts.panel_px as i32;
             let y0 = TITLE_H + row as i32 * self.panel_h();
-            self.draw_panel(area, t, curves, x0, y0)?;
+            self.draw_panel(pen, curves, x0, y0)?;
         }
-        self.draw_legend(area, t, h as i32 - LEGEND_H / 2 - 4)
+        self.draw_legend(pen, h as i32 - LEGEND_H / 2 - 4)
     }
 }
