@@ -4,14 +4,15 @@
 //! bytes. We embed no font (a full Unicode sans font with θ/φ/ω glyphs is several hundred KiB);
 //! instead the first readable font among `$LUSTRE_PLOT_FONT` and a list of common system paths
 //! (DejaVu Sans, Liberation Sans, Noto Sans, FreeSans, Arial/Helvetica on macOS and Windows) is
-//! loaded once per process and registered as `sans-serif`. When none is found, PNG figures are
+//! loaded once per process and registered as `sans-serif` (`LUSTRE_PLOT_FONT=none` skips it). When none is found, PNG figures are
 //! drawn without text (the curves, discs, markers and the colour bar are still drawn), while the
 //! SVG figures keep all their labels because SVG text is rendered by the viewer.
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-/// Environment variable naming a `.ttf`/`.otf` file to use for PNG text.
+/// Environment variable naming a `.ttf`/`.otf` file to use for PNG text; the value `none`
+/// disables PNG text (reproducible, font-independent images).
 pub const FONT_ENV: &str = "LUSTRE_PLOT_FONT";
 
 const CANDIDATES: &[&str] = &[
@@ -49,6 +50,9 @@ pub fn font_available() -> bool {
 
 fn load() -> Option<PathBuf> {
     let env = std::env::var_os(FONT_ENV).map(PathBuf::from);
+    if env.as_deref() == Some(Path::new("none")) {
+        return None;
+    }
     env.into_iter()
         .chain(CANDIDATES.iter().map(PathBuf::from))
         .find(|p| try_register(p))
