@@ -1,0 +1,311 @@
+//! `lustre plot`: lobe plots in the plane of incidence and transfer-probability arrays
+//! (000 Fig. 2.6, 3.11, 3.12; 004 Fig. V.11) for materials named by catalog specs.
+
+use anyhow::{bail, Context, Result};
+use lustre_brdf::{catalog, Bsdf};
+use lustre_plot::{ArrayColor, ArrayOptions, Channels, PolarOptions, Quantity};
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+/// The material plotted when no SPEC is given.
+pub const DEFAULT_SPEC: &str = "kurt-demo";
+
+/// Which figures to draw.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PlotKind {
+    /// Lobes in the plane of incidence, one panel per θi.
+    Polar,
+    /// Transfer-probability disc arrays (rows θi, columns φi).
+    Array,
+    /// Both.
+    All,
+}
+
+/// The radial quantity of the polar plots.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PlotQuantity {
+    /// p = f·|cos θo|, the transfer probability.
+    Transfer,
+    /// f, the BSDF value in 1/sr.
+    Bsdf,
+}
+
+/// Arguments of `lustre plot`.
+#[derive(Debug, clap::Args)]
+pub struct PlotArgs {
+    /// Material specs (catalog names, model specs or measured files); several are overlaid in
+    /// the polar plot and get one array each. Default: the built-in demo material.
+    #[arg(value_name = "SPEC")]
+    pub specs: Vec<String>,
+    /// A second material to compare with (e.g. a fit against its measurement): overlaid in the
+    /// polar plot, drawn side by side on a shared scale in the arrays.
+    #[arg(long, value_name = "SPEC")]
+    pub compare: Option<String>,
+    /// Which figures to draw.
+    #[arg(long, value_enum, default_value_t = PlotKind::All)]
+    pub kind: PlotKind,
+    /// Incidence angles θi (degrees) of the polar panels.
+    #[arg(
+        long = "theta-i",
+        value_delimiter = ',',
+        default_value = "10,30,50,70",
+        allow_hyphen_values = true
+    )]
+    pub theta_i: Vec<f64>,
+    /// Azimuth φi (degrees) of the plane of incidence of the polar plots.
+    #[arg(long = "phi-i", default_value_t = 0.0, allow_hyphen_values = true)]
+    pub phi_i: f64,
+    /// Apply the cube root to the polar lobes (the arrays always use it, as Fig. 2.6 does).
+    #[arg(long)]
+    pub cube_root: bool,
+    /// Radial quantity of the polar plots.
+    #[arg(long, value_enum, default_value_t = PlotQuantity::Transfer)]
+    pub quantity: PlotQuantity,
+    /// Polar plots: one curve per RGB channel instead of luminance.
+    #[arg(long)]
+    pub rgb: bool,
+    /// Arrays: colour-map the luminance instead of showing RGB.
+    #[arg(long)]
+    pub colormap: bool,
+    /// Array rows θi (degrees).
+    #[arg(
+        long = "array-theta",
+        value_delimiter = ',',
+        default_value = "0,5,20,35,50,65"
+    )]
+    pub array_theta: Vec<f64>,
+    /// Array columns φi (degrees).
+    #[arg(
+        long = "array-phi",
+        value_delimiter = ',',
+        default_value = "0,15,30,45,60,75,90",
+        allow_hyphen_values = true
+    )]
+    pub array_phi: Vec<f64>,
+    /// Array disc diameter in pixels.
+    #[arg(long, default_value_t = 96)]
+    pub disc_px: u32,
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "lustre-plots")]
+    pub out: PathBuf,
+}
+
+/// Runs `lustre plot`: resolves the specs, draws the requested figures into `--out` and prints
+/// the path of every file written.
+pub fn run(args: &PlotArgs) -> Result<()> {
+    let specs: Vec<String> = if args.specs.is_empty() {
+        vec![DEFAULT_SPEC.to_string()]
+    } else {
+        args.specs.clone()
+    };
+    let materials: Vec<(String, Box<dyn Bsdf>)> = specs
+        .iter()
+        .map(|s| Ok((s.clone(), resolve(s)?)))
+        .collect::<Result<_>>()?;
+    let compare = args
+        .compare
+        .as_deref()
+        .map(|s| Ok::<_, anyhow::Error>((s.to_string(), resolve(s)?)))
+        .transpose()?;
+
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create the output folder {}", args.out.display()))?;
+    if !lustre_plot::font::font_available() {
+        eprintln!(
+            "note: no system font found (set {} to a .ttf file); the PNG files carry no text, the SVG files do",
+            lustre_plot::font::FONT_ENV
+        );
+    }
+    let mut names = UniqueNames::default();
+    let mut written = Vec::new();
+
+    if matches!(args.kind, PlotKind::Polar | PlotKind::All) {
+        let mut all: Vec<(&dyn Bsdf, &str)> = materials
+            .iter()
+            .map(|(s, b)| (b.as_ref(), s.as_str()))
+            .collect();
+        if let Some((s, b)) = &compare {
+            all.push((b.as_ref(), s.as_str()));
+        }
+        let opts = PolarOptions {
+            quantity: match args.quantity {
+                PlotQuantity::Transfer => Quantity::TransferProbability,
+                PlotQuantity::Bsdf => Quantity::Bsdf,
+            },
+            cube_root: args.cube_root,
+            channels: if args.rgb {
+                Channels::Rgb
+            } else {
+                Channels::Luminance
+            },
+            phi_i_deg: args.phi_i,
+            ..PolarOptions::default()
+        };
+        let stem = all
+            .iter()
+            .map(|(_, s)| slug(s))
+            .collect::<Vec<_>>()
+            .join("-vs-");
+        let base = args.out.join(names.claim(&format!("polar-{stem}")));
+        let files = lustre_plot::polar_plot(&all, &args.theta_i, &opts, &base)
+            .with_context(|| format!("drawing the polar plot into {}", args.out.display()))?;
+        written.extend(files.paths().into_iter().map(Path::to_path_buf));
+    }
+
+    if matches!(args.kind, PlotKind::Array | PlotKind::All) {
+        let opts = ArrayOptions {
+            thetas_deg: args.array_theta.clone(),
+            phis_deg: args.array_phi.clone(),
+            disc_px: args.disc_px,
+            color: if args.colormap {
+                ArrayColor::Colormap
+            } else {
+                ArrayColor::Rgb
+            },
+            ..ArrayOptions::default()
+        };
+        for (spec, bsdf) in &materials {
+            let files = match &compare {
+                Some((cspec, cbsdf)) => {
+                    let base = args.out.join(names.claim(&format!(
+                        "array-{}-vs-{}",
+                        slug(spec),
+                        slug(cspec)
+                    )));
+                    lustre_plot::transfer_array_compare(
+                        (bsdf.as_ref(), spec),
+                        (cbsdf.as_ref(), cspec),
+                        &opts,
+                        &base,
+                    )
+                }
+                None => {
+                    let base = args.out.join(names.claim(&format!("array-{}", slug(spec))));
+                    lustre_plot::transfer_array(bsdf.as_ref(), spec, &opts, &base)
+                }
+            }
+            .with_context(|| {
+                format!(
+                    "drawing the transfer array of '{spec}' into {}",
+                    args.out.display()
+                )
+            })?;
+            written.extend(files.paths().into_iter().map(Path::to_path_buf));
+        }
+    }
+    for p in &written {
+        println!("{}", p.display());
+    }
+    Ok(())
+}
+
+/// Resolves a spec with a message that names it and a few known materials.
+fn resolve(spec: &str) -> Result<Box<dyn Bsdf>> {
+    if spec.trim().is_empty() {
+        bail!("empty material spec");
+    }
+    catalog::resolve(spec).with_context(|| {
+        let known = catalog::list();
+        let shown = known
+            .iter()
+            .take(12)
+            .cloned()
+            .collect::<Vec<_>>()
+            .join(", ");
+        let more = if known.len() > 12 {
+            format!(", … ({} in all)", known.len())
+        } else {
+            String::new()
+        };
+        format!("cannot resolve material spec '{spec}' (built-in names: {shown}{more})")
+    })
+}
+
+/// A file-name-safe short form of a spec: the last path component, other characters as '-'.
+fn slug(spec: &str) -> String {
+    let last = spec
+        .rsplit(['/', '\\'])
+        .find(|s| !s.is_empty())
+        .unwrap_or(spec);
+    let s: String = last
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.' {
+                c
+            } else {
+                '-'
+            }
+        })
+        .take(48)
+        .collect();
+    let s = s.trim_matches(|c| c == '-' || c == '.').to_string();
+    if s.is_empty() {
+        "material".into()
+    } else {
+        s
+    }
+}
+
+/// Hands out file stems, numbering repeats so no figure overwrites another of the same run.
+#[derive(Default)]
+struct UniqueNames(HashSet<String>);
+
+impl UniqueNames {
+    fn claim(&mut self, stem: &str) -> String {
+        let mut name = stem.to_string();
+        let mut k = 2;
+        while !self.0.insert(name.clone()) {
+            name = format!("{stem}-{k}");
+            k += 1;
+        }
+        name
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slugs_are_file_name_safe() {
+        assert_eq!(slug("kurt-demo"), "kurt-demo");
+        assert_eq!(
+            slug("/data/merl/gold-metallic-paint.binary"),
+            "gold-metallic-paint.binary"
+        );
+        assert_eq!(slug("kurt(kd=0.1, ks=0.5)"), "kurt-kd-0.1--ks-0.5");
+        assert_eq!(slug("../"), "material");
+        let mut u = UniqueNames::default();
+        assert_eq!(u.claim("a"), "a");
+        assert_eq!(u.claim("a"), "a-2");
+    }
+
+    #[test]
+    fn unknown_spec_and_unwritable_folder_are_errors() {
+        let args = |specs: Vec<String>, out: PathBuf| PlotArgs {
+            specs,
+            compare: None,
+            kind: PlotKind::Polar,
+            theta_i: vec![30.0],
+            phi_i: 0.0,
+            cube_root: false,
+            quantity: PlotQuantity::Transfer,
+            rgb: false,
+            colormap: false,
+            array_theta: vec![0.0],
+            array_phi: vec![0.0],
+            disc_px: 32,
+            out,
+        };
+        let dir = std::env::temp_dir().join(format!("lustre-plot-cmd-{}", std::process::id()));
+        let e = run(&args(vec!["no-such-material-xyz".into()], dir.clone())).unwrap_err();
+        assert!(format!("{e:#}").contains("no-such-material-xyz"), "{e:#}");
+        let file =
+            std::env::temp_dir().join(format!("lustre-plot-cmd-file-{}", std::process::id()));
+        std::fs::write(&file, b"x").unwrap();
+        let e = run(&args(vec![DEFAULT_SPEC.into()], file.join("sub"))).unwrap_err();
+        assert!(format!("{e:#}").contains("output folder"), "{e:#}");
+        std::fs::remove_file(&file).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
