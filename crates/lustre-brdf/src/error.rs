@@ -43,17 +43,27 @@ pub type Result<T> = std::result::Result<T, Error>;
 impl Error {
     /// A format error for `path`.
     pub fn format(path: impl Into<PathBuf>, problem: impl Into<String>) -> Self {
-        Error::Format { path: path.into(), problem: problem.into() }
+        Error::Format {
+            path: path.into(),
+            problem: problem.into(),
+        }
     }
 
     /// An I/O error for `path`.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
-        Error::Io { path: path.into(), source }
+        Error::Io {
+            path: path.into(),
+            source,
+        }
     }
 
     /// A parameter error.
     pub fn param(name: &str, value: f64, reason: impl Into<String>) -> Self {
-        Error::Parameter { name: name.to_string(), value, reason: reason.into() }
+        Error::Parameter {
+            name: name.to_string(),
+            value,
+            reason: reason.into(),
+        }
     }
 }
 
@@ -63,7 +73,11 @@ pub fn check_range(name: &str, value: f64, lo: f64, hi: f64) -> Result<f64> {
         return Err(Error::param(name, value, "not a finite number"));
     }
     if value < lo || value > hi {
-        return Err(Error::param(name, value, format!("must lie in [{lo}, {hi}]")));
+        return Err(Error::param(
+            name,
+            value,
+            format!("must lie in [{lo}, {hi}]"),
+        ));
     }
     Ok(value)
 }

@@ -71,7 +71,12 @@ pub fn to_half_diff(wi: DVec3, wo: DVec3) -> Option<HalfDiff> {
     let phi_h = phi(h);
     // Rotate wi by -φ_h about z, then by -θ_h about y: the difference vector.
     let d = rotate_y(rotate_z(wi, -phi_h), -theta_h);
-    Some(HalfDiff { theta_h, phi_h, theta_d: theta(d), phi_d: phi(d) })
+    Some(HalfDiff {
+        theta_h,
+        phi_h,
+        theta_d: theta(d),
+        phi_d: phi(d),
+    })
 }
 
 /// Converts half/difference angles back to (wi, wo).
@@ -119,12 +124,19 @@ mod tests {
 
     #[test]
     fn half_diff_round_trip() {
-        for &(ti, pi, to, po) in &[(0.3, 0.1, 0.9, 2.5), (1.2, -2.0, 0.2, 0.4), (0.01, 0.0, 1.5, 3.0)] {
+        for &(ti, pi, to, po) in &[
+            (0.3, 0.1, 0.9, 2.5),
+            (1.2, -2.0, 0.2, 0.4),
+            (0.01, 0.0, 1.5, 3.0),
+        ] {
             let wi = spherical(ti, pi);
             let wo = spherical(to, po);
             let hd = to_half_diff(wi, wo).expect("not opposite");
             let (a, b) = from_half_diff(&hd);
-            assert!((a - wi).length() < 1e-12 && (b - wo).length() < 1e-12, "{hd:?}");
+            assert!(
+                (a - wi).length() < 1e-12 && (b - wo).length() < 1e-12,
+                "{hd:?}"
+            );
         }
     }
 

@@ -59,7 +59,11 @@ impl Rgb {
 
     /// Channel-wise combination of two triples.
     pub fn zip(self, o: Rgb, f: impl Fn(f64, f64) -> f64) -> Rgb {
-        Rgb([f(self.0[0], o.0[0]), f(self.0[1], o.0[1]), f(self.0[2], o.0[2])])
+        Rgb([
+            f(self.0[0], o.0[0]),
+            f(self.0[1], o.0[1]),
+            f(self.0[2], o.0[2]),
+        ])
     }
 }
 

@@ -89,7 +89,11 @@ mod tests {
     fn warps_are_unit() {
         for k in 0..32 {
             let (u1, u2) = hammersley(k, 32);
-            for w in [cosine_hemisphere(u1, u2), uniform_sphere(u1, u2), cosine_power(u1, u2, 20.0)] {
+            for w in [
+                cosine_hemisphere(u1, u2),
+                uniform_sphere(u1, u2),
+                cosine_power(u1, u2, 20.0),
+            ] {
                 assert!((w.length() - 1.0).abs() < 1e-12);
             }
         }

@@ -61,7 +61,9 @@ pub fn albedo_quadrature(bsdf: &dyn Bsdf, wo: DVec3, q: &SphereQuadrature) -> [f
 /// Fraction of `n` stratified samples for which `sample` succeeds (what ∫pdf must equal).
 pub fn sample_success_fraction(bsdf: &dyn Bsdf, wo: DVec3, n: usize, seed: u64) -> f64 {
     let mut rng = SplitMix64::new(seed);
-    let ok = (0..n).filter(|_| bsdf.sample(wo, rng.next_f64(), rng.next_f64()).is_some()).count();
+    let ok = (0..n)
+        .filter(|_| bsdf.sample(wo, rng.next_f64(), rng.next_f64()).is_some())
+        .count();
     ok as f64 / n as f64
 }
 
@@ -95,7 +97,13 @@ impl Chi2Result {
 
 /// Chi-square goodness of fit between `sample` and `pdf` for one `wo`, on a (cos θ, φ) grid of
 /// `res_theta × 2·res_theta` cells over the sphere (as Mitsuba 3's `ChiSquareTest`).
-pub fn chi2_test(bsdf: &dyn Bsdf, wo: DVec3, res_theta: usize, samples: usize, seed: u64) -> Chi2Result {
+pub fn chi2_test(
+    bsdf: &dyn Bsdf,
+    wo: DVec3,
+    res_theta: usize,
+    samples: usize,
+    seed: u64,
+) -> Chi2Result {
     let res_phi = 2 * res_theta;
     let cells = res_theta * res_phi;
     let cell_of = |w: DVec3| -> usize {
@@ -175,7 +183,11 @@ pub fn chi2_test(bsdf: &dyn Bsdf, wo: DVec3, res_theta: usize, samples: usize, s
         dof += 1;
     }
     let dof = dof.saturating_sub(1).max(1);
-    let p_value = if stat.is_finite() { gamma_q(dof as f64 / 2.0, stat / 2.0) } else { 0.0 };
+    let p_value = if stat.is_finite() {
+        gamma_q(dof as f64 / 2.0, stat / 2.0)
+    } else {
+        0.0
+    };
     Chi2Result {
         statistic: stat,
         dof,
@@ -214,8 +226,14 @@ pub fn reciprocity_error(bsdf: &dyn Bsdf, n: usize, seed: u64) -> f64 {
 
 /// Outgoing directions the battery tests at: θo from near-normal to grazing, several azimuths.
 pub fn test_directions() -> Vec<DVec3> {
-    [(0.05, 0.3), (0.5, 1.0), (1.0, -2.0), (1.3, 2.5), (1.52, 0.7)]
-        .iter()
-        .map(|&(t, p)| crate::frame::spherical(t, p))
-        .collect()
+    [
+        (0.05, 0.3),
+        (0.5, 1.0),
+        (1.0, -2.0),
+        (1.3, 2.5),
+        (1.52, 0.7),
+    ]
+    .iter()
+    .map(|&(t, p)| crate::frame::spherical(t, p))
+    .collect()
 }

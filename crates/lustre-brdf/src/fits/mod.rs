@@ -27,13 +27,18 @@ impl FitTable {
 
     /// Parses a table from memory; `path` is used in error messages.
     pub fn parse(path: &Path, bytes: &[u8], name_column: &str) -> Result<Self> {
-        let mut rdr = csv::ReaderBuilder::new().has_headers(true).from_reader(bytes);
+        let mut rdr = csv::ReaderBuilder::new()
+            .has_headers(true)
+            .from_reader(bytes);
         let headers = rdr
             .headers()
             .map_err(|e| Error::format(path, format!("unreadable CSV header: {e}")))?
             .clone();
-        let columns: HashMap<String, usize> =
-            headers.iter().enumerate().map(|(i, h)| (h.trim().to_string(), i)).collect();
+        let columns: HashMap<String, usize> = headers
+            .iter()
+            .enumerate()
+            .map(|(i, h)| (h.trim().to_string(), i))
+            .collect();
         let name_col = *columns
             .get(name_column)
             .ok_or_else(|| Error::format(path, format!("no column named {name_column:?}")))?;
@@ -43,7 +48,12 @@ impl FitTable {
             if rec.len() != headers.len() {
                 return Err(Error::format(
                     path,
-                    format!("row {} has {} fields, the header has {}", i + 2, rec.len(), headers.len()),
+                    format!(
+                        "row {} has {} fields, the header has {}",
+                        i + 2,
+                        rec.len(),
+                        headers.len()
+                    ),
                 ));
             }
             rows.push(rec.iter().map(|s| s.trim().to_string()).collect());
@@ -51,12 +61,20 @@ impl FitTable {
         if rows.is_empty() {
             return Err(Error::format(path, "the table has no rows"));
         }
-        Ok(FitTable { path: path.to_path_buf(), columns, rows, name_column: name_col })
+        Ok(FitTable {
+            path: path.to_path_buf(),
+            columns,
+            rows,
+            name_column: name_col,
+        })
     }
 
     /// Material names in file order.
     pub fn names(&self) -> Vec<&str> {
-        self.rows.iter().map(|r| r[self.name_column].as_str()).collect()
+        self.rows
+            .iter()
+            .map(|r| r[self.name_column].as_str())
+            .collect()
     }
 
     /// The finite number in column `col` of the row for `material`.
@@ -66,17 +84,26 @@ impl FitTable {
             .iter()
             .find(|r| r[self.name_column] == material)
             .ok_or_else(|| {
-                Error::NotFound(format!("{}: no material named {material:?}", self.path.display()))
+                Error::NotFound(format!(
+                    "{}: no material named {material:?}",
+                    self.path.display()
+                ))
             })?;
         let c = *self
             .columns
             .get(col)
             .ok_or_else(|| Error::format(&self.path, format!("no column named {col:?}")))?;
         let v: f64 = row[c].parse().map_err(|_| {
-            Error::format(&self.path, format!("{material}: column {col} is not a number: {:?}", row[c]))
+            Error::format(
+                &self.path,
+                format!("{material}: column {col} is not a number: {:?}", row[c]),
+            )
         })?;
         if !v.is_finite() {
-            return Err(Error::format(&self.path, format!("{material}: column {col} is not finite")));
+            return Err(Error::format(
+                &self.path,
+                format!("{material}: column {col} is not finite"),
+            ));
         }
         Ok(v)
     }
