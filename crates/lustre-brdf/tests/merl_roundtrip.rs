@@ -3,8 +3,8 @@
 
 use lustre_brdf::frame::{from_half_diff, spherical, HalfDiff};
 use lustre_brdf::measured::merl::{
-    bin_center, table_from_fn, MerlTable, NegativeValues, BINS, CHANNEL_SCALE, FILE_BYTES,
-    RES_PHI_D, RES_THETA_D, RES_THETA_H,
+    bin_center, merl_angles, table_from_fn, MerlTable, NegativeValues, BINS, CHANNEL_SCALE,
+    FILE_BYTES, RES_PHI_D, RES_THETA_D, RES_THETA_H,
 };
 use lustre_brdf::measured::nbrdf::{synthesize_merl, Nbrdf, NbrdfSet};
 use lustre_brdf::numeric::SphereQuadrature;
@@ -433,6 +433,24 @@ fn trilinear_is_continuous_across_the_phi_seam_and_reciprocal() {
     for ch in 0..3 {
         assert!(rel_close(edge[ch], last[ch], 1e-12), "{edge:?} vs {last:?}");
     }
+    // Swapping wi and wo gives the same folded MERL angles.
+    for &(a, b) in &[
+        ((0.3, 0.2), (1.1, 2.8)),
+        ((1.4, -2.0), (0.1, 0.5)),
+        ((0.7, 1.0), (0.7, -1.0)),
+    ] {
+        let (wi, wo) = (spherical(a.0, a.1), spherical(b.0, b.1));
+        let (x, y) = (
+            merl_angles(wi, wo).expect("above"),
+            merl_angles(wo, wi).expect("above"),
+        );
+        assert!((x.theta_h - y.theta_h).abs() < 1e-12 && (x.theta_d - y.theta_d).abs() < 1e-12);
+        assert!(
+            (x.phi_d - y.phi_d).abs() < 1e-9 && (0.0..PI).contains(&x.phi_d),
+            "{x:?} {y:?}"
+        );
+    }
+    assert!(merl_angles(spherical(0.3, 0.0), -spherical(0.3, 1.0)).is_none());
     assert!(validate::reciprocity_error(t, 2000, 3) < 1e-6);
     let near = t
         .clone()

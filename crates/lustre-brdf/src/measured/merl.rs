@@ -85,7 +85,7 @@ pub fn nearest_bin(theta_h: f64, theta_d: f64, phi_d: f64) -> (usize, usize, usi
 
 /// θh index: ⌊sqrt(θh/(π/2) · 90 · 90)⌋ clamped to 0..=89.
 fn theta_h_index(theta_h: f64) -> usize {
-    if !(theta_h > 0.0) {
+    if theta_h.is_nan() || theta_h <= 0.0 {
         return 0;
     }
     let u = (theta_h / FRAC_PI_2 * (RES_THETA_H * RES_THETA_H) as f64).sqrt();
@@ -94,7 +94,7 @@ fn theta_h_index(theta_h: f64) -> usize {
 
 /// θd index: ⌊θd/(π/2) · 90⌋ clamped to 0..=89.
 fn theta_d_index(theta_d: f64) -> usize {
-    if !(theta_d > 0.0) {
+    if theta_d.is_nan() || theta_d <= 0.0 {
         return 0;
     }
     ((theta_d / FRAC_PI_2 * RES_THETA_D as f64) as usize).min(RES_THETA_D - 1)
@@ -103,7 +103,7 @@ fn theta_d_index(theta_d: f64) -> usize {
 /// φd index: fold φd < 0 to φd + π, then ⌊φd/π · 180⌋ clamped to 0..=179.
 fn phi_d_index(phi_d: f64) -> usize {
     let p = if phi_d < 0.0 { phi_d + PI } else { phi_d };
-    if !(p > 0.0) {
+    if p.is_nan() || p <= 0.0 {
         return 0;
     }
     ((p / PI * RES_PHI_D as f64) as usize).min(RES_PHI_D - 1)
@@ -121,6 +121,31 @@ pub fn bin_center(i: usize, j: usize, k: usize) -> HalfDiff {
     }
 }
 
+/// Folds φd into [0, π) (reciprocity: swapping wi and wo maps φd to φd ± π).
+#[inline]
+pub fn fold_phi_d(phi_d: f64) -> f64 {
+    let p = phi_d.rem_euclid(PI);
+    // rem_euclid of a tiny negative number rounds up to π itself.
+    if p >= PI {
+        0.0
+    } else {
+        p
+    }
+}
+
+/// The MERL angles of a reflection pair: [`to_half_diff`] with φd folded into [0, π) by
+/// [`fold_phi_d`]; `None` when either direction is at or below the surface or they are opposite.
+pub fn merl_angles(wi: DVec3, wo: DVec3) -> Option<HalfDiff> {
+    if wi.z <= 0.0 || wo.z <= 0.0 {
+        return None;
+    }
+    let hd = to_half_diff(wi, wo)?;
+    Some(HalfDiff {
+        phi_d: fold_phi_d(hd.phi_d),
+        ..hd
+    })
+}
+
 /// Offset of bin (i, j, k) within one channel: `k + 180·(j + 90·i)`.
 #[inline]
 pub fn bin_offset(i: usize, j: usize, k: usize) -> usize {
@@ -131,7 +156,7 @@ pub fn bin_offset(i: usize, j: usize, k: usize) -> usize {
 /// coordinate minus ½ (so bin centres sit at integers).
 #[inline]
 fn clamped_axis(x: f64, n: usize) -> (usize, usize, f64) {
-    if !(x > 0.0) {
+    if x.is_nan() || x <= 0.0 {
         return (0, 0, 0.0);
     }
     let last = (n - 1) as f64;
@@ -509,13 +534,7 @@ impl Bsdf for MerlTable {
 
     /// Looks the pair up through its Rusinkiewicz angles; 0 unless both lie above the surface.
     fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
-        if wi.z <= 0.0 || wo.z <= 0.0 {
-            return Rgb::ZERO;
-        }
-        match to_half_diff(wi, wo) {
-            Some(hd) => self.eval_half_diff(&hd),
-            None => Rgb::ZERO,
-        }
+        merl_angles(wi, wo).map_or(Rgb::ZERO, |hd| self.eval_half_diff(&hd))
     }
 
     /// Cosine-weighted hemisphere sampling; fails when `wo` is below the surface.
@@ -650,5 +669,14 @@ mod tests {
         assert_eq!((a, b), (179, 0));
         assert!((t - 0.25).abs() < 1e-9);
         assert_eq!(periodic_axis(f64::NAN), (0, 0, 0.0));
+    }
+
+    #[test]
+    fn fold_is_into_half_open_range() {
+        assert_eq!(fold_phi_d(PI), 0.0);
+        assert!((fold_phi_d(-0.5) - (PI - 0.5)).abs() < 1e-15);
+        assert!((fold_phi_d(0.5) - 0.5).abs() < 1e-15);
+        let p = fold_phi_d(-1e-300);
+        assert!((0.0..PI).contains(&p));
     }
 }

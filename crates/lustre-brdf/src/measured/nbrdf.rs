@@ -21,14 +21,12 @@
 
 use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample};
 use crate::error::{Error, Result};
-use crate::frame::to_half_diff;
-use crate::measured::merl::{bin_center, fill_bins, MerlTable};
+use crate::measured::merl::{bin_center, fill_bins, merl_angles, MerlTable};
 use crate::rgb::Rgb;
 use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use serde_json::Value;
 use std::collections::BTreeMap;
-use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
 /// The format string this reader accepts.
@@ -182,17 +180,6 @@ impl Nbrdf {
     }
 }
 
-/// Folds φd into [0, π) (reciprocity: swapping wi and wo maps φd to φd ± π).
-#[inline]
-fn fold_phi_d(phi_d: f64) -> f64 {
-    let p = phi_d.rem_euclid(PI);
-    if p >= PI {
-        0.0
-    } else {
-        p
-    }
-}
-
 impl Bsdf for Nbrdf {
     fn name(&self) -> String {
         format!("NBRDF {}", self.name)
@@ -201,13 +188,9 @@ impl Bsdf for Nbrdf {
     /// The network at the pair's Rusinkiewicz angles with φd folded into [0, π), which makes the
     /// evaluation exactly reciprocal; 0 unless both directions lie above the surface.
     fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
-        if wi.z <= 0.0 || wo.z <= 0.0 {
-            return Rgb::ZERO;
-        }
-        match to_half_diff(wi, wo) {
-            Some(hd) => self.eval_angles(hd.theta_h, hd.theta_d, fold_phi_d(hd.phi_d)),
-            None => Rgb::ZERO,
-        }
+        merl_angles(wi, wo).map_or(Rgb::ZERO, |hd| {
+            self.eval_angles(hd.theta_h, hd.theta_d, hd.phi_d)
+        })
     }
 
     /// Cosine-weighted hemisphere sampling; fails when `wo` is below the surface.
@@ -384,14 +367,5 @@ mod tests {
             assert!((got[c] - want).abs() < 1e-14 * want, "{got:?} vs {want}");
         }
         assert!(set.material("nope").is_err());
-    }
-
-    #[test]
-    fn fold_is_into_half_open_range() {
-        assert_eq!(fold_phi_d(PI), 0.0);
-        assert!((fold_phi_d(-0.5) - (PI - 0.5)).abs() < 1e-15);
-        assert!((fold_phi_d(0.5) - 0.5).abs() < 1e-15);
-        let p = fold_phi_d(-1e-300);
-        assert!((0.0..PI).contains(&p));
     }
 }
