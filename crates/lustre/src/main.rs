@@ -1,8 +1,11 @@
-//! The lustre command line.
+//! The lustre command line: thin over the libraries.
 
+mod merl_cmd;
 mod plot_cmd;
 
+use anyhow::Context;
 use clap::{Parser, Subcommand};
+use lustre_brdf::{catalog, frame, Bsdf};
 
 /// lustre: BSDF models, measured materials and their plots.
 #[derive(Parser)]
@@ -16,10 +19,55 @@ struct Cli {
 enum Command {
     /// Plot material lobes and transfer-probability arrays.
     Plot(plot_cmd::PlotArgs),
+    /// MERL tables: synthesize from a neural BRDF, inspect, list materials.
+    Merl(merl_cmd::MerlArgs),
+    /// List built-in materials, analytic models with their parameters, and published fits.
+    List,
+    /// Print a material's flags, albedo and a few values.
+    Info {
+        /// Material specification (see `lustre list`).
+        spec: String,
+    },
 }
 
 fn main() -> anyhow::Result<()> {
     match Cli::parse().command {
         Command::Plot(args) => plot_cmd::run(&args),
+        Command::Merl(args) => merl_cmd::run(&args),
+        Command::List => {
+            println!("built-in materials:");
+            for (name, what) in catalog::builtins() {
+                println!("  {name:<14} {what}");
+            }
+            println!("analytic models, as MODEL(key=value, ...):");
+            for (name, keys) in catalog::models() {
+                println!("  {name:<30} {keys}");
+            }
+            println!("published MERL fits: sgd:NAME, sgd-numeric:NAME, abc:NAME, lafortune:NAME");
+            println!("neural BRDFs: nbrdf:NAME, nbrdf:FILE#NAME; files: .binary .bsdf .dat .gonio");
+            Ok(())
+        }
+        Command::Info { spec } => info(&spec),
     }
+}
+
+fn info(spec: &str) -> anyhow::Result<()> {
+    let b = catalog::resolve(spec).with_context(|| format!("cannot resolve {spec:?}"))?;
+    let flags = b.flags();
+    println!("{}", b.name());
+    println!(
+        "  reciprocal: {}, energy conserving: {}, transmission: {}, anisotropic: {}",
+        flags.reciprocal, flags.energy_conserving, flags.transmission, flags.anisotropic
+    );
+    println!("  directional albedo (importance-sampled, 16384 Hammersley points):");
+    for deg in [0.0, 30.0, 60.0, 80.0] {
+        let wo = frame::spherical(frame::deg(deg), 0.0);
+        let a = b.albedo(wo, 16384);
+        println!("    θo = {deg:>4}°: ({:.4}, {:.4}, {:.4})", a[0], a[1], a[2]);
+    }
+    let wo = frame::spherical(frame::deg(30.0), 0.0);
+    let mirror = frame::spherical(frame::deg(30.0), std::f64::consts::PI);
+    let v = b.eval(mirror, wo);
+    println!("  f at the mirror direction of θ = 30°: ({:.5}, {:.5}, {:.5}) 1/sr", v[0], v[1], v[2]);
+    Ok(())
 }
