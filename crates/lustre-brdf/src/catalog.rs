@@ -163,7 +163,7 @@ pub fn models() -> Vec<(&'static str, &'static str)> {
 pub fn list() -> Vec<String> {
     let mut out: Vec<String> = builtins().iter().map(|b| b.0.to_string()).collect();
     if let Ok(names) = crate::fits::sgd::list_materials() {
-        for prefix in ["sgd", "abc", "lafortune"] {
+        for prefix in ["sgd", "abc", "lafortune", "nbrdf"] {
             out.extend(names.iter().map(|n| format!("{prefix}:{n}")));
         }
     }
@@ -247,6 +247,14 @@ fn resolve_prefixed(prefix: &str, rest: &str) -> Result<Box<dyn Bsdf>> {
             Ok(Box::new(CookTorrance::new(format!("sgd-numeric:{rest}"), channels)?))
         }
         "abc" => Ok(Box::new(crate::fits::abc::load(rest)?)),
+        "nbrdf" => {
+            use crate::measured::nbrdf::NbrdfSet;
+            let (file, name) = match rest.rsplit_once('#') {
+                Some((f, n)) => (std::path::PathBuf::from(f), n),
+                None => (crate::shared_data_dir().join("nbrdf/merl_nbrdf.json"), rest),
+            };
+            Ok(Box::new(NbrdfSet::read(&file)?.material(name)?))
+        }
         "lafortune" => Ok(Box::new(crate::fits::lafortune::load(rest)?)),
         other => Err(Error::NotFound(format!(
             "unknown material source {other:?} (known: sgd:, sgd-numeric:, abc:, lafortune:, nbrdf:)"
@@ -278,6 +286,7 @@ fn resolve_path(
             Box::new(alta::AltaTable::read(path, unit)?)
         }
         "bsdf" => Box::new(crate::measured::rgl::RglBsdf::read(path)?),
+        "binary" => Box::new(crate::measured::merl::MerlTable::read(path)?),
         "gonio" => {
             let recon = match fragment {
                 None | Some("half-vector") => gonio::Reconstruction::HalfVector,

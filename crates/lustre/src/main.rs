@@ -63,11 +63,17 @@ fn info(spec: &str) -> anyhow::Result<()> {
     for deg in [0.0, 30.0, 60.0, 80.0] {
         let wo = frame::spherical(frame::deg(deg), 0.0);
         let a = b.albedo(wo, 16384);
-        println!("    θo = {deg:>4}°: ({:.4}, {:.4}, {:.4})", a[0], a[1], a[2]);
+        println!(
+            "    θo = {deg:>4}°: ({:.4}, {:.4}, {:.4})",
+            a[0], a[1], a[2]
+        );
     }
     let wo = frame::spherical(frame::deg(30.0), 0.0);
     let mirror = frame::spherical(frame::deg(30.0), std::f64::consts::PI);
     let v = b.eval(mirror, wo);
-    println!("  f at the mirror direction of θ = 30°: ({:.5}, {:.5}, {:.5}) 1/sr", v[0], v[1], v[2]);
+    println!(
+        "  f at the mirror direction of θ = 30°: ({:.5}, {:.5}, {:.5}) 1/sr",
+        v[0], v[1], v[2]
+    );
     Ok(())
 }
