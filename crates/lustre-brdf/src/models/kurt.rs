@@ -31,11 +31,11 @@
 // `!(x > 0.0)` is deliberate: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use crate::bsdf::{select_component, Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample};
 use crate::error::{check_range, Error, Result};
 use crate::frame::{half_vector, mirror_z, reflect};
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
+use crate::sampling::cosine_hemisphere_pdf;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -287,11 +287,8 @@ impl Bsdf for Kurt {
             return None;
         }
         let weights: Vec<f64> = self.weights().collect();
-        let (idx, u1) = select_component(&weights, u1)?;
         let nr = self.reflection.len();
-        let wi_u = if idx == 0 {
-            cosine_hemisphere(u1, u2)
-        } else {
+        let wi_u = sample_diffuse_mixture(&weights, u1, u2, |idx, u1, u2| {
             let (lobe, transmit) = if idx <= nr {
                 (&self.reflection[idx - 1], false)
             } else {
@@ -305,22 +302,10 @@ impl Bsdf for Kurt {
             if !(r.z > 0.0) {
                 return None;
             }
-            if transmit {
-                mirror_z(r)
-            } else {
-                r
-            }
-        };
+            Some(if transmit { mirror_z(r) } else { r })
+        })?;
         let wi = if flip { mirror_z(wi_u) } else { wi_u };
-        let pdf = self.pdf(wi, wo);
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return None;
-        }
-        Some(BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf,
-        })
+        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {

@@ -5,11 +5,10 @@
 // `!(x > 0.0)` is deliberate: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
 use crate::error::Result;
 use crate::models::kurt::check_rgb;
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -43,24 +42,11 @@ impl Bsdf for Lambert {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        if !(wo.z > 0.0) {
-            return None;
-        }
-        let wi = cosine_hemisphere(u1, u2);
-        let pdf = self.pdf(wi, wo);
-        (pdf > 0.0).then(|| BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf,
-        })
+        cosine_sample(self, wo, u1, u2)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        if wo.z > 0.0 {
-            cosine_hemisphere_pdf(wi)
-        } else {
-            0.0
-        }
+        cosine_pdf(wi, wo)
     }
 
     /// Reciprocal; energy conserving when kd ≤ 1 in every channel (the albedo is exactly kd).

@@ -17,11 +17,12 @@
 //! with no quadrant bookkeeping. The reflected wi has pdf p(h)/(4 (h·wo)). The diffuse term is
 //! sampled by cosine sampling; the two strategies are mixed with weights mean(ρd) : mean(ρs).
 
-use crate::bsdf::{select_component, Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{
+    diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
+};
 use crate::error::{check_range, Result};
 use crate::frame::reflect;
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -132,43 +133,24 @@ impl WardCore {
         if wi.z < COS_MIN || wo.z < COS_MIN {
             return 0.0;
         }
-        let [wd, ws] = self.weights();
-        let total = wd + ws;
-        if total.is_nan() || total <= 0.0 {
-            return 0.0;
-        }
-        (wd * cosine_hemisphere_pdf(wi) + ws * self.specular_pdf(wi, wo)) / total
+        diffuse_mixture_pdf(&self.weights(), wi, |_| self.specular_pdf(wi, wo))
     }
 
     pub(crate) fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
         if wo.z < COS_MIN {
             return None;
         }
-        let (k, u1) = select_component(&self.weights(), u1)?;
-        let wi = if k == 0 {
-            cosine_hemisphere(u1, u2)
-        } else {
+        let wi = sample_diffuse_mixture(&self.weights(), u1, u2, |_, u1, u2| {
             // Slope-space Gaussian draw (Walter 2005, see the module docs).
             let r = (-(1.0 - u1).ln()).sqrt();
             let (s, c) = (2.0 * PI * u2).sin_cos();
             let h = DVec3::new(self.alpha * r * c, self.beta * r * s, 1.0).normalize();
-            if h.dot(wo) <= 0.0 {
-                return None;
-            }
-            reflect(wo, h)
-        };
+            (h.dot(wo) > 0.0).then(|| reflect(wo, h))
+        })?;
         if wi.z < COS_MIN {
             return None;
         }
-        let pdf = self.pdf(wi, wo);
-        if !pdf.is_finite() || pdf <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf,
-        })
+        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
     }
 
     pub(crate) fn anisotropic(&self) -> bool {
