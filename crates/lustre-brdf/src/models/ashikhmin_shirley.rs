@@ -14,9 +14,9 @@
 use crate::bsdf::{
     diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
 };
-use crate::error::{check_range, Result};
+use crate::error::{check_range, check_rgb, Result};
 use crate::frame::{half_vector, reflect};
-use crate::models::ward::{check_rgb, COS_MIN};
+use crate::models::ward::COS_MIN;
 use crate::rgb::Rgb;
 use glam::DVec3;
 use std::f64::consts::PI;

@@ -32,7 +32,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::bsdf::{finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample};
-use crate::error::{check_range, Error, Result};
+use crate::error::{check_range, check_rgb, Result};
 use crate::frame::{half_vector, mirror_z, reflect};
 use crate::rgb::Rgb;
 use crate::sampling::cosine_hemisphere_pdf;
@@ -77,26 +77,13 @@ impl KurtLobe {
 
     /// Checks the ranges documented on [`KurtLobe::new`].
     pub fn validate(&self) -> Result<()> {
-        check_rgb("ks", self.ks)?;
+        check_rgb("ks", self.ks, 0.0, f64::INFINITY)?;
         check_range("mx", self.mx, MIN_ROUGHNESS, MAX_ROUGHNESS)?;
         check_range("my", self.my, MIN_ROUGHNESS, MAX_ROUGHNESS)?;
         check_range("r0", self.r0, 0.0, 1.0)?;
         check_range("alpha", self.alpha, 0.0, 1.0)?;
         Ok(())
     }
-}
-
-/// Checks that every channel of `c` is finite and ≥ 0.
-pub(crate) fn check_rgb(name: &str, c: Rgb) -> Result<()> {
-    for v in c.0 {
-        if !v.is_finite() {
-            return Err(Error::param(name, v, "not a finite number"));
-        }
-        if v < 0.0 {
-            return Err(Error::param(name, v, "must be ≥ 0"));
-        }
-    }
-    Ok(())
 }
 
 /// Which Fresnel factor a lobe carries: F for reflection, 1 − F for transmission (000 Eq. 3.5).
@@ -220,7 +207,7 @@ impl Kurt {
 
     /// Checks kd and every lobe.
     pub fn validate(&self) -> Result<()> {
-        check_rgb("kd", self.kd)?;
+        check_rgb("kd", self.kd, 0.0, f64::INFINITY)?;
         self.reflection
             .iter()
             .chain(&self.transmission)

@@ -21,8 +21,8 @@
 use crate::bsdf::{
     diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
 };
-use crate::error::{check_range, Error, Result};
-use crate::models::ward::{check_rgb, COS_MIN};
+use crate::error::{check_range, check_rgb, Error, Result};
+use crate::models::ward::COS_MIN;
 use crate::rgb::Rgb;
 use crate::sampling::{cosine_power, cosine_power_pdf, to_world};
 use glam::DVec3;

@@ -6,8 +6,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
-use crate::error::Result;
-use crate::models::kurt::check_rgb;
+use crate::error::{check_rgb, Result};
 use crate::rgb::Rgb;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -23,7 +22,7 @@ pub struct Lambert {
 impl Lambert {
     /// A Lambertian BRDF; rejects negative or non-finite channels.
     pub fn new(kd: Rgb) -> Result<Self> {
-        check_rgb("kd", kd)?;
+        check_rgb("kd", kd, 0.0, f64::INFINITY)?;
         Ok(Lambert { kd })
     }
 }

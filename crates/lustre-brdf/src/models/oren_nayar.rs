@@ -12,8 +12,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
-use crate::error::{check_range, Result};
-use crate::models::kurt::check_rgb;
+use crate::error::{check_range, check_rgb, Result};
 use crate::rgb::Rgb;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -31,7 +30,7 @@ pub struct OrenNayar {
 impl OrenNayar {
     /// A validated model (ρ finite and ≥ 0, σ in [0, π/2]).
     pub fn new(rho: Rgb, sigma: f64) -> Result<Self> {
-        check_rgb("rho", rho)?;
+        check_rgb("rho", rho, 0.0, f64::INFINITY)?;
         check_range("sigma", sigma, 0.0, FRAC_PI_2)?;
         Ok(OrenNayar { rho, sigma })
     }

@@ -15,8 +15,7 @@
 use crate::bsdf::{
     diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
 };
-use crate::error::{check_range, Result};
-use crate::models::kurt::check_rgb;
+use crate::error::{check_range, check_rgb, Result};
 use crate::rgb::Rgb;
 use crate::sampling::{cosine_power, cosine_power_pdf, to_world};
 use glam::DVec3;
@@ -29,8 +28,8 @@ pub const MAX_EXPONENT: f64 = 1e7;
 /// Validates the parameters shared by [`Phong`] and [`crate::models::blinn_phong::BlinnPhong`]:
 /// ρd and ρs finite and ≥ 0, n in [0, [`MAX_EXPONENT`]].
 pub(crate) fn check_params(rho_d: Rgb, rho_s: Rgb, n: f64) -> Result<()> {
-    check_rgb("rho_d", rho_d)?;
-    check_rgb("rho_s", rho_s)?;
+    check_rgb("rho_d", rho_d, 0.0, f64::INFINITY)?;
+    check_rgb("rho_s", rho_s, 0.0, f64::INFINITY)?;
     check_range("n", n, 0.0, MAX_EXPONENT)?;
     Ok(())
 }

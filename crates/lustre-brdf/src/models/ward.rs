@@ -20,7 +20,7 @@
 use crate::bsdf::{
     diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, BsdfFlags, BsdfSample,
 };
-use crate::error::{check_range, Result};
+use crate::error::{check_range, check_rgb, Result};
 use crate::frame::reflect;
 use crate::rgb::Rgb;
 use glam::DVec3;
@@ -29,14 +29,6 @@ use std::f64::consts::PI;
 /// Directions whose cosine to the normal is below this are treated as lying in the surface plane:
 /// the models return zero there instead of the 1/cos singularities of their normalizations.
 pub(crate) const COS_MIN: f64 = 1e-9;
-
-/// Checks that every channel of `c` is finite and within [lo, hi].
-pub(crate) fn check_rgb(name: &str, c: Rgb, lo: f64, hi: f64) -> Result<Rgb> {
-    for (i, ch) in ["r", "g", "b"].iter().enumerate() {
-        check_range(&format!("{name}.{ch}"), c[i], lo, hi)?;
-    }
-    Ok(c)
-}
 
 /// Which normalization of the Ward lobe (004 §III.4.4.4).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
