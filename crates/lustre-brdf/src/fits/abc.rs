@@ -4,7 +4,7 @@
 //! [`crate::models::abc::Abc`], which evaluates them exactly as dj_brdf's `abc::eval` does.
 
 use crate::error::{Error, Result};
-use crate::fits::FitTable;
+use crate::fits::{parse_checked, FitTable};
 use crate::models::abc::Abc;
 use crate::rgb::Rgb;
 use std::path::{Path, PathBuf};
@@ -26,20 +26,14 @@ impl AbcFits {
 
     /// Reads a table from `path`.
     pub fn read(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::error::read_file(path)?;
         Self::parse(path, &bytes)
     }
 
     /// Parses a table from memory (`path` only names it in errors). Every row must hold a valid
     /// material, so that a bad value is reported when the file is read.
     pub fn parse(path: &Path, bytes: &[u8]) -> Result<Self> {
-        let fits = AbcFits {
-            table: FitTable::parse(path, bytes, "name")?,
-        };
-        for name in fits.table.names() {
-            fits.material(name)?;
-        }
-        Ok(fits)
+        parse_checked(path, bytes, |table| AbcFits { table }, Self::material)
     }
 
     /// Material names in file order.

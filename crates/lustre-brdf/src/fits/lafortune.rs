@@ -33,7 +33,7 @@
 //! sign lost in the published table). They are loaded as published.
 
 use crate::error::{Error, Result};
-use crate::fits::FitTable;
+use crate::fits::{parse_checked, FitTable};
 use crate::models::lafortune::{Lafortune, LafortuneLobe};
 use crate::rgb::Rgb;
 use std::path::{Path, PathBuf};
@@ -70,19 +70,13 @@ impl LafortuneFits {
 
     /// Reads a table from `path`.
     pub fn read(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::error::read_file(path)?;
         Self::parse(path, &bytes)
     }
 
     /// Parses a table from memory (`path` only names it in errors); every row is validated.
     pub fn parse(path: &Path, bytes: &[u8]) -> Result<Self> {
-        let fits = LafortuneFits {
-            table: FitTable::parse(path, bytes, "name")?,
-        };
-        for name in fits.table.names() {
-            fits.material(name)?;
-        }
-        Ok(fits)
+        parse_checked(path, bytes, |table| LafortuneFits { table }, Self::material)
     }
 
     /// Material names in file order.

@@ -18,10 +18,27 @@ pub struct FitTable {
     name_column: usize,
 }
 
+/// Parses a fit table keyed by a `name` column, wraps it with `wrap`, and checks every material
+/// with `check`, so that a bad value is reported when the file is read.
+pub(crate) fn parse_checked<T, M>(
+    path: &Path,
+    bytes: &[u8],
+    wrap: impl FnOnce(FitTable) -> T,
+    check: impl Fn(&T, &str) -> Result<M>,
+) -> Result<T> {
+    let table = FitTable::parse(path, bytes, "name")?;
+    let names: Vec<String> = table.names().into_iter().map(str::to_string).collect();
+    let fits = wrap(table);
+    for name in &names {
+        check(&fits, name)?;
+    }
+    Ok(fits)
+}
+
 impl FitTable {
     /// Reads a comma-separated table whose material names are in column `name_column`.
     pub fn read(path: &Path, name_column: &str) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::error::read_file(path)?;
         Self::parse(path, &bytes, name_column)
     }
 

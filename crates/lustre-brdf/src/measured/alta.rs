@@ -180,7 +180,7 @@ pub struct AltaTable {
 impl AltaTable {
     /// Reads an ALTA file; `unit_override`, when given, replaces (or supplies) `#PARAM_OUT`.
     pub fn read(path: &Path, unit_override: Option<AltaUnit>) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::error::read_file(path)?;
         Self::parse(path, &bytes, unit_override)
     }
 

@@ -214,7 +214,7 @@ impl MerlTable {
     /// Reads a MERL `.binary` file with the given treatment of negative values.
     pub fn read_with(path: impl AsRef<Path>, negative: NegativeValues) -> Result<Self> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::error::read_file(path)?;
         Self::parse_with(path, &bytes, negative)
     }
 

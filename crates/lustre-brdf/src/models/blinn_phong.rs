@@ -11,9 +11,6 @@
 //! Sampling mixes cosine sampling (luminance of ρd) with h ∝ cosⁿθh reflected about ωo (luminance
 //! of ρs), p(ωi) = (n + 1)/(2π) cosⁿθh / (4 ωo·h).
 
-// `!(x > 0.0)` is deliberate: it also rejects NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
 use crate::bsdf::{
     diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
 };

@@ -16,9 +16,6 @@
 //! w_spec = 4ρs/p_spec F D G cos³θm (α²+tan²θm)²/α², times |o·m|/cos θi, a Jacobian factor the
 //! paper's expression omits (test `weight_is_the_papers_up_to_the_jacobian`).
 
-// `!(x > 0.0)` is used on purpose: it is true for NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
 use crate::bsdf::{
     finish_sample, sample_diffuse_mixture, select_component, Bsdf, BsdfFlags, BsdfSample,
 };
@@ -241,7 +238,7 @@ impl Bsdf for CookTorrance {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        if !(wo.z > 0.0) {
+        if wo.z.is_nan() || wo.z <= 0.0 {
             return None;
         }
         let weights = [1.0 - self.p_spec, self.p_spec];
@@ -250,7 +247,7 @@ impl Bsdf for CookTorrance {
             let h = self.lobes[li].0.sample_h(u1, u2);
             Some(reflect(wo, h))
         })?;
-        if !(wi.z > 0.0) || !wi.is_finite() {
+        if wi.z.is_nan() || wi.z <= 0.0 || !wi.is_finite() {
             return None;
         }
         finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))

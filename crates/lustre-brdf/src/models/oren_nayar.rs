@@ -8,9 +8,6 @@
 //! at grazing. Symmetric in ωi, ωo, hence reciprocal. σ = 0 is Lambert. Cosine-sampled.
 //! One-sided: zero unless both directions lie above the surface.
 
-// `!(x > 0.0)` is deliberate: it also rejects NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
 use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
 use crate::error::{check_range, check_rgb, Result};
 use crate::rgb::Rgb;

@@ -9,9 +9,6 @@
 //! Sampling mixes cosine sampling (weight: luminance of ρd) with a cosⁿ lobe about the mirror
 //! direction of ωo (weight: luminance of ρs); samples below the horizon fail.
 
-// `!(x > 0.0)` is deliberate: it also rejects NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
 use crate::bsdf::{
     diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
 };
