@@ -45,6 +45,18 @@ pub struct BsdfFlags {
     pub anisotropic: bool,
 }
 
+impl BsdfFlags {
+    /// Flags of an isotropic, reflection-only BSDF.
+    pub fn isotropic_reflection(reciprocal: bool, energy_conserving: bool) -> Self {
+        BsdfFlags {
+            reciprocal,
+            energy_conserving,
+            transmission: false,
+            anisotropic: false,
+        }
+    }
+}
+
 /// A bidirectional scattering distribution function in the local frame.
 pub trait Bsdf: Send + Sync + std::fmt::Debug {
     /// A short human-readable name (model and material), used in plots and reports.

@@ -429,12 +429,7 @@ impl Bsdf for AltaTable {
     }
 
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: false,
-            energy_conserving: false,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(false, false)
     }
 }
 

@@ -547,12 +547,7 @@ impl Bsdf for MerlTable {
 
     /// Reciprocal (the φd fold) and isotropic; measured data promise no energy bound.
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: false,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, false)
     }
 }
 

@@ -203,12 +203,7 @@ impl Bsdf for Nbrdf {
 
     /// Reciprocal (by the φd fold) and isotropic; a fitted network promises no energy bound.
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: false,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, false)
     }
 }
 

@@ -194,12 +194,7 @@ impl Bsdf for Abc {
     }
 
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: false,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, false)
     }
 }
 

@@ -88,13 +88,10 @@ impl Bsdf for BlinnPhong {
 
     /// Reciprocal; energy conserving only when ρs = 0 and ρd ≤ 1 (see the module notes).
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: self.rho_s.max_component() == 0.0
-                && self.rho_d.max_component() <= 1.0,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(
+            true,
+            self.rho_s.max_component() == 0.0 && self.rho_d.max_component() <= 1.0,
+        )
     }
 }
 

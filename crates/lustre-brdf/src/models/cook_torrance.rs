@@ -271,12 +271,7 @@ impl Bsdf for CookTorrance {
     }
 
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: self.energy_conserving,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, self.energy_conserving)
     }
 }
 

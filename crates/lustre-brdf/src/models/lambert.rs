@@ -47,12 +47,7 @@ impl Bsdf for Lambert {
 
     /// Reciprocal; energy conserving when kd ≤ 1 in every channel (the albedo is exactly kd).
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: self.kd.max_component() <= 1.0,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, self.kd.max_component() <= 1.0)
     }
 }
 

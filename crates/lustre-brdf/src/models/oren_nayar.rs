@@ -75,12 +75,7 @@ impl Bsdf for OrenNayar {
     /// Reciprocal; energy conserving when [`OrenNayar::max_albedo`] ≤ 1 in every channel (not
     /// merely ρ ≤ 1: see there).
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: self.max_albedo().max_component() <= 1.0,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, self.max_albedo().max_component() <= 1.0)
     }
 }
 

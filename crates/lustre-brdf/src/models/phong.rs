@@ -108,12 +108,7 @@ impl Bsdf for Phong {
 
     /// Reciprocal; energy conserving when ρd + ρs ≤ 1 in every channel.
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: (self.rho_d + self.rho_s).max_component() <= 1.0,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, (self.rho_d + self.rho_s).max_component() <= 1.0)
     }
 }
 
