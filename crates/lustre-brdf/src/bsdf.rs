@@ -7,7 +7,7 @@
 //! horizon), so the pdf integrates to the probability that `sample` succeeds, which is at most 1.
 
 use crate::rgb::Rgb;
-use crate::sampling::hammersley;
+use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf, hammersley};
 use glam::DVec3;
 
 /// A direction drawn by [`Bsdf::sample`].
@@ -43,6 +43,18 @@ pub struct BsdfFlags {
     pub transmission: bool,
     /// Depends on the azimuth of the configuration, not only on relative angles.
     pub anisotropic: bool,
+}
+
+impl BsdfFlags {
+    /// Flags of an isotropic, reflection-only BSDF.
+    pub fn isotropic_reflection(reciprocal: bool, energy_conserving: bool) -> Self {
+        BsdfFlags {
+            reciprocal,
+            energy_conserving,
+            transmission: false,
+            anisotropic: false,
+        }
+    }
 }
 
 /// A bidirectional scattering distribution function in the local frame.
@@ -121,6 +133,86 @@ pub fn select_component(weights: &[f64], u: f64) -> Option<(usize, f64)> {
     // Rounding left `target` past the last positive weight.
     let last = weights.iter().rposition(|&w| w > 0.0)?;
     Some((last, 1.0 - f64::EPSILON))
+}
+
+/// Builds a [`BsdfSample`] for `wi` from its density and value, or `None` unless `pdf` is
+/// positive and finite. `value` is only evaluated when the sample is kept.
+pub fn finish_sample(wi: DVec3, pdf: f64, value: impl FnOnce() -> Rgb) -> Option<BsdfSample> {
+    if !pdf.is_finite() || pdf <= 0.0 {
+        return None;
+    }
+    Some(BsdfSample {
+        wi,
+        value: value(),
+        pdf,
+    })
+}
+
+/// Cosine-weighted hemisphere sampling for a BSDF whose pdf is [`cosine_pdf`]: `None` unless
+/// `wo` and the drawn `wi` both lie above the surface; value and density come from the BSDF's
+/// own `eval` and `pdf`.
+pub fn cosine_sample<B: Bsdf + ?Sized>(
+    bsdf: &B,
+    wo: DVec3,
+    u1: f64,
+    u2: f64,
+) -> Option<BsdfSample> {
+    if wo.z.is_nan() || wo.z <= 0.0 {
+        return None;
+    }
+    let wi = cosine_hemisphere(u1, u2);
+    if wi.z.is_nan() || wi.z <= 0.0 {
+        return None;
+    }
+    Some(BsdfSample {
+        wi,
+        value: bsdf.eval(wi, wo),
+        pdf: bsdf.pdf(wi, wo),
+    })
+}
+
+/// The density of [`cosine_sample`]: cos θi / π for `wo` above the surface, else 0.
+pub fn cosine_pdf(wi: DVec3, wo: DVec3) -> f64 {
+    if wo.z > 0.0 {
+        cosine_hemisphere_pdf(wi)
+    } else {
+        0.0
+    }
+}
+
+/// Draws `wi` from a mixture whose component 0 is the cosine-weighted hemisphere and whose
+/// component k ≥ 1 is drawn by `lobe(k, u1, u2)`. The component is picked with
+/// [`select_component`]`(weights, u1)`, whose rescaled `u1` then feeds the chosen warp.
+/// `None` when all weights are zero or the lobe sampler fails.
+pub fn sample_diffuse_mixture(
+    weights: &[f64],
+    u1: f64,
+    u2: f64,
+    lobe: impl FnOnce(usize, f64, f64) -> Option<DVec3>,
+) -> Option<DVec3> {
+    let (k, u1) = select_component(weights, u1)?;
+    if k == 0 {
+        Some(cosine_hemisphere(u1, u2))
+    } else {
+        lobe(k, u1, u2)
+    }
+}
+
+/// The density of [`sample_diffuse_mixture`]:
+/// (w₀ cos θi/π + Σ_{k≥1, wₖ>0} wₖ lobe_pdf(k)) / Σ wₖ, or 0 when the weights sum to no
+/// positive number.
+pub fn diffuse_mixture_pdf(weights: &[f64], wi: DVec3, lobe_pdf: impl Fn(usize) -> f64) -> f64 {
+    let total: f64 = weights.iter().sum();
+    if total.is_nan() || total <= 0.0 {
+        return 0.0;
+    }
+    let mut p = weights[0] * cosine_hemisphere_pdf(wi);
+    for (k, &w) in weights.iter().enumerate().skip(1) {
+        if w > 0.0 {
+            p += w * lobe_pdf(k);
+        }
+    }
+    p / total
 }
 
 #[cfg(test)]

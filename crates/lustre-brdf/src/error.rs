@@ -72,6 +72,9 @@ pub fn check_range(name: &str, value: f64, lo: f64, hi: f64) -> Result<f64> {
     if !value.is_finite() {
         return Err(Error::param(name, value, "not a finite number"));
     }
+    if value < lo && hi == f64::INFINITY {
+        return Err(Error::param(name, value, format!("must be ≥ {lo}")));
+    }
     if value < lo || value > hi {
         return Err(Error::param(
             name,
@@ -80,6 +83,20 @@ pub fn check_range(name: &str, value: f64, lo: f64, hi: f64) -> Result<f64> {
         ));
     }
     Ok(value)
+}
+
+/// Checks that every channel of a colour is finite and within [lo, hi] (`hi` may be +∞); errors
+/// name the channel (`name.r`, `name.g`, `name.b`).
+pub fn check_rgb(name: &str, c: crate::rgb::Rgb, lo: f64, hi: f64) -> Result<crate::rgb::Rgb> {
+    for (i, ch) in ["r", "g", "b"].iter().enumerate() {
+        check_range(&format!("{name}.{ch}"), c[i], lo, hi)?;
+    }
+    Ok(c)
+}
+
+/// Reads the whole file at `path`; a failure is an [`Error::Io`] naming the file.
+pub fn read_file(path: &std::path::Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|e| Error::io(path, e))
 }
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder, then a rename.

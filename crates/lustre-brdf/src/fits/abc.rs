@@ -4,10 +4,9 @@
 //! [`crate::models::abc::Abc`], which evaluates them exactly as dj_brdf's `abc::eval` does.
 
 use crate::error::{Error, Result};
-use crate::fits::FitTable;
+use crate::fits::{fit_table_api, FitTable};
 use crate::models::abc::Abc;
 use crate::rgb::Rgb;
-use std::path::{Path, PathBuf};
 
 /// The file's path relative to [`crate::shared_data_dir`].
 pub const ABC_FITS_FILE: &str = "fits/merl_abc_fits_low2012.csv";
@@ -18,35 +17,9 @@ pub struct AbcFits {
     table: FitTable,
 }
 
+fit_table_api!(AbcFits, ABC_FITS_FILE);
+
 impl AbcFits {
-    /// Reads the table from the shared data folder.
-    pub fn load_default() -> Result<Self> {
-        Self::read(&default_path())
-    }
-
-    /// Reads a table from `path`.
-    pub fn read(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        Self::parse(path, &bytes)
-    }
-
-    /// Parses a table from memory (`path` only names it in errors). Every row must hold a valid
-    /// material, so that a bad value is reported when the file is read.
-    pub fn parse(path: &Path, bytes: &[u8]) -> Result<Self> {
-        let fits = AbcFits {
-            table: FitTable::parse(path, bytes, "name")?,
-        };
-        for name in fits.table.names() {
-            fits.material(name)?;
-        }
-        Ok(fits)
-    }
-
-    /// Material names in file order.
-    pub fn names(&self) -> Vec<&str> {
-        self.table.names()
-    }
-
     /// The fitted ABC BRDF of `material`; [`Error::NotFound`] for an unknown name, a format
     /// error naming the file and the material for an invalid parameter.
     pub fn material(&self, material: &str) -> Result<Abc> {
@@ -62,10 +35,6 @@ impl AbcFits {
     }
 }
 
-fn default_path() -> PathBuf {
-    crate::shared_data_dir().join(ABC_FITS_FILE)
-}
-
 /// The ABC fit of MERL material `name`, from the shared data folder.
 pub fn load(name: &str) -> Result<Abc> {
     AbcFits::load_default()?.material(name)
@@ -74,6 +43,7 @@ pub fn load(name: &str) -> Result<Abc> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::Path;
 
     const HEADER: &str = "name,kD_r,kD_g,kD_b,A_r,A_g,A_b,B,C,ior\n";
 

@@ -33,10 +33,9 @@
 //! sign lost in the published table). They are loaded as published.
 
 use crate::error::{Error, Result};
-use crate::fits::FitTable;
+use crate::fits::{fit_table_api, FitTable};
 use crate::models::lafortune::{Lafortune, LafortuneLobe};
 use crate::rgb::Rgb;
-use std::path::{Path, PathBuf};
 
 /// The file's path relative to [`crate::shared_data_dir`].
 pub const LAFORTUNE_FITS_FILE: &str = "fits/merl_lafortune_fits_ngan2005.csv";
@@ -62,34 +61,9 @@ pub struct NganLafortuneParams {
     pub n: f64,
 }
 
+fit_table_api!(LafortuneFits, LAFORTUNE_FITS_FILE);
+
 impl LafortuneFits {
-    /// Reads the table from the shared data folder.
-    pub fn load_default() -> Result<Self> {
-        Self::read(&default_path())
-    }
-
-    /// Reads a table from `path`.
-    pub fn read(path: &Path) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        Self::parse(path, &bytes)
-    }
-
-    /// Parses a table from memory (`path` only names it in errors); every row is validated.
-    pub fn parse(path: &Path, bytes: &[u8]) -> Result<Self> {
-        let fits = LafortuneFits {
-            table: FitTable::parse(path, bytes, "name")?,
-        };
-        for name in fits.table.names() {
-            fits.material(name)?;
-        }
-        Ok(fits)
-    }
-
-    /// Material names in file order.
-    pub fn names(&self) -> Vec<&str> {
-        self.table.names()
-    }
-
     /// The published parameters of `material`.
     pub fn params(&self, material: &str) -> Result<NganLafortuneParams> {
         let t = &self.table;
@@ -114,10 +88,6 @@ impl LafortuneFits {
     }
 }
 
-fn default_path() -> PathBuf {
-    crate::shared_data_dir().join(LAFORTUNE_FITS_FILE)
-}
-
 /// The Ngan et al. 2005 Lafortune fit of material `name`, from the shared data folder.
 pub fn load(name: &str) -> Result<Lafortune> {
     LafortuneFits::load_default()?.material(name)
@@ -128,6 +98,7 @@ mod tests {
     use super::*;
     use crate::Bsdf;
     use std::f64::consts::PI;
+    use std::path::Path;
 
     const HEADER: &str = "index,name,kd_r,kd_g,kd_b,ks_r,ks_g,ks_b,Cxy,Cz,n\n";
 

@@ -18,10 +18,59 @@ pub struct FitTable {
     name_column: usize,
 }
 
+/// Parses a fit table keyed by a `name` column, wraps it with `wrap`, and checks every material
+/// with `check`, so that a bad value is reported when the file is read.
+pub(crate) fn parse_checked<T, M>(
+    path: &Path,
+    bytes: &[u8],
+    wrap: impl FnOnce(FitTable) -> T,
+    check: impl Fn(&T, &str) -> Result<M>,
+) -> Result<T> {
+    let table = FitTable::parse(path, bytes, "name")?;
+    let names: Vec<String> = table.names().into_iter().map(str::to_string).collect();
+    let fits = wrap(table);
+    for name in &names {
+        check(&fits, name)?;
+    }
+    Ok(fits)
+}
+
+/// Implements `load_default`, `read`, `parse` and `names` for a published-fit table type: a
+/// struct with the one field `table: FitTable` and a `material(&self, &str) -> Result<_>` method
+/// that validates a row; `$file` is the table's path under [`crate::shared_data_dir`].
+macro_rules! fit_table_api {
+    ($ty:ident, $file:expr) => {
+        impl $ty {
+            /// Reads the table from the shared data folder.
+            pub fn load_default() -> $crate::error::Result<Self> {
+                Self::read(&$crate::shared_data_dir().join($file))
+            }
+
+            /// Reads a table from `path`.
+            pub fn read(path: &std::path::Path) -> $crate::error::Result<Self> {
+                let bytes = $crate::error::read_file(path)?;
+                Self::parse(path, &bytes)
+            }
+
+            /// Parses a table from memory (`path` only names it in errors). Every row must hold
+            /// a valid material, so that a bad value is reported when the file is read.
+            pub fn parse(path: &std::path::Path, bytes: &[u8]) -> $crate::error::Result<Self> {
+                $crate::fits::parse_checked(path, bytes, |table| $ty { table }, Self::material)
+            }
+
+            /// Material names in file order.
+            pub fn names(&self) -> Vec<&str> {
+                self.table.names()
+            }
+        }
+    };
+}
+pub(crate) use fit_table_api;
+
 impl FitTable {
     /// Reads a comma-separated table whose material names are in column `name_column`.
     pub fn read(path: &Path, name_column: &str) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::error::read_file(path)?;
         Self::parse(path, &bytes, name_column)
     }
 

@@ -8,9 +8,6 @@
 //! kap (the published model as evaluated) and [`SgdFits::cook_torrance_normalized`] recomputes
 //! it.
 
-// `!(x > 0.0)` is used on purpose: it is true for NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
 use super::FitTable;
 use crate::error::Result;
 use crate::microfacet::fresnel::Fresnel;

@@ -34,11 +34,10 @@
 //! slice outside their range. f = value / max(cos θv, [`ALTA_COS_FLOOR`]) for cosine-weighted
 //! data.
 
-use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
 use crate::error::{Error, Result};
 use crate::frame::{phi, theta};
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use std::f64::consts::FRAC_PI_2;
 use std::path::{Path, PathBuf};
@@ -181,7 +180,7 @@ pub struct AltaTable {
 impl AltaTable {
     /// Reads an ALTA file; `unit_override`, when given, replaces (or supplies) `#PARAM_OUT`.
     pub fn read(path: &Path, unit_override: Option<AltaUnit>) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::error::read_file(path)?;
         Self::parse(path, &bytes, unit_override)
     }
 
@@ -422,34 +421,15 @@ impl Bsdf for AltaTable {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        if wo.z <= 0.0 {
-            return None;
-        }
-        let wi = cosine_hemisphere(u1, u2);
-        if wi.z <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf: self.pdf(wi, wo),
-        })
+        cosine_sample(self, wo, u1, u2)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        if wo.z <= 0.0 {
-            return 0.0;
-        }
-        cosine_hemisphere_pdf(wi)
+        cosine_pdf(wi, wo)
     }
 
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: false,
-            energy_conserving: false,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(false, false)
     }
 }
 

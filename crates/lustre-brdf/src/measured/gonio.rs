@@ -386,7 +386,7 @@ impl GonioTable {
 
     /// Reads a table file; `units` overrides (or supplies) the `#units` header.
     pub fn read(path: &Path, units: Option<GonioUnits>) -> Result<Self> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::error::read_file(path)?;
         Self::parse(path, &bytes, units)
     }
 

@@ -29,11 +29,10 @@
 //! kept as missing: they evaluate as 0, trilinear interpolation renormalizes over the present
 //! corners, and [`MerlTable::is_missing`] / [`MerlTable::missing_mask`] let a fitter mask them.
 
-use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
 use crate::error::{write_atomic, Error, Result};
 use crate::frame::{to_half_diff, HalfDiff};
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
@@ -215,7 +214,7 @@ impl MerlTable {
     /// Reads a MERL `.binary` file with the given treatment of negative values.
     pub fn read_with(path: impl AsRef<Path>, negative: NegativeValues) -> Result<Self> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::error::read_file(path)?;
         Self::parse_with(path, &bytes, negative)
     }
 
@@ -539,35 +538,16 @@ impl Bsdf for MerlTable {
 
     /// Cosine-weighted hemisphere sampling; fails when `wo` is below the surface.
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        if wo.z <= 0.0 {
-            return None;
-        }
-        let wi = cosine_hemisphere(u1, u2);
-        if wi.z <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf: self.pdf(wi, wo),
-        })
+        cosine_sample(self, wo, u1, u2)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        if wo.z <= 0.0 {
-            return 0.0;
-        }
-        cosine_hemisphere_pdf(wi)
+        cosine_pdf(wi, wo)
     }
 
     /// Reciprocal (the φd fold) and isotropic; measured data promise no energy bound.
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: false,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, false)
     }
 }
 

@@ -19,11 +19,10 @@
 //! `exp` per evaluation. To keep every output finite, weights are validated finite with
 //! |w| ≤ 1e6 (so no sum can overflow) and the last pre-activation is capped at 700 before `exp`.
 
-use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
 use crate::error::{Error, Result};
 use crate::measured::merl::{bin_center, fill_bins, merl_angles, MerlTable};
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -195,35 +194,16 @@ impl Bsdf for Nbrdf {
 
     /// Cosine-weighted hemisphere sampling; fails when `wo` is below the surface.
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        if wo.z <= 0.0 {
-            return None;
-        }
-        let wi = cosine_hemisphere(u1, u2);
-        if wi.z <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf: self.pdf(wi, wo),
-        })
+        cosine_sample(self, wo, u1, u2)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        if wo.z <= 0.0 {
-            return 0.0;
-        }
-        cosine_hemisphere_pdf(wi)
+        cosine_pdf(wi, wo)
     }
 
     /// Reciprocal (by the φd fold) and isotropic; a fitted network promises no energy bound.
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: false,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, false)
     }
 }
 
@@ -231,7 +211,7 @@ impl NbrdfSet {
     /// Reads an `nbrdf-mlp-v1` JSON file.
     pub fn read(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bytes = crate::error::read_file(path)?;
         Self::parse(path, &bytes)
     }
 

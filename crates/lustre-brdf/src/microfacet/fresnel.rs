@@ -1,9 +1,6 @@
 //! Fresnel terms of the microfacet models: Schlick (004 §III.4.4.4.2), the generalized Schlick of
 //! the SGD fits (004 Eq. V.5) and Lazányi's metal approximation (004 §III.4.4.4.2).
 
-// `!(x > 0.0)` is used on purpose: it is true for NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
 use crate::error::{check_range, Result};
 
 /// A Fresnel reflectance as a function of cos θ_d = i·h.

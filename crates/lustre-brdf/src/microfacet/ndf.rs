@@ -27,9 +27,6 @@
 //! median tan²θ (= α²) far from the SGD's; we instead pick the proxy α so that both have the same
 //! median of tan²θ (GGX's median x is α_ggx²), computed once at construction.
 
-// `!(x > 0.0)` is used on purpose: it is true for NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
 use crate::error::{check_range, Error, Result};
 use crate::numeric::upper_gamma;
 use glam::DVec3;
@@ -81,7 +78,7 @@ impl Sgd {
     }
     /// CDF of the (normalized) SGD in x: 1 − Γ(1−p, α + x/α)/Γ(1−p, α) (004 §V.3.5).
     fn cdf_x(&self, x: f64) -> f64 {
-        if !(x > 0.0) {
+        if x.is_nan() || x <= 0.0 {
             return 0.0;
         }
         (1.0 - upper_gamma(1.0 - self.p, self.alpha + x / self.alpha) / self.gamma0).clamp(0.0, 1.0)
@@ -190,7 +187,7 @@ impl Ndf {
     /// P22(x), x = tan²θ, normalized to ∫₀^∞ P22 dx = 1 (Table III.2 × π, Eq. V.2).
     #[inline]
     pub fn p22(&self, x: f64) -> f64 {
-        if !(x >= 0.0) {
+        if x.is_nan() || x < 0.0 {
             return 0.0;
         }
         match *self {
@@ -212,7 +209,7 @@ impl Ndf {
     #[inline]
     pub fn d(&self, cos_theta_h: f64) -> f64 {
         let c = cos_theta_h;
-        if !(c > 0.0) {
+        if c.is_nan() || c <= 0.0 {
             return 0.0;
         }
         let c = c.min(1.0);
@@ -232,7 +229,7 @@ impl Ndf {
 
     /// CDF of x = tan²θ_h under D(h)cosθ_h dω: ∫₀^x P22. For SGD, the normalized CDF of §V.3.5.
     pub fn cdf_x(&self, x: f64) -> f64 {
-        if !(x > 0.0) {
+        if x.is_nan() || x <= 0.0 {
             return 0.0;
         }
         match *self {
@@ -288,7 +285,7 @@ impl Ndf {
     /// Solid-angle density of [`Ndf::sample_h`]: D(h)cosθ_h, or the GGX proxy's for SGD.
     #[inline]
     pub fn pdf_h(&self, h: DVec3) -> f64 {
-        if !(h.z > 0.0) {
+        if h.z.is_nan() || h.z <= 0.0 {
             return 0.0;
         }
         match *self {
@@ -307,7 +304,7 @@ impl Ndf {
 /// Solves 1 − (1+u)e^{−u} = xi for u ≥ 0 (exponential distribution CDF with u = √x/α) by
 /// Newton's method on ln(1+u) − u = ln(1−xi), safeguarded by bisection.
 fn invert_exponential_cdf(xi: f64) -> f64 {
-    if !(xi > 0.0) {
+    if xi.is_nan() || xi <= 0.0 {
         return 0.0;
     }
     let lnq = (-xi).ln_1p(); // ln(1 − xi) ≤ 0

@@ -25,9 +25,6 @@
 //! [`G1Table`] stores G1 and dG1/d(ln μ) on a uniform grid in ln μ and interpolates with cubic
 //! Hermite polynomials.
 
-// `!(x > 0.0)` is used on purpose: it is true for NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
 use super::ndf::Ndf;
 use crate::error::{check_range, Result};
 use crate::numeric::gauss_legendre;
@@ -52,7 +49,7 @@ pub fn lambda_beckmann(alpha: f64, cos_theta: f64) -> f64 {
 
 /// Closed-form Smith G1 = 1/(1 + Λ) for Beckmann.
 pub fn g1_beckmann(alpha: f64, cos_theta: f64) -> f64 {
-    if !(cos_theta > 0.0) {
+    if cos_theta.is_nan() || cos_theta <= 0.0 {
         return 0.0;
     }
     1.0 / (1.0 + lambda_beckmann(alpha, cos_theta))
@@ -60,7 +57,7 @@ pub fn g1_beckmann(alpha: f64, cos_theta: f64) -> f64 {
 
 /// Closed-form Smith G1 for GGX: 2/(1 + √(1 + α² tan²θ)).
 pub fn g1_ggx(alpha: f64, cos_theta: f64) -> f64 {
-    if !(cos_theta > 0.0) {
+    if cos_theta.is_nan() || cos_theta <= 0.0 {
         return 0.0;
     }
     let c = cos_theta.min(1.0);
@@ -207,7 +204,7 @@ impl G1Table {
     /// G1 at cos θ (0 at and below the horizon, 1 at normal incidence).
     #[inline]
     pub fn eval(&self, cos_theta: f64) -> f64 {
-        if !(cos_theta > 0.0) {
+        if cos_theta.is_nan() || cos_theta <= 0.0 {
             return 0.0;
         }
         if cos_theta >= 1.0 {
@@ -297,7 +294,7 @@ impl SgdG1Approx {
     #[inline]
     pub fn eval(&self, theta: f64) -> f64 {
         let d = theta - self.theta0;
-        if !(d > 0.0) {
+        if d.is_nan() || d <= 0.0 {
             return 1.0;
         }
         let e = (self.ln_c + self.k * d.ln()).exp();
@@ -402,7 +399,7 @@ impl G1Fit<'_> {
     fn model(&self, theta: f64) -> (f64, [f64; 3]) {
         let (lambda, w, k) = params_of(&self.x);
         let delta = theta - FRAC_PI_2 + w;
-        if !(delta > 0.0) {
+        if delta.is_nan() || delta <= 0.0 {
             return (1.0, [0.0; 3]);
         }
         let l = (1.0 / lambda).ln_1p();

@@ -20,12 +20,13 @@
 //! p(h) = (1 + Bt)^(−C)/(2πZ), Z = ∫₀¹ (1 + Bt)^(−C) dt, and wi has p(h)/(4 h·o). The diffuse term
 //! is cosine sampled; weights mean(kD) : 8·mean(A)·Z·F(1) (≈ the specular albedo at normal incidence).
 
-use crate::bsdf::{select_component, Bsdf, BsdfFlags, BsdfSample};
-use crate::error::{check_range, Result};
+use crate::bsdf::{
+    diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
+};
+use crate::error::{check_range, check_rgb, Result};
 use crate::frame::{half_vector, reflect};
-use crate::models::ward::{check_rgb, COS_MIN};
+use crate::models::ward::COS_MIN;
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -171,53 +172,29 @@ impl Bsdf for Abc {
         if wo.z < COS_MIN {
             return None;
         }
-        let (k, u1) = select_component(&self.weights(), u1)?;
-        let wi = if k == 0 {
-            cosine_hemisphere(u1, u2)
-        } else {
+        let wi = sample_diffuse_mixture(&self.weights(), u1, u2, |_, u1, u2| {
             let t = self.t_of_u(u1);
             let ct = 1.0 - t;
             let st = (t * (2.0 - t)).max(0.0).sqrt();
             let (sp, cp) = (2.0 * PI * u2).sin_cos();
             let h = DVec3::new(st * cp, st * sp, ct);
-            if h.dot(wo) <= 0.0 {
-                return None;
-            }
-            reflect(wo, h)
-        };
+            (h.dot(wo) > 0.0).then(|| reflect(wo, h))
+        })?;
         if wi.z < COS_MIN {
             return None;
         }
-        let pdf = self.pdf(wi, wo);
-        if !pdf.is_finite() || pdf <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf,
-        })
+        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
         if wi.z < COS_MIN || wo.z < COS_MIN {
             return 0.0;
         }
-        let [wd, ws] = self.weights();
-        let total = wd + ws;
-        if total.is_nan() || total <= 0.0 {
-            return 0.0;
-        }
-        (wd * cosine_hemisphere_pdf(wi) + ws * self.spec_pdf(wi, wo)) / total
+        diffuse_mixture_pdf(&self.weights(), wi, |_| self.spec_pdf(wi, wo))
     }
 
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: false,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, false)
     }
 }
 

@@ -11,12 +11,13 @@
 //! √((nu+1)(nv+1))/(2π) (n·h)^(nu cos²φh + nv sin²φh), of wi that over 4(k·h). Mixed with cosine
 //! sampling for the diffuse term, weights mean(Rs) : mean(Rd)(1 − mean(Rs)).
 
-use crate::bsdf::{select_component, Bsdf, BsdfFlags, BsdfSample};
-use crate::error::{check_range, Result};
+use crate::bsdf::{
+    diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
+};
+use crate::error::{check_range, check_rgb, Result};
 use crate::frame::{half_vector, reflect};
-use crate::models::ward::{check_rgb, COS_MIN};
+use crate::models::ward::COS_MIN;
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -98,10 +99,7 @@ impl Bsdf for AshikhminShirley {
         if wo.z < COS_MIN {
             return None;
         }
-        let (k, u1) = select_component(&self.weights(), u1)?;
-        let wi = if k == 0 {
-            cosine_hemisphere(u1, u2)
-        } else {
+        let wi = sample_diffuse_mixture(&self.weights(), u1, u2, |_, u1, u2| {
             // Quadrant from the first uniform, then the paper's first-quadrant φ.
             let q = ((u1 * 4.0) as usize).min(3);
             let r = u1 * 4.0 - q as f64;
@@ -117,39 +115,22 @@ impl Bsdf for AshikhminShirley {
             let ct = (1.0 - u2).powf(1.0 / (e + 1.0));
             let st = (1.0 - ct * ct).max(0.0).sqrt();
             let h = DVec3::new(st * cp, st * sp, ct);
-            if h.dot(wo) <= 0.0 {
-                return None;
-            }
-            reflect(wo, h)
-        };
+            (h.dot(wo) > 0.0).then(|| reflect(wo, h))
+        })?;
         if wi.z < COS_MIN {
             return None;
         }
-        let pdf = self.pdf(wi, wo);
-        if !pdf.is_finite() || pdf <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf,
-        })
+        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
         if wi.z < COS_MIN || wo.z < COS_MIN {
             return 0.0;
         }
-        let [wd, ws] = self.weights();
-        let total = wd + ws;
-        if total.is_nan() || total <= 0.0 {
-            return 0.0;
-        }
-        let spec = match half_vector(wi, wo) {
+        diffuse_mixture_pdf(&self.weights(), wi, |_| match half_vector(wi, wo) {
             Some(h) if h.dot(wo) > 0.0 => self.h_pdf(h) / (4.0 * h.dot(wo)),
             _ => 0.0,
-        };
-        (wd * cosine_hemisphere_pdf(wi) + ws * spec) / total
+        })
     }
 
     fn flags(&self) -> BsdfFlags {

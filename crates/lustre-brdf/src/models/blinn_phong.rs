@@ -11,16 +11,14 @@
 //! Sampling mixes cosine sampling (luminance of ρd) with h ∝ cosⁿθh reflected about ωo (luminance
 //! of ρs), p(ωi) = (n + 1)/(2π) cosⁿθh / (4 ωo·h).
 
-// `!(x > 0.0)` is deliberate: it also rejects NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
-use crate::bsdf::{select_component, Bsdf, BsdfFlags, BsdfSample};
-use crate::error::{check_range, Result};
+use crate::bsdf::{
+    diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
+};
+use crate::error::Result;
 use crate::frame::{half_vector, reflect};
-use crate::models::kurt::check_rgb;
-use crate::models::phong::MAX_EXPONENT;
+use crate::models::phong::{both_above, check_params, weights};
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf, cosine_power, cosine_power_pdf};
+use crate::sampling::{cosine_power, cosine_power_pdf};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -32,16 +30,14 @@ pub struct BlinnPhong {
     pub rho_d: Rgb,
     /// Specular coefficient ρs (finite, ≥ 0).
     pub rho_s: Rgb,
-    /// Exponent n in [0, [`MAX_EXPONENT`]].
+    /// Exponent n in [0, [`MAX_EXPONENT`](crate::models::phong::MAX_EXPONENT)].
     pub n: f64,
 }
 
 impl BlinnPhong {
-    /// A validated model (channels finite and ≥ 0, n in [0, [`MAX_EXPONENT`]]).
+    /// A validated model (channels finite and ≥ 0, n in [0, [`MAX_EXPONENT`](crate::models::phong::MAX_EXPONENT)]).
     pub fn new(rho_d: Rgb, rho_s: Rgb, n: f64) -> Result<Self> {
-        check_rgb("rho_d", rho_d)?;
-        check_rgb("rho_s", rho_s)?;
-        check_range("n", n, 0.0, MAX_EXPONENT)?;
+        check_params(rho_d, rho_s, n)?;
         Ok(BlinnPhong { rho_d, rho_s, n })
     }
 }
@@ -52,7 +48,7 @@ impl Bsdf for BlinnPhong {
     }
 
     fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
+        if !both_above(wi, wo) {
             return Rgb::ZERO;
         }
         let Some(h) = half_vector(wi, wo) else {
@@ -63,54 +59,39 @@ impl Bsdf for BlinnPhong {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        if !(wo.z > 0.0) {
+        if wo.z.is_nan() || wo.z <= 0.0 {
             return None;
         }
-        let (idx, u1) = select_component(&[self.rho_d.luminance(), self.rho_s.luminance()], u1)?;
-        let wi = if idx == 0 {
-            cosine_hemisphere(u1, u2)
-        } else {
+        let wi = sample_diffuse_mixture(&weights(self.rho_d, self.rho_s), u1, u2, |_, u1, u2| {
             let h = cosine_power(u1, u2, self.n);
-            if !(wo.dot(h) > 0.0) {
-                return None;
-            }
-            reflect(wo, h)
-        };
-        if !(wi.z > 0.0) {
+            (wo.dot(h) > 0.0).then(|| reflect(wo, h))
+        })?;
+        if wi.z.is_nan() || wi.z <= 0.0 {
             return None;
         }
-        let pdf = self.pdf(wi, wo);
-        (pdf > 0.0 && pdf.is_finite()).then(|| BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf,
-        })
+        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
+        if !both_above(wi, wo) {
             return 0.0;
         }
-        let (wd, ws) = (self.rho_d.luminance(), self.rho_s.luminance());
-        if !(wd + ws > 0.0) {
-            return 0.0;
-        }
-        let spec = match half_vector(wi, wo) {
-            Some(h) if wo.dot(h) > 0.0 => cosine_power_pdf(h.z, self.n) / (4.0 * wo.dot(h)),
-            _ => 0.0,
-        };
-        (wd * cosine_hemisphere_pdf(wi) + ws * spec) / (wd + ws)
+        diffuse_mixture_pdf(
+            &weights(self.rho_d, self.rho_s),
+            wi,
+            |_| match half_vector(wi, wo) {
+                Some(h) if wo.dot(h) > 0.0 => cosine_power_pdf(h.z, self.n) / (4.0 * wo.dot(h)),
+                _ => 0.0,
+            },
+        )
     }
 
     /// Reciprocal; energy conserving only when ρs = 0 and ρd ≤ 1 (see the module notes).
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: self.rho_s.max_component() == 0.0
-                && self.rho_d.max_component() <= 1.0,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(
+            true,
+            self.rho_s.max_component() == 0.0 && self.rho_d.max_component() <= 1.0,
+        )
     }
 }
 

@@ -16,17 +16,16 @@
 //! w_spec = 4ρs/p_spec F D G cos³θm (α²+tan²θm)²/α², times |o·m|/cos θi, a Jacobian factor the
 //! paper's expression omits (test `weight_is_the_papers_up_to_the_jacobian`).
 
-// `!(x > 0.0)` is used on purpose: it is true for NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
-use crate::bsdf::{select_component, Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{
+    finish_sample, sample_diffuse_mixture, select_component, Bsdf, BsdfFlags, BsdfSample,
+};
 use crate::error::{check_range, Error, Result};
 use crate::frame::reflect;
 use crate::microfacet::fresnel::Fresnel;
 use crate::microfacet::ndf::Ndf;
 use crate::microfacet::smith::{g1_beckmann, g1_ggx, G1Table, SgdG1Approx};
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
+use crate::sampling::cosine_hemisphere_pdf;
 use glam::DVec3;
 use std::f64::consts::{FRAC_1_PI, FRAC_PI_4};
 
@@ -239,29 +238,19 @@ impl Bsdf for CookTorrance {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        if !(wo.z > 0.0) {
+        if wo.z.is_nan() || wo.z <= 0.0 {
             return None;
         }
-        let (comp, u1) = select_component(&[1.0 - self.p_spec, self.p_spec], u1)?;
-        let wi = if comp == 0 {
-            cosine_hemisphere(u1, u2)
-        } else {
+        let weights = [1.0 - self.p_spec, self.p_spec];
+        let wi = sample_diffuse_mixture(&weights, u1, u2, |_, u1, u2| {
             let (li, u1) = select_component(&self.lobe_weights, u1)?;
             let h = self.lobes[li].0.sample_h(u1, u2);
-            reflect(wo, h)
-        };
-        if !(wi.z > 0.0) || !wi.is_finite() {
+            Some(reflect(wo, h))
+        })?;
+        if wi.z.is_nan() || wi.z <= 0.0 || !wi.is_finite() {
             return None;
         }
-        let pdf = self.pdf(wi, wo);
-        if !(pdf > 0.0) {
-            return None;
-        }
-        Some(BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf,
-        })
+        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
@@ -282,12 +271,7 @@ impl Bsdf for CookTorrance {
     }
 
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: self.energy_conserving,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, self.energy_conserving)
     }
 }
 

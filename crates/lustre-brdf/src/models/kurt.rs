@@ -28,14 +28,11 @@
 //! `tests/kurt_battery.rs` measure it by quadrature over roughness and incidence (see
 //! [`Kurt::flags`] for the resulting promise).
 
-// `!(x > 0.0)` is deliberate: it also rejects NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
-use crate::bsdf::{select_component, Bsdf, BsdfFlags, BsdfSample};
-use crate::error::{check_range, Error, Result};
+use crate::bsdf::{finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample};
+use crate::error::{check_range, check_rgb, Result};
 use crate::frame::{half_vector, mirror_z, reflect};
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
+use crate::sampling::cosine_hemisphere_pdf;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -77,26 +74,13 @@ impl KurtLobe {
 
     /// Checks the ranges documented on [`KurtLobe::new`].
     pub fn validate(&self) -> Result<()> {
-        check_rgb("ks", self.ks)?;
+        check_rgb("ks", self.ks, 0.0, f64::INFINITY)?;
         check_range("mx", self.mx, MIN_ROUGHNESS, MAX_ROUGHNESS)?;
         check_range("my", self.my, MIN_ROUGHNESS, MAX_ROUGHNESS)?;
         check_range("r0", self.r0, 0.0, 1.0)?;
         check_range("alpha", self.alpha, 0.0, 1.0)?;
         Ok(())
     }
-}
-
-/// Checks that every channel of `c` is finite and ≥ 0.
-pub(crate) fn check_rgb(name: &str, c: Rgb) -> Result<()> {
-    for v in c.0 {
-        if !v.is_finite() {
-            return Err(Error::param(name, v, "not a finite number"));
-        }
-        if v < 0.0 {
-            return Err(Error::param(name, v, "must be ≥ 0"));
-        }
-    }
-    Ok(())
 }
 
 /// Which Fresnel factor a lobe carries: F for reflection, 1 − F for transmission (000 Eq. 3.5).
@@ -120,13 +104,13 @@ pub fn schlick(r0: f64, u: f64) -> f64 {
 /// tangent x); zero for h at or below the horizon. ∫ D(h) cos θh dωh = 1.
 #[inline]
 pub fn beckmann_d(mx: f64, my: f64, h: DVec3) -> f64 {
-    if !(h.z > 0.0) {
+    if h.z.is_nan() || h.z <= 0.0 {
         return 0.0;
     }
     // tan²θh cos²φh = hx²/hz², tan²θh sin²φh = hy²/hz².
     let (ax, ay) = (h.x / (mx * h.z), h.y / (my * h.z));
     let e = -(ax * ax + ay * ay);
-    if !(e > -740.0) {
+    if e.is_nan() || e <= -740.0 {
         return 0.0;
     }
     // In logarithms, so that neither cos⁴θh nor mx·my under- or overflows.
@@ -145,7 +129,7 @@ pub fn lobe_eval(lobe: &KurtLobe, kind: LobeKind, wi: DVec3, wo: DVec3) -> Rgb {
         return Rgb::ZERO;
     };
     let u = wo.dot(h);
-    if !(u > 0.0) {
+    if u.is_nan() || u <= 0.0 {
         return Rgb::ZERO;
     }
     let f = schlick(lobe.r0, u);
@@ -189,7 +173,7 @@ pub fn lobe_pdf(lobe: &KurtLobe, wi: DVec3, wo: DVec3) -> f64 {
         return 0.0;
     };
     let u = wo.dot(h);
-    if !(u > 0.0) {
+    if u.is_nan() || u <= 0.0 {
         return 0.0;
     }
     beckmann_d(lobe.mx, lobe.my, h) * h.z / (4.0 * u)
@@ -220,7 +204,7 @@ impl Kurt {
 
     /// Checks kd and every lobe.
     pub fn validate(&self) -> Result<()> {
-        check_rgb("kd", self.kd)?;
+        check_rgb("kd", self.kd, 0.0, f64::INFINITY)?;
         self.reflection
             .iter()
             .chain(&self.transmission)
@@ -259,7 +243,7 @@ impl Bsdf for Kurt {
 
     fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
         let (wi, wo) = Self::to_upper(wi, wo);
-        if !(wo.z > 0.0) {
+        if wo.z.is_nan() || wo.z <= 0.0 {
             return Rgb::ZERO;
         }
         if wi.z > 0.0 {
@@ -283,53 +267,38 @@ impl Bsdf for Kurt {
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
         let flip = wo.z < 0.0;
         let wo_u = if flip { mirror_z(wo) } else { wo };
-        if !(wo_u.z > 0.0) {
+        if wo_u.z.is_nan() || wo_u.z <= 0.0 {
             return None;
         }
         let weights: Vec<f64> = self.weights().collect();
-        let (idx, u1) = select_component(&weights, u1)?;
         let nr = self.reflection.len();
-        let wi_u = if idx == 0 {
-            cosine_hemisphere(u1, u2)
-        } else {
+        let wi_u = sample_diffuse_mixture(&weights, u1, u2, |idx, u1, u2| {
             let (lobe, transmit) = if idx <= nr {
                 (&self.reflection[idx - 1], false)
             } else {
                 (&self.transmission[idx - 1 - nr], true)
             };
             let h = lobe_sample_h(lobe, u1, u2);
-            if !(wo_u.dot(h) > 0.0) {
+            if wo_u.dot(h).is_nan() || wo_u.dot(h) <= 0.0 {
                 return None;
             }
             let r = reflect(wo_u, h); // Eq. 4.8
-            if !(r.z > 0.0) {
+            if r.z.is_nan() || r.z <= 0.0 {
                 return None;
             }
-            if transmit {
-                mirror_z(r)
-            } else {
-                r
-            }
-        };
+            Some(if transmit { mirror_z(r) } else { r })
+        })?;
         let wi = if flip { mirror_z(wi_u) } else { wi_u };
-        let pdf = self.pdf(wi, wo);
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return None;
-        }
-        Some(BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf,
-        })
+        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
         let (wi, wo) = Self::to_upper(wi, wo);
-        if !(wo.z > 0.0) {
+        if wo.z.is_nan() || wo.z <= 0.0 {
             return 0.0;
         }
         let total: f64 = self.weights().sum();
-        if !(total > 0.0) {
+        if total.is_nan() || total <= 0.0 {
             return 0.0;
         }
         let p = if wi.z > 0.0 {

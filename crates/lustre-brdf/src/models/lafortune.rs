@@ -18,13 +18,13 @@
 //! below the horizon fail). Lobes and the diffuse term (cosine sampling) are mixed with weights
 //! equal to their approximate albedo.
 
-use crate::bsdf::{select_component, Bsdf, BsdfFlags, BsdfSample};
-use crate::error::{check_range, Error, Result};
-use crate::models::ward::{check_rgb, COS_MIN};
-use crate::rgb::Rgb;
-use crate::sampling::{
-    cosine_hemisphere, cosine_hemisphere_pdf, cosine_power, cosine_power_pdf, to_world,
+use crate::bsdf::{
+    diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
 };
+use crate::error::{check_range, check_rgb, Error, Result};
+use crate::models::ward::COS_MIN;
+use crate::rgb::Rgb;
+use crate::sampling::{cosine_power, cosine_power_pdf, to_world};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -206,46 +206,26 @@ impl Bsdf for Lafortune {
         if wo.z < COS_MIN {
             return None;
         }
-        let (k, u1) = select_component(&self.weights(wo), u1)?;
-        let wi = if k == 0 {
-            cosine_hemisphere(u1, u2)
-        } else {
+        let wi = sample_diffuse_mixture(&self.weights(wo), u1, u2, |k, u1, u2| {
             let l = &self.lobes[k - 1];
             let (axis, _) = l.axis(wo)?;
-            to_world(cosine_power(u1, u2, l.n), axis)
-        };
+            Some(to_world(cosine_power(u1, u2, l.n), axis))
+        })?;
         if wi.z < COS_MIN {
             return None;
         }
-        let pdf = self.pdf(wi, wo);
-        if !pdf.is_finite() || pdf <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf,
-        })
+        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
         if wi.z < COS_MIN || wo.z < COS_MIN {
             return 0.0;
         }
-        let w = self.weights(wo);
-        let total: f64 = w.iter().sum();
-        if total.is_nan() || total <= 0.0 {
-            return 0.0;
-        }
-        let mut p = w[0] * cosine_hemisphere_pdf(wi);
-        for (l, wl) in self.lobes.iter().zip(&w[1..]) {
-            if *wl > 0.0 {
-                if let Some((axis, _)) = l.axis(wo) {
-                    p += wl * cosine_power_pdf(axis.dot(wi), l.n);
-                }
-            }
-        }
-        p / total
+        diffuse_mixture_pdf(&self.weights(wo), wi, |k| {
+            let l = &self.lobes[k - 1];
+            l.axis(wo)
+                .map_or(0.0, |(axis, _)| cosine_power_pdf(axis.dot(wi), l.n))
+        })
     }
 
     fn flags(&self) -> BsdfFlags {

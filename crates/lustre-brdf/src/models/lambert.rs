@@ -2,14 +2,9 @@
 //!
 //! One-sided: zero unless both directions lie above the surface.
 
-// `!(x > 0.0)` is deliberate: it also rejects NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
-use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample};
-use crate::error::Result;
-use crate::models::kurt::check_rgb;
+use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
+use crate::error::{check_rgb, Result};
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -24,7 +19,7 @@ pub struct Lambert {
 impl Lambert {
     /// A Lambertian BRDF; rejects negative or non-finite channels.
     pub fn new(kd: Rgb) -> Result<Self> {
-        check_rgb("kd", kd)?;
+        check_rgb("kd", kd, 0.0, f64::INFINITY)?;
         Ok(Lambert { kd })
     }
 }
@@ -43,34 +38,16 @@ impl Bsdf for Lambert {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        if !(wo.z > 0.0) {
-            return None;
-        }
-        let wi = cosine_hemisphere(u1, u2);
-        let pdf = self.pdf(wi, wo);
-        (pdf > 0.0).then(|| BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf,
-        })
+        cosine_sample(self, wo, u1, u2)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        if wo.z > 0.0 {
-            cosine_hemisphere_pdf(wi)
-        } else {
-            0.0
-        }
+        cosine_pdf(wi, wo)
     }
 
     /// Reciprocal; energy conserving when kd ≤ 1 in every channel (the albedo is exactly kd).
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: self.kd.max_component() <= 1.0,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, self.kd.max_component() <= 1.0)
     }
 }
 

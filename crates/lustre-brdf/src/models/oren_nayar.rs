@@ -8,14 +8,9 @@
 //! at grazing. Symmetric in ωi, ωo, hence reciprocal. σ = 0 is Lambert. Cosine-sampled.
 //! One-sided: zero unless both directions lie above the surface.
 
-// `!(x > 0.0)` is deliberate: it also rejects NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
-use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample};
-use crate::error::{check_range, Result};
-use crate::models::kurt::check_rgb;
+use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
+use crate::error::{check_range, check_rgb, Result};
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -32,7 +27,7 @@ pub struct OrenNayar {
 impl OrenNayar {
     /// A validated model (ρ finite and ≥ 0, σ in [0, π/2]).
     pub fn new(rho: Rgb, sigma: f64) -> Result<Self> {
-        check_rgb("rho", rho)?;
+        check_rgb("rho", rho, 0.0, f64::INFINITY)?;
         check_range("sigma", sigma, 0.0, FRAC_PI_2)?;
         Ok(OrenNayar { rho, sigma })
     }
@@ -70,35 +65,17 @@ impl Bsdf for OrenNayar {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        if !(wo.z > 0.0) {
-            return None;
-        }
-        let wi = cosine_hemisphere(u1, u2);
-        let pdf = self.pdf(wi, wo);
-        (pdf > 0.0).then(|| BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf,
-        })
+        cosine_sample(self, wo, u1, u2)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        if wo.z > 0.0 {
-            cosine_hemisphere_pdf(wi)
-        } else {
-            0.0
-        }
+        cosine_pdf(wi, wo)
     }
 
     /// Reciprocal; energy conserving when [`OrenNayar::max_albedo`] ≤ 1 in every channel (not
     /// merely ρ ≤ 1: see there).
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: self.max_albedo().max_component() <= 1.0,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, self.max_albedo().max_component() <= 1.0)
     }
 }
 

@@ -9,22 +9,37 @@
 //! Sampling mixes cosine sampling (weight: luminance of ρd) with a cosⁿ lobe about the mirror
 //! direction of ωo (weight: luminance of ρs); samples below the horizon fail.
 
-// `!(x > 0.0)` is deliberate: it also rejects NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
-use crate::bsdf::{select_component, Bsdf, BsdfFlags, BsdfSample};
-use crate::error::{check_range, Result};
-use crate::models::kurt::check_rgb;
-use crate::rgb::Rgb;
-use crate::sampling::{
-    cosine_hemisphere, cosine_hemisphere_pdf, cosine_power, cosine_power_pdf, to_world,
+use crate::bsdf::{
+    diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
 };
+use crate::error::{check_range, check_rgb, Result};
+use crate::rgb::Rgb;
+use crate::sampling::{cosine_power, cosine_power_pdf, to_world};
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// Largest accepted Phong exponent.
 pub const MAX_EXPONENT: f64 = 1e7;
+
+/// Validates the parameters shared by [`Phong`] and [`crate::models::blinn_phong::BlinnPhong`]:
+/// ρd and ρs finite and ≥ 0, n in [0, [`MAX_EXPONENT`]].
+pub(crate) fn check_params(rho_d: Rgb, rho_s: Rgb, n: f64) -> Result<()> {
+    check_rgb("rho_d", rho_d, 0.0, f64::INFINITY)?;
+    check_rgb("rho_s", rho_s, 0.0, f64::INFINITY)?;
+    check_range("n", n, 0.0, MAX_EXPONENT)?;
+    Ok(())
+}
+
+/// Diffuse and specular sampling weights (luminances of ρd and ρs).
+pub(crate) fn weights(rho_d: Rgb, rho_s: Rgb) -> [f64; 2] {
+    [rho_d.luminance(), rho_s.luminance()]
+}
+
+/// Whether `wi` and `wo` both lie strictly above the surface (false for NaN).
+pub(crate) fn both_above(wi: DVec3, wo: DVec3) -> bool {
+    wi.z > 0.0 && wo.z > 0.0
+}
 
 /// Mirror of a local direction about the normal.
 #[inline]
@@ -46,9 +61,7 @@ pub struct Phong {
 impl Phong {
     /// A validated model (channels finite and ≥ 0, n in [0, [`MAX_EXPONENT`]]).
     pub fn new(rho_d: Rgb, rho_s: Rgb, n: f64) -> Result<Self> {
-        check_rgb("rho_d", rho_d)?;
-        check_rgb("rho_s", rho_s)?;
-        check_range("n", n, 0.0, MAX_EXPONENT)?;
+        check_params(rho_d, rho_s, n)?;
         Ok(Phong { rho_d, rho_s, n })
     }
 }
@@ -59,7 +72,7 @@ impl Bsdf for Phong {
     }
 
     fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
+        if !both_above(wi, wo) {
             return Rgb::ZERO;
         }
         let c = wo.dot(mirror(wi));
@@ -72,46 +85,30 @@ impl Bsdf for Phong {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        if !(wo.z > 0.0) {
+        if wo.z.is_nan() || wo.z <= 0.0 {
             return None;
         }
-        let (idx, u1) = select_component(&[self.rho_d.luminance(), self.rho_s.luminance()], u1)?;
-        let wi = if idx == 0 {
-            cosine_hemisphere(u1, u2)
-        } else {
-            to_world(cosine_power(u1, u2, self.n), mirror(wo)).normalize()
-        };
-        if !(wi.z > 0.0) {
+        let wi = sample_diffuse_mixture(&weights(self.rho_d, self.rho_s), u1, u2, |_, u1, u2| {
+            Some(to_world(cosine_power(u1, u2, self.n), mirror(wo)).normalize())
+        })?;
+        if wi.z.is_nan() || wi.z <= 0.0 {
             return None;
         }
-        let pdf = self.pdf(wi, wo);
-        (pdf > 0.0 && pdf.is_finite()).then(|| BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf,
-        })
+        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
+        if !both_above(wi, wo) {
             return 0.0;
         }
-        let (wd, ws) = (self.rho_d.luminance(), self.rho_s.luminance());
-        if !(wd + ws > 0.0) {
-            return 0.0;
-        }
-        (wd * cosine_hemisphere_pdf(wi) + ws * cosine_power_pdf(wi.dot(mirror(wo)), self.n))
-            / (wd + ws)
+        diffuse_mixture_pdf(&weights(self.rho_d, self.rho_s), wi, |_| {
+            cosine_power_pdf(wi.dot(mirror(wo)), self.n)
+        })
     }
 
     /// Reciprocal; energy conserving when ρd + ρs ≤ 1 in every channel.
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: (self.rho_d + self.rho_s).max_component() <= 1.0,
-            transmission: false,
-            anisotropic: false,
-        }
+        BsdfFlags::isotropic_reflection(true, (self.rho_d + self.rho_s).max_component() <= 1.0)
     }
 }
 

@@ -6,11 +6,7 @@
 //! Reciprocal, but its albedo still exceeds 1 at grazing angles for some parameters (Neumann 1999;
 //! measured in the tests). Sampling as in [`crate::models::ward`] (Walter 2005).
 
-use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample};
-use crate::error::Result;
-use crate::models::ward::{WardCore, WardKind};
-use crate::rgb::Rgb;
-use glam::DVec3;
+use crate::models::ward::{ward_variant, WardCore, WardKind};
 
 /// The Ward-Dür anisotropic BRDF (α along the tangent +x, β along +y).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -18,56 +14,15 @@ pub struct WardDuer {
     core: WardCore,
 }
 
-impl WardDuer {
-    /// A Ward-Dür BRDF: diffuse albedo `rho_d` (channels in [0, 1]), specular weight `rho_s`
-    /// (in [0, 100]), roughness `alpha` along the tangent, `beta` along the bitangent ([1e-4, 10]).
-    pub fn new(rho_d: Rgb, rho_s: Rgb, alpha: f64, beta: f64) -> Result<Self> {
-        Ok(WardDuer {
-            core: WardCore::new(WardKind::Duer, rho_d, rho_s, alpha, beta)?,
-        })
-    }
-
-    /// The isotropic case α = β.
-    pub fn isotropic(rho_d: Rgb, rho_s: Rgb, alpha: f64) -> Result<Self> {
-        Self::new(rho_d, rho_s, alpha, alpha)
-    }
-
-    /// The specular lobe alone, without ρs (1/sr).
-    pub fn specular_lobe(&self, wi: DVec3, wo: DVec3) -> f64 {
-        self.core.specular(wi, wo)
-    }
-}
-
-impl Bsdf for WardDuer {
-    fn name(&self) -> String {
-        format!(
-            "ward-duer(alpha={}, beta={})",
-            self.core.alpha, self.core.beta
-        )
-    }
-    fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
-        self.core.eval(wi, wo)
-    }
-    fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        self.core.sample(wo, u1, u2)
-    }
-    fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        self.core.pdf(wi, wo)
-    }
-    fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            reciprocal: true,
-            energy_conserving: false,
-            transmission: false,
-            anisotropic: self.core.anisotropic(),
-        }
-    }
-}
+ward_variant!(WardDuer, WardKind::Duer, "ward-duer");
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bsdf::Bsdf;
     use crate::frame::spherical;
+    use crate::rgb::Rgb;
+    use glam::DVec3;
     use std::f64::consts::PI;
 
     #[test]
