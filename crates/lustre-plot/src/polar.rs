@@ -475,10 +475,12 @@ impl PolarFigure {
         grey: bool,
     ) -> DrawResult {
         let (color, dash) = match self.opts.channels {
-            Channels::Luminance => (PALETTE[b % PALETTE.len()], b / PALETTE.len()),
+            Channels::Luminance => (PALETTE[b % PALETTE.len()], b),
             Channels::Rgb if grey => (RGBColor(70, 70, 70), b),
             Channels::Rgb => (CHANNEL[ch], b),
         };
+        // The first BSDF (the reference, e.g. a measurement) is solid and the others dashed, so
+        // that overlaid curves stay visible where they coincide.
         pen.path(pts, color, 2.0, Self::dash(dash))
     }
 
