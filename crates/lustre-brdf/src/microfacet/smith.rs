@@ -605,9 +605,13 @@ mod tests {
                 assert!(l2 <= pl2, "{name}");
             }
         }
-        println!("worst RMS L2 of the LM fit = {worst:.3e}");
+        // Squared L2 norm ∫_0^{π/2} (G1_approx − G1_numeric)² dθ = (π/2)·RMS²: the reading of the
+        // paper's "L2 below 1e-5" under which its own published fits also qualify.
+        let squared_l2 = FRAC_PI_2 * worst * worst;
+        println!("worst RMS of the LM fit = {worst:.3e}, worst squared L2 = {squared_l2:.3e}");
         // The three-parameter form cannot follow the numeric G1 to an RMS of 1e-5 (the published
-        // parameters themselves are 5e-5..3e-4 away); the mean square is below 1e-7.
+        // parameters themselves are 5e-5..6e-4 away); in the squared L2 norm it is below 1e-7.
         assert!(worst < 2.5e-4);
+        assert!(squared_l2 < 1e-5);
     }
 }
