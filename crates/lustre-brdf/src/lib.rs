@@ -13,6 +13,7 @@ pub mod catalog;
 pub mod error;
 pub mod fits;
 pub mod frame;
+pub mod material;
 pub mod measured;
 pub mod microfacet;
 pub mod models;

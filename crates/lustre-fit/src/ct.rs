@@ -1,0 +1,1 @@
+//! Two-slice Cook-Torrance fits (004 §V.4).

@@ -1,0 +1,1 @@
+//! Measured inputs as fitting data.

@@ -1,0 +1,1 @@
+//! Kurt et al. hierarchical fitting (000 §3.4.1).

@@ -1,0 +1,1 @@
+//! Float RGB images.

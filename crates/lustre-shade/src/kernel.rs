@@ -1,0 +1,1 @@
+//! Per-pixel shading kernels.

@@ -1,0 +1,19 @@
+//! lustre-shade: integration of incident light over BSDF lobes on the CPU.
+//!
+//! - [`pattern`]: regular sample patterns (002 §5, 000 §4.4.3, §4.5.3).
+//! - [`mip`]: per-sample MIP levels (002 Eq. 14–16, 000 Eq. 4.14–4.17, Colbert-Křivánek).
+//! - [`image`], [`metrics`]: float images, RMS / PSNR / CIE Lab ΔE, false-colour differences.
+//! - [`kernel`]: per-pixel shading kernels: reference, progressive QMC, regular, Colbert-Křivánek.
+//! - [`scene`], [`render`], [`harness`]: evaluation scenes, image rendering, the comparisons.
+
+pub mod error;
+pub mod harness;
+pub mod image;
+pub mod kernel;
+pub mod metrics;
+pub mod mip;
+pub mod pattern;
+pub mod render;
+pub mod scene;
+
+pub use error::{Result, ShadeError};
