@@ -54,8 +54,64 @@ pub struct MaterialCase {
     pub settings: Vec<SampleSetting>,
 }
 
+/// Which regular pattern a method uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PatternChoice {
+    /// 002 §5's concentric pattern closest to the budget (`kernel::plan_regular`, with ξ0).
+    Concentric,
+    /// 000 §4.4.3's centre + ring / linear pattern (`kernel::plan_thesis`; ξ0 unused).
+    Thesis,
+}
+
+/// A regular-sampling method: a pattern and a weighting.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RegularMethod {
+    /// The pattern.
+    pub pattern: PatternChoice,
+    /// The weighting of the samples.
+    pub weighting: Weighting,
+}
+
+impl RegularMethod {
+    /// The label in the table: "regular (Pdf002)", "thesis (Eq. 4.24)", ...
+    pub fn label(&self) -> String {
+        let p = match self.pattern {
+            PatternChoice::Concentric => "regular",
+            PatternChoice::Thesis => "thesis",
+        };
+        let w = match self.weighting {
+            Weighting::Pdf002 => "Pdf002",
+            Weighting::Thesis424 => "Eq. 4.24",
+            Weighting::Thesis425 => "Eq. 4.25",
+        };
+        format!("{p} ({w})")
+    }
+
+    /// The tag in file names: "regular-002", "thesis-425", ...
+    pub fn tag(&self) -> String {
+        let p = match self.pattern {
+            PatternChoice::Concentric => "regular",
+            PatternChoice::Thesis => "thesis",
+        };
+        let w = match self.weighting {
+            Weighting::Pdf002 => "002",
+            Weighting::Thesis424 => "424",
+            Weighting::Thesis425 => "425",
+        };
+        format!("{p}-{w}")
+    }
+
+    /// The material plan of this method.
+    pub fn plan(&self, kurt: &Kurt, setting: SampleSetting) -> Result<kernel::MaterialPlan> {
+        match self.pattern {
+            PatternChoice::Concentric => kernel::plan_regular(kurt, setting.samples, setting.xi0),
+            PatternChoice::Thesis => kernel::plan_thesis(kurt, setting.samples),
+        }
+    }
+}
+
 /// A published comparison as data.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Experiment {
     /// Identifier ("002", "000").
     pub id: String,
@@ -63,8 +119,8 @@ pub struct Experiment {
     pub title: String,
     /// The materials.
     pub materials: Vec<MaterialCase>,
-    /// The regular-sampling weightings rendered for every setting.
-    pub weightings: Vec<Weighting>,
+    /// The regular-sampling methods rendered for every setting (CK is always rendered too).
+    pub methods: Vec<RegularMethod>,
 }
 
 fn specular_only(mx: f64, my: f64) -> Result<Kurt> {
@@ -102,12 +158,16 @@ pub fn experiment_002() -> Result<Experiment> {
                 settings: vec![s(14, 0.2), s(30, 0.1), s(270, 0.01)],
             },
         ],
-        weightings: vec![Weighting::Pdf002],
+        methods: vec![RegularMethod {
+            pattern: PatternChoice::Concentric,
+            weighting: Weighting::Pdf002,
+        }],
     })
 }
 
 /// 000 §4.4, Fig. 4.24: glossy metal, anisotropic, frosted glass and varnish with the thesis'
-/// sample counts, integrated with Eq. 4.24 and Eq. 4.25 (and 002's weighting for comparison).
+/// sample counts, the thesis pattern integrated with Eq. 4.24 and Eq. 4.25, and 002's concentric
+/// pattern and weighting for comparison.
 /// The parameters are ours (the thesis names the materials only).
 pub fn experiment_000() -> Result<Experiment> {
     let lobe = KurtLobe::new;
@@ -157,7 +217,20 @@ pub fn experiment_000() -> Result<Experiment> {
                 settings: vec![s(7)],
             },
         ],
-        weightings: vec![Weighting::Thesis424, Weighting::Thesis425, Weighting::Pdf002],
+        methods: vec![
+            RegularMethod {
+                pattern: PatternChoice::Thesis,
+                weighting: Weighting::Thesis424,
+            },
+            RegularMethod {
+                pattern: PatternChoice::Thesis,
+                weighting: Weighting::Thesis425,
+            },
+            RegularMethod {
+                pattern: PatternChoice::Concentric,
+                weighting: Weighting::Pdf002,
+            },
+        ],
     })
 }
 
@@ -387,7 +460,7 @@ pub struct Row {
     pub material: String,
     /// Samples per lobe (the reference's samples per pixel for the reference row).
     pub samples: usize,
-    /// Method: "regular (Pdf002)", "regular (Eq. 4.24)", "regular (Eq. 4.25)", "CK", "reference".
+    /// Method: [`RegularMethod::label`], "CK" or "reference".
     pub method: String,
     /// RMS (linear radiance, all channels) against the reference; for the reference row, the
     /// estimated RMS noise of the reference itself.
@@ -447,23 +520,6 @@ impl Report {
             .iter()
             .find(|r| r.material == material && r.samples == samples && r.method == method)
             .map(|r| r.rms)
-    }
-}
-
-/// The method label of a regular-sampling weighting.
-pub fn weighting_label(w: Weighting) -> &'static str {
-    match w {
-        Weighting::Pdf002 => "regular (Pdf002)",
-        Weighting::Thesis424 => "regular (Eq. 4.24)",
-        Weighting::Thesis425 => "regular (Eq. 4.25)",
-    }
-}
-
-fn file_tag(w: Weighting) -> &'static str {
-    match w {
-        Weighting::Pdf002 => "regular-002",
-        Weighting::Thesis424 => "regular-424",
-        Weighting::Thesis425 => "regular-425",
     }
 }
 
@@ -571,10 +627,11 @@ pub fn run(
                 file,
             });
             for setting in &case.settings {
-                let plan = kernel::plan_regular(&case.kurt, setting.samples, setting.xi0)?;
                 let mut images: Vec<(String, String, Image, f64)> = vec![];
-                for &w in &exp.weightings {
-                    let label = format!("{stem} n={} {}", setting.samples, weighting_label(w));
+                for m in &exp.methods {
+                    let plan = m.plan(&case.kurt, *setting)?;
+                    let w = m.weighting;
+                    let label = format!("{stem} n={} {}", setting.samples, m.label());
                     let t0 = Instant::now();
                     let img = render_with_progress(
                         &scene,
@@ -585,7 +642,7 @@ pub fn run(
                         &|r| progress(&label, r, n),
                     );
                     let s = t0.elapsed().as_secs_f64();
-                    images.push((weighting_label(w).into(), file_tag(w).into(), img, s));
+                    images.push((m.label(), m.tag(), img, s));
                 }
                 let label = format!("{stem} n={} CK", setting.samples);
                 let t0 = Instant::now();

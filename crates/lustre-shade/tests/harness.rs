@@ -87,7 +87,8 @@ fn tiny_run_writes_a_table_with_finite_numbers() {
     let md = std::fs::read_to_string(out.join("compare.md")).expect("compare.md");
     assert!(md.contains("## Experiment 002") && md.contains("## Experiment 000"));
     assert!(md.contains("| iso-0.15 | 270 | regular (Pdf002) |"));
-    assert!(md.contains("regular (Eq. 4.25)"));
+    assert!(md.contains("| varnish | 7 | thesis (Eq. 4.25) |"), "{md}");
+    assert!(out.join("000_frosted-glass_n5_thesis-424.png").is_file());
     assert!(out.join("002_iso-0.1_n14_ck_diff.png").is_file());
 }
 
