@@ -19,7 +19,8 @@
 //!    φd, the data evaluated once), with the SGD shadowing held at the numeric Smith G1 of the
 //!    two-slice (α, p) (Beckmann, GGX: closed forms). Variables ln ρd, ln ρs, ln α, ρs F0,
 //!    ρs F1 (and p); the result is kept only where it lowers the weighted error, recomputed with
-//!    the numeric G1 of the refined (α, p).
+//!    the numeric G1 of the refined (α, p). For SGD a second refinement starts from the refined
+//!    Beckmann fit (SGD with p = 0, α = α_B² is Beckmann), and the better one is kept.
 //! 4. SGD: the Eq. V.3 shadowing approximation (λ, c, k) by `SgdG1Approx::fit` of the numeric
 //!    G1 table of the final (α, p), and kap = 1/(αΓ(1−p, α)).
 //!
@@ -661,21 +662,20 @@ fn refine_round(
     (next, out.ok, out.evals)
 }
 
-/// Fits one channel: two slices, refinement, shadowing approximation.
-fn fit_channel(
+/// Steps 1 and 2 for one channel.
+fn two_slice(
     input: &str,
     kind: Distribution,
     ch: usize,
     slices: &Slices,
-    set: Option<&RefineSet>,
 ) -> Result<(CtChannelFit, bool, usize)> {
     let (s1, ok1, e1) = step1(input, kind, &slices.th, &slices.mh[ch], &slices.sw_h)?;
     let [rho_d, _fr, alpha, p] = s1;
     let d = Dist::new(kind, alpha, p);
-    let mut g1 = shadowing_of(kind, alpha, p)?;
+    let g1 = shadowing_of(kind, alpha, p)?;
     let (s2, ok2, e2) = step2(&slices.td, &slices.md[ch], rho_d, &d, &g1)?;
     let [rho_s, f0, f1] = s2;
-    let mut c = CtChannelFit {
+    let c = CtChannelFit {
         rho_d,
         rho_s,
         alpha,
@@ -685,16 +685,74 @@ fn fit_channel(
         f1,
         g1: None,
     };
-    let (mut ok, mut evals) = (ok1 && ok2, e1 + e2);
-    if let Some(set) = set {
+    Ok((c, ok1 && ok2, e1 + e2))
+}
+
+/// A refinement candidate: parameters, weighted cost (with the shadowing of its own (α, p)),
+/// shadowing, LM success.
+struct Candidate {
+    c: CtChannelFit,
+    cost: f64,
+    g1: SgdG1,
+    ok: bool,
+}
+
+impl Candidate {
+    fn new(
+        kind: Distribution,
+        c: CtChannelFit,
+        set: &RefineSet,
+        ch: usize,
+        ok: bool,
+    ) -> Result<Self> {
+        let g1 = shadowing_of(kind, c.alpha, c.p)?;
         let cost = refine_cost(kind, &c, &g1, set, ch);
-        let (next, ok_r, e) = refine_round(kind, &c, &g1, set, ch);
+        Ok(Candidate { c, cost, g1, ok })
+    }
+
+    /// Refines from this candidate; returns the refined one and the evaluations.
+    fn refine(&self, kind: Distribution, set: &RefineSet, ch: usize) -> Result<(Self, usize)> {
+        let (next, ok, e) = refine_round(kind, &self.c, &self.g1, set, ch);
+        Ok((Candidate::new(kind, next, set, ch, ok)?, e))
+    }
+}
+
+/// Fits one channel: two slices, refinement, shadowing approximation. For SGD the refinement
+/// also starts from the refined Beckmann fit (SGD with p = 0 and α = α_B² is Beckmann), so the
+/// SGD result is never worse than Beckmann on the refinement set.
+fn fit_channel(
+    input: &str,
+    kind: Distribution,
+    ch: usize,
+    slices: &Slices,
+    set: Option<&RefineSet>,
+) -> Result<(CtChannelFit, bool, usize)> {
+    let (c0, ok0, mut evals) = two_slice(input, kind, ch, slices)?;
+    let (mut c, mut g1, mut ok) = (c0, shadowing_of(kind, c0.alpha, c0.p)?, ok0);
+    if let Some(set) = set {
+        let start = Candidate::new(kind, c0, set, ch, ok0)?;
+        let (refined, e) = start.refine(kind, set, ch)?;
         evals += e;
-        let next_g1 = shadowing_of(kind, next.alpha, next.p)?;
-        if refine_cost(kind, &next, &next_g1, set, ch) < cost {
-            c = next;
-            g1 = next_g1;
-            ok = ok_r;
+        let mut cands = vec![start, refined];
+        if kind == Distribution::Sgd {
+            let beck = Distribution::Beckmann;
+            let (b0, okb, eb) = two_slice(input, beck, ch, slices)?;
+            let (b1, eb1) = Candidate::new(beck, b0, set, ch, okb)?.refine(beck, set, ch)?;
+            let as_sgd = CtChannelFit {
+                alpha: (b1.c.alpha * b1.c.alpha).max(1e-5),
+                p: 0.0,
+                ..b1.c
+            };
+            let (s1, es) = Candidate::new(kind, as_sgd, set, ch, b1.ok)?.refine(kind, set, ch)?;
+            evals += eb + eb1 + es;
+            cands.push(s1);
+        }
+        let best = cands
+            .into_iter()
+            .filter(|k| k.cost.is_finite())
+            .min_by(|a, b| a.cost.total_cmp(&b.cost));
+        if let Some(best) = best {
+            (c, g1, ok) = (best.c, best.g1, ok && best.ok);
         }
     }
     if kind == Distribution::Sgd {
