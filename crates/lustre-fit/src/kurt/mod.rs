@@ -1,7 +1,7 @@
 //! Kurt et al. hierarchical fitting (000 §3.4.1).
 //!
 //! The measured BSDF is sampled once on a fixed direction set (see [`samples`]: 8 incident
-//! elevations, 4 azimuths for anisotropic data, a 3° × 6° outgoing grid plus a dense patch
+//! elevations, 3 azimuths for anisotropic data, a 4° × 8° outgoing grid plus a dense patch
 //! around the mirror direction, reflection and — when fitting transmission — the mirrored
 //! transmission hemisphere). Every candidate model is then scored with the L1 transfer
 //! probability metric of 000 Eq. 3.7,
@@ -27,9 +27,14 @@
 //! 4. A Levenberg-Marquardt polish of all free parameters ([`polish`]); kept only if it lowers
 //!    the Eq. 3.7 error.
 //!
-//! [`KurtFit::status`] is `Converged` only when the last level of every final lobe search
-//! improved the error by less than 0.1 %, the alternation settled likewise, and LM (when run)
-//! met a convergence criterion; otherwise `NotConverged`. Data with NaN/infinite samples or no
+//! [`KurtFit::status`] is `Converged` when the alternation of several lobes settled (the last
+//! round improved the error by less than 0.1 % of the error without lobes) and then
+//! - with the polish: LM met one of its convergence criteria (ftol/xtol/gtol, zero residuals, or
+//!   tolerances reached at machine precision) — the search only provides its start;
+//! - without: the last level of every final lobe search improved the error by less than 0.1 %
+//!   of the error without that lobe.
+//!
+//! Otherwise `NotConverged`. Data with NaN/infinite samples or no
 //! non-zero sample is a [`FitError::Data`].
 
 mod params;
@@ -74,7 +79,7 @@ pub struct KurtOptions {
 }
 
 impl Default for KurtOptions {
-    /// One reflection lobe, no transmission lobe, grid 5, 8 levels, polish on.
+    /// One reflection lobe, no transmission lobe, grid 5, 6 levels, polish on.
     fn default() -> Self {
         KurtOptions {
             lobes: 1,
@@ -82,7 +87,7 @@ impl Default for KurtOptions {
             fixed: Vec::new(),
             ranges: Vec::new(),
             grid: 5,
-            levels: 8,
+            levels: 6,
             polish: true,
         }
     }
@@ -141,6 +146,7 @@ pub fn fit(data: &dyn Bsdf, transmission: bool, opts: &KurtOptions) -> Result<Ku
     let mut model = Kurt::new(Rgb(kd), refl.lobes, trans.lobes)?;
     let mut objective = model_objective(&s, &model);
     let mut evaluations = refl.evaluations + trans.evaluations;
+    let alternation = refl.alternation_settled && trans.alternation_settled;
     let mut settled = refl.settled && trans.settled;
     if opts.polish {
         let p = polish::polish(&s, &space, &model);
@@ -150,8 +156,9 @@ pub fn fit(data: &dyn Bsdf, transmission: bool, opts: &KurtOptions) -> Result<Ku
             model = p.model;
             objective = obj;
         }
-        settled &= p.converged;
+        settled = p.converged;
     }
+    settled &= alternation;
     Ok(KurtFit {
         model,
         objective,

@@ -199,7 +199,7 @@ impl levenberg_marquardt::LeastSquaresProblem<f64, Dyn, Dyn> for Problem<'_> {
 pub(crate) struct Polished {
     /// The polished model (parameters clamped to their ranges).
     pub model: Kurt,
-    /// Whether LM met one of its convergence criteria.
+    /// Whether LM met one of its convergence criteria (or met them at machine precision).
     pub converged: bool,
     /// Residual-vector evaluations (each over all pairs).
     pub evaluations: usize,
@@ -236,7 +236,12 @@ pub(crate) fn polish(s: &Samples, space: &Space, model: &Kurt) -> Polished {
         .minimize(problem);
     Polished {
         model: problem.model(&problem.x),
-        converged: report.termination.was_successful(),
+        // NoImprovementPossible: the tolerances were met at machine precision, not above it.
+        converged: report.termination.was_successful()
+            || matches!(
+                report.termination,
+                levenberg_marquardt::TerminationReason::NoImprovementPossible(_)
+            ),
         evaluations: problem.evaluations.get(),
     }
 }

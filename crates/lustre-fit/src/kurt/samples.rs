@@ -1,8 +1,8 @@
 //! The fixed direction set of the fit and the data sampled on it (000 §3.4.1, Eq. 3.7).
 //!
 //! For every incident direction ωi of a small set (θi = 5°, 15°, …, 75°; φi = 0° for isotropic
-//! data, φi ∈ {0°, 45°, 90°, 135°} for anisotropic data) the outgoing directions are a regular
-//! (θo, φo) grid (3° × 6°, cell centres) plus a dense polar patch of radius 9° around the mirror
+//! data, φi ∈ {0°, 45°, 90°} for anisotropic data) the outgoing directions are a regular
+//! (θo, φo) grid (4° × 8°, cell centres) plus a dense polar patch of radius 9° around the mirror
 //! direction (0.75° rings × 15° sectors) that replaces the grid cells inside it, so that sharp
 //! specular peaks are resolved. Each outgoing sample carries the solid angle of its cell as
 //! the weight w(ωo) of Eq. 3.7: for the regular grid that is sin θo·Δθ·Δφ, the thesis' sin θo
@@ -29,9 +29,9 @@ use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// Regular grid step in θo (degrees).
-const GRID_DTHETA_DEG: f64 = 3.0;
+const GRID_DTHETA_DEG: f64 = 4.0;
 /// Regular grid step in φo (degrees).
-const GRID_DPHI_DEG: f64 = 6.0;
+const GRID_DPHI_DEG: f64 = 8.0;
 /// Radius of the dense patch around the mirror direction (degrees).
 const PATCH_RADIUS_DEG: f64 = 9.0;
 /// Rings of the patch.
@@ -41,7 +41,7 @@ const PATCH_SECTORS: usize = 24;
 /// Incident polar angles (degrees).
 const THETA_I_DEG: [f64; 8] = [5.0, 15.0, 25.0, 35.0, 45.0, 55.0, 65.0, 75.0];
 /// Incident azimuths for anisotropic data (degrees).
-const PHI_I_ANISO_DEG: [f64; 4] = [0.0, 45.0, 90.0, 135.0];
+const PHI_I_ANISO_DEG: [f64; 3] = [0.0, 45.0, 90.0];
 
 /// The pairs of one hemisphere (reflection or transmission), as plain arrays.
 #[derive(Clone, Debug, Default)]
@@ -60,8 +60,6 @@ pub(crate) struct PairSet {
     pub ln_cc: Vec<f64>,
     /// (1 − u)⁵, so that Schlick's F = r0 + (1 − r0)·s5.
     pub s5: Vec<f64>,
-    /// u = ωo·h.
-    pub u: Vec<f64>,
     /// Measured transfer probability p = f·|cos θo| per channel.
     pub data: [Vec<f64>; 3],
     /// Whether a sample lies on the regular grid (the kd histogram uses only those).
@@ -283,7 +281,6 @@ fn build_set(raw: Vec<RawPair>, total_w: f64) -> PairSet {
         s.ln_cc.push((r.wi.z * r.wo.z).ln());
         // Schlick's F = r0 + (1 − r0)·s5: s5 from models::kurt::schlick with r0 = 0.
         s.s5.push(schlick(0.0, u));
-        s.u.push(u);
         for c in 0..3 {
             s.data[c].push(r.p[c]);
         }

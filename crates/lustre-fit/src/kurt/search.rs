@@ -7,7 +7,8 @@ use lustre_brdf::models::kurt::{KurtLobe, LobeKind};
 use lustre_brdf::Rgb;
 use rayon::prelude::*;
 
-/// Relative improvement below which a level (or an alternation round) counts as settled.
+/// Improvement, relative to the error without the lobe(s), below which a level (or an
+/// alternation round) counts as settled.
 const SETTLE_TOL: f64 = 1e-3;
 /// Alternation rounds for more than one lobe (each round refits every lobe once).
 const MAX_ROUNDS: usize = 4;
@@ -19,6 +20,8 @@ pub(crate) struct Found {
     pub lobes: Vec<KurtLobe>,
     /// Whether the last level of every final search and the alternation settled.
     pub settled: bool,
+    /// Whether the alternation of several lobes settled (true for one lobe).
+    pub alternation_settled: bool,
     /// Lobe-shape evaluations over the pair set.
     pub evaluations: usize,
 }
@@ -44,16 +47,6 @@ fn values(p: Param, bx: Option<(f64, f64)>, grid: usize, out: &mut Vec<f64>) {
     }
 }
 
-/// Σ_t a_t |target_t − ks·g_t|: the Eq. 3.7 error of one channel for one ks.
-#[inline]
-fn channel_error(a: &[f64], target: &[f64], g: &[f64], ks: f64) -> f64 {
-    a.iter()
-        .zip(target)
-        .zip(g)
-        .map(|((a, t), g)| a * (t - ks * g).abs())
-        .sum()
-}
-
 /// A lobe from search coordinates.
 fn lobe_at(p: &[Param; 7], x: &[f64; 7]) -> KurtLobe {
     let v = |d: usize| p[d].from_coord(x[d]);
@@ -70,7 +63,8 @@ fn lobe_at(p: &[Param; 7], x: &[f64; 7]) -> KurtLobe {
 /// The shape (mx, my, r0, α) is searched on the product grid; for each shape every channel
 /// picks its best ks on its own grid (the channels are independent given the shape, so the
 /// cost is that of a 4-parameter search). Returns the lobe, whether the last level improved the
-/// error by less than [`SETTLE_TOL`] (relative), and the number of shape evaluations.
+/// error by less than [`SETTLE_TOL`] times the error without the lobe, and the number of shape
+/// evaluations.
 pub(crate) fn search_lobe(
     set: &PairSet,
     target: &[Vec<f64>; 3],
@@ -88,6 +82,15 @@ pub(crate) fn search_lobe(
     let mut settled = false;
     let mut evaluations = 0usize;
     let n = set.len();
+    // Σ a|target| per channel: the error without the lobe, also the scale of "settled".
+    let abs_sum: [f64; 3] = std::array::from_fn(|c| {
+        set.weight
+            .iter()
+            .zip(&target[c])
+            .map(|(a, t)| a * t.abs())
+            .sum()
+    });
+    let scale: f64 = abs_sum.iter().sum();
     for _level in 0..levels {
         for d in 0..7 {
             values(p[d], boxes[d], grid, &mut vals[d]);
@@ -99,8 +102,8 @@ pub(crate) fn search_lobe(
         let level_best = (0..total)
             .into_par_iter()
             .map_init(
-                || vec![0.0; n],
-                |g, idx| {
+                || (vec![0.0; n], Vec::<usize>::with_capacity(n)),
+                |(g, active), idx| {
                     let mut x = [0.0; 7];
                     let mut rest = idx;
                     for d in 0..4 {
@@ -109,15 +112,32 @@ pub(crate) fn search_lobe(
                     }
                     let lobe = lobe_at(&p, &x);
                     let c = LobeConst::new(&lobe, kind);
+                    let mut gmax = 0.0f64;
                     for (t, o) in g.iter_mut().enumerate() {
                         *o = c.eval(set, t);
+                        gmax = gmax.max(*o);
                     }
+                    // Pairs where the lobe is below 1e-12 of its peak add ks·g ≤ 1e-12·gmax to
+                    // |t − ks·g|: they count as |t| (in `abs_sum`) and leave the ks loop.
+                    let thr = gmax * 1e-12;
+                    active.clear();
+                    active.extend((0..n).filter(|&t| g[t] > thr));
                     let mut err = 0.0;
                     for ch in 0..3 {
+                        let tc = &target[ch];
+                        let inactive = abs_sum[ch]
+                            - active
+                                .iter()
+                                .map(|&t| set.weight[t] * tc[t].abs())
+                                .sum::<f64>();
                         let mut be = f64::INFINITY;
                         for &kc in &vals_ref[4 + ch] {
                             let ks = p[4 + ch].from_coord(kc);
-                            let e = channel_error(&set.weight, &target[ch], g, ks);
+                            let e = inactive
+                                + active
+                                    .iter()
+                                    .map(|&t| set.weight[t] * (tc[t] - ks * g[t]).abs())
+                                    .sum::<f64>();
                             if e < be {
                                 be = e;
                                 x[4 + ch] = kc;
@@ -145,8 +165,7 @@ pub(crate) fn search_lobe(
         let Some((best_err, bx)) = best else {
             break;
         };
-        settled = prev_level_err.is_finite()
-            && prev_level_err - best_err <= SETTLE_TOL * best_err.abs().max(f64::MIN_POSITIVE);
+        settled = prev_level_err.is_finite() && prev_level_err - best_err <= SETTLE_TOL * scale;
         prev_level_err = best_err;
         // Shrink every free box to ± one grid step around the best (Fig. 3.8).
         for d in 0..7 {
@@ -201,6 +220,7 @@ pub(crate) fn fit_group(
         return Found {
             lobes: spaces.iter().map(|s| zero_lobe(s)).collect(),
             settled: true,
+            alternation_settled: true,
             evaluations: 0,
         };
     }
@@ -211,6 +231,7 @@ pub(crate) fn fit_group(
     let mut best: Option<(f64, Vec<KurtLobe>, bool)> = None;
     let mut alternation_settled = l == 1;
     let rounds = if l == 1 { 1 } else { MAX_ROUNDS };
+    let scale = group_error(set, base, &[]);
     for round in 0..rounds {
         let mut searches_settled = true;
         for k in 0..l {
@@ -246,7 +267,7 @@ pub(crate) fn fit_group(
                 if err < *e {
                     best = Some((err, lobes.clone(), searches_settled));
                 }
-                if improved <= SETTLE_TOL * err.abs().max(f64::MIN_POSITIVE) {
+                if improved <= SETTLE_TOL * scale {
                     alternation_settled = true;
                     break;
                 }
@@ -258,6 +279,7 @@ pub(crate) fn fit_group(
     Found {
         lobes,
         settled: searches_settled && alternation_settled,
+        alternation_settled,
         evaluations,
     }
 }
