@@ -146,7 +146,7 @@ impl BoundingPlane {
     /// parallel to the plane or points away from it.
     pub fn intersect(&self, pos: DVec3, dir: DVec3) -> Option<f64> {
         let denom = dir.dot(self.normal);
-        if !(denom.abs() > 1e-12) {
+        if denom.is_nan() || denom.abs() <= 1e-12 {
             return None;
         }
         let s = (self.point - pos).dot(self.normal) / denom;
@@ -242,25 +242,41 @@ pub struct MaterialPlan {
 /// (negative or non-finite roughness, ks, kd, r0 or α out of range), a zero budget, or ξ0
 /// outside (0, 1).
 pub fn plan_regular(kurt: &Kurt, budget_per_lobe: usize, xi0: f64) -> Result<MaterialPlan> {
+    if !(xi0 > 0.0 && xi0 < 1.0) {
+        return Err(ShadeError::Parameter(format!(
+            "xi0 = {xi0}: the pattern border must lie in (0, 1)"
+        )));
+    }
+    plan_with(kurt, budget_per_lobe, |l| {
+        pattern::concentric_for_budget(l.mx, l.my, budget_per_lobe, xi0)
+    })
+}
+
+/// Builds the thesis patterns of every lobe (`pattern::thesis`, 000 §4.4.3: centre + ring, or a
+/// line along the major axis when strongly anisotropic), the patterns 000 Eq. 4.24–4.25 were
+/// designed for. Errors as [`plan_regular`].
+pub fn plan_thesis(kurt: &Kurt, budget_per_lobe: usize) -> Result<MaterialPlan> {
+    plan_with(kurt, budget_per_lobe, |l| {
+        pattern::thesis(l.mx, l.my, budget_per_lobe)
+    })
+}
+
+/// Validates the material and the budget, then builds one pattern per lobe with `make`.
+fn plan_with(
+    kurt: &Kurt,
+    budget_per_lobe: usize,
+    make: impl Fn(&KurtLobe) -> Result<Pattern>,
+) -> Result<MaterialPlan> {
     kurt.validate()?;
     if budget_per_lobe == 0 {
         return Err(ShadeError::Parameter(
             "sample budget per lobe must be at least 1".into(),
         ));
     }
-    if !(xi0 > 0.0 && xi0 < 1.0) {
-        return Err(ShadeError::Parameter(format!(
-            "xi0 = {xi0}: the pattern border must lie in (0, 1)"
-        )));
-    }
     let plan = |lobes: &[KurtLobe]| -> Result<Vec<LobePlan>> {
         lobes
             .iter()
-            .map(|l| {
-                Ok(LobePlan {
-                    pattern: pattern::concentric_for_budget(l.mx, l.my, budget_per_lobe, xi0)?,
-                })
-            })
+            .map(|l| Ok(LobePlan { pattern: make(l)? }))
             .collect()
     };
     Ok(MaterialPlan {
@@ -302,7 +318,7 @@ pub fn shade_regular_with(
     lookup: Option<&Lookup>,
 ) -> Rgb {
     let (frame, wo_l) = f.facing(wo);
-    if !(wo_l.z > 0.0) {
+    if wo_l.z.is_nan() || wo_l.z <= 0.0 {
         return Rgb::ZERO;
     }
     let k = &plan.kurt;
@@ -353,12 +369,12 @@ fn regular_lobe(
     let mut weight_sum = 0.0;
     for &h in &pattern.h {
         let ho = wo_l.dot(h); // ωo·h = ωi·h
-        if !(ho > 0.0) {
+        if ho.is_nan() || ho <= 0.0 {
             continue;
         }
         let r = reflect(wo_l, h); // 000 Eq. 4.8
         let cos_i = r.z;
-        if !(cos_i > 0.0) {
+        if cos_i.is_nan() || cos_i <= 0.0 {
             continue;
         }
         let wi_l = match kind {
@@ -432,7 +448,7 @@ pub fn shade_ck_with(
     lookup: Option<&Lookup>,
 ) -> Rgb {
     let (frame, wo_l) = f.facing(wo);
-    if !(wo_l.z > 0.0) {
+    if wo_l.z.is_nan() || wo_l.z <= 0.0 {
         return Rgb::ZERO;
     }
     let mut out = diffuse(kurt.kd, env, frame.n);
@@ -455,11 +471,12 @@ pub fn shade_ck_with(
         for k in 0..n {
             let (u1, u2) = hammersley(k, n);
             let h = lobe_sample_h(lobe, u1, u2); // 002 Eq. 6–7
-            if !(wo_l.dot(h) > 0.0) {
+            let ho = wo_l.dot(h);
+            if ho.is_nan() || ho <= 0.0 {
                 continue;
             }
             let r = reflect(wo_l, h);
-            if !(r.z > 0.0) {
+            if r.z.is_nan() || r.z <= 0.0 {
                 continue;
             }
             let pdf = lobe_pdf(lobe, r, wo_l); // 002 Eq. 10
