@@ -10,8 +10,8 @@ use lustre_brdf::rgb::Rgb;
 use lustre_brdf::validate::albedo_quadrature;
 use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter};
 use lustre_shade::kernel::{
-    plan_regular, shade_ck, shade_qmc, shade_reference, shade_reference_with, shade_regular,
-    BoundingPlane, Environment, Lookup, Progressive, ShadingFrame, Weighting,
+    plan_regular, plan_thesis, shade_ck, shade_qmc, shade_reference, shade_reference_with,
+    shade_regular, BoundingPlane, Environment, Lookup, Progressive, ShadingFrame, Weighting,
 };
 use proptest::prelude::*;
 use std::sync::OnceLock;
@@ -233,26 +233,33 @@ fn convergence_on_a_smooth_map() {
         );
         ck_err.push(e);
     }
-    for w in [
-        Weighting::Pdf002,
-        Weighting::Thesis424,
-        Weighting::Thesis425,
-    ] {
-        for budget in [5, 9, 17, 30] {
-            let got: Vec<Rgb> = px
-                .iter()
-                .map(|(f, wo, k)| {
-                    let plan = plan_regular(k, budget, 0.01).expect("plan");
-                    shade_regular(f, *wo, &plan, &env, w)
-                })
-                .collect();
-            let e = mean_rel(&reference, &got);
-            println!(
-                "  {w:?} budget {budget:3}: mean relative error {:.3}%",
-                100.0 * e
-            );
-            if w == Weighting::Pdf002 && budget >= 17 {
-                assert!(e < 0.06, "regular {w:?} {budget}: {e}");
+    for (name, thesis) in [("002 concentric", false), ("thesis", true)] {
+        for w in [
+            Weighting::Pdf002,
+            Weighting::Thesis424,
+            Weighting::Thesis425,
+        ] {
+            for budget in [5, 9, 17, 30] {
+                let got: Vec<Rgb> = px
+                    .iter()
+                    .map(|(f, wo, k)| {
+                        let plan = if thesis {
+                            plan_thesis(k, budget)
+                        } else {
+                            plan_regular(k, budget, 0.01)
+                        }
+                        .expect("plan");
+                        shade_regular(f, *wo, &plan, &env, w)
+                    })
+                    .collect();
+                let e = mean_rel(&reference, &got);
+                println!(
+                    "  {name} {w:?} budget {budget:3}: mean relative error {:.3}%",
+                    100.0 * e
+                );
+                if !thesis && w == Weighting::Pdf002 && budget >= 17 {
+                    assert!(e < 0.06, "regular {w:?} {budget}: {e}");
+                }
             }
         }
     }
@@ -372,6 +379,7 @@ fn bounding_plane_lookup_changes_the_reference() {
 fn absurd_inputs_are_errors() {
     let good = furnace(0.2);
     assert!(plan_regular(&good, 0, 0.01).is_err());
+    assert!(plan_thesis(&good, 0).is_err());
     for xi0 in [0.0, 1.0, -0.5, f64::NAN] {
         assert!(plan_regular(&good, 9, xi0).is_err(), "xi0 {xi0}");
     }
