@@ -123,7 +123,10 @@ fn furnace_reference_and_progressive_match_albedo() {
 fn furnace_regular_weightings() {
     let env = environment(constant_env());
     println!("regular on a constant map: m, θo, budget, albedo, Pdf002, Eq. 4.24, Eq. 4.25");
-    let mut worst: f64 = 0.0;
+    // 002's p_h = mean D over the pattern (Eq. 18) treats D as if ∫ D dωh = 1 while the model
+    // normalizes ∫ D cos θh dωh = 1, so rough lobes read high (+7…15 % at m = 0.4, measured):
+    // "a few %" is asserted up to m = 0.2, a loose bound beyond.
+    let (mut worst, mut worst_rough): (f64, f64) = (0.0, 0.0);
     for m in [0.05, 0.1, 0.2, 0.4] {
         let k = furnace(m);
         for budget in [9, 17, 30] {
@@ -149,18 +152,26 @@ fn furnace_regular_weightings() {
                     v[2],
                     100.0 * (v[2] / a - 1.0)
                 );
-                if th <= 30.0 {
-                    worst = worst.max((v[0] / a - 1.0).abs());
+                let e = (v[0] / a - 1.0).abs();
+                if m <= 0.2 {
+                    worst = worst.max(e);
+                } else {
+                    worst_rough = worst_rough.max(e);
                 }
                 assert!(v.iter().all(|x| x.is_finite() && *x >= 0.0));
             }
         }
     }
     println!(
-        "worst Pdf002 relative error at θo ≤ 30°: {:.2}%",
-        100.0 * worst
+        "worst Pdf002 relative error: {:.2}% (m ≤ 0.2), {:.2}% (m = 0.4)",
+        100.0 * worst,
+        100.0 * worst_rough
     );
-    assert!(worst < 0.05, "Pdf002 off the albedo by {worst}");
+    assert!(worst < 0.04, "Pdf002 off the albedo by {worst}");
+    assert!(
+        worst_rough < 0.2,
+        "Pdf002 off the albedo by {worst_rough} (m = 0.4)"
+    );
 }
 
 /// Pixels for the convergence study: (frame, wo, material).
