@@ -335,23 +335,40 @@ pub fn shade_regular_with(
                 .map(|(l, p)| (l, p, LobeKind::Transmission)),
         );
     for (lobe, lp, kind) in lobes {
-        out += regular_lobe(&frame, wo_l, lobe, kind, &lp.pattern, env, w, lookup);
+        let px = Pixel {
+            frame,
+            wo_l,
+            env,
+            lookup,
+        };
+        out += regular_lobe(&px, lobe, kind, &lp.pattern, w);
     }
     out
 }
 
-/// One lobe of [`shade_regular_with`]; `wo_l` is local and above the surface.
-#[allow(clippy::too_many_arguments)]
-fn regular_lobe(
-    frame: &ShadingFrame,
+/// What one pixel's lobes share: the frame facing the viewer, ωo in it (above the surface), the
+/// light and the optional lookup correction.
+struct Pixel<'a> {
+    frame: ShadingFrame,
     wo_l: DVec3,
+    env: &'a Environment<'a>,
+    lookup: Option<&'a Lookup<'a>>,
+}
+
+/// One lobe of [`shade_regular_with`].
+fn regular_lobe(
+    px: &Pixel,
     lobe: &KurtLobe,
     kind: LobeKind,
     pattern: &Pattern,
-    env: &Environment,
     w: Weighting,
-    lookup: Option<&Lookup>,
 ) -> Rgb {
+    let Pixel {
+        frame,
+        wo_l,
+        env,
+        lookup,
+    } = *px;
     let n = pattern.h.len();
     if n == 0 {
         return Rgb::ZERO;
