@@ -59,10 +59,12 @@ impl ShadingFrame {
     /// chosen by `lustre_brdf::frame::basis`; a zero or non-finite `n` is replaced by +y.
     pub fn new(n: DVec3, t_hint: DVec3) -> Self {
         let n = n.try_normalize().unwrap_or(DVec3::Y);
-        let t = (t_hint - n * n.dot(t_hint))
-            .try_normalize()
-            .filter(|_| t_hint.is_finite() && (t_hint - n * n.dot(t_hint)).length() > 1e-9)
-            .unwrap_or_else(|| basis(n).0);
+        let t_perp = t_hint - n * n.dot(t_hint);
+        let t = if t_hint.is_finite() && t_perp.length() > 1e-9 * t_hint.length() {
+            t_perp.normalize()
+        } else {
+            basis(n).0
+        };
         ShadingFrame {
             t,
             b: n.cross(t),
