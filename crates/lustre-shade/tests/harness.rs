@@ -153,3 +153,37 @@ fn demo_scene_and_sky_are_sane() {
         assert!(c.iter().all(|v| v.is_finite() && *v >= 0.0), "{c:?}");
     }
 }
+
+#[test]
+fn more_samples_come_closer_to_the_reference() {
+    // A smooth sky converges quickly, so a small reference resolves the difference between 14
+    // and 270 regular samples (002 Fig. 9: the error shrinks evenly with the sample count).
+    let env = EnvSetup::new(
+        CubeMap::from_fn(64, procedural_sky).expect("cube"),
+        MipFilter::Gauss6,
+        8,
+    )
+    .expect("env");
+    let mut exp = harness::experiment_002().expect("002");
+    exp.materials.retain(|m| m.name == "iso-0.15");
+    exp.materials[0].settings.remove(1);
+    let report = harness::run(
+        &[exp],
+        &env.environment(),
+        &HarnessOptions {
+            size: 24,
+            reference_spp: 2048,
+            ..HarnessOptions::default()
+        },
+        None,
+        &|_, _, _| {},
+    )
+    .expect("run");
+    let get = |n, m| report.rms_of("iso-0.15", n, m).expect("row");
+    let noise = get(2048, "reference");
+    for m in ["regular (Pdf002)", "CK"] {
+        let (few, many) = (get(14, m), get(270, m));
+        assert!(many < few, "{m}: RMS {many} at 270 samples vs {few} at 14");
+        assert!(noise < few, "{m}: reference noise {noise} vs RMS {few}");
+    }
+}
