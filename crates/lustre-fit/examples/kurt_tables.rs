@@ -2,7 +2,7 @@
 //! manner of 000 Tables 3.1–3.3, plus measured-vs-model plots in the style of Fig. 3.11–3.12.
 //!
 //! ```text
-//! cargo run --release -p lustre-fit --example kurt_tables -- --out DIR [--lobes 1,2,3] [--no-plots]
+//! cargo run --release -p lustre-fit --example kurt_tables -- --out DIR [--lobes 1,2,3] [--no-plots] [--only NAME]
 //! ```
 //!
 //! Writes `DIR/kurt_tables.md` (parameters, L1 error of Eq. 3.7 per channel, albedo at normal
@@ -24,12 +24,14 @@ struct Args {
     out: PathBuf,
     lobes: Vec<usize>,
     plots: bool,
+    only: Option<String>,
 }
 
 fn parse_args() -> Result<Args, String> {
     let mut out = None;
     let mut lobes = vec![1, 2, 3];
     let mut plots = true;
+    let mut only = None;
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -43,11 +45,18 @@ fn parse_args() -> Result<Args, String> {
                     .map_err(|e| format!("--lobes {v}: {e}"))?;
             }
             "--no-plots" => plots = false,
+            "--only" => only = it.next(),
             other => return Err(format!("unknown argument {other}")),
         }
     }
-    let out = out.ok_or("usage: kurt_tables --out DIR [--lobes 1,2,3] [--no-plots]")?;
-    Ok(Args { out, lobes, plots })
+    let out =
+        out.ok_or("usage: kurt_tables --out DIR [--lobes 1,2,3] [--no-plots] [--only NAME]")?;
+    Ok(Args {
+        out,
+        lobes,
+        plots,
+        only,
+    })
 }
 
 /// The inputs: (short name, catalog specification).
@@ -207,6 +216,13 @@ fn run() -> Result<(), String> {
     );
     let mut written = Vec::new();
     for (name, spec) in inputs() {
+        if args
+            .only
+            .as_ref()
+            .is_some_and(|o| !name.contains(o.as_str()))
+        {
+            continue;
+        }
         let data = catalog::resolve(&spec).map_err(|e| format!("{spec}: {e}"))?;
         let albedo_data = data.albedo(DVec3::Z, ALBEDO_SAMPLES).0;
         let mut fits: Vec<(usize, KurtFit)> = Vec::new();

@@ -20,7 +20,8 @@
 //!    channel, as in the thesis' tables; given a shape, each channel picks its own ks from its
 //!    own grid (the channels' errors are independent), so a lobe costs a 4-parameter search.
 //! 3. Several lobes alternate: each lobe is fitted to the data minus kd and the other lobes,
-//!    negative residuals clamped to zero, and the rounds repeat until the error settles
+//!    negative residuals clamped to zero, and the rounds repeat (at most 3; a refit starts from
+//!    the lobe's previous value with a box of half the full width) until the error settles
 //!    (for L1 the clamping does not move the minimum — a lobe is non-negative, so a negative
 //!    target adds the same constant to every candidate — but it is kept as in the thesis).
 //!    Transmission lobes are fitted the same way on the transmission hemisphere.
