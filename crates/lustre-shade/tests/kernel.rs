@@ -8,7 +8,7 @@ use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::numeric::SphereQuadrature;
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::validate::albedo_quadrature;
-use lustre_env::{CubeMap, CubePyramid, MipFilter};
+use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter};
 use lustre_shade::kernel::{
     plan_regular, plan_thesis, shade_ck, shade_qmc, shade_reference, shade_reference_with,
     shade_regular, BoundingPlane, Environment, Lookup, Progressive, ShadingFrame, Weighting,
@@ -21,41 +21,8 @@ type Env = (CubePyramid, CubeMap);
 fn build_env(size: usize, f: impl Fn(DVec3) -> [f64; 3] + Sync) -> Env {
     let base = CubeMap::from_fn(size, f).expect("cube map");
     let pyramid = CubePyramid::build(base, MipFilter::Gauss6).expect("pyramid");
-    let irr = irradiance(&pyramid, 16);
+    let irr = irradiance_map(&pyramid, 16).expect("irradiance");
     (pyramid, irr)
-}
-
-/// E(n)/π by brute-force cosine convolution of the pyramid's 16² level (a stand-in with the
-/// contract's meaning of `lustre_env::irradiance_map`, which had not landed when this was written).
-fn irradiance(p: &CubePyramid, size: usize) -> CubeMap {
-    let lvl = p
-        .levels
-        .iter()
-        .find(|l| l.size <= 16)
-        .expect("the pyramid reaches 1×1");
-    let mut texels = Vec::new();
-    for (face, data) in lvl.faces.iter().enumerate() {
-        for j in 0..lvl.size {
-            for i in 0..lvl.size {
-                let d = CubeMap::texel_dir(lvl.size, face, i, j);
-                let w = CubeMap::texel_solid_angle(lvl.size, i, j);
-                texels.push((d, w, data[j * lvl.size + i]));
-            }
-        }
-    }
-    CubeMap::from_fn(size, |n| {
-        let mut e = [0.0; 3];
-        for (d, w, c) in &texels {
-            let ct = d.dot(n);
-            if ct > 0.0 {
-                for k in 0..3 {
-                    e[k] += c[k] as f64 * ct * w;
-                }
-            }
-        }
-        e.map(|v| v / std::f64::consts::PI)
-    })
-    .expect("irradiance map")
 }
 
 fn environment(e: &Env) -> Environment<'_> {
