@@ -120,8 +120,9 @@ impl CtDistribution {
 /// Becomes a [`CtChannel`] as follows: NDF `sgd` → [`Ndf::sgd_with_kap`]`(alpha, p, kap)`,
 /// `beckmann` → [`Ndf::beckmann`]`(alpha)`, `ggx` → [`Ndf::ggx`]`(alpha)` (then `p` and `kap`
 /// are not used but must be finite); Fresnel → [`Fresnel::generalized_schlick`]`(f0, f1)`
-/// (Eq. V.5); G1 → `g1 = [λ, c, k]`: the Eq. V.3 approximation [`SgdG1Approx::from_lck`], absent:
-/// the exact Smith G1 (closed form for Beckmann and GGX, tabulated numerically for SGD).
+/// (Eq. V.5); G1 → for SGD `g1 = [λ, c, k]`: the Eq. V.3 approximation
+/// [`SgdG1Approx::from_lck`], absent: the numeric Smith G1; for Beckmann and GGX always the
+/// closed-form Smith G1 (`g1` must be absent). This is `lustre_fit::ct::CtChannelFit::to_channel`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CtChannelParams {
@@ -139,7 +140,7 @@ pub struct CtChannelParams {
     pub f0: f64,
     /// Eq. V.5 F1.
     pub f1: f64,
-    /// Eq. V.3 shadowing approximation [λ, c, k]; absent: the exact Smith G1.
+    /// SGD only: the Eq. V.3 shadowing approximation [λ, c, k]; absent: the exact Smith G1.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub g1: Option<[f64; 3]>,
 }
@@ -162,9 +163,18 @@ impl CtChannelParams {
             }
         };
         let g1 = match (self.g1, distribution) {
-            (Some([lambda, c, k]), _) => G1Model::SgdApprox(SgdG1Approx::from_lck(lambda, c, k)?),
+            (Some([lambda, c, k]), CtDistribution::Sgd) => {
+                G1Model::SgdApprox(SgdG1Approx::from_lck(lambda, c, k)?)
+            }
             (None, CtDistribution::Sgd) => G1Model::numeric(&ndf),
             (None, _) => G1Model::Closed,
+            (Some([lambda, ..]), d) => {
+                let reason = format!(
+                    "the Eq. V.3 approximation applies to sgd only, not {}",
+                    d.as_str()
+                );
+                return Err(Error::param("g1", lambda, reason));
+            }
         };
         let fresnel = Fresnel::generalized_schlick(self.f0, self.f1)?;
         Ok(CtChannel::new(self.rho_d, self.rho_s, ndf, g1, fresnel))

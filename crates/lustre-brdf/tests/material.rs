@@ -206,6 +206,12 @@ fn validation_errors_name_the_file_and_the_problem() {
           {"rho_d": 0.1, "rho_s": 0.5, "alpha": 0.1, "p": 0, "kap": 1, "f0": 1, "f1": 0}]}}"#);
     assert!(e.contains("channels.g.rho_s"), "{e}");
     let e = err(r#"{"schema": "lustre-material", "version": 1, "name": "x",
+        "model": {"type": "cook-torrance", "distribution": "beckmann", "channels": [
+          {"rho_d": 0.1, "rho_s": 0.5, "alpha": 0.1, "p": 0, "kap": 1, "f0": 1, "f1": 0, "g1": [1, 2, 3]},
+          {"rho_d": 0.1, "rho_s": 0.5, "alpha": 0.1, "p": 0, "kap": 1, "f0": 1, "f1": 0},
+          {"rho_d": 0.1, "rho_s": 0.5, "alpha": 0.1, "p": 0, "kap": 1, "f0": 1, "f1": 0}]}}"#);
+    assert!(e.contains("channels.r.g1") && e.contains("sgd only"), "{e}");
+    let e = err(r#"{"schema": "lustre-material", "version": 1, "name": "x",
         "model": {"type": "phong", "n": 3}}"#);
     assert!(e.contains("phong"), "{e}");
     let e = material::read(Path::new("/nonexistent/m.json")).unwrap_err();
