@@ -16,10 +16,12 @@
 //! its row is rebuilt from the file. A corrupted or failed output is fitted again.
 //!
 //! The fitting itself is behind the [`Fitter`] trait, so the machinery runs (and is tested)
-//! with any fitter.
+//! with any fitter; [`MeasuredFitter`] is the real one.
 
-use crate::{FitError, FitStatus, Result};
-use lustre_brdf::material::{self, FitErrors, FitRecord, MaterialFile, MaterialModel};
+use crate::{ct, data, kurt, metrics, FitError, FitStatus, Result};
+use lustre_brdf::material::{
+    self, CtChannelParams, CtDistribution, FitErrors, FitRecord, MaterialFile, MaterialModel,
+};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::HashSet;
@@ -140,6 +142,121 @@ pub trait Fitter: Sync {
     fn expand(&self, input: &str) -> Result<Vec<String>>;
     /// Fits one input.
     fn fit(&self, input: &str, settings: &FitSettings) -> Result<Fitted>;
+}
+
+/// The real fitter: [`data::load`] (with its value checks), then [`ct::fit`] or
+/// [`kurt::fit`], then [`metrics::evaluate`] of the fitted model (built from the material JSON
+/// model, as the renderer will build it) against the data.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MeasuredFitter;
+
+impl Fitter for MeasuredFitter {
+    fn expand(&self, input: &str) -> Result<Vec<String>> {
+        data::expand_inputs(input)
+    }
+
+    fn fit(&self, input: &str, s: &FitSettings) -> Result<Fitted> {
+        let data = data::load(input)?;
+        let (model, status, message) = match s.model {
+            ModelChoice::Kurt => {
+                let f = kurt::fit(data.bsdf.as_ref(), data.transmission, &kurt_options(s))?;
+                let msg = format!(
+                    "Eq. 3.7 objective {:.6} after {} evaluations",
+                    f.objective, f.evaluations
+                );
+                (MaterialModel::from_kurt(&f.model), f.status, msg)
+            }
+            m => {
+                let (dist, mdist) = match m {
+                    ModelChoice::Sgd => (ct::Distribution::Sgd, CtDistribution::Sgd),
+                    ModelChoice::Beckmann => (ct::Distribution::Beckmann, CtDistribution::Beckmann),
+                    _ => (ct::Distribution::Ggx, CtDistribution::Ggx),
+                };
+                let opts = ct::CtOptions {
+                    refine: s.refine,
+                    ..ct::CtOptions::default()
+                };
+                let f = ct::fit(data.bsdf.as_ref(), dist, &opts)?;
+                let channels = std::array::from_fn(|i| {
+                    let c = &f.channels[i];
+                    CtChannelParams {
+                        rho_d: c.rho_d,
+                        rho_s: c.rho_s,
+                        alpha: c.alpha,
+                        p: c.p,
+                        kap: c.kap,
+                        f0: c.f0,
+                        f1: c.f1,
+                        g1: c.g1,
+                    }
+                });
+                let msg = format!("{} iterations", f.iterations);
+                (
+                    MaterialModel::cook_torrance(mdist, channels)?,
+                    f.status,
+                    msg,
+                )
+            }
+        };
+        let bsdf = model.to_bsdf(&data.name)?;
+        let r = metrics::evaluate(data.bsdf.as_ref(), bsdf.as_ref(), data.transmission);
+        Ok(Fitted {
+            model,
+            status,
+            message,
+            errors: FitErrors {
+                ngan_l2: r.ngan_l2,
+                l1: r.l1,
+            },
+            albedo_data: r.albedo_data,
+            albedo_model: r.albedo_model,
+        })
+    }
+}
+
+/// The Kurt options of `s` (search grid and levels at their defaults).
+pub fn kurt_options(s: &FitSettings) -> kurt::KurtOptions {
+    kurt::KurtOptions {
+        lobes: s.lobes,
+        transmission_lobes: s.transmission_lobes,
+        fixed: s.fixed.clone(),
+        ranges: s.ranges.clone(),
+        polish: s.refine,
+        ..kurt::KurtOptions::default()
+    }
+}
+
+/// Checks what can be checked before any input is read: for Kurt, that every `--fix` and
+/// `--range` name is one of [`kurt::parameter_names`] and that there is a lobe to fit; for
+/// Cook-Torrance, that no Kurt-only option is set.
+pub fn check_settings(s: &FitSettings) -> Result<()> {
+    if s.model != ModelChoice::Kurt {
+        if !s.fixed.is_empty() || !s.ranges.is_empty() {
+            return Err(FitError::Option(format!(
+                "fixed parameters and ranges apply to the Kurt model only, not {}",
+                s.model.as_str()
+            )));
+        }
+        return Ok(());
+    }
+    let names = kurt::parameter_names(&kurt_options(s));
+    let given = s
+        .fixed
+        .iter()
+        .map(|f| f.0.as_str())
+        .chain(s.ranges.iter().map(|r| r.0.as_str()));
+    for n in given {
+        if !names.iter().any(|k| k == n) {
+            return Err(FitError::Option(format!(
+                "unknown Kurt parameter {n:?} for {} reflection and {} transmission lobes \
+                 (known: {})",
+                s.lobes,
+                s.transmission_lobes,
+                names.join(", ")
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The JSON written for a failed input: no model, only the record of what went wrong.
