@@ -24,7 +24,7 @@
 //! [`parse`] checks the schema name first, then the version (a file of another version is a
 //! clear error, not a misreading), then every parameter through the model constructors
 //! ([`Kurt::new`], [`Ndf`], [`Fresnel`], [`CookTorrance::new`]), so a file that parses gives a
-//! valid BSDF. Unknown fields are errors (typos do not pass silently). [`write`] validates the
+//! valid BSDF. Unknown fields are errors (typos do not pass silently). [`write()`] validates the
 //! same way and writes atomically.
 
 use crate::bsdf::Bsdf;

@@ -12,8 +12,9 @@
 //!
 //! `OUT/summary.csv` (atomic) has one row per input ([`SummaryRow`]). **Resume**: unless
 //! `force` is set, an input whose JSON exists, parses as a material, records the same input, the
-//! same model and the same options, and has a status other than a failure is not fitted again;
-//! its row is rebuilt from the file. A corrupted or failed output is fitted again.
+//! same model and the same options, has a status other than a failure and is newer than the
+//! input's data file is not fitted again; its row is rebuilt from the file. A corrupted, failed
+//! or outdated output is fitted again.
 //!
 //! The fitting itself is behind the [`Fitter`] trait, so the machinery runs (and is tested)
 //! with any fitter; [`MeasuredFitter`] is the real one.
@@ -527,8 +528,21 @@ fn reusable(path: &Path, job: &Job, settings: &FitSettings) -> Option<SummaryRow
     let same = f.source == job.input
         && m.model.kind() == settings.model.as_str()
         && f.options == settings.to_json()
-        && !is_failure(status);
+        && !is_failure(status)
+        && !input_is_newer(&job.input, path);
     same.then(|| SummaryRow::new(&job.name, f, m.model.kind(), status, true))
+}
+
+/// Whether the input's data file (the path of a file input, the network file of
+/// `nbrdf:FILE#NAME`) was modified after `output` was written.
+fn input_is_newer(input: &str, output: &Path) -> bool {
+    let spec = input.strip_prefix("nbrdf:").unwrap_or(input);
+    let file = spec.rsplit_once('#').map_or(spec, |(f, _)| f);
+    let mtime = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+    match (mtime(Path::new(file)), mtime(output)) {
+        (Some(i), Some(o)) => i > o,
+        _ => false,
+    }
 }
 
 /// The status a fitting error maps to: bad data (unreadable or unusable input) or an error.
@@ -639,6 +653,7 @@ fn write_failure(path: &Path, name: &str, record: &FitRecord) -> Result<()> {
 mod tests {
     use super::*;
     use lustre_brdf::material::LobeParams;
+    use lustre_brdf::Bsdf;
     use std::sync::atomic::{AtomicUsize, Ordering};
 
     /// A fitter by input name: `bad*` is unusable data, `panic*` panics, `nan*` returns a
@@ -902,6 +917,70 @@ mod tests {
         assert_eq!(names, ["m", "m-2", "M-3"]);
         assert_eq!(s.rows[0].status, FitStatus::NotConverged);
         assert_eq!(s.failed(), 0, "not converged is a result, not a failure");
+    }
+
+    #[test]
+    fn a_changed_input_file_is_fitted_again() {
+        let dir = tempfile::tempdir().expect("dir");
+        let data = dir.path().join("t.gonio");
+        std::fs::write(&data, b"data").expect("write");
+        let out = dir.path().join("out");
+        let inputs = vec![data.to_string_lossy().into_owned()];
+        let mock = Mock::default();
+        run(&inputs, &options(&out), &mock).expect("batch");
+        run(&inputs, &options(&out), &mock).expect("batch");
+        assert_eq!(mock.fits.load(Ordering::SeqCst), 1);
+        let later = mtime(&out.join("t.json")) + std::time::Duration::from_secs(5);
+        std::fs::File::options()
+            .write(true)
+            .open(&data)
+            .and_then(|f| f.set_modified(later))
+            .expect("touch");
+        let s = run(&inputs, &options(&out), &mock).expect("batch");
+        assert_eq!(
+            mock.fits.load(Ordering::SeqCst),
+            2,
+            "the newer input is refitted"
+        );
+        assert_eq!(s.resumed(), 0);
+    }
+
+    /// The real fitter on a neural BRDF: the written model is the CT fit's own BSDF, and the
+    /// recorded metrics are those of that model.
+    #[test]
+    fn measured_fitter_writes_the_ct_fits_model() {
+        let input = "nbrdf:nickel";
+        let s = FitSettings::new(ModelChoice::Ggx);
+        let f = MeasuredFitter.fit(input, &s).expect("fit");
+        let data = data::load(input).expect("data");
+        let direct = ct::fit(
+            data.bsdf.as_ref(),
+            ct::Distribution::Ggx,
+            &ct::CtOptions::default(),
+        )
+        .expect("ct fit")
+        .to_bsdf("direct")
+        .expect("bsdf");
+        let ours = f.model.to_bsdf("ours").expect("bsdf");
+        for (ti, to, dphi) in [
+            (0.1, 0.1, 3.1),
+            (0.5, 0.4, 3.0),
+            (1.0, 0.3, 1.0),
+            (1.3, 1.2, 2.5),
+        ] {
+            let wi = lustre_brdf::frame::spherical(ti, 0.0);
+            let wo = lustre_brdf::frame::spherical(to, dphi);
+            let (a, b) = (direct.eval(wi, wo), ours.eval(wi, wo));
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() <= 1e-12 * a[c].abs().max(1e-300),
+                    "{a:?} {b:?}"
+                );
+            }
+        }
+        let r = metrics::evaluate(data.bsdf.as_ref(), &direct, data.transmission);
+        assert_eq!(f.errors.ngan_l2, r.ngan_l2);
+        assert_eq!(f.albedo_data, r.albedo_data);
     }
 
     #[test]
