@@ -15,7 +15,7 @@
 //! The fit (000 §3.4.1):
 //! 1. kd from the histogram of measured BRDF values ([`samples::estimate_kd`]); never searched.
 //! 2. Each lobe by hierarchical brute force: `grid` equidistant values per free shape parameter
-//!    (mx, my on a log scale, r0, α), the box shrunk to ± one grid step around the best, for
+//!    (mx, my on a log scale, r0, α; for isotropic data my is tied to mx unless given), the box shrunk to ± one grid step around the best, for
 //!    `levels` levels. **RGB:** the lobe shape is shared by the three channels and ks is per
 //!    channel, as in the thesis' tables; given a shape, each channel picks its own ks from its
 //!    own grid (the channels' errors are independent), so a lobe costs a 4-parameter search.
@@ -59,7 +59,8 @@ use std::f64::consts::PI;
 /// `mx{i}`, `my{i}`, `r0{i}`, `alpha{i}`, per transmission lobe j `kt{j}`, `kt{j}_r|g|b`,
 /// `mxt{j}`, `myt{j}`, `r0t{j}`, `alphat{j}`. A whole-colour name (`ks1`) sets all three
 /// channels; a channel name (`ks1_b`) overrides one. Default ranges: ks, kt, r0, α ∈ [0, 1],
-/// mx, my ∈ [0.001, 1] (log scale); kd comes from the histogram (a kd range clamps it).
+/// mx, my ∈ [0.001, 1] (log scale); kd comes from the histogram (a kd range clamps it). For
+/// isotropic data my is tied to mx unless `my{i}` / `myt{j}` is fixed or ranged.
 #[derive(Clone, Debug, PartialEq)]
 pub struct KurtOptions {
     /// Reflection lobes (≥ 0).
@@ -115,7 +116,7 @@ pub struct KurtFit {
 /// range, grid < 2, levels = 0, transmission lobes without transmission), data with NaN or
 /// infinite samples or with every sample zero ([`FitError::Data`]).
 pub fn fit(data: &dyn Bsdf, transmission: bool, opts: &KurtOptions) -> Result<KurtFit> {
-    let space = params::build_space(opts, transmission)?;
+    let space = params::build_space(opts, transmission, !data.flags().anisotropic)?;
     let s = samples::sample(data, transmission)?;
     let est = samples::estimate_kd(&s.refl);
     let kd: [f64; 3] = std::array::from_fn(|c| match space.kd[c] {

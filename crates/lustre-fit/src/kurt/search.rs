@@ -27,10 +27,16 @@ pub(crate) struct Found {
 }
 
 /// One dimension of the search: 0..4 the shape (mx, my, r0, α), 4..7 ks per channel.
+/// A tied my is a placeholder (one value) and follows mx in [`lobe_at`].
 fn dims(space: &LobeSpace) -> [Param; 7] {
     let s = space.shape;
     let k = space.ks;
-    [s[0], s[1], s[2], s[3], k[0], k[1], k[2]]
+    let my = if space.tie_my {
+        Param::Fixed(0.0)
+    } else {
+        s[1]
+    };
+    [s[0], my, s[2], s[3], k[0], k[1], k[2]]
 }
 
 /// Values tried in one dimension: `grid` equidistant coordinates in the box, or the fixed value.
@@ -47,13 +53,13 @@ fn values(p: Param, bx: Option<(f64, f64)>, grid: usize, out: &mut Vec<f64>) {
     }
 }
 
-/// A lobe from search coordinates.
-fn lobe_at(p: &[Param; 7], x: &[f64; 7]) -> KurtLobe {
+/// A lobe from search coordinates (my = mx when tied).
+fn lobe_at(p: &[Param; 7], x: &[f64; 7], tie_my: bool) -> KurtLobe {
     let v = |d: usize| p[d].value_at(x[d]);
     KurtLobe {
         ks: Rgb::new(v(4), v(5), v(6)),
         mx: v(0),
-        my: v(1),
+        my: if tie_my { v(0) } else { v(1) },
         r0: v(2),
         alpha: v(3),
     }
@@ -126,7 +132,7 @@ pub(crate) fn search_lobe(
                         x[d] = vals_ref[d][rest % counts[d]];
                         rest /= counts[d];
                     }
-                    let lobe = lobe_at(&p, &x);
+                    let lobe = lobe_at(&p, &x, space.tie_my);
                     let c = LobeConst::new(&lobe, kind);
                     let mut gmax = 0.0f64;
                     for (t, o) in g.iter_mut().enumerate() {
@@ -195,7 +201,7 @@ pub(crate) fn search_lobe(
         }
     }
     let x = best.map_or([0.0; 7], |b| b.1);
-    (lobe_at(&p, &x), settled, evaluations)
+    (lobe_at(&p, &x, space.tie_my), settled, evaluations)
 }
 
 /// `ks·g` of a lobe at every pair, per channel.
