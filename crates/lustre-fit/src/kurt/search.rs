@@ -22,6 +22,9 @@ pub(crate) struct Found {
     pub settled: bool,
     /// Whether the alternation of several lobes settled (true for one lobe).
     pub alternation_settled: bool,
+    /// The lobes of a one-lobe fit: the first search of the first round with the other lobes'
+    /// ks set to zero (a second start for the polish, see `fit`).
+    pub single: Vec<KurtLobe>,
     /// Lobe-shape evaluations over the pair set.
     pub evaluations: usize,
 }
@@ -244,6 +247,7 @@ pub(crate) fn fit_group(
             lobes: spaces.iter().map(zero_lobe).collect(),
             settled: true,
             alternation_settled: true,
+            single: spaces.iter().map(zero_lobe).collect(),
             evaluations: 0,
         };
     }
@@ -254,6 +258,7 @@ pub(crate) fn fit_group(
     let mut best: Option<(f64, Vec<KurtLobe>, bool)> = None;
     let mut alternation_settled = l == 1;
     let rounds = if l == 1 { 1 } else { MAX_ROUNDS };
+    let mut single: Vec<KurtLobe> = spaces.iter().map(zero_lobe).collect();
     let scale = group_error(set, base, &[]);
     for round in 0..rounds {
         let mut searches_settled = true;
@@ -276,6 +281,9 @@ pub(crate) fn fit_group(
                 search_lobe(set, &target, kind, &spaces[k], grid, levels, start.as_ref());
             evaluations += ev;
             searches_settled &= settled;
+            if round == 0 && k == 0 {
+                single[0] = lobe;
+            }
             let ck = contribution(set, &lobe, kind);
             if k < lobes.len() {
                 lobes[k] = lobe;
@@ -305,19 +313,25 @@ pub(crate) fn fit_group(
         lobes,
         settled: searches_settled && alternation_settled,
         alternation_settled,
+        single,
         evaluations,
     }
 }
 
-/// A lobe with zero weight (for a group without pairs): fixed values where given, otherwise the
-/// lower end of each range.
+/// A lobe with zero weight (for a group without pairs, or a placeholder beside a one-lobe fit):
+/// fixed values where given (a fixed ks included), otherwise ks = 0 and the lower end of each
+/// shape range.
 fn zero_lobe(s: &LobeSpace) -> KurtLobe {
     let v = |p: Param| match p {
         Param::Fixed(v) => v,
         Param::Free { lo, .. } => lo,
     };
+    let ks = |p: Param| match p {
+        Param::Fixed(v) => v,
+        Param::Free { .. } => 0.0,
+    };
     KurtLobe {
-        ks: Rgb::ZERO,
+        ks: Rgb::new(ks(s.ks[0]), ks(s.ks[1]), ks(s.ks[2])),
         mx: v(s.shape[0]),
         my: v(s.shape[1]),
         r0: v(s.shape[2]),
