@@ -15,7 +15,7 @@
 //! The fit (000 §3.4.1):
 //! 1. kd from the histogram of measured BRDF values ([`samples::estimate_kd`]); never searched.
 //! 2. Each lobe by hierarchical brute force: `grid` equidistant values per free shape parameter
-//!    (mx, my on a log scale, r0, α), the box shrunk to ± one grid step around the best, for
+//!    (mx, my on a log scale, r0, α; for isotropic data my is tied to mx unless given), the box shrunk to ± one grid step around the best, for
 //!    `levels` levels. **RGB:** the lobe shape is shared by the three channels and ks is per
 //!    channel, as in the thesis' tables; given a shape, each channel picks its own ks from its
 //!    own grid (the channels' errors are independent), so a lobe costs a 4-parameter search.
@@ -26,11 +26,13 @@
 //!    target adds the same constant to every candidate — but it is kept as in the thesis).
 //!    Transmission lobes are fitted the same way on the transmission hemisphere.
 //! 4. A Levenberg-Marquardt polish of all free parameters ([`polish`]); kept only if it lowers
-//!    the Eq. 3.7 error.
+//!    the Eq. 3.7 error. With several lobes LM runs twice, from the search result and from the
+//!    first one-lobe search (other lobes at ks = 0); the better result is kept.
 //!
 //! [`KurtFit::status`] is `Converged` when the alternation of several lobes settled (the last
 //! round improved the error by less than 0.1 % of the error without lobes) and then
-//! - with the polish: LM met one of its convergence criteria (ftol/xtol/gtol, zero residuals, or
+//! - with the polish: the LM run whose result was kept (else the first) met one of its
+//!   convergence criteria (ftol/xtol/gtol, zero residuals, or
 //!   tolerances reached at machine precision) — the search only provides its start;
 //! - without: the last level of every final lobe search improved the error by less than 0.1 %
 //!   of the error without that lobe.
@@ -59,7 +61,8 @@ use std::f64::consts::PI;
 /// `mx{i}`, `my{i}`, `r0{i}`, `alpha{i}`, per transmission lobe j `kt{j}`, `kt{j}_r|g|b`,
 /// `mxt{j}`, `myt{j}`, `r0t{j}`, `alphat{j}`. A whole-colour name (`ks1`) sets all three
 /// channels; a channel name (`ks1_b`) overrides one. Default ranges: ks, kt, r0, α ∈ [0, 1],
-/// mx, my ∈ [0.001, 1] (log scale); kd comes from the histogram (a kd range clamps it).
+/// mx, my ∈ [0.001, 1] (log scale); kd comes from the histogram (a kd range clamps it). For
+/// isotropic data my is tied to mx unless `my{i}` / `myt{j}` is fixed or ranged.
 #[derive(Clone, Debug, PartialEq)]
 pub struct KurtOptions {
     /// Reflection lobes (≥ 0).
@@ -115,7 +118,7 @@ pub struct KurtFit {
 /// range, grid < 2, levels = 0, transmission lobes without transmission), data with NaN or
 /// infinite samples or with every sample zero ([`FitError::Data`]).
 pub fn fit(data: &dyn Bsdf, transmission: bool, opts: &KurtOptions) -> Result<KurtFit> {
-    let space = params::build_space(opts, transmission)?;
+    let space = params::build_space(opts, transmission, !data.flags().anisotropic)?;
     let s = samples::sample(data, transmission)?;
     let est = samples::estimate_kd(&s.refl);
     let kd: [f64; 3] = std::array::from_fn(|c| match space.kd[c] {
@@ -144,20 +147,34 @@ pub fn fit(data: &dyn Bsdf, transmission: bool, opts: &KurtOptions) -> Result<Ku
         opts.grid,
         opts.levels,
     );
+    let single = Kurt::new(Rgb(kd), refl.single, trans.single)?;
     let mut model = Kurt::new(Rgb(kd), refl.lobes, trans.lobes)?;
     let mut objective = model_objective(&s, &model);
     let mut evaluations = refl.evaluations + trans.evaluations;
     let alternation = refl.alternation_settled && trans.alternation_settled;
     let mut settled = refl.settled && trans.settled;
     if opts.polish {
-        let p = polish::polish(&s, &space, &model);
-        evaluations += p.evaluations;
-        let obj = model_objective(&s, &p.model);
-        if obj < objective && p.model.validate().is_ok() {
-            model = p.model;
-            objective = obj;
+        // With several lobes LM also starts from the one-lobe fit (other lobes at ks = 0), so
+        // that the polished L-lobe model does not end in a worse basin than a one-lobe fit.
+        let several = opts.lobes > 1 || opts.transmission_lobes > 1;
+        let starts = if several {
+            vec![model.clone(), single]
+        } else {
+            vec![model.clone()]
+        };
+        let mut converged = None;
+        for start in &starts {
+            let p = polish::polish(&s, &space, start);
+            evaluations += p.evaluations;
+            let obj = model_objective(&s, &p.model);
+            if obj < objective && p.model.validate().is_ok() {
+                model = p.model;
+                objective = obj;
+                converged = Some(p.converged);
+            }
+            converged.get_or_insert(p.converged);
         }
-        settled = p.converged;
+        settled = converged.unwrap_or(false);
     }
     settled &= alternation;
     Ok(KurtFit {

@@ -22,15 +22,24 @@ pub(crate) struct Found {
     pub settled: bool,
     /// Whether the alternation of several lobes settled (true for one lobe).
     pub alternation_settled: bool,
+    /// The lobes of a one-lobe fit: the first search of the first round with the other lobes'
+    /// ks set to zero (a second start for the polish, see `fit`).
+    pub single: Vec<KurtLobe>,
     /// Lobe-shape evaluations over the pair set.
     pub evaluations: usize,
 }
 
 /// One dimension of the search: 0..4 the shape (mx, my, r0, α), 4..7 ks per channel.
+/// A tied my is a placeholder (one value) and follows mx in [`lobe_at`].
 fn dims(space: &LobeSpace) -> [Param; 7] {
     let s = space.shape;
     let k = space.ks;
-    [s[0], s[1], s[2], s[3], k[0], k[1], k[2]]
+    let my = if space.tie_my {
+        Param::Fixed(0.0)
+    } else {
+        s[1]
+    };
+    [s[0], my, s[2], s[3], k[0], k[1], k[2]]
 }
 
 /// Values tried in one dimension: `grid` equidistant coordinates in the box, or the fixed value.
@@ -47,13 +56,13 @@ fn values(p: Param, bx: Option<(f64, f64)>, grid: usize, out: &mut Vec<f64>) {
     }
 }
 
-/// A lobe from search coordinates.
-fn lobe_at(p: &[Param; 7], x: &[f64; 7]) -> KurtLobe {
+/// A lobe from search coordinates (my = mx when tied).
+fn lobe_at(p: &[Param; 7], x: &[f64; 7], tie_my: bool) -> KurtLobe {
     let v = |d: usize| p[d].value_at(x[d]);
     KurtLobe {
         ks: Rgb::new(v(4), v(5), v(6)),
         mx: v(0),
-        my: v(1),
+        my: if tie_my { v(0) } else { v(1) },
         r0: v(2),
         alpha: v(3),
     }
@@ -126,7 +135,7 @@ pub(crate) fn search_lobe(
                         x[d] = vals_ref[d][rest % counts[d]];
                         rest /= counts[d];
                     }
-                    let lobe = lobe_at(&p, &x);
+                    let lobe = lobe_at(&p, &x, space.tie_my);
                     let c = LobeConst::new(&lobe, kind);
                     let mut gmax = 0.0f64;
                     for (t, o) in g.iter_mut().enumerate() {
@@ -195,7 +204,7 @@ pub(crate) fn search_lobe(
         }
     }
     let x = best.map_or([0.0; 7], |b| b.1);
-    (lobe_at(&p, &x), settled, evaluations)
+    (lobe_at(&p, &x, space.tie_my), settled, evaluations)
 }
 
 /// `ks·g` of a lobe at every pair, per channel.
@@ -238,6 +247,7 @@ pub(crate) fn fit_group(
             lobes: spaces.iter().map(zero_lobe).collect(),
             settled: true,
             alternation_settled: true,
+            single: spaces.iter().map(zero_lobe).collect(),
             evaluations: 0,
         };
     }
@@ -248,6 +258,7 @@ pub(crate) fn fit_group(
     let mut best: Option<(f64, Vec<KurtLobe>, bool)> = None;
     let mut alternation_settled = l == 1;
     let rounds = if l == 1 { 1 } else { MAX_ROUNDS };
+    let mut single: Vec<KurtLobe> = spaces.iter().map(zero_lobe).collect();
     let scale = group_error(set, base, &[]);
     for round in 0..rounds {
         let mut searches_settled = true;
@@ -270,6 +281,9 @@ pub(crate) fn fit_group(
                 search_lobe(set, &target, kind, &spaces[k], grid, levels, start.as_ref());
             evaluations += ev;
             searches_settled &= settled;
+            if round == 0 && k == 0 {
+                single[0] = lobe;
+            }
             let ck = contribution(set, &lobe, kind);
             if k < lobes.len() {
                 lobes[k] = lobe;
@@ -299,19 +313,25 @@ pub(crate) fn fit_group(
         lobes,
         settled: searches_settled && alternation_settled,
         alternation_settled,
+        single,
         evaluations,
     }
 }
 
-/// A lobe with zero weight (for a group without pairs): fixed values where given, otherwise the
-/// lower end of each range.
+/// A lobe with zero weight (for a group without pairs, or a placeholder beside a one-lobe fit):
+/// fixed values where given (a fixed ks included), otherwise ks = 0 and the lower end of each
+/// shape range.
 fn zero_lobe(s: &LobeSpace) -> KurtLobe {
     let v = |p: Param| match p {
         Param::Fixed(v) => v,
         Param::Free { lo, .. } => lo,
     };
+    let ks = |p: Param| match p {
+        Param::Fixed(v) => v,
+        Param::Free { .. } => 0.0,
+    };
     KurtLobe {
-        ks: Rgb::ZERO,
+        ks: Rgb::new(ks(s.ks[0]), ks(s.ks[1]), ks(s.ks[2])),
         mx: v(s.shape[0]),
         my: v(s.shape[1]),
         r0: v(s.shape[2]),
