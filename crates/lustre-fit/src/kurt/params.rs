@@ -36,7 +36,7 @@ impl Param {
     }
 
     /// Maps a search coordinate back to a value.
-    pub fn from_coord(self, x: f64) -> f64 {
+    pub fn value_at(self, x: f64) -> f64 {
         match self {
             Param::Free { log: true, .. } => x.exp(),
             _ => x,

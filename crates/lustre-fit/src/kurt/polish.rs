@@ -71,8 +71,8 @@ fn free_slots(space: &Space, model: &Kurt) -> (Vec<Slot>, Vec<f64>) {
                 push(Target::Ks(trans, i, c), sp.ks[c], l.ks[c]);
             }
             let vals = [l.mx, l.my, l.r0, l.alpha];
-            for k in 0..4 {
-                push(Target::Shape(trans, i, k), sp.shape[k], vals[k]);
+            for (k, (&param, &v)) in sp.shape.iter().zip(&vals).enumerate() {
+                push(Target::Shape(trans, i, k), param, v);
             }
         }
     }
@@ -84,7 +84,7 @@ impl Problem<'_> {
     fn model(&self, x: &DVector<f64>) -> Kurt {
         let mut m = self.base.clone();
         for (s, &xi) in self.slots.iter().zip(x.iter()) {
-            let v = s.param.from_coord(xi.clamp(s.lo, s.hi));
+            let v = s.param.value_at(xi.clamp(s.lo, s.hi));
             match s.target {
                 Target::Kd(c) => m.kd[c] = v,
                 Target::Ks(t, i, c) => {
@@ -232,7 +232,7 @@ pub(crate) fn polish(s: &Samples, space: &Space, model: &Kurt) -> Polished {
         evaluations: Cell::new(0),
     };
     let (problem, report) = levenberg_marquardt::LevenbergMarquardt::new()
-        .with_patience(30)
+        .with_patience(15)
         .minimize(problem);
     Polished {
         model: problem.model(&problem.x),

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 /// alternation round) counts as settled.
 const SETTLE_TOL: f64 = 1e-3;
 /// Alternation rounds for more than one lobe (each round refits every lobe once).
-const MAX_ROUNDS: usize = 4;
+const MAX_ROUNDS: usize = 3;
 
 /// The outcome of a search.
 #[derive(Clone, Debug)]
@@ -49,7 +49,7 @@ fn values(p: Param, bx: Option<(f64, f64)>, grid: usize, out: &mut Vec<f64>) {
 
 /// A lobe from search coordinates.
 fn lobe_at(p: &[Param; 7], x: &[f64; 7]) -> KurtLobe {
-    let v = |d: usize| p[d].from_coord(x[d]);
+    let v = |d: usize| p[d].value_at(x[d]);
     KurtLobe {
         ks: Rgb::new(v(4), v(5), v(6)),
         mx: v(0),
@@ -65,6 +65,9 @@ fn lobe_at(p: &[Param; 7], x: &[f64; 7]) -> KurtLobe {
 /// cost is that of a 4-parameter search). Returns the lobe, whether the last level improved the
 /// error by less than [`SETTLE_TOL`] times the error without the lobe, and the number of shape
 /// evaluations.
+///
+/// With `start` (a refit in a later alternation round) the search begins where two levels of a
+/// full search would: a box of half the full width centred on `start`, for `levels − 2` levels.
 pub(crate) fn search_lobe(
     set: &PairSet,
     target: &[Vec<f64>; 3],
@@ -72,10 +75,23 @@ pub(crate) fn search_lobe(
     space: &LobeSpace,
     grid: usize,
     levels: usize,
+    start: Option<&KurtLobe>,
 ) -> (KurtLobe, bool, usize) {
     let p = dims(space);
     let full: [Option<(f64, f64)>; 7] = std::array::from_fn(|d| p[d].coord_range());
     let mut boxes = full;
+    let mut levels = levels;
+    if let Some(l) = start {
+        let v = [l.mx, l.my, l.r0, l.alpha, l.ks[0], l.ks[1], l.ks[2]];
+        for d in 0..7 {
+            if let Some((lo0, hi0)) = full[d] {
+                let c = p[d].to_coord(v[d]).clamp(lo0, hi0);
+                let hw = (hi0 - lo0) / 4.0;
+                boxes[d] = Some(((c - hw).max(lo0), (c + hw).min(hi0)));
+            }
+        }
+        levels = levels.saturating_sub(2).max(1);
+    }
     let mut vals: [Vec<f64>; 7] = Default::default();
     let mut best: Option<(f64, [f64; 7])> = None;
     let mut prev_level_err = f64::INFINITY;
@@ -132,7 +148,7 @@ pub(crate) fn search_lobe(
                                 .sum::<f64>();
                         let mut be = f64::INFINITY;
                         for &kc in &vals_ref[4 + ch] {
-                            let ks = p[4 + ch].from_coord(kc);
+                            let ks = p[4 + ch].value_at(kc);
                             let e = inactive
                                 + active
                                     .iter()
@@ -206,7 +222,8 @@ fn group_error(set: &PairSet, base: &[Vec<f64>; 3], contrib: &[[Vec<f64>; 3]]) -
 /// Fits `spaces.len()` lobes of one kind to `base` (the data minus the diffuse term) on `set`:
 /// one lobe at a time against the residual of the others with negative values clamped to zero
 /// (000 §3.4.1, multiple lobes), alternating rounds until the group error stops improving by
-/// [`SETTLE_TOL`] or [`MAX_ROUNDS`] rounds. The best round is kept.
+/// [`SETTLE_TOL`] or [`MAX_ROUNDS`] rounds (later rounds start each lobe's search around its
+/// previous value, see [`search_lobe`]). The best round is kept.
 pub(crate) fn fit_group(
     set: &PairSet,
     base: &[Vec<f64>; 3],
@@ -218,7 +235,7 @@ pub(crate) fn fit_group(
     let l = spaces.len();
     if l == 0 || set.len() == 0 {
         return Found {
-            lobes: spaces.iter().map(|s| zero_lobe(s)).collect(),
+            lobes: spaces.iter().map(zero_lobe).collect(),
             settled: true,
             alternation_settled: true,
             evaluations: 0,
@@ -248,7 +265,9 @@ pub(crate) fn fit_group(
                     })
                     .collect()
             });
-            let (lobe, settled, ev) = search_lobe(set, &target, kind, &spaces[k], grid, levels);
+            let start = (round > 0).then(|| lobes[k]);
+            let (lobe, settled, ev) =
+                search_lobe(set, &target, kind, &spaces[k], grid, levels, start.as_ref());
             evaluations += ev;
             searches_settled &= settled;
             let ck = contribution(set, &lobe, kind);
