@@ -401,7 +401,8 @@ pub fn parse_status(s: &str) -> Option<FitStatus> {
 
 /// A file-name-safe name for an input: the material name of `nbrdf:FILE#NAME` or `nbrdf:NAME`,
 /// else the file stem (plus a `#fragment`), with characters other than ASCII letters, digits,
-/// `-`, `_` and `.` replaced by `-`; at most 100 characters; never empty or hidden.
+/// `-`, `_` and `.` replaced by `-`; at most 100 characters; never empty or hidden (a name that
+/// sanitizes to nothing, such as `*`, falls back to the file's stem, then to `input`).
 pub fn output_name(input: &str) -> String {
     let input = input.trim();
     let raw = if let Some(rest) = input.strip_prefix("nbrdf:") {
@@ -432,10 +433,11 @@ pub fn output_name(input: &str) -> String {
         .take(100)
         .collect();
     let s = s.trim_matches(|c| c == '-' || c == '.').to_string();
-    if s.is_empty() {
-        "input".into()
-    } else {
-        s
+    match input.rsplit_once('#') {
+        // `nbrdf:FILE#*` that could not be expanded: name it after the file.
+        Some((file, _)) if s.is_empty() => output_name(file.trim_start_matches("nbrdf:")),
+        _ if s.is_empty() => "input".into(),
+        _ => s,
     }
 }
 
@@ -891,6 +893,7 @@ mod tests {
         assert_eq!(output_name("nbrdf:/x/set.json#blue metal"), "blue-metal");
         assert_eq!(output_name("t.gonio#quadrilinear"), "t-quadrilinear");
         assert_eq!(output_name("../"), "input");
+        assert_eq!(output_name("nbrdf:/data/merl_nbrdf.json#*"), "merl_nbrdf");
         assert_eq!(output_name(".hidden"), "hidden");
         assert!(output_name(&"x".repeat(500)).len() <= 100);
         for s in [
