@@ -20,7 +20,9 @@
 //!    two-slice (α, p) (Beckmann, GGX: closed forms). Variables ln ρd, ln α, A = ρs F0,
 //!    C = ρs F1, x with ρs = eˣ + (|A| + |C|)/[`F_MAX`] (and p); the result is kept only where it lowers the weighted error, recomputed with
 //!    the numeric G1 of the refined (α, p). For SGD a second refinement starts from the refined
-//!    Beckmann fit (SGD with p = 0, α = α_B² is Beckmann), and the better one is kept.
+//!    Beckmann fit (SGD with p = 0, α = α_B² is Beckmann). Among the two-slice fit and the
+//!    refined ones, the one with the lowest weighted error on the full default
+//!    [`crate::metrics::NganQuadrature`] (the metric's own nodes) is kept.
 //! 4. SGD: the Eq. V.3 shadowing approximation (λ, c, k) by `SgdG1Approx::fit` of the numeric
 //!    G1 table of the final (α, p), and kap = 1/(αΓ(1−p, α)).
 //!
@@ -539,14 +541,16 @@ struct RefineSet {
     m: [Vec<f64>; 3],
 }
 
+/// The quadrature of the refinement LM.
+const REFINE_QUADRATURE: NganQuadrature = NganQuadrature {
+    theta_h_panels: 4,
+    theta_d_panels: 2,
+    phi_d: 16,
+    phi_h: 1,
+};
+
 impl RefineSet {
-    fn new(data: &dyn Bsdf) -> RefineSet {
-        let q = NganQuadrature {
-            theta_h_panels: 4,
-            theta_d_panels: 2,
-            phi_d: 16,
-            phi_h: 1,
-        };
+    fn new(data: &dyn Bsdf, q: &NganQuadrature) -> RefineSet {
         let pairs: Vec<_> = q.pairs(true).into_iter().flatten().collect();
         let vals: Vec<[f64; 3]> = pairs.par_iter().map(|p| data.eval(p.wi, p.wo).0).collect();
         let geo = pairs
@@ -705,32 +709,23 @@ fn two_slice(
     Ok((c, ok1 && ok2, e1 + e2))
 }
 
-/// A refinement candidate: parameters, weighted cost (with the shadowing of its own (α, p)),
-/// shadowing, LM success.
+/// A refinement candidate: parameters, the shadowing of its own (α, p), LM success.
 struct Candidate {
     c: CtChannelFit,
-    cost: f64,
     g1: SgdG1,
     ok: bool,
 }
 
 impl Candidate {
-    fn new(
-        kind: Distribution,
-        c: CtChannelFit,
-        set: &RefineSet,
-        ch: usize,
-        ok: bool,
-    ) -> Result<Self> {
+    fn new(kind: Distribution, c: CtChannelFit, ok: bool) -> Result<Self> {
         let g1 = shadowing_of(kind, c.alpha, c.p)?;
-        let cost = refine_cost(kind, &c, &g1, set, ch);
-        Ok(Candidate { c, cost, g1, ok })
+        Ok(Candidate { c, g1, ok })
     }
 
     /// Refines from this candidate; returns the refined one and the evaluations.
     fn refine(&self, kind: Distribution, set: &RefineSet, ch: usize) -> Result<(Self, usize)> {
         let (next, ok, e) = refine_round(kind, &self.c, &self.g1, set, ch);
-        Ok((Candidate::new(kind, next, set, ch, ok)?, e))
+        Ok((Candidate::new(kind, next, ok)?, e))
     }
 }
 
@@ -742,39 +737,43 @@ fn fit_channel(
     kind: Distribution,
     ch: usize,
     slices: &Slices,
-    set: Option<&RefineSet>,
+    sets: Option<(&RefineSet, &RefineSet)>,
 ) -> Result<(CtChannelFit, bool, usize)> {
     let (c0, ok0, mut evals) = two_slice(input, kind, ch, slices)?;
     let (mut c, mut g1, mut ok) = (c0, shadowing_of(kind, c0.alpha, c0.p)?, ok0);
-    if let Some(set) = set {
-        let start = Candidate::new(kind, c0, set, ch, ok0)?;
+    if let Some((set, select)) = sets {
+        let start = Candidate::new(kind, c0, ok0)?;
         let (refined, e) = start.refine(kind, set, ch)?;
         evals += e;
         let mut cands = vec![start, refined];
         if kind == Distribution::Sgd {
             // A failure here (e.g. a Beckmann α beyond the SGD's range) only drops the candidate.
-            let from_beckmann = || -> Result<(Candidate, usize)> {
+            let from_beckmann = || -> Result<(Candidate, Candidate, usize)> {
                 let beck = Distribution::Beckmann;
                 let (b0, okb, eb) = two_slice(input, beck, ch, slices)?;
-                let (b1, eb1) = Candidate::new(beck, b0, set, ch, okb)?.refine(beck, set, ch)?;
+                let (b1, eb1) = Candidate::new(beck, b0, okb)?.refine(beck, set, ch)?;
                 let as_sgd = CtChannelFit {
                     alpha: (b1.c.alpha * b1.c.alpha).clamp(LN_ALPHA.0.exp(), LN_ALPHA.1.exp()),
                     p: 0.0,
                     ..b1.c
                 };
-                let (s1, es) =
-                    Candidate::new(kind, as_sgd, set, ch, b1.ok)?.refine(kind, set, ch)?;
-                Ok((s1, eb + eb1 + es))
+                let embedded = Candidate::new(kind, as_sgd, b1.ok)?;
+                let (s1, es) = embedded.refine(kind, set, ch)?;
+                Ok((embedded, s1, eb + eb1 + es))
             };
-            if let Ok((s1, e)) = from_beckmann() {
+            if let Ok((s0, s1, e)) = from_beckmann() {
                 evals += e;
+                cands.push(s0);
                 cands.push(s1);
             }
         }
+        // Choose on the full Ngan quadrature (the refinement set is coarser).
         let best = cands
             .into_iter()
-            .filter(|k| k.cost.is_finite())
-            .min_by(|a, b| a.cost.total_cmp(&b.cost));
+            .map(|k| (refine_cost(kind, &k.c, &k.g1, select, ch), k))
+            .filter(|(cost, _)| cost.is_finite())
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, k)| k);
         if let Some(best) = best {
             (c, g1, ok) = (best.c, best.g1, ok && best.ok);
         }
@@ -857,10 +856,23 @@ pub fn fit(data: &dyn Bsdf, distribution: Distribution, opts: &CtOptions) -> Res
             return Err(err(format!("channel {c} is zero on the θd = 0 slice")));
         }
     }
-    let set = opts.refine.then(|| RefineSet::new(data));
+    let sets = opts.refine.then(|| {
+        (
+            RefineSet::new(data, &REFINE_QUADRATURE),
+            RefineSet::new(data, &NganQuadrature::default()),
+        )
+    });
     let fits: Vec<Result<(CtChannelFit, bool, usize)>> = (0..3)
         .into_par_iter()
-        .map(|ch| fit_channel(&input, distribution, ch, &slices, set.as_ref()))
+        .map(|ch| {
+            fit_channel(
+                &input,
+                distribution,
+                ch,
+                &slices,
+                sets.as_ref().map(|(a, b)| (a, b)),
+            )
+        })
         .collect();
     let mut channels = Vec::with_capacity(3);
     let (mut ok, mut iterations) = (true, 0);
