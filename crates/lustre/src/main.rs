@@ -1,5 +1,6 @@
 //! The lustre command line: thin over the libraries.
 
+mod fit_cmd;
 mod merl_cmd;
 mod plot_cmd;
 
@@ -19,6 +20,8 @@ struct Cli {
 enum Command {
     /// Plot material lobes and transfer-probability arrays.
     Plot(plot_cmd::PlotArgs),
+    /// Fit Cook-Torrance (SGD, Beckmann, GGX) or Kurt models to measured inputs, in a batch.
+    Fit(fit_cmd::FitArgs),
     /// MERL tables: synthesize from a neural BRDF, inspect, list materials.
     Merl(merl_cmd::MerlArgs),
     /// List built-in materials, analytic models with their parameters, and published fits.
@@ -33,6 +36,7 @@ enum Command {
 fn main() -> anyhow::Result<()> {
     match Cli::parse().command {
         Command::Plot(args) => plot_cmd::run(&args),
+        Command::Fit(args) => fit_cmd::run(&args),
         Command::Merl(args) => merl_cmd::run(&args),
         Command::List => {
             println!("built-in materials:");
