@@ -26,7 +26,7 @@
 //! max(1, N >> l), as on a GPU), but for an odd parent size the last parent row and column lie
 //! outside every child's 2×2 block and only enter through the Gaussian margins.
 
-use crate::cube::{build_faces, face_coords, CubeMap};
+use crate::cube::{build_faces, face_coords, solid_angle_table, CubeMap};
 use crate::error::Result;
 use glam::DVec3;
 
@@ -82,9 +82,7 @@ fn downsample(parent: &CubeMap, filter: MipFilter) -> CubeMap {
     let (w, off) = filter.kernel();
     let np = parent.size as i64;
     // Texel solid angles of the parent (the same table on every face).
-    let omega: Vec<f64> = (0..parent.size * parent.size)
-        .map(|k| CubeMap::texel_solid_angle(parent.size, k % parent.size, k / parent.size))
-        .collect();
+    let omega = solid_angle_table(parent.size);
     // A tap k texels beyond an edge reads the (k−1)-th texel from the edge of the neighbour,
     // whose solid angle (symmetric under the face's flips and transposition) is that of the
     // mirrored index.
