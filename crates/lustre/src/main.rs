@@ -2,6 +2,7 @@
 
 mod compare_cmd;
 mod demo_cmd;
+mod fit_cmd;
 mod merl_cmd;
 mod plot_cmd;
 
@@ -21,6 +22,8 @@ struct Cli {
 enum Command {
     /// Plot material lobes and transfer-probability arrays.
     Plot(plot_cmd::PlotArgs),
+    /// Fit Cook-Torrance (SGD, Beckmann, GGX) or Kurt models to measured inputs, in a batch.
+    Fit(fit_cmd::FitArgs),
     /// MERL tables: synthesize from a neural BRDF, inspect, list materials.
     Merl(merl_cmd::MerlArgs),
     /// Render the built-in demo scene with regular sampling and print its PSNR.
@@ -39,6 +42,7 @@ enum Command {
 fn main() -> anyhow::Result<()> {
     match Cli::parse().command {
         Command::Plot(args) => plot_cmd::run(&args),
+        Command::Fit(args) => fit_cmd::run(&args),
         Command::Merl(args) => merl_cmd::run(&args),
         Command::Demo(args) => demo_cmd::run(&args),
         Command::Compare(args) => compare_cmd::run(&args),
