@@ -21,6 +21,7 @@
 use crate::image::Image;
 use crate::kernel::{self, Environment, Weighting};
 use crate::metrics;
+use crate::pattern::ConcentricOptions;
 use crate::render::render_with_progress;
 use crate::scene::{Camera, Hit, Plane, Scene, Sphere};
 use crate::{Result, ShadeError};
@@ -61,6 +62,10 @@ pub enum PatternChoice {
     Concentric,
     /// 000 §4.4.3's centre + ring / linear pattern (`kernel::plan_thesis`; ξ0 unused).
     Thesis,
+    /// 002 §5's concentric pattern with the rings stretched so the outermost lies at θmax
+    /// (`kernel::plan_regular_with`, `ConcentricOptions { reach: Some(1.0) }`): the printed
+    /// radii stop at ≈ θmax/2; this variant is ours.
+    ConcentricReach1,
 }
 
 /// A regular-sampling method: a pattern and a weighting.
@@ -78,6 +83,7 @@ impl RegularMethod {
         let p = match self.pattern {
             PatternChoice::Concentric => "regular",
             PatternChoice::Thesis => "thesis",
+            PatternChoice::ConcentricReach1 => "regular reach 1",
         };
         let w = match self.weighting {
             Weighting::Pdf002 => "Pdf002",
@@ -92,6 +98,7 @@ impl RegularMethod {
         let p = match self.pattern {
             PatternChoice::Concentric => "regular",
             PatternChoice::Thesis => "thesis",
+            PatternChoice::ConcentricReach1 => "regular-reach1",
         };
         let w = match self.weighting {
             Weighting::Pdf002 => "002",
@@ -106,6 +113,12 @@ impl RegularMethod {
         match self.pattern {
             PatternChoice::Concentric => kernel::plan_regular(kurt, setting.samples, setting.xi0),
             PatternChoice::Thesis => kernel::plan_thesis(kurt, setting.samples),
+            PatternChoice::ConcentricReach1 => kernel::plan_regular_with(
+                kurt,
+                setting.samples,
+                setting.xi0,
+                ConcentricOptions { reach: Some(1.0) },
+            ),
         }
     }
 }
@@ -158,10 +171,16 @@ pub fn experiment_002() -> Result<Experiment> {
                 settings: vec![s(14, 0.2), s(30, 0.1), s(270, 0.01)],
             },
         ],
-        methods: vec![RegularMethod {
-            pattern: PatternChoice::Concentric,
-            weighting: Weighting::Pdf002,
-        }],
+        methods: vec![
+            RegularMethod {
+                pattern: PatternChoice::Concentric,
+                weighting: Weighting::Pdf002,
+            },
+            RegularMethod {
+                pattern: PatternChoice::ConcentricReach1,
+                weighting: Weighting::Pdf002,
+            },
+        ],
     })
 }
 

@@ -26,7 +26,7 @@
 //! light from the upper side. A viewer exactly in the tangent plane receives nothing.
 
 use crate::mip;
-use crate::pattern::{self, Pattern};
+use crate::pattern::{self, ConcentricOptions, Pattern};
 use crate::{Result, ShadeError};
 use glam::DVec3;
 use lustre_brdf::bsdf::Bsdf;
@@ -244,13 +244,25 @@ pub struct MaterialPlan {
 /// (negative or non-finite roughness, ks, kd, r0 or α out of range), a zero budget, or ξ0
 /// outside (0, 1).
 pub fn plan_regular(kurt: &Kurt, budget_per_lobe: usize, xi0: f64) -> Result<MaterialPlan> {
+    plan_regular_with(kurt, budget_per_lobe, xi0, ConcentricOptions::default())
+}
+
+/// [`plan_regular`] with options of the concentric pattern, e.g. `ConcentricOptions { reach:
+/// Some(1.0) }`: the rings stretched so the outermost lies at θmax (measured better than the
+/// printed radii on the 002 §8 map; `examples/regular_study.rs`, `lustre compare`).
+pub fn plan_regular_with(
+    kurt: &Kurt,
+    budget_per_lobe: usize,
+    xi0: f64,
+    opts: ConcentricOptions,
+) -> Result<MaterialPlan> {
     if !(xi0 > 0.0 && xi0 < 1.0) {
         return Err(ShadeError::Parameter(format!(
             "xi0 = {xi0}: the pattern border must lie in (0, 1)"
         )));
     }
     plan_with(kurt, budget_per_lobe, |l| {
-        pattern::concentric_for_budget(l.mx, l.my, budget_per_lobe, xi0)
+        pattern::concentric_for_budget_opts(l.mx, l.my, budget_per_lobe, xi0, opts)
     })
 }
 

@@ -67,8 +67,9 @@ fn tiny_run_writes_a_table_with_finite_numbers() {
     )
     .expect("run");
     assert!(calls.into_inner() > 0);
-    // 002: 5 settings × (1 weighting + CK) + 3 references; 000: 4 × (3 + CK) + 4 references.
-    assert_eq!(report.rows.len(), 5 * 2 + 3 + 4 * 4 + 4);
+    // 002: 5 settings × (printed and reach-1 patterns + CK) + 3 references;
+    // 000: 4 × (3 + CK) + 4 references.
+    assert_eq!(report.rows.len(), 5 * 3 + 3 + 4 * 4 + 4);
     for r in &report.rows {
         assert!(r.rms.is_finite() && r.rms >= 0.0, "{r:?}");
         assert!(r.delta_e.is_finite() && r.delta_e >= 0.0, "{r:?}");
