@@ -11,12 +11,14 @@ pub mod array;
 mod color;
 mod draw;
 pub mod font;
+pub mod pattern;
 pub mod polar;
 
 pub use array::{
     direction_pixel, disc_direction, transfer_array, transfer_array_compare, transfer_disc,
     transmits, ArrayColor, ArrayOptions, Disc, Hemisphere,
 };
+pub use pattern::{pattern_plot, PatternOptions, PatternPanel};
 pub use polar::{
     polar_curve, polar_plot, Channels, PolarCurve, PolarOptions, PolarSample, Quantity,
 };

@@ -1,0 +1,69 @@
+//! Readers and conversions on the real maps of the shared data (`envmaps/`).
+
+use lustre_env::{read_map, shared_data_dir, CubeMap, CubePyramid, EnvError, MipFilter};
+use std::path::PathBuf;
+
+fn envmaps() -> PathBuf {
+    shared_data_dir().join("envmaps")
+}
+
+fn rel(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3)
+        .map(|c| ((a[c] - b[c]) / b[c]).abs())
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn reads_every_hdr_and_exr_map() {
+    let mut n = 0;
+    for e in std::fs::read_dir(envmaps()).unwrap() {
+        let p = e.unwrap().path();
+        let name = p.file_name().unwrap().to_string_lossy().to_string();
+        if name.contains("dwab") {
+            continue;
+        }
+        let m = read_map(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(m.map.width, 2 * m.map.height, "{name}");
+        let s = m.map.integral();
+        eprintln!(
+            "{name}: {}×{}, ∫L = {s:?}, nonfinite {}, negative {}",
+            m.map.width, m.map.height, m.nonfinite, m.negative
+        );
+        assert!(s.iter().all(|v| v.is_finite() && *v > 0.0), "{name}");
+        n += 1;
+    }
+    assert!(n >= 13, "{n} maps");
+}
+
+#[test]
+fn dwab_exr_decodes_or_names_the_compression() {
+    let p = envmaps().join("studio_interior_dwab.exr");
+    match read_map(&p) {
+        Ok(m) => {
+            let zip = read_map(&envmaps().join("studio_interior.exr")).unwrap();
+            assert_eq!((m.map.width, m.map.height), (zip.map.width, zip.map.height));
+            let r = rel(m.map.integral(), zip.map.integral());
+            eprintln!("DWAB decoded; ∫L differs from the ZIP file by {r:e}");
+            assert!(r < 0.02, "{r}");
+        }
+        Err(EnvError::Format { problem, .. }) => {
+            eprintln!("{problem}");
+            assert!(problem.contains("DWAB"), "{problem}");
+        }
+        Err(e) => panic!("{e}"),
+    }
+}
+
+#[test]
+fn cube_conversion_preserves_energy_on_real_maps() {
+    for name in ["quarry_01_1k.hdr", "studio_interior.exr"] {
+        let m = read_map(&envmaps().join(name)).unwrap().map;
+        let reference = m.integral();
+        let cube = CubeMap::from_equirect(&m, 256).unwrap();
+        let r = rel(cube.integral(), reference);
+        eprintln!("{name}: cube 256 ∫L relative error {r:e}");
+        assert!(r < 1e-3, "{name}: {r}");
+        let p = CubePyramid::build(cube, MipFilter::Gauss6).unwrap();
+        assert_eq!(p.levels.len(), 9);
+    }
+}
