@@ -116,10 +116,19 @@ fn check(scene: &PackedScene) -> Result<()> {
         }
     }
     for (i, p) in scene.planes.iter().enumerate() {
-        if p.material >= nm || !finite(&p.point) || !finite(&p.normal) || !finite(&p.tangent) {
+        if p.material >= nm
+            || !finite(&p.point)
+            || !finite(&p.normal)
+            || !finite(&p.tangent)
+            || p.half_size.is_nan()
+            || p.half_size <= 0.0
+        {
             return Err(invalid(
                 format!("plane {i}"),
-                format!("material {} of {nm}, or a non-finite value", p.material),
+                format!(
+                    "material {} of {nm}, a non-finite value or half_size {} ≤ 0",
+                    p.material, p.half_size
+                ),
             ));
         }
     }

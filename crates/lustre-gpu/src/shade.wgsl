@@ -88,23 +88,8 @@ fn no_hit() -> Hit {
     return Hit(false, 0.0, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0u);
 }
 
-// ShadingFrame::new(n, t_hint): Gram–Schmidt, t = normalize(t_hint − (t_hint·n) n), b = n × t.
-fn frame_t(n: vec3<f32>, t_hint: vec3<f32>) -> vec3<f32> {
-    let t = t_hint - dot(t_hint, n) * n;
-    let l = length(t);
-    if (l < 1e-6) {
-        // A hint along n: any perpendicular tangent.
-        var other = vec3<f32>(1.0, 0.0, 0.0);
-        if (abs(n.x) > 0.9) {
-            other = vec3<f32>(0.0, 0.0, 1.0);
-        }
-        return normalize(other - dot(other, n) * n);
-    }
-    return t / l;
-}
-
-// Primary ray of pixel (x, y) in a W×H image (contract): px = (2(x+0.5)/W − 1)·a·W/H;
-// py = (1 − 2(y+0.5)/H)·a; dir = normalize(fwd + px·right + py·up').
+// Primary ray of pixel (x, y) in a W×H image (contract, Scene::primary): px = (2(x+½)/W − 1)·a·W/H;
+// py = (1 − 2(y+½)/H)·a; dir = normalize(fwd + px·right + py·up').
 fn primary_dir(x: u32, y: u32) -> vec3<f32> {
     let w = f32(globals.dims.x);
     let h = f32(globals.dims.y);
@@ -114,79 +99,122 @@ fn primary_dir(x: u32, y: u32) -> vec3<f32> {
     return normalize(globals.fwd.xyz + px * globals.right.xyz + py * globals.up.xyz);
 }
 
-const T_MIN: f32 = 1e-4;
+// scene::T_MIN: smallest accepted ray parameter.
+const T_MIN: f32 = 1e-9;
 
-// Ray–sphere: |o + s d − c|² = r², nearest s > T_MIN. The tangent follows the sphere's axis:
-// t = normalize(axis × n), falling back to x̂ × n, then ẑ, where the cross product vanishes.
-fn hit_sphere(o: vec3<f32>, d: vec3<f32>, s: Sphere, best: f32) -> Hit {
-    let oc = o - s.center;
-    let bb = dot(oc, d);
-    let cc = dot(oc, oc) - s.radius * s.radius;
-    let disc = bb * bb - cc;
-    if (disc < 0.0) {
-        return no_hit();
-    }
-    let sq = sqrt(disc);
-    var dist = -bb - sq;
-    if (dist <= T_MIN) {
-        dist = -bb + sq;
-    }
-    if (dist <= T_MIN || dist >= best) {
-        return no_hit();
-    }
-    let p = o + dist * d;
-    let n = normalize(p - s.center);
-    var c = cross(s.axis, n);
-    if (length(c) < 1e-6) {
-        c = cross(vec3<f32>(1.0, 0.0, 0.0), n);
-        if (length(c) < 1e-6) {
-            c = vec3<f32>(0.0, 0.0, 1.0);
+// The tangent fallback of Sphere::frame_at and Plane::frame: where t is degenerate
+// (|t| < 1e-6), t = x̂ × n, and where that is degenerate too, t = ẑ; then normalized.
+fn tangent_or_fallback(t_in: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    var t = t_in;
+    if (length(t) < 1e-6) {
+        t = cross(vec3<f32>(1.0, 0.0, 0.0), n);
+        if (length(t) < 1e-6) {
+            t = vec3<f32>(0.0, 0.0, 1.0);
         }
     }
-    let t = frame_t(n, normalize(c));
-    return Hit(true, dist, p, t, cross(n, t), n, s.material);
+    return normalize(t);
 }
 
-// Ray–square: (o + s d − point)·normal = 0, |local x|, |local y| ≤ half_size.
-fn hit_plane(o: vec3<f32>, d: vec3<f32>, q: Plane, best: f32) -> Hit {
-    let n = normalize(q.normal);
+// Sphere::intersect: the nearest ray parameter > T_MIN of o + t·d (d unit). The discriminant is
+// r² − |f − (f·d)d|² (f = o − c) and the roots the stable pair q = −f·d − sign(f·d)√disc, c/q.
+// Returns −1 for a miss.
+fn sphere_t(o: vec3<f32>, d: vec3<f32>, s: Sphere) -> f32 {
+    let f = o - s.center;
+    let b = dot(f, d);
+    let perp = f - b * d;
+    let r2 = s.radius * s.radius;
+    let disc = r2 - dot(perp, perp);
+    if (!(disc >= 0.0)) {
+        return -1.0;
+    }
+    let c = dot(f, f) - r2;
+    // Rust's signum: +1 for b = +0.
+    let sgn = select(1.0, -1.0, b < 0.0);
+    let q = -b - sgn * sqrt(disc);
+    var t0 = 0.0;
+    var t1 = 0.0;
+    if (q != 0.0) {
+        t0 = min(c / q, q);
+        t1 = max(c / q, q);
+    }
+    if (t0 > T_MIN) {
+        return t0;
+    }
+    if (t1 > T_MIN) {
+        return t1;
+    }
+    return -1.0;
+}
+
+// Plane::frame: n = normal, t = the tangent made orthogonal to n (Gram–Schmidt), b = n × t.
+fn plane_n(q: Plane) -> vec3<f32> {
+    return normalize(q.normal);
+}
+
+fn plane_t(q: Plane) -> vec3<f32> {
+    let n = plane_n(q);
+    return tangent_or_fallback(q.tangent - n * dot(n, q.tangent), n);
+}
+
+// Plane::intersect: (o + t d − point)·n = 0 with t > T_MIN, inside the square
+// |(p − point)·t| ≤ half_size, |(p − point)·b| ≤ half_size. Returns −1 for a miss.
+fn plane_t_hit(o: vec3<f32>, d: vec3<f32>, q: Plane) -> f32 {
+    let n = plane_n(q);
+    let t_axis = plane_t(q);
+    let b_axis = cross(n, t_axis);
     let denom = dot(d, n);
-    if (abs(denom) < 1e-12) {
-        return no_hit();
+    if (!(abs(denom) > 1e-12)) {
+        return -1.0;
     }
-    let dist = dot(q.point - o, n) / denom;
-    if (dist <= T_MIN || dist >= best) {
-        return no_hit();
+    let t = dot(q.point - o, n) / denom;
+    if (!(t > T_MIN && t <= 3.4e38)) {
+        return -1.0;
     }
-    let p = o + dist * d;
-    let t = frame_t(n, q.tangent);
-    let b = cross(n, t);
-    let r = p - q.point;
-    if (abs(dot(r, t)) > q.half_size || abs(dot(r, b)) > q.half_size) {
-        return no_hit();
+    let r = o + t * d - q.point;
+    if (abs(dot(r, t_axis)) <= q.half_size && abs(dot(r, b_axis)) <= q.half_size) {
+        return t;
     }
-    return Hit(true, dist, p, t, b, n, q.material);
+    return -1.0;
 }
 
-// Scene::intersect: the nearest hit over all spheres and planes.
+// Scene::intersect: the nearest hit over all spheres, then all planes (a later surface wins only
+// when strictly closer), with the frame flipped towards the viewer (n → −n, t kept, b = n × t).
 fn intersect(o: vec3<f32>, d: vec3<f32>) -> Hit {
-    var best = no_hit();
-    var best_dist = 3.4e38;
+    var found = false;
+    var best = 0.0;
+    var t_axis = vec3<f32>(0.0);
+    var n = vec3<f32>(0.0);
+    var material = 0u;
     for (var i = 0u; i < globals.dims.z; i++) {
-        let h = hit_sphere(o, d, spheres[i], best_dist);
-        if (h.found) {
-            best = h;
-            best_dist = h.distance;
+        let s = spheres[i];
+        let t = sphere_t(o, d, s);
+        if (t > 0.0 && (!found || t < best)) {
+            found = true;
+            best = t;
+            // Sphere::frame_at: n = (p − c)/r, t = normalize(axis × n) with the fallbacks.
+            n = normalize((o + t * d - s.center) / s.radius);
+            t_axis = tangent_or_fallback(cross(s.axis, n), n);
+            material = s.material;
         }
     }
     for (var i = 0u; i < globals.dims.w; i++) {
-        let h = hit_plane(o, d, planes[i], best_dist);
-        if (h.found) {
-            best = h;
-            best_dist = h.distance;
+        let q = planes[i];
+        let t = plane_t_hit(o, d, q);
+        if (t > 0.0 && (!found || t < best)) {
+            found = true;
+            best = t;
+            n = plane_n(q);
+            t_axis = plane_t(q);
+            material = q.material;
         }
     }
-    return best;
+    if (!found) {
+        return no_hit();
+    }
+    if (dot(n, -d) < 0.0) {
+        n = -n;
+    }
+    return Hit(true, best, o + best * d, t_axis, cross(n, t_axis), n, material);
 }
 
 // ---------------------------------------------------------------- Kurt lobe (lustre-brdf) ---
@@ -210,20 +238,22 @@ fn beckmann_d(mx: f32, my: f32, h: vec3<f32>) -> f32 {
     return exp(e - log(PI) - log(mx) - log(my) - 4.0 * log(h.z));
 }
 
-// lobe_eval: ks · F D / (4 (ωo·h) ((ωi·n)(ωo·n))^α) (002 Eq. 2); 1 − F for transmission.
-fn lobe_eval(lobe: Lobe, transmission: bool, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+// lobe_eval with unit ks: F D / (4 (ωo·h) ((ωi·n)(ωo·n))^α) (002 Eq. 2), 1 − F for a
+// transmission lobe, in the reflection geometry (both directions above the surface).
+fn lobe_eval(lobe: Lobe, transmission: bool, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
     if (!(wi.z > 0.0 && wo.z > 0.0)) {
-        return vec3<f32>(0.0);
+        return 0.0;
     }
+    // lustre_brdf::frame::half_vector: none when |wi + wo|² ≤ 1e-24.
     let hs = wi + wo;
-    let hl = length(hs);
-    if (hl <= 0.0) {
-        return vec3<f32>(0.0);
+    let l2 = dot(hs, hs);
+    if (!(l2 > 1e-24)) {
+        return 0.0;
     }
-    let h = hs / hl;
+    let h = hs / sqrt(l2);
     let u = dot(wo, h);
-    if (u <= 0.0) {
-        return vec3<f32>(0.0);
+    if (!(u > 0.0)) {
+        return 0.0;
     }
     var fresnel = schlick(lobe.r0, u);
     if (transmission) {
@@ -234,7 +264,7 @@ fn lobe_eval(lobe: Lobe, transmission: bool, wi: vec3<f32>, wo: vec3<f32>) -> ve
     if (lobe.alpha != 0.0) {
         shadow = pow(wi.z * wo.z, lobe.alpha);
     }
-    return lobe.ks * (fresnel * d / (4.0 * u * shadow));
+    return fresnel * d / (4.0 * u * shadow);
 }
 
 // ---------------------------------------------------------------- MIP level (mip.rs) --------
@@ -243,31 +273,51 @@ fn reflect_about(w: vec3<f32>, h: vec3<f32>) -> vec3<f32> {
     return 2.0 * dot(w, h) * h - w;
 }
 
-// lobe_area: 002 Eq. 14–15, A = π·u·v at unit distance. The extreme half vectors at the ξ0
-// border along x and y (θ = arctan(√(−ln ξ0)·m), 002 Eq. 11 per axis) reflect ωo into ωU and ωV;
-// the lobe centre ωC is ωo mirrored about the normal.
-fn lobe_area(mx: f32, my: f32, xi0: f32, wo: vec3<f32>) -> f32 {
-    let s = sqrt(-log(xi0));
-    let tx = atan(s * mx);
-    let ty = atan(s * my);
-    let hu = vec3<f32>(sin(tx), 0.0, cos(tx));
-    let hv = vec3<f32>(0.0, sin(ty), cos(ty));
-    let wc = vec3<f32>(-wo.x, -wo.y, wo.z);
-    let wu = reflect_about(wo, hu);
-    let wv = reflect_about(wo, hv);
-    // Eq. 14: αU = arccos(ωC·ωU), αV = arccos(ωC·ωV); Eq. 15: u = tan αU, v = tan αV.
-    let au = min(acos(clamp(dot(wc, wu), -1.0, 1.0)), 0.5 * PI - 1e-3);
-    let av = min(acos(clamp(dot(wc, wv), -1.0, 1.0)), 0.5 * PI - 1e-3);
-    return PI * tan(au) * tan(av);
+// mip::MAX_TAN_ALPHA: tan 89°, the cap of tan α for lobe edges at or beyond 90° from the centre.
+const MAX_TAN_ALPHA: f32 = 57.28996163075942;
+
+// mip::tan_between: tan of the angle between two unit vectors, capped at MAX_TAN_ALPHA.
+fn tan_between(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    let alpha = acos(clamp(dot(a, b), -1.0, 1.0));
+    let t = tan(alpha);
+    if (alpha >= 0.5 * PI || !(abs(t) <= 3.4e38)) {
+        return MAX_TAN_ALPHA;
+    }
+    return min(t, MAX_TAN_ALPHA);
 }
 
-// regular_level: 002 Eq. 16, pixels = A·N / (4 n) · ‖ωi‖/‖ωi‖∞ · 1/(ωi·h), N = face_size²;
-// level = log4(pixels), at least 0.
+// mip::lobe_area: 002 Eq. 14–15, A = π·u·v at unit distance. The extreme half vectors at the ξ0
+// border, hU at θ = arctan(√(−ln ξ0) mx), φ = 0 and hV at θ = arctan(√(−ln ξ0) my), φ = 90°
+// (002 Eq. 5, 11), reflect ωo into ωU and ωV; the lobe centre ωC reflects ωo about the normal.
+// Eq. 14: αU = arccos(ωC·ωU), αV = arccos(ωC·ωV); Eq. 15: u = tan αU, v = tan αV.
+fn lobe_area(mx: f32, my: f32, xi0: f32, wo: vec3<f32>) -> f32 {
+    let k = sqrt(-log(xi0));
+    let tu = atan(k * mx);
+    let tv = atan(k * my);
+    let hu = vec3<f32>(sin(tu), 0.0, cos(tu));
+    let hv = vec3<f32>(0.0, sin(tv), cos(tv));
+    let wc = reflect_about(wo, vec3<f32>(0.0, 0.0, 1.0));
+    let u = tan_between(wc, reflect_about(wo, hu));
+    let v = tan_between(wc, reflect_about(wo, hv));
+    return PI * u * v;
+}
+
+// mip::regular_level: 002 Eq. 16, log4( A·N / (4 n) · ‖ωi‖/‖ωi‖∞ · 1/(ωi·h) ) with
+// N = face_size², clamped to [0, log2(face_size)]; an invalid sample reads the top level.
 fn regular_level(area: f32, n_samples: u32, wi: vec3<f32>, wi_dot_h: f32, face_size: f32) -> f32 {
-    let inf_norm = max(abs(wi.x), max(abs(wi.y), abs(wi.z)));
-    let pixels = area * face_size * face_size / (4.0 * f32(n_samples)) * (length(wi) / inf_norm)
-        / max(wi_dot_h, 1e-6);
-    return max(log2(max(pixels, 1e-30)) * 0.5, 0.0);
+    let top = log2(max(face_size, 1.0));
+    let inf = max(abs(wi.x), max(abs(wi.y), abs(wi.z)));
+    if (!(inf > 0.0 && wi_dot_h > 0.0 && n_samples > 0u)) {
+        return top;
+    }
+    let n_texels = face_size * face_size;
+    let d = length(wi) / inf;
+    let pixels = area * n_texels / (4.0 * f32(n_samples)) * d / wi_dot_h;
+    // log2(0) = −∞ clamps to 0 on the CPU; WGSL leaves log2(0) undefined, so it is spelled out.
+    if (!(pixels > 0.0)) {
+        return 0.0;
+    }
+    return clamp(log2(pixels) / 2.0, 0.0, top);
 }
 
 // ---------------------------------------------------------------- kernel (kernel.rs) --------
@@ -276,62 +326,69 @@ fn to_world(h: vec3<f32>, t: vec3<f32>, b: vec3<f32>, n: vec3<f32>) -> vec3<f32>
     return h.x * t + h.y * b + h.z * n;
 }
 
-// One lobe by the 002 pseudo code (EvaluateSpecularLobe) with the Pdf002 weighting.
-// A transmission lobe is evaluated in the mirrored reflection geometry; its light arrives from
-// the reflected direction mirrored through the surface plane.
-fn shade_lobe(lobe: Lobe, transmission: bool, wo: vec3<f32>, wo_local: vec3<f32>,
+// kernel::regular_lobe with Weighting::Pdf002: one lobe by the 002 pseudo code
+// (EvaluateSpecularLobe), in the frame facing the viewer. Samples with ωo·h ≤ 0 or ωi below the
+// horizon are skipped but still count in n. A transmission lobe takes its light from ωi mirrored
+// through the tangent plane (000 Eq. 3.5) and is evaluated on the mirrored pair.
+fn shade_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>,
               t: vec3<f32>, b: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     let count = lobe.sample_count;
     if (count == 0u) {
         return vec3<f32>(0.0);
     }
-    // Equation 14, 15 & area.
-    let area = lobe_area(lobe.mx, lobe.my, lobe.xi0, wo_local);
-    let lod_max = globals.params.z;
+    let face = globals.params.w;
+    // 002 Eq. 14–15: A = π u v.
+    let area = lobe_area(lobe.mx, lobe.my, lobe.xi0, wo_l);
     var sum = vec3<f32>(0.0);
     for (var i = 0u; i < count; i++) {
-        let h_local = samples[lobe.sample_start + i].xyz;
-        let h = to_world(h_local, t, b, n);
-        // lightInVec = reflect(−lightOutVec, h).
-        let wi = reflect_about(wo, h);
-        let wi_dot_h = dot(wi, h);
-        let wi_local = reflect_about(wo_local, h_local);
-        var lookup = wi;
-        if (transmission) {
-            lookup = wi - 2.0 * dot(wi, n) * n;
+        let h = samples[lobe.sample_start + i].xyz;
+        let ho = dot(wo_l, h); // ωo·h = ωi·h
+        if (!(ho > 0.0)) {
+            continue;
         }
-        // Equation 16.
-        let level = clamp(regular_level(area, count, lookup, wi_dot_h, globals.params.w), 0.0, lod_max);
-        // Environment map lookup.
-        let l = textureSampleLevel(pyramid, linear_sampler, lookup, level).rgb;
-        // Equation 2.
-        let brdf = lobe_eval(lobe, transmission, wi_local, wo_local);
-        // Equation 17 & 18.
-        let pdf = lobe.pdf_constant / (4.0 * wi_dot_h);
-        let cos_i = wi_local.z;
-        // Equation 9 (inner sum).
-        if (pdf > 0.0 && cos_i > 0.0) {
-            sum += l * brdf / pdf * cos_i;
+        let r = reflect_about(wo_l, h); // 000 Eq. 4.8
+        let cos_i = r.z;
+        if (!(cos_i > 0.0)) {
+            continue;
+        }
+        var wi_l = r;
+        if (transmission) {
+            wi_l = vec3<f32>(r.x, r.y, -r.z); // 000 Eq. 3.5: the thin BTDF's direction
+        }
+        let wi = to_world(wi_l, t, b, n);
+        // 002 Eq. 16 (the sampler clamps the level to the pyramid as CubePyramid::sample does).
+        let level = min(regular_level(area, count, wi, ho, face), globals.params.z);
+        let li = textureSampleLevel(pyramid, linear_sampler, wi, level).rgb;
+        // 002 Eq. 2 with unit ks (ks is applied once at the end).
+        let g = lobe_eval(lobe, transmission, r, wo_l);
+        // 002 Eq. 17–18: p_o = p_h / (4 h·ωi).
+        let pdf = lobe.pdf_constant / (4.0 * ho);
+        if (pdf > 0.0) {
+            sum += li * (g * cos_i / pdf); // 002 Eq. 9, inner sum
         }
     }
-    return sum / f32(count);
+    return lobe.ks * sum / f32(count);
 }
 
-// shade_regular: diffuse = kd · irradiance(n) (the map stores E/π) plus every lobe. The thin
-// two-sided surface is shaded from the side of the viewer: n flips when ωo is below it.
+// kernel::shade_regular_with (Pdf002, no bounding planes): the frame faces the viewer (flipped to
+// (t, −b, −n) when ωo·n < 0); nothing when ωo lies in the tangent plane; diffuse = kd ·
+// irradiance(n) (the map stores E/π) plus every reflection and transmission lobe.
 fn shade(hit: Hit, wo: vec3<f32>) -> vec3<f32> {
     let m = materials[hit.material];
+    var t = hit.t;
+    var b = hit.b;
     var n = hit.n;
-    let t = hit.t;
-    let b = hit.b;
-    var wo_local = vec3<f32>(dot(wo, t), dot(wo, b), dot(wo, n));
-    if (wo_local.z < 0.0) {
+    if (dot(wo, n) < 0.0) {
+        b = -b;
         n = -n;
-        wo_local.z = -wo_local.z;
+    }
+    let wo_l = vec3<f32>(dot(wo, t), dot(wo, b), dot(wo, n));
+    if (!(wo_l.z > 0.0)) {
+        return vec3<f32>(0.0);
     }
     var c = m.kd * textureSampleLevel(irradiance, linear_sampler, n, 0.0).rgb;
     for (var k = 0u; k < m.reflection + m.transmission; k++) {
-        c += shade_lobe(lobes[m.lobe_start + k], k >= m.reflection, wo, wo_local, t, b, n);
+        c += shade_lobe(lobes[m.lobe_start + k], k >= m.reflection, wo_l, t, b, n);
     }
     return c;
 }
