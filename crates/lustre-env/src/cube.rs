@@ -488,6 +488,42 @@ mod tests {
     }
 
     #[test]
+    fn equirect_round_trip_of_a_smooth_map() {
+        let a = DVec3::new(0.2, 0.6, -0.3);
+        let f = |d: DVec3| 1.0 + d.dot(a) + 0.3 * d.x * d.z;
+        let (w, h) = (128, 64);
+        let data = (0..w * h)
+            .map(|k| [f(EquirectMap::pixel_dir(w, h, k % w, k / w)) as f32; 3])
+            .collect();
+        let m = EquirectMap::new(w, h, data).unwrap();
+        let cube = CubeMap::from_equirect(&m, 32).unwrap();
+        let back = cube.to_equirect(w).unwrap();
+        let mut worst: f64 = 0.0;
+        for (k, v) in back.data.iter().enumerate() {
+            let exact = f(EquirectMap::pixel_dir(w, h, k % w, k / w));
+            worst = worst.max((v[0] as f64 - exact).abs());
+        }
+        assert!(worst < 5e-3, "round trip max error {worst}");
+        let (i0, i1) = (m.integral()[0], cube.integral()[0]);
+        assert!((i0 - i1).abs() < 1e-4 * i0, "{i0} vs {i1}");
+        assert!(cube.to_equirect(3).is_err());
+        assert!(cube.to_equirect(0).is_err());
+    }
+
+    proptest::proptest! {
+        /// Lookups in any direction (zero, huge, denormal components) are finite and inside
+        /// the range of the texels.
+        #[test]
+        fn lookups_are_finite_and_bounded(x in -1e6f64..1e6, y in -1e6f64..1e6, z in -1e-300f64..1e6) {
+            let m = CubeMap::from_fn(4, |d| [2.0 + d.x, 2.0 + d.y, 2.0 + d.z]).unwrap();
+            for d in [DVec3::new(x, y, z), DVec3::ZERO, DVec3::new(x, 0.0, 0.0)] {
+                let v = m.bilinear(d);
+                proptest::prop_assert!(v.iter().all(|c| c.is_finite() && *c >= 0.9 && *c <= 3.1), "{:?}", v);
+            }
+        }
+    }
+
+    #[test]
     fn rejects_bad_sizes() {
         assert!(CubeMap::new(0, Default::default()).is_err());
         let faces: [Vec<[f32; 3]>; 6] = std::array::from_fn(|_| vec![[0.0; 3]; 4]);

@@ -9,10 +9,14 @@ pub mod cube;
 pub mod equirect;
 pub mod error;
 pub mod io;
+pub mod irradiance;
 pub mod pyramid;
+pub mod spot;
 
 pub use cube::CubeMap;
 pub use equirect::EquirectMap;
 pub use error::{EnvError, Result};
 pub use io::{parse_exr, parse_hdr, read_map, shared_data_dir, LoadedMap};
+pub use irradiance::irradiance_map;
 pub use pyramid::{CubePyramid, MipFilter};
+pub use spot::{spot_map, SpotMapParams};

@@ -14,6 +14,10 @@
 //! unfolded about the shared edge; beyond a corner the average of the three texels meeting
 //! there), so the filtering is seamless. The weights are dyadic and sum to 1, so a constant
 //! map stays exactly constant at every level.
+//!
+//! Power-of-two base sizes are the intended case. Other sizes work (level sizes are
+//! max(1, N >> l), as on a GPU), but for an odd parent size the last parent row and column lie
+//! outside every child's 2×2 block and only enter through the Gaussian margins.
 
 use crate::cube::{build_faces, face_coords, CubeMap};
 use crate::error::Result;
@@ -61,32 +65,42 @@ pub struct CubePyramid {
     pub filter: MipFilter,
 }
 
-/// One down-sampling step: the next level from `parent` with `filter` (rayon-parallel).
+/// One down-sampling step (parent size ≥ 2): the next level from `parent` with `filter`
+/// (rayon-parallel).
 fn downsample(parent: &CubeMap, filter: MipFilter) -> CubeMap {
     let size = (parent.size / 2).max(1);
     let (w, off) = filter.kernel();
-    let faces = if parent.size == 1 {
-        // A 1×1 level has no children; kept for completeness (never reached by `build`).
-        parent.faces.clone()
-    } else {
-        build_faces(size, |face, i, j| {
-            let mut acc = [0.0f64; 3];
-            let (bi, bj) = (2 * i as i64 + off, 2 * j as i64 + off);
-            for (b, wb) in w.iter().enumerate() {
-                let mut row = [0.0f64; 3];
+    let faces = build_faces(size, |face, i, j| {
+        let mut acc = [0.0f64; 3];
+        let (bi, bj) = (2 * i as i64 + off, 2 * j as i64 + off);
+        let np = parent.size as i64;
+        let len = w.len() as i64;
+        let inside = bi >= 0 && bj >= 0 && bi + len <= np && bj + len <= np;
+        for (b, wb) in w.iter().enumerate() {
+            let mut row = [0.0f64; 3];
+            if inside {
+                // Fast path: the whole footprint lies on this face.
+                let start = (bj as usize + b) * parent.size + bi as usize;
+                let texels = &parent.faces[face][start..start + w.len()];
+                for (v, wa) in texels.iter().zip(w) {
+                    for c in 0..3 {
+                        row[c] += wa * v[c] as f64;
+                    }
+                }
+            } else {
                 for (a, wa) in w.iter().enumerate() {
                     let v = parent.fetch(face, bi + a as i64, bj + b as i64);
                     for c in 0..3 {
                         row[c] += wa * v[c];
                     }
                 }
-                for c in 0..3 {
-                    acc[c] += wb * row[c];
-                }
             }
-            [acc[0] as f32, acc[1] as f32, acc[2] as f32]
-        })
-    };
+            for c in 0..3 {
+                acc[c] += wb * row[c];
+            }
+        }
+        [acc[0] as f32, acc[1] as f32, acc[2] as f32]
+    });
     CubeMap { size, faces }
 }
 

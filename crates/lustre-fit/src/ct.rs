@@ -1,1 +1,869 @@
 //! Two-slice Cook-Torrance fits (004 §V.4).
+//!
+//! Per RGB channel (004 §V.4.1) the model is 004 Eq. III.1,
+//! f = ρd/π + (ρs/π) F(θd) D(θh) G1(θi) G1(θo)/(cos θi cos θo), with the SGD (004 Eq. V.2),
+//! Beckmann or GGX distribution and the generalized Schlick Fresnel F = F0 + (1 − F0)(1 − cos θd)⁵
+//! − F1 cos θd (004 Eq. V.5). [`fit`] proceeds as 004 §V.4.2:
+//!
+//! 1. On the θd = 0 slice m_h(θh) (sampled at the 90 MERL θh bin centres) fit
+//!    ρ_h = ρd/π + (Fr/π) D(θh) G1²(θh)/cos²θh for (ρd, Fr, α, p) (Eq. V.6), with weights
+//!    w_i = sin θh cos²θh Δθh (the slice's share of the Ngan measure), from several starts.
+//!    For SGD the starts use G1 = 1 and the best is polished once more with the numeric Smith
+//!    G1 of its (α, p); Beckmann and GGX use their closed forms.
+//! 2. On the θh = 0 slice m_d(θd) (MERL θd bin centres up to `max_theta_d_deg`), fit
+//!    ρs F(θd) = (m_d − ρd/π) π cos²θd / (D(0) G1²(θd)) with Eq. V.5 for (ρs, F0, F1) (ρs is
+//!    F's value at θd = 90°, where F = 1).
+//! 3. Optional refinement (beyond the paper, [`CtOptions::refine`]): per channel, one LM on all
+//!    parameters minimizing the Ngan-weighted residual Σ w (f − m)² over a fixed quadrature set
+//!    of direction pairs ([`crate::metrics::NganQuadrature`], 32 × 16 × 16 nodes in θh × θd ×
+//!    φd, the data evaluated once), with the SGD shadowing held at the numeric Smith G1 of the
+//!    two-slice (α, p) (Beckmann, GGX: closed forms). Variables ln ρd, ln ρs, ln α, ρs F0,
+//!    ρs F1 (and p); the result is kept only where it lowers the weighted error, recomputed with
+//!    the numeric G1 of the refined (α, p). For SGD a second refinement starts from the refined
+//!    Beckmann fit (SGD with p = 0, α = α_B² is Beckmann), and the better one is kept.
+//! 4. SGD: the Eq. V.3 shadowing approximation (λ, c, k) by `SgdG1Approx::fit` of the numeric
+//!    G1 table of the final (α, p), and kap = 1/(αΓ(1−p, α)).
+//!
+//! Every optimization is `levenberg_marquardt::LevenbergMarquardt` with a forward-difference
+//! Jacobian. Positivity and ranges come from the parametrization: ρd, ρs, Fr, α are exp of the
+//! LM variable (α clamped to [1e-5, 5]), SGD p = −1.9 + 4.8·sigmoid (inside the library's
+//! range), F0 and F1 free (the published fits hold F0 > 1 and F1 < 0).
+
+use crate::metrics::NganQuadrature;
+use crate::{FitError, FitStatus, Result};
+use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
+use lustre_brdf::bsdf::Bsdf;
+use lustre_brdf::frame::{from_half_diff, HalfDiff};
+use lustre_brdf::measured::merl::{bin_center, RES_THETA_D, RES_THETA_H};
+use lustre_brdf::microfacet::fresnel::Fresnel;
+use lustre_brdf::microfacet::ndf::Ndf;
+use lustre_brdf::microfacet::smith::{g1_beckmann, g1_ggx, G1Table, SgdG1Approx};
+use lustre_brdf::models::cook_torrance::{CookTorrance, CtChannel, G1Model};
+use lustre_brdf::numeric::upper_gamma;
+use nalgebra::{DMatrix, DVector, Dyn, Owned};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::{FRAC_1_PI, FRAC_PI_2, PI};
+
+/// The microfacet distribution of a fit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Distribution {
+    /// Shifted gamma distribution (004 Eq. V.2) with the Eq. V.3 shadowing approximation.
+    Sgd,
+    /// Beckmann with its closed-form Smith G1.
+    Beckmann,
+    /// GGX / Trowbridge-Reitz with its closed-form Smith G1.
+    Ggx,
+}
+
+impl Distribution {
+    /// `sgd`, `beckmann` or `ggx`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Distribution::Sgd => "sgd",
+            Distribution::Beckmann => "beckmann",
+            Distribution::Ggx => "ggx",
+        }
+    }
+}
+
+/// Options of [`fit`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CtOptions {
+    /// Run the refinement over the full data after the two-slice fit (module notes, step 4).
+    pub refine: bool,
+    /// Step 2 discards θd beyond this angle (degrees; 004 §V.4.2 uses 70°).
+    pub max_theta_d_deg: f64,
+}
+
+impl Default for CtOptions {
+    /// Refinement on, θd ≤ 70°.
+    fn default() -> Self {
+        CtOptions {
+            refine: true,
+            max_theta_d_deg: 70.0,
+        }
+    }
+}
+
+/// The fitted parameters of one RGB channel.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CtChannelFit {
+    /// Diffuse coefficient ρd.
+    pub rho_d: f64,
+    /// Specular coefficient ρs.
+    pub rho_s: f64,
+    /// Roughness α of the distribution.
+    pub alpha: f64,
+    /// SGD exponent p (0 for Beckmann and GGX).
+    pub p: f64,
+    /// SGD normalization kap = 1/(αΓ(1−p, α)) (0 for Beckmann and GGX).
+    pub kap: f64,
+    /// Eq. V.5 F0.
+    pub f0: f64,
+    /// Eq. V.5 F1.
+    pub f1: f64,
+    /// SGD shadowing approximation (λ, c, k) of Eq. V.3 (θ0 follows from them). `None` for
+    /// Beckmann and GGX (closed-form Smith G1), and for an SGD channel whose Eq. V.3 fit has
+    /// c below the f64 range (the model then uses the numeric Smith G1 of the SGD).
+    pub g1: Option<[f64; 3]>,
+}
+
+/// A Cook-Torrance fit of three channels.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CtFit {
+    /// The distribution.
+    pub distribution: Distribution,
+    /// Parameters per channel (r, g, b).
+    pub channels: [CtChannelFit; 3],
+    /// Whether every final optimization converged.
+    pub status: FitStatus,
+    /// Residual evaluations of all Levenberg-Marquardt runs together.
+    pub iterations: usize,
+}
+
+impl CtChannelFit {
+    /// The channel as a [`CtChannel`] of `distribution`.
+    pub fn to_channel(&self, distribution: Distribution) -> lustre_brdf::Result<CtChannel> {
+        let fresnel = Fresnel::generalized_schlick(self.f0, self.f1)?;
+        let (ndf, g1) = match distribution {
+            Distribution::Sgd => {
+                let ndf = Ndf::sgd_with_kap(self.alpha, self.p, self.kap)?;
+                let g1 = match self.g1 {
+                    Some([l, c, k]) => G1Model::SgdApprox(SgdG1Approx::from_lck(l, c, k)?),
+                    None => G1Model::numeric(&ndf),
+                };
+                (ndf, g1)
+            }
+            Distribution::Beckmann => (Ndf::beckmann(self.alpha)?, G1Model::Closed),
+            Distribution::Ggx => (Ndf::ggx(self.alpha)?, G1Model::Closed),
+        };
+        Ok(CtChannel::new(self.rho_d, self.rho_s, ndf, g1, fresnel))
+    }
+}
+
+impl CtFit {
+    /// The fitted model as a [`CookTorrance`] BSDF named `name`.
+    pub fn to_bsdf(&self, name: &str) -> lustre_brdf::Result<CookTorrance> {
+        let [r, g, b] = &self.channels;
+        let d = self.distribution;
+        CookTorrance::new(name, [r.to_channel(d)?, g.to_channel(d)?, b.to_channel(d)?])
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Levenberg-Marquardt on a closure, central-difference Jacobian.
+
+/// Stand-in for a non-finite residual: LM then rejects the step.
+const BAD_RESIDUAL: f64 = 1e100;
+
+struct Lsq<'a> {
+    x: DVector<f64>,
+    m: usize,
+    f: &'a (dyn Fn(&[f64], &mut [f64]) + Sync),
+}
+
+impl Lsq<'_> {
+    fn eval(&self, x: &[f64]) -> DVector<f64> {
+        let mut r = vec![0.0; self.m];
+        (self.f)(x, &mut r);
+        for v in &mut r {
+            if !v.is_finite() {
+                *v = BAD_RESIDUAL;
+            }
+        }
+        DVector::from_vec(r)
+    }
+}
+
+impl LeastSquaresProblem<f64, Dyn, Dyn> for Lsq<'_> {
+    type ResidualStorage = Owned<f64, Dyn>;
+    type JacobianStorage = Owned<f64, Dyn, Dyn>;
+    type ParameterStorage = Owned<f64, Dyn>;
+
+    fn set_params(&mut self, x: &DVector<f64>) {
+        self.x.copy_from(x);
+    }
+
+    fn params(&self) -> DVector<f64> {
+        self.x.clone()
+    }
+
+    fn residuals(&self) -> Option<DVector<f64>> {
+        Some(self.eval(self.x.as_slice()))
+    }
+
+    fn jacobian(&self) -> Option<DMatrix<f64>> {
+        // Forward differences: one extra residual evaluation per parameter.
+        let n = self.x.len();
+        let mut j = DMatrix::zeros(self.m, n);
+        let mut x = self.x.as_slice().to_vec();
+        let r0 = self.eval(&x);
+        for k in 0..n {
+            let h = 1e-7 * (1.0 + x[k].abs());
+            let x0 = x[k];
+            x[k] = x0 + h;
+            let rp = self.eval(&x);
+            x[k] = x0;
+            let mut col = (rp - &r0) / h;
+            col.iter_mut().for_each(|v| {
+                if !v.is_finite() || v.abs() > 1e90 {
+                    *v = 0.0;
+                }
+            });
+            j.set_column(k, &col);
+        }
+        Some(j)
+    }
+}
+
+/// Result of one LM run: parameters, ½‖r‖², success, residual evaluations.
+struct LmOut {
+    x: Vec<f64>,
+    cost: f64,
+    ok: bool,
+    evals: usize,
+}
+
+fn minimize(f: &(dyn Fn(&[f64], &mut [f64]) + Sync), m: usize, x0: &[f64]) -> LmOut {
+    let problem = Lsq {
+        x: DVector::from_column_slice(x0),
+        m,
+        f,
+    };
+    let (done, report) = LevenbergMarquardt::new()
+        .with_patience(60)
+        .minimize(problem);
+    let x = done.x.as_slice().to_vec();
+    let r = done.eval(&x);
+    LmOut {
+        cost: 0.5 * r.norm_squared(),
+        ok: report.termination.was_successful(),
+        evals: report.number_of_evaluations,
+        x,
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The channel model.
+
+const P_LO: f64 = -1.9;
+const P_SPAN: f64 = 4.8;
+const LN_ALPHA: (f64, f64) = (-11.512925464970229, 1.6094379124341003); // ln 1e-5, ln 5
+
+fn alpha_of(x: f64) -> f64 {
+    x.clamp(LN_ALPHA.0, LN_ALPHA.1).exp()
+}
+fn p_of(q: f64) -> f64 {
+    P_LO + P_SPAN / (1.0 + (-q.clamp(-40.0, 40.0)).exp())
+}
+fn q_of(p: f64) -> f64 {
+    let s = ((p - P_LO) / P_SPAN).clamp(1e-9, 1.0 - 1e-9);
+    (s / (1.0 - s)).ln()
+}
+fn pos_of(x: f64) -> f64 {
+    x.clamp(-60.0, 30.0).exp()
+}
+fn ln_pos(v: f64) -> f64 {
+    v.max(1e-26).ln()
+}
+
+/// A distribution with its parameters and precomputed normalization.
+#[derive(Clone, Copy, Debug)]
+struct Dist {
+    kind: Distribution,
+    alpha: f64,
+    p: f64,
+    ln_kap: f64,
+}
+
+impl Dist {
+    fn new(kind: Distribution, alpha: f64, p: f64) -> Dist {
+        let ln_kap = match kind {
+            Distribution::Sgd => -alpha.ln() - upper_gamma(1.0 - p, alpha).ln(),
+            _ => 0.0,
+        };
+        Dist {
+            kind,
+            alpha,
+            p,
+            ln_kap,
+        }
+    }
+
+    /// D(θh) = P22(tan²θh)/(π cos⁴θh) (004 Eq. III.2, V.2).
+    #[inline]
+    fn d(&self, ch: f64) -> f64 {
+        if ch.is_nan() || ch <= 0.0 {
+            return 0.0;
+        }
+        let c2 = (ch * ch).min(1.0);
+        let s2 = 1.0 - c2;
+        let a = self.alpha;
+        match self.kind {
+            Distribution::Sgd => {
+                let x = s2 / c2;
+                let big_a = a + x / a;
+                (self.ln_kap - big_a - self.p * big_a.ln()).exp() * FRAC_1_PI / (c2 * c2)
+            }
+            Distribution::Beckmann => {
+                let a2 = a * a;
+                (-(s2 / c2) / a2).exp() * FRAC_1_PI / (a2 * c2 * c2)
+            }
+            Distribution::Ggx => {
+                let a2 = a * a;
+                let d = a2 * c2 + s2;
+                a2 * FRAC_1_PI / (d * d)
+            }
+        }
+    }
+
+    /// The closed-form Smith G1 (Beckmann, GGX); `None` for SGD.
+    #[inline]
+    fn g1_closed(&self, cos_t: f64) -> Option<f64> {
+        match self.kind {
+            Distribution::Beckmann => Some(g1_beckmann(self.alpha, cos_t)),
+            Distribution::Ggx => Some(g1_ggx(self.alpha, cos_t)),
+            Distribution::Sgd => None,
+        }
+    }
+
+    fn ndf(&self) -> lustre_brdf::Result<Ndf> {
+        match self.kind {
+            Distribution::Sgd => Ndf::sgd(self.alpha, self.p),
+            Distribution::Beckmann => Ndf::beckmann(self.alpha),
+            Distribution::Ggx => Ndf::ggx(self.alpha),
+        }
+    }
+}
+
+/// The SGD shadowing term held fixed during an LM run.
+#[derive(Clone, Debug)]
+enum SgdG1 {
+    One,
+    Table(Box<G1Table>),
+}
+
+impl SgdG1 {
+    #[inline]
+    fn eval(&self, cos_t: f64) -> f64 {
+        match self {
+            SgdG1::One => 1.0,
+            SgdG1::Table(t) => t.eval(cos_t),
+        }
+    }
+}
+
+/// G1 of `d` at cos θ: closed form where one exists, else the fixed SGD term.
+#[inline]
+fn g1_of(d: &Dist, fixed: &SgdG1, cos_t: f64) -> f64 {
+    d.g1_closed(cos_t).unwrap_or_else(|| fixed.eval(cos_t))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Slices.
+
+/// The data's value in `channel` at (θh, θd, φd) (φh = 0).
+fn data_at(data: &dyn Bsdf, theta_h: f64, theta_d: f64, phi_d: f64) -> [f64; 3] {
+    let (wi, wo) = from_half_diff(&HalfDiff {
+        theta_h,
+        phi_h: 0.0,
+        theta_d,
+        phi_d,
+    });
+    data.eval(wi, wo).0
+}
+
+/// Step 1 for one channel; returns (ρd, Fr, α, p), success, evaluations.
+fn step1(
+    input: &str,
+    kind: Distribution,
+    th: &[f64],
+    m: &[f64],
+    sw: &[f64],
+) -> Result<([f64; 4], bool, usize)> {
+    let sgd = kind == Distribution::Sgd;
+    let n = th.len();
+    let cos: Vec<f64> = th.iter().map(|t| t.cos()).collect();
+    let tail = m
+        .iter()
+        .rev()
+        .take(20)
+        .cloned()
+        .fold(f64::INFINITY, f64::min)
+        .max(0.0);
+    let peak = m[0];
+    let mut evals = 0;
+    let run = |x0: &[f64], g1: &SgdG1| {
+        let f = |x: &[f64], r: &mut [f64]| {
+            let (rd, fr, a) = (pos_of(x[0]), pos_of(x[1]), alpha_of(x[2]));
+            let p = if sgd { p_of(x[3]) } else { 0.0 };
+            let d = Dist::new(kind, a, p);
+            for i in 0..n {
+                let c = cos[i];
+                let g = g1_of(&d, g1, c);
+                let v = rd * FRAC_1_PI + fr * FRAC_1_PI * d.d(c) * g * g / (c * c);
+                r[i] = sw[i] * (v - m[i]);
+            }
+        };
+        minimize(&f, n, x0)
+    };
+    // Starts: a grid of α (and p); ρd from the tail, Fr from the peak height.
+    let alphas: &[f64] = if sgd {
+        &[1e-3, 1e-2, 0.05, 0.2]
+    } else {
+        &[0.01, 0.05, 0.2, 0.5]
+    };
+    let ps: &[f64] = if sgd { &[0.2, 0.8, 1.4] } else { &[0.0] };
+    let mut best: Option<LmOut> = None;
+    for &a in alphas {
+        for &p in ps {
+            let d = Dist::new(kind, a, p);
+            let rd = (tail * PI).max(1e-6);
+            let fr = ((peak - tail).max(1e-9) * PI / d.d(1.0)).max(1e-9);
+            let mut x0 = vec![ln_pos(rd), ln_pos(fr), a.ln()];
+            if sgd {
+                x0.push(q_of(p));
+            }
+            let out = run(&x0, &SgdG1::One);
+            evals += out.evals;
+            if out.cost.is_finite() && best.as_ref().is_none_or(|b| out.cost < b.cost) {
+                best = Some(out);
+            }
+        }
+    }
+    let mut best = best.ok_or_else(|| FitError::Data {
+        input: input.to_string(),
+        problem: "step 1 (θd = 0 slice): no start gave a finite fit".into(),
+    })?;
+    if sgd {
+        // Rounds with the numeric Smith G1 of the current (α, p).
+        let d = Dist::new(kind, alpha_of(best.x[2]), p_of(best.x[3]));
+        let table = G1Table::new(&d.ndf()?);
+        let out = run(&best.x, &SgdG1::Table(Box::new(table)));
+        evals += out.evals;
+        best = out;
+    }
+    let x = &best.x;
+    let p = if sgd { p_of(x[3]) } else { 0.0 };
+    Ok((
+        [pos_of(x[0]), pos_of(x[1]), alpha_of(x[2]), p],
+        best.ok,
+        evals,
+    ))
+}
+
+/// Step 2 for one channel: (ρs, F0, F1) from the θh = 0 slice, success, evaluations.
+fn step2(
+    td: &[f64],
+    m: &[f64],
+    rho_d: f64,
+    d: &Dist,
+    g1: &SgdG1,
+) -> Result<([f64; 3], bool, usize)> {
+    let n = td.len();
+    let d0 = d.d(1.0);
+    // y = ρs F(θd) = (m − ρd/π) π cos²θd/(D(0) G1²(θd)).
+    let y: Vec<f64> = td
+        .iter()
+        .zip(m)
+        .map(|(&t, &mv)| {
+            let c = t.cos();
+            let g = g1_of(d, g1, c);
+            (mv - rho_d * FRAC_1_PI) * PI * c * c / (d0 * g * g)
+        })
+        .collect();
+    let basis: Vec<(f64, f64)> = td
+        .iter()
+        .map(|&t| {
+            let c = t.cos();
+            let m1 = 1.0 - c;
+            (m1 * m1 * m1 * m1 * m1, c)
+        })
+        .collect();
+    // Start: linear least squares in (ρs F0, ρs, ρs F1) of y = ρsF0(1−m5) + ρs m5 − ρsF1 c.
+    let a = DMatrix::from_fn(n, 3, |i, j| match j {
+        0 => 1.0 - basis[i].0,
+        1 => basis[i].0,
+        _ => -basis[i].1,
+    });
+    let b = DVector::from_column_slice(&y);
+    let (mut rs, mut f0, mut f1) = (y.iter().cloned().fold(0.0, f64::max).max(1e-9), 1.0, 0.0);
+    if let Ok(sol) = a.svd(true, true).solve(&b, 1e-12) {
+        if sol[1] > 0.0 && sol.iter().all(|v| v.is_finite()) {
+            rs = sol[1];
+            f0 = sol[0] / rs;
+            f1 = sol[2] / rs;
+        }
+    }
+    let f = |x: &[f64], r: &mut [f64]| {
+        let (rs, f0, f1) = (pos_of(x[0]), x[1], x[2]);
+        for i in 0..n {
+            let (m5, c) = basis[i];
+            r[i] = rs * (f0 + (1.0 - f0) * m5 - f1 * c) - y[i];
+        }
+    };
+    let out = minimize(&f, n, &[ln_pos(rs), f0, f1]);
+    Ok(([pos_of(out.x[0]), out.x[1], out.x[2]], out.ok, out.evals))
+}
+
+/// The fixed direction pairs of the refinement with their geometry and weights.
+struct RefineSet {
+    /// (cos θi, cos θo, cos θh, cos θd).
+    geo: Vec<[f64; 4]>,
+    /// √w of the Ngan quadrature.
+    sw: Vec<f64>,
+    /// Data per channel.
+    m: [Vec<f64>; 3],
+}
+
+impl RefineSet {
+    fn new(data: &dyn Bsdf) -> RefineSet {
+        let q = NganQuadrature {
+            theta_h_panels: 4,
+            theta_d_panels: 2,
+            phi_d: 16,
+            phi_h: 1,
+        };
+        let pairs: Vec<_> = q.pairs(true).into_iter().flatten().collect();
+        let vals: Vec<[f64; 3]> = pairs.par_iter().map(|p| data.eval(p.wi, p.wo).0).collect();
+        let geo = pairs
+            .iter()
+            .map(|p| {
+                let h = (p.wi + p.wo).normalize();
+                let (ci, co) = (p.wi.z, p.wo.z);
+                [ci, co, h.z, p.wi.dot(h)]
+            })
+            .collect();
+        RefineSet {
+            geo,
+            sw: pairs.iter().map(|p| p.w.sqrt()).collect(),
+            m: std::array::from_fn(|c| vals.iter().map(|v| v[c]).collect()),
+        }
+    }
+}
+
+/// The shadowing of a channel during refinement: the SGD's numeric table (fixed per round) or
+/// the closed form of Beckmann / GGX.
+fn shadowing_of(kind: Distribution, alpha: f64, p: f64) -> Result<SgdG1> {
+    Ok(match kind {
+        Distribution::Sgd => {
+            SgdG1::Table(Box::new(G1Table::new(&Dist::new(kind, alpha, p).ndf()?)))
+        }
+        _ => SgdG1::One,
+    })
+}
+
+/// D(θh) G1(θi) G1(θo)/(cos θi cos θo) at every point of the set.
+fn spec_factor(d: &Dist, g1: &SgdG1, set: &RefineSet) -> Vec<f64> {
+    set.geo
+        .iter()
+        .map(|g| d.d(g[2]) * g1_of(d, g1, g[0]) * g1_of(d, g1, g[1]) / (g[0] * g[1]))
+        .collect()
+}
+
+/// Σ w (f − m)² of channel `ch` on the refinement set with shadowing `g1`.
+fn refine_cost(
+    kind: Distribution,
+    c: &CtChannelFit,
+    g1: &SgdG1,
+    set: &RefineSet,
+    ch: usize,
+) -> f64 {
+    let d = Dist::new(kind, c.alpha, c.p);
+    let fr = Fresnel::GeneralizedSchlick { f0: c.f0, f1: c.f1 };
+    spec_factor(&d, g1, set)
+        .iter()
+        .zip(&set.geo)
+        .zip(&set.sw)
+        .zip(&set.m[ch])
+        .map(|(((&sf, g), &s), &m)| {
+            let r = s * ((c.rho_d + c.rho_s * fr.eval(g[3]) * sf) * FRAC_1_PI - m);
+            r * r
+        })
+        .sum()
+}
+
+/// The SGD shadowing approximation: Eq. V.3 fitted to the numeric table. `None` when the
+/// stored (λ, c, k) cannot rebuild it (c underflows to 0 for very large k, seen for
+/// α ≈ 1e-3, p ≈ 1.5); the channel then keeps the numeric Smith G1.
+fn sgd_g1_fit(table: &G1Table) -> Option<[f64; 3]> {
+    let (a, _) = SgdG1Approx::fit(table);
+    SgdG1Approx::from_lck(a.lambda, a.c, a.k).ok()?;
+    Some([a.lambda, a.c, a.k])
+}
+
+/// One refinement LM of channel `ch` with the SGD shadowing held at `g1` (a numeric table).
+/// Variables: ln ρd, ln ρs, ln α, A = ρs F0, C = ρs F1 (better conditioned than F0, F1 when
+/// ρs is small) and, for SGD, q (p = −1.9 + 4.8 sigmoid q). D·G is cached per (α, p), so the
+/// Jacobian columns of the linear parameters cost a few multiplies per point.
+fn refine_round(
+    kind: Distribution,
+    c: &CtChannelFit,
+    g1: &SgdG1,
+    set: &RefineSet,
+    ch: usize,
+) -> (CtChannelFit, bool, usize) {
+    let sgd = kind == Distribution::Sgd;
+    let n = set.geo.len();
+    let m = &set.m[ch];
+    let basis: Vec<(f64, f64)> = set
+        .geo
+        .iter()
+        .map(|g| {
+            let cd = g[3].clamp(0.0, 1.0);
+            let m1 = 1.0 - cd;
+            (m1 * m1 * m1 * m1 * m1, cd)
+        })
+        .collect();
+    type Cache = Option<([f64; 2], Vec<f64>)>;
+    let cache: std::sync::Mutex<Cache> = std::sync::Mutex::new(None);
+    let f = |x: &[f64], r: &mut [f64]| {
+        let (rd, rs, a) = (pos_of(x[0]), pos_of(x[1]), alpha_of(x[2]));
+        let p = if sgd { p_of(x[5]) } else { 0.0 };
+        let (big_a, big_c) = (x[3], x[4]);
+        let mut guard = cache.lock().unwrap_or_else(|e| e.into_inner());
+        let stale = guard.as_ref().is_none_or(|(k, _)| *k != [a, p]);
+        if stale {
+            *guard = Some(([a, p], spec_factor(&Dist::new(kind, a, p), g1, set)));
+        }
+        if let Some((_, sf)) = guard.as_ref() {
+            for i in 0..n {
+                let (m5, cd) = basis[i];
+                let fres = big_a * (1.0 - m5) + rs * m5 - big_c * cd;
+                r[i] = set.sw[i] * ((rd + fres * sf[i]) * FRAC_1_PI - m[i]);
+            }
+        }
+    };
+    let mut x0 = vec![
+        ln_pos(c.rho_d),
+        ln_pos(c.rho_s),
+        c.alpha.ln(),
+        c.rho_s * c.f0,
+        c.rho_s * c.f1,
+    ];
+    if sgd {
+        x0.push(q_of(c.p));
+    }
+    let out = minimize(&f, n, &x0);
+    let x = &out.x;
+    let rho_s = pos_of(x[1]);
+    let next = CtChannelFit {
+        rho_d: pos_of(x[0]),
+        rho_s,
+        alpha: alpha_of(x[2]),
+        p: if sgd { p_of(x[5]) } else { 0.0 },
+        kap: 0.0,
+        f0: x[3] / rho_s,
+        f1: x[4] / rho_s,
+        g1: None,
+    };
+    (next, out.ok, out.evals)
+}
+
+/// Steps 1 and 2 for one channel.
+fn two_slice(
+    input: &str,
+    kind: Distribution,
+    ch: usize,
+    slices: &Slices,
+) -> Result<(CtChannelFit, bool, usize)> {
+    let (s1, ok1, e1) = step1(input, kind, &slices.th, &slices.mh[ch], &slices.sw_h)?;
+    let [rho_d, _fr, alpha, p] = s1;
+    let d = Dist::new(kind, alpha, p);
+    let g1 = shadowing_of(kind, alpha, p)?;
+    let (s2, ok2, e2) = step2(&slices.td, &slices.md[ch], rho_d, &d, &g1)?;
+    let [rho_s, f0, f1] = s2;
+    let c = CtChannelFit {
+        rho_d,
+        rho_s,
+        alpha,
+        p,
+        kap: 0.0,
+        f0,
+        f1,
+        g1: None,
+    };
+    Ok((c, ok1 && ok2, e1 + e2))
+}
+
+/// A refinement candidate: parameters, weighted cost (with the shadowing of its own (α, p)),
+/// shadowing, LM success.
+struct Candidate {
+    c: CtChannelFit,
+    cost: f64,
+    g1: SgdG1,
+    ok: bool,
+}
+
+impl Candidate {
+    fn new(
+        kind: Distribution,
+        c: CtChannelFit,
+        set: &RefineSet,
+        ch: usize,
+        ok: bool,
+    ) -> Result<Self> {
+        let g1 = shadowing_of(kind, c.alpha, c.p)?;
+        let cost = refine_cost(kind, &c, &g1, set, ch);
+        Ok(Candidate { c, cost, g1, ok })
+    }
+
+    /// Refines from this candidate; returns the refined one and the evaluations.
+    fn refine(&self, kind: Distribution, set: &RefineSet, ch: usize) -> Result<(Self, usize)> {
+        let (next, ok, e) = refine_round(kind, &self.c, &self.g1, set, ch);
+        Ok((Candidate::new(kind, next, set, ch, ok)?, e))
+    }
+}
+
+/// Fits one channel: two slices, refinement, shadowing approximation. For SGD the refinement
+/// also starts from the refined Beckmann fit (SGD with p = 0 and α = α_B² is Beckmann), so the
+/// SGD result is never worse than Beckmann on the refinement set.
+fn fit_channel(
+    input: &str,
+    kind: Distribution,
+    ch: usize,
+    slices: &Slices,
+    set: Option<&RefineSet>,
+) -> Result<(CtChannelFit, bool, usize)> {
+    let (c0, ok0, mut evals) = two_slice(input, kind, ch, slices)?;
+    let (mut c, mut g1, mut ok) = (c0, shadowing_of(kind, c0.alpha, c0.p)?, ok0);
+    if let Some(set) = set {
+        let start = Candidate::new(kind, c0, set, ch, ok0)?;
+        let (refined, e) = start.refine(kind, set, ch)?;
+        evals += e;
+        let mut cands = vec![start, refined];
+        if kind == Distribution::Sgd {
+            let beck = Distribution::Beckmann;
+            let (b0, okb, eb) = two_slice(input, beck, ch, slices)?;
+            let (b1, eb1) = Candidate::new(beck, b0, set, ch, okb)?.refine(beck, set, ch)?;
+            let as_sgd = CtChannelFit {
+                alpha: (b1.c.alpha * b1.c.alpha).max(1e-5),
+                p: 0.0,
+                ..b1.c
+            };
+            let (s1, es) = Candidate::new(kind, as_sgd, set, ch, b1.ok)?.refine(kind, set, ch)?;
+            evals += eb + eb1 + es;
+            cands.push(s1);
+        }
+        let best = cands
+            .into_iter()
+            .filter(|k| k.cost.is_finite())
+            .min_by(|a, b| a.cost.total_cmp(&b.cost));
+        if let Some(best) = best {
+            (c, g1, ok) = (best.c, best.g1, ok && best.ok);
+        }
+    }
+    if kind == Distribution::Sgd {
+        c.kap = Dist::new(kind, c.alpha, c.p).ln_kap.exp();
+        if let SgdG1::Table(t) = &g1 {
+            c.g1 = sgd_g1_fit(t);
+        }
+    }
+    Ok((c, ok, evals))
+}
+
+/// The two slices of the data at MERL bin centres.
+struct Slices {
+    th: Vec<f64>,
+    sw_h: Vec<f64>,
+    mh: [Vec<f64>; 3],
+    td: Vec<f64>,
+    md: [Vec<f64>; 3],
+}
+
+impl Slices {
+    fn new(data: &dyn Bsdf, max_theta_d: f64) -> Slices {
+        let th: Vec<f64> = (0..RES_THETA_H)
+            .map(|i| bin_center(i, 0, 0).theta_h)
+            .collect();
+        // Weights: sin θh cos²θh Δθh, Δθh = (2i+1)/90² · π/2 (the bin width of the u² mapping).
+        let sw_h = th
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| {
+                let dt = (2 * i + 1) as f64 / (RES_THETA_H * RES_THETA_H) as f64 * FRAC_PI_2;
+                (t.sin() * t.cos() * t.cos() * dt).sqrt()
+            })
+            .collect();
+        let vh: Vec<[f64; 3]> = th.iter().map(|&t| data_at(data, t, 0.0, 0.0)).collect();
+        let td: Vec<f64> = (0..RES_THETA_D)
+            .map(|j| bin_center(0, j, 0).theta_d)
+            .filter(|&t| t <= max_theta_d)
+            .collect();
+        let phi_d = FRAC_PI_2;
+        let vd: Vec<[f64; 3]> = td.iter().map(|&t| data_at(data, 0.0, t, phi_d)).collect();
+        Slices {
+            th,
+            sw_h,
+            mh: std::array::from_fn(|c| vh.iter().map(|v| v[c]).collect()),
+            td,
+            md: std::array::from_fn(|c| vd.iter().map(|v| v[c]).collect()),
+        }
+    }
+}
+
+/// Fits Cook-Torrance with `distribution` to `data` (module notes). Errors: non-finite slice
+/// data, too few θd samples, or a fit that ends with non-finite parameters (`FitError::Data`
+/// naming the data); `FitStatus::NotConverged` when an optimization stopped at its limit.
+pub fn fit(data: &dyn Bsdf, distribution: Distribution, opts: &CtOptions) -> Result<CtFit> {
+    let input = data.name();
+    let err = |problem: String| FitError::Data {
+        input: input.clone(),
+        problem,
+    };
+    if !(opts.max_theta_d_deg.is_finite()
+        && opts.max_theta_d_deg > 5.0
+        && opts.max_theta_d_deg <= 90.0)
+    {
+        return Err(FitError::Option(format!(
+            "max_theta_d_deg = {} (must lie in (5, 90])",
+            opts.max_theta_d_deg
+        )));
+    }
+    let slices = Slices::new(data, opts.max_theta_d_deg.to_radians());
+    for (c, (h, d)) in slices.mh.iter().zip(&slices.md).enumerate() {
+        if h.iter().chain(d).any(|v| !v.is_finite()) {
+            return Err(err(format!(
+                "non-finite values on the fitting slices (channel {c})"
+            )));
+        }
+        if h.iter().all(|&v| v <= 0.0) {
+            return Err(err(format!("channel {c} is zero on the θd = 0 slice")));
+        }
+    }
+    let set = opts.refine.then(|| RefineSet::new(data));
+    let fits: Vec<Result<(CtChannelFit, bool, usize)>> = (0..3)
+        .into_par_iter()
+        .map(|ch| fit_channel(&input, distribution, ch, &slices, set.as_ref()))
+        .collect();
+    let mut channels = Vec::with_capacity(3);
+    let (mut ok, mut iterations) = (true, 0);
+    for f in fits {
+        let (c, o, e) = f?;
+        ok &= o;
+        iterations += e;
+        let finite = [c.rho_d, c.rho_s, c.alpha, c.p, c.kap, c.f0, c.f1]
+            .iter()
+            .chain(c.g1.iter().flatten())
+            .all(|v| v.is_finite());
+        if !finite {
+            return Err(err(format!(
+                "the fit produced non-finite parameters: {c:?}"
+            )));
+        }
+        channels.push(c);
+    }
+    let channels: [CtChannelFit; 3] = [channels[0], channels[1], channels[2]];
+    Ok(CtFit {
+        distribution,
+        channels,
+        status: if ok {
+            FitStatus::Converged
+        } else {
+            FitStatus::NotConverged
+        },
+        iterations,
+    })
+}

@@ -26,7 +26,8 @@
 //! a(o) = ∫ f(i, o) |cos θi| dωi at normal incidence o = +z, by the half-vector parametrization
 //! dωi = 4 (o·h) dωh with θh = (π/2) u² (peaks resolved), 48 φh midpoints and for each φh Gauss
 //! nodes in u up to the exact horizon cut of i (so Lambert's albedo comes out to 1e-6); plus the
-//! lower hemisphere (around −z, same mapping) when `transmission`.
+//! lower hemisphere (around −z, same mapping) when `transmission`. [`average_albedo`] averages
+//! a(o) over all view directions (cosine-weighted).
 
 use glam::DVec3;
 use lustre_brdf::bsdf::Bsdf;
@@ -297,6 +298,34 @@ pub fn max_albedo(bsdf: &dyn Bsdf, transmission: bool) -> [f64; 3] {
             || [0.0; 3],
             |x, y| [x[0].max(y[0]), x[1].max(y[1]), x[2].max(y[2])],
         )
+}
+
+/// The cosine-weighted average of the directional albedo over all view directions,
+/// (1/π) ∫ a(o) cos θo dωo per channel (the albedo under uniform illumination): Gauss nodes in
+/// μ² = cos²θo (16 nodes, since (1/π)∫ cos θo dωo = ∫₀¹ d(μ²)), 8 azimuths for anisotropic
+/// BSDFs (1 otherwise).
+pub fn average_albedo(bsdf: &dyn Bsdf, transmission: bool) -> [f64; 3] {
+    let nodes = composite_gauss(0.0, 1.0, 2, 8);
+    let nphi = if bsdf.flags().anisotropic { 8 } else { 1 };
+    let sums: Vec<[f64; 3]> = nodes
+        .par_iter()
+        .map(|&(s, w)| {
+            let mu = s.sqrt();
+            let sin_t = (1.0 - s).max(0.0).sqrt();
+            let mut acc = [0.0; 3];
+            for k in 0..nphi {
+                let phi = 2.0 * PI * k as f64 / nphi as f64;
+                let wo = DVec3::new(sin_t * phi.cos(), sin_t * phi.sin(), mu);
+                let a = albedo(bsdf, wo, transmission);
+                for (x, v) in acc.iter_mut().zip(a) {
+                    *x += w * v / nphi as f64;
+                }
+            }
+            acc
+        })
+        .collect();
+    sums.iter()
+        .fold([0.0; 3], |x, y| [x[0] + y[0], x[1] + y[1], x[2] + y[2]])
 }
 
 /// Ngan's normalized L2, the Eq. 3.7 L1 and the normal-incidence albedos of `model` against

@@ -51,6 +51,22 @@ fn lambert_known_values() {
 }
 
 #[test]
+fn average_albedo_of_lambert_and_sgd() {
+    let a = Lambert::new(Rgb::new(0.2, 0.5, 0.9)).unwrap();
+    let v = lustre_fit::metrics::average_albedo(&a, false);
+    for (got, want) in v.iter().zip([0.2, 0.5, 0.9]) {
+        assert!((got - want).abs() < 1e-6, "{v:?}");
+    }
+    // The published SGD fit: the average lies below the maximum over θo.
+    let m = lustre_brdf::catalog::resolve("sgd:gold-metallic-paint").unwrap();
+    let avg = lustre_fit::metrics::average_albedo(m.as_ref(), false);
+    let max = lustre_fit::metrics::max_albedo(m.as_ref(), false);
+    for c in 0..3 {
+        assert!(avg[c] > 0.0 && avg[c] <= max[c] * 1.001, "{avg:?} {max:?}");
+    }
+}
+
+#[test]
 fn albedo_at_oblique_incidence() {
     let a = Lambert::new(Rgb::splat(0.7)).unwrap();
     for t in [0.0f64, 30.0, 60.0, 80.0] {

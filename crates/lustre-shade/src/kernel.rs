@@ -1,1 +1,758 @@
-//! Per-pixel shading kernels.
+//! Per-pixel shading kernels: the specular integral of 002 Eq. 8 / 000 Eq. 4.3,
+//!
+//! L_o(ωo) = ∫ L_i(ωi) f(ωi, ωo) |cos θi| dωi,
+//!
+//! evaluated against a pre-filtered cube-map pyramid ([`Environment`]) by four integrators:
+//!
+//! - [`shade_regular`]: the regular half-vector patterns of 002 §5–7 (pseudo code
+//!   `EvaluateSpecularLobe`), with the weightings of [`Weighting`] (002 Eq. 17–18; 000 Eq. 4.24,
+//!   4.25) and per-sample MIP levels (002 Eq. 14–16). A straight loop that the GPU renderer mirrors
+//!   line by line.
+//! - [`shade_ck`]: Colbert & Křivánek (2007): Hammersley points through the importance warp
+//!   (002 Eq. 6–7), pdf Eq. 10, MIP level from the pdf ([`crate::mip::ck_level`]).
+//! - [`shade_reference`]: seeded Monte-Carlo importance sampling of any [`Bsdf`] on level 0
+//!   (bilinear), reflection and transmission, diffuse included (000 §4.4.2, Eq. 4.4).
+//! - [`Progressive`]: the same estimator with a QMC sequence (Sobol' (0,2)-sequence, per-pixel
+//!   Cranley–Patterson rotation) accumulating across calls — 000 §4.4.2's refinement while the
+//!   camera is still.
+//!
+//! Optionally a lookup is corrected by [`BoundingPlane`]s (000 §4.4.1, Fig. 4.5): the secondary
+//! ray from the shaded position is intersected with the planes and the cube map is read in the
+//! direction from the projection centre to the hit point.
+//!
+//! **Two-sided surfaces.** Like [`Kurt`]'s thin-surface convention, a viewer below the surface
+//! (wo·n < 0) is shaded with the frame flipped (n → −n, b → −b, so that b = n × t still holds):
+//! the diffuse term and reflection lobes then act on the lower side and transmission lobes carry
+//! light from the upper side. A viewer exactly in the tangent plane receives nothing.
+
+use crate::mip;
+use crate::pattern::{self, Pattern};
+use crate::{Result, ShadeError};
+use glam::DVec3;
+use lustre_brdf::bsdf::Bsdf;
+use lustre_brdf::frame::{basis, mirror_z, reflect};
+use lustre_brdf::models::kurt::{lobe_eval, lobe_pdf, lobe_sample_h, Kurt, KurtLobe, LobeKind};
+use lustre_brdf::rgb::Rgb;
+use lustre_brdf::sampling::{hammersley, radical_inverse2, SplitMix64};
+use lustre_env::{CubeMap, CubePyramid};
+
+/// The number of samples below which a [`shade_reference`] image is not called a reference
+/// (002 §8 uses "> 10000 samples").
+pub const REFERENCE_SAMPLES: usize = 10_000;
+
+/// An orthonormal shading frame in world space: tangent `t`, bitangent `b = n × t`, normal `n`.
+/// Local coordinates of a world vector w are (w·t, w·b, w·n), the lustre-brdf convention
+/// (normal +z, tangent +x).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingFrame {
+    /// Tangent (the anisotropy axis, local +x).
+    pub t: DVec3,
+    /// Bitangent, n × t (local +y).
+    pub b: DVec3,
+    /// Normal (local +z).
+    pub n: DVec3,
+}
+
+impl ShadingFrame {
+    /// The frame with normal `n` (normalized) and the tangent `t_hint` made orthogonal to it by
+    /// Gram–Schmidt. When `t_hint` is (nearly) parallel to `n`, zero or not finite, a tangent is
+    /// chosen by `lustre_brdf::frame::basis`; a zero or non-finite `n` is replaced by +y.
+    pub fn new(n: DVec3, t_hint: DVec3) -> Self {
+        let n = n.try_normalize().unwrap_or(DVec3::Y);
+        let t_perp = t_hint - n * n.dot(t_hint);
+        let t = if t_hint.is_finite() && t_perp.length() > 1e-9 * t_hint.length() {
+            t_perp.normalize()
+        } else {
+            basis(n).0
+        };
+        ShadingFrame {
+            t,
+            b: n.cross(t),
+            n,
+        }
+    }
+
+    /// World → local: (w·t, w·b, w·n).
+    #[inline]
+    pub fn to_local(&self, w: DVec3) -> DVec3 {
+        DVec3::new(w.dot(self.t), w.dot(self.b), w.dot(self.n))
+    }
+
+    /// Local → world: t·x + b·y + n·z.
+    #[inline]
+    pub fn to_world(&self, w: DVec3) -> DVec3 {
+        self.t * w.x + self.b * w.y + self.n * w.z
+    }
+
+    /// The frame of the other side: (t, −b, −n), still right-handed with b = n × t.
+    #[inline]
+    pub fn flipped(&self) -> Self {
+        ShadingFrame {
+            t: self.t,
+            b: -self.b,
+            n: -self.n,
+        }
+    }
+
+    /// The frame facing `wo` (flipped when wo·n < 0) and `wo` in it.
+    #[inline]
+    fn facing(&self, wo: DVec3) -> (ShadingFrame, DVec3) {
+        let f = if wo.dot(self.n) < 0.0 {
+            self.flipped()
+        } else {
+            *self
+        };
+        (f, f.to_local(wo))
+    }
+}
+
+/// The pre-filtered incident light: a cube-map MIP pyramid for the lobes and an irradiance map
+/// storing E(n)/π for the diffuse term (so that diffuse radiance = kd · lookup(n)).
+#[derive(Clone, Copy, Debug)]
+pub struct Environment<'a> {
+    /// The radiance pyramid (002 §3).
+    pub pyramid: &'a CubePyramid,
+    /// Irradiance over π, looked up bilinearly at the normal.
+    pub irradiance: &'a CubeMap,
+}
+
+/// A plane bounding the scene (000 §4.4.1): a secondary ray is intersected with it and the cube
+/// map is read towards the hit point instead of along the ray. Positions are in world space with
+/// the cube map's projection centre at the origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoundingPlane {
+    /// A point on the plane.
+    pub point: DVec3,
+    /// The plane's normal (any length > 0; normalized by [`BoundingPlane::new`]).
+    pub normal: DVec3,
+}
+
+impl BoundingPlane {
+    /// A plane through `point` with normal `normal`; an error unless both are finite and the
+    /// normal is non-zero.
+    pub fn new(point: DVec3, normal: DVec3) -> Result<Self> {
+        if !point.is_finite() {
+            return Err(ShadeError::Parameter(format!(
+                "bounding plane point {point} is not finite"
+            )));
+        }
+        let normal = normal.try_normalize().ok_or_else(|| {
+            ShadeError::Parameter(format!(
+                "bounding plane normal {normal} must be finite and non-zero"
+            ))
+        })?;
+        Ok(BoundingPlane { point, normal })
+    }
+
+    /// The ray parameter s > 0 where `pos + s·dir` meets the plane, or `None` when the ray is
+    /// parallel to the plane or points away from it.
+    pub fn intersect(&self, pos: DVec3, dir: DVec3) -> Option<f64> {
+        let denom = dir.dot(self.normal);
+        if denom.is_nan() || denom.abs() <= 1e-12 {
+            return None;
+        }
+        let s = (self.point - pos).dot(self.normal) / denom;
+        (s > 0.0 && s.is_finite()).then_some(s)
+    }
+
+    /// The corrected lookup direction (000 Fig. 4.5): the unit vector from the projection centre
+    /// (origin) to where the secondary ray `pos + s·dir` hits the plane; `dir` itself when it
+    /// misses or the hit point is the centre.
+    pub fn corrected_direction(&self, pos: DVec3, dir: DVec3) -> DVec3 {
+        self.intersect(pos, dir)
+            .and_then(|s| (pos + dir * s).try_normalize())
+            .unwrap_or(dir)
+    }
+}
+
+/// The lookup direction for a secondary ray from `pos` along `dir` with several bounding planes:
+/// the nearest hit wins (000 §4.4.1); `dir` when no plane is hit.
+pub fn corrected_direction(planes: &[BoundingPlane], pos: DVec3, dir: DVec3) -> DVec3 {
+    let mut best: Option<(f64, &BoundingPlane)> = None;
+    for p in planes {
+        if let Some(s) = p.intersect(pos, dir) {
+            if best.is_none_or(|(b, _)| s < b) {
+                best = Some((s, p));
+            }
+        }
+    }
+    match best {
+        Some((s, _)) => (pos + dir * s).try_normalize().unwrap_or(dir),
+        None => dir,
+    }
+}
+
+/// Where the lookups of one pixel happen when bounding planes correct them: the shaded position
+/// (relative to the projection centre) and the planes.
+#[derive(Clone, Copy, Debug)]
+pub struct Lookup<'a> {
+    /// The shaded point, world space, projection centre at the origin.
+    pub position: DVec3,
+    /// The bounding planes ([`corrected_direction`]).
+    pub planes: &'a [BoundingPlane],
+}
+
+/// Radiance from `env` along the world direction `wi` at MIP level `lod`, through the optional
+/// bounding-plane correction.
+#[inline]
+fn incident(env: &Environment, lookup: Option<&Lookup>, wi: DVec3, lod: f64) -> Rgb {
+    let d = match lookup {
+        Some(l) => corrected_direction(l.planes, l.position, wi),
+        None => wi,
+    };
+    Rgb(env.pyramid.sample(d, lod))
+}
+
+/// Diffuse radiance kd · E(n)/π (000 Eq. 3.6's kd/π term integrated against the irradiance map).
+#[inline]
+fn diffuse(kd: Rgb, env: &Environment, n: DVec3) -> Rgb {
+    kd * Rgb(env.irradiance.bilinear(n))
+}
+
+/// How the regular samples of one lobe are weighted.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Weighting {
+    /// 002 Eq. 17–18 and the pseudo code: pdf_i = p_h / (4 h·ωi) with the constant
+    /// p_h = mean D(h) over the pattern; L = (1/n) Σ L_i f_i cos θi / pdf_i.
+    Pdf002,
+    /// 000 Eq. 4.24: L = Σ L_i cos²θi f_i / Σ p_i cos θi, p the importance pdf (Eq. 4.9).
+    Thesis424,
+    /// 000 Eq. 4.25: L = Σ L_i cos²θi f_i²/p_i / Σ f_i cos θi.
+    Thesis425,
+}
+
+/// The regular pattern of one Kurt lobe.
+#[derive(Clone, Debug)]
+pub struct LobePlan {
+    /// Half vectors in the lobe's local frame and the pdf constant (002 §5, Eq. 18).
+    pub pattern: Pattern,
+}
+
+/// A Kurt material with one regular pattern per lobe, built once and reused at every pixel.
+#[derive(Clone, Debug)]
+pub struct MaterialPlan {
+    /// The material.
+    pub kurt: Kurt,
+    /// One plan per reflection lobe, in the order of `kurt.reflection`.
+    pub reflection: Vec<LobePlan>,
+    /// One plan per transmission lobe, in the order of `kurt.transmission`.
+    pub transmission: Vec<LobePlan>,
+}
+
+/// Builds the regular patterns of every lobe: `pattern::concentric_for_budget(mx, my, budget,
+/// xi0)` (002 §5: the concentric pattern closest to the budget). Errors: an invalid material
+/// (negative or non-finite roughness, ks, kd, r0 or α out of range), a zero budget, or ξ0
+/// outside (0, 1).
+pub fn plan_regular(kurt: &Kurt, budget_per_lobe: usize, xi0: f64) -> Result<MaterialPlan> {
+    if !(xi0 > 0.0 && xi0 < 1.0) {
+        return Err(ShadeError::Parameter(format!(
+            "xi0 = {xi0}: the pattern border must lie in (0, 1)"
+        )));
+    }
+    plan_with(kurt, budget_per_lobe, |l| {
+        pattern::concentric_for_budget(l.mx, l.my, budget_per_lobe, xi0)
+    })
+}
+
+/// Builds the thesis patterns of every lobe (`pattern::thesis`, 000 §4.4.3: centre + ring, or a
+/// line along the major axis when strongly anisotropic), the patterns 000 Eq. 4.24–4.25 were
+/// designed for. Errors as [`plan_regular`].
+pub fn plan_thesis(kurt: &Kurt, budget_per_lobe: usize) -> Result<MaterialPlan> {
+    plan_with(kurt, budget_per_lobe, |l| {
+        pattern::thesis(l.mx, l.my, budget_per_lobe)
+    })
+}
+
+/// Validates the material and the budget, then builds one pattern per lobe with `make`.
+fn plan_with(
+    kurt: &Kurt,
+    budget_per_lobe: usize,
+    make: impl Fn(&KurtLobe) -> Result<Pattern>,
+) -> Result<MaterialPlan> {
+    kurt.validate()?;
+    if budget_per_lobe == 0 {
+        return Err(ShadeError::Parameter(
+            "sample budget per lobe must be at least 1".into(),
+        ));
+    }
+    let plan = |lobes: &[KurtLobe]| -> Result<Vec<LobePlan>> {
+        lobes
+            .iter()
+            .map(|l| Ok(LobePlan { pattern: make(l)? }))
+            .collect()
+    };
+    Ok(MaterialPlan {
+        kurt: kurt.clone(),
+        reflection: plan(&kurt.reflection)?,
+        transmission: plan(&kurt.transmission)?,
+    })
+}
+
+/// Regular sampling (002 §5–7): diffuse = kd · irradiance(n) plus, per lobe, the pseudo code
+/// `EvaluateSpecularLobe` with the weighting `w`. See [`shade_regular_with`].
+pub fn shade_regular(
+    f: &ShadingFrame,
+    wo: DVec3,
+    plan: &MaterialPlan,
+    env: &Environment,
+    w: Weighting,
+) -> Rgb {
+    shade_regular_with(f, wo, plan, env, w, None)
+}
+
+/// [`shade_regular`] with optional bounding-plane lookups. `wo` is the world direction to the
+/// viewer. Per lobe (the GPU renderer mirrors this loop):
+///
+/// 1. A = π u v, the lobe's cross-section at unit distance (002 Eq. 14–15, [`mip::lobe_area`]).
+/// 2. For each pattern half vector h (lobe-local = shading-local frame): ωi = 2(ωo·h)h − ωo
+///    (the pseudo code's `reflect(−ωo, h)`, 000 Eq. 4.8). For a transmission lobe the light
+///    comes from ωi mirrored through the tangent plane (000 Eq. 3.5–3.6) and the lobe is
+///    evaluated on the mirrored pair, as [`lobe_eval`] with [`LobeKind::Transmission`] expects.
+///    Samples with ωi below the horizon are skipped (they still count in n for [`Weighting::Pdf002`]).
+/// 3. level = [`mip::regular_level`] (002 Eq. 16), L = pyramid lookup at that level.
+/// 4. f = [`lobe_eval`] (002 Eq. 2 with Eq. 3–5), weighted by `w`.
+pub fn shade_regular_with(
+    f: &ShadingFrame,
+    wo: DVec3,
+    plan: &MaterialPlan,
+    env: &Environment,
+    w: Weighting,
+    lookup: Option<&Lookup>,
+) -> Rgb {
+    let (frame, wo_l) = f.facing(wo);
+    if wo_l.z.is_nan() || wo_l.z <= 0.0 {
+        return Rgb::ZERO;
+    }
+    let k = &plan.kurt;
+    let mut out = diffuse(k.kd, env, frame.n);
+    let lobes = k
+        .reflection
+        .iter()
+        .zip(&plan.reflection)
+        .map(|(l, p)| (l, p, LobeKind::Reflection))
+        .chain(
+            k.transmission
+                .iter()
+                .zip(&plan.transmission)
+                .map(|(l, p)| (l, p, LobeKind::Transmission)),
+        );
+    for (lobe, lp, kind) in lobes {
+        let px = Pixel {
+            frame,
+            wo_l,
+            env,
+            lookup,
+        };
+        out += regular_lobe(&px, lobe, kind, &lp.pattern, w);
+    }
+    out
+}
+
+/// What one pixel's lobes share: the frame facing the viewer, ωo in it (above the surface), the
+/// light and the optional lookup correction.
+struct Pixel<'a> {
+    frame: ShadingFrame,
+    wo_l: DVec3,
+    env: &'a Environment<'a>,
+    lookup: Option<&'a Lookup<'a>>,
+}
+
+/// One lobe of [`shade_regular_with`].
+fn regular_lobe(
+    px: &Pixel,
+    lobe: &KurtLobe,
+    kind: LobeKind,
+    pattern: &Pattern,
+    w: Weighting,
+) -> Rgb {
+    let Pixel {
+        frame,
+        wo_l,
+        env,
+        lookup,
+    } = *px;
+    let n = pattern.h.len();
+    if n == 0 {
+        return Rgb::ZERO;
+    }
+    // The lobe shape without its colour: Eq. 4.25 squares f, so ks is applied once at the end
+    // (as the pseudo code's `SpecularCoefficient * brdfSum`).
+    let unit = KurtLobe {
+        ks: Rgb::ONE,
+        ..*lobe
+    };
+    let face = env.pyramid.base_size();
+    // 002 Eq. 14–15: A = π u v.
+    let area = mip::lobe_area(lobe.mx, lobe.my, pattern.xi0, wo_l);
+    let mut sum = Rgb::ZERO;
+    let mut weight_sum = 0.0;
+    for &h in &pattern.h {
+        let ho = wo_l.dot(h); // ωo·h = ωi·h
+        if ho.is_nan() || ho <= 0.0 {
+            continue;
+        }
+        let r = reflect(wo_l, h); // 000 Eq. 4.8
+        let cos_i = r.z;
+        if cos_i.is_nan() || cos_i <= 0.0 {
+            continue;
+        }
+        let wi_l = match kind {
+            LobeKind::Reflection => r,
+            LobeKind::Transmission => mirror_z(r), // 000 Eq. 3.5: the thin-BTDF's direction
+        };
+        let wi = frame.to_world(wi_l);
+        let level = mip::regular_level(area, n, wi, ho, face); // 002 Eq. 16
+        let li = incident(env, lookup, wi, level);
+        let g = lobe_eval(&unit, kind, r, wo_l)[0]; // 002 Eq. 2
+        match w {
+            Weighting::Pdf002 => {
+                // 002 Eq. 17–18: p_o = p_h / (4 h·ωi).
+                let pdf = pattern.pdf_constant / (4.0 * ho);
+                if pdf > 0.0 {
+                    sum += li * (g * cos_i / pdf); // 002 Eq. 9, inner sum
+                }
+            }
+            Weighting::Thesis424 => {
+                let p = lobe_pdf(&unit, r, wo_l); // 000 Eq. 4.9
+                sum += li * (cos_i * cos_i * g);
+                weight_sum += p * cos_i;
+            }
+            Weighting::Thesis425 => {
+                let p = lobe_pdf(&unit, r, wo_l);
+                if p > 0.0 {
+                    sum += li * (cos_i * cos_i * g * g / p);
+                    weight_sum += g * cos_i;
+                }
+            }
+        }
+    }
+    let scale = match w {
+        Weighting::Pdf002 => 1.0 / n as f64,
+        Weighting::Thesis424 | Weighting::Thesis425 => {
+            if weight_sum > 0.0 {
+                1.0 / weight_sum
+            } else {
+                0.0
+            }
+        }
+    };
+    lobe.ks * sum * scale
+}
+
+/// Colbert & Křivánek (2007) filtered importance sampling with [`Kurt`] lobes. See
+/// [`shade_ck_with`].
+pub fn shade_ck(
+    f: &ShadingFrame,
+    wo: DVec3,
+    kurt: &Kurt,
+    n_samples: usize,
+    env: &Environment,
+) -> Rgb {
+    shade_ck_with(f, wo, kurt, n_samples, env, None)
+}
+
+/// [`shade_ck`] with optional bounding-plane lookups. Diffuse = kd · irradiance(n). **Per-lobe
+/// budgets**: every lobe (reflection and transmission) receives its own `n_samples` Hammersley
+/// points (u1, u2) — the same per-lobe budget as [`plan_regular`]'s — warped to half vectors by
+/// [`lobe_sample_h`] (002 Eq. 6–7), reflected (000 Eq. 4.8; mirrored for transmission), and
+/// weighted by f cos θi / p with p from 002 Eq. 10 ([`lobe_pdf`]); each is looked up at
+/// [`mip::ck_level`]`(p, n_samples, face)`. Samples below the horizon contribute zero but count.
+/// `n_samples = 0` leaves the diffuse term only.
+pub fn shade_ck_with(
+    f: &ShadingFrame,
+    wo: DVec3,
+    kurt: &Kurt,
+    n_samples: usize,
+    env: &Environment,
+    lookup: Option<&Lookup>,
+) -> Rgb {
+    let (frame, wo_l) = f.facing(wo);
+    if wo_l.z.is_nan() || wo_l.z <= 0.0 {
+        return Rgb::ZERO;
+    }
+    let mut out = diffuse(kurt.kd, env, frame.n);
+    if n_samples == 0 {
+        return out;
+    }
+    let face = env.pyramid.base_size();
+    let lobes = kurt
+        .reflection
+        .iter()
+        .map(|l| (l, LobeKind::Reflection))
+        .chain(
+            kurt.transmission
+                .iter()
+                .map(|l| (l, LobeKind::Transmission)),
+        );
+    let n = n_samples.min(u32::MAX as usize) as u32;
+    for (lobe, kind) in lobes {
+        let mut sum = Rgb::ZERO;
+        for k in 0..n {
+            let (u1, u2) = hammersley(k, n);
+            let h = lobe_sample_h(lobe, u1, u2); // 002 Eq. 6–7
+            let ho = wo_l.dot(h);
+            if ho.is_nan() || ho <= 0.0 {
+                continue;
+            }
+            let r = reflect(wo_l, h);
+            if r.z.is_nan() || r.z <= 0.0 {
+                continue;
+            }
+            let pdf = lobe_pdf(lobe, r, wo_l); // 002 Eq. 10
+            if !(pdf > 0.0 && pdf.is_finite()) {
+                continue;
+            }
+            let wi_l = match kind {
+                LobeKind::Reflection => r,
+                LobeKind::Transmission => mirror_z(r),
+            };
+            let wi = frame.to_world(wi_l);
+            let li = incident(env, lookup, wi, mip::ck_level(pdf, n as usize, face));
+            sum += li * lobe_eval(lobe, kind, r, wo_l) * (r.z / pdf); // 002 Eq. 9
+        }
+        out += sum / n as f64;
+    }
+    out
+}
+
+/// Monte-Carlo reference (000 Eq. 4.4 with the BSDF's own importance sampling): `n_samples`
+/// directions from [`Bsdf::sample`] driven by [`SplitMix64`]`(seed)`, each weighted by
+/// f |cos θi| / p and lit by the pyramid's level 0 (bilinear). Diffuse, reflection and
+/// transmission all come through the sampler. `n_samples = 0` gives black. A reference image
+/// uses at least [`REFERENCE_SAMPLES`].
+pub fn shade_reference(
+    f: &ShadingFrame,
+    wo: DVec3,
+    bsdf: &dyn Bsdf,
+    env: &Environment,
+    n_samples: usize,
+    seed: u64,
+) -> Rgb {
+    shade_reference_with(f, wo, bsdf, env, n_samples, seed, None)
+}
+
+/// [`shade_reference`] with optional bounding-plane lookups.
+pub fn shade_reference_with(
+    f: &ShadingFrame,
+    wo: DVec3,
+    bsdf: &dyn Bsdf,
+    env: &Environment,
+    n_samples: usize,
+    seed: u64,
+    lookup: Option<&Lookup>,
+) -> Rgb {
+    if n_samples == 0 {
+        return Rgb::ZERO;
+    }
+    let wo_l = f.to_local(wo);
+    let mut rng = SplitMix64::new(seed);
+    let mut sum = Rgb::ZERO;
+    for _ in 0..n_samples {
+        let (u1, u2) = (rng.next_f64(), rng.next_f64());
+        sum += reference_sample(f, wo_l, bsdf, env, lookup, u1, u2);
+    }
+    sum / n_samples as f64
+}
+
+/// One term L(ωi) f |cos θi| / p of the importance-sampled estimator, level 0.
+#[inline]
+fn reference_sample(
+    f: &ShadingFrame,
+    wo_l: DVec3,
+    bsdf: &dyn Bsdf,
+    env: &Environment,
+    lookup: Option<&Lookup>,
+    u1: f64,
+    u2: f64,
+) -> Rgb {
+    match bsdf.sample(wo_l, u1, u2) {
+        Some(s) => {
+            let wt = s.weight();
+            if wt.is_finite() {
+                incident(env, lookup, f.to_world(s.wi), 0.0) * wt
+            } else {
+                Rgb::ZERO
+            }
+        }
+        None => Rgb::ZERO,
+    }
+}
+
+/// The i-th point of the Sobol' (0,2)-sequence in [0, 1)²: the base-2 radical inverse and the
+/// second Sobol' dimension (generator matrix = Pascal's triangle mod 2). Any prefix of 2^m points
+/// is a (0, m, 2)-net, so the sequence can be extended sample by sample.
+#[inline]
+pub fn sobol02(i: u32) -> (f64, f64) {
+    let mut r = 0u32;
+    let mut v = 1u32 << 31;
+    let mut k = i;
+    while k != 0 {
+        if k & 1 != 0 {
+            r ^= v;
+        }
+        k >>= 1;
+        v ^= v >> 1;
+    }
+    (radical_inverse2(i), r as f64 * (1.0 / 4_294_967_296.0))
+}
+
+/// A seed for pixel (x, y) of an image rendered with `seed` (decorrelates neighbouring pixels).
+pub fn pixel_seed(x: usize, y: usize, seed: u64) -> u64 {
+    let mut g = SplitMix64::new(seed ^ ((x as u64) << 32 | (y as u64 & 0xffff_ffff)));
+    g.next_u64()
+}
+
+/// Progressive QMC refinement of one pixel (000 §4.4.2: with a still camera the image converges
+/// towards the reference over frames). Sample i uses the i-th [`sobol02`] point shifted by this
+/// pixel's Cranley–Patterson rotation, pushed through [`Bsdf::sample`], lit at level 0. Calls
+/// accumulate: after k calls of n samples the estimate equals [`shade_qmc`] with k·n samples.
+/// The sequence index wraps after 2³² samples.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Progressive {
+    rotation: (f64, f64),
+    sum: Rgb,
+    count: usize,
+}
+
+impl Progressive {
+    /// An empty accumulator whose rotation is drawn from [`SplitMix64`]`(seed)`; use
+    /// [`pixel_seed`] for per-pixel seeds.
+    pub fn new(seed: u64) -> Self {
+        let mut g = SplitMix64::new(seed);
+        Progressive {
+            rotation: (g.next_f64(), g.next_f64()),
+            sum: Rgb::ZERO,
+            count: 0,
+        }
+    }
+
+    /// Adds `n` samples (the next `n` points of the sequence) for this pixel's configuration.
+    pub fn add_samples(
+        &mut self,
+        f: &ShadingFrame,
+        wo: DVec3,
+        bsdf: &dyn Bsdf,
+        env: &Environment,
+        n: usize,
+    ) {
+        let wo_l = f.to_local(wo);
+        let (r1, r2) = self.rotation;
+        for i in self.count..self.count + n {
+            let (a, b) = sobol02(i as u32);
+            let (u1, u2) = ((a + r1).fract(), (b + r2).fract());
+            self.sum += reference_sample(f, wo_l, bsdf, env, None, u1, u2);
+        }
+        self.count += n;
+    }
+
+    /// The current estimate (black before the first sample).
+    pub fn estimate(&self) -> Rgb {
+        if self.count == 0 {
+            Rgb::ZERO
+        } else {
+            self.sum / self.count as f64
+        }
+    }
+
+    /// Samples accumulated so far.
+    pub fn samples(&self) -> usize {
+        self.count
+    }
+
+    /// Forgets all samples (the camera moved); the rotation is kept.
+    pub fn reset(&mut self) {
+        self.sum = Rgb::ZERO;
+        self.count = 0;
+    }
+}
+
+/// One-shot QMC estimate with `n` samples: the same as a fresh [`Progressive::new`]`(seed)` fed
+/// `n` samples at once.
+pub fn shade_qmc(
+    f: &ShadingFrame,
+    wo: DVec3,
+    bsdf: &dyn Bsdf,
+    env: &Environment,
+    n: usize,
+    seed: u64,
+) -> Rgb {
+    let mut p = Progressive::new(seed);
+    p.add_samples(f, wo, bsdf, env, n);
+    p.estimate()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_is_orthonormal_and_round_trips() {
+        for (n, t) in [
+            (DVec3::Y, DVec3::X),
+            (DVec3::new(0.3, -0.5, 0.8), DVec3::new(1.0, 2.0, 0.0)),
+            (DVec3::Z, DVec3::Z),    // degenerate hint
+            (DVec3::X, DVec3::ZERO), // zero hint
+            (DVec3::ZERO, DVec3::X), // zero normal → +y
+            (DVec3::new(0.0, 0.0, -2.0), DVec3::new(f64::NAN, 0.0, 0.0)),
+        ] {
+            let f = ShadingFrame::new(n, t);
+            assert!((f.t.length() - 1.0).abs() < 1e-12, "{f:?}");
+            assert!((f.n.length() - 1.0).abs() < 1e-12, "{f:?}");
+            assert!(f.t.dot(f.n).abs() < 1e-12, "{f:?}");
+            assert!((f.b - f.n.cross(f.t)).length() < 1e-12, "{f:?}");
+            let w = DVec3::new(0.2, -0.7, 0.4);
+            assert!((f.to_world(f.to_local(w)) - w).length() < 1e-12);
+            let g = f.flipped();
+            assert!((g.b - g.n.cross(g.t)).length() < 1e-12);
+        }
+        let f = ShadingFrame::new(DVec3::Y, DVec3::new(1.0, 5.0, 0.0));
+        assert!((f.t - DVec3::X).length() < 1e-12);
+        assert!((f.b - DVec3::new(0.0, 0.0, -1.0)).length() < 1e-12);
+    }
+
+    #[test]
+    fn sobol_prefix_is_a_net() {
+        // Every 2^m prefix is a (0, m, 2)-net: each of the 2^m elementary intervals of shape
+        // 2^-a × 2^-(m-a) holds exactly one point.
+        let m = 6;
+        let n = 1u32 << m;
+        for a in 0..=m {
+            let mut seen = vec![false; n as usize];
+            for i in 0..n {
+                let (x, y) = sobol02(i);
+                let cx = (x * (1u32 << a) as f64) as usize;
+                let cy = (y * (1u32 << (m - a)) as f64) as usize;
+                let cell = cx * (1usize << (m - a)) + cy;
+                assert!(!seen[cell], "a = {a}, point {i} shares a cell");
+                seen[cell] = true;
+            }
+        }
+    }
+
+    #[test]
+    fn bounding_plane_by_hand() {
+        // Floor y = −1; a ray from (1, 0, 0) straight down hits (1, −1, 0).
+        let floor = BoundingPlane::new(DVec3::new(0.0, -1.0, 0.0), DVec3::new(0.0, 3.0, 0.0))
+            .expect("valid plane");
+        let pos = DVec3::new(1.0, 0.0, 0.0);
+        let d = floor.corrected_direction(pos, -DVec3::Y);
+        assert!(
+            (d - DVec3::new(1.0, -1.0, 0.0).normalize()).length() < 1e-12,
+            "{d}"
+        );
+        // Upwards it misses: the direction is unchanged.
+        assert_eq!(floor.corrected_direction(pos, DVec3::Y), DVec3::Y);
+        // With a ceiling at y = 2 the upward ray hits (1, 2, 0); downward still the floor.
+        let ceiling = BoundingPlane::new(DVec3::new(0.0, 2.0, 0.0), -DVec3::Y).expect("valid");
+        let planes = [floor, ceiling];
+        let up = corrected_direction(&planes, pos, DVec3::Y);
+        assert!((up - DVec3::new(1.0, 2.0, 0.0).normalize()).length() < 1e-12);
+        let dn = corrected_direction(&planes, pos, -DVec3::Y);
+        assert!((dn - d).length() < 1e-12);
+        // At the projection centre the correction is the identity.
+        let w = DVec3::new(0.3, -0.8, 0.1).normalize();
+        assert!((corrected_direction(&planes, DVec3::ZERO, w) - w).length() < 1e-12);
+        assert!(BoundingPlane::new(DVec3::ZERO, DVec3::ZERO).is_err());
+        assert!(BoundingPlane::new(DVec3::splat(f64::NAN), DVec3::Y).is_err());
+    }
+}

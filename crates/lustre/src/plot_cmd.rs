@@ -1,9 +1,11 @@
 //! `lustre plot`: lobe plots in the plane of incidence and transfer-probability arrays
-//! (000 Fig. 2.6, 3.11, 3.12; 004 Fig. V.11) for materials named by catalog specs.
+//! (000 Fig. 2.6, 3.11, 3.12; 004 Fig. V.11) for materials named by catalog specs, and with
+//! `--pattern` the regular half-vector sample patterns of one lobe (002 Fig. 4–5, 000 Fig. 4.17).
 
 use anyhow::{bail, Context, Result};
 use lustre_brdf::{catalog, Bsdf};
 use lustre_plot::{ArrayColor, ArrayOptions, Channels, PolarOptions, Quantity};
+use lustre_shade::pattern::{self, PatternKind, Spacing};
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
@@ -28,6 +30,20 @@ pub enum PlotQuantity {
     Transfer,
     /// f, the BSDF value in 1/sr.
     Bsdf,
+}
+
+/// Which regular sample pattern `--pattern` draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum PatternChoice {
+    /// 002 §5 concentric circles: one panel per spacing (s1, s2), each with the circle count
+    /// closest to `--budget` (or `--circles`), plus the overall choice for the budget.
+    Concentric,
+    /// 000 §4.4.3: centre + ring, or the linear pattern for strong anisotropy.
+    Thesis,
+    /// 000 §4.5.3: centre + `--rings` rings.
+    MultiRing,
+    /// All of the above.
+    All,
 }
 
 /// Arguments of `lustre plot`.
@@ -88,11 +104,35 @@ pub struct PlotArgs {
     /// Output folder (created if missing).
     #[arg(long, default_value = "lustre-plots")]
     pub out: PathBuf,
+    /// Draw a regular half-vector sample pattern of one lobe instead of material plots.
+    #[arg(long, value_enum)]
+    pub pattern: Option<PatternChoice>,
+    /// Pattern lobe roughness along the tangent.
+    #[arg(long, default_value_t = 0.2)]
+    pub mx: f64,
+    /// Pattern lobe roughness along the bitangent.
+    #[arg(long, default_value_t = 0.075)]
+    pub my: f64,
+    /// Pattern sample budget.
+    #[arg(long, default_value_t = 17)]
+    pub budget: usize,
+    /// Pattern threshold ξ0 of 002 §5 (the concentric patterns).
+    #[arg(long, default_value_t = 0.1)]
+    pub xi0: f64,
+    /// Concentric patterns: this many circles nc instead of the count closest to the budget.
+    #[arg(long)]
+    pub circles: Option<usize>,
+    /// Multi-ring pattern: the number of rings (the budget less the centre is spread over them).
+    #[arg(long, default_value_t = 3)]
+    pub rings: usize,
 }
 
 /// Runs `lustre plot`: resolves the specs, draws the requested figures into `--out` and prints
 /// the path of every file written.
 pub fn run(args: &PlotArgs) -> Result<()> {
+    if let Some(choice) = args.pattern {
+        return run_pattern(args, choice);
+    }
     let specs: Vec<String> = if args.specs.is_empty() {
         vec![DEFAULT_SPEC.to_string()]
     } else {
@@ -199,6 +239,105 @@ pub fn run(args: &PlotArgs) -> Result<()> {
     Ok(())
 }
 
+/// A plot panel of a pattern.
+fn panel(title: String, p: &pattern::Pattern) -> lustre_plot::PatternPanel {
+    lustre_plot::PatternPanel {
+        title: format!("{title}: {} samples", p.h.len()),
+        h: p.h.clone(),
+        mx: p.mx,
+        my: p.my,
+        xi0: p.xi0,
+    }
+}
+
+/// The panels of a concentric-pattern plot: s1 and s2 with `--circles` circles, or each with the
+/// circle count closest to the budget followed by the overall pick for the budget.
+fn concentric_panels(args: &PlotArgs) -> Result<Vec<lustre_plot::PatternPanel>> {
+    let (mx, my, xi0) = (args.mx, args.my, args.xi0);
+    let mut panels = Vec::new();
+    for (spacing, name) in [(Spacing::S1, "s1"), (Spacing::S2, "s2")] {
+        let p = match args.circles {
+            Some(nc) => pattern::concentric(mx, my, nc, spacing, xi0)?,
+            None => {
+                let mut best: Option<pattern::Pattern> = None;
+                for nc in 1..=pattern::MAX_CIRCLES {
+                    let p = pattern::concentric(mx, my, nc, spacing, xi0)?;
+                    let n = p.h.len();
+                    if best
+                        .as_ref()
+                        .is_none_or(|b| n.abs_diff(args.budget) < b.h.len().abs_diff(args.budget))
+                    {
+                        best = Some(p);
+                    }
+                    if n > args.budget {
+                        break;
+                    }
+                }
+                best.context("no concentric pattern")?
+            }
+        };
+        let nc = match p.kind {
+            PatternKind::Concentric { circles, .. } => circles,
+            _ => 0,
+        };
+        panels.push(panel(format!("{name}, nc = {nc}"), &p));
+    }
+    if args.circles.is_none() {
+        let p = pattern::concentric_for_budget(mx, my, args.budget, xi0)?;
+        panels.push(panel(format!("closest to budget {}", args.budget), &p));
+    }
+    Ok(panels)
+}
+
+/// `lustre plot --pattern`: draws the chosen patterns for the lobe (`--mx`, `--my`) into `--out`.
+fn run_pattern(args: &PlotArgs, choice: PatternChoice) -> Result<()> {
+    let (mx, my) = (args.mx, args.my);
+    if args.budget == 0 {
+        bail!("--budget must be at least 1");
+    }
+    let mut panels = Vec::new();
+    if matches!(choice, PatternChoice::Concentric | PatternChoice::All) {
+        panels.extend(concentric_panels(args).context("--pattern concentric")?);
+    }
+    if matches!(choice, PatternChoice::Thesis | PatternChoice::All) {
+        let p = pattern::thesis(mx, my, args.budget).context("--pattern thesis")?;
+        let name = match p.kind {
+            PatternKind::ThesisLinear => "thesis, linear",
+            _ => "thesis, ring",
+        };
+        panels.push(panel(name.into(), &p));
+    }
+    if matches!(choice, PatternChoice::MultiRing | PatternChoice::All) {
+        let per_ring = (args.budget.saturating_sub(1) / args.rings.max(1)).max(1);
+        let p =
+            pattern::multi_ring(mx, my, args.rings, per_ring).context("--pattern multi-ring")?;
+        panels.push(panel(
+            format!("multi-ring, {} × {per_ring}", args.rings),
+            &p,
+        ));
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create the output folder {}", args.out.display()))?;
+    let opts = lustre_plot::PatternOptions {
+        title: format!(
+            "Half-vector patterns: mx = {mx}, my = {my}, ξ0 = {}, budget {}",
+            args.xi0, args.budget
+        ),
+        ..lustre_plot::PatternOptions::default()
+    };
+    let stem = format!(
+        "pattern-{}-mx{mx}-my{my}-n{}",
+        format!("{choice:?}").to_lowercase(),
+        args.budget
+    );
+    let files = lustre_plot::pattern_plot(&panels, &opts, &args.out.join(slug(&stem)))
+        .with_context(|| format!("drawing the pattern plot into {}", args.out.display()))?;
+    for p in files.paths() {
+        println!("{}", p.display());
+    }
+    Ok(())
+}
+
 /// Resolves a spec with a message that names it and a few known materials.
 fn resolve(spec: &str) -> Result<Box<dyn Bsdf>> {
     if spec.trim().is_empty() {
@@ -296,6 +435,13 @@ mod tests {
             array_phi: vec![0.0],
             disc_px: 32,
             out,
+            pattern: None,
+            mx: 0.2,
+            my: 0.075,
+            budget: 17,
+            xi0: 0.1,
+            circles: None,
+            rings: 3,
         };
         let dir = std::env::temp_dir().join(format!("lustre-plot-cmd-{}", std::process::id()));
         let e = run(&args(vec!["no-such-material-xyz".into()], dir.clone())).unwrap_err();
@@ -306,6 +452,53 @@ mod tests {
         let e = run(&args(vec![DEFAULT_SPEC.into()], file.join("sub"))).unwrap_err();
         assert!(format!("{e:#}").contains("output folder"), "{e:#}");
         std::fs::remove_file(&file).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn pattern_plots_are_written_and_bad_lobes_rejected() {
+        let dir = std::env::temp_dir().join(format!("lustre-plot-pattern-{}", std::process::id()));
+        let mut args = PlotArgs {
+            specs: vec![],
+            compare: None,
+            kind: PlotKind::All,
+            theta_i: vec![30.0],
+            phi_i: 0.0,
+            cube_root: false,
+            quantity: PlotQuantity::Transfer,
+            rgb: false,
+            colormap: false,
+            array_theta: vec![0.0],
+            array_phi: vec![0.0],
+            disc_px: 32,
+            out: dir.clone(),
+            pattern: Some(PatternChoice::All),
+            mx: 0.2,
+            my: 0.075,
+            budget: 17,
+            xi0: 0.1,
+            circles: None,
+            rings: 3,
+        };
+        run(&args).unwrap();
+        let names: Vec<String> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert!(names.iter().any(|n| n.ends_with(".png")), "{names:?}");
+        assert!(names.iter().any(|n| n.ends_with(".svg")), "{names:?}");
+        // Fig. 4 panels with a fixed circle count.
+        let panels = {
+            args.circles = Some(3);
+            args.mx = 0.2;
+            args.my = 0.2;
+            concentric_panels(&args).unwrap()
+        };
+        assert_eq!(panels[0].h.len(), 19);
+        assert_eq!(panels[1].h.len(), 30);
+        args.mx = -1.0;
+        let e = run(&args).unwrap_err();
+        assert!(format!("{e:#}").contains("mx"), "{e:#}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -1,0 +1,32 @@
+//! Timing of one SGD fit and one `metrics::evaluate` on an NBRDF material.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use lustre_fit::ct::{fit, CtOptions, Distribution};
+use lustre_fit::metrics::evaluate;
+use std::hint::black_box;
+
+fn bench(c: &mut Criterion) {
+    let data = match lustre_fit::data::load("nbrdf:gold-metallic-paint") {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("skipping the fit benchmarks: {e}");
+            return;
+        }
+    };
+    let d = data.bsdf.as_ref();
+    let mut g = c.benchmark_group("ct");
+    g.sample_size(10);
+    g.bench_function("sgd_fit", |b| {
+        b.iter(|| fit(black_box(d), Distribution::Sgd, &CtOptions::default()))
+    });
+    let Ok(model) = lustre_brdf::fits::sgd::load("gold-metallic-paint") else {
+        return;
+    };
+    g.bench_function("evaluate", |b| {
+        b.iter(|| evaluate(black_box(d), black_box(&model), false))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,1 +1,0 @@
-//! Kurt et al. hierarchical fitting (000 §3.4.1).

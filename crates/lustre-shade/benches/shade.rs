@@ -1,0 +1,118 @@
+//! CPU shading throughput: `shade_regular` at budgets 14/17/30 per lobe, `shade_ck`, and the
+//! reference per sample. Each iteration shades 64 pixel configurations (throughput in elements
+//! = calls, or samples for the reference).
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use glam::DVec3;
+use lustre_brdf::models::kurt::{Kurt, KurtLobe};
+use lustre_brdf::rgb::Rgb;
+use lustre_env::{CubeMap, CubePyramid, MipFilter};
+use lustre_shade::kernel::{
+    plan_regular, shade_ck, shade_reference, shade_regular, Environment, ShadingFrame, Weighting,
+};
+use std::hint::black_box;
+
+const PIXELS: usize = 64;
+
+/// E(n)/π by brute-force cosine convolution of the pyramid's 16² level (a stand-in with the
+/// contract's meaning of `lustre_env::irradiance_map`, which had not landed when this was written).
+fn irradiance(p: &CubePyramid, size: usize) -> CubeMap {
+    let lvl = p
+        .levels
+        .iter()
+        .find(|l| l.size <= 16)
+        .expect("the pyramid reaches 1×1");
+    let mut texels = Vec::new();
+    for (face, data) in lvl.faces.iter().enumerate() {
+        for j in 0..lvl.size {
+            for i in 0..lvl.size {
+                let d = CubeMap::texel_dir(lvl.size, face, i, j);
+                let w = CubeMap::texel_solid_angle(lvl.size, i, j);
+                texels.push((d, w, data[j * lvl.size + i]));
+            }
+        }
+    }
+    CubeMap::from_fn(size, |n| {
+        let mut e = [0.0; 3];
+        for (d, w, c) in &texels {
+            let ct = d.dot(n);
+            if ct > 0.0 {
+                for k in 0..3 {
+                    e[k] += c[k] as f64 * ct * w;
+                }
+            }
+        }
+        e.map(|v| v / std::f64::consts::PI)
+    })
+    .expect("irradiance map")
+}
+
+fn setup() -> (CubePyramid, CubeMap, Kurt, Vec<(ShadingFrame, DVec3)>) {
+    let base = CubeMap::from_fn(128, |d| {
+        let s = (8.0 * d.x).sin() * (5.0 * d.z).cos();
+        [1.0 + 0.5 * s, 1.0 + 0.3 * d.y, 0.8 + 0.2 * d.z]
+    })
+    .expect("cube map");
+    let pyramid = CubePyramid::build(base, MipFilter::Gauss6).expect("pyramid");
+    let irradiance = irradiance(&pyramid, 16);
+    let lobe = KurtLobe::new(Rgb::new(0.8, 0.7, 0.6), 0.12, 0.25, 0.9, 0.0).expect("lobe");
+    let kurt = Kurt::new(Rgb::splat(0.1), vec![lobe], vec![]).expect("material");
+    let pixels = (0..PIXELS)
+        .map(|i| {
+            let a = i as f64 * 0.7;
+            let n = DVec3::new(a.sin(), 1.0, a.cos() * 0.5).normalize();
+            let f = ShadingFrame::new(n, DVec3::X);
+            let th = 0.1 + 1.2 * (i as f64 / PIXELS as f64);
+            let wo = f.to_world(DVec3::new(th.sin() * a.cos(), th.sin() * a.sin(), th.cos()));
+            (f, wo)
+        })
+        .collect();
+    (pyramid, irradiance, kurt, pixels)
+}
+
+fn bench(c: &mut Criterion) {
+    let (pyramid, irradiance, kurt, pixels) = setup();
+    let env = Environment {
+        pyramid: &pyramid,
+        irradiance: &irradiance,
+    };
+    let mut g = c.benchmark_group("shade_regular");
+    g.throughput(Throughput::Elements(PIXELS as u64));
+    for budget in [14, 17, 30] {
+        let plan = plan_regular(&kurt, budget, 0.01).expect("plan");
+        g.bench_with_input(BenchmarkId::from_parameter(budget), &plan, |b, plan| {
+            b.iter(|| {
+                for (f, wo) in &pixels {
+                    black_box(shade_regular(f, *wo, plan, &env, Weighting::Pdf002));
+                }
+            })
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("shade_ck");
+    g.throughput(Throughput::Elements(PIXELS as u64));
+    for n in [16, 32] {
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, &n| {
+            b.iter(|| {
+                for (f, wo) in &pixels {
+                    black_box(shade_ck(f, *wo, &kurt, n, &env));
+                }
+            })
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("reference");
+    let samples = 256;
+    g.throughput(Throughput::Elements((PIXELS * samples) as u64));
+    g.bench_function("per_sample", |b| {
+        b.iter(|| {
+            for (i, (f, wo)) in pixels.iter().enumerate() {
+                black_box(shade_reference(f, *wo, &kurt, &env, samples, i as u64));
+            }
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
