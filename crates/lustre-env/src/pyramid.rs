@@ -23,14 +23,16 @@ use crate::cube::{build_faces, face_coords, CubeMap};
 use crate::error::Result;
 use glam::DVec3;
 
-/// The down-sampling filter of a pyramid (002 §3, Table 1).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+/// The down-sampling filter of a pyramid (002 §3, Table 1). The default is `Gauss6`, the
+/// filter of 002's evaluation (§8).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum MipFilter {
     /// Standard MIP mapping: mean of the 2×2 parent block.
     Box2,
     /// Pyramid of Gaussians, 4×4 binomial (1,3,3,1)/8 per axis.
     Gauss4,
     /// Pyramid of Gaussians, 6×6 binomial (1,5,10,10,5,1)/32 per axis.
+    #[default]
     Gauss6,
 }
 

@@ -38,7 +38,8 @@ pub struct SpotMapParams {
 }
 
 impl Default for SpotMapParams {
-    /// 256² faces, 24 spots 2–10° wide, ratios up to 3000, background 0.05.
+    /// 256² faces, 24 spots 2–10° wide, ratios up to 3000, background 0.05 (002 §8 used
+    /// 1024² faces; pass `size: 1024` for that).
     fn default() -> Self {
         Self {
             size: 256,
@@ -74,11 +75,12 @@ impl SplitMix {
     }
 }
 
-/// One spot: centre, angular radius (rad), peak ratio and tint.
+/// One spot: centre, angular radius (rad) and its cosine, peak ratio and tint.
 #[derive(Clone, Debug)]
 struct Spot {
     centre: DVec3,
     radius: f64,
+    cos_radius: f64,
     ratio: f64,
     tint: [f64; 3],
 }
@@ -134,9 +136,11 @@ pub fn spot_map(p: &SpotMapParams) -> Result<CubeMap> {
                 0.8 + 0.2 * rng.next_f64(),
                 0.8 + 0.2 * rng.next_f64(),
             ];
+            let radius = 0.5 * w.to_radians();
             Spot {
                 centre,
-                radius: 0.5 * w.to_radians(),
+                radius,
+                cos_radius: radius.cos(),
                 ratio,
                 tint,
             }
@@ -146,7 +150,11 @@ pub fn spot_map(p: &SpotMapParams) -> Result<CubeMap> {
         let b = 1.0 + 0.5 * d.dot(g);
         let mut v = [b; 3];
         for s in &spots {
-            let a = d.dot(s.centre).clamp(-1.0, 1.0).acos();
+            let cosine = d.dot(s.centre);
+            if cosine <= s.cos_radius {
+                continue;
+            }
+            let a = cosine.clamp(-1.0, 1.0).acos();
             if a < s.radius {
                 let k = profile(a, s.radius) * s.ratio * b;
                 for (vc, tc) in v.iter_mut().zip(s.tint) {

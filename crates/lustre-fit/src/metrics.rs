@@ -332,10 +332,21 @@ pub fn average_albedo(bsdf: &dyn Bsdf, transmission: bool) -> [f64; 3] {
 /// `data` (module notes). A data channel with zero albedo is normalized by the largest channel
 /// albedo instead (or not at all when every channel is zero).
 pub fn evaluate(data: &dyn Bsdf, model: &dyn Bsdf, transmission: bool) -> ErrorReport {
-    let integral = ngan_integral(data, model, &NganQuadrature::default());
     let amax = max_albedo(data, transmission);
+    ErrorReport {
+        ngan_l2: ngan_l2(data, model, &amax),
+        l1: l1_error(data, model, transmission),
+        albedo_data: albedo(data, DVec3::Z, transmission),
+        albedo_model: albedo(model, DVec3::Z, transmission),
+    }
+}
+
+/// Ngan's normalized L2 per channel given the data's maximum albedo `amax` (from
+/// [`max_albedo`], so that a batch comparing several models computes it once).
+pub fn ngan_l2(data: &dyn Bsdf, model: &dyn Bsdf, amax: &[f64; 3]) -> [f64; 3] {
+    let integral = ngan_integral(data, model, &NganQuadrature::default());
     let top = amax.iter().cloned().fold(0.0, f64::max);
-    let ngan_l2 = std::array::from_fn(|c| {
+    std::array::from_fn(|c| {
         let norm = if amax[c] > 0.0 {
             amax[c]
         } else if top > 0.0 {
@@ -344,11 +355,5 @@ pub fn evaluate(data: &dyn Bsdf, model: &dyn Bsdf, transmission: bool) -> ErrorR
             1.0
         };
         integral[c].max(0.0).sqrt() / norm
-    });
-    ErrorReport {
-        ngan_l2,
-        l1: l1_error(data, model, transmission),
-        albedo_data: albedo(data, DVec3::Z, transmission),
-        albedo_model: albedo(model, DVec3::Z, transmission),
-    }
+    })
 }

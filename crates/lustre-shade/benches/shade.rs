@@ -6,46 +6,13 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::rgb::Rgb;
-use lustre_env::{CubeMap, CubePyramid, MipFilter};
+use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter};
 use lustre_shade::kernel::{
     plan_regular, shade_ck, shade_reference, shade_regular, Environment, ShadingFrame, Weighting,
 };
 use std::hint::black_box;
 
 const PIXELS: usize = 64;
-
-/// E(n)/π by brute-force cosine convolution of the pyramid's 16² level (a stand-in with the
-/// contract's meaning of `lustre_env::irradiance_map`, which had not landed when this was written).
-fn irradiance(p: &CubePyramid, size: usize) -> CubeMap {
-    let lvl = p
-        .levels
-        .iter()
-        .find(|l| l.size <= 16)
-        .expect("the pyramid reaches 1×1");
-    let mut texels = Vec::new();
-    for (face, data) in lvl.faces.iter().enumerate() {
-        for j in 0..lvl.size {
-            for i in 0..lvl.size {
-                let d = CubeMap::texel_dir(lvl.size, face, i, j);
-                let w = CubeMap::texel_solid_angle(lvl.size, i, j);
-                texels.push((d, w, data[j * lvl.size + i]));
-            }
-        }
-    }
-    CubeMap::from_fn(size, |n| {
-        let mut e = [0.0; 3];
-        for (d, w, c) in &texels {
-            let ct = d.dot(n);
-            if ct > 0.0 {
-                for k in 0..3 {
-                    e[k] += c[k] as f64 * ct * w;
-                }
-            }
-        }
-        e.map(|v| v / std::f64::consts::PI)
-    })
-    .expect("irradiance map")
-}
 
 fn setup() -> (CubePyramid, CubeMap, Kurt, Vec<(ShadingFrame, DVec3)>) {
     let base = CubeMap::from_fn(128, |d| {
@@ -54,7 +21,7 @@ fn setup() -> (CubePyramid, CubeMap, Kurt, Vec<(ShadingFrame, DVec3)>) {
     })
     .expect("cube map");
     let pyramid = CubePyramid::build(base, MipFilter::Gauss6).expect("pyramid");
-    let irradiance = irradiance(&pyramid, 16);
+    let irradiance = irradiance_map(&pyramid, 16).expect("irradiance");
     let lobe = KurtLobe::new(Rgb::new(0.8, 0.7, 0.6), 0.12, 0.25, 0.9, 0.0).expect("lobe");
     let kurt = Kurt::new(Rgb::splat(0.1), vec![lobe], vec![]).expect("material");
     let pixels = (0..PIXELS)

@@ -110,6 +110,31 @@ pub fn texel_solid_angle_mean(face_size: usize) -> f64 {
     4.0 * std::f64::consts::PI / (6.0 * (face_size * face_size) as f64)
 }
 
+/// The solid angle of the texel of a cube map with faces `face_size`² seen in direction `dir`
+/// (any length), to first order in the texel size: Ωp(ω) = (2/N)² / d³ with d = ‖ω‖/‖ω‖∞ the
+/// distance to the unit cube along ω (the texel area (2/N)² at distance d, tilted by cos β = 1/d).
+/// 4/N² at a face centre, 4/(3√3 N²) at a cube corner; the mean over the sphere is
+/// [`texel_solid_angle_mean`].
+pub fn texel_solid_angle_at(dir: DVec3, face_size: usize) -> f64 {
+    let n = face_size.max(1) as f64;
+    let inf = dir.abs().max_element();
+    let d = if inf > 0.0 { dir.length() / inf } else { 1.0 };
+    4.0 / (n * n * d * d * d)
+}
+
+/// [`ck_level`] with the direction-dependent texel solid angle [`texel_solid_angle_at`] of the
+/// lookup direction `dir` instead of the mean: the texels near cube corners are smaller, so
+/// the same sample solid angle covers more of them (+0.72 levels at a corner, −0.47 at a face
+/// centre).
+pub fn ck_level_at(pdf: f64, n_samples: usize, face_size: usize, dir: DVec3) -> f64 {
+    if !(pdf > 0.0 && n_samples > 0) {
+        return clamp_level(f64::INFINITY, face_size);
+    }
+    let omega_s = 1.0 / (n_samples as f64 * pdf);
+    let omega_p = texel_solid_angle_at(dir, face_size);
+    clamp_level(0.5 * (omega_s / omega_p).log2() + 1.0, face_size)
+}
+
 /// The Colbert-Křivánek MIP level of a sample drawn with density `pdf` (1/sr) out of
 /// `n_samples`: max(½·log2(Ωs/Ωp) + 1, 0) with Ωs = 1/(N·pdf) and Ωp
 /// = [`texel_solid_angle_mean`] (the mean texel solid angle, not the direction-dependent one;

@@ -232,6 +232,21 @@ pub fn concentric(mx: f64, my: f64, circles: usize, spacing: Spacing, xi0: f64) 
 /// The concentric pattern (either spacing, nc = 1 … [`MAX_CIRCLES`]) whose number of samples
 /// is closest to `budget` (002 §5, last paragraph). Ties go to the smaller pattern, then to s1.
 pub fn concentric_for_budget(mx: f64, my: f64, budget: usize, xi0: f64) -> Result<Pattern> {
+    let s1 = concentric_for_budget_with(mx, my, budget, xi0, Spacing::S1)?;
+    let s2 = concentric_for_budget_with(mx, my, budget, xi0, Spacing::S2)?;
+    let key = |p: &Pattern| (p.h.len().abs_diff(budget), p.h.len());
+    Ok(if key(&s2) < key(&s1) { s2 } else { s1 })
+}
+
+/// The concentric pattern with the given spacing (nc = 1 … [`MAX_CIRCLES`]) whose number of
+/// samples is closest to `budget`; ties go to the smaller pattern.
+pub fn concentric_for_budget_with(
+    mx: f64,
+    my: f64,
+    budget: usize,
+    xi0: f64,
+    spacing: Spacing,
+) -> Result<Pattern> {
     check_roughness(mx, my)?;
     check_xi0(xi0)?;
     if budget == 0 {
@@ -239,28 +254,22 @@ pub fn concentric_for_budget(mx: f64, my: f64, budget: usize, xi0: f64) -> Resul
             "pattern: the sample budget must be at least 1".into(),
         ));
     }
-    let mut best: Option<Pattern> = None;
-    for spacing in [Spacing::S1, Spacing::S2] {
-        for circles in 1..=MAX_CIRCLES {
-            let p = concentric(mx, my, circles, spacing, xi0)?;
-            let n = p.h.len();
-            let better = match &best {
-                None => true,
-                Some(b) => {
-                    let (d, db) = (n.abs_diff(budget), b.h.len().abs_diff(budget));
-                    d < db || (d == db && n < b.h.len())
-                }
-            };
-            let past = n > budget;
-            if better {
-                best = Some(p);
-            }
-            if past {
-                break;
-            }
+    let mut best = concentric(mx, my, 1, spacing, xi0)?;
+    for circles in 2..=MAX_CIRCLES {
+        if best.h.len() > budget {
+            break;
+        }
+        let p = concentric(mx, my, circles, spacing, xi0)?;
+        let (n, nb) = (p.h.len(), best.h.len());
+        let past = n > budget;
+        if (n.abs_diff(budget), n) < (nb.abs_diff(budget), nb) {
+            best = p;
+        }
+        if past {
+            break;
         }
     }
-    best.ok_or_else(|| ShadeError::Parameter("pattern: no concentric pattern".into()))
+    Ok(best)
 }
 
 /// θthresh of 000 Eq. 4.10 at azimuth φh: arctan √(−ln ξ1border / (cos²φh/mx² + sin²φh/my²)).

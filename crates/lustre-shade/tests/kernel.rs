@@ -8,7 +8,7 @@ use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::numeric::SphereQuadrature;
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::validate::albedo_quadrature;
-use lustre_env::{CubeMap, CubePyramid, MipFilter};
+use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter};
 use lustre_shade::kernel::{
     plan_regular, plan_thesis, shade_ck, shade_qmc, shade_reference, shade_reference_with,
     shade_regular, BoundingPlane, Environment, Lookup, Progressive, ShadingFrame, Weighting,
@@ -21,41 +21,8 @@ type Env = (CubePyramid, CubeMap);
 fn build_env(size: usize, f: impl Fn(DVec3) -> [f64; 3] + Sync) -> Env {
     let base = CubeMap::from_fn(size, f).expect("cube map");
     let pyramid = CubePyramid::build(base, MipFilter::Gauss6).expect("pyramid");
-    let irr = irradiance(&pyramid, 16);
+    let irr = irradiance_map(&pyramid, 16).expect("irradiance");
     (pyramid, irr)
-}
-
-/// E(n)/π by brute-force cosine convolution of the pyramid's 16² level (a stand-in with the
-/// contract's meaning of `lustre_env::irradiance_map`, which had not landed when this was written).
-fn irradiance(p: &CubePyramid, size: usize) -> CubeMap {
-    let lvl = p
-        .levels
-        .iter()
-        .find(|l| l.size <= 16)
-        .expect("the pyramid reaches 1×1");
-    let mut texels = Vec::new();
-    for (face, data) in lvl.faces.iter().enumerate() {
-        for j in 0..lvl.size {
-            for i in 0..lvl.size {
-                let d = CubeMap::texel_dir(lvl.size, face, i, j);
-                let w = CubeMap::texel_solid_angle(lvl.size, i, j);
-                texels.push((d, w, data[j * lvl.size + i]));
-            }
-        }
-    }
-    CubeMap::from_fn(size, |n| {
-        let mut e = [0.0; 3];
-        for (d, w, c) in &texels {
-            let ct = d.dot(n);
-            if ct > 0.0 {
-                for k in 0..3 {
-                    e[k] += c[k] as f64 * ct * w;
-                }
-            }
-        }
-        e.map(|v| v / std::f64::consts::PI)
-    })
-    .expect("irradiance map")
 }
 
 fn environment(e: &Env) -> Environment<'_> {
@@ -312,6 +279,89 @@ fn convergence_on_a_smooth_map() {
         ck_err[3] <= ck_err[0] + 1e-3,
         "CK does not converge: {ck_err:?}"
     );
+}
+
+/// Bright soft spots (≈ 6° wide, 200:1 over the background), in the manner of 002 §8's map.
+fn spot_env() -> &'static Env {
+    static E: OnceLock<Env> = OnceLock::new();
+    E.get_or_init(|| {
+        let spots = [
+            (DVec3::new(0.3, 0.9, 0.2), [200.0, 150.0, 100.0]),
+            (DVec3::new(-0.6, 0.5, 0.4), [50.0, 80.0, 120.0]),
+            (DVec3::new(0.5, 0.6, -0.6), [120.0, 120.0, 120.0]),
+            (DVec3::new(0.9, 0.1, 0.3), [80.0, 40.0, 20.0]),
+        ];
+        build_env(128, move |d| {
+            let mut c = [1.0; 3];
+            for (dir, rgb) in &spots {
+                let a = d.dot(dir.normalize()).clamp(-1.0, 1.0).acos();
+                let g = (-(a / 0.05).powi(2)).exp();
+                for k in 0..3 {
+                    c[k] += rgb[k] * g;
+                }
+            }
+            c
+        })
+    })
+}
+
+#[test]
+fn convergence_on_a_spot_map() {
+    let env = environment(spot_env());
+    let px = study_pixels();
+    let reference: Vec<Rgb> = px
+        .iter()
+        .enumerate()
+        .map(|(i, (f, wo, k))| shade_qmc(f, *wo, k, &env, 65_536, 200 + i as u64))
+        .collect();
+    let rmc: Vec<Rgb> = px
+        .iter()
+        .enumerate()
+        .map(|(i, (f, wo, k))| shade_reference(f, *wo, k, &env, 40_000, 300 + i as u64))
+        .collect();
+    let e_mc = mean_rel(&reference, &rmc);
+    println!(
+        "spot map, {} pixels; MC 40k vs QMC 64k: {:.3}%",
+        px.len(),
+        100.0 * e_mc
+    );
+    assert!(e_mc < 0.03, "MC vs QMC reference {e_mc}");
+    let mut ck_err = Vec::new();
+    for n in [8, 32, 128, 512] {
+        let got: Vec<Rgb> = px
+            .iter()
+            .map(|(f, wo, k)| shade_ck(f, *wo, k, n, &env))
+            .collect();
+        let e = mean_rel(&reference, &got);
+        println!("  CK N = {n:4}: mean relative error {:.2}%", 100.0 * e);
+        ck_err.push(e);
+    }
+    for budget in [5, 9, 17, 30] {
+        let got: Vec<Rgb> = px
+            .iter()
+            .map(|(f, wo, k)| {
+                let plan = plan_regular(k, budget, 0.01).expect("plan");
+                shade_regular(f, *wo, &plan, &env, Weighting::Pdf002)
+            })
+            .collect();
+        let e = mean_rel(&reference, &got);
+        // Per material (iso 0.15 at 10°, aniso 0.08×0.3 at 40°, rough 0.4 at 65°).
+        let per: Vec<String> = (0..3)
+            .map(|m| {
+                let idx: Vec<usize> = (0..px.len()).filter(|i| i % 3 == m).collect();
+                let r: Vec<Rgb> = idx.iter().map(|&i| reference[i]).collect();
+                let g: Vec<Rgb> = idx.iter().map(|&i| got[i]).collect();
+                format!("{:.1}%", 100.0 * mean_rel(&r, &g))
+            })
+            .collect();
+        println!(
+            "  regular Pdf002 budget {budget:3}: mean relative error {:.2}% (iso, aniso, rough: {})",
+            100.0 * e,
+            per.join(", ")
+        );
+        assert!(got.iter().all(|v| v.is_finite()));
+    }
+    assert!(ck_err[3] < ck_err[0], "CK does not converge: {ck_err:?}");
 }
 
 #[test]

@@ -2,7 +2,8 @@
 
 use glam::DVec3;
 use lustre_shade::mip::{
-    ck_level, lobe_area, regular_level, texel_solid_angle_mean, thesis_level, MAX_TAN_ALPHA,
+    ck_level, ck_level_at, lobe_area, regular_level, texel_solid_angle_at, texel_solid_angle_mean,
+    thesis_level, MAX_TAN_ALPHA,
 };
 
 fn close(a: f64, b: f64, tol: f64) {
@@ -83,4 +84,49 @@ fn ck_level_by_hand() {
     assert_eq!(ck_level(64.0 / (n as f64 * omega_p), n, face), 0.0);
     // Zero pdf → coarsest level.
     assert_eq!(ck_level(0.0, n, face), 7.0);
+}
+
+#[test]
+fn texel_solid_angle_against_exact_cube_texels() {
+    // The first-order texel solid angle against lustre-env's exact one, and the sum over the
+    // sphere against 4π.
+    let n = 32;
+    let mut total = 0.0;
+    for face in 0..6 {
+        for j in 0..n {
+            for i in 0..n {
+                let d = lustre_env::CubeMap::texel_dir(n, face, i, j);
+                let approx = texel_solid_angle_at(d, n);
+                let exact = lustre_env::CubeMap::texel_solid_angle(n, i, j);
+                assert!(
+                    (approx - exact).abs() < 2e-3 * exact,
+                    "{face} {i} {j}: {approx} vs {exact}"
+                );
+                total += approx;
+            }
+        }
+    }
+    // Midpoint rule: 12.56938 vs 4π = 12.56637 at N = 32.
+    assert!((total - 4.0 * std::f64::consts::PI).abs() < 5e-3, "{total}");
+    // Face centre 4/N², corner 4/(3√3 N²).
+    close(texel_solid_angle_at(DVec3::Z, 128), 4.0 / 16384.0, 1e-15);
+    close(
+        texel_solid_angle_at(DVec3::ONE, 128),
+        4.0 / (16384.0 * 27f64.sqrt()),
+        1e-15,
+    );
+    // The direction-dependent level: at a face centre Ωp = 4/N² = (6/π)·mean, so the level is
+    // ½ log2(π/6) = −0.4668 below ck_level; at a corner ½ log2(3√3 π/6) = +0.7220 above it.
+    let pdf = 1.0 / (8.0 * 1e3 * texel_solid_angle_mean(128));
+    let base = ck_level(pdf, 8, 128);
+    close(
+        ck_level_at(pdf, 8, 128, DVec3::Z) - base,
+        0.5 * (std::f64::consts::PI / 6.0).log2(),
+        1e-12,
+    );
+    close(
+        ck_level_at(pdf, 8, 128, DVec3::ONE) - base,
+        0.5 * (27f64.sqrt() * std::f64::consts::PI / 6.0).log2(),
+        1e-12,
+    );
 }

@@ -258,23 +258,7 @@ fn concentric_panels(args: &PlotArgs) -> Result<Vec<lustre_plot::PatternPanel>> 
     for (spacing, name) in [(Spacing::S1, "s1"), (Spacing::S2, "s2")] {
         let p = match args.circles {
             Some(nc) => pattern::concentric(mx, my, nc, spacing, xi0)?,
-            None => {
-                let mut best: Option<pattern::Pattern> = None;
-                for nc in 1..=pattern::MAX_CIRCLES {
-                    let p = pattern::concentric(mx, my, nc, spacing, xi0)?;
-                    let n = p.h.len();
-                    if best
-                        .as_ref()
-                        .is_none_or(|b| n.abs_diff(args.budget) < b.h.len().abs_diff(args.budget))
-                    {
-                        best = Some(p);
-                    }
-                    if n > args.budget {
-                        break;
-                    }
-                }
-                best.context("no concentric pattern")?
-            }
+            None => pattern::concentric_for_budget_with(mx, my, args.budget, xi0, spacing)?,
         };
         let nc = match p.kind {
             PatternKind::Concentric { circles, .. } => circles,
