@@ -8,8 +8,9 @@
 //! - `sgd:MATERIAL`, `abc:MATERIAL`, `lafortune:MATERIAL` — a published MERL fit
 //!   (`../shared/data/fits/`);
 //! - `nbrdf:MATERIAL` or `nbrdf:FILE#MATERIAL` — a neural BRDF (default file: the MERL set);
-//! - a path ending in `.binary` (MERL), `.bsdf` (RGL tensor), `.dat` (ALTA table) or
-//!   `.gonio` (lustre goniometric table).
+//! - a path ending in `.binary` (MERL), `.bsdf` (RGL tensor), `.dat` (ALTA table),
+//!   `.gonio` (lustre goniometric table) or `.json` (a `lustre-material` file, see
+//!   [`crate::material`]).
 
 use crate::bsdf::Bsdf;
 use crate::error::{Error, Result};
@@ -286,6 +287,15 @@ fn resolve_path(
             Box::new(alta::AltaTable::read(path, unit)?)
         }
         "bsdf" => Box::new(crate::measured::rgl::RglBsdf::read(path)?),
+        "json" => {
+            if let Some(f) = fragment {
+                return Err(Error::NotFound(format!(
+                    "{}: a material file takes no #{f} suffix",
+                    path.display()
+                )));
+            }
+            crate::material::read(path)?.to_bsdf()?
+        }
         "binary" => Box::new(crate::measured::merl::MerlTable::read(path)?),
         "gonio" => {
             let recon = match fragment {
@@ -394,7 +404,7 @@ fn resolve_model(mut p: Params) -> Result<Box<dyn Bsdf>> {
         other => {
             return Err(Error::NotFound(format!(
                 "unknown material {other:?}: not a built-in ({}), a model ({}), a published fit \
-                 (sgd:NAME, abc:NAME, lafortune:NAME), nbrdf:NAME or a file (.binary, .bsdf, .dat, .gonio)",
+                 (sgd:NAME, abc:NAME, lafortune:NAME), nbrdf:NAME or a file (.binary, .bsdf, .dat, .gonio, .json)",
                 builtins().iter().map(|b| b.0).collect::<Vec<_>>().join(", "),
                 models().iter().map(|m| m.0).collect::<Vec<_>>().join(", ")
             )))

@@ -93,6 +93,28 @@ pub fn rect_solid_angle(x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
     area_element(x1, y1) - area_element(x0, y1) - area_element(x1, y0) + area_element(x0, y0)
 }
 
+/// The exact solid angles of all texels of a face of size `size`, `[j*size + i]` (the same on
+/// every face), from the (size+1)² corner values of the area element.
+pub fn solid_angle_table(size: usize) -> Vec<f64> {
+    let n = size as f64;
+    let x = |k: usize| 2.0 * k as f64 / n - 1.0;
+    let m = size + 1;
+    let mut f = vec![0.0f64; m * m];
+    for b in 0..m {
+        for a in 0..m {
+            f[b * m + a] = area_element(x(a), x(b));
+        }
+    }
+    let mut out = Vec::with_capacity(size * size);
+    for j in 0..size {
+        for i in 0..size {
+            let k = j * m + i;
+            out.push(f[k + m + 1] - f[k + m] - f[k + 1] + f[k]);
+        }
+    }
+    out
+}
+
 /// Checks a face size.
 fn check_size(size: usize) -> Result<()> {
     if size == 0 || size > MAX_FACE_SIZE {
@@ -256,10 +278,11 @@ impl CubeMap {
     /// ∫ L dω over the sphere (per channel), with exact texel solid angles.
     pub fn integral(&self) -> [f64; 3] {
         let n = self.size;
+        let omega = solid_angle_table(n);
         let mut acc = [0.0f64; 3];
         for j in 0..n {
             for i in 0..n {
-                let w = Self::texel_solid_angle(n, i, j);
+                let w = omega[j * n + i];
                 for face in &self.faces {
                     let v = face[j * n + i];
                     for c in 0..3 {
@@ -373,6 +396,9 @@ mod tests {
             let err = (6.0 * s - 4.0 * PI).abs();
             assert!(err < 1e-9, "n = {n}: 6·Σ = {}, error {err:e}", 6.0 * s);
         }
+        let t = solid_angle_table(33);
+        assert!((6.0 * t.iter().sum::<f64>() - 4.0 * PI).abs() < 1e-9);
+        assert!((t[5 * 33 + 7] - CubeMap::texel_solid_angle(33, 7, 5)).abs() < 1e-15);
         // One face is 4π/6; the centre texel of a large face is ≈ (2/N)².
         let n = 1001;
         let c = CubeMap::texel_solid_angle(n, 500, 500);

@@ -6,7 +6,7 @@
 //! source texel weighted by its exact solid angle (see [`CubeMap::texel_solid_angle`]) and
 //! the clamped cosine at its centre.
 
-use crate::cube::{build_faces, CubeMap};
+use crate::cube::{build_faces, solid_angle_table, CubeMap};
 use crate::error::{EnvError, Result};
 use crate::pyramid::CubePyramid;
 use glam::DVec3;
@@ -31,10 +31,11 @@ pub fn irradiance_map(src: &CubePyramid, size: usize) -> Result<CubeMap> {
     let n = level.size;
     // Source texels: direction, radiance × solid angle / π.
     let mut texels: Vec<(DVec3, [f64; 3])> = Vec::with_capacity(6 * n * n);
+    let omega = solid_angle_table(n);
     for (face, data) in level.faces.iter().enumerate() {
         for j in 0..n {
             for i in 0..n {
-                let w = CubeMap::texel_solid_angle(n, i, j) / PI;
+                let w = omega[j * n + i] / PI;
                 let v = data[j * n + i];
                 texels.push((
                     CubeMap::texel_dir(n, face, i, j),

@@ -2,34 +2,34 @@
 //! manner of 000 Tables 3.1–3.3, plus measured-vs-model plots in the style of Fig. 3.11–3.12.
 //!
 //! ```text
-//! cargo run --release -p lustre-fit --example kurt_tables -- --out DIR [--lobes 1,2,3] [--no-plots]
+//! cargo run --release -p lustre-fit --example kurt_tables -- --out DIR [--lobes 1,2,3] [--no-plots] [--only NAME]
 //! ```
 //!
-//! Writes `DIR/kurt_tables.md` (parameters, L1 error of Eq. 3.7 per channel, albedo at normal
-//! incidence of data and model, fit time, status) and, per material, a transfer-probability
+//! Writes `DIR/kurt_tables.md` (parameters, L1 error of Eq. 3.7 on the fit's direction set and
+//! from `metrics`, Ngan's L2, albedo at normal incidence of data and model, fit time, status) and, per material, a transfer-probability
 //! array of the data next to the 2-lobe model (Fig. 3.11) and polar plots of the data with the
 //! 1- and 2-lobe models in the planes φi = 0° and 90° (Fig. 3.12, cube root).
 
 use lustre_brdf::{catalog, shared_data_dir, Bsdf, DVec3};
-use lustre_fit::kurt::{fit, l1_error, KurtFit, KurtOptions};
+use lustre_fit::kurt::{fit, KurtFit, KurtOptions};
+use lustre_fit::metrics;
 use lustre_plot::{ArrayOptions, PolarOptions};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Albedo samples (Hammersley through each BSDF's sampler).
-const ALBEDO_SAMPLES: usize = 1 << 16;
-
 struct Args {
     out: PathBuf,
     lobes: Vec<usize>,
     plots: bool,
+    only: Option<String>,
 }
 
 fn parse_args() -> Result<Args, String> {
     let mut out = None;
     let mut lobes = vec![1, 2, 3];
     let mut plots = true;
+    let mut only = None;
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -43,11 +43,18 @@ fn parse_args() -> Result<Args, String> {
                     .map_err(|e| format!("--lobes {v}: {e}"))?;
             }
             "--no-plots" => plots = false,
+            "--only" => only = it.next(),
             other => return Err(format!("unknown argument {other}")),
         }
     }
-    let out = out.ok_or("usage: kurt_tables --out DIR [--lobes 1,2,3] [--no-plots]")?;
-    Ok(Args { out, lobes, plots })
+    let out =
+        out.ok_or("usage: kurt_tables --out DIR [--lobes 1,2,3] [--no-plots] [--only NAME]")?;
+    Ok(Args {
+        out,
+        lobes,
+        plots,
+        only,
+    })
 }
 
 /// The inputs: (short name, catalog specification).
@@ -92,6 +99,7 @@ struct Row {
     lobes: usize,
     fit: KurtFit,
     l1: [f64; 3],
+    ngan: [f64; 3],
     albedo_data: [f64; 3],
     albedo_model: [f64; 3],
     seconds: f64,
@@ -116,16 +124,18 @@ fn row_markdown(r: &Row) -> String {
         })
         .collect();
     format!(
-        "| {} | {} | {} | {} | {:.4e} ({}) | {:.3} | {:.3} | {:.1} | {} | {:?} |\n",
+        "| {} | {} | {} | {} | {:.4e} | {:.4e} ({}) | {:.4} | {:.3} | {:.3} | {:.1} | {} | {:?} |\n",
         r.name,
         r.lobes,
         rgb(m.kd.0),
         lobes.join("<br>"),
+        r.fit.objective,
         mean(r.l1),
         r.l1.iter()
             .map(|v| format!("{v:.2e}"))
             .collect::<Vec<_>>()
             .join(", "),
+        mean(r.ngan),
         mean(r.albedo_data),
         mean(r.albedo_model),
         r.seconds,
@@ -199,16 +209,26 @@ fn run() -> Result<(), String> {
     let mut md = String::from(
         "# Kurt fits of the measured materials (000 Tables 3.1–3.3 style)\n\n\
          Hierarchical brute force (grid 5, 6 levels) + Levenberg-Marquardt polish, \
-         `lustre_fit::kurt::fit`. L1 = Eq. 3.7 on the fit's direction set, mean (R, G, B). \
-         Albedo = directional albedo at normal incidence (Eq. 2.6), mean of RGB. \
-         Time = wall-clock seconds of the fit. Evaluations = lobe evaluations over the direction set.\n\n\
-         | material | lobes | kd (RGB) | lobes: ks (RGB), mx, my, r0, α | L1 mean (R, G, B) | albedo data | albedo model | time (s) | evaluations | status |\n\
-         |---|---|---|---|---|---|---|---|---|---|\n",
+         `lustre_fit::kurt::fit`. L1 fit = Eq. 3.7 on the fit's own direction set (its objective, \
+         mean of RGB); L1 metrics and Ngan L2 = `lustre_fit::metrics::evaluate` (Eq. 3.7 on a 5° \
+         grid; Ngan's normalized L2), mean (R, G, B). Albedo = directional albedo at normal \
+         incidence (Eq. 2.6), mean of RGB. Time = wall-clock seconds of the fit alone. \
+         Evaluations = lobe evaluations over the direction set.\n\n\
+         | material | lobes | kd (RGB) | lobes: ks (RGB), mx, my, r0, α | L1 fit | L1 metrics mean (R, G, B) | Ngan L2 | albedo data | albedo model | time (s) | evaluations | status |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let mut written = Vec::new();
     for (name, spec) in inputs() {
+        if args
+            .only
+            .as_ref()
+            .is_some_and(|o| !name.contains(o.as_str()))
+        {
+            continue;
+        }
         let data = catalog::resolve(&spec).map_err(|e| format!("{spec}: {e}"))?;
-        let albedo_data = data.albedo(DVec3::Z, ALBEDO_SAMPLES).0;
+        let amax = metrics::max_albedo(data.as_ref(), false);
+        let albedo_data = metrics::albedo(data.as_ref(), DVec3::Z, false);
         let mut fits: Vec<(usize, KurtFit)> = Vec::new();
         for &lobes in &args.lobes {
             let opts = KurtOptions {
@@ -218,13 +238,13 @@ fn run() -> Result<(), String> {
             let t = Instant::now();
             let f = fit(data.as_ref(), false, &opts).map_err(|e| format!("{name}: {e}"))?;
             let seconds = t.elapsed().as_secs_f64();
-            let l1 = l1_error(data.as_ref(), &f.model, false).map_err(|e| e.to_string())?;
             let row = Row {
                 name: name.clone(),
                 lobes,
                 albedo_data,
-                albedo_model: f.model.albedo(DVec3::Z, ALBEDO_SAMPLES).0,
-                l1,
+                albedo_model: metrics::albedo(&f.model, DVec3::Z, false),
+                l1: metrics::l1_error(data.as_ref(), &f.model, false),
+                ngan: metrics::ngan_l2(data.as_ref(), &f.model, &amax),
                 seconds,
                 fit: f,
             };

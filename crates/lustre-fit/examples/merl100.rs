@@ -30,6 +30,42 @@ fn cpu_seconds() -> f64 {
     (ticks(11) + ticks(12)) / 100.0
 }
 
+/// The Ngan errors (per channel) of one material's fits and the published fit.
+struct Row {
+    e_sgd: [f64; 3],
+    e_pub: [f64; 3],
+    e_beck: [f64; 3],
+    e_ggx: [f64; 3],
+    t_sgd: f64,
+    c_sgd: f64,
+    status: String,
+}
+
+fn one(
+    data: &lustre_fit::data::MeasuredData,
+    published: &lustre_brdf::fits::sgd::SgdFits,
+    opts: &CtOptions,
+) -> Result<Row, Box<dyn std::error::Error>> {
+    let d = data.bsdf.as_ref();
+    let (t0, c0) = (Instant::now(), cpu_seconds());
+    let sgd = fit(d, Distribution::Sgd, opts)?;
+    let (t_sgd, c_sgd) = (t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
+    let beck = fit(d, Distribution::Beckmann, opts)?;
+    let ggx = fit(d, Distribution::Ggx, opts)?;
+    let pubm = published.cook_torrance(&data.name)?;
+    // The Ngan part of metrics::evaluate, with the data's maximum albedo computed once.
+    let amax = max_albedo(d, false);
+    Ok(Row {
+        e_sgd: ngan_l2(d, &sgd.to_bsdf("sgd")?, &amax),
+        e_pub: ngan_l2(d, &pubm, &amax),
+        e_beck: ngan_l2(d, &beck.to_bsdf("beckmann")?, &amax),
+        e_ggx: ngan_l2(d, &ggx.to_bsdf("ggx")?, &amax),
+        t_sgd,
+        c_sgd,
+        status: format!("{:?}/{:?}/{:?}", sgd.status, beck.status, ggx.status),
+    })
+}
+
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut out: Option<String> = None;
     let mut only: Option<Vec<String>> = None;
@@ -54,7 +90,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         "| material | SGD ours | SGD published | Beckmann | GGX | SGD wall (s) | SGD CPU (s) | SGD ours r/g/b | SGD published r/g/b | Beckmann r/g/b | GGX r/g/b | status |".to_string(),
         "|---|---|---|---|---|---|---|---|---|---|---|---|".to_string(),
     ];
-    let (mut n, mut better, mut beats_beckmann) = (0usize, 0usize, 0usize);
+    let (mut n, mut better, mut beats_beckmann, mut failed) = (0usize, 0usize, 0usize, 0usize);
     let (mut times, mut cpu) = (Vec::new(), Vec::new());
     for input in inputs.iter() {
         let data = lustre_fit::data::load(input)?;
@@ -66,26 +102,32 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         if n >= limit {
             break;
         }
-        let (t0, c0) = (Instant::now(), cpu_seconds());
-        let sgd = fit(data.bsdf.as_ref(), Distribution::Sgd, &opts)?;
-        let (t_sgd, c_sgd) = (t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
-        let beck = fit(data.bsdf.as_ref(), Distribution::Beckmann, &opts)?;
-        let ggx = fit(data.bsdf.as_ref(), Distribution::Ggx, &opts)?;
-        let pubm = published.cook_torrance(&data.name)?;
-        let d = data.bsdf.as_ref();
-        // The Ngan part of metrics::evaluate, with the data's maximum albedo computed once.
-        let amax = max_albedo(d, false);
-        let e_sgd = ngan_l2(d, &sgd.to_bsdf("sgd")?, &amax);
-        let e_pub = ngan_l2(d, &pubm, &amax);
-        let e_beck = ngan_l2(d, &beck.to_bsdf("beckmann")?, &amax);
-        let e_ggx = ngan_l2(d, &ggx.to_bsdf("ggx")?, &amax);
+        let r = match one(&data, &published, &opts) {
+            Ok(r) => r,
+            Err(e) => {
+                let line = format!("| {} | error: {e} |", data.name);
+                println!("{line}");
+                lines.push(line);
+                failed += 1;
+                continue;
+            }
+        };
+        let Row {
+            e_sgd,
+            e_pub,
+            e_beck,
+            e_ggx,
+            t_sgd,
+            c_sgd,
+            status,
+        } = r;
         n += 1;
         better += usize::from(mean(&e_sgd) <= mean(&e_pub));
         beats_beckmann += usize::from(mean(&e_sgd) < mean(&e_beck));
         times.push(t_sgd);
         cpu.push(c_sgd);
         let line = format!(
-            "| {} | {:.4e} | {:.4e} | {:.4e} | {:.4e} | {:.3} | {:.2} | {} | {} | {} | {} | {:?}/{:?}/{:?} |",
+            "| {} | {:.4e} | {:.4e} | {:.4e} | {:.4e} | {:.3} | {:.2} | {} | {} | {} | {} | {} |",
             data.name,
             mean(&e_sgd),
             mean(&e_pub),
@@ -97,9 +139,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             channels(&e_pub),
             channels(&e_beck),
             channels(&e_ggx),
-            sgd.status,
-            beck.status,
-            ggx.status,
+            status,
         );
         println!("{line}");
         lines.push(line);
@@ -116,7 +156,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let threads = rayon::current_num_threads();
     let summary = [
         String::new(),
-        format!("- materials: {n}"),
+        format!("- materials: {n} fitted, {failed} failed"),
         format!("- SGD ours ≤ published (Ngan L2, mean of channels): {better}/{n}"),
         format!("- SGD ours < Beckmann ours: {beats_beckmann}/{n}"),
         format!("- SGD fit wall time: median {median:.3} s, worst {worst:.3} s ({threads} rayon threads)"),

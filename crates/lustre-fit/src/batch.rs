@@ -1,1 +1,1002 @@
-//! The batch runner behind `lustre fit`.
+//! The batch runner behind `lustre fit`: fits a list of inputs in a rayon pool, writes one
+//! material JSON per input and a CSV summary, and resumes an interrupted batch.
+//!
+//! Per input the runner writes `OUT/<name>.json` (atomically), where `<name>` is
+//! [`output_name`] of the input (numbered `-2`, `-3`, ... when two inputs share a name):
+//!
+//! - a fit that produced a model (status `converged` or `not-converged`) gives a
+//!   [`lustre_brdf::material::MaterialFile`] with its [`FitRecord`];
+//! - a failed input (unreadable file, all-zero or NaN data, a fit error, even a panic inside the
+//!   fitter) gives a [`FailureFile`] (schema [`FAILURE_SCHEMA`]) with the status and message, so
+//!   the renderer refuses it with a clear message and the batch goes on.
+//!
+//! `OUT/summary.csv` (atomic) has one row per input ([`SummaryRow`]). **Resume**: unless
+//! `force` is set, an input whose JSON exists, parses as a material, records the same input, the
+//! same model and the same options, has a status other than a failure and is newer than the
+//! input's data file is not fitted again; its row is rebuilt from the file. A corrupted, failed
+//! or outdated output is fitted again.
+//!
+//! The fitting itself is behind the [`Fitter`] trait, so the machinery runs (and is tested)
+//! with any fitter; [`MeasuredFitter`] is the real one.
+
+use crate::{ct, data, kurt, metrics, FitError, FitStatus, Result};
+use lustre_brdf::material::{
+    self, CtChannelParams, CtDistribution, FitErrors, FitRecord, MaterialFile, MaterialModel,
+};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The schema name of the JSON written for a failed input.
+pub const FAILURE_SCHEMA: &str = "lustre-fit-failure";
+/// The file name of the CSV summary inside the output folder.
+pub const SUMMARY_FILE: &str = "summary.csv";
+
+/// The model a batch fits (`lustre fit --model`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ModelChoice {
+    /// Cook-Torrance with the SGD distribution (004 §V.4).
+    Sgd,
+    /// Kurt et al. lobes (000 §3.4.1).
+    Kurt,
+    /// Cook-Torrance with the Beckmann distribution.
+    Beckmann,
+    /// Cook-Torrance with the GGX distribution.
+    Ggx,
+}
+
+impl ModelChoice {
+    /// The lower-case name (`sgd`, `kurt`, `beckmann`, `ggx`), as [`MaterialModel::kind`] gives it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ModelChoice::Sgd => "sgd",
+            ModelChoice::Kurt => "kurt",
+            ModelChoice::Beckmann => "beckmann",
+            ModelChoice::Ggx => "ggx",
+        }
+    }
+}
+
+/// The options that determine a fit's result; recorded in the JSON and compared on resume.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FitSettings {
+    /// The model.
+    pub model: ModelChoice,
+    /// Kurt: number of reflection lobes.
+    pub lobes: usize,
+    /// Kurt: number of transmission lobes.
+    pub transmission_lobes: usize,
+    /// Kurt: parameters held at a value (`--fix NAME=VALUE`).
+    pub fixed: Vec<(String, f64)>,
+    /// Kurt: parameter search ranges (`--range NAME=LO:HI`).
+    pub ranges: Vec<(String, f64, f64)>,
+    /// Refine the fit (CT: over the full data; Kurt: the final polish).
+    pub refine: bool,
+}
+
+impl FitSettings {
+    /// Default settings for `model`: one lobe, no transmission lobe, nothing fixed, refine.
+    pub fn new(model: ModelChoice) -> Self {
+        FitSettings {
+            model,
+            lobes: 1,
+            transmission_lobes: 0,
+            fixed: Vec::new(),
+            ranges: Vec::new(),
+            refine: true,
+        }
+    }
+
+    /// The settings as the JSON object stored in [`FitRecord::options`]: the model and refine,
+    /// plus the lobe counts, fixed parameters and ranges for Kurt (the only model they act on).
+    pub fn to_json(&self) -> serde_json::Value {
+        let mut v = serde_json::json!({ "model": self.model, "refine": self.refine });
+        if self.model == ModelChoice::Kurt {
+            v["lobes"] = self.lobes.into();
+            v["transmission_lobes"] = self.transmission_lobes.into();
+            v["fixed"] = serde_json::json!(self.fixed);
+            v["ranges"] = serde_json::json!(self.ranges);
+        }
+        v
+    }
+}
+
+/// Everything a batch needs besides its inputs and its fitter.
+#[derive(Clone, Debug)]
+pub struct BatchOptions {
+    /// What to fit.
+    pub settings: FitSettings,
+    /// Worker threads (at least 1).
+    pub jobs: usize,
+    /// Fit every input again, even when a valid output exists.
+    pub force: bool,
+    /// The output folder (created if missing).
+    pub out: PathBuf,
+    /// Draw a progress bar on stderr (only shown on a terminal).
+    pub progress: bool,
+}
+
+/// What a successful fit returns to the batch.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fitted {
+    /// The fitted model.
+    pub model: MaterialModel,
+    /// How the optimizer ended (`Converged` or `NotConverged`; a failure status makes the input
+    /// count as failed but its model is still written).
+    pub status: FitStatus,
+    /// A message in words (may be empty).
+    pub message: String,
+    /// Error metrics of the model against the data.
+    pub errors: FitErrors,
+    /// Albedo of the data at normal incidence.
+    pub albedo_data: [f64; 3],
+    /// Albedo of the model at normal incidence.
+    pub albedo_model: [f64; 3],
+}
+
+/// The fitting behind a batch.
+pub trait Fitter: Sync {
+    /// Expands one command-line input into the inputs to fit (e.g. `nbrdf:FILE#*`).
+    fn expand(&self, input: &str) -> Result<Vec<String>>;
+    /// Fits one input.
+    fn fit(&self, input: &str, settings: &FitSettings) -> Result<Fitted>;
+}
+
+/// The real fitter: [`data::load`] (with its value checks), then [`ct::fit`] or
+/// [`kurt::fit`], then [`metrics::evaluate`] of the fitted model (built from the material JSON
+/// model, as the renderer will build it) against the data.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MeasuredFitter;
+
+impl Fitter for MeasuredFitter {
+    fn expand(&self, input: &str) -> Result<Vec<String>> {
+        data::expand_inputs(input)
+    }
+
+    fn fit(&self, input: &str, s: &FitSettings) -> Result<Fitted> {
+        let data = data::load(input)?;
+        let (model, status, message) = match s.model {
+            ModelChoice::Kurt => {
+                let f = kurt::fit(data.bsdf.as_ref(), data.transmission, &kurt_options(s))?;
+                let msg = format!(
+                    "Eq. 3.7 objective {:.6} after {} evaluations",
+                    f.objective, f.evaluations
+                );
+                (MaterialModel::from_kurt(&f.model), f.status, msg)
+            }
+            m => {
+                let (dist, mdist) = match m {
+                    ModelChoice::Sgd => (ct::Distribution::Sgd, CtDistribution::Sgd),
+                    ModelChoice::Beckmann => (ct::Distribution::Beckmann, CtDistribution::Beckmann),
+                    _ => (ct::Distribution::Ggx, CtDistribution::Ggx),
+                };
+                let opts = ct::CtOptions {
+                    refine: s.refine,
+                    ..ct::CtOptions::default()
+                };
+                let f = ct::fit(data.bsdf.as_ref(), dist, &opts)?;
+                let channels = std::array::from_fn(|i| {
+                    let c = &f.channels[i];
+                    CtChannelParams {
+                        rho_d: c.rho_d,
+                        rho_s: c.rho_s,
+                        alpha: c.alpha,
+                        p: c.p,
+                        kap: c.kap,
+                        f0: c.f0,
+                        f1: c.f1,
+                        g1: c.g1,
+                    }
+                });
+                let msg = format!("{} iterations", f.iterations);
+                (
+                    MaterialModel::cook_torrance(mdist, channels)?,
+                    f.status,
+                    msg,
+                )
+            }
+        };
+        let bsdf = model.to_bsdf(&data.name)?;
+        let r = metrics::evaluate(data.bsdf.as_ref(), bsdf.as_ref(), data.transmission);
+        Ok(Fitted {
+            model,
+            status,
+            message,
+            errors: FitErrors {
+                ngan_l2: r.ngan_l2,
+                l1: r.l1,
+            },
+            albedo_data: r.albedo_data,
+            albedo_model: r.albedo_model,
+        })
+    }
+}
+
+/// The Kurt options of `s` (search grid and levels at their defaults).
+pub fn kurt_options(s: &FitSettings) -> kurt::KurtOptions {
+    kurt::KurtOptions {
+        lobes: s.lobes,
+        transmission_lobes: s.transmission_lobes,
+        fixed: s.fixed.clone(),
+        ranges: s.ranges.clone(),
+        polish: s.refine,
+        ..kurt::KurtOptions::default()
+    }
+}
+
+/// Checks what can be checked before any input is read: for Kurt, that every `--fix` and
+/// `--range` name is one of [`kurt::parameter_names`] and that there is a lobe to fit; for
+/// Cook-Torrance, that no Kurt-only option is set.
+pub fn check_settings(s: &FitSettings) -> Result<()> {
+    if s.model != ModelChoice::Kurt {
+        if !s.fixed.is_empty() || !s.ranges.is_empty() {
+            return Err(FitError::Option(format!(
+                "fixed parameters and ranges apply to the Kurt model only, not {}",
+                s.model.as_str()
+            )));
+        }
+        return Ok(());
+    }
+    let names = kurt::parameter_names(&kurt_options(s));
+    let given = s
+        .fixed
+        .iter()
+        .map(|f| f.0.as_str())
+        .chain(s.ranges.iter().map(|r| r.0.as_str()));
+    for n in given {
+        if !names.iter().any(|k| k == n) {
+            return Err(FitError::Option(format!(
+                "unknown Kurt parameter {n:?} for {} reflection and {} transmission lobes \
+                 (known: {})",
+                s.lobes,
+                s.transmission_lobes,
+                names.join(", ")
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The JSON written for a failed input: no model, only the record of what went wrong.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FailureFile {
+    /// Always [`FAILURE_SCHEMA`].
+    pub schema: String,
+    /// Always 1.
+    pub version: u32,
+    /// The output name.
+    pub name: String,
+    /// The status, message and options.
+    pub fit: FitRecord,
+}
+
+/// One row of the CSV summary (empty cells where a failed input has no numbers).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SummaryRow {
+    /// Output name (the JSON is `<name>.json`).
+    pub name: String,
+    /// The input as given (after expansion).
+    pub input: String,
+    /// The model (`sgd`, `kurt`, `beckmann`, `ggx`).
+    pub model: String,
+    /// How the fit ended.
+    pub status: FitStatus,
+    /// Ngan's normalized L2, red.
+    pub ngan_l2_r: Option<f64>,
+    /// Ngan's normalized L2, green.
+    pub ngan_l2_g: Option<f64>,
+    /// Ngan's normalized L2, blue.
+    pub ngan_l2_b: Option<f64>,
+    /// L1 of Eq. 3.7, red.
+    pub l1_r: Option<f64>,
+    /// L1 of Eq. 3.7, green.
+    pub l1_g: Option<f64>,
+    /// L1 of Eq. 3.7, blue.
+    pub l1_b: Option<f64>,
+    /// Data albedo at normal incidence, red.
+    pub albedo_data_r: Option<f64>,
+    /// Data albedo at normal incidence, green.
+    pub albedo_data_g: Option<f64>,
+    /// Data albedo at normal incidence, blue.
+    pub albedo_data_b: Option<f64>,
+    /// Model albedo at normal incidence, red.
+    pub albedo_model_r: Option<f64>,
+    /// Model albedo at normal incidence, green.
+    pub albedo_model_g: Option<f64>,
+    /// Model albedo at normal incidence, blue.
+    pub albedo_model_b: Option<f64>,
+    /// Fit wall time in seconds (of the run that produced the JSON).
+    pub time_s: f64,
+    /// Whether the row was taken from an existing JSON instead of fitting again.
+    pub resumed: bool,
+    /// The message (empty when there is nothing to say).
+    pub message: String,
+}
+
+impl SummaryRow {
+    /// Whether the input failed (status `invalid-data` or `error`).
+    pub fn failed(&self) -> bool {
+        is_failure(self.status)
+    }
+
+    fn new(name: &str, record: &FitRecord, model: &str, status: FitStatus, resumed: bool) -> Self {
+        let e = record.errors;
+        let pick = |a: Option<[f64; 3]>, i: usize| a.map(|a| a[i]);
+        let (nl, l1) = (e.map(|e| e.ngan_l2), e.map(|e| e.l1));
+        SummaryRow {
+            name: name.to_string(),
+            input: record.source.clone(),
+            model: model.to_string(),
+            status,
+            ngan_l2_r: pick(nl, 0),
+            ngan_l2_g: pick(nl, 1),
+            ngan_l2_b: pick(nl, 2),
+            l1_r: pick(l1, 0),
+            l1_g: pick(l1, 1),
+            l1_b: pick(l1, 2),
+            albedo_data_r: pick(record.albedo_data, 0),
+            albedo_data_g: pick(record.albedo_data, 1),
+            albedo_data_b: pick(record.albedo_data, 2),
+            albedo_model_r: pick(record.albedo_model, 0),
+            albedo_model_g: pick(record.albedo_model, 1),
+            albedo_model_b: pick(record.albedo_model, 2),
+            time_s: record.time_s,
+            resumed,
+            message: record.message.clone(),
+        }
+    }
+}
+
+/// The outcome of a batch: one row per input, in input order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BatchSummary {
+    /// The rows, as in `summary.csv`.
+    pub rows: Vec<SummaryRow>,
+    /// The CSV file written.
+    pub summary_path: PathBuf,
+}
+
+impl BatchSummary {
+    /// How many inputs failed.
+    pub fn failed(&self) -> usize {
+        self.rows.iter().filter(|r| r.failed()).count()
+    }
+
+    /// How many inputs were taken over from an earlier run.
+    pub fn resumed(&self) -> usize {
+        self.rows.iter().filter(|r| r.resumed).count()
+    }
+}
+
+/// Whether a status counts as a failed input.
+pub fn is_failure(s: FitStatus) -> bool {
+    matches!(s, FitStatus::InvalidData | FitStatus::Error)
+}
+
+/// The status as its JSON/CSV word (`converged`, `not-converged`, `invalid-data`, `error`).
+pub fn status_str(s: FitStatus) -> &'static str {
+    match s {
+        FitStatus::Converged => "converged",
+        FitStatus::NotConverged => "not-converged",
+        FitStatus::InvalidData => "invalid-data",
+        FitStatus::Error => "error",
+    }
+}
+
+/// The status of a word written by [`status_str`].
+pub fn parse_status(s: &str) -> Option<FitStatus> {
+    [
+        FitStatus::Converged,
+        FitStatus::NotConverged,
+        FitStatus::InvalidData,
+        FitStatus::Error,
+    ]
+    .into_iter()
+    .find(|&x| status_str(x) == s)
+}
+
+/// A file-name-safe name for an input: the material name of `nbrdf:FILE#NAME` or `nbrdf:NAME`,
+/// else the file stem (plus a `#fragment`), with characters other than ASCII letters, digits,
+/// `-`, `_` and `.` replaced by `-`; at most 100 characters; never empty or hidden (a name that
+/// sanitizes to nothing, such as `*`, falls back to the file's stem, then to `input`).
+pub fn output_name(input: &str) -> String {
+    let input = input.trim();
+    let raw = if let Some(rest) = input.strip_prefix("nbrdf:") {
+        rest.rsplit_once('#').map_or(rest, |(_, n)| n).to_string()
+    } else {
+        let (path, frag) = match input.rsplit_once('#') {
+            Some((p, f)) => (p, Some(f)),
+            None => (input, None),
+        };
+        let stem = Path::new(path)
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        match frag {
+            Some(f) => format!("{stem}-{f}"),
+            None => stem,
+        }
+    };
+    let s: String = raw
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.') {
+                c
+            } else {
+                '-'
+            }
+        })
+        .take(100)
+        .collect();
+    let s = s.trim_matches(|c| c == '-' || c == '.').to_string();
+    match input.rsplit_once('#') {
+        // `nbrdf:FILE#*` that could not be expanded: name it after the file.
+        Some((file, _)) if s.is_empty() => output_name(file.trim_start_matches("nbrdf:")),
+        _ if s.is_empty() => "input".into(),
+        _ => s,
+    }
+}
+
+/// One unit of work: an expanded input, its output name, or the error of its expansion.
+struct Job {
+    input: String,
+    name: String,
+    expand_error: Option<FitError>,
+}
+
+/// Runs a batch: expands the inputs, fits them (resuming where valid outputs exist) on
+/// `opts.jobs` threads, writes every JSON and `summary.csv`. Per-input failures are rows, not
+/// errors; the error is for the batch as a whole (output folder not writable, no thread pool,
+/// summary not written).
+pub fn run(inputs: &[String], opts: &BatchOptions, fitter: &dyn Fitter) -> Result<BatchSummary> {
+    std::fs::create_dir_all(&opts.out).map_err(|e| lustre_brdf::Error::io(&opts.out, e))?;
+    let mut jobs = Vec::new();
+    let mut taken = HashSet::new();
+    let mut push = |input: String, expand_error: Option<FitError>| {
+        let base = output_name(&input);
+        let mut name = base.clone();
+        let mut k = 2;
+        // "summary" would not clash (summary.csv vs summary.json), but keep names unique
+        // regardless of case so that case-insensitive file systems agree.
+        while !taken.insert(name.to_ascii_lowercase()) {
+            name = format!("{base}-{k}");
+            k += 1;
+        }
+        jobs.push(Job {
+            input,
+            name,
+            expand_error,
+        });
+    };
+    for input in inputs {
+        match fitter.expand(input) {
+            Ok(list) => list.into_iter().for_each(|i| push(i, None)),
+            Err(e) => push(input.clone(), Some(e)),
+        }
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(opts.jobs.max(1))
+        .build()
+        .map_err(|e| FitError::Option(format!("cannot start {} threads: {e}", opts.jobs)))?;
+    let bar = if opts.progress {
+        indicatif::ProgressBar::new(jobs.len() as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("fitting [{bar:40}] {pos}/{len} ({eta}) {msg}")
+    {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    let rows: Vec<SummaryRow> = pool.install(|| {
+        jobs.par_iter()
+            .map(|job| {
+                let row = run_one(job, opts, fitter);
+                bar.set_message(format!("{}: {}", row.name, status_str(row.status)));
+                bar.inc(1);
+                row
+            })
+            .collect()
+    });
+    bar.finish_and_clear();
+    let summary_path = opts.out.join(SUMMARY_FILE);
+    write_summary(&summary_path, &rows)?;
+    Ok(BatchSummary { rows, summary_path })
+}
+
+/// Writes the CSV summary atomically.
+pub fn write_summary(path: &Path, rows: &[SummaryRow]) -> Result<()> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let csv_err = |e: csv::Error| FitError::Option(format!("{}: {e}", path.display()));
+    for r in rows {
+        w.serialize(r).map_err(csv_err)?;
+    }
+    let bytes = w
+        .into_inner()
+        .map_err(|e| FitError::Option(format!("{}: {e}", path.display())))?;
+    lustre_brdf::error::write_atomic(path, &bytes)?;
+    Ok(())
+}
+
+/// The row of an existing output that can be reused, if any (see the module notes).
+fn reusable(path: &Path, job: &Job, settings: &FitSettings) -> Option<SummaryRow> {
+    let m = material::read(path).ok()?;
+    let f = m.fit.as_ref()?;
+    let status = parse_status(&f.status)?;
+    let same = f.source == job.input
+        && m.model.kind() == settings.model.as_str()
+        && f.options == settings.to_json()
+        && !is_failure(status)
+        && !input_is_newer(&job.input, path);
+    same.then(|| SummaryRow::new(&job.name, f, m.model.kind(), status, true))
+}
+
+/// Whether the input's data file (the path of a file input, the network file of
+/// `nbrdf:FILE#NAME`) was modified after `output` was written.
+fn input_is_newer(input: &str, output: &Path) -> bool {
+    let spec = input.strip_prefix("nbrdf:").unwrap_or(input);
+    let file = spec.rsplit_once('#').map_or(spec, |(f, _)| f);
+    let mtime = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+    match (mtime(Path::new(file)), mtime(output)) {
+        (Some(i), Some(o)) => i > o,
+        _ => false,
+    }
+}
+
+/// The status a fitting error maps to: bad data (unreadable or unusable input) or an error.
+fn error_status(e: &FitError) -> FitStatus {
+    match e {
+        FitError::Brdf(_) | FitError::Data { .. } => FitStatus::InvalidData,
+        FitError::Option(_) => FitStatus::Error,
+    }
+}
+
+fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
+    p.downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| p.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "unknown panic".into())
+}
+
+/// Fits one input (or reuses its output) and writes its JSON; never fails.
+fn run_one(job: &Job, opts: &BatchOptions, fitter: &dyn Fitter) -> SummaryRow {
+    let path = opts.out.join(format!("{}.json", job.name));
+    let settings = &opts.settings;
+    if !opts.force {
+        if let Some(row) = reusable(&path, job, settings) {
+            return row;
+        }
+    }
+    let t0 = Instant::now();
+    let result = match &job.expand_error {
+        Some(e) => Err((error_status(e), e.to_string())),
+        None => {
+            match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                fitter.fit(&job.input, settings)
+            })) {
+                Ok(Ok(f)) => Ok(f),
+                Ok(Err(e)) => Err((error_status(&e), e.to_string())),
+                Err(p) => Err((
+                    FitStatus::Error,
+                    format!("the fit panicked: {}", panic_message(p.as_ref())),
+                )),
+            }
+        }
+    };
+    let time_s = t0.elapsed().as_secs_f64();
+    let model = settings.model.as_str();
+    let mut record = FitRecord {
+        source: job.input.clone(),
+        errors: None,
+        albedo_data: None,
+        albedo_model: None,
+        time_s,
+        status: String::new(),
+        message: String::new(),
+        options: settings.to_json(),
+    };
+    let written = match result {
+        Ok(f) => {
+            record.errors = Some(f.errors);
+            record.albedo_data = Some(f.albedo_data);
+            record.albedo_model = Some(f.albedo_model);
+            record.status = status_str(f.status).into();
+            record.message = f.message;
+            let file = MaterialFile::new(job.name.clone(), f.model, Some(record.clone()));
+            match file.and_then(|m| material::write(&path, &m)) {
+                Ok(()) => Ok(f.status),
+                Err(e) => Err((
+                    FitStatus::Error,
+                    format!("the fit gave no valid material: {e}"),
+                )),
+            }
+        }
+        Err(e) => Err(e),
+    };
+    let status = match written {
+        Ok(s) => s,
+        Err((status, message)) => {
+            record.errors = None;
+            record.albedo_data = None;
+            record.albedo_model = None;
+            record.status = status_str(status).into();
+            record.message = message;
+            if let Err(e) = write_failure(&path, &job.name, &record) {
+                record.message = format!(
+                    "{}; the failure record was not written: {e}",
+                    record.message
+                );
+            }
+            status
+        }
+    };
+    SummaryRow::new(&job.name, &record, model, status, false)
+}
+
+/// Writes the [`FailureFile`] of a failed input atomically.
+fn write_failure(path: &Path, name: &str, record: &FitRecord) -> Result<()> {
+    let f = FailureFile {
+        schema: FAILURE_SCHEMA.into(),
+        version: 1,
+        name: name.to_string(),
+        fit: record.clone(),
+    };
+    let json = serde_json::to_string_pretty(&f)
+        .map_err(|e| FitError::Option(format!("{}: {e}", path.display())))?;
+    lustre_brdf::error::write_atomic(path, format!("{json}\n").as_bytes())?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lustre_brdf::material::LobeParams;
+    use lustre_brdf::Bsdf;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    /// A fitter by input name: `bad*` is unusable data, `panic*` panics, `nan*` returns a
+    /// model with a NaN parameter, `many` expands into two inputs, `noexpand` cannot be
+    /// expanded; anything else fits a fixed Kurt model. Counts its fits.
+    #[derive(Default)]
+    struct Mock {
+        fits: AtomicUsize,
+    }
+
+    fn kurt_model(mx: f64) -> MaterialModel {
+        MaterialModel::Kurt {
+            kd: [0.1, 0.2, 0.3],
+            reflection: vec![LobeParams {
+                ks: [0.5; 3],
+                mx,
+                my: 0.2,
+                r0: 0.9,
+                alpha: 0.0,
+            }],
+            transmission: vec![],
+        }
+    }
+
+    impl Fitter for Mock {
+        fn expand(&self, input: &str) -> Result<Vec<String>> {
+            match input {
+                "many" => Ok(vec![
+                    "nbrdf:set.json#red".into(),
+                    "nbrdf:set.json#blue".into(),
+                ]),
+                "noexpand" => Err(FitError::Data {
+                    input: input.into(),
+                    problem: "no such network file".into(),
+                }),
+                _ => Ok(vec![input.to_string()]),
+            }
+        }
+
+        fn fit(&self, input: &str, settings: &FitSettings) -> Result<Fitted> {
+            self.fits.fetch_add(1, Ordering::SeqCst);
+            let name = Path::new(input)
+                .file_name()
+                .map_or(input.into(), |n| n.to_string_lossy());
+            if name.starts_with("bad") {
+                return Err(FitError::Data {
+                    input: input.into(),
+                    problem: "all samples are zero".into(),
+                });
+            }
+            if name.starts_with("panic") {
+                panic!("index out of bounds in the mock");
+            }
+            let mx = if name.starts_with("nan") {
+                f64::NAN
+            } else {
+                0.1
+            };
+            Ok(Fitted {
+                model: kurt_model(mx),
+                status: if settings.refine {
+                    FitStatus::Converged
+                } else {
+                    FitStatus::NotConverged
+                },
+                message: String::new(),
+                errors: FitErrors {
+                    ngan_l2: [0.01, 0.02, 0.03],
+                    l1: [0.1, 0.2, 0.3],
+                },
+                albedo_data: [0.5; 3],
+                albedo_model: [0.45; 3],
+            })
+        }
+    }
+
+    fn options(out: &Path) -> BatchOptions {
+        BatchOptions {
+            settings: FitSettings::new(ModelChoice::Kurt),
+            jobs: 2,
+            force: false,
+            out: out.to_path_buf(),
+            progress: false,
+        }
+    }
+
+    fn mtime(p: &Path) -> std::time::SystemTime {
+        std::fs::metadata(p)
+            .and_then(|m| m.modified())
+            .expect("mtime")
+    }
+
+    fn csv_rows(p: &Path) -> Vec<csv::StringRecord> {
+        let mut r = csv::Reader::from_path(p).expect("csv");
+        let h = r.headers().expect("headers").clone();
+        assert_eq!(&h[0], "name");
+        assert_eq!(&h[3], "status");
+        assert_eq!(&h[4], "ngan_l2_r");
+        assert_eq!(h.len(), 19);
+        r.records().map(|x| x.expect("record")).collect()
+    }
+
+    #[test]
+    fn resume_skips_done_inputs_and_refits_corrupted_ones() {
+        let dir = tempfile::tempdir().expect("dir");
+        let inputs: Vec<String> = vec!["data/a.gonio".into(), "data/b.binary".into()];
+        let mock = Mock::default();
+        let opts = options(dir.path());
+        let s = run(&inputs, &opts, &mock).expect("batch");
+        assert_eq!(mock.fits.load(Ordering::SeqCst), 2);
+        assert_eq!((s.failed(), s.resumed()), (0, 0));
+        let (a, b) = (dir.path().join("a.json"), dir.path().join("b.json"));
+        let m = material::read(&a).expect("a material");
+        assert_eq!(m.fit.as_ref().map(|f| f.status.as_str()), Some("converged"));
+        let t_a = mtime(&a);
+
+        let s = run(&inputs, &opts, &mock).expect("resumed batch");
+        assert_eq!(
+            mock.fits.load(Ordering::SeqCst),
+            2,
+            "nothing is fitted again"
+        );
+        assert_eq!(s.resumed(), 2);
+        assert_eq!(mtime(&a), t_a, "a.json is not rewritten");
+        assert_eq!(s.rows[0].ngan_l2_g, Some(0.02));
+
+        std::fs::write(&b, b"{\"schema\": \"lustre-mat").expect("corrupt");
+        let s = run(&inputs, &opts, &mock).expect("batch");
+        assert_eq!(
+            mock.fits.load(Ordering::SeqCst),
+            3,
+            "only the corrupted one"
+        );
+        assert!(s.rows[0].resumed && !s.rows[1].resumed);
+        material::read(&b).expect("b rewritten");
+
+        let other = BatchOptions {
+            settings: FitSettings {
+                lobes: 2,
+                ..FitSettings::new(ModelChoice::Kurt)
+            },
+            ..options(dir.path())
+        };
+        run(&inputs, &other, &mock).expect("batch");
+        assert_eq!(mock.fits.load(Ordering::SeqCst), 5, "other options refit");
+        let forced = BatchOptions {
+            force: true,
+            ..other.clone()
+        };
+        let s = run(&inputs, &forced, &mock).expect("batch");
+        assert_eq!(mock.fits.load(Ordering::SeqCst), 7, "--force refits");
+        assert_eq!(s.resumed(), 0);
+        assert_eq!(csv_rows(&s.summary_path).len(), 2);
+        // The CT options ignore the lobe settings.
+        let ggx = |lobes| FitSettings {
+            lobes,
+            ..FitSettings::new(ModelChoice::Ggx)
+        };
+        assert_eq!(ggx(1).to_json(), ggx(3).to_json());
+        assert_ne!(
+            FitSettings::new(ModelChoice::Kurt).to_json(),
+            other.settings.to_json()
+        );
+    }
+
+    #[test]
+    fn failures_become_rows_and_the_batch_goes_on() {
+        let dir = tempfile::tempdir().expect("dir");
+        let inputs: Vec<String> = [
+            "x/good.gonio",
+            "x/bad.gonio",
+            "panic.dat",
+            "nan.bsdf",
+            "noexpand",
+            "many",
+        ]
+        .map(String::from)
+        .to_vec();
+        let mock = Mock::default();
+        let s = run(&inputs, &options(dir.path()), &mock).expect("batch");
+        let names: Vec<&str> = s.rows.iter().map(|r| r.name.as_str()).collect();
+        assert_eq!(
+            names,
+            ["good", "bad", "panic", "nan", "noexpand", "red", "blue"]
+        );
+        let status: Vec<&str> = s.rows.iter().map(|r| status_str(r.status)).collect();
+        assert_eq!(
+            status,
+            [
+                "converged",
+                "invalid-data",
+                "error",
+                "error",
+                "invalid-data",
+                "converged",
+                "converged"
+            ]
+        );
+        assert_eq!(s.failed(), 4);
+        assert!(s.rows[1].message.contains("all samples are zero"));
+        assert!(
+            s.rows[2].message.contains("panicked"),
+            "{}",
+            s.rows[2].message
+        );
+        assert!(s.rows[3].message.contains("mx"), "{}", s.rows[3].message);
+        assert!(s.rows[4].message.contains("no such network"));
+        assert_eq!(s.rows[1].ngan_l2_r, None);
+        let rows = csv_rows(&s.summary_path);
+        assert_eq!(rows.len(), 7);
+        assert_eq!(&rows[1][3], "invalid-data");
+        assert_eq!(&rows[1][4], "", "no numbers for a failed input");
+        assert_eq!(&rows[0][4], "0.01");
+        // A failure record is JSON the renderer refuses with a clear message.
+        let bad = dir.path().join("bad.json");
+        let f: FailureFile =
+            serde_json::from_slice(&std::fs::read(&bad).expect("bad.json")).expect("failure");
+        assert_eq!(
+            (f.schema.as_str(), f.fit.status.as_str()),
+            (FAILURE_SCHEMA, "invalid-data")
+        );
+        let e = material::read(&bad).unwrap_err().to_string();
+        assert!(e.contains(FAILURE_SCHEMA), "{e}");
+        // Resume retries the failures only.
+        let before = mock.fits.load(Ordering::SeqCst);
+        let s = run(&inputs, &options(dir.path()), &mock).expect("batch");
+        assert_eq!(mock.fits.load(Ordering::SeqCst), before + 3);
+        assert_eq!(s.resumed(), 3);
+    }
+
+    #[test]
+    fn output_names_are_safe_and_unique() {
+        assert_eq!(output_name("/data/merl/gold-paint.binary"), "gold-paint");
+        assert_eq!(output_name("nbrdf:nickel"), "nickel");
+        assert_eq!(output_name("nbrdf:/x/set.json#blue metal"), "blue-metal");
+        assert_eq!(output_name("t.gonio#quadrilinear"), "t-quadrilinear");
+        assert_eq!(output_name("../"), "input");
+        assert_eq!(output_name("nbrdf:/data/merl_nbrdf.json#*"), "merl_nbrdf");
+        assert_eq!(output_name(".hidden"), "hidden");
+        assert!(output_name(&"x".repeat(500)).len() <= 100);
+        for s in [
+            FitStatus::Converged,
+            FitStatus::NotConverged,
+            FitStatus::InvalidData,
+            FitStatus::Error,
+        ] {
+            assert_eq!(parse_status(status_str(s)), Some(s));
+            let json = serde_json::to_value(s).expect("json");
+            assert_eq!(json.as_str(), Some(status_str(s)));
+        }
+        let dir = tempfile::tempdir().expect("dir");
+        let inputs: Vec<String> = vec!["a/m.gonio".into(), "b/m.gonio".into(), "b/M.gonio".into()];
+        let opts = BatchOptions {
+            settings: FitSettings {
+                refine: false,
+                ..FitSettings::new(ModelChoice::Kurt)
+            },
+            ..options(dir.path())
+        };
+        let s = run(&inputs, &opts, &Mock::default()).expect("batch");
+        let names: Vec<&str> = s.rows.iter().map(|r| r.name.as_str()).collect();
+        assert_eq!(names, ["m", "m-2", "M-3"]);
+        assert_eq!(s.rows[0].status, FitStatus::NotConverged);
+        assert_eq!(s.failed(), 0, "not converged is a result, not a failure");
+    }
+
+    #[test]
+    fn a_changed_input_file_is_fitted_again() {
+        let dir = tempfile::tempdir().expect("dir");
+        let data = dir.path().join("t.gonio");
+        std::fs::write(&data, b"data").expect("write");
+        let out = dir.path().join("out");
+        let inputs = vec![data.to_string_lossy().into_owned()];
+        let mock = Mock::default();
+        run(&inputs, &options(&out), &mock).expect("batch");
+        run(&inputs, &options(&out), &mock).expect("batch");
+        assert_eq!(mock.fits.load(Ordering::SeqCst), 1);
+        let later = mtime(&out.join("t.json")) + std::time::Duration::from_secs(5);
+        std::fs::File::options()
+            .write(true)
+            .open(&data)
+            .and_then(|f| f.set_modified(later))
+            .expect("touch");
+        let s = run(&inputs, &options(&out), &mock).expect("batch");
+        assert_eq!(
+            mock.fits.load(Ordering::SeqCst),
+            2,
+            "the newer input is refitted"
+        );
+        assert_eq!(s.resumed(), 0);
+    }
+
+    /// The real fitter on a neural BRDF: the written model is the CT fit's own BSDF, and the
+    /// recorded metrics are those of that model.
+    #[test]
+    fn measured_fitter_writes_the_ct_fits_model() {
+        let input = "nbrdf:nickel";
+        let s = FitSettings::new(ModelChoice::Ggx);
+        let f = MeasuredFitter.fit(input, &s).expect("fit");
+        let data = data::load(input).expect("data");
+        let direct = ct::fit(
+            data.bsdf.as_ref(),
+            ct::Distribution::Ggx,
+            &ct::CtOptions::default(),
+        )
+        .expect("ct fit")
+        .to_bsdf("direct")
+        .expect("bsdf");
+        let ours = f.model.to_bsdf("ours").expect("bsdf");
+        for (ti, to, dphi) in [
+            (0.1, 0.1, 3.1),
+            (0.5, 0.4, 3.0),
+            (1.0, 0.3, 1.0),
+            (1.3, 1.2, 2.5),
+        ] {
+            let wi = lustre_brdf::frame::spherical(ti, 0.0);
+            let wo = lustre_brdf::frame::spherical(to, dphi);
+            let (a, b) = (direct.eval(wi, wo), ours.eval(wi, wo));
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() <= 1e-12 * a[c].abs().max(1e-300),
+                    "{a:?} {b:?}"
+                );
+            }
+        }
+        let r = metrics::evaluate(data.bsdf.as_ref(), &direct, data.transmission);
+        assert_eq!(f.errors.ngan_l2, r.ngan_l2);
+        assert_eq!(f.albedo_data, r.albedo_data);
+    }
+
+    #[test]
+    fn an_unwritable_output_folder_is_an_error() {
+        let dir = tempfile::tempdir().expect("dir");
+        let file = dir.path().join("file");
+        std::fs::write(&file, b"x").expect("write");
+        let e = run(
+            &["a.gonio".into()],
+            &options(&file.join("sub")),
+            &Mock::default(),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("file"), "{e}");
+    }
+}

@@ -17,17 +17,20 @@
 //!    parameters minimizing the Ngan-weighted residual Σ w (f − m)² over a fixed quadrature set
 //!    of direction pairs ([`crate::metrics::NganQuadrature`], 32 × 16 × 16 nodes in θh × θd ×
 //!    φd, the data evaluated once), with the SGD shadowing held at the numeric Smith G1 of the
-//!    two-slice (α, p) (Beckmann, GGX: closed forms). Variables ln ρd, ln ρs, ln α, ρs F0,
-//!    ρs F1 (and p); the result is kept only where it lowers the weighted error, recomputed with
+//!    two-slice (α, p) (Beckmann, GGX: closed forms). Variables ln ρd, ln α, A = ρs F0,
+//!    C = ρs F1, x with ρs = eˣ + (|A| + |C|)/[`F_MAX`] (and p); the result is kept only where it lowers the weighted error, recomputed with
 //!    the numeric G1 of the refined (α, p). For SGD a second refinement starts from the refined
-//!    Beckmann fit (SGD with p = 0, α = α_B² is Beckmann), and the better one is kept.
+//!    Beckmann fit (SGD with p = 0, α = α_B² is Beckmann). Among the two-slice fit and the
+//!    refined ones, the one with the lowest weighted error on the full default
+//!    [`crate::metrics::NganQuadrature`] (the metric's own nodes) is kept.
 //! 4. SGD: the Eq. V.3 shadowing approximation (λ, c, k) by `SgdG1Approx::fit` of the numeric
 //!    G1 table of the final (α, p), and kap = 1/(αΓ(1−p, α)).
 //!
 //! Every optimization is `levenberg_marquardt::LevenbergMarquardt` with a forward-difference
 //! Jacobian. Positivity and ranges come from the parametrization: ρd, ρs, Fr, α are exp of the
 //! LM variable (α clamped to [1e-5, 5]), SGD p = −1.9 + 4.8·sigmoid (inside the library's
-//! range), F0 and F1 free (the published fits hold F0 > 1 and F1 < 0).
+//! range); F0 and F1 may take either sign and exceed 1 (the published fits hold F0 up to 8.5
+//! and F1 < 0) but |F0|, |F1| ≤ [`F_MAX`] through the parametrization of ρs (steps 2 and 3).
 
 use crate::metrics::NganQuadrature;
 use crate::{FitError, FitStatus, Result};
@@ -269,6 +272,25 @@ fn ln_pos(v: f64) -> f64 {
     v.max(1e-26).ln()
 }
 
+/// Largest |F0|, |F1| a fit may reach (the published SGD fits stay below 8.5).
+pub const F_MAX: f64 = 10.0;
+
+/// (ρs, F0, F1) from the LM variables (x, A = ρs F0, C = ρs F1) with
+/// ρs = eˣ + (|A| + |C|)/F_MAX, so |F0|, |F1| ≤ F_MAX: without the bound, ρs → 0 with
+/// F0 → ∞ is a flat direction of the objective, and a tiny ρs would starve the specular lobe
+/// of importance samples (CookTorrance picks it with probability ∝ ρs).
+fn fresnel_of(x: f64, big_a: f64, big_c: f64) -> (f64, f64, f64) {
+    let rs = pos_of(x) + (big_a.abs() + big_c.abs()) / F_MAX;
+    (rs, big_a / rs, big_c / rs)
+}
+
+/// The LM variables of [`fresnel_of`] for (ρs, F0, F1) (F0, F1 clamped to ±F_MAX).
+fn fresnel_vars(rs: f64, f0: f64, f1: f64) -> [f64; 3] {
+    let (f0, f1) = (f0.clamp(-F_MAX, F_MAX), f1.clamp(-F_MAX, F_MAX));
+    let (a, c) = (rs * f0, rs * f1);
+    [ln_pos(rs - (a.abs() + c.abs()) / F_MAX), a, c]
+}
+
 /// A distribution with its parameters and precomputed normalization.
 #[derive(Clone, Copy, Debug)]
 struct Dist {
@@ -498,14 +520,15 @@ fn step2(
         }
     }
     let f = |x: &[f64], r: &mut [f64]| {
-        let (rs, f0, f1) = (pos_of(x[0]), x[1], x[2]);
+        let (rs, big_a, big_c) = (fresnel_of(x[0], x[1], x[2]).0, x[1], x[2]);
         for i in 0..n {
             let (m5, c) = basis[i];
-            r[i] = rs * (f0 + (1.0 - f0) * m5 - f1 * c) - y[i];
+            r[i] = big_a * (1.0 - m5) + rs * m5 - big_c * c - y[i];
         }
     };
-    let out = minimize(&f, n, &[ln_pos(rs), f0, f1]);
-    Ok(([pos_of(out.x[0]), out.x[1], out.x[2]], out.ok, out.evals))
+    let out = minimize(&f, n, &fresnel_vars(rs, f0, f1));
+    let (rs, f0, f1) = fresnel_of(out.x[0], out.x[1], out.x[2]);
+    Ok(([rs, f0, f1], out.ok, out.evals))
 }
 
 /// The fixed direction pairs of the refinement with their geometry and weights.
@@ -518,14 +541,16 @@ struct RefineSet {
     m: [Vec<f64>; 3],
 }
 
+/// The quadrature of the refinement LM.
+const REFINE_QUADRATURE: NganQuadrature = NganQuadrature {
+    theta_h_panels: 4,
+    theta_d_panels: 2,
+    phi_d: 16,
+    phi_h: 1,
+};
+
 impl RefineSet {
-    fn new(data: &dyn Bsdf) -> RefineSet {
-        let q = NganQuadrature {
-            theta_h_panels: 4,
-            theta_d_panels: 2,
-            phi_d: 16,
-            phi_h: 1,
-        };
+    fn new(data: &dyn Bsdf, q: &NganQuadrature) -> RefineSet {
         let pairs: Vec<_> = q.pairs(true).into_iter().flatten().collect();
         let vals: Vec<[f64; 3]> = pairs.par_iter().map(|p| data.eval(p.wi, p.wo).0).collect();
         let geo = pairs
@@ -620,9 +645,10 @@ fn refine_round(
     type Cache = Option<([f64; 2], Vec<f64>)>;
     let cache: std::sync::Mutex<Cache> = std::sync::Mutex::new(None);
     let f = |x: &[f64], r: &mut [f64]| {
-        let (rd, rs, a) = (pos_of(x[0]), pos_of(x[1]), alpha_of(x[2]));
+        let (rd, a) = (pos_of(x[0]), alpha_of(x[2]));
         let p = if sgd { p_of(x[5]) } else { 0.0 };
         let (big_a, big_c) = (x[3], x[4]);
+        let rs = fresnel_of(x[1], big_a, big_c).0;
         let mut guard = cache.lock().unwrap_or_else(|e| e.into_inner());
         let stale = guard.as_ref().is_none_or(|(k, _)| *k != [a, p]);
         if stale {
@@ -636,27 +662,22 @@ fn refine_round(
             }
         }
     };
-    let mut x0 = vec![
-        ln_pos(c.rho_d),
-        ln_pos(c.rho_s),
-        c.alpha.ln(),
-        c.rho_s * c.f0,
-        c.rho_s * c.f1,
-    ];
+    let [xs, big_a, big_c] = fresnel_vars(c.rho_s, c.f0, c.f1);
+    let mut x0 = vec![ln_pos(c.rho_d), xs, c.alpha.ln(), big_a, big_c];
     if sgd {
         x0.push(q_of(c.p));
     }
     let out = minimize(&f, n, &x0);
     let x = &out.x;
-    let rho_s = pos_of(x[1]);
+    let (rho_s, f0, f1) = fresnel_of(x[1], x[3], x[4]);
     let next = CtChannelFit {
         rho_d: pos_of(x[0]),
         rho_s,
         alpha: alpha_of(x[2]),
         p: if sgd { p_of(x[5]) } else { 0.0 },
         kap: 0.0,
-        f0: x[3] / rho_s,
-        f1: x[4] / rho_s,
+        f0,
+        f1,
         g1: None,
     };
     (next, out.ok, out.evals)
@@ -688,32 +709,23 @@ fn two_slice(
     Ok((c, ok1 && ok2, e1 + e2))
 }
 
-/// A refinement candidate: parameters, weighted cost (with the shadowing of its own (α, p)),
-/// shadowing, LM success.
+/// A refinement candidate: parameters, the shadowing of its own (α, p), LM success.
 struct Candidate {
     c: CtChannelFit,
-    cost: f64,
     g1: SgdG1,
     ok: bool,
 }
 
 impl Candidate {
-    fn new(
-        kind: Distribution,
-        c: CtChannelFit,
-        set: &RefineSet,
-        ch: usize,
-        ok: bool,
-    ) -> Result<Self> {
+    fn new(kind: Distribution, c: CtChannelFit, ok: bool) -> Result<Self> {
         let g1 = shadowing_of(kind, c.alpha, c.p)?;
-        let cost = refine_cost(kind, &c, &g1, set, ch);
-        Ok(Candidate { c, cost, g1, ok })
+        Ok(Candidate { c, g1, ok })
     }
 
     /// Refines from this candidate; returns the refined one and the evaluations.
     fn refine(&self, kind: Distribution, set: &RefineSet, ch: usize) -> Result<(Self, usize)> {
         let (next, ok, e) = refine_round(kind, &self.c, &self.g1, set, ch);
-        Ok((Candidate::new(kind, next, set, ch, ok)?, e))
+        Ok((Candidate::new(kind, next, ok)?, e))
     }
 }
 
@@ -725,32 +737,43 @@ fn fit_channel(
     kind: Distribution,
     ch: usize,
     slices: &Slices,
-    set: Option<&RefineSet>,
+    sets: Option<(&RefineSet, &RefineSet)>,
 ) -> Result<(CtChannelFit, bool, usize)> {
     let (c0, ok0, mut evals) = two_slice(input, kind, ch, slices)?;
     let (mut c, mut g1, mut ok) = (c0, shadowing_of(kind, c0.alpha, c0.p)?, ok0);
-    if let Some(set) = set {
-        let start = Candidate::new(kind, c0, set, ch, ok0)?;
+    if let Some((set, select)) = sets {
+        let start = Candidate::new(kind, c0, ok0)?;
         let (refined, e) = start.refine(kind, set, ch)?;
         evals += e;
         let mut cands = vec![start, refined];
         if kind == Distribution::Sgd {
-            let beck = Distribution::Beckmann;
-            let (b0, okb, eb) = two_slice(input, beck, ch, slices)?;
-            let (b1, eb1) = Candidate::new(beck, b0, set, ch, okb)?.refine(beck, set, ch)?;
-            let as_sgd = CtChannelFit {
-                alpha: (b1.c.alpha * b1.c.alpha).max(1e-5),
-                p: 0.0,
-                ..b1.c
+            // A failure here (e.g. a Beckmann α beyond the SGD's range) only drops the candidate.
+            let from_beckmann = || -> Result<(Candidate, Candidate, usize)> {
+                let beck = Distribution::Beckmann;
+                let (b0, okb, eb) = two_slice(input, beck, ch, slices)?;
+                let (b1, eb1) = Candidate::new(beck, b0, okb)?.refine(beck, set, ch)?;
+                let as_sgd = CtChannelFit {
+                    alpha: (b1.c.alpha * b1.c.alpha).clamp(LN_ALPHA.0.exp(), LN_ALPHA.1.exp()),
+                    p: 0.0,
+                    ..b1.c
+                };
+                let embedded = Candidate::new(kind, as_sgd, b1.ok)?;
+                let (s1, es) = embedded.refine(kind, set, ch)?;
+                Ok((embedded, s1, eb + eb1 + es))
             };
-            let (s1, es) = Candidate::new(kind, as_sgd, set, ch, b1.ok)?.refine(kind, set, ch)?;
-            evals += eb + eb1 + es;
-            cands.push(s1);
+            if let Ok((s0, s1, e)) = from_beckmann() {
+                evals += e;
+                cands.push(s0);
+                cands.push(s1);
+            }
         }
+        // Choose on the full Ngan quadrature (the refinement set is coarser).
         let best = cands
             .into_iter()
-            .filter(|k| k.cost.is_finite())
-            .min_by(|a, b| a.cost.total_cmp(&b.cost));
+            .map(|k| (refine_cost(kind, &k.c, &k.g1, select, ch), k))
+            .filter(|(cost, _)| cost.is_finite())
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, k)| k);
         if let Some(best) = best {
             (c, g1, ok) = (best.c, best.g1, ok && best.ok);
         }
@@ -833,10 +856,23 @@ pub fn fit(data: &dyn Bsdf, distribution: Distribution, opts: &CtOptions) -> Res
             return Err(err(format!("channel {c} is zero on the θd = 0 slice")));
         }
     }
-    let set = opts.refine.then(|| RefineSet::new(data));
+    let sets = opts.refine.then(|| {
+        (
+            RefineSet::new(data, &REFINE_QUADRATURE),
+            RefineSet::new(data, &NganQuadrature::default()),
+        )
+    });
     let fits: Vec<Result<(CtChannelFit, bool, usize)>> = (0..3)
         .into_par_iter()
-        .map(|ch| fit_channel(&input, distribution, ch, &slices, set.as_ref()))
+        .map(|ch| {
+            fit_channel(
+                &input,
+                distribution,
+                ch,
+                &slices,
+                sets.as_ref().map(|(a, b)| (a, b)),
+            )
+        })
         .collect();
     let mut channels = Vec::with_capacity(3);
     let (mut ok, mut iterations) = (true, 0);

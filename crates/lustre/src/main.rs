@@ -1,5 +1,8 @@
 //! The lustre command line: thin over the libraries.
 
+mod compare_cmd;
+mod demo_cmd;
+mod fit_cmd;
 mod merl_cmd;
 mod plot_cmd;
 
@@ -19,8 +22,14 @@ struct Cli {
 enum Command {
     /// Plot material lobes and transfer-probability arrays.
     Plot(plot_cmd::PlotArgs),
+    /// Fit Cook-Torrance (SGD, Beckmann, GGX) or Kurt models to measured inputs, in a batch.
+    Fit(fit_cmd::FitArgs),
     /// MERL tables: synthesize from a neural BRDF, inspect, list materials.
     Merl(merl_cmd::MerlArgs),
+    /// Render the built-in demo scene with regular sampling and print its PSNR.
+    Demo(demo_cmd::DemoArgs),
+    /// Regular sampling vs Colbert–Křivánek vs reference (002 Fig. 8–10, 000 Fig. 4.24).
+    Compare(compare_cmd::CompareArgs),
     /// List built-in materials, analytic models with their parameters, and published fits.
     List,
     /// Print a material's flags, albedo and a few values.
@@ -33,7 +42,10 @@ enum Command {
 fn main() -> anyhow::Result<()> {
     match Cli::parse().command {
         Command::Plot(args) => plot_cmd::run(&args),
+        Command::Fit(args) => fit_cmd::run(&args),
         Command::Merl(args) => merl_cmd::run(&args),
+        Command::Demo(args) => demo_cmd::run(&args),
+        Command::Compare(args) => compare_cmd::run(&args),
         Command::List => {
             println!("built-in materials:");
             for (name, what) in catalog::builtins() {

@@ -30,6 +30,7 @@ use crate::error::{check_range, Result};
 use crate::numeric::gauss_legendre;
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use nalgebra::{Dyn, Matrix, Owned, Vector, Vector3, U3};
+use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
 
 /// Closed-form Smith Λ for Beckmann (P22 = e^{−x/α²}/α²): (erf(a) − 1)/2 + e^{−a²}/(2a√π),
@@ -330,28 +331,41 @@ impl SgdG1Approx {
                 .map(|(&t, _)| t)
                 .unwrap_or(1.5)
         };
-        let mut best: Option<(Vector3<f64>, f64)> = None;
-        for &thr in &[1e-6, 1e-4, 1e-2, 0.2] {
-            let t0 = first_below(thr);
-            for &k in &[2.0, 6.0, 20.0, 60.0] {
-                for &lam in &[0.3, 3.0] {
-                    let w = (FRAC_PI_2 - t0).max(1e-4);
-                    let problem = G1Fit {
-                        theta: &theta,
-                        target: &target,
-                        x: Vector3::new(f64::ln(lam), w.ln(), f64::ln(k)),
-                    };
-                    let (done, _report) = LevenbergMarquardt::new()
-                        .with_patience(200)
-                        .minimize(problem);
-                    let x = done.x;
-                    let r = done.rms();
-                    if r.is_finite() && best.as_ref().is_none_or(|b| r < b.1) {
-                        best = Some((x, r));
-                    }
+        // The 32 starts are independent: run them in parallel (rayon), keep the lowest RMS,
+        // ties to the earlier start so the result does not depend on scheduling.
+        let starts: Vec<(f64, f64, f64)> = [1e-6, 1e-4, 1e-2, 0.2]
+            .iter()
+            .flat_map(|&thr| {
+                let t0 = first_below(thr);
+                [2.0, 6.0, 20.0, 60.0]
+                    .into_iter()
+                    .flat_map(move |k| [0.3, 3.0].into_iter().map(move |lam| (t0, k, lam)))
+            })
+            .collect();
+        let best = starts
+            .par_iter()
+            .enumerate()
+            .filter_map(|(i, &(t0, k, lam))| {
+                let w = (FRAC_PI_2 - t0).max(1e-4);
+                let problem = G1Fit {
+                    theta: &theta,
+                    target: &target,
+                    x: Vector3::new(f64::ln(lam), w.ln(), f64::ln(k)),
+                };
+                let (done, _report) = LevenbergMarquardt::new()
+                    .with_patience(200)
+                    .minimize(problem);
+                let r = done.rms();
+                r.is_finite().then_some((i, done.x, r))
+            })
+            .reduce_with(|a, b| {
+                if b.2 < a.2 || (b.2 == a.2 && b.0 < a.0) {
+                    b
+                } else {
+                    a
                 }
-            }
-        }
+            })
+            .map(|(_, x, r)| (x, r));
         let (x, rms) = best.unwrap_or((Vector3::new(0.0, 0.0, 0.0), f64::INFINITY));
         let (lambda, w, k) = params_of(&x);
         let l = (1.0 / lambda).ln_1p();

@@ -6,6 +6,9 @@
 //! `myt{j}`, `r0t{j}`, `alphat{j}`. A whole-colour name (`ks1`) applies to the three channels;
 //! a channel name (`ks1_g`) then overrides its channel.
 //!
+//! For isotropic data (the BSDF's flags say so) my is tied to mx (an isotropic lobe) unless
+//! `my{i}` (`myt{j}`) is fixed or given a range; for anisotropic data both are free.
+//!
 //! Default ranges: ks, kt ∈ [0, 1]; mx, my ∈ [0.001, 1] searched on a logarithmic scale;
 //! r0, α ∈ [0, 1]. kd is never searched: it comes from the histogram (000 §3.4.1) and is
 //! clamped to its range when one is given; the polish refines it within that range.
@@ -36,7 +39,7 @@ impl Param {
     }
 
     /// Maps a search coordinate back to a value.
-    pub fn from_coord(self, x: f64) -> f64 {
+    pub fn value_at(self, x: f64) -> f64 {
         match self {
             Param::Free { log: true, .. } => x.exp(),
             _ => x,
@@ -59,6 +62,8 @@ pub(crate) struct LobeSpace {
     pub ks: [Param; 3],
     /// mx, my, r0, α.
     pub shape: [Param; 4],
+    /// my is tied to mx (isotropic data, no `my{i}`/`myt{j}` given).
+    pub tie_my: bool,
 }
 
 /// The whole parameter space of a fit.
@@ -163,6 +168,7 @@ fn default_space(opts: &KurtOptions) -> Space {
     let lobe = LobeSpace {
         ks: [w; 3],
         shape: [m, m, w, w],
+        tie_my: false,
     };
     let kd = Param::Free {
         lo: 0.0,
@@ -201,7 +207,11 @@ fn assign(space: &mut Space, slot: Slot, p: Param) {
 }
 
 /// Validates the options and builds the parameter space.
-pub(crate) fn build_space(opts: &KurtOptions, transmission: bool) -> Result<Space> {
+pub(crate) fn build_space(
+    opts: &KurtOptions,
+    transmission: bool,
+    isotropic: bool,
+) -> Result<Space> {
     if opts.grid < 2 {
         return Err(FitError::Option(format!(
             "grid = {}: the brute-force search needs at least 2 values per parameter",
@@ -290,6 +300,12 @@ pub(crate) fn build_space(opts: &KurtOptions, transmission: bool) -> Result<Spac
         ));
     }
     let mut space = default_space(opts);
+    // Isotropic data: my follows mx unless my is given.
+    for (trans, lobes) in [(false, &mut space.refl), (true, &mut space.trans)] {
+        for (i, l) in lobes.iter_mut().enumerate() {
+            l.tie_my = isotropic && !entries.iter().any(|(s, _)| *s == Slot::Shape(trans, i, 1));
+        }
+    }
     // Whole-colour names first, so that channel names override them.
     entries.sort_by_key(|(s, _)| !s.is_group());
     for (slot, p) in entries {

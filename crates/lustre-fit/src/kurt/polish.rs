@@ -4,7 +4,7 @@
 //! pseudo-Huber loss ρ(e) = √(e² + δ²) − δ (≈ |e| for |e| ≫ δ, smooth at 0) with
 //! residuals r = sign(e)·√(a·ρ(e)), so that Σ r² = Σ a·ρ(e). δ is 1 % of the weighted mean
 //! |data|. All free parameters are polished jointly (kd, every ks/kt channel, mx, my, r0, α of
-//! every lobe; mx, my in ln), each clamped to its range. The Jacobian is taken by forward
+//! every lobe; mx, my in ln; a tied my follows mx), each clamped to its range. The Jacobian is taken by forward
 //! differences. The polished model is kept only when it lowers the true Eq. 3.7 error.
 
 use super::params::{Param, Space};
@@ -37,6 +37,8 @@ struct Problem<'a> {
     s: &'a Samples,
     base: Kurt,
     slots: Vec<Slot>,
+    /// Lobes whose my follows mx: (transmission?, index).
+    ties: Vec<(bool, usize)>,
     x: DVector<f64>,
     delta: f64,
     evaluations: Cell<usize>,
@@ -71,8 +73,10 @@ fn free_slots(space: &Space, model: &Kurt) -> (Vec<Slot>, Vec<f64>) {
                 push(Target::Ks(trans, i, c), sp.ks[c], l.ks[c]);
             }
             let vals = [l.mx, l.my, l.r0, l.alpha];
-            for k in 0..4 {
-                push(Target::Shape(trans, i, k), sp.shape[k], vals[k]);
+            for (k, (&param, &v)) in sp.shape.iter().zip(&vals).enumerate() {
+                if !(k == 1 && sp.tie_my) {
+                    push(Target::Shape(trans, i, k), param, v);
+                }
             }
         }
     }
@@ -84,7 +88,7 @@ impl Problem<'_> {
     fn model(&self, x: &DVector<f64>) -> Kurt {
         let mut m = self.base.clone();
         for (s, &xi) in self.slots.iter().zip(x.iter()) {
-            let v = s.param.from_coord(xi.clamp(s.lo, s.hi));
+            let v = s.param.value_at(xi.clamp(s.lo, s.hi));
             match s.target {
                 Target::Kd(c) => m.kd[c] = v,
                 Target::Ks(t, i, c) => {
@@ -109,6 +113,14 @@ impl Problem<'_> {
                     }
                 }
             }
+        }
+        for &(t, i) in &self.ties {
+            let l = if t {
+                &mut m.transmission[i]
+            } else {
+                &mut m.reflection[i]
+            };
+            l.my = l.mx;
         }
         m
     }
@@ -223,16 +235,26 @@ pub(crate) fn polish(s: &Samples, space: &Space, model: &Kurt) -> Polished {
         }
     }
     let delta = (0.01 * num / den.max(f64::MIN_POSITIVE)).max(1e-12);
+    let ties = [(false, &space.refl), (true, &space.trans)]
+        .into_iter()
+        .flat_map(|(t, v)| {
+            v.iter()
+                .enumerate()
+                .filter(|(_, l)| l.tie_my)
+                .map(move |(i, _)| (t, i))
+        })
+        .collect();
     let problem = Problem {
         s,
         base: model.clone(),
         slots,
+        ties,
         x: DVector::from_vec(x),
         delta,
         evaluations: Cell::new(0),
     };
     let (problem, report) = levenberg_marquardt::LevenbergMarquardt::new()
-        .with_patience(30)
+        .with_patience(15)
         .minimize(problem);
     Polished {
         model: problem.model(&problem.x),

@@ -2,9 +2,10 @@
 //!
 //! For every incident direction ωi of a small set (θi = 5°, 15°, …, 75°; φi = 0° for isotropic
 //! data, φi ∈ {0°, 45°, 90°} for anisotropic data) the outgoing directions are a regular
-//! (θo, φo) grid (4° × 8°, cell centres) plus a dense polar patch of radius 9° around the mirror
-//! direction (0.75° rings × 15° sectors) that replaces the grid cells inside it, so that sharp
-//! specular peaks are resolved. Each outgoing sample carries the solid angle of its cell as
+//! (θo, φo) grid (4.5° × 8°, cell centres) plus a dense polar patch of radius 9° around the mirror
+//! direction (a 0.05° cap, then 30 rings growing geometrically to 9°, × 22.5° sectors) that
+//! replaces the grid cells inside it, so that sharp specular peaks are integrated: a lobe too
+//! narrow for the metric to see would otherwise cost nothing and could take any ks. Each outgoing sample carries the solid angle of its cell as
 //! the weight w(ωo) of Eq. 3.7: for the regular grid that is sin θo·Δθ·Δφ, the thesis' sin θo
 //! correction. Transmission pairs use the same outgoing set mirrored through the surface plane.
 //!
@@ -29,15 +30,17 @@ use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// Regular grid step in θo (degrees).
-const GRID_DTHETA_DEG: f64 = 4.0;
+const GRID_DTHETA_DEG: f64 = 4.5;
 /// Regular grid step in φo (degrees).
 const GRID_DPHI_DEG: f64 = 8.0;
 /// Radius of the dense patch around the mirror direction (degrees).
 const PATCH_RADIUS_DEG: f64 = 9.0;
-/// Rings of the patch.
-const PATCH_RINGS: usize = 12;
+/// Radius of the central cap of the patch (degrees).
+const PATCH_INNER_DEG: f64 = 0.05;
+/// Rings of the patch between the cap and the radius (geometric spacing, ×1.19 per ring).
+const PATCH_RINGS: usize = 30;
 /// Sectors of the patch.
-const PATCH_SECTORS: usize = 24;
+const PATCH_SECTORS: usize = 16;
 /// Incident polar angles (degrees).
 const THETA_I_DEG: [f64; 8] = [5.0, 15.0, 25.0, 35.0, 45.0, 55.0, 65.0, 75.0];
 /// Incident azimuths for anisotropic data (degrees).
@@ -167,22 +170,27 @@ fn outgoing_directions(wi: DVec3) -> Vec<(DVec3, f64, bool)> {
             }
         }
     }
-    // The patch: a polar grid about r.
+    // The patch: a polar grid about r, rings geometrically spaced from PATCH_INNER_DEG to the
+    // radius so that lobes far sharper than the grid are still integrated, plus a central cap.
     let e1 = if r.z.abs() < 0.999 {
         DVec3::Z.cross(r).normalize()
     } else {
         DVec3::X
     };
     let e2 = r.cross(e1);
-    let dpsi = radius / PATCH_RINGS as f64;
+    let inner = PATCH_INNER_DEG.to_radians();
+    let bound = |k: usize| inner * (radius / inner).powf(k as f64 / PATCH_RINGS as f64);
+    v.push((r, 2.0 * PI * (1.0 - inner.cos()), false));
     let da = 2.0 * PI / PATCH_SECTORS as f64;
     for k in 0..PATCH_RINGS {
-        let psi = (k as f64 + 0.5) * dpsi;
+        let (b0, b1) = (bound(k), bound(k + 1));
+        let psi = 0.5 * (b0 + b1);
+        let w = (b0.cos() - b1.cos()) * da;
         for j in 0..PATCH_SECTORS {
             let a = (j as f64 + 0.5) * da;
             let wo = (psi.cos() * r + psi.sin() * (a.cos() * e1 + a.sin() * e2)).normalize();
             if wo.z > 1e-6 {
-                v.push((wo, psi.sin() * dpsi * da, false));
+                v.push((wo, w, false));
             }
         }
     }

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 /// alternation round) counts as settled.
 const SETTLE_TOL: f64 = 1e-3;
 /// Alternation rounds for more than one lobe (each round refits every lobe once).
-const MAX_ROUNDS: usize = 4;
+const MAX_ROUNDS: usize = 3;
 
 /// The outcome of a search.
 #[derive(Clone, Debug)]
@@ -22,15 +22,24 @@ pub(crate) struct Found {
     pub settled: bool,
     /// Whether the alternation of several lobes settled (true for one lobe).
     pub alternation_settled: bool,
+    /// The lobes of a one-lobe fit: the first search of the first round with the other lobes'
+    /// ks set to zero (a second start for the polish, see `fit`).
+    pub single: Vec<KurtLobe>,
     /// Lobe-shape evaluations over the pair set.
     pub evaluations: usize,
 }
 
 /// One dimension of the search: 0..4 the shape (mx, my, r0, α), 4..7 ks per channel.
+/// A tied my is a placeholder (one value) and follows mx in [`lobe_at`].
 fn dims(space: &LobeSpace) -> [Param; 7] {
     let s = space.shape;
     let k = space.ks;
-    [s[0], s[1], s[2], s[3], k[0], k[1], k[2]]
+    let my = if space.tie_my {
+        Param::Fixed(0.0)
+    } else {
+        s[1]
+    };
+    [s[0], my, s[2], s[3], k[0], k[1], k[2]]
 }
 
 /// Values tried in one dimension: `grid` equidistant coordinates in the box, or the fixed value.
@@ -47,13 +56,13 @@ fn values(p: Param, bx: Option<(f64, f64)>, grid: usize, out: &mut Vec<f64>) {
     }
 }
 
-/// A lobe from search coordinates.
-fn lobe_at(p: &[Param; 7], x: &[f64; 7]) -> KurtLobe {
-    let v = |d: usize| p[d].from_coord(x[d]);
+/// A lobe from search coordinates (my = mx when tied).
+fn lobe_at(p: &[Param; 7], x: &[f64; 7], tie_my: bool) -> KurtLobe {
+    let v = |d: usize| p[d].value_at(x[d]);
     KurtLobe {
         ks: Rgb::new(v(4), v(5), v(6)),
         mx: v(0),
-        my: v(1),
+        my: if tie_my { v(0) } else { v(1) },
         r0: v(2),
         alpha: v(3),
     }
@@ -65,6 +74,9 @@ fn lobe_at(p: &[Param; 7], x: &[f64; 7]) -> KurtLobe {
 /// cost is that of a 4-parameter search). Returns the lobe, whether the last level improved the
 /// error by less than [`SETTLE_TOL`] times the error without the lobe, and the number of shape
 /// evaluations.
+///
+/// With `start` (a refit in a later alternation round) the search begins where two levels of a
+/// full search would: a box of half the full width centred on `start`, for `levels − 2` levels.
 pub(crate) fn search_lobe(
     set: &PairSet,
     target: &[Vec<f64>; 3],
@@ -72,10 +84,23 @@ pub(crate) fn search_lobe(
     space: &LobeSpace,
     grid: usize,
     levels: usize,
+    start: Option<&KurtLobe>,
 ) -> (KurtLobe, bool, usize) {
     let p = dims(space);
     let full: [Option<(f64, f64)>; 7] = std::array::from_fn(|d| p[d].coord_range());
     let mut boxes = full;
+    let mut levels = levels;
+    if let Some(l) = start {
+        let v = [l.mx, l.my, l.r0, l.alpha, l.ks[0], l.ks[1], l.ks[2]];
+        for d in 0..7 {
+            if let Some((lo0, hi0)) = full[d] {
+                let c = p[d].to_coord(v[d]).clamp(lo0, hi0);
+                let hw = (hi0 - lo0) / 4.0;
+                boxes[d] = Some(((c - hw).max(lo0), (c + hw).min(hi0)));
+            }
+        }
+        levels = levels.saturating_sub(2).max(1);
+    }
     let mut vals: [Vec<f64>; 7] = Default::default();
     let mut best: Option<(f64, [f64; 7])> = None;
     let mut prev_level_err = f64::INFINITY;
@@ -110,7 +135,7 @@ pub(crate) fn search_lobe(
                         x[d] = vals_ref[d][rest % counts[d]];
                         rest /= counts[d];
                     }
-                    let lobe = lobe_at(&p, &x);
+                    let lobe = lobe_at(&p, &x, space.tie_my);
                     let c = LobeConst::new(&lobe, kind);
                     let mut gmax = 0.0f64;
                     for (t, o) in g.iter_mut().enumerate() {
@@ -132,7 +157,7 @@ pub(crate) fn search_lobe(
                                 .sum::<f64>();
                         let mut be = f64::INFINITY;
                         for &kc in &vals_ref[4 + ch] {
-                            let ks = p[4 + ch].from_coord(kc);
+                            let ks = p[4 + ch].value_at(kc);
                             let e = inactive
                                 + active
                                     .iter()
@@ -179,7 +204,7 @@ pub(crate) fn search_lobe(
         }
     }
     let x = best.map_or([0.0; 7], |b| b.1);
-    (lobe_at(&p, &x), settled, evaluations)
+    (lobe_at(&p, &x, space.tie_my), settled, evaluations)
 }
 
 /// `ks·g` of a lobe at every pair, per channel.
@@ -206,7 +231,8 @@ fn group_error(set: &PairSet, base: &[Vec<f64>; 3], contrib: &[[Vec<f64>; 3]]) -
 /// Fits `spaces.len()` lobes of one kind to `base` (the data minus the diffuse term) on `set`:
 /// one lobe at a time against the residual of the others with negative values clamped to zero
 /// (000 §3.4.1, multiple lobes), alternating rounds until the group error stops improving by
-/// [`SETTLE_TOL`] or [`MAX_ROUNDS`] rounds. The best round is kept.
+/// [`SETTLE_TOL`] or [`MAX_ROUNDS`] rounds (later rounds start each lobe's search around its
+/// previous value, see [`search_lobe`]). The best round is kept.
 pub(crate) fn fit_group(
     set: &PairSet,
     base: &[Vec<f64>; 3],
@@ -218,9 +244,10 @@ pub(crate) fn fit_group(
     let l = spaces.len();
     if l == 0 || set.len() == 0 {
         return Found {
-            lobes: spaces.iter().map(|s| zero_lobe(s)).collect(),
+            lobes: spaces.iter().map(zero_lobe).collect(),
             settled: true,
             alternation_settled: true,
+            single: spaces.iter().map(zero_lobe).collect(),
             evaluations: 0,
         };
     }
@@ -231,6 +258,7 @@ pub(crate) fn fit_group(
     let mut best: Option<(f64, Vec<KurtLobe>, bool)> = None;
     let mut alternation_settled = l == 1;
     let rounds = if l == 1 { 1 } else { MAX_ROUNDS };
+    let mut single: Vec<KurtLobe> = spaces.iter().map(zero_lobe).collect();
     let scale = group_error(set, base, &[]);
     for round in 0..rounds {
         let mut searches_settled = true;
@@ -248,9 +276,14 @@ pub(crate) fn fit_group(
                     })
                     .collect()
             });
-            let (lobe, settled, ev) = search_lobe(set, &target, kind, &spaces[k], grid, levels);
+            let start = (round > 0).then(|| lobes[k]);
+            let (lobe, settled, ev) =
+                search_lobe(set, &target, kind, &spaces[k], grid, levels, start.as_ref());
             evaluations += ev;
             searches_settled &= settled;
+            if round == 0 && k == 0 {
+                single[0] = lobe;
+            }
             let ck = contribution(set, &lobe, kind);
             if k < lobes.len() {
                 lobes[k] = lobe;
@@ -280,19 +313,25 @@ pub(crate) fn fit_group(
         lobes,
         settled: searches_settled && alternation_settled,
         alternation_settled,
+        single,
         evaluations,
     }
 }
 
-/// A lobe with zero weight (for a group without pairs): fixed values where given, otherwise the
-/// lower end of each range.
+/// A lobe with zero weight (for a group without pairs, or a placeholder beside a one-lobe fit):
+/// fixed values where given (a fixed ks included), otherwise ks = 0 and the lower end of each
+/// shape range.
 fn zero_lobe(s: &LobeSpace) -> KurtLobe {
     let v = |p: Param| match p {
         Param::Fixed(v) => v,
         Param::Free { lo, .. } => lo,
     };
+    let ks = |p: Param| match p {
+        Param::Fixed(v) => v,
+        Param::Free { .. } => 0.0,
+    };
     KurtLobe {
-        ks: Rgb::ZERO,
+        ks: Rgb::new(ks(s.ks[0]), ks(s.ks[1]), ks(s.ks[2])),
         mx: v(s.shape[0]),
         my: v(s.shape[1]),
         r0: v(s.shape[2]),

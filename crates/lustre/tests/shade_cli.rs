@@ -1,0 +1,97 @@
+//! End-to-end runs of `lustre demo` and `lustre compare` at tiny sizes, and their input errors.
+
+use std::process::Command;
+
+fn lustre() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_lustre"))
+}
+
+fn run_ok(cmd: &mut Command) -> String {
+    let out = cmd.output().expect("runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn run_err(cmd: &mut Command) -> String {
+    let out = cmd.output().expect("runs");
+    assert!(!out.status.success(), "unexpected success");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn demo_at_a_tiny_size_writes_a_png_and_prints_psnr() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let png = dir.path().join("demo.png");
+    let stdout = run_ok(
+        lustre()
+            .args(["demo", "--cpu", "--size", "48x27", "--samples", "4"])
+            .args(["--reference-spp", "16", "--out"])
+            .arg(&png),
+    );
+    assert!(stdout.contains("renderer: CPU"), "{stdout}");
+    let psnr: f64 = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("PSNR against the reference: "))
+        .and_then(|l| l.split(' ').next())
+        .and_then(|v| v.parse().ok())
+        .expect("a PSNR line");
+    assert!(psnr.is_finite() && psnr > 5.0, "{psnr}");
+    let bytes = std::fs::read(&png).expect("png written");
+    assert!(bytes.starts_with(b"\x89PNG"));
+}
+
+#[test]
+fn compare_with_a_tiny_configuration_writes_the_table() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("cmp");
+    let stdout = run_ok(
+        lustre()
+            .args(["compare", "--experiment", "002", "--size", "8"])
+            .args(["--reference-spp", "4", "--face-size", "16", "--out"])
+            .arg(&out),
+    );
+    assert!(stdout.contains("| iso-0.15 | 270 | CK |"), "{stdout}");
+    let md = std::fs::read_to_string(out.join("compare.md")).expect("compare.md");
+    assert!(md.contains("## Experiment 002") && !md.contains("## Experiment 000"));
+    assert!(
+        md.contains("| aniso-0.2-0.075 | 17 | regular (Pdf002) |"),
+        "{md}"
+    );
+    assert!(out.join("002_iso-0.1_reference.png").is_file());
+}
+
+#[test]
+fn bad_inputs_are_clear_errors() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let e = run_err(
+        lustre()
+            .args(["demo", "--size", "0x5", "--out"])
+            .arg(dir.path().join("a.png")),
+    );
+    assert!(e.contains("--size"), "{e}");
+    let e = run_err(
+        lustre()
+            .args(["demo", "--size", "big", "--out"])
+            .arg(dir.path().join("a.png")),
+    );
+    assert!(e.contains("WIDTHxHEIGHT"), "{e}");
+    let e = run_err(
+        lustre()
+            .args(["compare", "--experiment", "123", "--out"])
+            .arg(dir.path()),
+    );
+    assert!(e.contains("123"), "{e}");
+    let missing = dir.path().join("no-such-map.hdr");
+    let e = run_err(
+        lustre()
+            .args(["compare", "--face-size", "8", "--map"])
+            .arg(&missing)
+            .arg("--out")
+            .arg(dir.path()),
+    );
+    assert!(e.contains("no-such-map.hdr"), "{e}");
+}
