@@ -6,6 +6,7 @@
 //! order as lustre-env stores them, sampled trilinearly and seamlessly by the hardware.
 
 pub mod context;
+pub mod contract;
 pub mod cube;
 pub mod error;
 pub mod packed;
