@@ -1,1 +1,30 @@
 //! lustre-gpu: the regular-sampling kernel of lustre-shade in WGSL through wgpu, headless.
+//!
+//! `shade.wgsl` mirrors `lustre_shade::kernel::shade_regular` with `Weighting::Pdf002` (002 §4–7,
+//! the pseudo code `EvaluateSpecularLobe`) and the scene ray casting of `lustre_shade::scene`, in
+//! f32. The environment pyramid is one cube texture with all its mip levels, faces in Vulkan
+//! order as lustre-env stores them, sampled trilinearly and seamlessly by the hardware.
+//!
+//! Use: `GpuContext::new()?`, `GpuRenderer::new(&ctx)?`, then
+//! `renderer.render(&scene, &plans, &env, w, h)?` (one `MaterialPlan` per scene material) gives
+//! an `Image`. For repeated frames upload once ([`GpuScene::upload`], [`GpuEnvironment::new`],
+//! [`RenderTarget::new`]), [`GpuRenderer::bind`] them and time [`GpuRenderer::draw`]
+//! (dispatch + wait) apart from [`RenderTarget::read_back`].
+//!
+//! Measured (lavapipe on the shared 2-core machine, load ≈ 12): parity with the CPU kernel
+//! 122 dB PSNR (7 samples per lobe) and 129 dB (19) at 128×96; 1920×1080 frames of a screen
+//! full of one-lobe specular pixels 3.9 s (n = 3), 6.0 s (n = 11), 9.7 s (n = 19); half
+//! specular 4.2 s (n = 11); readback 29 ms; upload of a 256² pyramid 243 ms (`benches/frame.rs`).
+
+pub mod context;
+pub mod contract;
+pub mod cube;
+pub mod error;
+pub mod packed;
+pub mod shade;
+
+pub use context::GpuContext;
+pub use cube::{CubeLevelRef, GpuCube};
+pub use error::{GpuError, Result};
+pub use packed::{CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, PackedScene};
+pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_WGSL};

@@ -30,7 +30,8 @@ pub struct DemoArgs {
     /// Exposure of the PNG and of the PSNR.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f64,
-    /// Render on the CPU (the only renderer wired so far).
+    /// Render on the CPU (lustre-shade) instead of the GPU (lustre-gpu; without an adapter the
+    /// demo falls back to the CPU).
     #[arg(long)]
     pub cpu: bool,
 }
@@ -66,9 +67,19 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     if !(args.exposure > 0.0 && args.exposure.is_finite()) {
         bail!("--exposure {}: must be finite and > 0", args.exposure);
     }
-    if !args.cpu {
-        eprintln!("note: the GPU renderer is not wired into `lustre demo` yet; using the CPU");
-    }
+    let gpu = if args.cpu {
+        None
+    } else {
+        match lustre_gpu::GpuContext::new()
+            .and_then(|ctx| Ok((lustre_gpu::GpuRenderer::new(&ctx)?, ctx)))
+        {
+            Ok(g) => Some(g),
+            Err(e) => {
+                eprintln!("note: {e}; rendering on the CPU");
+                None
+            }
+        }
+    };
     let t0 = Instant::now();
     let base = CubeMap::from_fn(128, harness::procedural_sky)?;
     let env_setup = EnvSetup::new(base, MipFilter::Gauss6, 16)?;
@@ -86,26 +97,31 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         .collect::<Result<Vec<_>, _>>()?;
     let t_env = t0.elapsed().as_secs_f64();
 
-    let pb = bar("regular", h);
     let t1 = Instant::now();
-    let img = render::render_with_progress(
-        &scene,
-        w,
-        h,
-        |hit| {
-            kernel::shade_regular(
-                &hit.frame,
-                hit.wo,
-                &plans[hit.material],
-                &env,
-                Weighting::Pdf002,
-            )
-        },
-        harness::background(&env),
-        &|r| pb.set_position(r as u64),
-    );
+    let img = if let Some((renderer, _)) = &gpu {
+        renderer.render(&scene, &plans, &env, w, h)?
+    } else {
+        let pb = bar("regular", h);
+        let img = render::render_with_progress(
+            &scene,
+            w,
+            h,
+            |hit| {
+                kernel::shade_regular(
+                    &hit.frame,
+                    hit.wo,
+                    &plans[hit.material],
+                    &env,
+                    Weighting::Pdf002,
+                )
+            },
+            harness::background(&env),
+            &|r| pb.set_position(r as u64),
+        );
+        pb.finish_and_clear();
+        img
+    };
     let t_regular = t1.elapsed().as_secs_f64();
-    pb.finish_and_clear();
 
     let pb = bar("reference", h);
     let t2 = Instant::now();
@@ -119,10 +135,13 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         .with_context(|| format!("writing {}", args.out.display()))?;
     let psnr = metrics::psnr(&img, &reference, args.exposure)?;
     let rms = metrics::rms(&img, &reference)?;
-    println!(
-        "renderer: CPU (lustre-shade, {} threads)",
-        rayon::current_num_threads()
-    );
+    match &gpu {
+        Some((_, ctx)) => println!("renderer: GPU (lustre-gpu, {})", ctx.describe()),
+        None => println!(
+            "renderer: CPU (lustre-shade, {} threads)",
+            rayon::current_num_threads()
+        ),
+    }
     println!(
         "scene: 3 spheres (anisotropic metal, frosted glass, plastic) on a glossy floor, {w}×{h}, regular sampling ({} samples per lobe, 002 weighting)",
         args.samples

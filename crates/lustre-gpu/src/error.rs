@@ -1,0 +1,48 @@
+//! Errors of the GPU renderer.
+
+/// What can go wrong on the GPU side.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter at all: no GPU and no software rasterizer (install lavapipe:
+    /// `apt-get install mesa-vulkan-drivers libvulkan1`).
+    #[error(
+        "no GPU adapter found ({0}); install a Vulkan driver, e.g. lavapipe: \
+         apt-get install mesa-vulkan-drivers libvulkan1"
+    )]
+    NoAdapter(String),
+    /// The adapter refused to create a device.
+    #[error("the adapter {adapter} could not create a device: {message}")]
+    Device {
+        /// Adapter name.
+        adapter: String,
+        /// wgpu's message.
+        message: String,
+    },
+    /// A parameter outside what the renderer accepts (names the parameter).
+    #[error("invalid {parameter}: {message}")]
+    Invalid {
+        /// Which input.
+        parameter: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// A validation or out-of-memory error reported by wgpu while rendering.
+    #[error("wgpu reported an error during {stage}: {message}")]
+    Wgpu {
+        /// What was being done.
+        stage: &'static str,
+        /// wgpu's message.
+        message: String,
+    },
+}
+
+/// Result with [`GpuError`].
+pub type Result<T> = std::result::Result<T, GpuError>;
+
+/// Shorthand for an [`GpuError::Invalid`].
+pub(crate) fn invalid(parameter: impl Into<String>, message: impl Into<String>) -> GpuError {
+    GpuError::Invalid {
+        parameter: parameter.into(),
+        message: message.into(),
+    }
+}

@@ -1,0 +1,142 @@
+//! The scene, materials and sample patterns as flat GPU records (the layouts of `shade.wgsl`).
+
+use bytemuck::{Pod, Zeroable};
+use glam::DVec3;
+
+/// The camera basis of the contract's primary rays, computed in f64: fwd = normalize(target −
+/// eye), right = normalize(fwd × up), up' = right × fwd, a = tan(fov_y / 2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraBasis {
+    /// Ray origin.
+    pub eye: DVec3,
+    /// Viewing direction.
+    pub fwd: DVec3,
+    /// Image x axis.
+    pub right: DVec3,
+    /// Image y axis (up').
+    pub up: DVec3,
+    /// tan(fov_y / 2).
+    pub a: f64,
+}
+
+impl CameraBasis {
+    /// The basis of a camera at `eye` looking at `target` with the hint `up` and vertical field
+    /// of view `fov_y_deg` degrees.
+    pub fn new(eye: DVec3, target: DVec3, up: DVec3, fov_y_deg: f64) -> Self {
+        let fwd = (target - eye).normalize();
+        let right = fwd.cross(up).normalize();
+        let up = right.cross(fwd);
+        CameraBasis {
+            eye,
+            fwd,
+            right,
+            up,
+            a: (fov_y_deg.to_radians() / 2.0).tan(),
+        }
+    }
+
+    /// True when every component is finite (a degenerate camera gives NaN).
+    pub fn is_finite(&self) -> bool {
+        self.eye.is_finite()
+            && self.fwd.is_finite()
+            && self.right.is_finite()
+            && self.up.is_finite()
+            && self.a.is_finite()
+    }
+}
+
+/// A sphere (WGSL `Sphere`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSphere {
+    /// Centre.
+    pub center: [f32; 3],
+    /// Radius.
+    pub radius: f32,
+    /// Tangent axis: t = normalize(axis × n).
+    pub axis: [f32; 3],
+    /// Index into the materials.
+    pub material: u32,
+}
+
+/// A square (WGSL `Plane`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPlane {
+    /// Centre of the square.
+    pub point: [f32; 3],
+    /// Half the side length.
+    pub half_size: f32,
+    /// Normal.
+    pub normal: [f32; 3],
+    /// Index into the materials.
+    pub material: u32,
+    /// Tangent hint (orthogonalized against the normal).
+    pub tangent: [f32; 3],
+    /// Padding.
+    pub pad: u32,
+}
+
+/// A Kurt material (WGSL `Material`): kd and the range of its lobes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    /// Diffuse coefficient.
+    pub kd: [f32; 3],
+    /// First lobe (reflection lobes, then transmission lobes).
+    pub lobe_start: u32,
+    /// Number of reflection lobes.
+    pub reflection: u32,
+    /// Number of transmission lobes.
+    pub transmission: u32,
+    /// Padding.
+    pub pad: [u32; 2],
+}
+
+/// One Kurt lobe with its regular pattern (WGSL `Lobe`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLobe {
+    /// ks (kt for transmission).
+    pub ks: [f32; 3],
+    /// Roughness along the tangent.
+    pub mx: f32,
+    /// Roughness along the bitangent.
+    pub my: f32,
+    /// Schlick r0.
+    pub r0: f32,
+    /// Shadowing exponent α.
+    pub alpha: f32,
+    /// The pattern's threshold ξ0.
+    pub xi0: f32,
+    /// The pattern's PDF constant (002 Eq. 18).
+    pub pdf_constant: f32,
+    /// First half vector in the sample array.
+    pub sample_start: u32,
+    /// Number of half vectors.
+    pub sample_count: u32,
+    /// Padding.
+    pub pad: u32,
+}
+
+/// Everything `shade.wgsl` reads besides the environment, ready to upload.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PackedScene {
+    /// The camera.
+    pub camera: CameraBasis,
+    /// Spheres.
+    pub spheres: Vec<GpuSphere>,
+    /// Squares.
+    pub planes: Vec<GpuPlane>,
+    /// Materials.
+    pub materials: Vec<GpuMaterial>,
+    /// Lobes of all materials.
+    pub lobes: Vec<GpuLobe>,
+    /// Half vectors of all patterns (xyz, w = 0), in the lobe's local frame.
+    pub samples: Vec<[f32; 4]>,
+}
+
+/// f64 vector → f32 array.
+pub(crate) fn f3(v: DVec3) -> [f32; 3] {
+    [v.x as f32, v.y as f32, v.z as f32]
+}

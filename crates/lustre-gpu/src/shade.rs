@@ -1,0 +1,592 @@
+//! The compute pass of `shade.wgsl`: ray casting and the regular-sampling kernel, one invocation
+//! per pixel, into an Rgba32Float storage texture that is read back row by row.
+
+use crate::context::GpuContext;
+use crate::cube::{linear_sampler, CubeLevelRef, GpuCube};
+use crate::error::{invalid, GpuError, Result};
+use crate::packed::{f3, PackedScene};
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+/// The WGSL source of the kernel.
+pub const SHADE_WGSL: &str = include_str!("shade.wgsl");
+
+/// Workgroup edge of the compute shader (`@workgroup_size(8, 8, 1)`).
+const WORKGROUP: u32 = 8;
+
+/// The uniform block `Globals` of `shade.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct Globals {
+    eye: [f32; 4],
+    fwd: [f32; 4],
+    right: [f32; 4],
+    up: [f32; 4],
+    params: [f32; 4],
+    dims: [u32; 4],
+}
+
+/// The environment on the GPU: the filtered pyramid (all levels) and the irradiance cube.
+#[derive(Debug)]
+pub struct GpuEnvironment {
+    /// The pyramid, level l of face size max(1, N >> l).
+    pub pyramid: GpuCube,
+    /// The irradiance map (stores E(n)/π), one level.
+    pub irradiance: GpuCube,
+}
+
+impl GpuEnvironment {
+    /// Uploads the pyramid levels and the irradiance map.
+    pub fn from_levels(
+        ctx: &GpuContext,
+        pyramid: &[CubeLevelRef<'_>],
+        irradiance: CubeLevelRef<'_>,
+    ) -> Result<Self> {
+        Ok(GpuEnvironment {
+            pyramid: GpuCube::upload(ctx, "environment pyramid", pyramid)?,
+            irradiance: GpuCube::upload(ctx, "irradiance map", &[irradiance])?,
+        })
+    }
+}
+
+/// The scene buffers on the GPU.
+#[derive(Debug)]
+pub struct GpuScene {
+    camera: crate::packed::CameraBasis,
+    spheres: u32,
+    planes: u32,
+    buffers: [wgpu::Buffer; 5],
+}
+
+impl GpuScene {
+    /// Uploads a packed scene after checking that every index is in range and every value
+    /// finite.
+    pub fn upload(ctx: &GpuContext, scene: &PackedScene) -> Result<Self> {
+        check(scene)?;
+        let storage = |label: &str, bytes: &[u8]| {
+            // A binding may not be empty: one zero record stands in for an empty array.
+            let zeros = [0u8; 64];
+            let contents = if bytes.is_empty() { &zeros[..] } else { bytes };
+            ctx.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents,
+                    usage: wgpu::BufferUsages::STORAGE,
+                })
+        };
+        Ok(GpuScene {
+            camera: scene.camera,
+            spheres: scene.spheres.len() as u32,
+            planes: scene.planes.len() as u32,
+            buffers: [
+                storage("spheres", bytemuck::cast_slice(&scene.spheres)),
+                storage("planes", bytemuck::cast_slice(&scene.planes)),
+                storage("materials", bytemuck::cast_slice(&scene.materials)),
+                storage("lobes", bytemuck::cast_slice(&scene.lobes)),
+                storage("samples", bytemuck::cast_slice(&scene.samples)),
+            ],
+        })
+    }
+}
+
+/// Checks indices and finiteness of a packed scene.
+fn check(scene: &PackedScene) -> Result<()> {
+    if !scene.camera.is_finite() {
+        return Err(invalid(
+            "camera",
+            "degenerate (eye = target or up parallel to the view direction)",
+        ));
+    }
+    let nm = scene.materials.len() as u32;
+    let finite = |v: &[f32]| v.iter().all(|x| x.is_finite());
+    for (i, s) in scene.spheres.iter().enumerate() {
+        if s.material >= nm
+            || !finite(&s.center)
+            || !finite(&s.axis)
+            || !s.radius.is_finite()
+            || s.radius <= 0.0
+        {
+            return Err(invalid(
+                format!("sphere {i}"),
+                format!(
+                    "material {} of {nm}, or a non-finite/non-positive value",
+                    s.material
+                ),
+            ));
+        }
+    }
+    for (i, p) in scene.planes.iter().enumerate() {
+        if p.material >= nm
+            || !finite(&p.point)
+            || !finite(&p.normal)
+            || !finite(&p.tangent)
+            || p.half_size.is_nan()
+            || p.half_size <= 0.0
+        {
+            return Err(invalid(
+                format!("plane {i}"),
+                format!(
+                    "material {} of {nm}, a non-finite value or half_size {} ≤ 0",
+                    p.material, p.half_size
+                ),
+            ));
+        }
+    }
+    for (i, m) in scene.materials.iter().enumerate() {
+        let end = m.lobe_start as usize + m.reflection as usize + m.transmission as usize;
+        if end > scene.lobes.len() || !finite(&m.kd) {
+            return Err(invalid(
+                format!("material {i}"),
+                "lobe range outside the lobe array or non-finite kd",
+            ));
+        }
+    }
+    for (i, l) in scene.lobes.iter().enumerate() {
+        let end = l.sample_start as usize + l.sample_count as usize;
+        let values = [l.mx, l.my, l.r0, l.alpha, l.xi0, l.pdf_constant];
+        if end > scene.samples.len() || !finite(&l.ks) || !finite(&values) {
+            return Err(invalid(
+                format!("lobe {i}"),
+                "sample range outside the pattern array or a non-finite parameter",
+            ));
+        }
+        if l.mx <= 0.0 || l.my <= 0.0 || l.xi0 <= 0.0 || l.xi0 >= 1.0 {
+            return Err(invalid(
+                format!("lobe {i}"),
+                format!(
+                    "mx {}, my {} must be > 0 and xi0 {} in (0, 1)",
+                    l.mx, l.my, l.xi0
+                ),
+            ));
+        }
+    }
+    if !scene.samples.iter().all(|s| finite(s)) {
+        return Err(invalid("pattern", "non-finite half vector"));
+    }
+    Ok(())
+}
+
+/// A W×H Rgba32Float storage texture and the buffer it is read back through.
+#[derive(Debug)]
+pub struct RenderTarget {
+    texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    readback: wgpu::Buffer,
+    padded_row: u32,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+}
+
+impl RenderTarget {
+    /// Allocates a target of `width`×`height` pixels (both ≥ 1 and within the adapter's 2D limit).
+    pub fn new(ctx: &GpuContext, width: usize, height: usize) -> Result<Self> {
+        let max = ctx.device.limits().max_texture_dimension_2d as usize;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(invalid(
+                "image size",
+                format!("{width}×{height} is outside 1..={max} per side"),
+            ));
+        }
+        let (w, h) = (width as u32, height as u32);
+        let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("lustre-gpu target"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let padded_row = (w * 16).div_ceil(align) * align;
+        let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("lustre-gpu readback"),
+            size: u64::from(padded_row) * u64::from(h),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        Ok(RenderTarget {
+            texture,
+            view,
+            readback,
+            padded_row,
+            width: w,
+            height: h,
+        })
+    }
+
+    /// Copies the target to the host: row-major RGB, row 0 at the top.
+    pub fn read_back(&self, ctx: &GpuContext) -> Result<Vec<[f32; 3]>> {
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut enc = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("lustre-gpu readback"),
+            });
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.readback,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(self.padded_row),
+                    rows_per_image: Some(self.height),
+                },
+            },
+            wgpu::Extent3d {
+                width: self.width,
+                height: self.height,
+                depth_or_array_layers: 1,
+            },
+        );
+        ctx.queue.submit([enc.finish()]);
+        let slice = self.readback.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            // The receiver lives until the poll below has returned.
+            let _ = tx.send(r);
+        });
+        ctx.wait()?;
+        scope_result(scope, "readback")?;
+        rx.recv()
+            .map_err(|e| wgpu_error("readback", e))?
+            .map_err(|e| wgpu_error("readback", e))?;
+        let out = {
+            let view = slice
+                .get_mapped_range()
+                .map_err(|e| wgpu_error("readback", e))?;
+            let (w, row) = (self.width as usize, self.padded_row as usize);
+            let mut out = Vec::with_capacity(w * self.height as usize);
+            for y in 0..self.height as usize {
+                let px: &[f32] = bytemuck::cast_slice(&view[y * row..y * row + w * 16]);
+                out.extend(px.chunks_exact(4).map(|c| [c[0], c[1], c[2]]));
+            }
+            out
+        };
+        self.readback.unmap();
+        Ok(out)
+    }
+}
+
+fn buffer(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: b.as_entire_binding(),
+    }
+}
+
+fn wgpu_error(stage: &'static str, e: impl std::fmt::Display) -> GpuError {
+    GpuError::Wgpu {
+        stage,
+        message: e.to_string(),
+    }
+}
+
+fn scope_result(scope: wgpu::ErrorScopeGuard, stage: &'static str) -> Result<()> {
+    match pollster::block_on(scope.pop()) {
+        Some(e) => Err(wgpu_error(stage, e)),
+        None => Ok(()),
+    }
+}
+
+/// The compiled kernel: pipeline, bind group layout and sampler.
+#[derive(Debug)]
+pub struct GpuRenderer {
+    ctx: GpuContext,
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+}
+
+/// Everything bound for one dispatch: scene, environment and target.
+#[derive(Debug)]
+pub struct Frame {
+    bind_group: wgpu::BindGroup,
+    width: u32,
+    height: u32,
+}
+
+impl GpuRenderer {
+    /// Compiles `shade.wgsl` on `ctx`'s device.
+    pub fn new(ctx: &GpuContext) -> Result<Self> {
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = ctx
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("shade.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(SHADE_WGSL.into()),
+            });
+        let storage = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let cube = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                view_dimension: wgpu::TextureViewDimension::Cube,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let layout = ctx
+            .device
+            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("shade.wgsl"),
+                entries: &[
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 0,
+                        visibility: wgpu::ShaderStages::COMPUTE,
+                        ty: wgpu::BindingType::Buffer {
+                            ty: wgpu::BufferBindingType::Uniform,
+                            has_dynamic_offset: false,
+                            min_binding_size: None,
+                        },
+                        count: None,
+                    },
+                    storage(1),
+                    storage(2),
+                    storage(3),
+                    storage(4),
+                    storage(5),
+                    cube(6),
+                    cube(7),
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 8,
+                        visibility: wgpu::ShaderStages::COMPUTE,
+                        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                        count: None,
+                    },
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 9,
+                        visibility: wgpu::ShaderStages::COMPUTE,
+                        ty: wgpu::BindingType::StorageTexture {
+                            access: wgpu::StorageTextureAccess::WriteOnly,
+                            format: wgpu::TextureFormat::Rgba32Float,
+                            view_dimension: wgpu::TextureViewDimension::D2,
+                        },
+                        count: None,
+                    },
+                ],
+            });
+        let pipeline_layout = ctx
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("shade.wgsl"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+        let pipeline = ctx
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("shade.wgsl"),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+        scope_result(scope, "compiling shade.wgsl")?;
+        Ok(GpuRenderer {
+            ctx: ctx.clone(),
+            sampler: linear_sampler(ctx),
+            pipeline,
+            layout,
+        })
+    }
+
+    /// The context the renderer runs on.
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+
+    /// Binds a scene, an environment and a target for [`GpuRenderer::draw`].
+    pub fn bind(
+        &self,
+        scene: &GpuScene,
+        env: &GpuEnvironment,
+        target: &RenderTarget,
+    ) -> Result<Frame> {
+        let c = &scene.camera;
+        let w4 = |v: glam::DVec3| {
+            let a = f3(v);
+            [a[0], a[1], a[2], 0.0]
+        };
+        let globals = Globals {
+            eye: w4(c.eye),
+            fwd: w4(c.fwd),
+            right: w4(c.right),
+            up: w4(c.up),
+            params: [
+                c.a as f32,
+                (f64::from(target.width) / f64::from(target.height)) as f32,
+                (env.pyramid.levels - 1) as f32,
+                env.pyramid.size as f32,
+            ],
+            dims: [target.width, target.height, scene.spheres, scene.planes],
+        };
+        let uniform = self
+            .ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("globals"),
+                contents: bytemuck::bytes_of(&globals),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let scope = self
+            .ctx
+            .device
+            .push_error_scope(wgpu::ErrorFilter::Validation);
+        let bind_group = self
+            .ctx
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("shade.wgsl"),
+                layout: &self.layout,
+                entries: &[
+                    buffer(0, &uniform),
+                    buffer(1, &scene.buffers[0]),
+                    buffer(2, &scene.buffers[1]),
+                    buffer(3, &scene.buffers[2]),
+                    buffer(4, &scene.buffers[3]),
+                    buffer(5, &scene.buffers[4]),
+                    wgpu::BindGroupEntry {
+                        binding: 6,
+                        resource: wgpu::BindingResource::TextureView(&env.pyramid.view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 7,
+                        resource: wgpu::BindingResource::TextureView(&env.irradiance.view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 8,
+                        resource: wgpu::BindingResource::Sampler(&self.sampler),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 9,
+                        resource: wgpu::BindingResource::TextureView(&target.view),
+                    },
+                ],
+            });
+        scope_result(scope, "binding the frame")?;
+        Ok(Frame {
+            bind_group,
+            width: target.width,
+            height: target.height,
+        })
+    }
+
+    /// Dispatches the kernel over the frame's target and waits until the GPU has finished.
+    pub fn draw(&self, frame: &Frame) -> Result<()> {
+        let scope = self
+            .ctx
+            .device
+            .push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut enc = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("shade.wgsl"),
+            });
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("shade.wgsl"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &frame.bind_group, &[]);
+            pass.dispatch_workgroups(
+                frame.width.div_ceil(WORKGROUP),
+                frame.height.div_ceil(WORKGROUP),
+                1,
+            );
+        }
+        self.ctx.queue.submit([enc.finish()]);
+        self.ctx.wait()?;
+        scope_result(scope, "shading")
+    }
+
+    /// Uploads a packed scene and environment levels, renders `width`×`height` and reads the
+    /// pixels back (row-major RGB, row 0 at the top).
+    pub fn render_packed(
+        &self,
+        scene: &PackedScene,
+        env: &GpuEnvironment,
+        width: usize,
+        height: usize,
+    ) -> Result<Vec<[f32; 3]>> {
+        let gpu_scene = GpuScene::upload(&self.ctx, scene)?;
+        let target = RenderTarget::new(&self.ctx, width, height)?;
+        let frame = self.bind(&gpu_scene, env, &target)?;
+        self.draw(&frame)?;
+        target.read_back(&self.ctx)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::packed::{GpuLobe, GpuMaterial, GpuPlane, GpuSphere};
+    use wgpu::naga;
+
+    fn module() -> naga::Module {
+        match naga::front::wgsl::parse_str(SHADE_WGSL) {
+            Ok(m) => m,
+            Err(e) => panic!("{}", e.emit_to_string(SHADE_WGSL)),
+        }
+    }
+
+    #[test]
+    fn wgsl_parses_and_validates_with_naga() {
+        let m = module();
+        let mut v = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::empty(),
+        );
+        if let Err(e) = v.validate(&m) {
+            panic!("{}", e.emit_to_string(SHADE_WGSL));
+        }
+        assert!(m.entry_points.iter().any(|e| e.name == "main"));
+    }
+
+    /// The Rust records have the sizes WGSL gives the structs (storage/uniform layout).
+    #[test]
+    fn record_layouts_match_wgsl() {
+        let m = module();
+        let span = |name: &str| {
+            m.types
+                .iter()
+                .find(|(_, t)| t.name.as_deref() == Some(name))
+                .map(|(_, t)| match t.inner {
+                    naga::TypeInner::Struct { span, .. } => span as usize,
+                    _ => panic!("{name} is not a struct"),
+                })
+                .unwrap_or_else(|| panic!("no struct {name}"))
+        };
+        assert_eq!(span("Globals"), std::mem::size_of::<Globals>());
+        assert_eq!(span("Sphere"), std::mem::size_of::<GpuSphere>());
+        assert_eq!(span("Plane"), std::mem::size_of::<GpuPlane>());
+        assert_eq!(span("Material"), std::mem::size_of::<GpuMaterial>());
+        assert_eq!(span("Lobe"), std::mem::size_of::<GpuLobe>());
+    }
+}
