@@ -85,6 +85,13 @@ impl<DB: DrawingBackend> Pen<'_, DB> {
         let pts: Vec<(i32, i32)> = pts.iter().map(|&q| self.p(q)).collect();
         let style = color.stroke_width(self.len(width));
         match dash {
+            // One element per segment: plotters joins thick polylines with miters, which shoot
+            // far out of the panel where a sharp lobe turns back on itself (a narrow peak).
+            Dash::Solid if width > 1.0 => pts.windows(2).try_for_each(|seg| {
+                self.area
+                    .draw(&PathElement::new(seg.to_vec(), style))
+                    .map(|_| ())
+            }),
             Dash::Solid => self.area.draw(&PathElement::new(pts, style)),
             Dash::Dashed(on, off) => self.area.draw(&DashedPathElement::new(
                 pts,

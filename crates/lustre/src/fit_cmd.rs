@@ -231,7 +231,7 @@ fn row_line(r: &SummaryRow) -> String {
     s
 }
 
-/// `lustre plot INPUT --compare OUT/NAME.json --out OUT/plots/NAME` with the plot defaults;
+/// `lustre plot INPUT --compare OUT/NAME.json --cube-root --out OUT/plots/NAME`;
 /// skipped for a resumed input whose plot folder is not empty.
 fn plot_row(out: &Path, r: &SummaryRow) -> Result<()> {
     let dir = out.join("plots").join(&r.name);
@@ -251,6 +251,8 @@ fn plot_row(out: &Path, r: &SummaryRow) -> Result<()> {
         dir.as_os_str(),
         "--compare".as_ref(),
         json.as_os_str(),
+        // Narrow measured lobes and their diffuse floor on one readable scale (004 Fig. V.11).
+        "--cube-root".as_ref(),
         "--".as_ref(),
         r.input.as_ref(),
     ])
