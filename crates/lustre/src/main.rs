@@ -40,6 +40,7 @@ enum Command {
 }
 
 fn main() -> anyhow::Result<()> {
+    quiet_vulkan_loader();
     match Cli::parse().command {
         Command::Plot(args) => plot_cmd::run(&args),
         Command::Fit(args) => fit_cmd::run(&args),
@@ -88,4 +89,24 @@ fn info(spec: &str) -> anyhow::Result<()> {
         v[0], v[1], v[2]
     );
     Ok(())
+}
+
+/// The Vulkan loader prints "XDG_RUNTIME_DIR is invalid or not set" on headless machines; give it
+/// a private runtime folder when none is set. Runs first, before any thread exists.
+fn quiet_vulkan_loader() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_dir()) {
+        return;
+    }
+    let user = std::env::var("USER").unwrap_or_else(|_| "user".into());
+    let dir = std::env::temp_dir().join(format!("lustre-xdg-{user}"));
+    #[cfg(unix)]
+    let made = {
+        use std::os::unix::fs::DirBuilderExt;
+        std::fs::DirBuilder::new().mode(0o700).create(&dir).is_ok() || dir.is_dir()
+    };
+    #[cfg(not(unix))]
+    let made = std::fs::create_dir(&dir).is_ok() || dir.is_dir();
+    if made {
+        std::env::set_var("XDG_RUNTIME_DIR", &dir);
+    }
 }
