@@ -248,7 +248,7 @@ impl MaterialModel {
                 let lobes = |v: &[LobeParams], what: &str| -> Result<Vec<KurtLobe>> {
                     v.iter()
                         .enumerate()
-                        .map(|(i, l)| l.to_lobe().map_err(|e| in_lobe(e, what, i)))
+                        .map(|(i, l)| l.to_lobe().map_err(|e| located(e, &format!("{what}[{i}]"))))
                         .collect()
                 };
                 Kurt::new(
@@ -272,7 +272,10 @@ impl MaterialModel {
             } => {
                 let mut out = Vec::with_capacity(3);
                 for (c, ch) in channels.iter().zip(["r", "g", "b"]) {
-                    out.push(c.to_channel(*distribution).map_err(|e| in_channel(e, ch))?);
+                    out.push(
+                        c.to_channel(*distribution)
+                            .map_err(|e| located(e, &format!("channels.{ch}")))?,
+                    );
                 }
                 let out: [CtChannel; 3] = out
                     .try_into()
@@ -302,31 +305,16 @@ impl MaterialModel {
     }
 }
 
-/// Prefixes a parameter error with the lobe it belongs to (`reflection[0].mx`).
-fn in_lobe(e: Error, what: &str, i: usize) -> Error {
+/// Prefixes a parameter error with where it sits in the file (`reflection[0].mx`,
+/// `channels.g.alpha`).
+fn located(e: Error, prefix: &str) -> Error {
     match e {
         Error::Parameter {
             name,
             value,
             reason,
         } => Error::Parameter {
-            name: format!("{what}[{i}].{name}"),
-            value,
-            reason,
-        },
-        other => other,
-    }
-}
-
-/// Prefixes a parameter error with its channel (`channels.g.alpha`).
-fn in_channel(e: Error, ch: &str) -> Error {
-    match e {
-        Error::Parameter {
-            name,
-            value,
-            reason,
-        } => Error::Parameter {
-            name: format!("channels.{ch}.{name}"),
+            name: format!("{prefix}.{name}"),
             value,
             reason,
         },

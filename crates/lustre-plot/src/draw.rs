@@ -1,7 +1,7 @@
 //! Shared drawing plumbing: one figure description rendered to PNG and SVG, atomic output,
 //! text that is skipped when no font is available, and tick formatting.
 
-use crate::{parent_dir, PlotError, Result};
+use crate::{parent_dir, with_suffix, PlotError, PlotFiles, Result};
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
@@ -145,6 +145,18 @@ impl<DB: DrawingBackend> Pen<'_, DB> {
 }
 
 /// Renders `fig` into a PNG at `path` atomically (temporary file beside it, then a rename).
+/// Writes `{out_base}.png` and `{out_base}.svg` of one figure.
+pub(crate) fn write_png_svg<F: Figure>(fig: &F, out_base: &Path) -> Result<PlotFiles> {
+    let png = with_suffix(out_base, "png");
+    let svg = with_suffix(out_base, "svg");
+    write_png(fig, &png)?;
+    write_svg(fig, &svg)?;
+    Ok(PlotFiles {
+        png,
+        svg: Some(svg),
+    })
+}
+
 pub(crate) fn write_png<F: Figure>(fig: &F, path: &Path) -> Result<()> {
     let dir = parent_dir(path);
     let tmp = builder()

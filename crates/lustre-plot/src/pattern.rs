@@ -8,8 +8,8 @@
 //! Samples are coloured by q(h) (1 at the centre, ξ0 at the border).
 
 use crate::color::colormap;
-use crate::draw::{fmt_deg, nice_ceil, write_png, write_svg, Dash, DrawResult, Figure, Pen};
-use crate::{with_suffix, PlotError, PlotFiles, Result};
+use crate::draw::{fmt_deg, nice_ceil, write_png_svg, Dash, DrawResult, Figure, Pen};
+use crate::{PlotError, PlotFiles, Result};
 use lustre_brdf::DVec3;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, VPos};
@@ -146,14 +146,7 @@ pub fn pattern_plot(
         opts: opts.clone(),
         extent: nice_ceil(extent * 1.08).min(90.0),
     };
-    let png = with_suffix(out_base, "png");
-    let svg = with_suffix(out_base, "svg");
-    write_png(&fig, &png)?;
-    write_svg(&fig, &svg)?;
-    Ok(PlotFiles {
-        png,
-        svg: Some(svg),
-    })
+    write_png_svg(&fig, out_base)
 }
 
 const TITLE_H: f64 = 50.0;

@@ -4,10 +4,8 @@
 //! scatters into it.
 
 use crate::color::{CHANNEL, PALETTE};
-use crate::draw::{
-    fmt_deg, fmt_value, nice_ceil, write_png, write_svg, Dash, DrawResult, Figure, Pen,
-};
-use crate::{check_angle, clean, with_suffix, PlotError, PlotFiles, Result};
+use crate::draw::{fmt_deg, fmt_value, nice_ceil, write_png_svg, Dash, DrawResult, Figure, Pen};
+use crate::{check_angle, clean, PlotError, PlotFiles, Result};
 use lustre_brdf::frame::{deg, spherical};
 use lustre_brdf::{Bsdf, DVec3, Rgb};
 use plotters::prelude::*;
@@ -213,14 +211,7 @@ pub fn polar_plot(
         bsdfs.iter().map(|(_, l)| l.to_string()).collect(),
         opts.clone(),
     );
-    let png = with_suffix(out_base, "png");
-    let svg = with_suffix(out_base, "svg");
-    write_png(&fig, &png)?;
-    write_svg(&fig, &svg)?;
-    Ok(PlotFiles {
-        png,
-        svg: Some(svg),
-    })
+    write_png_svg(&fig, out_base)
 }
 
 const TITLE_H: i32 = 58;
