@@ -86,6 +86,34 @@ fn delta_models() -> Vec<Box<dyn Bsdf>> {
     ]
 }
 
+/// The model seen from the other side (both directions mirrored through the surface plane): the
+/// shared quadratures integrate around an upper `wo`.
+#[derive(Debug)]
+struct Flipped<'a>(&'a dyn Bsdf);
+
+impl Bsdf for Flipped<'_> {
+    fn name(&self) -> String {
+        format!("{} (flipped)", self.0.name())
+    }
+    fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
+        self.0.eval(mirror_z(wi), mirror_z(wo))
+    }
+    fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<lustre_brdf::BsdfSample> {
+        self.0
+            .sample(mirror_z(wo), u1, u2)
+            .map(|s| lustre_brdf::BsdfSample {
+                wi: mirror_z(s.wi),
+                ..s
+            })
+    }
+    fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
+        self.0.pdf(mirror_z(wi), mirror_z(wo))
+    }
+    fn flags(&self) -> lustre_brdf::BsdfFlags {
+        self.0.flags()
+    }
+}
+
 /// `wo` on both sides for transmissive models, above the surface otherwise.
 fn directions(b: &dyn Bsdf) -> Vec<DVec3> {
     let mut d = test_directions();
@@ -101,7 +129,7 @@ fn chi_square_pdf_normalization_and_delta_frequencies() {
     let n_tests: usize = models.iter().map(|m| directions(m.as_ref()).len()).sum();
     for (mi, m) in models.iter().enumerate() {
         for (di, wo) in directions(m.as_ref()).into_iter().enumerate() {
-            let r = chi2_test(m.as_ref(), wo, 16, 60_000, 2000 + (mi * 16 + di) as u64);
+            let r = chi2_test(m.as_ref(), wo, 16, 40_000, 2000 + (mi * 16 + di) as u64);
             assert!(r.passed(0.01, n_tests), "{} at wo={wo:?}: {r:?}", m.name());
             if m.flags().delta_only() {
                 assert_eq!(r.pdf_integral, 0.0, "{}", m.name());
@@ -109,8 +137,14 @@ fn chi_square_pdf_normalization_and_delta_frequencies() {
                 continue;
             }
             // ∫pdf (quadrature) = fraction of non-delta successes; ∫pdf + delta ≤ 1.
-            let integral = pdf_integral(m.as_ref(), wo, &quad());
-            let frac = sample_success_fraction(m.as_ref(), wo, 40_000, 7 + di as u64);
+            let flipped = Flipped(m.as_ref());
+            let (b, wq): (&dyn Bsdf, DVec3) = if wo.z < 0.0 {
+                (&flipped, mirror_z(wo))
+            } else {
+                (m.as_ref(), wo)
+            };
+            let integral = pdf_integral(b, wq, &quad());
+            let frac = sample_success_fraction(b, wq, 40_000, 7 + di as u64);
             assert!(
                 (integral - frac).abs() < 1.2e-2 && integral + r.delta_fraction <= 1.0 + 1e-2,
                 "{} at wo={wo:?}: ∫pdf = {integral}, success = {frac}, delta {}",
@@ -221,7 +255,7 @@ fn white_furnace_and_energy() {
                 )
                 .unwrap(),
             ),
-            0.9,
+            0.86,
         ),
         (
             Box::new(
@@ -232,31 +266,27 @@ fn white_furnace_and_energy() {
                 )
                 .unwrap(),
             ),
-            0.9,
+            0.97,
         ),
         (
             Box::new(RoughDielectric::new(dist(Ggx, 0.05, 0.05), 1.5, 1.0).unwrap()),
-            0.98,
+            0.99,
         ),
         (
             Box::new(RoughDielectric::new(dist(Beckmann, 0.4, 0.2), 1.5, 1.0).unwrap()),
-            0.85,
+            0.99,
         ),
         (
             Box::new(RoughPlastic::new(Ggx, 0.1, Rgb::ONE, Rgb::ONE, 1.5, 1.0, false).unwrap()),
-            0.9,
+            0.89,
         ),
         (
             Box::new(RoughPlastic::new(Beckmann, 0.5, Rgb::ONE, Rgb::ONE, 1.5, 1.0, true).unwrap()),
-            0.85,
-        ),
-        (
-            Box::new(PbrMetallicRoughness::new(Rgb::ONE, 0.0, 0.5).unwrap()),
-            0.85,
+            0.72,
         ),
         (
             Box::new(PbrMetallicRoughness::new(Rgb::ONE, 1.0, 0.2).unwrap()),
-            0.9,
+            0.98,
         ),
     ];
     for (m, normal_min) in &lossy {
@@ -270,6 +300,7 @@ fn white_furnace_and_energy() {
                 let a = flux_albedo(m.as_ref(), wo, 1 << 15);
                 worst = worst.max(a);
                 if t == 0.0 && wo.z > 0.0 {
+                    println!("{}: flux albedo at normal incidence {a:.4}", m.name());
                     assert!(a > *normal_min, "{} at normal incidence: {a}", m.name());
                 }
             }
@@ -277,6 +308,18 @@ fn white_furnace_and_energy() {
         println!("{}: max flux albedo {worst:.4}", m.name());
         assert!(worst <= 1.0 + 5e-3, "{}: flux albedo {worst}", m.name());
     }
+    // The glTF dielectric mix (1 − F(wo·h))·c/π + F·specular is not energy conserving: white, it
+    // reflects up to 1.116 at grazing incidence (measured). Not promised, and measured here.
+    let pbr = PbrMetallicRoughness::new(Rgb::ONE, 0.0, 0.5).unwrap();
+    assert!(!pbr.flags().energy_conserving);
+    let a: Vec<f64> = THETAS
+        .iter()
+        .map(|&t| flux_albedo(&pbr, spherical(t, 0.4), 1 << 15))
+        .collect();
+    println!("glTF white dielectric, roughness 0.5: albedo over θo {a:.4?}");
+    assert!((a[0] - 0.9966).abs() < 2e-3, "{a:?}");
+    let max = a.iter().cloned().fold(0.0, f64::max);
+    assert!(max > 1.1 && max < 1.13, "{a:?}");
 }
 
 #[test]
@@ -578,4 +621,368 @@ fn rough_plastic_extremes_are_finite() {
     }
     assert!(RoughPlastic::new(Ggx, 0.1, Rgb::splat(1.1), Rgb::ONE, 1.5, 1.0, false).is_err());
     assert!(RoughPlastic::new(Ggx, f64::NAN, Rgb::ONE, Rgb::ONE, 1.5, 1.0, false).is_err());
+}
+
+/// Mitsuba 3.9.1 `scalar_rgb` values for the same plugins, produced by
+/// `bsdf.eval(ctx, si, wi) / |cos θi|` and `bsdf.pdf(ctx, si, wi)` with `si.wi` = our `wo`
+/// (viewer) and `wi` the light, directions given as (θ, φ): (plugin, wo, wi, f RGB, pdf).
+/// Plugins: rc_ggx_au = roughconductor(ggx, α 0.3, Au); rc_beck_cu = roughconductor(beckmann,
+/// αu 0.1, αv 0.3, Cu); rd_ggx = roughdielectric(ggx, α 0.3, 1.5/1.0); rp_ggx_nl =
+/// roughplastic(ggx, α 0.1, 1.5/1.0, nonlinear, diffuse (0.6, 0.4, 0.2)); rp_beck =
+/// roughplastic(beckmann, α 0.3, 1.5/1.0, diffuse 0.5); plastic = plastic(1.5/1.0, diffuse
+/// (0.1, 0.5, 0.9)).
+#[allow(clippy::type_complexity)]
+const MITSUBA: &[(&str, [f64; 2], [f64; 2], [f64; 3], f64)] = &[
+    (
+        "rc_ggx_au",
+        [0.3, 0.2],
+        [0.5, 3.0],
+        [7.656163639e-01, 6.351437817e-01, 2.572324671e-01],
+        6.997475624e-01,
+    ),
+    (
+        "rc_ggx_au",
+        [1.0, -0.5],
+        [0.8, 2.4],
+        [1.202594985e+00, 9.990433618e-01, 4.305814927e-01],
+        8.890848160e-01,
+    ),
+    (
+        "rc_ggx_au",
+        [0.1, 0.0],
+        [0.15, 3.2],
+        [8.570460046e-01, 7.110516462e-01, 2.873678954e-01],
+        8.770834804e-01,
+    ),
+    (
+        "rc_ggx_au",
+        [1.3, 1.0],
+        [1.2, -2.0],
+        [2.928817285e+00, 2.518347213e+00, 1.366195827e+00],
+        1.252045393e+00,
+    ),
+    (
+        "rc_ggx_au",
+        [0.6, 0.4],
+        [2.5, 3.3],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "rc_ggx_au",
+        [2.6, 0.3],
+        [0.7, 3.1],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "rc_ggx_au",
+        [2.8, 1.0],
+        [2.9, -2.0],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "rc_beck_cu",
+        [0.3, 0.2],
+        [0.5, 3.0],
+        [1.062534081e+00, 6.917269378e-01, 5.700859480e-01],
+        9.795786142e-01,
+    ),
+    (
+        "rc_beck_cu",
+        [1.0, -0.5],
+        [0.8, 2.4],
+        [3.864314476e-01, 2.526803876e-01, 2.112311120e-01],
+        2.837549448e-01,
+    ),
+    (
+        "rc_beck_cu",
+        [0.1, 0.0],
+        [0.15, 3.2],
+        [2.415328494e+00, 1.572441840e+00, 1.295314814e+00],
+        2.508581638e+00,
+    ),
+    (
+        "rc_beck_cu",
+        [1.3, 1.0],
+        [1.2, -2.0],
+        [3.152857648e-01, 2.198112958e-01, 1.942608645e-01],
+        1.214370355e-01,
+    ),
+    (
+        "rc_beck_cu",
+        [0.6, 0.4],
+        [2.5, 3.3],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "rc_beck_cu",
+        [2.6, 0.3],
+        [0.7, 3.1],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "rc_beck_cu",
+        [2.8, 1.0],
+        [2.9, -2.0],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "rd_ggx",
+        [0.3, 0.2],
+        [0.5, 3.0],
+        [3.203544612e-02, 3.203544612e-02, 3.203544612e-02],
+        2.830128372e-02,
+    ),
+    (
+        "rd_ggx",
+        [1.0, -0.5],
+        [0.8, 2.4],
+        [7.450046332e-02, 7.450046332e-02, 7.450046332e-02],
+        5.311489105e-02,
+    ),
+    (
+        "rd_ggx",
+        [0.1, 0.0],
+        [0.15, 3.2],
+        [3.546710836e-02, 3.546710836e-02, 3.546710836e-02],
+        3.508687019e-02,
+    ),
+    (
+        "rd_ggx",
+        [1.3, 1.0],
+        [1.2, -2.0],
+        [5.714915301e-01, 5.714915301e-01, 5.714915301e-01],
+        2.343269885e-01,
+    ),
+    (
+        "rd_ggx",
+        [0.6, 0.4],
+        [2.5, 3.3],
+        [4.283327025e-01, 4.283327025e-01, 4.283327025e-01],
+        7.816765904e-01,
+    ),
+    (
+        "rd_ggx",
+        [2.6, 0.3],
+        [0.7, 3.1],
+        [2.268918458e+00, 2.268918458e+00, 2.268918458e+00],
+        7.833942771e-01,
+    ),
+    (
+        "rd_ggx",
+        [2.8, 1.0],
+        [2.9, -2.0],
+        [3.698735756e-02, 3.698735756e-02, 3.698735756e-02],
+        3.596217558e-02,
+    ),
+    (
+        "rp_ggx_nl",
+        [0.3, 0.2],
+        [0.5, 3.0],
+        [1.800130340e-01, 1.301783651e-01, 9.271005496e-02],
+        3.854274154e-01,
+    ),
+    (
+        "rp_ggx_nl",
+        [1.0, -0.5],
+        [0.8, 2.4],
+        [1.824175443e-01, 1.353224041e-01, 9.991381534e-02],
+        3.358080983e-01,
+    ),
+    (
+        "rp_ggx_nl",
+        [0.1, 0.0],
+        [0.15, 3.2],
+        [4.030881703e-01, 3.531117282e-01, 3.155368569e-01],
+        9.598643780e-01,
+    ),
+    (
+        "rp_ggx_nl",
+        [1.3, 1.0],
+        [1.2, -2.0],
+        [5.652061586e-01, 5.293956945e-01, 5.024715358e-01],
+        4.604407251e-01,
+    ),
+    (
+        "rp_ggx_nl",
+        [0.6, 0.4],
+        [2.5, 3.3],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "rp_ggx_nl",
+        [2.6, 0.3],
+        [0.7, 3.1],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "rp_ggx_nl",
+        [2.8, 1.0],
+        [2.9, -2.0],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "rp_beck",
+        [0.3, 0.2],
+        [0.5, 3.0],
+        [1.752636699e-01, 1.752636699e-01, 1.752636699e-01],
+        3.209443986e-01,
+    ),
+    (
+        "rp_beck",
+        [1.0, -0.5],
+        [0.8, 2.4],
+        [2.330570071e-01, 2.330570071e-01, 2.330570071e-01],
+        3.813973367e-01,
+    ),
+    (
+        "rp_beck",
+        [0.1, 0.0],
+        [0.15, 3.2],
+        [1.743385884e-01, 1.743385884e-01, 1.743385884e-01],
+        3.587988615e-01,
+    ),
+    (
+        "rp_beck",
+        [1.3, 1.0],
+        [1.2, -2.0],
+        [1.166187169e+00, 1.166187169e+00, 1.166187169e+00],
+        7.255995274e-01,
+    ),
+    (
+        "rp_beck",
+        [0.6, 0.4],
+        [2.5, 3.3],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "rp_beck",
+        [2.6, 0.3],
+        [0.7, 3.1],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "rp_beck",
+        [2.8, 1.0],
+        [2.9, -2.0],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "plastic",
+        [0.3, 0.2],
+        [0.5, 3.0],
+        [3.229053764e-02, 1.614526882e-01, 2.906148218e-01],
+        2.577821016e-01,
+    ),
+    (
+        "plastic",
+        [1.0, -0.5],
+        [0.8, 2.4],
+        [3.070932225e-02, 1.535466139e-01, 2.763838923e-01],
+        1.898581237e-01,
+    ),
+    (
+        "plastic",
+        [0.1, 0.0],
+        [0.15, 3.2],
+        [3.233678587e-02, 1.616839406e-01, 2.910310540e-01],
+        2.905241847e-01,
+    ),
+    (
+        "plastic",
+        [1.3, 1.0],
+        [1.2, -2.0],
+        [2.242618404e-02, 1.121309151e-01, 2.018356410e-01],
+        7.029985636e-02,
+    ),
+    (
+        "plastic",
+        [0.6, 0.4],
+        [2.5, 3.3],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "plastic",
+        [2.6, 0.3],
+        [0.7, 3.1],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+    (
+        "plastic",
+        [2.8, 1.0],
+        [2.9, -2.0],
+        [0.000000000e+00, 0.000000000e+00, 0.000000000e+00],
+        0.000000000e+00,
+    ),
+];
+
+#[test]
+fn matches_mitsuba_scalar_rgb() {
+    let rp = |kind, alpha, d: Rgb, nl| {
+        RoughPlastic::new(kind, alpha, d, Rgb::ONE, 1.5, 1.0, nl).unwrap()
+    };
+    let model = |name: &str| -> (Box<dyn Bsdf>, f64) {
+        match name {
+            "rc_ggx_au" => (
+                Box::new(RoughConductor::new(dist(Ggx, 0.3, 0.3), gold(), Rgb::ONE).unwrap()),
+                1e-5,
+            ),
+            // Mitsuba's Beckmann G1 is a rational fit good to 0.35 %.
+            "rc_beck_cu" => (
+                Box::new(
+                    RoughConductor::new(
+                        dist(Beckmann, 0.1, 0.3),
+                        ComplexIor::preset("Cu").unwrap(),
+                        Rgb::ONE,
+                    )
+                    .unwrap(),
+                ),
+                1e-2,
+            ),
+            "rd_ggx" => (
+                Box::new(RoughDielectric::new(dist(Ggx, 0.3, 0.3), 1.5, 1.0).unwrap()),
+                1e-5,
+            ),
+            // Tables integrated differently (see rough_plastic.rs), and Beckmann's G1 fit.
+            "rp_ggx_nl" => (Box::new(rp(Ggx, 0.1, Rgb::new(0.6, 0.4, 0.2), true)), 8e-3),
+            "rp_beck" => (Box::new(rp(Beckmann, 0.3, Rgb::splat(0.5), false)), 8e-3),
+            // Mitsuba fits Fdr (0.1 % for η in [1, 2]); we integrate it.
+            "plastic" => (
+                Box::new(Plastic::new(Rgb::new(0.1, 0.5, 0.9), Rgb::ONE, 1.5, 1.0, false).unwrap()),
+                3e-3,
+            ),
+            other => panic!("{other}"),
+        }
+    };
+    let mut worst = std::collections::BTreeMap::<&str, (f64, f64)>::new();
+    for &(name, o, i, f, p) in MITSUBA {
+        let (m, tol) = model(name);
+        let (wo, wi) = (spherical(o[0], o[1]), spherical(i[0], i[1]));
+        let (ours_f, ours_p) = (m.eval(wi, wo), m.pdf(wi, wo));
+        let rel = |a: f64, b: f64| (a - b).abs() / b.abs().max(1e-6);
+        let ef = (0..3).map(|c| rel(ours_f[c], f[c])).fold(0.0, f64::max);
+        let ep = rel(ours_p, p);
+        let w = worst.entry(name).or_insert((0.0, 0.0));
+        *w = (w.0.max(ef), w.1.max(ep));
+        assert!(
+            ef < tol && ep < tol,
+            "{name} wo={o:?} wi={i:?}: f {ours_f:?} vs {f:?}, pdf {ours_p} vs {p}"
+        );
+    }
+    for (name, (ef, ep)) in worst {
+        println!("vs Mitsuba 3 {name}: max relative difference f {ef:.2e}, pdf {ep:.2e}");
+    }
 }

@@ -338,12 +338,18 @@ impl Bsdf for Kurt {
             energy_conserving: lobes().all(|l| l.alpha == 0.0) && sum.max_component() <= 1.0,
             transmission: !self.transmission.is_empty(),
             anisotropic: lobes().any(|l| l.mx != l.my),
-            lobes: if self.transmission.is_empty() {
-                LobeFlags::DIFFUSE_REFLECTION | LobeFlags::GLOSSY_REFLECTION
-            } else {
-                LobeFlags::DIFFUSE_REFLECTION
-                    | LobeFlags::GLOSSY_REFLECTION
-                    | LobeFlags::GLOSSY_TRANSMISSION
+            lobes: {
+                let mut l = LobeFlags::NONE;
+                if self.kd.max_component() > 0.0 {
+                    l |= LobeFlags::DIFFUSE_REFLECTION;
+                }
+                if !self.reflection.is_empty() {
+                    l |= LobeFlags::GLOSSY_REFLECTION;
+                }
+                if !self.transmission.is_empty() {
+                    l |= LobeFlags::GLOSSY_TRANSMISSION;
+                }
+                l
             },
         }
     }

@@ -133,13 +133,15 @@ impl Bsdf for PbrMetallicRoughness {
         ps * spec + (1.0 - ps) * cosine_hemisphere_pdf(wi)
     }
 
-    /// Reciprocal; energy conserving for a base colour ≤ 1 (measured in the tests).
+    /// Reciprocal. Energy conserving only as a pure metal (a rough conductor with F ≤ 1): the
+    /// dielectric mix (1 − F(wo·h)) c/π + F·specular reflects up to 1.116 with a white base at
+    /// roughness 0.5 at grazing incidence (measured in `tests/physical_battery.rs`).
     fn flags(&self) -> BsdfFlags {
         let lobes = if self.metallic < 1.0 {
             LobeFlags::GLOSSY_REFLECTION | LobeFlags::DIFFUSE_REFLECTION
         } else {
             LobeFlags::GLOSSY_REFLECTION
         };
-        BsdfFlags::isotropic_reflection(true, true).with_lobes(lobes)
+        BsdfFlags::isotropic_reflection(true, self.metallic == 1.0).with_lobes(lobes)
     }
 }
