@@ -86,7 +86,7 @@ fn lobe(n: usize, samples: &mut Vec<[f32; 4]>) -> GpuLobe {
         pdf_constant: pdf as f32,
         sample_start: start,
         sample_count: n as u32,
-        pad: 0,
+        scheme: lustre_gpu::packed::LOBE_SCHEME_PATTERN,
     }
 }
 
