@@ -14,9 +14,12 @@
 //! The runner ([`run`]) renders, per material, one reference image (Monte-Carlo importance
 //! sampling on MIP level 0, `reference_spp` samples per pixel, as two independent halves whose
 //! difference estimates the reference's own noise), then per sample count the regular images (one
-//! per weighting) and a CK image, and measures RMS (linear), PSNR and ΔE (display values) against
-//! the reference and the wall time of each image. It writes PNGs, false-colour differences
-//! (002 Fig. 9 style) and a Markdown table.
+//! per method: 002's printed pattern, reach 1, ours = the row lattice) and a CK image, and
+//! measures RMS (linear), PSNR and ΔE (display values) against the reference, the wall time of
+//! each image and the filtered lookups each method actually made per pixel (mean and largest;
+//! never more than the budget per lobe). It writes PNGs, false-colour differences (002 Fig. 9
+//! style) and a Markdown table. Where a distant environment is the only light, the exact answer
+//! is `crate::truth` (`examples/truth_study.rs`).
 
 use crate::image::Image;
 use crate::kernel::{self, Environment, Weighting};
