@@ -81,6 +81,9 @@ fn arg<T: std::str::FromStr>(args: &[String], name: &str, default: T) -> T {
         .unwrap_or(default)
 }
 
+/// Map, material, and per method the relative RMS overall, at θo < 60° and at 60–80°.
+type SummaryRow = (String, String, [f64; 5], [f64; 5], [f64; 5]);
+
 struct Plans {
     printed: MaterialPlan,
     reach: MaterialPlan,
@@ -147,7 +150,7 @@ fn study(
     configs: &[Configuration],
     mc: usize,
     md: &mut String,
-    summary: &mut Vec<(String, String, [f64; 5], [f64; 5], [f64; 5])>,
+    summary: &mut Vec<SummaryRow>,
 ) -> Res<()> {
     let t0 = Instant::now();
     let plans = Plans {

@@ -579,6 +579,9 @@ impl Report {
     }
 }
 
+/// One rendered method image: label, file tag, image, seconds, lookups (mean, max) per pixel.
+type Rendered = (String, String, Image, f64, (f64, usize));
+
 /// Lookups counted across the pixels of one image (shaded from several threads).
 #[derive(Default)]
 struct LookupCount {
@@ -711,7 +714,7 @@ pub fn run(
                 file,
             });
             for setting in &case.settings {
-                let mut images: Vec<(String, String, Image, f64, (f64, usize))> = vec![];
+                let mut images: Vec<Rendered> = vec![];
                 for m in &exp.methods {
                     let plan = m.plan(&case.kurt, *setting)?;
                     let w = m.weighting;

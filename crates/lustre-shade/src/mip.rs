@@ -160,7 +160,7 @@ pub const FOOTPRINT_LEVEL_BIAS: f64 = -0.5;
 /// [`FOOTPRINT_LEVEL_BIAS`], clamped to `[0, log2(face_size)]`; a non-positive or NaN cell gives
 /// the coarsest level.
 pub fn footprint_level(cell: f64, wi_world: DVec3, face_size: usize) -> f64 {
-    if !(cell > 0.0) {
+    if cell.is_nan() || cell <= 0.0 {
         return clamp_level(f64::INFINITY, face_size);
     }
     let omega_p = texel_solid_angle_at(wi_world, face_size);
