@@ -3,13 +3,17 @@
 //! screen half specular, half diffuse. `draw` = dispatch + wait, without upload or readback;
 //! those are measured separately in the `transfer` group.
 //!
+//! The `scheme` group compares the two regular kernels per pixel at 480×270, a screen full of
+//! one-lobe specular pixels: 002's stored pattern (Pdf002) and ours, the per-pixel row lattice,
+//! at 14 and 17 lookups per lobe.
+//!
 //! Run one group quickly: `cargo bench -p lustre-gpu --bench frame -- --quick frame_full/7`.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use glam::DVec3;
 use lustre_gpu::{
     CameraBasis, CubeLevelRef, GpuContext, GpuEnvironment, GpuLobe, GpuMaterial, GpuPlane,
-    GpuRenderer, GpuScene, PackedScene, RenderTarget,
+    GpuRenderer, GpuScene, PackedScene, RenderTarget, LOBE_SCHEME_LATTICE,
 };
 use std::f64::consts::PI;
 
@@ -86,7 +90,7 @@ fn lobe(n: usize, samples: &mut Vec<[f32; 4]>) -> GpuLobe {
         pdf_constant: pdf as f32,
         sample_start: start,
         sample_count: n as u32,
-        pad: 0,
+        scheme: lustre_gpu::packed::LOBE_SCHEME_PATTERN,
     }
 }
 
@@ -166,6 +170,27 @@ fn bench(c: &mut Criterion) {
         }
         g.finish();
     }
+    let small = RenderTarget::new(&ctx, 480, 270).unwrap_or_else(|e| panic!("{e}"));
+    let mut g = c.benchmark_group("scheme");
+    g.sample_size(10);
+    for n in [14, 17] {
+        for lattice in [false, true] {
+            let mut packed = scene(n, false);
+            if lattice {
+                packed.lobes[0].scheme = LOBE_SCHEME_LATTICE;
+                packed.lobes[0].sample_count = n as u32;
+            }
+            let gs = GpuScene::upload(&ctx, &packed).unwrap_or_else(|e| panic!("{e}"));
+            let frame = renderer
+                .bind(&gs, &env, &small)
+                .unwrap_or_else(|e| panic!("{e}"));
+            let name = if lattice { "lattice" } else { "pattern" };
+            g.bench_with_input(BenchmarkId::new(name, n), &frame, |b, frame| {
+                b.iter(|| renderer.draw(frame).unwrap_or_else(|e| panic!("{e}")))
+            });
+        }
+    }
+    g.finish();
     let mut g = c.benchmark_group("transfer");
     g.sample_size(10);
     g.bench_function("readback_1080p", |b| {

@@ -4,12 +4,16 @@
 use crate::context::GpuContext;
 use crate::cube::CubeLevelRef;
 use crate::error::{invalid, Result};
-use crate::packed::{f3, CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, PackedScene};
+use crate::packed::{
+    f3, CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, PackedScene, LOBE_SCHEME_LATTICE,
+    LOBE_SCHEME_PATTERN,
+};
 use crate::shade::{GpuEnvironment, GpuRenderer};
 use lustre_brdf::models::kurt::KurtLobe;
 use lustre_env::CubeMap;
 use lustre_shade::image::Image;
 use lustre_shade::kernel::{Environment, LobePlan, MaterialPlan};
+use lustre_shade::pattern::PatternKind;
 use lustre_shade::scene::Scene;
 
 fn level_ref(map: &CubeMap) -> CubeLevelRef<'_> {
@@ -103,6 +107,10 @@ impl PackedScene {
 
     fn push_lobe(&mut self, lobe: &KurtLobe, plan: &LobePlan) {
         let p = &plan.pattern;
+        let (scheme, count) = match p.kind {
+            PatternKind::RowLattice { budget } => (LOBE_SCHEME_LATTICE, index(budget)),
+            _ => (LOBE_SCHEME_PATTERN, p.h.len() as u32),
+        };
         self.lobes.push(GpuLobe {
             ks: [
                 lobe.ks.0[0] as f32,
@@ -116,8 +124,8 @@ impl PackedScene {
             xi0: p.xi0 as f32,
             pdf_constant: p.pdf_constant as f32,
             sample_start: self.samples.len() as u32,
-            sample_count: p.h.len() as u32,
-            pad: 0,
+            sample_count: count,
+            scheme,
         });
         self.samples.extend(
             p.h.iter()

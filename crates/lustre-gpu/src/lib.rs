@@ -26,5 +26,8 @@ pub mod shade;
 pub use context::GpuContext;
 pub use cube::{CubeLevelRef, GpuCube};
 pub use error::{GpuError, Result};
-pub use packed::{CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, PackedScene};
+pub use packed::{
+    CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, PackedScene, LOBE_SCHEME_LATTICE,
+    LOBE_SCHEME_PATTERN,
+};
 pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_WGSL};

@@ -113,11 +113,17 @@ pub struct GpuLobe {
     pub pdf_constant: f32,
     /// First half vector in the sample array.
     pub sample_start: u32,
-    /// Number of half vectors.
+    /// Number of half vectors; for [`LOBE_SCHEME_LATTICE`] the budget (no stored vectors).
     pub sample_count: u32,
-    /// Padding.
-    pub pad: u32,
+    /// [`LOBE_SCHEME_PATTERN`] (002's stored pattern, Pdf002 weights) or
+    /// [`LOBE_SCHEME_LATTICE`] (ours, the per-pixel row lattice).
+    pub scheme: u32,
 }
+
+/// `GpuLobe::scheme` of a stored pattern (`kernel::plan_regular`, Pdf002 weights).
+pub const LOBE_SCHEME_PATTERN: u32 = 0;
+/// `GpuLobe::scheme` of ours, the per-pixel row lattice (`kernel::plan_lattice`).
+pub const LOBE_SCHEME_LATTICE: u32 = 1;
 
 /// Everything `shade.wgsl` reads besides the environment, ready to upload.
 #[derive(Clone, Debug, PartialEq)]

@@ -4,7 +4,7 @@
 use crate::context::GpuContext;
 use crate::cube::{linear_sampler, CubeLevelRef, GpuCube};
 use crate::error::{invalid, GpuError, Result};
-use crate::packed::{f3, PackedScene};
+use crate::packed::{f3, PackedScene, LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN};
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
@@ -142,7 +142,18 @@ fn check(scene: &PackedScene) -> Result<()> {
         }
     }
     for (i, l) in scene.lobes.iter().enumerate() {
-        let end = l.sample_start as usize + l.sample_count as usize;
+        // A row-lattice lobe stores no half vectors: sample_count is its budget.
+        let stored = match l.scheme {
+            LOBE_SCHEME_PATTERN => l.sample_count as usize,
+            LOBE_SCHEME_LATTICE => 0,
+            other => {
+                return Err(invalid(
+                    format!("lobe {i}"),
+                    format!("unknown scheme {other}"),
+                ))
+            }
+        };
+        let end = l.sample_start as usize + stored;
         let values = [l.mx, l.my, l.r0, l.alpha, l.xi0, l.pdf_constant];
         if end > scene.samples.len() || !finite(&l.ks) || !finite(&values) {
             return Err(invalid(

@@ -1,5 +1,6 @@
-// The regular-sampling kernel of lustre-shade (kernel::shade_regular with Weighting::Pdf002) and
-// the scene ray casting of lustre_shade::scene, in f32. One invocation shades one pixel.
+// The regular-sampling kernel of lustre-shade (kernel::shade_regular with Weighting::Pdf002 for
+// stored patterns, and ours, the per-pixel row lattice of kernel::plan_lattice) and the scene ray
+// casting of lustre_shade::scene, in f32. One invocation shades one pixel.
 //
 // Conventions (contracts.md): world +y up; shading frame (t, b, n) with b = n × t; local =
 // (w·t, w·b, w·n); `wi` to the light, `wo` to the viewer; cube maps in Vulkan face order, sampled
@@ -55,10 +56,12 @@ struct Lobe {
     // The pattern's threshold ξ0 and its PDF constant (002 Eq. 18).
     xi0: f32,
     pdf_constant: f32,
-    // The pattern's half vectors: samples[sample_start .. sample_start + sample_count].
+    // The pattern's half vectors: samples[sample_start .. sample_start + sample_count]; for the
+    // row lattice (scheme 1) sample_count is the budget and nothing is stored.
     sample_start: u32,
     sample_count: u32,
-    pad: u32,
+    // 0: stored pattern with Pdf002 weights; 1: the row lattice (packed::LOBE_SCHEME_*).
+    scheme: u32,
 }
 
 @group(0) @binding(0) var<uniform> globals: Globals;
@@ -320,6 +323,98 @@ fn regular_level(area: f32, n_samples: u32, wi: vec3<f32>, wi_dot_h: f32, face_s
     return clamp(log2(pixels) / 2.0, 0.0, top);
 }
 
+// mip::texel_solid_angle_at: (2/N)² / d³ with d = ‖ω‖/‖ω‖∞.
+fn texel_solid_angle_at(dir: vec3<f32>, face_size: f32) -> f32 {
+    let inf = max(abs(dir.x), max(abs(dir.y), abs(dir.z)));
+    var d = 1.0;
+    if (inf > 0.0) {
+        d = length(dir) / inf;
+    }
+    return 4.0 / (face_size * face_size * d * d * d);
+}
+
+// mip::FOOTPRINT_LEVEL_BIAS.
+const FOOTPRINT_LEVEL_BIAS: f32 = -0.5;
+
+// mip::footprint_level: ½ log2(cell / Ωp(ωi)) + bias, clamped to [0, log2(face_size)].
+fn footprint_level(cell: f32, wi: vec3<f32>, face_size: f32) -> f32 {
+    let top = log2(max(face_size, 1.0));
+    if (!(cell > 0.0)) {
+        return top;
+    }
+    let l = 0.5 * log2(cell / texel_solid_angle_at(wi, face_size)) + FOOTPRINT_LEVEL_BIAS;
+    return clamp(l, 0.0, top);
+}
+
+// ---------------------------------------------------------------- row lattice (pattern.rs) --
+
+// pattern::gauss_quantile: erfinv(2u − 1), Giles' single-precision polynomial.
+fn gauss_quantile(u_in: f32) -> f32 {
+    let x = clamp(2.0 * clamp(u_in, 1e-7, 1.0 - 1e-7) - 1.0, -1.0, 1.0);
+    let w0 = -log((1.0 - x) * (1.0 + x));
+    var p: f32;
+    if (w0 < 5.0) {
+        let w = w0 - 2.5;
+        p = 2.81022636e-08;
+        p = 3.43273939e-07 + p * w;
+        p = -3.5233877e-06 + p * w;
+        p = -4.39150654e-06 + p * w;
+        p = 0.00021858087 + p * w;
+        p = -0.00125372503 + p * w;
+        p = -0.00417768164 + p * w;
+        p = 0.246640727 + p * w;
+        p = 1.50140941 + p * w;
+    } else {
+        let w = sqrt(w0) - 3.0;
+        p = -0.000200214257;
+        p = 0.000100950558 + p * w;
+        p = 0.00134934322 + p * w;
+        p = -0.00367342844 + p * w;
+        p = 0.00573950773 + p * w;
+        p = -0.0076224613 + p * w;
+        p = 0.00943887047 + p * w;
+        p = 1.00167406 + p * w;
+        p = 2.83297682 + p * w;
+    }
+    return p * x;
+}
+
+// pattern::lattice_rows: round(√(budget / ratio)) clamped to 1 ..= budget.
+fn lattice_rows(budget: u32, ratio: f32) -> u32 {
+    var r = ratio;
+    if (!(r >= 1.0)) {
+        r = 1.0;
+    }
+    let k = round(sqrt(f32(budget) / r));
+    return u32(clamp(k, 1.0, f32(max(budget, 1u))));
+}
+
+// pattern::row_length: ⌊budget/rows⌋ plus one for the budget mod rows rows nearest the centre
+// (order c, c−1, c+1, … ).
+fn row_length(budget: u32, rows: u32, j: u32) -> u32 {
+    let base = budget / rows;
+    let extra = budget % rows;
+    var rank: u32;
+    if (rows % 2u == 1u) {
+        let c = (rows - 1u) / 2u;
+        if (j == c) {
+            rank = 0u;
+        } else if (j < c) {
+            rank = 2u * (c - j) - 1u;
+        } else {
+            rank = 2u * (j - c);
+        }
+    } else {
+        let c0 = rows / 2u - 1u;
+        if (j <= c0) {
+            rank = 2u * (c0 - j);
+        } else {
+            rank = 2u * (j - c0 - 1u) + 1u;
+        }
+    }
+    return base + select(0u, 1u, rank < extra);
+}
+
 // ---------------------------------------------------------------- kernel (kernel.rs) --------
 
 fn to_world(h: vec3<f32>, t: vec3<f32>, b: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
@@ -370,6 +465,87 @@ fn shade_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>,
     return lobe.ks * sum / f32(count);
 }
 
+// kernel::lattice_lobe: ours, the row lattice of `budget` equal-mass cells of the slope-space
+// Gaussian, rows along the minor axis of the lobe's image in ωi (kernel::lattice_axes), each cell
+// read once at the level of its solid angle μ/p(ωi); weight μ F cos θi / (G cos θh).
+fn lattice_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>,
+                t: vec3<f32>, b: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let budget = lobe.sample_count;
+    if (budget == 0u) {
+        return vec3<f32>(0.0);
+    }
+    let face = globals.params.w;
+    let mx = lobe.mx;
+    let my = lobe.my;
+    // kernel::lattice_axes: JᵀJ of s ↦ ωi at s = 0 and its major eigenvector.
+    let ja = 4.0 * mx * mx * (wo_l.x * wo_l.x + wo_l.z * wo_l.z);
+    let jc = 4.0 * my * my * (wo_l.y * wo_l.y + wo_l.z * wo_l.z);
+    let jb = 4.0 * mx * my * wo_l.x * wo_l.y;
+    let half = 0.5 * (ja - jc);
+    let root = sqrt(half * half + jb * jb);
+    let l1 = 0.5 * (ja + jc) + root;
+    let l2 = 0.5 * (ja + jc) - root;
+    var ratio = sqrt(l1 / l2);
+    if (!(abs(ratio) <= 3.4e38)) {
+        ratio = 1.0;
+    }
+    let ev = major_axis(half, root, jb);
+    let len = length(ev);
+    var e1 = vec2<f32>(1.0, 0.0);
+    if (len > 0.0 && len <= 3.4e38) {
+        e1 = ev / len;
+    }
+    let e2 = vec2<f32>(-e1.y, e1.x);
+    let rows = lattice_rows(budget, ratio);
+    var sum = vec3<f32>(0.0);
+    for (var j = 0u; j < rows; j++) {
+        let m = row_length(budget, rows, j);
+        let y = gauss_quantile((f32(j) + 0.5) / f32(rows));
+        let mass = 1.0 / f32(rows * m);
+        for (var i = 0u; i < m; i++) {
+            let x = gauss_quantile((f32(i) + 0.5) / f32(m));
+            let s = x * e1 + y * e2;
+            let h = normalize(vec3<f32>(mx * s.x, my * s.y, 1.0));
+            let ho = dot(wo_l, h);
+            if (!(ho > 0.0)) {
+                continue;
+            }
+            let r = reflect_about(wo_l, h);
+            let cos_i = r.z;
+            if (!(cos_i > 0.0)) {
+                continue;
+            }
+            var wi_l = r;
+            if (transmission) {
+                wi_l = vec3<f32>(r.x, r.y, -r.z);
+            }
+            let wi = to_world(wi_l, t, b, n);
+            let cell = mass * 4.0 * PI * mx * my * ho * h.z * h.z * h.z * exp(dot(s, s));
+            let level = min(footprint_level(cell, wi, face), globals.params.z);
+            let li = textureSampleLevel(pyramid, linear_sampler, wi, level).rgb;
+            var fresnel = schlick(lobe.r0, ho);
+            if (transmission) {
+                fresnel = 1.0 - fresnel;
+            }
+            var shadow = 1.0;
+            if (lobe.alpha != 0.0) {
+                shadow = pow(cos_i * wo_l.z, lobe.alpha);
+            }
+            sum += li * (mass * fresnel * cos_i / (shadow * h.z));
+        }
+    }
+    return lobe.ks * sum;
+}
+
+// The unnormalized major eigenvector of [[a, b], [b, c]] with half = (a − c)/2 and
+// root = √(half² + b²): (half + root, b) when half ≥ 0, else (b, root − half).
+fn major_axis(half: f32, root: f32, b: f32) -> vec2<f32> {
+    if (half >= 0.0) {
+        return vec2<f32>(half + root, b);
+    }
+    return vec2<f32>(b, root - half);
+}
+
 // kernel::shade_regular_with (Pdf002, no bounding planes): the frame faces the viewer (flipped to
 // (t, −b, −n) when ωo·n < 0); nothing when ωo lies in the tangent plane; diffuse = kd ·
 // irradiance(n) (the map stores E/π) plus every reflection and transmission lobe.
@@ -388,7 +564,12 @@ fn shade(hit: Hit, wo: vec3<f32>) -> vec3<f32> {
     }
     var c = m.kd * textureSampleLevel(irradiance, linear_sampler, n, 0.0).rgb;
     for (var k = 0u; k < m.reflection + m.transmission; k++) {
-        c += shade_lobe(lobes[m.lobe_start + k], k >= m.reflection, wo_l, t, b, n);
+        let lobe = lobes[m.lobe_start + k];
+        if (lobe.scheme == 1u) {
+            c += lattice_lobe(lobe, k >= m.reflection, wo_l, t, b, n);
+        } else {
+            c += shade_lobe(lobe, k >= m.reflection, wo_l, t, b, n);
+        }
     }
     return c;
 }

@@ -1,5 +1,6 @@
-//! GPU ↔ CPU parity: the same scene, material plans and environment rendered by
-//! `lustre_shade::render` with `kernel::shade_regular` (Weighting::Pdf002) in f64 and by the
+//! GPU ↔ CPU parity: the same scene, material plans (002's stored patterns with
+//! Weighting::Pdf002, and ours, the row lattice of `plan_lattice`) and environment rendered by
+//! `lustre_shade::render` with `kernel::shade_regular` in f64 and by the
 //! WGSL kernel in f32 must agree to PSNR ≥ 45 dB (≥ 90 dB on lavapipe, whose float filtering
 //! leaves only f32 rounding). Fails (does not skip) without an adapter. Set
 //! `LUSTRE_GPU_PARITY_DUMP=DIR` to write both images as PNG.
@@ -10,7 +11,9 @@ use lustre_brdf::Rgb;
 use lustre_env::{CubeMap, CubePyramid, MipFilter};
 use lustre_gpu::{GpuContext, GpuRenderer};
 use lustre_shade::image::Image;
-use lustre_shade::kernel::{plan_regular, shade_regular, Environment, MaterialPlan, Weighting};
+use lustre_shade::kernel::{
+    plan_lattice, plan_regular, shade_regular, Environment, MaterialPlan, Weighting,
+};
 use lustre_shade::metrics::{psnr, rms};
 use lustre_shade::render::render;
 use lustre_shade::scene::{Camera, Plane, Scene, Sphere};
@@ -142,12 +145,20 @@ fn gpu_render_matches_cpu_shade_regular() {
         pyramid: &pyramid,
         irradiance: &irradiance,
     };
-    for budget in [7, 19] {
+    for (budget, lattice) in [(7, false), (19, false), (7, true), (17, true)] {
         let plans: Vec<MaterialPlan> = scene
             .materials
             .iter()
-            .map(|k| plan_regular(k, budget, 0.1).unwrap_or_else(|e| panic!("{e}")))
+            .map(|k| {
+                if lattice {
+                    plan_lattice(k, budget)
+                } else {
+                    plan_regular(k, budget, 0.1)
+                }
+                .unwrap_or_else(|e| panic!("{e}"))
+            })
             .collect();
+        let tag = if lattice { "lattice" } else { "regular" };
         let cpu = cpu_render(&scene, &plans, &env);
         let renderer = GpuRenderer::new(&ctx).unwrap_or_else(|e| panic!("{e}"));
         let gpu = renderer
@@ -162,25 +173,25 @@ fn gpu_render_matches_cpu_shade_regular() {
             .sum::<f64>()
             / (W * H) as f64;
         eprintln!(
-            "budget {budget}: PSNR {p:.2} dB, linear RMS {r:.2e}, CPU mean {mean:.3} ({})",
+            "{tag} budget {budget}: PSNR {p:.2} dB, linear RMS {r:.2e}, CPU mean {mean:.3} ({})",
             ctx.describe()
         );
         if let Ok(dir) = std::env::var("LUSTRE_GPU_PARITY_DUMP") {
             let dir = std::path::Path::new(&dir);
-            cpu.write_png(&dir.join(format!("cpu-{budget}.png")), 1.0)
+            cpu.write_png(&dir.join(format!("cpu-{tag}-{budget}.png")), 1.0)
                 .unwrap_or_else(|e| panic!("{e}"));
-            gpu.write_png(&dir.join(format!("gpu-{budget}.png")), 1.0)
+            gpu.write_png(&dir.join(format!("gpu-{tag}-{budget}.png")), 1.0)
                 .unwrap_or_else(|e| panic!("{e}"));
         }
         assert!(mean > 0.1, "the CPU image is nearly black (mean {mean})");
-        assert!(p >= 45.0, "budget {budget}: PSNR {p:.2} dB < 45 dB");
+        assert!(p >= 45.0, "{tag} budget {budget}: PSNR {p:.2} dB < 45 dB");
         // lavapipe filters Rgba32Float in f32, so there the only differences are f32 rounding
         // (measured ≈ 120 dB; a level formula off by the 1/(ωi·h) factor already gives ≈ 58 dB).
         // Hardware GPUs filter with fixed-point weights and only get the 45 dB bound.
         if ctx.info.device_type == wgpu::DeviceType::Cpu && ctx.float32_filterable {
             assert!(
                 p >= 90.0,
-                "budget {budget}: PSNR {p:.2} dB < 90 dB on a CPU adapter"
+                "{tag} budget {budget}: PSNR {p:.2} dB < 90 dB on a CPU adapter"
             );
         }
     }

@@ -159,7 +159,7 @@ fn diffuse_and_single_sample_lobe_match_hand_values() {
                 pdf_constant: d_n,
                 sample_start: 0,
                 sample_count: 1,
-                pad: 0,
+                scheme: lustre_gpu::packed::LOBE_SCHEME_PATTERN,
             }],
             samples: vec![[0.0, 0.0, 1.0, 0.0]],
         };

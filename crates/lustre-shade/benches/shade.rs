@@ -1,5 +1,6 @@
-//! CPU shading throughput: `shade_regular` at budgets 14/17/30 per lobe, `shade_ck`, and the
-//! reference per sample. Each iteration shades 64 pixel configurations (throughput in elements
+//! CPU shading throughput: `shade_regular` at budgets 14/17/30 per lobe with 002's printed
+//! patterns (`shade_regular`) and with ours, the row lattice (`shade_lattice`), `shade_ck`, and
+//! the reference per sample. Each iteration shades 64 pixel configurations (throughput in elements
 //! = calls, or samples for the reference).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -8,7 +9,8 @@ use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::rgb::Rgb;
 use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter};
 use lustre_shade::kernel::{
-    plan_regular, shade_ck, shade_reference, shade_regular, Environment, ShadingFrame, Weighting,
+    plan_lattice, plan_regular, shade_ck, shade_reference, shade_regular, Environment,
+    ShadingFrame, Weighting,
 };
 use std::hint::black_box;
 
@@ -47,6 +49,19 @@ fn bench(c: &mut Criterion) {
     g.throughput(Throughput::Elements(PIXELS as u64));
     for budget in [14, 17, 30] {
         let plan = plan_regular(&kurt, budget, 0.01).expect("plan");
+        g.bench_with_input(BenchmarkId::from_parameter(budget), &plan, |b, plan| {
+            b.iter(|| {
+                for (f, wo) in &pixels {
+                    black_box(shade_regular(f, *wo, plan, &env, Weighting::Pdf002));
+                }
+            })
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("shade_lattice");
+    g.throughput(Throughput::Elements(PIXELS as u64));
+    for budget in [14, 17, 30] {
+        let plan = plan_lattice(&kurt, budget).expect("plan");
         g.bench_with_input(BenchmarkId::from_parameter(budget), &plan, |b, plan| {
             b.iter(|| {
                 for (f, wo) in &pixels {

@@ -14,9 +14,12 @@
 //! The runner ([`run`]) renders, per material, one reference image (Monte-Carlo importance
 //! sampling on MIP level 0, `reference_spp` samples per pixel, as two independent halves whose
 //! difference estimates the reference's own noise), then per sample count the regular images (one
-//! per weighting) and a CK image, and measures RMS (linear), PSNR and ΔE (display values) against
-//! the reference and the wall time of each image. It writes PNGs, false-colour differences
-//! (002 Fig. 9 style) and a Markdown table.
+//! per method: 002's printed pattern, reach 1, ours = the row lattice) and a CK image, and
+//! measures RMS (linear), PSNR and ΔE (display values) against the reference, the wall time of
+//! each image and the filtered lookups each method actually made per pixel (mean and largest;
+//! never more than the budget per lobe). It writes PNGs, false-colour differences (002 Fig. 9
+//! style) and a Markdown table. Where a distant environment is the only light, the exact answer
+//! is `crate::truth` (`examples/truth_study.rs`).
 
 use crate::image::Image;
 use crate::kernel::{self, Environment, Weighting};
@@ -31,6 +34,7 @@ use lustre_brdf::Rgb;
 use lustre_env::{CubeMap, CubePyramid, MipFilter, SpotMapParams};
 use std::fmt::Write as _;
 use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// One sample-count setting of a regular-sampling run: the budget per lobe and the pattern's ξ0.
@@ -58,7 +62,7 @@ pub struct MaterialCase {
 /// Which regular pattern a method uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PatternChoice {
-    /// 002 §5's concentric pattern closest to the budget (`kernel::plan_regular`, with ξ0).
+    /// 002 §5's concentric pattern, the largest within the budget (`kernel::plan_regular`, with ξ0).
     Concentric,
     /// 000 §4.4.3's centre + ring / linear pattern (`kernel::plan_thesis`; ξ0 unused).
     Thesis,
@@ -66,6 +70,10 @@ pub enum PatternChoice {
     /// (`kernel::plan_regular_with`, `ConcentricOptions { reach: Some(1.0) }`): the printed
     /// radii stop at ≈ θmax/2; this variant is ours.
     ConcentricReach1,
+    /// Ours: the per-pixel row lattice (`kernel::plan_lattice`), one lookup per equal-mass
+    /// cell at the level of the cell's solid angle; the weighting is its own (the method's
+    /// `weighting` is ignored).
+    Lattice,
 }
 
 /// A regular-sampling method: a pattern and a weighting.
@@ -80,10 +88,14 @@ pub struct RegularMethod {
 impl RegularMethod {
     /// The label in the table: "regular (Pdf002)", "thesis (Eq. 4.24)", ...
     pub fn label(&self) -> String {
+        if self.pattern == PatternChoice::Lattice {
+            return "lattice (ours)".into();
+        }
         let p = match self.pattern {
             PatternChoice::Concentric => "regular",
             PatternChoice::Thesis => "thesis",
             PatternChoice::ConcentricReach1 => "regular reach 1",
+            PatternChoice::Lattice => "lattice",
         };
         let w = match self.weighting {
             Weighting::Pdf002 => "Pdf002",
@@ -95,10 +107,14 @@ impl RegularMethod {
 
     /// The tag in file names: "regular-002", "thesis-425", ...
     pub fn tag(&self) -> String {
+        if self.pattern == PatternChoice::Lattice {
+            return "lattice".into();
+        }
         let p = match self.pattern {
             PatternChoice::Concentric => "regular",
             PatternChoice::Thesis => "thesis",
             PatternChoice::ConcentricReach1 => "regular-reach1",
+            PatternChoice::Lattice => "lattice",
         };
         let w = match self.weighting {
             Weighting::Pdf002 => "002",
@@ -119,6 +135,7 @@ impl RegularMethod {
                 setting.xi0,
                 ConcentricOptions { reach: Some(1.0) },
             ),
+            PatternChoice::Lattice => kernel::plan_lattice(kurt, setting.samples),
         }
     }
 }
@@ -178,6 +195,10 @@ pub fn experiment_002() -> Result<Experiment> {
             },
             RegularMethod {
                 pattern: PatternChoice::ConcentricReach1,
+                weighting: Weighting::Pdf002,
+            },
+            RegularMethod {
+                pattern: PatternChoice::Lattice,
                 weighting: Weighting::Pdf002,
             },
         ],
@@ -247,6 +268,10 @@ pub fn experiment_000() -> Result<Experiment> {
             },
             RegularMethod {
                 pattern: PatternChoice::Concentric,
+                weighting: Weighting::Pdf002,
+            },
+            RegularMethod {
+                pattern: PatternChoice::Lattice,
                 weighting: Weighting::Pdf002,
             },
         ],
@@ -490,6 +515,9 @@ pub struct Row {
     pub delta_e: f64,
     /// Wall time of the image in seconds.
     pub seconds: f64,
+    /// Filtered lookups per shaded (hit) pixel: mean and largest (the reference's level-0
+    /// lookups are its samples per pixel).
+    pub lookups: (f64, usize),
     /// The PNG written for the image, relative to the output directory (empty without output).
     pub file: String,
 }
@@ -516,7 +544,7 @@ impl Report {
                 last = r.experiment.clone();
                 let _ = write!(
                     s,
-                    "\n## Experiment {last}\n\n| material | n | method | RMS | PSNR (dB) | ΔE | time (s) | image |\n|---|---:|---|---:|---:|---:|---:|---|\n"
+                    "\n## Experiment {last}\n\n| material | n | method | lookups mean / max | RMS | PSNR (dB) | ΔE | time (s) | image |\n|---|---:|---|---:|---:|---:|---:|---:|---|\n"
                 );
             }
             let psnr = if r.psnr.is_finite() {
@@ -526,8 +554,17 @@ impl Report {
             };
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {:.5} | {} | {:.3} | {:.3} | {} |",
-                r.material, r.samples, r.method, r.rms, psnr, r.delta_e, r.seconds, r.file
+                "| {} | {} | {} | {:.1} / {} | {:.5} | {} | {:.3} | {:.3} | {} |",
+                r.material,
+                r.samples,
+                r.method,
+                r.lookups.0,
+                r.lookups.1,
+                r.rms,
+                psnr,
+                r.delta_e,
+                r.seconds,
+                r.file
             );
         }
         s
@@ -539,6 +576,36 @@ impl Report {
             .iter()
             .find(|r| r.material == material && r.samples == samples && r.method == method)
             .map(|r| r.rms)
+    }
+}
+
+/// One rendered method image: label, file tag, image, seconds, lookups (mean, max) per pixel.
+type Rendered = (String, String, Image, f64, (f64, usize));
+
+/// Lookups counted across the pixels of one image (shaded from several threads).
+#[derive(Default)]
+struct LookupCount {
+    pixels: AtomicUsize,
+    total: AtomicUsize,
+    max: AtomicUsize,
+}
+
+impl LookupCount {
+    /// Records one pixel's lookups and passes its colour through.
+    fn add(&self, (c, n): (Rgb, usize)) -> Rgb {
+        self.pixels.fetch_add(1, Ordering::Relaxed);
+        self.total.fetch_add(n, Ordering::Relaxed);
+        self.max.fetch_max(n, Ordering::Relaxed);
+        c
+    }
+
+    /// Mean and largest lookups per shaded pixel.
+    fn summary(&self) -> (f64, usize) {
+        let p = self.pixels.load(Ordering::Relaxed).max(1);
+        (
+            self.total.load(Ordering::Relaxed) as f64 / p as f64,
+            self.max.load(Ordering::Relaxed),
+        )
     }
 }
 
@@ -643,39 +710,60 @@ pub fn run(
                 psnr: f64::INFINITY,
                 delta_e: 0.0,
                 seconds,
+                lookups: (opts.reference_spp as f64, opts.reference_spp),
                 file,
             });
             for setting in &case.settings {
-                let mut images: Vec<(String, String, Image, f64)> = vec![];
+                let mut images: Vec<Rendered> = vec![];
                 for m in &exp.methods {
                     let plan = m.plan(&case.kurt, *setting)?;
                     let w = m.weighting;
                     let label = format!("{stem} n={} {}", setting.samples, m.label());
+                    let count = LookupCount::default();
                     let t0 = Instant::now();
                     let img = render_with_progress(
                         &scene,
                         n,
                         n,
-                        |hit| kernel::shade_regular(&hit.frame, hit.wo, &plan, env, w),
+                        |hit| {
+                            count.add(kernel::shade_regular_counted(
+                                &hit.frame, hit.wo, &plan, env, w,
+                            ))
+                        },
                         background(env),
                         &|r| progress(&label, r, n),
                     );
                     let s = t0.elapsed().as_secs_f64();
-                    images.push((m.label(), m.tag(), img, s));
+                    images.push((m.label(), m.tag(), img, s, count.summary()));
                 }
                 let label = format!("{stem} n={} CK", setting.samples);
+                let count = LookupCount::default();
                 let t0 = Instant::now();
                 let kurt = &scene.materials[0];
                 let img = render_with_progress(
                     &scene,
                     n,
                     n,
-                    |hit| kernel::shade_ck(&hit.frame, hit.wo, kurt, setting.samples, env),
+                    |hit| {
+                        count.add(kernel::shade_ck_counted(
+                            &hit.frame,
+                            hit.wo,
+                            kurt,
+                            setting.samples,
+                            env,
+                        ))
+                    },
                     background(env),
                     &|r| progress(&label, r, n),
                 );
-                images.push(("CK".into(), "ck".into(), img, t0.elapsed().as_secs_f64()));
-                for (method, tag, img, seconds) in images {
+                images.push((
+                    "CK".into(),
+                    "ck".into(),
+                    img,
+                    t0.elapsed().as_secs_f64(),
+                    count.summary(),
+                ));
+                for (method, tag, img, seconds, lookups) in images {
                     let name = format!("{stem}_n{}_{tag}", setting.samples);
                     let file = save(&img, &name)?;
                     let diff = metrics::false_colour(&img, &reference, opts.diff_range)?;
@@ -689,6 +777,7 @@ pub fn run(
                         psnr: metrics::psnr(&img, &reference, opts.exposure)?,
                         delta_e: metrics::delta_e(&img, &reference, opts.exposure)?,
                         seconds,
+                        lookups,
                         file,
                     });
                 }

@@ -26,12 +26,14 @@
 //! light from the upper side. A viewer exactly in the tangent plane receives nothing.
 
 use crate::mip;
-use crate::pattern::{self, ConcentricOptions, Pattern};
+use crate::pattern::{self, ConcentricOptions, Pattern, PatternKind};
 use crate::{Result, ShadeError};
 use glam::DVec3;
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::frame::{basis, mirror_z, reflect};
-use lustre_brdf::models::kurt::{lobe_eval, lobe_pdf, lobe_sample_h, Kurt, KurtLobe, LobeKind};
+use lustre_brdf::models::kurt::{
+    lobe_eval, lobe_pdf, lobe_sample_h, schlick, Kurt, KurtLobe, LobeKind,
+};
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::{hammersley, radical_inverse2, SplitMix64};
 use lustre_env::{CubeMap, CubePyramid};
@@ -240,9 +242,9 @@ pub struct MaterialPlan {
 }
 
 /// Builds the regular patterns of every lobe: `pattern::concentric_for_budget(mx, my, budget,
-/// xi0)` (002 §5: the concentric pattern closest to the budget). Errors: an invalid material
-/// (negative or non-finite roughness, ks, kd, r0 or α out of range), a zero budget, or ξ0
-/// outside (0, 1).
+/// xi0)` (the largest concentric pattern within the budget; 002 §5 takes the closest, which
+/// may exceed it). Errors: an invalid material (negative or non-finite roughness, ks, kd, r0
+/// or α out of range), a zero budget, or ξ0 outside (0, 1).
 pub fn plan_regular(kurt: &Kurt, budget_per_lobe: usize, xi0: f64) -> Result<MaterialPlan> {
     plan_regular_with(kurt, budget_per_lobe, xi0, ConcentricOptions::default())
 }
@@ -272,6 +274,15 @@ pub fn plan_regular_with(
 pub fn plan_thesis(kurt: &Kurt, budget_per_lobe: usize) -> Result<MaterialPlan> {
     plan_with(kurt, budget_per_lobe, |l| {
         pattern::thesis(l.mx, l.my, budget_per_lobe)
+    })
+}
+
+/// Plans every lobe with ours, the per-pixel row lattice ([`pattern::row_lattice`]): exactly
+/// `budget_per_lobe` filtered lookups per lobe (fewer where samples fall below the horizon),
+/// see [`shade_regular_with`]. Errors as [`plan_regular`].
+pub fn plan_lattice(kurt: &Kurt, budget_per_lobe: usize) -> Result<MaterialPlan> {
+    plan_with(kurt, budget_per_lobe, |l| {
+        pattern::row_lattice(l.mx, l.my, budget_per_lobe)
     })
 }
 
@@ -312,6 +323,18 @@ pub fn shade_regular(
     shade_regular_with(f, wo, plan, env, w, None)
 }
 
+/// [`shade_regular`] that also returns the number of filtered (pyramid) lookups it made, the
+/// irradiance lookup of the diffuse term not counted.
+pub fn shade_regular_counted(
+    f: &ShadingFrame,
+    wo: DVec3,
+    plan: &MaterialPlan,
+    env: &Environment,
+    w: Weighting,
+) -> (Rgb, usize) {
+    shade_regular_full(f, wo, plan, env, w, None)
+}
+
 /// [`shade_regular`] with optional bounding-plane lookups. `wo` is the world direction to the
 /// viewer. Per lobe (the GPU renderer mirrors this loop):
 ///
@@ -323,6 +346,11 @@ pub fn shade_regular(
 ///    Samples with ωi below the horizon are skipped (they still count in n for [`Weighting::Pdf002`]).
 /// 3. level = [`mip::regular_level`] (002 Eq. 16), L = pyramid lookup at that level.
 /// 4. f = [`lobe_eval`] (002 Eq. 2 with Eq. 3–5), weighted by `w`.
+///
+/// Lobes planned with [`plan_lattice`] ([`PatternKind::RowLattice`]) take ours instead, and
+/// ignore `w` ([`lattice_lobe`]): equal-mass cells of the slope-space Gaussian, laid out per
+/// pixel in rows across the lobe's image in ωi so that every cell is about round there, each
+/// read once at the level of its own solid angle ([`mip::footprint_level`]).
 pub fn shade_regular_with(
     f: &ShadingFrame,
     wo: DVec3,
@@ -331,9 +359,21 @@ pub fn shade_regular_with(
     w: Weighting,
     lookup: Option<&Lookup>,
 ) -> Rgb {
+    shade_regular_full(f, wo, plan, env, w, lookup).0
+}
+
+/// [`shade_regular_with`] and the number of pyramid lookups made.
+fn shade_regular_full(
+    f: &ShadingFrame,
+    wo: DVec3,
+    plan: &MaterialPlan,
+    env: &Environment,
+    w: Weighting,
+    lookup: Option<&Lookup>,
+) -> (Rgb, usize) {
     let (frame, wo_l) = f.facing(wo);
     if wo_l.z.is_nan() || wo_l.z <= 0.0 {
-        return Rgb::ZERO;
+        return (Rgb::ZERO, 0);
     }
     let k = &plan.kurt;
     let mut out = diffuse(k.kd, env, frame.n);
@@ -348,6 +388,7 @@ pub fn shade_regular_with(
                 .zip(&plan.transmission)
                 .map(|(l, p)| (l, p, LobeKind::Transmission)),
         );
+    let mut lookups = 0;
     for (lobe, lp, kind) in lobes {
         let px = Pixel {
             frame,
@@ -355,9 +396,14 @@ pub fn shade_regular_with(
             env,
             lookup,
         };
-        out += regular_lobe(&px, lobe, kind, &lp.pattern, w);
+        let (c, n) = match lp.pattern.kind {
+            PatternKind::RowLattice { budget } => lattice_lobe(&px, lobe, kind, budget),
+            _ => regular_lobe(&px, lobe, kind, &lp.pattern, w),
+        };
+        out += c;
+        lookups += n;
     }
-    out
+    (out, lookups)
 }
 
 /// What one pixel's lobes share: the frame facing the viewer, ωo in it (above the surface), the
@@ -369,14 +415,14 @@ struct Pixel<'a> {
     lookup: Option<&'a Lookup<'a>>,
 }
 
-/// One lobe of [`shade_regular_with`].
+/// One lobe of [`shade_regular_with`] with a stored pattern; the radiance and the lookups.
 fn regular_lobe(
     px: &Pixel,
     lobe: &KurtLobe,
     kind: LobeKind,
     pattern: &Pattern,
     w: Weighting,
-) -> Rgb {
+) -> (Rgb, usize) {
     let Pixel {
         frame,
         wo_l,
@@ -385,7 +431,7 @@ fn regular_lobe(
     } = *px;
     let n = pattern.h.len();
     if n == 0 {
-        return Rgb::ZERO;
+        return (Rgb::ZERO, 0);
     }
     // The lobe shape without its colour: Eq. 4.25 squares f, so ks is applied once at the end
     // (as the pseudo code's `SpecularCoefficient * brdfSum`).
@@ -398,6 +444,7 @@ fn regular_lobe(
     let area = mip::lobe_area(lobe.mx, lobe.my, pattern.xi0, wo_l);
     let mut sum = Rgb::ZERO;
     let mut weight_sum = 0.0;
+    let mut lookups = 0;
     for &h in &pattern.h {
         let ho = wo_l.dot(h); // ωo·h = ωi·h
         if ho.is_nan() || ho <= 0.0 {
@@ -415,6 +462,7 @@ fn regular_lobe(
         let wi = frame.to_world(wi_l);
         let level = mip::regular_level(area, n, wi, ho, face); // 002 Eq. 16
         let li = incident(env, lookup, wi, level);
+        lookups += 1;
         let g = lobe_eval(&unit, kind, r, wo_l)[0]; // 002 Eq. 2
         match w {
             Weighting::Pdf002 => {
@@ -448,7 +496,116 @@ fn regular_lobe(
             }
         }
     };
-    lobe.ks * sum * scale
+    (lobe.ks * sum * scale, lookups)
+}
+
+/// The major axis of the lobe's image in ωi at its centre and the ratio of its axes: the
+/// Jacobian of the slope-space point s ↦ h = normalize(mx sx, my sy, 1) ↦ ωi = 2(ωo·h)h − ωo at
+/// s = 0 has the columns 2 m_a (ωo_a n + ωo_z e_a) (a = x, y), so JᵀJ = 4 [[mx² (ωo_x² + ωo_z²),
+/// mx my ωo_x ωo_y], [mx my ωo_x ωo_y, my² (ωo_y² + ωo_z²)]]. Returns the unit eigenvector of the
+/// larger eigenvalue (in s) and √(λ1/λ2) ≥ 1; ωo must lie above the surface.
+pub fn lattice_axes(mx: f64, my: f64, wo_l: DVec3) -> ((f64, f64), f64) {
+    let a = 4.0 * mx * mx * (wo_l.x * wo_l.x + wo_l.z * wo_l.z);
+    let c = 4.0 * my * my * (wo_l.y * wo_l.y + wo_l.z * wo_l.z);
+    let b = 4.0 * mx * my * wo_l.x * wo_l.y;
+    let half = 0.5 * (a - c);
+    let root = (half * half + b * b).sqrt();
+    let (l1, l2) = (0.5 * (a + c) + root, 0.5 * (a + c) - root);
+    let ratio = (l1 / l2).sqrt();
+    let (ex, ey) = if half >= 0.0 {
+        (half + root, b)
+    } else {
+        (b, root - half)
+    };
+    let len = (ex * ex + ey * ey).sqrt();
+    let e1 = if len > 0.0 && len.is_finite() {
+        (ex / len, ey / len)
+    } else {
+        (1.0, 0.0)
+    };
+    (e1, if ratio.is_finite() { ratio } else { 1.0 })
+}
+
+/// One lobe with ours, the row lattice of `budget` samples (a [`PatternKind::RowLattice`]
+/// plan); the radiance and the lookups made (≤ `budget`).
+///
+/// 1. The lobe is the Gaussian e^{−|s|²}/π of the slope-space point s (h ∝ (mx sx, my sy, 1);
+///    its density is D(h) cos θh, 000 Eq. 4.5–4.7). Its image in ωi has the axes of
+///    [`lattice_axes`]: major e1, ratio ρ.
+/// 2. k = [`pattern::lattice_rows`]`(budget, ρ)` rows along the minor axis e2 at the quantiles
+///    y_j = [`pattern::gauss_quantile`]((j + ½)/k), row j holding m_j = [`pattern::row_length`]
+///    samples at x_i = quantile((i + ½)/m_j) along e1: `budget` cells of mass μ = 1/(k m_j),
+///    about round in ωi (grazing views and anisotropy stretch the lattice, not the cells).
+/// 3. Each s = x e1 + y e2 gives h and ωi = 2(ωo·h)h − ωo (mirrored through the tangent plane
+///    for transmission, 000 Eq. 3.5); samples with ωo·h ≤ 0 or ωi below the horizon contribute
+///    nothing and make no lookup (the integrand is zero there).
+/// 4. The cell's solid angle is μ / p(ωi), p = D cos θh / (4 ωo·h) (000 Eq. 4.9) =
+///    e^{−|s|²} / (4π mx my (ωo·h) cos³θh); it is read once at [`mip::footprint_level`].
+/// 5. Weight μ · f cos θi / p = μ · F cos θi / (((cos θi cos θo)^α) cos θh) (000 Eq. 3.4 over
+///    Eq. 4.9; F = 1 − Schlick for transmission), so L = ks Σ μ F cos θi L̄ / (G cos θh).
+fn lattice_lobe(px: &Pixel, lobe: &KurtLobe, kind: LobeKind, budget: usize) -> (Rgb, usize) {
+    let Pixel {
+        frame,
+        wo_l,
+        env,
+        lookup,
+    } = *px;
+    if budget == 0 {
+        return (Rgb::ZERO, 0);
+    }
+    let face = env.pyramid.base_size();
+    let (mx, my) = (lobe.mx, lobe.my);
+    let ((e1x, e1y), ratio) = lattice_axes(mx, my, wo_l);
+    let (e2x, e2y) = (-e1y, e1x);
+    let rows = pattern::lattice_rows(budget, ratio);
+    let mut sum = Rgb::ZERO;
+    let mut lookups = 0;
+    for j in 0..rows {
+        let m = pattern::row_length(budget, rows, j);
+        let y = pattern::gauss_quantile((j as f64 + 0.5) / rows as f64);
+        let mass = 1.0 / (rows * m) as f64;
+        for i in 0..m {
+            let x = pattern::gauss_quantile((i as f64 + 0.5) / m as f64);
+            let (sx, sy) = (x * e1x + y * e2x, x * e1y + y * e2y);
+            let h = DVec3::new(mx * sx, my * sy, 1.0).normalize();
+            let ho = wo_l.dot(h);
+            if ho.is_nan() || ho <= 0.0 {
+                continue;
+            }
+            let r = reflect(wo_l, h);
+            let cos_i = r.z;
+            if cos_i.is_nan() || cos_i <= 0.0 {
+                continue;
+            }
+            let wi_l = match kind {
+                LobeKind::Reflection => r,
+                LobeKind::Transmission => mirror_z(r),
+            };
+            let wi = frame.to_world(wi_l);
+            let cell = mass
+                * 4.0
+                * std::f64::consts::PI
+                * mx
+                * my
+                * ho
+                * h.z.powi(3)
+                * (sx * sx + sy * sy).exp();
+            let li = incident(env, lookup, wi, mip::footprint_level(cell, wi, face));
+            lookups += 1;
+            let f = schlick(lobe.r0, ho);
+            let fresnel = match kind {
+                LobeKind::Reflection => f,
+                LobeKind::Transmission => 1.0 - f,
+            };
+            let shadow = if lobe.alpha == 0.0 {
+                1.0
+            } else {
+                (cos_i * wo_l.z).powf(lobe.alpha)
+            };
+            sum += li * (mass * fresnel * cos_i / (shadow * h.z));
+        }
+    }
+    (lobe.ks * sum, lookups)
 }
 
 /// Colbert & Křivánek (2007) filtered importance sampling with [`Kurt`] lobes. See
@@ -461,6 +618,18 @@ pub fn shade_ck(
     env: &Environment,
 ) -> Rgb {
     shade_ck_with(f, wo, kurt, n_samples, env, None)
+}
+
+/// [`shade_ck`] that also returns the number of pyramid lookups it made (≤ `n_samples` per
+/// lobe: samples below the horizon make none).
+pub fn shade_ck_counted(
+    f: &ShadingFrame,
+    wo: DVec3,
+    kurt: &Kurt,
+    n_samples: usize,
+    env: &Environment,
+) -> (Rgb, usize) {
+    shade_ck_full(f, wo, kurt, n_samples, env, None)
 }
 
 /// [`shade_ck`] with optional bounding-plane lookups. Diffuse = kd · irradiance(n). **Per-lobe
@@ -478,14 +647,27 @@ pub fn shade_ck_with(
     env: &Environment,
     lookup: Option<&Lookup>,
 ) -> Rgb {
+    shade_ck_full(f, wo, kurt, n_samples, env, lookup).0
+}
+
+/// [`shade_ck_with`] and the number of pyramid lookups made.
+fn shade_ck_full(
+    f: &ShadingFrame,
+    wo: DVec3,
+    kurt: &Kurt,
+    n_samples: usize,
+    env: &Environment,
+    lookup: Option<&Lookup>,
+) -> (Rgb, usize) {
     let (frame, wo_l) = f.facing(wo);
     if wo_l.z.is_nan() || wo_l.z <= 0.0 {
-        return Rgb::ZERO;
+        return (Rgb::ZERO, 0);
     }
     let mut out = diffuse(kurt.kd, env, frame.n);
     if n_samples == 0 {
-        return out;
+        return (out, 0);
     }
+    let mut lookups = 0;
     let face = env.pyramid.base_size();
     let lobes = kurt
         .reflection
@@ -520,11 +702,12 @@ pub fn shade_ck_with(
             };
             let wi = frame.to_world(wi_l);
             let li = incident(env, lookup, wi, mip::ck_level(pdf, n as usize, face));
+            lookups += 1;
             sum += li * lobe_eval(lobe, kind, r, wo_l) * (r.z / pdf); // 002 Eq. 9
         }
         out += sum / n as f64;
     }
-    out
+    (out, lookups)
 }
 
 /// Monte-Carlo reference (000 Eq. 4.4 with the BSDF's own importance sampling): `n_samples`

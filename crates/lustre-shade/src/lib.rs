@@ -5,6 +5,7 @@
 //! - [`image`], [`metrics`]: float images, RMS / PSNR / CIE Lab ΔE, false-colour differences.
 //! - [`kernel`]: per-pixel shading kernels: reference, progressive QMC, regular, Colbert-Křivánek.
 //! - [`scene`], [`render`], [`harness`]: evaluation scenes, image rendering, the comparisons.
+//! - [`truth`]: the exact environment integral over every texel (the truth harness).
 
 pub mod error;
 pub mod harness;
@@ -15,5 +16,6 @@ pub mod mip;
 pub mod pattern;
 pub mod render;
 pub mod scene;
+pub mod truth;
 
 pub use error::{Result, ShadeError};

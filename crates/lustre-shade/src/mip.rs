@@ -147,3 +147,25 @@ pub fn ck_level(pdf: f64, n_samples: usize, face_size: usize) -> f64 {
     let omega_p = texel_solid_angle_mean(face_size);
     clamp_level(0.5 * (omega_s / omega_p).log2() + 1.0, face_size)
 }
+
+/// The bias of [`footprint_level`] (in levels), measured on the truth harness
+/// (`examples/truth_study.rs`): the Gaussian 6×6 pyramid's level-l lookup (with its bilinear
+/// tap) has a standard deviation of ≈ 0.76·2^l texels, more than twice a square cell's
+/// 0.29·side, so a cell of side 2^l texels is best read somewhat finer than level l.
+pub const FOOTPRINT_LEVEL_BIAS: f64 = -0.5;
+
+/// The MIP level of one cell of the row lattice (ours, `pattern::row_lattice`): the cell's
+/// solid angle `cell` = mass / p(ωi) (sr) over the solid angle of the texel seen along
+/// `wi_world` ([`texel_solid_angle_at`], the cube distortion d³), level = ½ log2(cell / Ωp) +
+/// [`FOOTPRINT_LEVEL_BIAS`], clamped to `[0, log2(face_size)]`; a non-positive or NaN cell gives
+/// the coarsest level.
+pub fn footprint_level(cell: f64, wi_world: DVec3, face_size: usize) -> f64 {
+    if cell.is_nan() || cell <= 0.0 {
+        return clamp_level(f64::INFINITY, face_size);
+    }
+    let omega_p = texel_solid_angle_at(wi_world, face_size);
+    clamp_level(
+        0.5 * (cell / omega_p).log2() + FOOTPRINT_LEVEL_BIAS,
+        face_size,
+    )
+}

@@ -49,6 +49,12 @@ pub enum PatternKind {
         /// Number of rings around the centre sample.
         rings: usize,
     },
+    /// Ours ([`row_lattice`]): `budget` equal-mass cells of the slope-space Gaussian laid out
+    /// per pixel in rows across the lobe's image in ωi, so that every cell is about round there.
+    RowLattice {
+        /// Samples (= filtered lookups) per lobe.
+        budget: usize,
+    },
 }
 
 /// A regular pattern of half vectors for one lobe.
@@ -284,8 +290,11 @@ pub fn concentric_with(
     })
 }
 
-/// The concentric pattern (either spacing, nc = 1 … [`MAX_CIRCLES`]) whose number of samples
-/// is closest to `budget` (002 §5, last paragraph). Ties go to the smaller pattern, then to s1.
+/// The largest concentric pattern (either spacing, nc = 1 … [`MAX_CIRCLES`]) with at most
+/// `budget` samples, so that a method compared at a budget never exceeds it. 002 §5 (last
+/// paragraph) takes the pattern *closest* to the budget, which may be larger (a budget of 17
+/// for the mx 0.2 / my 0.075 lobe with reach 1 planned 20 samples); ties go to s1. The pole
+/// pattern (nc = 1 of s1, one sample) always fits.
 pub fn concentric_for_budget(mx: f64, my: f64, budget: usize, xi0: f64) -> Result<Pattern> {
     concentric_for_budget_opts(mx, my, budget, xi0, ConcentricOptions::default())
 }
@@ -300,12 +309,17 @@ pub fn concentric_for_budget_opts(
 ) -> Result<Pattern> {
     let s1 = budget_search(mx, my, budget, xi0, Spacing::S1, opts)?;
     let s2 = budget_search(mx, my, budget, xi0, Spacing::S2, opts)?;
-    let key = |p: &Pattern| (p.h.len().abs_diff(budget), p.h.len());
-    Ok(if key(&s2) < key(&s1) { s2 } else { s1 })
+    let fits = |p: &Pattern| p.h.len() <= budget;
+    Ok(match (fits(&s1), fits(&s2)) {
+        (true, true) if s2.h.len() > s1.h.len() => s2,
+        (false, true) => s2,
+        _ => s1,
+    })
 }
 
-/// The concentric pattern with the given spacing (nc = 1 … [`MAX_CIRCLES`]) whose number of
-/// samples is closest to `budget`; ties go to the smaller pattern.
+/// The largest concentric pattern with the given spacing (nc = 1 … [`MAX_CIRCLES`]) with at
+/// most `budget` samples (ties go to fewer circles); when even nc = 1 exceeds the budget (s2
+/// puts 4 samples on its first circle), that smallest pattern.
 pub fn concentric_for_budget_with(
     mx: f64,
     my: f64,
@@ -338,13 +352,11 @@ fn budget_search(
             break;
         }
         let p = concentric_with(mx, my, circles, spacing, xi0, opts)?;
-        let (n, nb) = (p.h.len(), best.h.len());
-        let past = n > budget;
-        if (n.abs_diff(budget), n) < (nb.abs_diff(budget), nb) {
-            best = p;
-        }
-        if past {
+        if p.h.len() > budget {
             break;
+        }
+        if p.h.len() > best.h.len() {
+            best = p;
         }
     }
     Ok(best)
@@ -434,4 +446,119 @@ pub fn multi_ring(mx: f64, my: f64, rings: usize, per_ring: usize) -> Result<Pat
         );
     }
     Ok(thesis_pattern(PatternKind::MultiRing { rings }, mx, my, h))
+}
+
+/// The row lattice of [`row_lattice`]: `budget` half vectors laid out per pixel (they depend on
+/// the view), so the stored pattern holds no half vectors; `kernel::shade_regular` builds them
+/// with [`lattice_rows`], [`row_length`] and [`gauss_quantile`].
+pub fn row_lattice(mx: f64, my: f64, budget: usize) -> Result<Pattern> {
+    check_roughness(mx, my)?;
+    if budget == 0 {
+        return Err(ShadeError::Parameter(
+            "pattern: the sample budget must be at least 1".into(),
+        ));
+    }
+    Ok(Pattern {
+        kind: PatternKind::RowLattice { budget },
+        h: vec![],
+        pdf_constant: 0.0,
+        mx,
+        my,
+        xi0: ROW_LATTICE_XI0,
+    })
+}
+
+/// The `xi0` stored with a [`PatternKind::RowLattice`] pattern: unused by the estimator (the
+/// lattice covers the whole lobe by equal-mass cells), kept inside (0, 1) for the GPU records.
+pub const ROW_LATTICE_XI0: f64 = 0.5;
+
+/// The quantile of the slope-space Gaussian marginal, density e^{−x²}/√π: x = erfinv(2u − 1),
+/// by Giles' single-precision polynomial ("Approximating the erfinv function", GPU Computing
+/// Gems, 2011; relative error < 4e-7 on (−1, 1)), the same polynomial as `shade.wgsl`. `u` is
+/// clamped to [1e-7, 1 − 1e-7].
+pub fn gauss_quantile(u: f64) -> f64 {
+    let x = (2.0 * u.clamp(1e-7, 1.0 - 1e-7) - 1.0).clamp(-1.0, 1.0);
+    let w0 = -((1.0 - x) * (1.0 + x)).ln();
+    let p = if w0 < 5.0 {
+        let w = w0 - 2.5;
+        let mut p = 2.810_226_36e-08;
+        for c in [
+            3.432_739_39e-07,
+            -3.523_387_7e-06,
+            -4.391_506_54e-06,
+            0.000_218_580_87,
+            -0.001_253_725_03,
+            -0.004_177_681_64,
+            0.246_640_727,
+            1.501_409_41,
+        ] {
+            p = c + p * w;
+        }
+        p
+    } else {
+        let w = w0.sqrt() - 3.0;
+        let mut p = -0.000_200_214_257;
+        for c in [
+            0.000_100_950_558,
+            0.001_349_343_22,
+            -0.003_673_428_44,
+            0.005_739_507_73,
+            -0.007_622_461_3,
+            0.009_438_870_47,
+            1.001_674_06,
+            2.832_976_82,
+        ] {
+            p = c + p * w;
+        }
+        p
+    };
+    p * x
+}
+
+/// The number of rows of a [`row_lattice`] of `budget` samples for a lobe whose image in ωi
+/// space is `ratio` (≥ 1) times longer along its major axis than along its minor one:
+/// k = round(√(budget / ratio)) clamped to 1 ..= budget, so that with about budget/k samples
+/// per row the cells are about as long as wide (round) in ωi space.
+pub fn lattice_rows(budget: usize, ratio: f64) -> usize {
+    let r = if ratio.is_finite() && ratio >= 1.0 {
+        ratio
+    } else if ratio.is_nan() {
+        1.0
+    } else {
+        ratio.max(1.0)
+    };
+    let k = (budget as f64 / r).sqrt().round();
+    if k.is_finite() {
+        (k as usize).clamp(1, budget.max(1))
+    } else {
+        1
+    }
+}
+
+/// The number of samples in row `j` of `rows` rows sharing `budget` samples: ⌊budget/rows⌋,
+/// plus one for the budget mod rows rows nearest the centre (order c, c−1, c+1, c−2, … from
+/// the centre row c = (rows−1)/2, or from the lower central row for an even count). The rows
+/// sum to `budget` exactly.
+pub fn row_length(budget: usize, rows: usize, j: usize) -> usize {
+    let rows = rows.max(1);
+    let base = budget / rows;
+    let extra = budget % rows;
+    let rank = if rows % 2 == 1 {
+        let c = (rows - 1) / 2;
+        if j == c {
+            0
+        } else if j < c {
+            2 * (c - j) - 1
+        } else {
+            2 * (j - c)
+        }
+    } else {
+        let c0 = rows / 2 - 1;
+        if j <= c0 {
+            2 * (c0 - j)
+        } else {
+            2 * (j - c0 - 1) + 1
+        }
+    };
+    base + usize::from(rank < extra)
 }

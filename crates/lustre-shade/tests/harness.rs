@@ -67,10 +67,24 @@ fn tiny_run_writes_a_table_with_finite_numbers() {
     )
     .expect("run");
     assert!(calls.into_inner() > 0);
-    // 002: 5 settings × (printed and reach-1 patterns + CK) + 3 references;
-    // 000: 4 × (3 + CK) + 4 references.
-    assert_eq!(report.rows.len(), 5 * 3 + 3 + 4 * 4 + 4);
+    // 002: 5 settings × (printed, reach-1 and lattice + CK) + 3 references;
+    // 000: 4 × (4 + CK) + 4 references.
+    assert_eq!(report.rows.len(), 5 * 4 + 3 + 4 * 5 + 4);
     for r in &report.rows {
+        // Every method within its budget of filtered lookups per lobe and pixel.
+        if r.method != "reference" {
+            let lobes = exps
+                .iter()
+                .flat_map(|e| &e.materials)
+                .find(|m| m.name == r.material)
+                .map(|m| m.kurt.reflection.len() + m.kurt.transmission.len())
+                .expect("material");
+            assert!(r.lookups.1 <= r.samples * lobes, "{r:?}");
+            assert!(
+                r.lookups.0 <= r.lookups.1 as f64 && r.lookups.0 > 0.0,
+                "{r:?}"
+            );
+        }
         assert!(r.rms.is_finite() && r.rms >= 0.0, "{r:?}");
         assert!(r.delta_e.is_finite() && r.delta_e >= 0.0, "{r:?}");
         assert!(r.seconds.is_finite() && r.seconds >= 0.0, "{r:?}");
@@ -88,6 +102,11 @@ fn tiny_run_writes_a_table_with_finite_numbers() {
     let md = std::fs::read_to_string(out.join("compare.md")).expect("compare.md");
     assert!(md.contains("## Experiment 002") && md.contains("## Experiment 000"));
     assert!(md.contains("| iso-0.15 | 270 | regular (Pdf002) |"));
+    assert!(
+        md.contains("| aniso-0.2-0.075 | 17 | lattice (ours) |"),
+        "{md}"
+    );
+    assert!(md.contains("lookups mean / max"));
     assert!(md.contains("| varnish | 7 | thesis (Eq. 4.25) |"), "{md}");
     assert!(out.join("000_frosted-glass_n5_thesis-424.png").is_file());
     assert!(out.join("002_iso-0.1_n14_ck_diff.png").is_file());

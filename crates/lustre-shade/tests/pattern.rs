@@ -3,8 +3,9 @@
 use glam::DVec3;
 use lustre_brdf::models::kurt::beckmann_d;
 use lustre_shade::pattern::{
-    concentric, concentric_for_budget, multi_ring, q, ring_count, thesis, theta_max, PatternKind,
-    Spacing, THESIS_RING_XI1,
+    concentric, concentric_for_budget, concentric_for_budget_opts, concentric_with, gauss_quantile,
+    lattice_rows, multi_ring, q, ring_count, row_lattice, row_length, thesis, theta_max,
+    ConcentricOptions, PatternKind, Spacing, THESIS_RING_XI1,
 };
 use proptest::prelude::*;
 
@@ -133,7 +134,7 @@ fn half_offset_circle_is_used_when_better() {
 }
 
 #[test]
-fn budget_picks_closest() {
+fn budget_is_never_exceeded() {
     let p = concentric_for_budget(0.2, 0.2, 19, 0.1).unwrap();
     assert_eq!(p.h.len(), 19);
     assert_eq!(
@@ -145,22 +146,34 @@ fn budget_picks_closest() {
     );
     let p = concentric_for_budget(0.2, 0.2, 30, 0.1).unwrap();
     assert_eq!(p.h.len(), 30);
-    // Isotropic sizes: s1 1, 7, 19, 37, …; s2 4, 14, 30, … → 17 is closest to 19 (2 away).
+    // Isotropic sizes: s1 1, 7, 19, 37, …; s2 4, 14, 30, … → a budget of 17 gets 14 (002 §5's
+    // "closest" would take 19, over the budget).
     assert_eq!(
         concentric_for_budget(0.2, 0.2, 17, 0.1).unwrap().h.len(),
-        19
+        14
     );
     assert_eq!(concentric_for_budget(0.2, 0.2, 1, 0.1).unwrap().h.len(), 1);
-    // Anisotropic: the count is as close as any candidate.
+    // Anisotropic, printed and with reach 1 (which planned 20 for 17 under the "closest"
+    // rule): at most the budget, and no candidate within the budget is larger.
     let budget = 17;
-    let best = concentric_for_budget(0.2, 0.075, budget, 0.1)
-        .unwrap()
-        .h
-        .len();
-    for spacing in [Spacing::S1, Spacing::S2] {
-        for nc in 1..=10 {
-            let n = concentric(0.2, 0.075, nc, spacing, 0.1).unwrap().h.len();
-            assert!(best.abs_diff(budget) <= n.abs_diff(budget));
+    for reach in [None, Some(1.0)] {
+        let opts = ConcentricOptions { reach };
+        let best = concentric_for_budget_opts(0.2, 0.075, budget, 0.2, opts)
+            .unwrap()
+            .h
+            .len();
+        assert!(best <= budget, "{reach:?}: {best}");
+        for spacing in [Spacing::S1, Spacing::S2] {
+            for nc in 1..=10 {
+                let n = concentric_with(0.2, 0.075, nc, spacing, 0.2, opts)
+                    .unwrap()
+                    .h
+                    .len();
+                assert!(
+                    n > budget || n <= best,
+                    "{reach:?} {spacing:?} {nc}: {n} vs {best}"
+                );
+            }
         }
     }
     assert!(concentric_for_budget(0.2, 0.2, 0, 0.1).is_err());
@@ -240,6 +253,71 @@ fn multi_ring_pattern() {
     for (a, b) in one.h.iter().zip(&th.h) {
         assert!((*a - *b).length() < 1e-12);
     }
+}
+
+/// erfinv(2u − 1) against values from the error function (erf(0.476936) = 0.5, erf(1.163087)
+/// = 0.9, erf(1.821386) = 0.99, erf(2.751064) = 0.9999), odd symmetry and monotonicity.
+#[test]
+fn gauss_quantile_known_values() {
+    for (u, x) in [
+        (0.75, 0.476_936_276),
+        (0.95, 1.163_087_154),
+        (0.995, 1.821_386_368),
+        (0.999_95, 2.751_064_5),
+    ] {
+        assert!(
+            (gauss_quantile(u) - x).abs() < 2e-6 * x,
+            "{u}: {}",
+            gauss_quantile(u)
+        );
+        assert!((gauss_quantile(1.0 - u) + x).abs() < 2e-6 * x);
+    }
+    assert_eq!(gauss_quantile(0.5), 0.0);
+    let mut last = f64::NEG_INFINITY;
+    for k in 1..1000 {
+        let v = gauss_quantile(k as f64 / 1000.0);
+        assert!(v > last);
+        last = v;
+    }
+    assert!(gauss_quantile(0.0).is_finite() && gauss_quantile(1.0).is_finite());
+}
+
+/// The rows share the budget exactly, the longer rows in the middle; round cells need about
+/// √(budget/ratio) rows.
+#[test]
+fn lattice_rows_share_the_budget() {
+    for budget in 1..40 {
+        for ratio in [1.0, 1.7, 2.67, 6.0, 50.0, f64::NAN, f64::INFINITY, 0.2] {
+            let rows = lattice_rows(budget, ratio);
+            assert!((1..=budget).contains(&rows), "{budget} {ratio}: {rows}");
+            let lens: Vec<usize> = (0..rows).map(|j| row_length(budget, rows, j)).collect();
+            assert_eq!(lens.iter().sum::<usize>(), budget, "{lens:?}");
+            assert!(lens
+                .iter()
+                .all(|&m| m >= budget / rows && m <= budget / rows + 1));
+            // Every longer row is at least as central as every shorter one.
+            let c = (rows as f64 - 1.0) / 2.0;
+            for (a, la) in lens.iter().enumerate() {
+                for (b, lb) in lens.iter().enumerate() {
+                    if la > lb {
+                        assert!((a as f64 - c).abs() <= (b as f64 - c).abs(), "{lens:?}");
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(lattice_rows(16, 1.0), 4);
+    assert_eq!(lattice_rows(17, 2.67), 3);
+    assert_eq!(lattice_rows(17, 17.0), 1);
+    assert_eq!(
+        (0..4).map(|j| row_length(14, 4, j)).collect::<Vec<_>>(),
+        [3, 4, 4, 3]
+    );
+    let p = row_lattice(0.2, 0.075, 17).unwrap();
+    assert_eq!(p.kind, PatternKind::RowLattice { budget: 17 });
+    assert!(p.h.is_empty());
+    assert!(row_lattice(0.2, 0.0, 17).is_err());
+    assert!(row_lattice(0.2, 0.1, 0).is_err());
 }
 
 proptest! {

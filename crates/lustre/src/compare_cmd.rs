@@ -1,5 +1,7 @@
 //! `lustre compare`: reproduces 002 Fig. 8–10 (regular sampling vs Colbert–Křivánek on a
-//! tiny-spot map) and 000 Fig. 4.24 (Eq. 4.24 vs Eq. 4.25) as images and a Markdown table.
+//! tiny-spot map) and 000 Fig. 4.24 (Eq. 4.24 vs Eq. 4.25) as images and a Markdown table, with
+//! our row lattice beside 002's printed method and the filtered lookups every method made per
+//! pixel (each within its per-lobe budget).
 
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};

@@ -119,7 +119,7 @@ pub struct PlotArgs {
     /// Pattern threshold ξ0 of 002 §5 (the concentric patterns).
     #[arg(long, default_value_t = 0.1)]
     pub xi0: f64,
-    /// Concentric patterns: this many circles nc instead of the count closest to the budget.
+    /// Concentric patterns: this many circles nc instead of the largest count within the budget.
     #[arg(long)]
     pub circles: Option<usize>,
     /// Multi-ring pattern: the number of rings (the budget less the centre is spread over them).
@@ -251,7 +251,7 @@ fn panel(title: String, p: &pattern::Pattern) -> lustre_plot::PatternPanel {
 }
 
 /// The panels of a concentric-pattern plot: s1 and s2 with `--circles` circles, or each with the
-/// circle count closest to the budget followed by the overall pick for the budget.
+/// largest circle count within the budget followed by the overall pick for the budget.
 fn concentric_panels(args: &PlotArgs) -> Result<Vec<lustre_plot::PatternPanel>> {
     let (mx, my, xi0) = (args.mx, args.my, args.xi0);
     let mut panels = Vec::new();
@@ -268,7 +268,7 @@ fn concentric_panels(args: &PlotArgs) -> Result<Vec<lustre_plot::PatternPanel>> 
     }
     if args.circles.is_none() {
         let p = pattern::concentric_for_budget(mx, my, args.budget, xi0)?;
-        panels.push(panel(format!("closest to budget {}", args.budget), &p));
+        panels.push(panel(format!("largest within budget {}", args.budget), &p));
     }
     Ok(panels)
 }

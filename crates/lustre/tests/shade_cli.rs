@@ -61,6 +61,11 @@ fn compare_with_a_tiny_configuration_writes_the_table() {
         md.contains("| aniso-0.2-0.075 | 17 | regular (Pdf002) |"),
         "{md}"
     );
+    assert!(
+        md.contains("| aniso-0.2-0.075 | 17 | lattice (ours) |"),
+        "{md}"
+    );
+    assert!(md.contains("lookups mean / max"), "{md}");
     assert!(out.join("002_iso-0.1_reference.png").is_file());
 }
 
