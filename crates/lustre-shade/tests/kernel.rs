@@ -313,7 +313,7 @@ fn convergence_on_a_smooth_map() {
                 );
                 // (Budgets are never exceeded: 19 is the isotropic s1 pattern with nc = 3.)
                 if w == Weighting::Pdf002 && budget >= 19 {
-                    // Measured: 4.6 %, 3.5 % (002 concentric), 5.0 %, 3.5 % (thesis).
+                    // Measured: 4.6 %, 3.5 % (002 concentric), 4.6 %, 3.5 % (thesis) at 19 / 30.
                     assert!(e < 0.06, "{name} {w:?} {budget}: {e}");
                 } else if w != Weighting::Pdf002 {
                     // Eq. 4.24/4.25 stay biased, 12–15 % (concentric) and 17–18.6 % (thesis
@@ -416,11 +416,11 @@ fn convergence_on_a_spot_map() {
         println!("  CK N = {n:4}: mean relative error {:.2}%", 100.0 * e);
         ck_err.push(e);
     }
-    // Measured mean relative errors of the regular Pdf002 kernel on this map: 27.1 %, 26.4 %,
-    // 17.4 %, 15.0 % at budgets 5, 9, 17, 30 (the reference's own noise: ~1 %, the MC/QMC
+    // Measured mean relative errors of the regular Pdf002 kernel on this map: 27.1 %, 24.9 %,
+    // 19.4 %, 15.0 % at budgets 5, 9, 17, 30 (the reference's own noise: ~1 %, the MC/QMC
     // difference above). Asserted with a margin, and the decrease from 5 to 30.
     let mut regular_err = Vec::new();
-    for (budget, bound) in [(5, 0.30), (9, 0.29), (17, 0.20), (30, 0.17)] {
+    for (budget, bound) in [(5, 0.30), (9, 0.29), (17, 0.21), (30, 0.17)] {
         let got: Vec<Rgb> = px
             .iter()
             .map(|(f, wo, k)| {
