@@ -192,15 +192,6 @@ pub struct Fitted {
     pub albedo_model: [f64; 3],
 }
 
-/// What a fit that failed after producing parameters keeps: the parameters and the reason.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Unfinished {
-    /// The best parameters the fit reached.
-    pub model: MaterialModel,
-    /// Why they are not a result.
-    pub reason: String,
-}
-
 /// The fitting behind a batch.
 pub trait Fitter: Sync {
     /// Expands one command-line input into the inputs to fit (e.g. `nbrdf:FILE#*`).
@@ -413,9 +404,10 @@ pub struct FailureFile {
     pub name: String,
     /// The status, message and options.
     pub fit: FitRecord,
-    /// The best parameters the fit reached before it failed (absent when it reached none).
+    /// The best parameters the fit reached before it failed, as the material JSON's `model`
+    /// would hold them (absent when it reached none; a non-finite number reads `null`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub model: Option<MaterialModel>,
+    pub model: Option<serde_json::Value>,
 }
 
 /// One row of the CSV summary (empty cells where a failed input has no numbers).
@@ -878,7 +870,7 @@ fn run_one(
                 Ok(()) => Ok(f.status),
                 Err(e) => {
                     // Keep what the fit reached, to inspect.
-                    kept = Some(f.model);
+                    kept = serde_json::to_value(&f.model).ok();
                     Err((
                         FitStatus::Error,
                         format!(
@@ -917,7 +909,7 @@ fn write_failure(
     path: &Path,
     name: &str,
     record: &FitRecord,
-    model: Option<MaterialModel>,
+    model: Option<serde_json::Value>,
 ) -> Result<()> {
     let f = FailureFile {
         schema: FAILURE_SCHEMA.into(),
@@ -1163,6 +1155,14 @@ mod tests {
             s.rows[2].message
         );
         assert!(s.rows[3].message.contains("mx"), "{}", s.rows[3].message);
+        // A fit that exists but is invalid keeps its parameters in the failure record.
+        let nan: FailureFile = serde_json::from_slice(
+            &std::fs::read(dir.path().join("nan.json")).expect("nan.json"),
+        )
+        .expect("failure record");
+        let kept = nan.model.expect("parameters kept");
+        assert_eq!(kept["reflection"][0]["my"], 0.2, "{kept}");
+        assert!(kept["reflection"][0]["mx"].is_null(), "NaN reads null: {kept}");
         assert!(s.rows[4].message.contains("no such network"));
         assert_eq!(s.rows[1].ngan_l2_r, None);
         let rows = csv_rows(&s.summary_path);
