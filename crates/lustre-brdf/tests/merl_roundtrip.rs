@@ -4,8 +4,7 @@
 use lustre_brdf::frame::{from_half_diff, spherical, HalfDiff};
 use lustre_brdf::measured::merl::{
     bin_center, bin_node, merl_angles, table_from_fn, MerlTable, NegativeValues, BINS,
-    CHANNEL_SCALE,
-    FILE_BYTES, RES_PHI_D, RES_THETA_D, RES_THETA_H,
+    CHANNEL_SCALE, FILE_BYTES, RES_PHI_D, RES_THETA_D, RES_THETA_H,
 };
 use lustre_brdf::measured::nbrdf::{synthesize_merl, Nbrdf, NbrdfSet};
 use lustre_brdf::numeric::SphereQuadrature;

@@ -175,7 +175,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     }
     let mut summary = vec![
         String::new(),
-        format!("- materials: {n} (elapsed {:.0} s)", t0.elapsed().as_secs_f64()),
+        format!(
+            "- materials: {n} (elapsed {:.0} s)",
+            t0.elapsed().as_secs_f64()
+        ),
         format!(
             "- published SGD fits closer to the tables read at lower edges than at centres: \
              {edge_wins}/{n}; error ratio centre/edge: median {:.3}, min {:.3}, max {:.3}",

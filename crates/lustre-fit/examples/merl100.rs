@@ -217,7 +217,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut unphys = [0usize; 4];
     let mut capped = [0usize; 3];
     let mut n_pub = 0usize;
-    let (mut wall, mut cpu, mut cpu_b, mut cpu_g) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut wall, mut cpu, mut cpu_b, mut cpu_g) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut kurt_lines = Vec::new();
     let mut kurt_unphys = 0;
     for input in &inputs {

@@ -281,9 +281,8 @@ impl Fitter for MeasuredFitter {
                         best = Some((model, f.status, r, k));
                     }
                 }
-                let (model, status, r, k) = best.ok_or_else(|| {
-                    FitError::Option("no Kurt fit was run (0 lobes)".into())
-                })?;
+                let (model, status, r, k) =
+                    best.ok_or_else(|| FitError::Option("no Kurt fit was run (0 lobes)".into()))?;
                 if counts.len() > 1 {
                     notes.push(format!(
                         "reported: the {k}-lobe fit (best {} of 1..={} lobes)",
@@ -644,9 +643,8 @@ pub fn run(inputs: &[String], opts: &BatchOptions, fitter: &dyn Fitter) -> Resul
             .iter()
             .filter_map(|j| {
                 let path = opts.out.join(format!("{}.json", j.name));
-                other_options(&path, j, &opts.settings).map(|old| {
-                    format!("{} ({old})", path.display())
-                })
+                other_options(&path, j, &opts.settings)
+                    .map(|old| format!("{} ({old})", path.display()))
             })
             .collect();
         if !conflicts.is_empty() {
@@ -1077,7 +1075,11 @@ mod tests {
         // Other options never overwrite silently: refused, nothing fitted, files unchanged.
         let e = run(&inputs, &other, &mock).unwrap_err().to_string();
         assert!(e.contains("--force") && e.contains("a.json"), "{e}");
-        assert_eq!(mock.fits.load(Ordering::SeqCst), 3, "refused before fitting");
+        assert_eq!(
+            mock.fits.load(Ordering::SeqCst),
+            3,
+            "refused before fitting"
+        );
         assert_eq!(mtime(&a), t_a);
         // To another name: both fits stay and the summary covers all four JSON files.
         let suffixed = BatchOptions {
@@ -1156,13 +1158,15 @@ mod tests {
         );
         assert!(s.rows[3].message.contains("mx"), "{}", s.rows[3].message);
         // A fit that exists but is invalid keeps its parameters in the failure record.
-        let nan: FailureFile = serde_json::from_slice(
-            &std::fs::read(dir.path().join("nan.json")).expect("nan.json"),
-        )
-        .expect("failure record");
+        let nan: FailureFile =
+            serde_json::from_slice(&std::fs::read(dir.path().join("nan.json")).expect("nan.json"))
+                .expect("failure record");
         let kept = nan.model.expect("parameters kept");
         assert_eq!(kept["reflection"][0]["my"], 0.2, "{kept}");
-        assert!(kept["reflection"][0]["mx"].is_null(), "NaN reads null: {kept}");
+        assert!(
+            kept["reflection"][0]["mx"].is_null(),
+            "NaN reads null: {kept}"
+        );
         assert!(s.rows[4].message.contains("no such network"));
         assert_eq!(s.rows[1].ngan_l2_r, None);
         let rows = csv_rows(&s.summary_path);

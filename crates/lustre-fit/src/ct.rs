@@ -928,7 +928,10 @@ pub fn fit_masked(
                 "non-finite values on the fitting slices (channel {c})"
             )));
         }
-        if h.iter().zip(&slices.valid_h).all(|(&v, &ok)| v <= 0.0 || !ok) {
+        if h.iter()
+            .zip(&slices.valid_h)
+            .all(|(&v, &ok)| v <= 0.0 || !ok)
+        {
             return Err(err(format!("channel {c} is zero on the θd = 0 slice")));
         }
     }

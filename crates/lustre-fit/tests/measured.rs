@@ -65,7 +65,8 @@ fn unmeasured_bins_are_masked_in_fits_and_metrics() {
     assert_eq!(d.missing, 3 * 20 * per_theta_h);
     assert_eq!(cov.masked_bins(), 20 * per_theta_h);
     assert!(
-        d.mask_note().contains("972000 unmeasured values (324000 of 1458000 bins)"),
+        d.mask_note()
+            .contains("972000 unmeasured values (324000 of 1458000 bins)"),
         "{}",
         d.mask_note()
     );
@@ -84,7 +85,10 @@ fn unmeasured_bins_are_masked_in_fits_and_metrics() {
     let (wm, wu) = (worst(&masked), worst(&unmasked));
     println!("α/ρs relative error: masked {wm:.2e}, hole read as data {wu:.2e}");
     assert!(wm < 0.05, "masked fit departs from the intact one: {wm}");
-    assert!(wu > 4.0 * wm, "the hole should matter when not masked: {wu} vs {wm}");
+    assert!(
+        wu > 4.0 * wm,
+        "the hole should matter when not masked: {wu} vs {wm}"
+    );
 
     // The metrics leave the hole out: the intact fit's error integrals on the intact table
     // (masked the same way) and on the holey one agree up to the interpolation at the hole's
@@ -126,7 +130,10 @@ fn lower_edge_tables_are_recovered_with_the_lower_edge_convention() {
     assert!(rel(c.rho_s, 0.5) < 1e-2, "{c:?}");
     assert!(rel(c.rho_d, 0.1) < 1e-3, "{c:?}");
     let s = &shifted.channels[0];
-    assert!(rel(s.alpha, 0.05) > 0.02 || rel(s.rho_s, 0.5) > 0.05, "{s:?}");
+    assert!(
+        rel(s.alpha, 0.05) > 0.02 || rel(s.rho_s, 0.5) > 0.05,
+        "{s:?}"
+    );
 }
 
 /// Fits that used to end with a negative Fresnel term or an albedo above 1 stay physical: F in

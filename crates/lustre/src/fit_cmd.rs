@@ -4,9 +4,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use lustre_fit::batch::{
-    self, BatchOptions, FitSettings, Fitter, Metric, ModelChoice, SummaryRow,
-};
+use lustre_fit::batch::{self, BatchOptions, FitSettings, Fitter, Metric, ModelChoice, SummaryRow};
 use std::path::{Path, PathBuf};
 
 /// The model to fit.

@@ -128,7 +128,10 @@ fn list() -> anyhow::Result<()> {
     for (name, keys) in catalog::models() {
         writeln!(out, "  {name:<30} {keys}")?;
     }
-    writeln!(out, "published MERL fits and neural BRDFs, built into this binary:")?;
+    writeln!(
+        out,
+        "published MERL fits and neural BRDFs, built into this binary:"
+    )?;
     for (spec, source) in lustre_brdf::embedded::sources() {
         writeln!(out, "  {spec:<28} {source}")?;
     }
@@ -144,7 +147,11 @@ fn list() -> anyhow::Result<()> {
          .dat (ALTA), .gonio, .json (lustre material); nbrdf:FILE#NAME for other network files"
     )?;
     match lustre_brdf::data_dir() {
-        Ok(d) => writeln!(out, "data folder (data:PATH): {} (LUSTRE_DATA)", d.display())?,
+        Ok(d) => writeln!(
+            out,
+            "data folder (data:PATH): {} (LUSTRE_DATA)",
+            d.display()
+        )?,
         Err(e) => writeln!(out, "data folder (data:PATH): none: {e}")?,
     }
     Ok(())

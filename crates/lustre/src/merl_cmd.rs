@@ -110,12 +110,7 @@ pub fn run(args: &MerlArgs) -> anyhow::Result<()> {
                 .map_or("the built-in set".to_string(), |f| f.display().to_string());
             // Through a locked handle so that a closed pipe (`| head`) is an error, not a panic.
             let mut out = std::io::stdout().lock();
-            writeln!(
-                out,
-                "{} materials in {from} ({})",
-                set.len(),
-                set.dataset()
-            )?;
+            writeln!(out, "{} materials in {from} ({})", set.len(), set.dataset())?;
             for name in set.names() {
                 writeln!(out, "{name}")?;
             }
@@ -142,7 +137,10 @@ fn synth(
         (Some(m), _) => {
             let net = nbrdf_set(nbrdf)?.material(m)?;
             bar.set_message(format!("synthesizing {m}"));
-            (m.to_string(), synthesize_merl_with(&net, convention, |n| bar.inc(n)))
+            (
+                m.to_string(),
+                synthesize_merl_with(&net, convention, |n| bar.inc(n)),
+            )
         }
         (None, Some(spec)) => {
             if nbrdf.is_some() {

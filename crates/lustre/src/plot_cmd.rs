@@ -172,7 +172,6 @@ fn draw(
     compare: Option<&(String, Box<dyn Bsdf>)>,
     written: &mut Vec<PathBuf>,
 ) -> Result<()> {
-
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create the output folder {}", args.out.display()))?;
     if !lustre_plot::font::font_available() {

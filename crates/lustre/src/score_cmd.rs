@@ -14,7 +14,7 @@ pub struct ScoreArgs {
     /// The measured input it is scored against (as `lustre fit` takes it), e.g. `nbrdf:nickel`
     /// or a MERL `.binary`.
     #[arg(value_name = "DATA")]
-    pub data: String,
+    pub input: String,
     /// Refuse MERL tables with unmeasured (negative) bins instead of masking them.
     #[arg(long)]
     pub strict: bool,
@@ -30,12 +30,12 @@ pub fn run(args: &ScoreArgs) -> anyhow::Result<()> {
     )
     .with_context(|| format!("cannot resolve {:?}", args.spec))?;
     let d = data::load_with(
-        &args.data,
+        &args.input,
         &data::LoadOptions {
             strict: args.strict,
         },
     )
-    .with_context(|| format!("cannot load {:?}", args.data))?;
+    .with_context(|| format!("cannot load {:?}", args.input))?;
     let r = metrics::evaluate_masked(
         d.bsdf.as_ref(),
         model.as_ref(),

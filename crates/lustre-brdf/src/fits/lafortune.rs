@@ -61,7 +61,11 @@ pub struct NganLafortuneParams {
     pub n: f64,
 }
 
-fit_table_api!(LafortuneFits, LAFORTUNE_FITS_FILE, crate::embedded::LAFORTUNE_FITS);
+fit_table_api!(
+    LafortuneFits,
+    LAFORTUNE_FITS_FILE,
+    crate::embedded::LAFORTUNE_FITS
+);
 
 impl LafortuneFits {
     /// The published parameters of `material`.

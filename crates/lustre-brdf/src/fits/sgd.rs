@@ -57,7 +57,10 @@ pub struct SgdFits {
 impl SgdFits {
     /// The table compiled into the library ([`crate::embedded`]).
     pub fn load_default() -> Result<Self> {
-        Self::parse(&crate::embedded::label(SGD_FITS_FILE), crate::embedded::SGD_FITS)
+        Self::parse(
+            &crate::embedded::label(SGD_FITS_FILE),
+            crate::embedded::SGD_FITS,
+        )
     }
 
     /// Reads a table from `path`.

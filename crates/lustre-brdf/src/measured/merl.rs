@@ -811,7 +811,10 @@ mod tests {
                 (i, j, k)
             );
         }
-        assert_eq!(bin_node_with(BinConvention::Centre, 3, 4, 5), bin_center(3, 4, 5));
+        assert_eq!(
+            bin_node_with(BinConvention::Centre, 3, 4, 5),
+            bin_center(3, 4, 5)
+        );
     }
 
     #[test]
