@@ -10,6 +10,7 @@
 //!    the fits used is the one with the smaller error.
 //! 2. **Parameter recovery.** A table made from the published SGD parameters at the nodes of a
 //!    convention (`lustre merl synth --from sgd:NAME --convention ...`) is fitted by our SGD fit
+//!    (two-slice, no refinement: it reads the table exactly at its nodes on both slices)
 //!    reading it with the lower-edge convention (the crate's) and with the centre convention; we
 //!    report the relative errors of α and ρd and of the normal-incidence specular scale
 //!    ρs·(F0 − F1) (our fits keep F in [0, 1], the published ones do not, so ρs alone is not
@@ -88,7 +89,13 @@ fn recovery(
     table: &lustre_brdf::measured::merl::MerlTable,
     p: &[lustre_brdf::fits::sgd::SgdChannelParams; 3],
 ) -> Result<[f64; 3], Box<dyn std::error::Error>> {
-    let f = fit(table, Distribution::Sgd, &CtOptions::default())?;
+    // The two-slice fit (004 §V.4.2) reads the table exactly at its nodes on both slices; the
+    // refinement would mix in our model's own choices (F within [0, 1], numeric G1).
+    let opts = CtOptions {
+        refine: false,
+        ..CtOptions::default()
+    };
+    let f = fit(table, Distribution::Sgd, &opts)?;
     let rel = |a: f64, b: f64| (a - b).abs() / b.abs().max(1e-12);
     let mut worst = [0.0f64; 3];
     for (c, q) in f.channels.iter().zip(p) {

@@ -189,7 +189,8 @@ fn more_kurt_lobes_never_report_a_worse_fit() {
         .to_string_lossy()
         .into_owned();
     // One metric here (each Kurt fit takes seconds); the Ngan L2 path is the same code.
-    for metric in [Metric::L1] {
+    {
+        let metric = Metric::L1;
         let settings = |lobes| FitSettings {
             lobes,
             metric,

@@ -701,7 +701,7 @@ pub fn table_from_bsdf(
         progress,
     );
     let name = name.into();
-    if let Some(v) = values.iter().find(|v| !(**v >= 0.0)) {
+    if let Some(v) = values.iter().find(|v| !v.is_finite() || **v < 0.0) {
         return Err(Error::NotFound(format!(
             "{}: the model evaluates to {v:e} (stored value) at some bin: a MERL table holds \
              finite non-negative reflectance",
