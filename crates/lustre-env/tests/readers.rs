@@ -59,7 +59,7 @@ fn hdr_shape_and_truncation_errors() {
     assert!(parse_hdr(p, &hdr_bytes(0, 0, [1, 1, 1, 128])).is_err());
     // A 2×1 or 4×2 image is no environment map.
     for (w, h) in [(2, 1), (4, 2)] {
-        let e = problem(parse_hdr(p, &hdr_bytes(w, h, [1, 1, 1, 128])).unwrap_err());
+        let e = problem(parse_hdr(p, &hdr_bytes(w, h, [128, 64, 32, 129])).unwrap_err());
         assert!(e.contains("too small") && e.contains("8×4"), "{e}");
     }
     let mut t = hdr_bytes(8, 4, [1, 1, 1, 128]);
