@@ -446,6 +446,7 @@ mod tests {
             xi0: 0.1,
             circles: None,
             rings: 3,
+            strict: false,
         };
         let dir = std::env::temp_dir().join(format!("lustre-plot-cmd-{}", std::process::id()));
         let e = run(&args(vec!["no-such-material-xyz".into()], dir.clone())).unwrap_err();
@@ -483,6 +484,7 @@ mod tests {
             xi0: 0.1,
             circles: None,
             rings: 3,
+            strict: false,
         };
         run(&args).unwrap();
         let names: Vec<String> = std::fs::read_dir(&dir)
