@@ -5,12 +5,20 @@
 //! - `NAME` — a built-in material (see [`builtins`]), e.g. `kurt-demo`;
 //! - `MODEL(key=value, ...)` — an analytic model with its parameters, e.g.
 //!   `kurt(kd=0.1, ks=0.6, mx=0.1, my=0.3, r0=0.9)` (see [`models`] for models and keys);
-//! - `sgd:MATERIAL`, `abc:MATERIAL`, `lafortune:MATERIAL` — a published MERL fit
-//!   (`../shared/data/fits/`);
-//! - `nbrdf:MATERIAL` or `nbrdf:FILE#MATERIAL` — a neural BRDF (default file: the MERL set);
+//! - `sgd:MATERIAL`, `abc:MATERIAL`, `lafortune:MATERIAL` — a published MERL fit (embedded,
+//!   [`crate::embedded`]);
+//! - `nbrdf:MATERIAL` or `nbrdf:FILE#MATERIAL` — a neural BRDF (default: the embedded MERL set);
+//! - `data:RELATIVE/PATH` — a file under the data folder ([`crate::data_dir`], `$LUSTRE_DATA`);
 //! - a path ending in `.binary` (MERL), `.bsdf` (RGL tensor), `.dat` (ALTA table),
 //!   `.gonio` (lustre goniometric table) or `.json` (a `lustre-material` file, see
 //!   [`crate::material`]).
+//!
+//! MERL tables are read with unmeasured (negative) bins masked unless
+//! [`ResolveOptions::strict`] is set ([`resolve_with`]).
+//!
+//! `beckmann(…)`, `ggx(…)`, `exponential(…)` and `sgd(…)` follow 004's Cook-Torrance convention
+//! f = ρd/π + (ρs/π)·F·D·G1·G1/(cos θi cos θo): at ρs = 1 the specular term is 4/π times the
+//! physical microfacet BRDF F·D·G/(4 cos θi cos θo) of pbrt or Mitsuba. [`models`] says so.
 
 use crate::bsdf::Bsdf;
 use crate::error::{Error, Result};
@@ -187,11 +195,14 @@ pub fn models() -> Vec<(&'static str, &'static str)> {
         ),
         (
             "beckmann | ggx | exponential",
-            "rho_d, rho_s, alpha, f0, f1  (Cook-Torrance)",
+            "rho_d, rho_s, alpha, f0, f1  (Cook-Torrance in 004's rho_s/pi convention: \
+             f = rho_d/pi + rho_s/pi F D G1 G1/(cos i cos o), i.e. rho_s = pi/4 gives the \
+             pbrt/Mitsuba microfacet BRDF F D G/(4 cos i cos o))",
         ),
         (
             "sgd",
-            "rho_d, rho_s, alpha, p, f0, f1  (Cook-Torrance, numeric Smith G1)",
+            "rho_d, rho_s, alpha, p, f0, f1  (Cook-Torrance, same rho_s/pi convention, \
+             numeric Smith G1)",
         ),
         (
             "conductor",
@@ -240,13 +251,30 @@ pub fn list() -> Vec<String> {
     out
 }
 
-/// Resolves a specification (see the module documentation) to a BSDF.
+/// How [`resolve_with`] reads measured files.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ResolveOptions {
+    /// Refuse MERL tables with unmeasured (negative) bins instead of masking them.
+    pub strict: bool,
+}
+
+/// Resolves a specification (see the module documentation) to a BSDF, masking unmeasured MERL
+/// bins.
 pub fn resolve(spec: &str) -> Result<Box<dyn Bsdf>> {
+    resolve_with(spec, &ResolveOptions::default())
+}
+
+/// [`resolve`] with options.
+pub fn resolve_with(spec: &str, opts: &ResolveOptions) -> Result<Box<dyn Bsdf>> {
     let spec = spec.trim();
     if spec.is_empty() {
         return Err(Error::NotFound("empty material specification".into()));
     }
     if let Some((prefix, rest)) = spec.split_once(':') {
+        if prefix == "data" {
+            let path = crate::data_dir()?.join(rest.trim());
+            return resolve_with(&path.to_string_lossy(), opts);
+        }
         if !prefix.contains(['(', '/', '.']) && prefix.len() > 1 {
             return resolve_prefixed(prefix, rest.trim());
         }
@@ -261,7 +289,7 @@ pub fn resolve(spec: &str) -> Result<Box<dyn Bsdf>> {
         .map(|e| e.to_string_lossy().to_ascii_lowercase());
     if !lower.contains('(') {
         if let Some(ext) = ext.as_deref() {
-            if let Some(b) = resolve_path(std::path::Path::new(path_part), ext, fragment)? {
+            if let Some(b) = resolve_path(std::path::Path::new(path_part), ext, fragment, opts)? {
                 return Ok(b);
             }
         }
@@ -320,15 +348,14 @@ fn resolve_prefixed(prefix: &str, rest: &str) -> Result<Box<dyn Bsdf>> {
         "abc" => Ok(Box::new(crate::fits::abc::load(rest)?)),
         "nbrdf" => {
             use crate::measured::nbrdf::NbrdfSet;
-            let (file, name) = match rest.rsplit_once('#') {
-                Some((f, n)) => (std::path::PathBuf::from(f), n),
-                None => (crate::shared_data_dir().join("nbrdf/merl_nbrdf.json"), rest),
-            };
-            Ok(Box::new(NbrdfSet::read(&file)?.material(name)?))
+            match rest.rsplit_once('#') {
+                Some((f, n)) => Ok(Box::new(NbrdfSet::read(f)?.material(n)?)),
+                None => Ok(Box::new(crate::embedded::merl_nbrdf()?.material(rest)?)),
+            }
         }
         "lafortune" => Ok(Box::new(crate::fits::lafortune::load(rest)?)),
         other => Err(Error::NotFound(format!(
-            "unknown material source {other:?} (known: sgd:, sgd-numeric:, abc:, lafortune:, nbrdf:, twosided:)"
+            "unknown material source {other:?} (known: sgd:, sgd-numeric:, abc:, lafortune:, nbrdf:, data:, twosided:)"
         ))),
     }
 }
@@ -337,6 +364,7 @@ fn resolve_path(
     path: &std::path::Path,
     ext: &str,
     fragment: Option<&str>,
+    opts: &ResolveOptions,
 ) -> Result<Option<Box<dyn Bsdf>>> {
     use crate::measured::{alta, gonio};
     Ok(Some(match ext {
@@ -366,7 +394,15 @@ fn resolve_path(
             }
             crate::material::read(path)?.to_bsdf()?
         }
-        "binary" => Box::new(crate::measured::merl::MerlTable::read(path)?),
+        "binary" => {
+            use crate::measured::merl::{MerlTable, NegativeValues};
+            let negative = if opts.strict {
+                NegativeValues::Reject
+            } else {
+                NegativeValues::Missing
+            };
+            Box::new(MerlTable::read_with(path, negative)?)
+        }
         "gonio" => {
             let recon = match fragment {
                 None | Some("half-vector") => gonio::Reconstruction::HalfVector,
@@ -524,7 +560,8 @@ fn resolve_model(mut p: Params) -> Result<Box<dyn Bsdf>> {
         other => {
             return Err(Error::NotFound(format!(
                 "unknown material {other:?}: not a built-in ({}), a model ({}), a published fit \
-                 (sgd:NAME, abc:NAME, lafortune:NAME), nbrdf:NAME or a file (.binary, .bsdf, .dat, .gonio, .json)",
+                 (sgd:NAME, abc:NAME, lafortune:NAME), nbrdf:NAME, data:PATH or a file (.binary, .bsdf, \
+                 .dat, .gonio, .json)",
                 builtins().iter().map(|b| b.0).collect::<Vec<_>>().join(", "),
                 models().iter().map(|m| m.0).collect::<Vec<_>>().join(", ")
             )))

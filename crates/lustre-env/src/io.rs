@@ -24,6 +24,8 @@ pub struct LoadedMap {
 const HDR_MAGIC: &[u8] = b"#?";
 /// The OpenEXR magic number 20000630 (little endian).
 const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+/// The smallest map height a file may have: a 2×1 or 4×2 image is no environment.
+pub const MIN_FILE_HEIGHT: usize = 4;
 
 /// The directory of the shared data (`LUSTRE_DATA`, else `../shared/data` next to the
 /// repository), where the test environment maps live under `envmaps/`.
@@ -94,6 +96,16 @@ fn finish(path: &Path, width: usize, height: usize, mut data: Vec<[f32; 3]>) -> 
                 }
             }
         }
+    }
+    if height < MIN_FILE_HEIGHT {
+        return Err(format_err(
+            path,
+            format!(
+                "a {width}×{height} map is too small to be an environment (at least \
+                 {}×{MIN_FILE_HEIGHT} pixels)",
+                2 * MIN_FILE_HEIGHT
+            ),
+        ));
     }
     let map = EquirectMap::new(width, height, data).map_err(|e| format_err(path, e.to_string()))?;
     Ok(LoadedMap {
@@ -180,7 +192,10 @@ pub fn parse_exr(path: &Path, bytes: &[u8]) -> Result<LoadedMap> {
             format!("{w}×{h} is not an equirectangular map (width must be 2 × height)"),
         ));
     }
-    if w > MAX_WIDTH || w.saturating_mul(h) / 256 > bytes.len() {
+    // Refuse headers that promise far more pixels than the file could hold, before the reader
+    // allocates for them: real ZIP/PIZ/DWA maps hold ≥ 0.4 byte per pixel (DWAB, measured on
+    // the shared studio maps), so 1/32 byte per pixel leaves a wide margin.
+    if w > MAX_WIDTH || w.saturating_mul(h) / 32 > bytes.len() {
         return Err(format_err(
             path,
             format!(

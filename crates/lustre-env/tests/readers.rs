@@ -38,10 +38,10 @@ fn problem(e: EnvError) -> String {
 fn synthetic_hdr_decodes_to_the_expected_value() {
     let p = Path::new("mem.hdr");
     // RGBE (128, 64, 32, 129): mantissa/256 · 2^(129−128) = (1, ½, ¼).
-    let m = parse_hdr(p, &hdr_bytes(4, 2, [128, 64, 32, 129])).unwrap();
+    let m = parse_hdr(p, &hdr_bytes(8, 4, [128, 64, 32, 129])).unwrap();
     assert_eq!(
         (m.map.width, m.map.height, m.nonfinite, m.negative),
-        (4, 2, 0, 0)
+        (8, 4, 0, 0)
     );
     for v in &m.map.data {
         assert!(
@@ -57,6 +57,11 @@ fn hdr_shape_and_truncation_errors() {
     let e = problem(parse_hdr(p, &hdr_bytes(4, 3, [1, 1, 1, 128])).unwrap_err());
     assert!(e.contains("2 × height"), "{e}");
     assert!(parse_hdr(p, &hdr_bytes(0, 0, [1, 1, 1, 128])).is_err());
+    // A 2×1 or 4×2 image is no environment map.
+    for (w, h) in [(2, 1), (4, 2)] {
+        let e = problem(parse_hdr(p, &hdr_bytes(w, h, [128, 64, 32, 129])).unwrap_err());
+        assert!(e.contains("too small") && e.contains("8×4"), "{e}");
+    }
     let mut t = hdr_bytes(8, 4, [1, 1, 1, 128]);
     t.truncate(t.len() - 20);
     let e = parse_hdr(p, &t).unwrap_err().to_string();
@@ -112,10 +117,10 @@ fn exr_shape_and_truncation_errors() {
 fn read_map_dispatches_on_magic_and_reports_files() {
     let dir = tempfile::tempdir().unwrap();
     let a = dir.path().join("looks_like.exr");
-    std::fs::write(&a, hdr_bytes(4, 2, [128, 128, 128, 128])).unwrap();
-    assert_eq!(read_map(&a).unwrap().map.width, 4);
+    std::fs::write(&a, hdr_bytes(8, 4, [128, 128, 128, 128])).unwrap();
+    assert_eq!(read_map(&a).unwrap().map.width, 8);
     let b = dir.path().join("looks_like.hdr");
-    std::fs::write(&b, exr_bytes(4, 2, |_, _| (1.0, 2.0, 3.0))).unwrap();
+    std::fs::write(&b, exr_bytes(8, 4, |_, _| (1.0, 2.0, 3.0))).unwrap();
     assert_eq!(read_map(&b).unwrap().map.data[0], [1.0, 2.0, 3.0]);
     let c = dir.path().join("junk.hdr");
     std::fs::write(&c, b"hello").unwrap();

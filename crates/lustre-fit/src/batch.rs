@@ -10,11 +10,21 @@
 //!   fitter) gives a [`FailureFile`] (schema [`FAILURE_SCHEMA`]) with the status and message, so
 //!   the renderer refuses it with a clear message and the batch goes on.
 //!
-//! `OUT/summary.csv` (atomic) has one row per input ([`SummaryRow`]). **Resume**: unless
-//! `force` is set, an input whose JSON exists, parses as a material, records the same input, the
-//! same model and the same options, has a status other than a failure and is newer than the
-//! input's data file is not fitted again; its row is rebuilt from the file. A corrupted, failed
-//! or outdated output is fitted again.
+//! `OUT/summary.csv` (atomic) has one row per material JSON in the folder ([`SummaryRow`]): the
+//! inputs of this batch, in input order, then every other `*.json` of an earlier batch (marked
+//! `resumed`, rebuilt from its file), so the summary never loses a fit that is still there.
+//!
+//! **Resume**: unless `force` is set, an input whose JSON exists, parses as a material, records
+//! the same input, the same model and the same options, has a status other than a failure and
+//! is newer than the input's data file is not fitted again; its row is rebuilt from the file. A
+//! corrupted, failed or outdated output is fitted again.
+//!
+//! **Other options**: an existing valid fit of the same input with another model or other
+//! options is never overwritten silently: the batch refuses to start ([`FitError::Option`]
+//! naming the files) unless `force` is set; `lustre fit --suffix` writes to other names instead.
+//!
+//! Every fit records its options ([`FitSettings::to_json`]) in its JSON; a failure record keeps
+//! the best parameters the fit reached, when it reached any ([`FailureFile::model`]).
 //!
 //! The fitting itself is behind the [`Fitter`] trait, so the machinery runs (and is tested)
 //! with any fitter; [`MeasuredFitter`] is the real one.
@@ -60,6 +70,36 @@ impl ModelChoice {
     }
 }
 
+/// The metric a Kurt fit with several lobes is judged by (`lustre fit --metric`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Metric {
+    /// Ngan's normalized L2 (004 §V.5.3), mean of the channels.
+    #[default]
+    NganL2,
+    /// The L1 of transfer probabilities (000 Eq. 3.7), mean of the channels.
+    L1,
+}
+
+impl Metric {
+    /// `ngan-l2` or `l1`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Metric::NganL2 => "ngan-l2",
+            Metric::L1 => "l1",
+        }
+    }
+
+    /// The metric's value (mean of the channels) in `e`.
+    pub fn of(self, e: &FitErrors) -> f64 {
+        let v = match self {
+            Metric::NganL2 => e.ngan_l2,
+            Metric::L1 => e.l1,
+        };
+        v.iter().sum::<f64>() / 3.0
+    }
+}
+
 /// The options that determine a fit's result; recorded in the JSON and compared on resume.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FitSettings {
@@ -75,10 +115,16 @@ pub struct FitSettings {
     pub ranges: Vec<(String, f64, f64)>,
     /// Refine the fit (CT: over the full data; Kurt: the final polish).
     pub refine: bool,
+    /// Kurt: the metric by which fits with 1..=`lobes` lobes are compared (the reported fit is
+    /// the best of them, so more lobes never report a worse fit).
+    pub metric: Metric,
+    /// Refuse MERL tables with unmeasured bins instead of masking them.
+    pub strict: bool,
 }
 
 impl FitSettings {
-    /// Default settings for `model`: one lobe, no transmission lobe, nothing fixed, refine.
+    /// Default settings for `model`: one lobe, no transmission lobe, nothing fixed, refine,
+    /// Ngan's L2, unmeasured bins masked.
     pub fn new(model: ModelChoice) -> Self {
         FitSettings {
             model,
@@ -87,6 +133,8 @@ impl FitSettings {
             fixed: Vec::new(),
             ranges: Vec::new(),
             refine: true,
+            metric: Metric::NganL2,
+            strict: false,
         }
     }
 
@@ -94,7 +142,11 @@ impl FitSettings {
     /// plus the lobe counts, fixed parameters and ranges for Kurt (the only model they act on).
     pub fn to_json(&self) -> serde_json::Value {
         let mut v = serde_json::json!({ "model": self.model, "refine": self.refine });
+        if self.strict {
+            v["strict"] = true.into();
+        }
         if self.model == ModelChoice::Kurt {
+            v["metric"] = self.metric.as_str().into();
             v["lobes"] = self.lobes.into();
             v["transmission_lobes"] = self.transmission_lobes.into();
             v["fixed"] = serde_json::json!(self.fixed);
@@ -117,6 +169,9 @@ pub struct BatchOptions {
     pub out: PathBuf,
     /// Draw a progress bar on stderr (only shown on a terminal).
     pub progress: bool,
+    /// Appended to every output name (`NAME-SUFFIX.json`), to keep fits with other options
+    /// beside the earlier ones; empty for none.
+    pub suffix: String,
 }
 
 /// What a successful fit returns to the batch.
@@ -141,8 +196,8 @@ pub struct Fitted {
 pub trait Fitter: Sync {
     /// Expands one command-line input into the inputs to fit (e.g. `nbrdf:FILE#*`).
     fn expand(&self, input: &str) -> Result<Vec<String>>;
-    /// Fits one input.
-    fn fit(&self, input: &str, settings: &FitSettings) -> Result<Fitted>;
+    /// Fits one input; `stage` is told what the fit is doing (for the progress display).
+    fn fit(&self, input: &str, settings: &FitSettings, stage: &dyn Fn(&str)) -> Result<Fitted>;
 }
 
 /// The real fitter: [`data::load`] (with its value checks), then [`ct::fit`] or
@@ -156,16 +211,86 @@ impl Fitter for MeasuredFitter {
         data::expand_inputs(input)
     }
 
-    fn fit(&self, input: &str, s: &FitSettings) -> Result<Fitted> {
-        let data = data::load(input)?;
-        let (model, status, message) = match s.model {
+    fn fit(&self, input: &str, s: &FitSettings, stage: &dyn Fn(&str)) -> Result<Fitted> {
+        stage("reading the data");
+        let data = data::load_with(input, &data::LoadOptions { strict: s.strict })?;
+        let mask = data.coverage.as_ref();
+        let mut notes = Vec::new();
+        let mask_note = data.mask_note();
+        if !mask_note.is_empty() {
+            notes.push(mask_note);
+        }
+        let evaluate = |model: &MaterialModel| -> Result<metrics::ErrorReport> {
+            let bsdf = model.to_bsdf(&data.name)?;
+            Ok(metrics::evaluate_masked(
+                data.bsdf.as_ref(),
+                bsdf.as_ref(),
+                data.transmission,
+                mask,
+            ))
+        };
+        let (model, status, report) = match s.model {
             ModelChoice::Kurt => {
-                let f = kurt::fit(data.bsdf.as_ref(), data.transmission, &kurt_options(s))?;
-                let msg = format!(
-                    "Eq. 3.7 objective {:.6} after {} evaluations",
-                    f.objective, f.evaluations
-                );
-                (MaterialModel::from_kurt(&f.model), f.status, msg)
+                // Fits with 1..=L lobes (and the transmission lobes); the reported one is the
+                // best on the user's metric, so more lobes never report a worse fit.
+                let mut best: Option<(MaterialModel, FitStatus, metrics::ErrorReport, usize)> =
+                    None;
+                let counts: Vec<usize> = if s.lobes <= 1 {
+                    vec![s.lobes]
+                } else {
+                    (1..=s.lobes).collect()
+                };
+                for &k in &counts {
+                    stage(&format!("Kurt search and polish, {k} of {} lobes", s.lobes));
+                    let opts = kurt::KurtOptions {
+                        lobes: k,
+                        ..kurt_options(s)
+                    };
+                    let f = kurt::fit_masked(data.bsdf.as_ref(), data.transmission, &opts, mask)?;
+                    let mut m = f.model.clone();
+                    // Pad to L lobes with ks = 0 so that the model has the requested shape.
+                    while m.reflection.len() < s.lobes {
+                        let mut l = *m.reflection.last().ok_or_else(|| {
+                            FitError::Option("a Kurt fit returned no reflection lobe".into())
+                        })?;
+                        l.ks = lustre_brdf::Rgb::ZERO;
+                        m.reflection.push(l);
+                    }
+                    let model = MaterialModel::from_kurt(&m);
+                    stage(&format!("error metrics of the {k}-lobe fit"));
+                    let r = evaluate(&model)?;
+                    let value = s.metric.of(&FitErrors {
+                        ngan_l2: r.ngan_l2,
+                        l1: r.l1,
+                    });
+                    notes.push(format!(
+                        "{k} lobes: {} {value:.6}, Eq. 3.7 objective {:.6}, {} evaluations, {}",
+                        s.metric.as_str(),
+                        f.objective,
+                        f.evaluations,
+                        f.note
+                    ));
+                    let better = best.as_ref().is_none_or(|b| {
+                        value
+                            < s.metric.of(&FitErrors {
+                                ngan_l2: b.2.ngan_l2,
+                                l1: b.2.l1,
+                            })
+                    });
+                    if better {
+                        best = Some((model, f.status, r, k));
+                    }
+                }
+                let (model, status, r, k) =
+                    best.ok_or_else(|| FitError::Option("no Kurt fit was run (0 lobes)".into()))?;
+                if counts.len() > 1 {
+                    notes.push(format!(
+                        "reported: the {k}-lobe fit (best {} of 1..={} lobes)",
+                        s.metric.as_str(),
+                        s.lobes
+                    ));
+                }
+                (model, status, r)
             }
             m => {
                 let (dist, mdist) = match m {
@@ -177,7 +302,8 @@ impl Fitter for MeasuredFitter {
                     refine: s.refine,
                     ..ct::CtOptions::default()
                 };
-                let f = ct::fit(data.bsdf.as_ref(), dist, &opts)?;
+                stage("two-slice fit and refinement");
+                let f = ct::fit_masked(data.bsdf.as_ref(), dist, &opts, mask)?;
                 let channels = std::array::from_fn(|i| {
                     let c = &f.channels[i];
                     CtChannelParams {
@@ -191,26 +317,24 @@ impl Fitter for MeasuredFitter {
                         g1: c.g1,
                     }
                 });
-                let msg = format!("{} iterations", f.iterations);
-                (
-                    MaterialModel::cook_torrance(mdist, channels)?,
-                    f.status,
-                    msg,
-                )
+                notes.push(format!("{} iterations", f.iterations));
+                notes.extend(f.notes.iter().cloned());
+                let model = MaterialModel::cook_torrance(mdist, channels)?;
+                stage("error metrics");
+                let r = evaluate(&model)?;
+                (model, f.status, r)
             }
         };
-        let bsdf = model.to_bsdf(&data.name)?;
-        let r = metrics::evaluate(data.bsdf.as_ref(), bsdf.as_ref(), data.transmission);
         Ok(Fitted {
             model,
             status,
-            message,
+            message: notes.join("; "),
             errors: FitErrors {
-                ngan_l2: r.ngan_l2,
-                l1: r.l1,
+                ngan_l2: report.ngan_l2,
+                l1: report.l1,
             },
-            albedo_data: r.albedo_data,
-            albedo_model: r.albedo_model,
+            albedo_data: report.albedo_data,
+            albedo_model: report.albedo_model,
         })
     }
 }
@@ -231,6 +355,13 @@ pub fn kurt_options(s: &FitSettings) -> kurt::KurtOptions {
 /// `--range` name is one of [`kurt::parameter_names`] and that there is a lobe to fit; for
 /// Cook-Torrance, that no Kurt-only option is set.
 pub fn check_settings(s: &FitSettings) -> Result<()> {
+    if s.model == ModelChoice::Kurt && s.lobes == 0 && s.transmission_lobes == 0 {
+        return Err(FitError::Option(
+            "--lobes 0 without transmission lobes fits no lobe (only kd, a diffuse model): \
+             use --lobes 1 or more"
+                .into(),
+        ));
+    }
     if s.model != ModelChoice::Kurt {
         if !s.fixed.is_empty() || !s.ranges.is_empty() {
             return Err(FitError::Option(format!(
@@ -272,6 +403,10 @@ pub struct FailureFile {
     pub name: String,
     /// The status, message and options.
     pub fit: FitRecord,
+    /// The best parameters the fit reached before it failed, as the material JSON's `model`
+    /// would hold them (absent when it reached none; a non-finite number reads `null`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<serde_json::Value>,
 }
 
 /// One row of the CSV summary (empty cells where a failed input has no numbers).
@@ -351,24 +486,45 @@ impl SummaryRow {
     }
 }
 
-/// The outcome of a batch: one row per input, in input order.
+/// The outcome of a batch: one row per input, in input order, then the rows of earlier fits in
+/// the same folder.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BatchSummary {
-    /// The rows, as in `summary.csv`.
+    /// The rows, as in `summary.csv`: the batch's `batch` inputs first.
     pub rows: Vec<SummaryRow>,
     /// The CSV file written.
     pub summary_path: PathBuf,
+    /// How many of the rows are this batch's inputs.
+    pub batch: usize,
 }
 
 impl BatchSummary {
-    /// How many inputs failed.
-    pub fn failed(&self) -> usize {
-        self.rows.iter().filter(|r| r.failed()).count()
+    /// This batch's rows.
+    pub fn batch_rows(&self) -> &[SummaryRow] {
+        &self.rows[..self.batch.min(self.rows.len())]
     }
 
-    /// How many inputs were taken over from an earlier run.
+    /// The rows of earlier batches' fits in the folder.
+    pub fn earlier_rows(&self) -> &[SummaryRow] {
+        &self.rows[self.batch.min(self.rows.len())..]
+    }
+
+    /// How many of this batch's inputs failed.
+    pub fn failed(&self) -> usize {
+        self.batch_rows().iter().filter(|r| r.failed()).count()
+    }
+
+    /// How many of this batch's inputs were taken over from an earlier run.
     pub fn resumed(&self) -> usize {
-        self.rows.iter().filter(|r| r.resumed).count()
+        self.batch_rows().iter().filter(|r| r.resumed).count()
+    }
+
+    /// How many of this batch's inputs were fitted now and gave a model (converged or not).
+    pub fn fitted(&self) -> usize {
+        self.batch_rows()
+            .iter()
+            .filter(|r| !r.resumed && !r.failed())
+            .count()
     }
 }
 
@@ -457,7 +613,11 @@ pub fn run(inputs: &[String], opts: &BatchOptions, fitter: &dyn Fitter) -> Resul
     let mut jobs = Vec::new();
     let mut taken = HashSet::new();
     let mut push = |input: String, expand_error: Option<FitError>| {
-        let base = output_name(&input);
+        let base = if opts.suffix.is_empty() {
+            output_name(&input)
+        } else {
+            output_name(&format!("{}-{}", output_name(&input), opts.suffix))
+        };
         let mut name = base.clone();
         let mut k = 2;
         // "summary" would not clash (summary.csv vs summary.json), but keep names unique
@@ -478,6 +638,26 @@ pub fn run(inputs: &[String], opts: &BatchOptions, fitter: &dyn Fitter) -> Resul
             Err(e) => push(input.clone(), Some(e)),
         }
     }
+    if !opts.force {
+        let conflicts: Vec<String> = jobs
+            .iter()
+            .filter_map(|j| {
+                let path = opts.out.join(format!("{}.json", j.name));
+                other_options(&path, j, &opts.settings)
+                    .map(|old| format!("{} ({old})", path.display()))
+            })
+            .collect();
+        if !conflicts.is_empty() {
+            let n = conflicts.len();
+            let list: Vec<String> = conflicts.into_iter().take(5).collect();
+            return Err(FitError::Option(format!(
+                "{n} output(s) already hold a fit of the same input with another model or other \
+                 options, e.g. {}; refit them with --force (overwrites), or keep both with \
+                 --suffix TEXT (writes NAME-TEXT.json) or another --out folder",
+                list.join(", ")
+            )));
+        }
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(opts.jobs.max(1))
         .build()
@@ -487,25 +667,96 @@ pub fn run(inputs: &[String], opts: &BatchOptions, fitter: &dyn Fitter) -> Resul
     } else {
         indicatif::ProgressBar::hidden()
     };
-    if let Ok(style) =
-        indicatif::ProgressStyle::with_template("fitting [{bar:40}] {pos}/{len} ({eta}) {msg}")
-    {
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{spinner} fitting [{bar:30}] {pos}/{len} ({elapsed}) {msg}",
+    ) {
         bar.set_style(style.progress_chars("=> "));
     }
+    // Redraw while a long fit runs, so that its stage and the elapsed time stay current.
+    bar.enable_steady_tick(std::time::Duration::from_millis(250));
+    let stages: std::sync::Mutex<std::collections::BTreeMap<String, String>> =
+        std::sync::Mutex::default();
+    let show = |name: &str, what: Option<&str>| {
+        let mut m = stages.lock().unwrap_or_else(|e| e.into_inner());
+        match what {
+            Some(w) => m.insert(name.to_string(), w.to_string()),
+            None => m.remove(name),
+        };
+        let line: Vec<String> = m.iter().map(|(n, w)| format!("{n}: {w}")).collect();
+        bar.set_message(line.join(" | "));
+    };
     let rows: Vec<SummaryRow> = pool.install(|| {
         jobs.par_iter()
             .map(|job| {
-                let row = run_one(job, opts, fitter);
-                bar.set_message(format!("{}: {}", row.name, status_str(row.status)));
+                let row = run_one(job, opts, fitter, &|w| show(&job.name, Some(w)));
+                show(&job.name, None);
                 bar.inc(1);
                 row
             })
             .collect()
     });
     bar.finish_and_clear();
+    let mut rows = rows;
+    rows.extend(earlier_rows(&opts.out, &rows));
     let summary_path = opts.out.join(SUMMARY_FILE);
     write_summary(&summary_path, &rows)?;
-    Ok(BatchSummary { rows, summary_path })
+    let batch = jobs.len();
+    Ok(BatchSummary {
+        rows,
+        summary_path,
+        batch,
+    })
+}
+
+/// A description of the existing fit at `path` when it is a valid fit of the same input with
+/// another model or other options (`None` otherwise: no file, a failure, a corrupted file, a fit
+/// of another input, or the same options).
+fn other_options(path: &Path, job: &Job, settings: &FitSettings) -> Option<String> {
+    let m = material::read(path).ok()?;
+    let f = m.fit.as_ref()?;
+    let status = parse_status(&f.status)?;
+    let differs = m.model.kind() != settings.model.as_str() || f.options != settings.to_json();
+    (f.source == job.input && !is_failure(status) && differs)
+        .then(|| format!("{}, options {}", m.model.kind(), f.options))
+}
+
+/// The rows of the `*.json` files in `out` that are not among `rows` (fits of earlier batches),
+/// sorted by name: materials with their numbers, failure records with their status.
+fn earlier_rows(out: &Path, rows: &[SummaryRow]) -> Vec<SummaryRow> {
+    let have: HashSet<String> = rows.iter().map(|r| r.name.to_ascii_lowercase()).collect();
+    let Ok(dir) = std::fs::read_dir(out) else {
+        return Vec::new();
+    };
+    let mut paths: Vec<PathBuf> = dir
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    paths.sort();
+    paths
+        .into_iter()
+        .filter_map(|p| {
+            let name = p.file_stem()?.to_string_lossy().into_owned();
+            if have.contains(&name.to_ascii_lowercase()) {
+                return None;
+            }
+            if let Ok(m) = material::read(&p) {
+                let f = m.fit.as_ref()?;
+                let status = parse_status(&f.status)?;
+                return Some(SummaryRow::new(&name, f, m.model.kind(), status, true));
+            }
+            let bytes = std::fs::read(&p).ok()?;
+            let f: FailureFile = serde_json::from_slice(&bytes).ok()?;
+            let status = parse_status(&f.fit.status)?;
+            let model = f
+                .fit
+                .options
+                .get("model")
+                .and_then(|v| v.as_str())
+                .unwrap_or("")
+                .to_string();
+            Some(SummaryRow::new(&name, &f.fit, &model, status, true))
+        })
+        .collect()
 }
 
 /// Writes the CSV summary atomically.
@@ -563,7 +814,12 @@ fn panic_message(p: &(dyn std::any::Any + Send)) -> String {
 }
 
 /// Fits one input (or reuses its output) and writes its JSON; never fails.
-fn run_one(job: &Job, opts: &BatchOptions, fitter: &dyn Fitter) -> SummaryRow {
+fn run_one(
+    job: &Job,
+    opts: &BatchOptions,
+    fitter: &dyn Fitter,
+    stage: &(dyn Fn(&str) + Sync),
+) -> SummaryRow {
     let path = opts.out.join(format!("{}.json", job.name));
     let settings = &opts.settings;
     if !opts.force {
@@ -576,7 +832,7 @@ fn run_one(job: &Job, opts: &BatchOptions, fitter: &dyn Fitter) -> SummaryRow {
         Some(e) => Err((error_status(e), e.to_string())),
         None => {
             match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                fitter.fit(&job.input, settings)
+                fitter.fit(&job.input, settings, stage)
             })) {
                 Ok(Ok(f)) => Ok(f),
                 Ok(Err(e)) => Err((error_status(&e), e.to_string())),
@@ -599,6 +855,7 @@ fn run_one(job: &Job, opts: &BatchOptions, fitter: &dyn Fitter) -> SummaryRow {
         message: String::new(),
         options: settings.to_json(),
     };
+    let mut kept = None;
     let written = match result {
         Ok(f) => {
             record.errors = Some(f.errors);
@@ -606,13 +863,21 @@ fn run_one(job: &Job, opts: &BatchOptions, fitter: &dyn Fitter) -> SummaryRow {
             record.albedo_model = Some(f.albedo_model);
             record.status = status_str(f.status).into();
             record.message = f.message;
-            let file = MaterialFile::new(job.name.clone(), f.model, Some(record.clone()));
+            let file = MaterialFile::new(job.name.clone(), f.model.clone(), Some(record.clone()));
             match file.and_then(|m| material::write(&path, &m)) {
                 Ok(()) => Ok(f.status),
-                Err(e) => Err((
-                    FitStatus::Error,
-                    format!("the fit gave no valid material: {e}"),
-                )),
+                Err(e) => {
+                    // Keep what the fit reached, to inspect.
+                    kept = serde_json::to_value(&f.model).ok();
+                    Err((
+                        FitStatus::Error,
+                        format!(
+                            "the fit gave no valid material: {e} (its parameters are kept in \
+                             this file's \"model\"; {})",
+                            record.message
+                        ),
+                    ))
+                }
             }
         }
         Err(e) => Err(e),
@@ -625,7 +890,7 @@ fn run_one(job: &Job, opts: &BatchOptions, fitter: &dyn Fitter) -> SummaryRow {
             record.albedo_model = None;
             record.status = status_str(status).into();
             record.message = message;
-            if let Err(e) = write_failure(&path, &job.name, &record) {
+            if let Err(e) = write_failure(&path, &job.name, &record, kept) {
                 record.message = format!(
                     "{}; the failure record was not written: {e}",
                     record.message
@@ -638,12 +903,18 @@ fn run_one(job: &Job, opts: &BatchOptions, fitter: &dyn Fitter) -> SummaryRow {
 }
 
 /// Writes the [`FailureFile`] of a failed input atomically.
-fn write_failure(path: &Path, name: &str, record: &FitRecord) -> Result<()> {
+fn write_failure(
+    path: &Path,
+    name: &str,
+    record: &FitRecord,
+    model: Option<serde_json::Value>,
+) -> Result<()> {
     let f = FailureFile {
         schema: FAILURE_SCHEMA.into(),
         version: 1,
         name: name.to_string(),
         fit: record.clone(),
+        model,
     };
     let json = serde_json::to_string_pretty(&f)
         .map_err(|e| FitError::Option(format!("{}: {e}", path.display())))?;
@@ -695,7 +966,8 @@ mod tests {
             }
         }
 
-        fn fit(&self, input: &str, settings: &FitSettings) -> Result<Fitted> {
+        fn fit(&self, input: &str, settings: &FitSettings, stage: &dyn Fn(&str)) -> Result<Fitted> {
+            stage("mock fit");
             self.fits.fetch_add(1, Ordering::SeqCst);
             let name = Path::new(input)
                 .file_name()
@@ -739,6 +1011,7 @@ mod tests {
             force: false,
             out: out.to_path_buf(),
             progress: false,
+            suffix: String::new(),
         }
     }
 
@@ -799,8 +1072,27 @@ mod tests {
             },
             ..options(dir.path())
         };
-        run(&inputs, &other, &mock).expect("batch");
-        assert_eq!(mock.fits.load(Ordering::SeqCst), 5, "other options refit");
+        // Other options never overwrite silently: refused, nothing fitted, files unchanged.
+        let e = run(&inputs, &other, &mock).unwrap_err().to_string();
+        assert!(e.contains("--force") && e.contains("a.json"), "{e}");
+        assert_eq!(
+            mock.fits.load(Ordering::SeqCst),
+            3,
+            "refused before fitting"
+        );
+        assert_eq!(mtime(&a), t_a);
+        // To another name: both fits stay and the summary covers all four JSON files.
+        let suffixed = BatchOptions {
+            suffix: "2lobes".into(),
+            ..other.clone()
+        };
+        let s = run(&inputs, &suffixed, &mock).expect("batch");
+        assert_eq!(mock.fits.load(Ordering::SeqCst), 5);
+        let names: Vec<&str> = s.rows.iter().map(|r| r.name.as_str()).collect();
+        assert_eq!(names, ["a-2lobes", "b-2lobes", "a", "b"]);
+        assert_eq!((s.fitted(), s.resumed(), s.failed()), (2, 0, 0));
+        assert_eq!(s.earlier_rows().len(), 2);
+        assert_eq!(csv_rows(&s.summary_path).len(), 4);
         let forced = BatchOptions {
             force: true,
             ..other.clone()
@@ -808,7 +1100,9 @@ mod tests {
         let s = run(&inputs, &forced, &mock).expect("batch");
         assert_eq!(mock.fits.load(Ordering::SeqCst), 7, "--force refits");
         assert_eq!(s.resumed(), 0);
-        assert_eq!(csv_rows(&s.summary_path).len(), 2);
+        assert_eq!(csv_rows(&s.summary_path).len(), 4);
+        let m = material::read(&a).expect("a material");
+        assert_eq!(m.fit.expect("record").options["lobes"], 2);
         // The CT options ignore the lobe settings.
         let ggx = |lobes| FitSettings {
             lobes,
@@ -855,6 +1149,7 @@ mod tests {
             ]
         );
         assert_eq!(s.failed(), 4);
+        assert_eq!((s.fitted(), s.resumed()), (3, 0), "counts add up to 7");
         assert!(s.rows[1].message.contains("all samples are zero"));
         assert!(
             s.rows[2].message.contains("panicked"),
@@ -862,6 +1157,16 @@ mod tests {
             s.rows[2].message
         );
         assert!(s.rows[3].message.contains("mx"), "{}", s.rows[3].message);
+        // A fit that exists but is invalid keeps its parameters in the failure record.
+        let nan: FailureFile =
+            serde_json::from_slice(&std::fs::read(dir.path().join("nan.json")).expect("nan.json"))
+                .expect("failure record");
+        let kept = nan.model.expect("parameters kept");
+        assert_eq!(kept["reflection"][0]["my"], 0.2, "{kept}");
+        assert!(
+            kept["reflection"][0]["mx"].is_null(),
+            "NaN reads null: {kept}"
+        );
         assert!(s.rows[4].message.contains("no such network"));
         assert_eq!(s.rows[1].ngan_l2_r, None);
         let rows = csv_rows(&s.summary_path);
@@ -884,6 +1189,7 @@ mod tests {
         let s = run(&inputs, &options(dir.path()), &mock).expect("batch");
         assert_eq!(mock.fits.load(Ordering::SeqCst), before + 3);
         assert_eq!(s.resumed(), 3);
+        assert_eq!(s.fitted() + s.resumed() + s.failed(), 7);
     }
 
     #[test]
@@ -954,7 +1260,7 @@ mod tests {
     fn measured_fitter_writes_the_ct_fits_model() {
         let input = "nbrdf:nickel";
         let s = FitSettings::new(ModelChoice::Ggx);
-        let f = MeasuredFitter.fit(input, &s).expect("fit");
+        let f = MeasuredFitter.fit(input, &s, &|_| {}).expect("fit");
         let data = data::load(input).expect("data");
         let direct = ct::fit(
             data.bsdf.as_ref(),

@@ -5,20 +5,20 @@
 //! Beckmann or GGX distribution and the generalized Schlick Fresnel F = F0 + (1 − F0)(1 − cos θd)⁵
 //! − F1 cos θd (004 Eq. V.5). [`fit`] proceeds as 004 §V.4.2:
 //!
-//! 1. On the θd = 0 slice m_h(θh) (sampled at the 90 MERL θh bin centres) fit
+//! 1. On the θd = 0 slice m_h(θh) (sampled at the 90 MERL θh bin nodes, [`bin_node`]) fit
 //!    ρ_h = ρd/π + (Fr/π) D(θh) G1²(θh)/cos²θh for (ρd, Fr, α, p) (Eq. V.6), with weights
 //!    w_i = sin θh cos²θh Δθh (the slice's share of the Ngan measure), from several starts.
 //!    For SGD the starts use G1 = 1 and the best is polished once more with the numeric Smith
 //!    G1 of its (α, p); Beckmann and GGX use their closed forms.
-//! 2. On the θh = 0 slice m_d(θd) (MERL θd bin centres up to `max_theta_d_deg`), fit
+//! 2. On the θh = 0 slice m_d(θd) (MERL θd bin nodes up to `max_theta_d_deg`), fit
 //!    ρs F(θd) = (m_d − ρd/π) π cos²θd / (D(0) G1²(θd)) with Eq. V.5 for (ρs, F0, F1) (ρs is
 //!    F's value at θd = 90°, where F = 1).
 //! 3. Optional refinement (beyond the paper, [`CtOptions::refine`]): per channel, one LM on all
 //!    parameters minimizing the Ngan-weighted residual Σ w (f − m)² over a fixed quadrature set
 //!    of direction pairs ([`crate::metrics::NganQuadrature`], 32 × 16 × 16 nodes in θh × θd ×
 //!    φd, the data evaluated once), with the SGD shadowing held at the numeric Smith G1 of the
-//!    two-slice (α, p) (Beckmann, GGX: closed forms). Variables ln ρd, ln α, A = ρs F0,
-//!    C = ρs F1, x with ρs = eˣ + (|A| + |C|)/[`F_MAX`] (and p); the result is kept only where it lowers the weighted error, recomputed with
+//!    two-slice (α, p) (Beckmann, GGX: closed forms). Variables ln ρd, ln ρs, ln α, the
+//!    Fresnel variables of [`fresnel_of`] (and p); the result is kept only where it lowers the weighted error, recomputed with
 //!    the numeric G1 of the refined (α, p). For SGD a second refinement starts from the refined
 //!    Beckmann fit (SGD with p = 0, α = α_B² is Beckmann). Among the two-slice fit and the
 //!    refined ones, the one with the lowest weighted error on the full default
@@ -26,18 +26,28 @@
 //! 4. SGD: the Eq. V.3 shadowing approximation (λ, c, k) by `SgdG1Approx::fit` of the numeric
 //!    G1 table of the final (α, p), and kap = 1/(αΓ(1−p, α)).
 //!
+//! 5. Albedo bound: where the data's directional albedo stays ≤ 1 (max over θo = 0°, 10°, …,
+//!    80°), a channel whose model albedo exceeds 1 has ρd capped at 1 and ρs scaled down until
+//!    ρd + ρs·a_s(θo) ≤ 1 at every such θo (a_s: the specular albedo at ρs = 1); the fit's
+//!    message says so ([`CtFit::notes`]).
+//!
+//! # Physical by construction
 //! Every optimization is `levenberg_marquardt::LevenbergMarquardt` with a forward-difference
 //! Jacobian. Positivity and ranges come from the parametrization: ρd, ρs, Fr, α are exp of the
 //! LM variable (α clamped to [1e-5, 5]), SGD p = −1.9 + 4.8·sigmoid (inside the library's
-//! range); F0 and F1 may take either sign and exceed 1 (the published fits hold F0 up to 8.5
-//! and F1 < 0) but |F0|, |F1| ≤ [`F_MAX`] through the parametrization of ρs (steps 2 and 3).
+//! range), F0 = sigmoid(a) ∈ (0, 1) and F1 = F0 − sigmoid(c) ∈ (F0 − 1, F0). With F0 ∈ [0, 1]
+//! and F0 − 1 ≤ F1 ≤ F0, Eq. V.5 stays in [0, 1] for every cos θd ∈ [0, 1]: F(c) = F0(1 − c −
+//! m) + m + c − F1·c with m = (1 − c)⁵ ≤ 1 − c, so F ≥ F0(1 − c − m) + m ≥ 0 when F1 ≤ F0 and
+//! F ≤ (1 − c − m) + m + c = 1 when F1 ≥ F0 − 1. The model is therefore never negative. (The
+//! published SGD fits use F0 up to 8.5 and F1 < 0, i.e. a Fresnel "reflectance" above 1; we do
+//! not.)
 
 use crate::metrics::NganQuadrature;
 use crate::{FitError, FitStatus, Result};
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::frame::{from_half_diff, HalfDiff};
-use lustre_brdf::measured::merl::{bin_center, RES_THETA_D, RES_THETA_H};
+use lustre_brdf::measured::merl::{bin_node, MerlCoverage, RES_THETA_D, RES_THETA_H};
 use lustre_brdf::microfacet::fresnel::Fresnel;
 use lustre_brdf::microfacet::ndf::Ndf;
 use lustre_brdf::microfacet::smith::{g1_beckmann, g1_ggx, G1Table, SgdG1Approx};
@@ -124,6 +134,8 @@ pub struct CtFit {
     pub status: FitStatus,
     /// Residual evaluations of all Levenberg-Marquardt runs together.
     pub iterations: usize,
+    /// What the fit changed to stay physical (e.g. an albedo cap), in words; empty otherwise.
+    pub notes: Vec<String>,
 }
 
 impl CtChannelFit {
@@ -272,23 +284,33 @@ fn ln_pos(v: f64) -> f64 {
     v.max(1e-26).ln()
 }
 
-/// Largest |F0|, |F1| a fit may reach (the published SGD fits stay below 8.5).
-pub const F_MAX: f64 = 10.0;
-
-/// (ρs, F0, F1) from the LM variables (x, A = ρs F0, C = ρs F1) with
-/// ρs = eˣ + (|A| + |C|)/F_MAX, so |F0|, |F1| ≤ F_MAX: without the bound, ρs → 0 with
-/// F0 → ∞ is a flat direction of the objective, and a tiny ρs would starve the specular lobe
-/// of importance samples (CookTorrance picks it with probability ∝ ρs).
-fn fresnel_of(x: f64, big_a: f64, big_c: f64) -> (f64, f64, f64) {
-    let rs = pos_of(x) + (big_a.abs() + big_c.abs()) / F_MAX;
-    (rs, big_a / rs, big_c / rs)
+fn sigmoid(x: f64) -> f64 {
+    1.0 / (1.0 + (-x.clamp(-40.0, 40.0)).exp())
+}
+fn logit(s: f64) -> f64 {
+    let s = s.clamp(1e-9, 1.0 - 1e-9);
+    (s / (1.0 - s)).ln()
 }
 
-/// The LM variables of [`fresnel_of`] for (ρs, F0, F1) (F0, F1 clamped to ±F_MAX).
+/// (ρs, F0, F1) from the LM variables (x, a, c): ρs = eˣ, F0 = sigmoid(a) ∈ (0, 1),
+/// F1 = F0 − sigmoid(c) ∈ (F0 − 1, F0), so that F(θd) ∈ [0, 1] everywhere (module notes).
+fn fresnel_of(x: f64, a: f64, c: f64) -> (f64, f64, f64) {
+    let f0 = sigmoid(a);
+    (pos_of(x), f0, f0 - sigmoid(c))
+}
+
+/// The LM variables of [`fresnel_of`] for (ρs, F0, F1), after projecting F0 into [0, 1] and
+/// F1 into [F0 − 1, F0].
 fn fresnel_vars(rs: f64, f0: f64, f1: f64) -> [f64; 3] {
-    let (f0, f1) = (f0.clamp(-F_MAX, F_MAX), f1.clamp(-F_MAX, F_MAX));
-    let (a, c) = (rs * f0, rs * f1);
-    [ln_pos(rs - (a.abs() + c.abs()) / F_MAX), a, c]
+    let f0 = f0.clamp(0.0, 1.0);
+    let f1 = f1.clamp(f0 - 1.0, f0);
+    [ln_pos(rs), logit(f0), logit(f0 - f1)]
+}
+
+/// Eq. V.5 from the basis (m5 = (1 − cos θd)⁵, cos θd).
+#[inline]
+fn fresnel_basis(f0: f64, f1: f64, m5: f64, c: f64) -> f64 {
+    f0 * (1.0 - m5) + m5 - f1 * c
 }
 
 /// A distribution with its parameters and precomputed normalization.
@@ -404,18 +426,25 @@ fn step1(
     th: &[f64],
     m: &[f64],
     sw: &[f64],
+    valid: &[bool],
 ) -> Result<([f64; 4], bool, usize)> {
     let sgd = kind == Distribution::Sgd;
     let n = th.len();
     let cos: Vec<f64> = th.iter().map(|t| t.cos()).collect();
-    let tail = m
+    let valid: Vec<f64> = m
+        .iter()
+        .zip(valid)
+        .filter(|(_, v)| **v)
+        .map(|(x, _)| *x)
+        .collect();
+    let tail = valid
         .iter()
         .rev()
         .take(20)
         .cloned()
         .fold(f64::INFINITY, f64::min)
         .max(0.0);
-    let peak = m[0];
+    let peak = valid.first().copied().unwrap_or(0.0);
     let mut evals = 0;
     let run = |x0: &[f64], g1: &SgdG1| {
         let f = |x: &[f64], r: &mut [f64]| {
@@ -480,6 +509,7 @@ fn step1(
 fn step2(
     td: &[f64],
     m: &[f64],
+    w: &[f64],
     rho_d: f64,
     d: &Dist,
     g1: &SgdG1,
@@ -505,12 +535,14 @@ fn step2(
         })
         .collect();
     // Start: linear least squares in (ρs F0, ρs, ρs F1) of y = ρsF0(1−m5) + ρs m5 − ρsF1 c.
-    let a = DMatrix::from_fn(n, 3, |i, j| match j {
-        0 => 1.0 - basis[i].0,
-        1 => basis[i].0,
-        _ => -basis[i].1,
+    let a = DMatrix::from_fn(n, 3, |i, j| {
+        w[i] * match j {
+            0 => 1.0 - basis[i].0,
+            1 => basis[i].0,
+            _ => -basis[i].1,
+        }
     });
-    let b = DVector::from_column_slice(&y);
+    let b = DVector::from_iterator(n, y.iter().zip(w).map(|(y, w)| y * w));
     let (mut rs, mut f0, mut f1) = (y.iter().cloned().fold(0.0, f64::max).max(1e-9), 1.0, 0.0);
     if let Ok(sol) = a.svd(true, true).solve(&b, 1e-12) {
         if sol[1] > 0.0 && sol.iter().all(|v| v.is_finite()) {
@@ -520,10 +552,10 @@ fn step2(
         }
     }
     let f = |x: &[f64], r: &mut [f64]| {
-        let (rs, big_a, big_c) = (fresnel_of(x[0], x[1], x[2]).0, x[1], x[2]);
+        let (rs, f0, f1) = fresnel_of(x[0], x[1], x[2]);
         for i in 0..n {
             let (m5, c) = basis[i];
-            r[i] = big_a * (1.0 - m5) + rs * m5 - big_c * c - y[i];
+            r[i] = w[i] * (rs * fresnel_basis(f0, f1, m5, c) - y[i]);
         }
     };
     let out = minimize(&f, n, &fresnel_vars(rs, f0, f1));
@@ -550,8 +582,13 @@ const REFINE_QUADRATURE: NganQuadrature = NganQuadrature {
 };
 
 impl RefineSet {
-    fn new(data: &dyn Bsdf, q: &NganQuadrature) -> RefineSet {
-        let pairs: Vec<_> = q.pairs(true).into_iter().flatten().collect();
+    fn new(data: &dyn Bsdf, q: &NganQuadrature, mask: Option<&MerlCoverage>) -> RefineSet {
+        let pairs: Vec<_> = q
+            .pairs(true)
+            .into_iter()
+            .flatten()
+            .filter(|p| mask.is_none_or(|m| m.covers(p.wi, p.wo)))
+            .collect();
         let vals: Vec<[f64; 3]> = pairs.par_iter().map(|p| data.eval(p.wi, p.wo).0).collect();
         let geo = pairs
             .iter()
@@ -620,8 +657,8 @@ fn sgd_g1_fit(table: &G1Table) -> Option<[f64; 3]> {
 }
 
 /// One refinement LM of channel `ch` with the SGD shadowing held at `g1` (a numeric table).
-/// Variables: ln ρd, ln ρs, ln α, A = ρs F0, C = ρs F1 (better conditioned than F0, F1 when
-/// ρs is small) and, for SGD, q (p = −1.9 + 4.8 sigmoid q). D·G is cached per (α, p), so the
+/// Variables: ln ρd, ln ρs, ln α, the Fresnel variables of [`fresnel_of`] and, for SGD, q
+/// (p = −1.9 + 4.8 sigmoid q). D·G is cached per (α, p), so the
 /// Jacobian columns of the linear parameters cost a few multiplies per point.
 fn refine_round(
     kind: Distribution,
@@ -647,8 +684,7 @@ fn refine_round(
     let f = |x: &[f64], r: &mut [f64]| {
         let (rd, a) = (pos_of(x[0]), alpha_of(x[2]));
         let p = if sgd { p_of(x[5]) } else { 0.0 };
-        let (big_a, big_c) = (x[3], x[4]);
-        let rs = fresnel_of(x[1], big_a, big_c).0;
+        let (rs, f0, f1) = fresnel_of(x[1], x[3], x[4]);
         let mut guard = cache.lock().unwrap_or_else(|e| e.into_inner());
         let stale = guard.as_ref().is_none_or(|(k, _)| *k != [a, p]);
         if stale {
@@ -657,13 +693,13 @@ fn refine_round(
         if let Some((_, sf)) = guard.as_ref() {
             for i in 0..n {
                 let (m5, cd) = basis[i];
-                let fres = big_a * (1.0 - m5) + rs * m5 - big_c * cd;
+                let fres = rs * fresnel_basis(f0, f1, m5, cd);
                 r[i] = set.sw[i] * ((rd + fres * sf[i]) * FRAC_1_PI - m[i]);
             }
         }
     };
-    let [xs, big_a, big_c] = fresnel_vars(c.rho_s, c.f0, c.f1);
-    let mut x0 = vec![ln_pos(c.rho_d), xs, c.alpha.ln(), big_a, big_c];
+    let [xs, fa, fc] = fresnel_vars(c.rho_s, c.f0, c.f1);
+    let mut x0 = vec![ln_pos(c.rho_d), xs, c.alpha.ln(), fa, fc];
     if sgd {
         x0.push(q_of(c.p));
     }
@@ -690,11 +726,18 @@ fn two_slice(
     ch: usize,
     slices: &Slices,
 ) -> Result<(CtChannelFit, bool, usize)> {
-    let (s1, ok1, e1) = step1(input, kind, &slices.th, &slices.mh[ch], &slices.sw_h)?;
+    let (s1, ok1, e1) = step1(
+        input,
+        kind,
+        &slices.th,
+        &slices.mh[ch],
+        &slices.sw_h,
+        &slices.valid_h,
+    )?;
     let [rho_d, _fr, alpha, p] = s1;
     let d = Dist::new(kind, alpha, p);
     let g1 = shadowing_of(kind, alpha, p)?;
-    let (s2, ok2, e2) = step2(&slices.td, &slices.md[ch], rho_d, &d, &g1)?;
+    let (s2, ok2, e2) = step2(&slices.td, &slices.md[ch], &slices.w_d, rho_d, &d, &g1)?;
     let [rho_s, f0, f1] = s2;
     let c = CtChannelFit {
         rho_d,
@@ -787,41 +830,64 @@ fn fit_channel(
     Ok((c, ok, evals))
 }
 
-/// The two slices of the data at MERL bin centres.
+/// The two slices of the data at MERL bin nodes; points the mask does not cover get weight 0.
 struct Slices {
     th: Vec<f64>,
     sw_h: Vec<f64>,
+    valid_h: Vec<bool>,
     mh: [Vec<f64>; 3],
     td: Vec<f64>,
+    w_d: Vec<f64>,
     md: [Vec<f64>; 3],
 }
 
+/// Whether the mask covers the pair at (θh, θd, φd) (φh = 0).
+fn covered(mask: Option<&MerlCoverage>, theta_h: f64, theta_d: f64, phi_d: f64) -> bool {
+    let Some(m) = mask else {
+        return true;
+    };
+    let (wi, wo) = from_half_diff(&HalfDiff {
+        theta_h,
+        phi_h: 0.0,
+        theta_d,
+        phi_d,
+    });
+    m.covers(wi, wo)
+}
+
 impl Slices {
-    fn new(data: &dyn Bsdf, max_theta_d: f64) -> Slices {
+    fn new(data: &dyn Bsdf, max_theta_d: f64, mask: Option<&MerlCoverage>) -> Slices {
         let th: Vec<f64> = (0..RES_THETA_H)
-            .map(|i| bin_center(i, 0, 0).theta_h)
+            .map(|i| bin_node(i, 0, 0).theta_h)
             .collect();
+        let valid_h: Vec<bool> = th.iter().map(|&t| covered(mask, t, 0.0, 0.0)).collect();
         // Weights: sin θh cos²θh Δθh, Δθh = (2i+1)/90² · π/2 (the bin width of the u² mapping).
         let sw_h = th
             .iter()
             .enumerate()
             .map(|(i, &t)| {
                 let dt = (2 * i + 1) as f64 / (RES_THETA_H * RES_THETA_H) as f64 * FRAC_PI_2;
-                (t.sin() * t.cos() * t.cos() * dt).sqrt()
+                (t.sin() * t.cos() * t.cos() * dt).sqrt() * f64::from(u8::from(valid_h[i]))
             })
             .collect();
         let vh: Vec<[f64; 3]> = th.iter().map(|&t| data_at(data, t, 0.0, 0.0)).collect();
         let td: Vec<f64> = (0..RES_THETA_D)
-            .map(|j| bin_center(0, j, 0).theta_d)
+            .map(|j| bin_node(0, j, 0).theta_d)
             .filter(|&t| t <= max_theta_d)
             .collect();
         let phi_d = FRAC_PI_2;
+        let w_d = td
+            .iter()
+            .map(|&t| f64::from(u8::from(covered(mask, 0.0, t, phi_d))))
+            .collect();
         let vd: Vec<[f64; 3]> = td.iter().map(|&t| data_at(data, 0.0, t, phi_d)).collect();
         Slices {
             th,
             sw_h,
+            valid_h,
             mh: std::array::from_fn(|c| vh.iter().map(|v| v[c]).collect()),
             td,
+            w_d,
             md: std::array::from_fn(|c| vd.iter().map(|v| v[c]).collect()),
         }
     }
@@ -831,6 +897,16 @@ impl Slices {
 /// data, too few θd samples, or a fit that ends with non-finite parameters (`FitError::Data`
 /// naming the data); `FitStatus::NotConverged` when an optimization stopped at its limit.
 pub fn fit(data: &dyn Bsdf, distribution: Distribution, opts: &CtOptions) -> Result<CtFit> {
+    fit_masked(data, distribution, opts, None)
+}
+
+/// [`fit`] on the direction pairs `mask` covers (a MERL table's measured bins).
+pub fn fit_masked(
+    data: &dyn Bsdf,
+    distribution: Distribution,
+    opts: &CtOptions,
+    mask: Option<&MerlCoverage>,
+) -> Result<CtFit> {
     let input = data.name();
     let err = |problem: String| FitError::Data {
         input: input.clone(),
@@ -845,21 +921,24 @@ pub fn fit(data: &dyn Bsdf, distribution: Distribution, opts: &CtOptions) -> Res
             opts.max_theta_d_deg
         )));
     }
-    let slices = Slices::new(data, opts.max_theta_d_deg.to_radians());
+    let slices = Slices::new(data, opts.max_theta_d_deg.to_radians(), mask);
     for (c, (h, d)) in slices.mh.iter().zip(&slices.md).enumerate() {
         if h.iter().chain(d).any(|v| !v.is_finite()) {
             return Err(err(format!(
                 "non-finite values on the fitting slices (channel {c})"
             )));
         }
-        if h.iter().all(|&v| v <= 0.0) {
+        if h.iter()
+            .zip(&slices.valid_h)
+            .all(|(&v, &ok)| v <= 0.0 || !ok)
+        {
             return Err(err(format!("channel {c} is zero on the θd = 0 slice")));
         }
     }
     let sets = opts.refine.then(|| {
         (
-            RefineSet::new(data, &REFINE_QUADRATURE),
-            RefineSet::new(data, &NganQuadrature::default()),
+            RefineSet::new(data, &REFINE_QUADRATURE, mask),
+            RefineSet::new(data, &NganQuadrature::default(), mask),
         )
     });
     let fits: Vec<Result<(CtChannelFit, bool, usize)>> = (0..3)
@@ -891,7 +970,8 @@ pub fn fit(data: &dyn Bsdf, distribution: Distribution, opts: &CtOptions) -> Res
         }
         channels.push(c);
     }
-    let channels: [CtChannelFit; 3] = [channels[0], channels[1], channels[2]];
+    let mut channels: [CtChannelFit; 3] = [channels[0], channels[1], channels[2]];
+    let notes = cap_albedo(data, distribution, &mut channels)?;
     Ok(CtFit {
         distribution,
         channels,
@@ -901,5 +981,67 @@ pub fn fit(data: &dyn Bsdf, distribution: Distribution, opts: &CtOptions) -> Res
             FitStatus::NotConverged
         },
         iterations,
+        notes,
     })
+}
+
+/// The view angles of the albedo bound (module notes, step 5): θo = 0°, 10°, …, 80°.
+fn albedo_angles() -> impl Iterator<Item = glam::DVec3> {
+    (0..9).map(|k| lustre_brdf::frame::spherical((10.0 * k as f64).to_radians(), 0.0))
+}
+
+/// Step 5: caps ρd at 1 and scales ρs down where the model's directional albedo exceeds 1 while
+/// the data's does not; returns a note per changed channel.
+fn cap_albedo(
+    data: &dyn Bsdf,
+    distribution: Distribution,
+    channels: &mut [CtChannelFit; 3],
+) -> Result<Vec<String>> {
+    let data_max = crate::metrics::max_albedo(data, false);
+    // The specular albedo per unit ρs: the model with ρd = 0, ρs = 1.
+    let unit: [CtChannelFit; 3] = channels.map(|c| CtChannelFit {
+        rho_d: 0.0,
+        rho_s: 1.0,
+        ..c
+    });
+    let spec = CtFit {
+        distribution,
+        channels: unit,
+        status: FitStatus::Converged,
+        iterations: 0,
+        notes: Vec::new(),
+    }
+    .to_bsdf("unit specular")?;
+    let a_s: Vec<[f64; 3]> = albedo_angles()
+        .map(|wo| crate::metrics::albedo(&spec, wo, false))
+        .collect();
+    let mut notes = Vec::new();
+    for (c, ch) in channels.iter_mut().enumerate() {
+        if data_max[c] > 1.0 {
+            continue;
+        }
+        let worst = a_s.iter().map(|a| a[c]).fold(0.0, f64::max);
+        let total = ch.rho_d + ch.rho_s * worst;
+        // A small margin keeps the quadrature's own error (≈1e-4) on the safe side.
+        let limit = 0.999;
+        if total <= limit {
+            continue;
+        }
+        let before = (ch.rho_d, ch.rho_s);
+        ch.rho_d = ch.rho_d.min(limit);
+        if worst > 0.0 {
+            ch.rho_s = ch.rho_s.min((limit - ch.rho_d).max(0.0) / worst);
+        }
+        notes.push(format!(
+            "channel {}: albedo {total:.3} > 1 where the data's is {:.3}: rho_d {:.4} -> {:.4}, \
+             rho_s {:.4} -> {:.4}",
+            ["r", "g", "b"][c],
+            data_max[c],
+            before.0,
+            ch.rho_d,
+            before.1,
+            ch.rho_s
+        ));
+    }
+    Ok(notes)
 }

@@ -1,8 +1,14 @@
 //! Measured inputs as fitting data.
 //!
 //! An input is anything [`lustre_brdf::catalog::resolve`] accepts: a MERL `.binary`, an RGL
-//! `.bsdf`, a goniometric `.gonio`, an ALTA `.dat`, `nbrdf:FILE#NAME` or `nbrdf:NAME` (the MERL
-//! NBRDF set). [`expand_inputs`] turns `nbrdf:FILE#*` (or `#all`) into one input per material.
+//! `.bsdf`, a goniometric `.gonio`, an ALTA `.dat`, `nbrdf:FILE#NAME` or `nbrdf:NAME` (the
+//! embedded MERL NBRDF set). [`expand_inputs`] turns `nbrdf:FILE#*` (or `#all`, or `nbrdf:*` for
+//! the embedded set) into one input per material.
+//!
+//! A MERL table's unmeasured (negative) bins are masked by default: [`MeasuredData::coverage`]
+//! says which direction pairs were measured, the fitters and [`crate::metrics`] leave the others
+//! out, and [`MeasuredData::missing`] counts them for the report. [`LoadOptions::strict`]
+//! refuses such tables instead.
 //!
 //! [`load`] checks the data before anyone fits it: it evaluates the BSDF on a fixed set of
 //! direction pairs (in-plane and out-of-plane, the specular configuration included, and the lower
@@ -14,8 +20,16 @@ use crate::{FitError, Result};
 use glam::DVec3;
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::frame::spherical;
+use lustre_brdf::measured::merl::MerlCoverage;
 use lustre_brdf::measured::nbrdf::NbrdfSet;
 use std::path::PathBuf;
+
+/// How [`load_with`] reads an input.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Refuse MERL tables with unmeasured (negative) bins instead of masking them.
+    pub strict: bool,
+}
 
 /// A measured material ready to be fitted.
 #[derive(Debug)]
@@ -28,19 +42,38 @@ pub struct MeasuredData {
     pub bsdf: Box<dyn Bsdf>,
     /// Whether the data scatters into the lower hemisphere.
     pub transmission: bool,
+    /// The measured direction pairs of a MERL table with unmeasured bins (`None`: all).
+    pub coverage: Option<MerlCoverage>,
+    /// Unmeasured stored values of a MERL table (all channels together; 0 for other inputs).
+    pub missing: usize,
 }
 
-/// The default NBRDF file of `nbrdf:NAME` (the MERL set in the shared data folder).
-pub fn default_nbrdf_file() -> PathBuf {
-    lustre_brdf::shared_data_dir().join("nbrdf/merl_nbrdf.json")
+impl MeasuredData {
+    /// Whether the pair was measured (always true without a coverage mask).
+    pub fn covers(&self, wi: DVec3, wo: DVec3) -> bool {
+        self.coverage.as_ref().is_none_or(|c| c.covers(wi, wo))
+    }
+
+    /// A sentence on the masked bins for reports (empty when nothing is masked).
+    pub fn mask_note(&self) -> String {
+        match &self.coverage {
+            Some(c) => format!(
+                "{} unmeasured values ({} of 1458000 bins) masked",
+                self.missing,
+                c.masked_bins()
+            ),
+            None => String::new(),
+        }
+    }
 }
 
-/// Splits `nbrdf:FILE#NAME` / `nbrdf:NAME` into (file, name); `None` for other inputs.
-fn split_nbrdf(input: &str) -> Option<(PathBuf, &str)> {
+/// Splits `nbrdf:FILE#NAME` / `nbrdf:NAME` into (file, name), the file `None` for the embedded
+/// MERL set; `None` for other inputs.
+fn split_nbrdf(input: &str) -> Option<(Option<PathBuf>, &str)> {
     let rest = input.trim().strip_prefix("nbrdf:")?.trim();
     Some(match rest.rsplit_once('#') {
-        Some((f, n)) => (PathBuf::from(f), n.trim()),
-        None => (default_nbrdf_file(), rest),
+        Some((f, n)) => (Some(PathBuf::from(f)), n.trim()),
+        None => (None, rest),
     })
 }
 
@@ -51,25 +84,37 @@ pub fn expand_inputs(input: &str) -> Result<Vec<String>> {
     let input = input.trim();
     match split_nbrdf(input) {
         Some((file, name)) if name == "*" || name == "all" => {
-            let set = NbrdfSet::read(&file)?;
+            let set = match &file {
+                Some(f) => NbrdfSet::read(f)?,
+                None => lustre_brdf::embedded::merl_nbrdf()?,
+            };
             if set.is_empty() {
                 return Err(FitError::Data {
                     input: input.to_string(),
-                    problem: format!("{} holds no material", file.display()),
+                    problem: "the network file holds no material".into(),
                 });
             }
             Ok(set
                 .names()
                 .iter()
-                .map(|n| format!("nbrdf:{}#{n}", file.display()))
+                .map(|n| match &file {
+                    Some(f) => format!("nbrdf:{}#{n}", f.display()),
+                    None => format!("nbrdf:{n}"),
+                })
                 .collect())
         }
         _ => Ok(vec![input.to_string()]),
     }
 }
 
-/// Loads one input through the catalog and checks its values (see the module notes).
+/// Loads one input through the catalog and checks its values (see the module notes), masking
+/// unmeasured MERL bins.
 pub fn load(input: &str) -> Result<MeasuredData> {
+    load_with(input, &LoadOptions::default())
+}
+
+/// [`load`] with options.
+pub fn load_with(input: &str, opts: &LoadOptions) -> Result<MeasuredData> {
     let input = input.trim();
     if let Some((_, name)) = split_nbrdf(input) {
         if name == "*" || name == "all" {
@@ -81,7 +126,27 @@ pub fn load(input: &str) -> Result<MeasuredData> {
             });
         }
     }
-    let bsdf = lustre_brdf::catalog::resolve(input)?;
+    let path_part = input.rsplit_once('#').map_or(input, |(p, _)| p);
+    let is_merl = !input.starts_with("nbrdf:")
+        && std::path::Path::new(path_part)
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("binary"));
+    let (bsdf, coverage, missing): (Box<dyn Bsdf>, _, _) = if is_merl {
+        use lustre_brdf::measured::merl::{MerlTable, NegativeValues};
+        let negative = if opts.strict {
+            NegativeValues::Reject
+        } else {
+            NegativeValues::Missing
+        };
+        let t = MerlTable::read_with(path_part, negative)?;
+        let (c, n) = (t.coverage(), t.missing_count());
+        (Box::new(t), c, n)
+    } else {
+        let ro = lustre_brdf::catalog::ResolveOptions {
+            strict: opts.strict,
+        };
+        (lustre_brdf::catalog::resolve_with(input, &ro)?, None, 0)
+    };
     let name = match split_nbrdf(input) {
         Some((_, n)) => n.to_string(),
         None => {
@@ -98,6 +163,8 @@ pub fn load(input: &str) -> Result<MeasuredData> {
         source: input.to_string(),
         bsdf,
         transmission,
+        coverage,
+        missing,
     })
 }
 

@@ -21,6 +21,12 @@
 //! (0°, 90°), φo at 36 midpoints of [0°, 360°), φi = 0 (and 4 values when a BSDF is anisotropic);
 //! with `transmission`, θo also covers (90°, 180°).
 //!
+//! # Masked data
+//! With a coverage mask (a MERL table's measured bins, [`MerlCoverage`]) the Ngan integral and
+//! the L1 leave out the pairs whose bin was not measured (the `*_masked` functions). The data's
+//! albedos and maximum albedo integrate the table as it evaluates (unmeasured corners left out of
+//! the trilinear interpolation), since an albedo needs the whole hemisphere.
+//!
 //! # Albedos (000 Eq. 2.6, Tables 3.1–3.3)
 //!
 //! a(o) = ∫ f(i, o) |cos θi| dωi at normal incidence o = +z, by the half-vector parametrization
@@ -32,6 +38,7 @@
 use glam::DVec3;
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::frame::{from_half_diff, reflect, spherical, HalfDiff};
+use lustre_brdf::measured::merl::MerlCoverage;
 use lustre_brdf::numeric::gauss_legendre;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -163,12 +170,25 @@ impl NganQuadrature {
 /// The un-normalized Ngan integral ∫∫ (a − b)² cos θi cos θo dωi dωo per channel, by
 /// [`NganQuadrature`] (rayon over θh nodes).
 pub fn ngan_integral(a: &dyn Bsdf, b: &dyn Bsdf, q: &NganQuadrature) -> [f64; 3] {
+    ngan_integral_masked(a, b, q, None)
+}
+
+/// [`ngan_integral`] over the pairs `mask` covers (all without a mask).
+pub fn ngan_integral_masked(
+    a: &dyn Bsdf,
+    b: &dyn Bsdf,
+    q: &NganQuadrature,
+    mask: Option<&MerlCoverage>,
+) -> [f64; 3] {
     let iso = !a.flags().anisotropic && !b.flags().anisotropic;
     let rows = q.pairs(iso);
     rows.par_iter()
         .map(|row| {
             let mut s = [0.0; 3];
             for p in row {
+                if mask.is_some_and(|m| !m.covers(p.wi, p.wo)) {
+                    continue;
+                }
                 let (fa, fb) = (a.eval(p.wi, p.wo), b.eval(p.wi, p.wo));
                 for (c, sc) in s.iter_mut().enumerate() {
                     let d = fa.0[c] - fb.0[c];
@@ -231,6 +251,16 @@ pub fn albedo(bsdf: &dyn Bsdf, wo: DVec3, transmission: bool) -> [f64; 3] {
 
 /// The L1 of 000 Eq. 3.7 per channel (see the module notes for the grid).
 pub fn l1_error(data: &dyn Bsdf, model: &dyn Bsdf, transmission: bool) -> [f64; 3] {
+    l1_error_masked(data, model, transmission, None)
+}
+
+/// [`l1_error`] over the tuples `mask` covers (all without a mask).
+pub fn l1_error_masked(
+    data: &dyn Bsdf,
+    model: &dyn Bsdf,
+    transmission: bool,
+    mask: Option<&MerlCoverage>,
+) -> [f64; 3] {
     let n_t = 18;
     let dt = FRAC_PI_2 / n_t as f64;
     let n_po = 36;
@@ -255,6 +285,9 @@ pub fn l1_error(data: &dyn Bsdf, model: &dyn Bsdf, transmission: bool) -> [f64; 
                     let w = to.sin().abs();
                     for k in 0..n_po {
                         let wo = spherical(to, (k as f64 + 0.5) * dpo);
+                        if mask.is_some_and(|m| !m.covers(wi, wo)) {
+                            continue;
+                        }
                         let (fd, fm) = (data.eval(wi, wo), model.eval(wi, wo));
                         let g = w * wi.z.abs() * wo.z.abs();
                         for (c, nc) in num.iter_mut().enumerate() {
@@ -332,10 +365,20 @@ pub fn average_albedo(bsdf: &dyn Bsdf, transmission: bool) -> [f64; 3] {
 /// `data` (module notes). A data channel with zero albedo is normalized by the largest channel
 /// albedo instead (or not at all when every channel is zero).
 pub fn evaluate(data: &dyn Bsdf, model: &dyn Bsdf, transmission: bool) -> ErrorReport {
+    evaluate_masked(data, model, transmission, None)
+}
+
+/// [`evaluate`] with the errors over the pairs `mask` covers (see the module notes).
+pub fn evaluate_masked(
+    data: &dyn Bsdf,
+    model: &dyn Bsdf,
+    transmission: bool,
+    mask: Option<&MerlCoverage>,
+) -> ErrorReport {
     let amax = max_albedo(data, transmission);
     ErrorReport {
-        ngan_l2: ngan_l2(data, model, &amax),
-        l1: l1_error(data, model, transmission),
+        ngan_l2: ngan_l2_masked(data, model, &amax, mask),
+        l1: l1_error_masked(data, model, transmission, mask),
         albedo_data: albedo(data, DVec3::Z, transmission),
         albedo_model: albedo(model, DVec3::Z, transmission),
     }
@@ -344,7 +387,17 @@ pub fn evaluate(data: &dyn Bsdf, model: &dyn Bsdf, transmission: bool) -> ErrorR
 /// Ngan's normalized L2 per channel given the data's maximum albedo `amax` (from
 /// [`max_albedo`], so that a batch comparing several models computes it once).
 pub fn ngan_l2(data: &dyn Bsdf, model: &dyn Bsdf, amax: &[f64; 3]) -> [f64; 3] {
-    let integral = ngan_integral(data, model, &NganQuadrature::default());
+    ngan_l2_masked(data, model, amax, None)
+}
+
+/// [`ngan_l2`] over the pairs `mask` covers.
+pub fn ngan_l2_masked(
+    data: &dyn Bsdf,
+    model: &dyn Bsdf,
+    amax: &[f64; 3],
+    mask: Option<&MerlCoverage>,
+) -> [f64; 3] {
+    let integral = ngan_integral_masked(data, model, &NganQuadrature::default(), mask);
     let top = amax.iter().cloned().fold(0.0, f64::max);
     std::array::from_fn(|c| {
         let norm = if amax[c] > 0.0 {

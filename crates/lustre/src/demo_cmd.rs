@@ -60,6 +60,16 @@ fn bar(label: &str, len: usize) -> ProgressBar {
 
 /// Runs `lustre demo`.
 pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
+    let png = args
+        .out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !png {
+        bail!(
+            "--out {}: the demo writes a PNG image; give a file name ending in .png",
+            args.out.display()
+        );
+    }
     let (w, h) = parse_size(&args.size)?;
     if args.samples == 0 || args.reference_spp == 0 {
         bail!("--samples and --reference-spp must be > 0");

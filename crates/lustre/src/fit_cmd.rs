@@ -4,7 +4,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use lustre_fit::batch::{self, BatchOptions, FitSettings, Fitter, ModelChoice, SummaryRow};
+use lustre_fit::batch::{self, BatchOptions, FitSettings, Fitter, Metric, ModelChoice, SummaryRow};
 use std::path::{Path, PathBuf};
 
 /// The model to fit.
@@ -31,6 +31,15 @@ impl From<ModelArg> for ModelChoice {
     }
 }
 
+/// The metric of `--metric`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MetricArg {
+    /// Ngan's normalized L2 (004 §V.5.3).
+    NganL2,
+    /// The L1 of transfer probabilities (000 Eq. 3.7).
+    L1,
+}
+
 /// Arguments of `lustre fit`.
 #[derive(Debug, clap::Args)]
 pub struct FitArgs {
@@ -53,6 +62,16 @@ pub struct FitArgs {
     /// Skip the refinement (CT: over the full data; Kurt: the final polish).
     #[arg(long = "no-refine")]
     pub no_refine: bool,
+    /// Kurt: the metric by which fits with 1..=LOBES lobes are compared; the reported fit is
+    /// the best of them, so more lobes never report a worse fit.
+    #[arg(long, value_enum, default_value_t = MetricArg::NganL2)]
+    pub metric: MetricArg,
+    /// Refuse MERL tables with unmeasured (negative) bins instead of masking them.
+    #[arg(long)]
+    pub strict: bool,
+    /// Append -TEXT to every output name: keeps fits with other options beside earlier ones.
+    #[arg(long, value_name = "TEXT")]
+    pub suffix: Option<String>,
     /// Inputs fitted in parallel.
     #[arg(long, default_value_t = default_jobs(), value_parser = parse_jobs)]
     pub jobs: usize,
@@ -60,7 +79,7 @@ pub struct FitArgs {
     /// DIR/plots/NAME/.
     #[arg(long)]
     pub plots: bool,
-    /// Fit every input again, even where a valid output exists.
+    /// Fit every input again, even where a valid output exists (also one with other options).
     #[arg(long)]
     pub force: bool,
     /// Output folder: NAME.json per input and summary.csv (created if missing).
@@ -146,6 +165,9 @@ impl FitArgs {
             if self.lobes != 1 || self.transmission_lobes != 0 {
                 bail!("--lobes and --transmission-lobes apply to --model kurt only");
             }
+            if self.metric != MetricArg::NganL2 {
+                bail!("--metric applies to --model kurt only (Cook-Torrance fits minimize Ngan's weighted L2)");
+            }
         }
         let settings = FitSettings {
             model,
@@ -154,6 +176,11 @@ impl FitArgs {
             fixed: self.fix.clone(),
             ranges: self.range.clone(),
             refine: !self.no_refine,
+            metric: match self.metric {
+                MetricArg::NganL2 => Metric::NganL2,
+                MetricArg::L1 => Metric::L1,
+            },
+            strict: self.strict,
         };
         batch::check_settings(&settings)?;
         Ok(BatchOptions {
@@ -162,6 +189,7 @@ impl FitArgs {
             force: self.force,
             out: self.out.clone(),
             progress: true,
+            suffix: self.suffix.clone().unwrap_or_default(),
         })
     }
 }
@@ -177,25 +205,31 @@ pub fn run_with(args: &FitArgs, fitter: &dyn Fitter) -> Result<()> {
     let opts = args.batch_options()?;
     let summary = batch::run(&args.inputs, &opts, fitter)
         .with_context(|| format!("fitting into {}", args.out.display()))?;
-    for r in &summary.rows {
+    for r in summary.batch_rows() {
         println!("{}", row_line(r));
     }
     let mut plot_failures = 0;
     if args.plots {
-        for r in summary.rows.iter().filter(|r| !r.failed()) {
+        for r in summary.batch_rows().iter().filter(|r| !r.failed()) {
             if let Err(e) = plot_row(&args.out, r) {
                 eprintln!("warning: no plots for {}: {e:#}", r.input);
                 plot_failures += 1;
             }
         }
     }
-    let n = summary.rows.len();
+    let n = summary.batch;
+    let earlier = summary.earlier_rows().len();
     println!(
-        "{}: {n} inputs, {} fitted, {} resumed, {} failed",
+        "{}: {n} inputs: {} fitted, {} resumed, {} failed{}",
         summary.summary_path.display(),
-        n - summary.resumed(),
+        summary.fitted(),
         summary.resumed(),
-        summary.failed()
+        summary.failed(),
+        if earlier > 0 {
+            format!(" (the summary also lists {earlier} earlier fits in the folder)")
+        } else {
+            String::new()
+        }
     );
     if summary.failed() > 0 {
         bail!(

@@ -5,15 +5,21 @@ mod demo_cmd;
 mod fit_cmd;
 mod merl_cmd;
 mod plot_cmd;
+mod score_cmd;
 
 use anyhow::Context;
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use lustre_brdf::{catalog, frame, Bsdf};
+use std::process::ExitCode;
 
 /// lustre: BSDF models, measured materials and their plots.
 #[derive(Parser)]
 #[command(name = "lustre", version, about)]
 struct Cli {
+    /// The data folder for `data:PATH` specs and larger data (sets LUSTRE_DATA). The published
+    /// fits and the MERL neural BRDFs are built in and need none.
+    #[arg(long, global = true, value_name = "DIR")]
+    data: Option<std::path::PathBuf>,
     #[command(subcommand)]
     command: Command,
 }
@@ -30,44 +36,143 @@ enum Command {
     Demo(demo_cmd::DemoArgs),
     /// Regular sampling vs Colbert–Křivánek vs reference (002 Fig. 8–10, 000 Fig. 4.24).
     Compare(compare_cmd::CompareArgs),
-    /// List built-in materials, analytic models with their parameters, and published fits.
+    /// Error metrics and albedos of any material against any measured input, without fitting.
+    Score(score_cmd::ScoreArgs),
+    /// List built-in materials, analytic models, published fits, the 100 MERL materials and
+    /// where data comes from.
     List,
     /// Print a material's flags, albedo and a few values.
     Info {
         /// Material specification (see `lustre list`).
         spec: String,
+        /// Refuse MERL tables with unmeasured (negative) bins instead of masking them.
+        #[arg(long)]
+        strict: bool,
     },
 }
 
-fn main() -> anyhow::Result<()> {
+/// Every value-taking argument accepts negative numbers (`--phi-i -30`), in every subcommand.
+fn negative_numbers(cmd: clap::Command) -> clap::Command {
+    cmd.mut_args(|a| {
+        if a.get_action().takes_values() {
+            a.allow_negative_numbers(true)
+        } else {
+            a
+        }
+    })
+    .mut_subcommands(negative_numbers)
+}
+
+fn main() -> ExitCode {
     quiet_vulkan_loader();
-    match Cli::parse().command {
+    let matches = negative_numbers(Cli::command()).get_matches();
+    let result = Cli::from_arg_matches(&matches)
+        .map_err(anyhow::Error::from)
+        .and_then(run);
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // The chain in words; no backtrace for a user's error, even with RUST_BACKTRACE.
+            eprintln!("error: {}", error_chain(&e));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The error and its causes joined by ": ", leaving out a cause whose text the message already
+/// holds (an I/O error wrapped with its path would otherwise be printed twice).
+fn error_chain(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if out.contains(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&text);
+    }
+    out
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    if let Some(d) = &cli.data {
+        if !d.is_dir() {
+            anyhow::bail!("--data {}: not a folder", d.display());
+        }
+        // Before any thread exists (the commands start their pools later).
+        std::env::set_var("LUSTRE_DATA", d);
+    }
+    match cli.command {
         Command::Plot(args) => plot_cmd::run(&args),
         Command::Fit(args) => fit_cmd::run(&args),
         Command::Merl(args) => merl_cmd::run(&args),
         Command::Demo(args) => demo_cmd::run(&args),
         Command::Compare(args) => compare_cmd::run(&args),
-        Command::List => {
-            println!("built-in materials:");
-            for (name, what) in catalog::builtins() {
-                println!("  {name:<14} {what}");
-            }
-            println!("analytic models, as MODEL(key=value, ...):");
-            for (name, keys) in catalog::models() {
-                println!("  {name:<30} {keys}");
-            }
-            println!("published MERL fits: sgd:NAME, sgd-numeric:NAME, abc:NAME, lafortune:NAME");
-            println!("neural BRDFs: nbrdf:NAME, nbrdf:FILE#NAME; files: .binary .bsdf .dat .gonio");
-            Ok(())
-        }
-        Command::Info { spec } => info(&spec),
+        Command::Score(args) => score_cmd::run(&args),
+        Command::List => list(),
+        Command::Info { spec, strict } => info(&spec, strict),
     }
 }
 
-fn info(spec: &str) -> anyhow::Result<()> {
-    let b = catalog::resolve(spec).with_context(|| format!("cannot resolve {spec:?}"))?;
+fn list() -> anyhow::Result<()> {
+    use std::io::Write;
+    // Through a locked handle so that a closed pipe (`| head`) is an error, not a panic.
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "built-in materials:")?;
+    for (name, what) in catalog::builtins() {
+        writeln!(out, "  {name:<14} {what}")?;
+    }
+    writeln!(out, "analytic models, as MODEL(key=value, ...):")?;
+    for (name, keys) in catalog::models() {
+        writeln!(out, "  {name:<30} {keys}")?;
+    }
+    writeln!(
+        out,
+        "published MERL fits and neural BRDFs, built into this binary:"
+    )?;
+    for (spec, source) in lustre_brdf::embedded::sources() {
+        writeln!(out, "  {spec:<28} {source}")?;
+    }
+    let names = lustre_brdf::fits::sgd::list_materials()?;
+    writeln!(out, "the {} MERL materials (NAME above):", names.len())?;
+    for row in names.chunks(4) {
+        let cells: Vec<String> = row.iter().map(|n| format!("{n:<24}")).collect();
+        writeln!(out, "  {}", cells.join("").trim_end())?;
+    }
+    writeln!(
+        out,
+        "files: .binary (MERL; unmeasured bins masked, --strict refuses them), .bsdf (RGL), \
+         .dat (ALTA), .gonio, .json (lustre material); nbrdf:FILE#NAME for other network files"
+    )?;
+    match lustre_brdf::data_dir() {
+        Ok(d) => writeln!(
+            out,
+            "data folder (data:PATH): {} (LUSTRE_DATA)",
+            d.display()
+        )?,
+        Err(e) => writeln!(out, "data folder (data:PATH): none: {e}")?,
+    }
+    Ok(())
+}
+
+fn info(spec: &str, strict: bool) -> anyhow::Result<()> {
+    let b = catalog::resolve_with(spec, &catalog::ResolveOptions { strict })
+        .with_context(|| format!("cannot resolve {spec:?}"))?;
     let flags = b.flags();
     println!("{}", b.name());
+    if spec.trim().to_ascii_lowercase().ends_with(".binary") {
+        let t = lustre_brdf::measured::merl::MerlTable::read(spec.trim())?;
+        match t.coverage() {
+            Some(c) => println!(
+                "  unmeasured (negative) values: {} ({} of 1458000 bins), masked",
+                t.missing_count(),
+                c.masked_bins()
+            ),
+            None => println!("  unmeasured (negative) values: 0"),
+        }
+    }
     println!(
         "  reciprocal: {}, energy conserving: {}, transmission: {}, anisotropic: {}",
         flags.reciprocal, flags.energy_conserving, flags.transmission, flags.anisotropic

@@ -125,6 +125,9 @@ pub struct PlotArgs {
     /// Multi-ring pattern: the number of rings (the budget less the centre is spread over them).
     #[arg(long, default_value_t = 3)]
     pub rings: usize,
+    /// Refuse MERL tables with unmeasured (negative) bins instead of masking them.
+    #[arg(long)]
+    pub strict: bool,
 }
 
 /// Runs `lustre plot`: resolves the specs, draws the requested figures into `--out` and prints
@@ -140,14 +143,35 @@ pub fn run(args: &PlotArgs) -> Result<()> {
     };
     let materials: Vec<(String, Box<dyn Bsdf>)> = specs
         .iter()
-        .map(|s| Ok((s.clone(), resolve(s)?)))
+        .map(|s| Ok((s.clone(), resolve(s, args.strict)?)))
         .collect::<Result<_>>()?;
     let compare = args
         .compare
         .as_deref()
-        .map(|s| Ok::<_, anyhow::Error>((s.to_string(), resolve(s)?)))
+        .map(|s| Ok::<_, anyhow::Error>((s.to_string(), resolve(s, args.strict)?)))
         .transpose()?;
+    let mut written = Vec::new();
+    let result = draw(args, &materials, compare.as_ref(), &mut written);
+    if result.is_err() {
+        // No half-finished set of figures: remove what this run wrote before the failure.
+        for p in &written {
+            let _ = std::fs::remove_file(p);
+        }
+        return result;
+    }
+    for p in &written {
+        println!("{}", p.display());
+    }
+    Ok(())
+}
 
+/// Draws the figures of `run` into `args.out`, pushing every file written onto `written`.
+fn draw(
+    args: &PlotArgs,
+    materials: &[(String, Box<dyn Bsdf>)],
+    compare: Option<&(String, Box<dyn Bsdf>)>,
+    written: &mut Vec<PathBuf>,
+) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create the output folder {}", args.out.display()))?;
     if !lustre_plot::font::font_available() {
@@ -157,14 +181,13 @@ pub fn run(args: &PlotArgs) -> Result<()> {
         );
     }
     let mut names = UniqueNames::default();
-    let mut written = Vec::new();
 
     if matches!(args.kind, PlotKind::Polar | PlotKind::All) {
         let mut all: Vec<(&dyn Bsdf, &str)> = materials
             .iter()
             .map(|(s, b)| (b.as_ref(), s.as_str()))
             .collect();
-        if let Some((s, b)) = &compare {
+        if let Some((s, b)) = compare {
             all.push((b.as_ref(), s.as_str()));
         }
         let opts = PolarOptions {
@@ -204,8 +227,8 @@ pub fn run(args: &PlotArgs) -> Result<()> {
             },
             ..ArrayOptions::default()
         };
-        for (spec, bsdf) in &materials {
-            let files = match &compare {
+        for (spec, bsdf) in materials {
+            let files = match compare {
                 Some((cspec, cbsdf)) => {
                     let base = args.out.join(names.claim(&format!(
                         "array-{}-vs-{}",
@@ -232,9 +255,6 @@ pub fn run(args: &PlotArgs) -> Result<()> {
             })?;
             written.extend(files.paths().into_iter().map(Path::to_path_buf));
         }
-    }
-    for p in &written {
-        println!("{}", p.display());
     }
     Ok(())
 }
@@ -323,11 +343,11 @@ fn run_pattern(args: &PlotArgs, choice: PatternChoice) -> Result<()> {
 }
 
 /// Resolves a spec with a message that names it and a few known materials.
-fn resolve(spec: &str) -> Result<Box<dyn Bsdf>> {
+fn resolve(spec: &str, strict: bool) -> Result<Box<dyn Bsdf>> {
     if spec.trim().is_empty() {
         bail!("empty material spec");
     }
-    catalog::resolve(spec).with_context(|| {
+    catalog::resolve_with(spec, &catalog::ResolveOptions { strict }).with_context(|| {
         let known = catalog::list();
         let shown = known
             .iter()
@@ -426,6 +446,7 @@ mod tests {
             xi0: 0.1,
             circles: None,
             rings: 3,
+            strict: false,
         };
         let dir = std::env::temp_dir().join(format!("lustre-plot-cmd-{}", std::process::id()));
         let e = run(&args(vec!["no-such-material-xyz".into()], dir.clone())).unwrap_err();
@@ -463,6 +484,7 @@ mod tests {
             xi0: 0.1,
             circles: None,
             rings: 3,
+            strict: false,
         };
         run(&args).unwrap();
         let names: Vec<String> = std::fs::read_dir(&dir)

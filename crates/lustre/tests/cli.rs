@@ -110,7 +110,7 @@ fn bad_input_is_a_clear_error_not_a_panic() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{args:?} should fail");
         assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
-        assert!(err.contains("Error"), "{args:?}: {err}");
+        assert!(err.starts_with("error: "), "{args:?}: {err}");
     }
     // A truncated MERL file names the file and the problem.
     let dir = tempfile::tempdir().expect("temp dir");

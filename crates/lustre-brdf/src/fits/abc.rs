@@ -8,8 +8,8 @@ use crate::fits::{fit_table_api, FitTable};
 use crate::models::abc::Abc;
 use crate::rgb::Rgb;
 
-/// The file's path relative to [`crate::shared_data_dir`].
-pub const ABC_FITS_FILE: &str = "fits/merl_abc_fits_low2012.csv";
+/// The file's name (in the shared data folder under `fits/`, and embedded).
+pub const ABC_FITS_FILE: &str = "merl_abc_fits_low2012.csv";
 
 /// The table of ABC fits.
 #[derive(Clone, Debug)]
@@ -17,7 +17,7 @@ pub struct AbcFits {
     table: FitTable,
 }
 
-fit_table_api!(AbcFits, ABC_FITS_FILE);
+fit_table_api!(AbcFits, ABC_FITS_FILE, crate::embedded::ABC_FITS);
 
 impl AbcFits {
     /// The fitted ABC BRDF of `material`; [`Error::NotFound`] for an unknown name, a format
@@ -35,7 +35,7 @@ impl AbcFits {
     }
 }
 
-/// The ABC fit of MERL material `name`, from the shared data folder.
+/// The ABC fit of MERL material `name`, from the embedded table.
 pub fn load(name: &str) -> Result<Abc> {
     AbcFits::load_default()?.material(name)
 }

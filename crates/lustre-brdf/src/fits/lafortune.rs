@@ -37,8 +37,8 @@ use crate::fits::{fit_table_api, FitTable};
 use crate::models::lafortune::{Lafortune, LafortuneLobe};
 use crate::rgb::Rgb;
 
-/// The file's path relative to [`crate::shared_data_dir`].
-pub const LAFORTUNE_FITS_FILE: &str = "fits/merl_lafortune_fits_ngan2005.csv";
+/// The file's name (in the shared data folder under `fits/`, and embedded).
+pub const LAFORTUNE_FITS_FILE: &str = "merl_lafortune_fits_ngan2005.csv";
 
 /// The table of Lafortune fits.
 #[derive(Clone, Debug)]
@@ -61,7 +61,11 @@ pub struct NganLafortuneParams {
     pub n: f64,
 }
 
-fit_table_api!(LafortuneFits, LAFORTUNE_FITS_FILE);
+fit_table_api!(
+    LafortuneFits,
+    LAFORTUNE_FITS_FILE,
+    crate::embedded::LAFORTUNE_FITS
+);
 
 impl LafortuneFits {
     /// The published parameters of `material`.

@@ -1,4 +1,5 @@
-//! Published fits of the MERL materials (`../shared/data/fits/`), loaded by material name.
+//! Published fits of the MERL materials, loaded by material name: by default from the copies
+//! compiled into the library ([`crate::embedded`]), or from any file with `read`.
 
 pub mod abc;
 pub mod lafortune;
@@ -37,13 +38,13 @@ pub(crate) fn parse_checked<T, M>(
 
 /// Implements `load_default`, `read`, `parse` and `names` for a published-fit table type: a
 /// struct with the one field `table: FitTable` and a `material(&self, &str) -> Result<_>` method
-/// that validates a row; `$file` is the table's path under [`crate::shared_data_dir`].
+/// that validates a row; `$file` is the table's file name and `$bytes` its embedded copy.
 macro_rules! fit_table_api {
-    ($ty:ident, $file:expr) => {
+    ($ty:ident, $file:expr, $bytes:expr) => {
         impl $ty {
-            /// Reads the table from the shared data folder.
+            /// The table compiled into the library ([`crate::embedded`]).
             pub fn load_default() -> $crate::error::Result<Self> {
-                Self::read(&$crate::shared_data_dir().join($file))
+                Self::parse(&$crate::embedded::label($file), $bytes)
             }
 
             /// Reads a table from `path`.

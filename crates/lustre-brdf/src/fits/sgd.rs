@@ -14,10 +14,10 @@ use crate::microfacet::fresnel::Fresnel;
 use crate::microfacet::ndf::Ndf;
 use crate::microfacet::smith::SgdG1Approx;
 use crate::models::cook_torrance::{CookTorrance, CtChannel, G1Model};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// The table's path relative to [`crate::shared_data_dir`].
-pub const SGD_FITS_FILE: &str = "fits/merl_sgd_fits_bagher2012.csv";
+/// The table's file name (in the shared data folder under `fits/`, and embedded).
+pub const SGD_FITS_FILE: &str = "merl_sgd_fits_bagher2012.csv";
 
 /// The published parameters of one channel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,9 +55,12 @@ pub struct SgdFits {
 }
 
 impl SgdFits {
-    /// Reads the table from the shared data folder.
+    /// The table compiled into the library ([`crate::embedded`]).
     pub fn load_default() -> Result<Self> {
-        Self::read(&default_path())
+        Self::parse(
+            &crate::embedded::label(SGD_FITS_FILE),
+            crate::embedded::SGD_FITS,
+        )
     }
 
     /// Reads a table from `path`.
@@ -147,17 +150,12 @@ impl SgdFits {
     }
 }
 
-/// The table's default location.
-pub fn default_path() -> PathBuf {
-    crate::shared_data_dir().join(SGD_FITS_FILE)
-}
-
-/// Names of the 100 materials in the shared table.
+/// Names of the 100 materials in the embedded table.
 pub fn list_materials() -> Result<Vec<String>> {
     Ok(SgdFits::load_default()?.list_materials())
 }
 
-/// The published SGD model of `material` from the shared table.
+/// The published SGD model of `material` from the embedded table.
 pub fn load(material: &str) -> Result<CookTorrance> {
     SgdFits::load_default()?.cook_torrance(material)
 }

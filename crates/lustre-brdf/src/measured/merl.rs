@@ -15,19 +15,29 @@
 //!   φd < 0 is first folded to φd + π; u_φ = φd / π · 180; nearest index = ⌊u_φ⌋ clamped to
 //!   0..=179.
 //!
-//! # Bin centres (the convention of this crate)
-//! Bin (i, j, k) has its centre at index coordinates (i + ½, j + ½, k + ½), mapped back through
-//! the same maps: θh = ((i + ½)/90)² · 90° = (i + ½)²/90 degrees, θd = (j + ½) · 90°/90,
-//! φd = (k + ½) · 180°/180 (see [`bin_center`]). Trilinear interpolation ([`Interpolation::Trilinear`])
-//! interpolates linearly in index coordinates between these centres; θ ends are clamped (the
-//! value at the first/last centre extends to the table's edge) and φd is periodic with period π
-//! (between the last and the first bin the interpolation wraps around).
+//! # Which point of a bin a stored value stands for: the lower edge
+//! A stored value of bin (i, j, k) is the BRDF at the bin's *lower edge* ([`bin_node`]):
+//! θh = (i/90)² · π/2, θd = j/90 · π/2, φd = k/180 · π. This is the convention of the real MERL
+//! data as its users read it: the neural BRDFs of `nbrdf/merl_nbrdf.json` were trained on the
+//! MERL tables with exactly these angles (asztr/Neural-BRDF, `binary_to_nbrdf/fastmerl.py`), and
+//! `BRDFRead.cpp`'s lookup (⌊u⌋) maps a bin's lower edge to that bin. Evidence that the published
+//! SGD fits use it too: `cargo run --release -p lustre-fit --example bin_convention` (results
+//! in `docs/results/bin-convention.md`) measures, for all 100 materials, the published fits'
+//! error against the tables under both conventions, and the parameter recovery from tables
+//! made from the published parameters. [`BinConvention::Centre`] (the bin's centre,
+//! (i + ½, j + ½, k + ½) in index coordinates, [`bin_center`]) is kept for that comparison.
+//!
+//! Trilinear interpolation ([`Interpolation::Trilinear`]) interpolates linearly in index
+//! coordinates between the nodes of the table's convention; θ ends are clamped (the value at the
+//! first/last node extends to the table's edge) and φd is periodic with period π (between the
+//! last and the first bin the interpolation wraps around).
 //!
 //! # Missing bins
-//! The measured MERL database marks unmeasured bins with negative values. By default such files
-//! are rejected ([`NegativeValues::Reject`]); with [`NegativeValues::Missing`] those values are
-//! kept as missing: they evaluate as 0, trilinear interpolation renormalizes over the present
-//! corners, and [`MerlTable::is_missing`] / [`MerlTable::missing_mask`] let a fitter mask them.
+//! The measured MERL database marks unmeasured bins with negative values. By default they are
+//! kept as missing ([`NegativeValues::Missing`]): they evaluate as 0, trilinear interpolation
+//! renormalizes over the present corners, [`MerlTable::missing_count`] counts them and
+//! [`MerlTable::coverage`] lets a fitter or an error metric mask them. A strict reader
+//! ([`NegativeValues::Reject`], `--strict` on the command line) refuses such files.
 
 use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use crate::error::{write_atomic, Error, Result};
@@ -65,11 +75,42 @@ pub enum Interpolation {
 /// What a reader does with negative stored values (the MERL database's mark for unmeasured bins).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum NegativeValues {
-    /// Fail with a count of the negative values (the default).
-    #[default]
+    /// Fail with a count of the negative values (strict reading).
     Reject,
-    /// Keep them as missing bins: they evaluate as 0 and are reported by [`MerlTable::is_missing`].
+    /// Keep them as missing bins (the default): they evaluate as 0, are reported by
+    /// [`MerlTable::is_missing`] and masked through [`MerlTable::coverage`].
+    #[default]
     Missing,
+}
+
+/// Which point of its bin a stored value stands for (see the module notes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BinConvention {
+    /// The bin's lower edge: θh = (i/90)²·π/2, θd = j/90·π/2, φd = k/180·π (the default; the
+    /// convention of the MERL data's users and of the neural BRDFs trained on it).
+    #[default]
+    LowerEdge,
+    /// The bin's centre: (i + ½, j + ½, k + ½) in index coordinates.
+    Centre,
+}
+
+impl BinConvention {
+    /// The index-coordinate offset of the node within its bin: 0 or ½.
+    #[inline]
+    pub fn offset(self) -> f64 {
+        match self {
+            BinConvention::LowerEdge => 0.0,
+            BinConvention::Centre => 0.5,
+        }
+    }
+
+    /// `lower-edge` or `centre`.
+    pub fn name(self) -> &'static str {
+        match self {
+            BinConvention::LowerEdge => "lower-edge",
+            BinConvention::Centre => "centre",
+        }
+    }
 }
 
 /// The bin (i, j, k) = (θh, θd, φd indices) that contains the given angles, as `BRDFRead.cpp`
@@ -120,6 +161,25 @@ pub fn bin_center(i: usize, j: usize, k: usize) -> HalfDiff {
     }
 }
 
+/// The point a stored value of bin (i, j, k) stands for under `convention`, with φh = 0:
+/// θh = ((i + o)/90)²·π/2, θd = (j + o)/90·π/2, φd = (k + o)/180·π, o = [`BinConvention::offset`].
+pub fn bin_node_with(convention: BinConvention, i: usize, j: usize, k: usize) -> HalfDiff {
+    let o = convention.offset();
+    let uh = (i as f64 + o) / RES_THETA_H as f64;
+    HalfDiff {
+        theta_h: uh * uh * FRAC_PI_2,
+        phi_h: 0.0,
+        theta_d: (j as f64 + o) / RES_THETA_D as f64 * FRAC_PI_2,
+        phi_d: (k as f64 + o) / RES_PHI_D as f64 * PI,
+    }
+}
+
+/// The point a stored value of bin (i, j, k) stands for in this crate's convention (the lower
+/// edge, [`BinConvention::LowerEdge`]).
+pub fn bin_node(i: usize, j: usize, k: usize) -> HalfDiff {
+    bin_node_with(BinConvention::default(), i, j, k)
+}
+
 /// Folds φd into [0, π) (reciprocity: swapping wi and wo maps φd to φd ± π).
 #[inline]
 pub fn fold_phi_d(phi_d: f64) -> f64 {
@@ -152,7 +212,7 @@ pub fn bin_offset(i: usize, j: usize, k: usize) -> usize {
 }
 
 /// Two neighbouring indices and the weight of the second along a clamped axis: `x` is the index
-/// coordinate minus ½ (so bin centres sit at integers).
+/// coordinate minus the node offset (so nodes sit at integers).
 #[inline]
 fn clamped_axis(x: f64, n: usize) -> (usize, usize, f64) {
     if x.is_nan() || x <= 0.0 {
@@ -167,11 +227,11 @@ fn clamped_axis(x: f64, n: usize) -> (usize, usize, f64) {
     (i, i + 1, x - i0)
 }
 
-/// The same along the periodic φd axis (period π, `RES_PHI_D` bins).
+/// The same along the periodic φd axis (period π, `RES_PHI_D` bins), nodes at `offset`.
 #[inline]
-fn periodic_axis(phi_d: f64) -> (usize, usize, f64) {
+fn periodic_axis(phi_d: f64, offset: f64) -> (usize, usize, f64) {
     let p = phi_d.rem_euclid(PI);
-    let x = p / PI * RES_PHI_D as f64 - 0.5;
+    let x = p / PI * RES_PHI_D as f64 - offset;
     if !x.is_finite() {
         return (0, 0, 0.0);
     }
@@ -192,6 +252,35 @@ pub struct MerlTable {
     missing: Vec<bool>,
     missing_count: usize,
     interpolation: Interpolation,
+    convention: BinConvention,
+}
+
+/// Which direction pairs of a MERL table were measured: the bins whose three channels are all
+/// present ([`MerlTable::coverage`]). Plain data, cheap to share with a fitter.
+#[derive(Clone, Debug)]
+pub struct MerlCoverage {
+    /// Per bin (`bin_offset` order): all three channels present.
+    present: Vec<bool>,
+    masked_bins: usize,
+}
+
+impl MerlCoverage {
+    /// Whether the bin containing the pair (the `BRDFRead.cpp` lookup) was measured; pairs at or
+    /// below the horizon count as covered (they are not measured by any table).
+    pub fn covers(&self, wi: DVec3, wo: DVec3) -> bool {
+        match merl_angles(wi, wo) {
+            Some(hd) => {
+                let (i, j, k) = nearest_bin(hd.theta_h, hd.theta_d, hd.phi_d);
+                self.present[bin_offset(i, j, k)]
+            }
+            None => true,
+        }
+    }
+
+    /// Bins with at least one missing channel.
+    pub fn masked_bins(&self) -> usize {
+        self.masked_bins
+    }
 }
 
 impl std::fmt::Debug for MerlTable {
@@ -200,15 +289,16 @@ impl std::fmt::Debug for MerlTable {
             .field("name", &self.name)
             .field("missing_count", &self.missing_count)
             .field("interpolation", &self.interpolation)
+            .field("convention", &self.convention)
             .finish_non_exhaustive()
     }
 }
 
 impl MerlTable {
-    /// Reads a MERL `.binary` file, rejecting negative values. The table is named after the
-    /// file stem.
+    /// Reads a MERL `.binary` file, keeping negative values as missing bins
+    /// ([`NegativeValues::Missing`]). The table is named after the file stem.
     pub fn read(path: impl AsRef<Path>) -> Result<Self> {
-        Self::read_with(path, NegativeValues::Reject)
+        Self::read_with(path, NegativeValues::Missing)
     }
 
     /// Reads a MERL `.binary` file with the given treatment of negative values.
@@ -219,13 +309,14 @@ impl MerlTable {
     }
 
     /// Parses the bytes of a MERL `.binary` file (`path` is used in messages and for the name),
-    /// rejecting negative values. Never panics.
+    /// keeping negative values as missing bins. Never panics.
     pub fn parse(path: impl AsRef<Path>, bytes: &[u8]) -> Result<Self> {
-        Self::parse_with(path, bytes, NegativeValues::Reject)
+        Self::parse_with(path, bytes, NegativeValues::Missing)
     }
 
     /// Parses the bytes of a MERL `.binary` file with the given treatment of negative values.
-    /// Checks, in order: header present, dims (90, 90, 180), exact size, finiteness, signs.
+    /// Checks, in order: header present, dims (90, 90, 180), exact size, finiteness, signs, and
+    /// that some measured value is positive (an all-zero table is refused).
     pub fn parse_with(
         path: impl AsRef<Path>,
         bytes: &[u8],
@@ -275,7 +366,16 @@ impl MerlTable {
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_default();
-        Self::from_stored_named(path, name, values, negative)
+        let table = Self::from_stored_named(path, name, values, negative)?;
+        if table.values.iter().all(|v| *v == 0.0) {
+            let what = if table.missing_count == 3 * BINS {
+                "every value is negative (unmeasured): the table holds no measurement"
+            } else {
+                "every measured value is zero: the table holds no reflectance"
+            };
+            return Err(fail(what.into()));
+        }
+        Ok(table)
     }
 
     /// A table from stored (unscaled) values, channel-major, `3 · BINS` of them, rejecting
@@ -341,8 +441,8 @@ impl MerlTable {
                         path,
                         format!(
                             "{negatives} negative values (the first at {} is {}); the MERL database \
-                             marks unmeasured bins negative: read with NegativeValues::Missing to treat \
-                             them as missing",
+                             marks unmeasured bins negative, and a strict reading (--strict) refuses \
+                             them: read without --strict to mask them as unmeasured",
                             describe(first),
                             values[first]
                         ),
@@ -362,6 +462,7 @@ impl MerlTable {
             missing,
             missing_count: negatives,
             interpolation: Interpolation::default(),
+            convention: BinConvention::default(),
         })
     }
 
@@ -377,6 +478,7 @@ impl MerlTable {
             missing: Vec::new(),
             missing_count: 0,
             interpolation: Interpolation::default(),
+            convention: BinConvention::default(),
         }
     }
 
@@ -404,6 +506,17 @@ impl MerlTable {
     /// The same table with another interpolation.
     pub fn with_interpolation(mut self, interpolation: Interpolation) -> Self {
         self.interpolation = interpolation;
+        self
+    }
+
+    /// Which point of a bin a stored value stands for (default [`BinConvention::LowerEdge`]).
+    pub fn convention(&self) -> BinConvention {
+        self.convention
+    }
+
+    /// The same table read with another bin convention.
+    pub fn with_convention(mut self, convention: BinConvention) -> Self {
+        self.convention = convention;
         self
     }
 
@@ -439,6 +552,21 @@ impl MerlTable {
         !self.missing.is_empty() && self.missing[n]
     }
 
+    /// Which bins were measured in all three channels, or `None` when nothing is missing.
+    pub fn coverage(&self) -> Option<MerlCoverage> {
+        if self.missing.is_empty() {
+            return None;
+        }
+        let present: Vec<bool> = (0..BINS)
+            .map(|b| !(self.missing[b] || self.missing[BINS + b] || self.missing[2 * BINS + b]))
+            .collect();
+        let masked_bins = present.iter().filter(|p| !**p).count();
+        Some(MerlCoverage {
+            present,
+            masked_bins,
+        })
+    }
+
     /// The missing mask (channel-major like the values), or `None` when nothing is missing.
     pub fn missing_mask(&self) -> Option<&[bool]> {
         (!self.missing.is_empty()).then_some(self.missing.as_slice())
@@ -450,19 +578,20 @@ impl MerlTable {
         self.bin_value(i, j, k)
     }
 
-    /// f_r trilinearly interpolated between bin centres in index space (θ ends clamped, φd
-    /// periodic with period π). Missing corners are left out and the weights of the present ones
-    /// renormalized; with no present weighted corner the channel is 0.
+    /// f_r trilinearly interpolated between the nodes of the table's [`BinConvention`] in index
+    /// space (θ ends clamped, φd periodic with period π). Missing corners are left out and the
+    /// weights of the present ones renormalized; with no present weighted corner the channel
+    /// is 0.
     pub fn lookup_trilinear(&self, theta_h: f64, theta_d: f64, phi_d: f64) -> Rgb {
+        let o = self.convention.offset();
         let uh = if theta_h > 0.0 {
             (theta_h / FRAC_PI_2).sqrt() * RES_THETA_H as f64
         } else {
             0.0
         };
-        let (h0, h1, th) = clamped_axis(uh - 0.5, RES_THETA_H);
-        let (d0, d1, td) =
-            clamped_axis(theta_d / FRAC_PI_2 * RES_THETA_D as f64 - 0.5, RES_THETA_D);
-        let (p0, p1, tp) = periodic_axis(phi_d);
+        let (h0, h1, th) = clamped_axis(uh - o, RES_THETA_H);
+        let (d0, d1, td) = clamped_axis(theta_d / FRAC_PI_2 * RES_THETA_D as f64 - o, RES_THETA_D);
+        let (p0, p1, tp) = periodic_axis(phi_d, o);
         let mut offsets = [0usize; 8];
         let mut weights = [0.0f64; 8];
         let mut n = 0;
@@ -551,6 +680,37 @@ impl Bsdf for MerlTable {
     }
 }
 
+/// A table of any BSDF: f_r at every bin's node of `convention` (φh = 0; 0 where a direction is
+/// at or below the horizon), read back with the same convention. Errors when a value is not
+/// finite or negative (e.g. a model with a negative Fresnel term).
+pub fn table_from_bsdf(
+    name: impl Into<String>,
+    bsdf: &dyn Bsdf,
+    convention: BinConvention,
+    progress: impl Fn(u64) + Sync,
+) -> Result<MerlTable> {
+    let values = fill_bins(
+        |i, j, k| {
+            let (wi, wo) = crate::frame::from_half_diff(&bin_node_with(convention, i, j, k));
+            if wi.z <= 0.0 || wo.z <= 0.0 {
+                Rgb::ZERO
+            } else {
+                bsdf.eval(wi, wo)
+            }
+        },
+        progress,
+    );
+    let name = name.into();
+    if let Some(v) = values.iter().find(|v| !v.is_finite() || **v < 0.0) {
+        return Err(Error::NotFound(format!(
+            "{}: the model evaluates to {v:e} (stored value) at some bin: a MERL table holds \
+             finite non-negative reflectance",
+            bsdf.name()
+        )));
+    }
+    Ok(MerlTable::from_stored(name, values)?.with_convention(convention))
+}
+
 /// Builds a table from a function of bin (i, j, k) giving f_r (1/sr), evaluated in parallel;
 /// errors when a value is not finite or negative.
 pub fn table_from_fn(
@@ -635,20 +795,49 @@ mod tests {
     }
 
     #[test]
+    fn lower_edges_are_the_fastmerl_angles() {
+        // asztr/Neural-BRDF fastmerl.py: θh = (i/90)²·π/2, θd = i/90·π/2, φd = i/180·π.
+        for (i, j, k) in [(0, 0, 0), (9, 45, 90), (89, 89, 179)] {
+            let n = bin_node(i, j, k);
+            let u = i as f64 / 90.0;
+            assert!((n.theta_h - u * u * FRAC_PI_2).abs() < 1e-15);
+            assert!((n.theta_d - j as f64 / 90.0 * FRAC_PI_2).abs() < 1e-15);
+            assert!((n.phi_d - k as f64 / 180.0 * PI).abs() < 1e-15);
+            // A node lies in its own bin (BRDFRead.cpp's lookup), up to rounding at the edge.
+            let e = bin_node_with(BinConvention::LowerEdge, i, j, k);
+            let nudge = 1e-9;
+            assert_eq!(
+                nearest_bin(e.theta_h + nudge, e.theta_d + nudge, e.phi_d + nudge),
+                (i, j, k)
+            );
+        }
+        assert_eq!(
+            bin_node_with(BinConvention::Centre, 3, 4, 5),
+            bin_center(3, 4, 5)
+        );
+    }
+
+    #[test]
     fn axes_clamp_and_wrap() {
         assert_eq!(clamped_axis(-0.3, 90), (0, 0, 0.0));
         assert_eq!(clamped_axis(89.2, 90), (89, 89, 0.0));
         let (a, b, t) = clamped_axis(3.25, 90);
         assert_eq!((a, b), (3, 4));
         assert!((t - 0.25).abs() < 1e-15);
-        // φd = 0 sits half-way between the centres of bins 179 and 0.
-        let (a, b, t) = periodic_axis(0.0);
+        // Centres: φd = 0 sits half-way between the centres of bins 179 and 0.
+        let (a, b, t) = periodic_axis(0.0, 0.5);
         assert_eq!((a, b), (179, 0));
         assert!((t - 0.5).abs() < 1e-12);
-        let (a, b, t) = periodic_axis(-deg(0.25));
+        let (a, b, t) = periodic_axis(-deg(0.25), 0.5);
         assert_eq!((a, b), (179, 0));
         assert!((t - 0.25).abs() < 1e-9);
-        assert_eq!(periodic_axis(f64::NAN), (0, 0, 0.0));
+        assert_eq!(periodic_axis(f64::NAN, 0.5), (0, 0, 0.0));
+        // Lower edges: φd = 0 is bin 0's node; −0.5° lies between the nodes of 179 and 0.
+        let (a, _, t) = periodic_axis(0.0, 0.0);
+        assert_eq!((a, t), (0, 0.0));
+        let (a, b, t) = periodic_axis(-deg(0.5), 0.0);
+        assert_eq!((a, b), (179, 0));
+        assert!((t - 0.5).abs() < 1e-9);
     }
 
     #[test]

@@ -21,7 +21,7 @@
 
 use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use crate::error::{Error, Result};
-use crate::measured::merl::{bin_center, fill_bins, merl_angles, MerlTable};
+use crate::measured::merl::{bin_node_with, fill_bins, merl_angles, BinConvention, MerlTable};
 use crate::rgb::Rgb;
 use glam::DVec3;
 use serde_json::Value;
@@ -299,19 +299,30 @@ impl NbrdfSet {
     }
 }
 
-/// A full 90×90×180 MERL table of `nbrdf`: the network at every bin centre
-/// ([`bin_center`]), stored value = f / channel scale, evaluated in parallel with rayon.
-/// `progress(n)` is called with the number of bins just finished (they add up to
-/// [`crate::measured::merl::BINS`] = 1,458,000), from worker threads.
+/// A full 90×90×180 MERL table of `nbrdf`: the network at every bin's node in the crate's
+/// convention (the lower edge, as the networks were trained; see [`crate::measured::merl`]),
+/// stored value = f / channel scale, evaluated in parallel with rayon. `progress(n)` is called
+/// with the number of bins just finished (they add up to [`crate::measured::merl::BINS`] =
+/// 1,458,000), from worker threads.
 pub fn synthesize_merl(nbrdf: &Nbrdf, progress: impl Fn(u64) + Sync) -> MerlTable {
+    synthesize_merl_with(nbrdf, BinConvention::default(), progress)
+}
+
+/// [`synthesize_merl`] with the network evaluated at the nodes of `convention`; the table reads
+/// its values back with the same convention.
+pub fn synthesize_merl_with(
+    nbrdf: &Nbrdf,
+    convention: BinConvention,
+    progress: impl Fn(u64) + Sync,
+) -> MerlTable {
     let values = fill_bins(
         |i, j, k| {
-            let c = bin_center(i, j, k);
+            let c = bin_node_with(convention, i, j, k);
             nbrdf.eval_angles(c.theta_h, c.theta_d, c.phi_d)
         },
         progress,
     );
-    MerlTable::from_valid_stored(nbrdf.name.clone(), values)
+    MerlTable::from_valid_stored(nbrdf.name.clone(), values).with_convention(convention)
 }
 
 #[cfg(test)]

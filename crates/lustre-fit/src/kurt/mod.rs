@@ -109,6 +109,9 @@ pub struct KurtFit {
     /// Lobe-shape evaluations of the search plus residual evaluations of the polish, each over
     /// the whole direction set.
     pub evaluations: usize,
+    /// Why the fit is (not) converged, in words: how the alternation of lobes ended and LM's
+    /// termination reason for the polish whose result was kept.
+    pub note: String,
 }
 
 /// Fits a Kurt model to `data` (000 §3.4.1). With `transmission` the transmission hemisphere is
@@ -118,8 +121,25 @@ pub struct KurtFit {
 /// range, grid < 2, levels = 0, transmission lobes without transmission), data with NaN or
 /// infinite samples or with every sample zero ([`FitError::Data`]).
 pub fn fit(data: &dyn Bsdf, transmission: bool, opts: &KurtOptions) -> Result<KurtFit> {
+    fit_masked(data, transmission, opts, None)
+}
+
+/// [`fit`] on the direction pairs `mask` covers (a MERL table's measured bins).
+pub fn fit_masked(
+    data: &dyn Bsdf,
+    transmission: bool,
+    opts: &KurtOptions,
+    mask: Option<&lustre_brdf::measured::merl::MerlCoverage>,
+) -> Result<KurtFit> {
+    if opts.lobes == 0 && opts.transmission_lobes == 0 {
+        return Err(FitError::Option(
+            "0 reflection and 0 transmission lobes: a Kurt fit needs at least one lobe \
+             (kd alone is not fitted, it is estimated from the histogram)"
+                .into(),
+        ));
+    }
     let space = params::build_space(opts, transmission, !data.flags().anisotropic)?;
-    let s = samples::sample(data, transmission)?;
+    let s = samples::sample_masked(data, transmission, mask)?;
     let est = samples::estimate_kd(&s.refl);
     let kd: [f64; 3] = std::array::from_fn(|c| match space.kd[c] {
         Param::Fixed(v) => v,
@@ -153,6 +173,14 @@ pub fn fit(data: &dyn Bsdf, transmission: bool, opts: &KurtOptions) -> Result<Ku
     let mut evaluations = refl.evaluations + trans.evaluations;
     let alternation = refl.alternation_settled && trans.alternation_settled;
     let mut settled = refl.settled && trans.settled;
+    let mut notes = Vec::new();
+    if !alternation {
+        notes.push(
+            "the alternation of lobes did not settle in 3 rounds (last round improved the \
+             error by ≥ 0.1 % of the lobe-free error)"
+                .to_string(),
+        );
+    }
     if opts.polish {
         // With several lobes LM also starts from the one-lobe fit (other lobes at ks = 0), so
         // that the polished L-lobe model does not end in a worse basin than a one-lobe fit.
@@ -163,18 +191,33 @@ pub fn fit(data: &dyn Bsdf, transmission: bool, opts: &KurtOptions) -> Result<Ku
             vec![model.clone()]
         };
         let mut converged = None;
-        for start in &starts {
+        let mut reason = None;
+        for (k, start) in starts.iter().enumerate() {
             let p = polish::polish(&s, &space, start);
             evaluations += p.evaluations;
             let obj = model_objective(&s, &p.model);
+            let from = if k == 0 {
+                "from the search"
+            } else {
+                "from the one-lobe fit"
+            };
             if obj < objective && p.model.validate().is_ok() {
                 model = p.model;
                 objective = obj;
                 converged = Some(p.converged);
+                reason = Some(format!("polish {from} kept: {}", p.reason));
+            } else if reason.is_none() {
+                reason = Some(format!(
+                    "polish {from} did not lower the Eq. 3.7 error and was dropped ({})",
+                    p.reason
+                ));
             }
             converged.get_or_insert(p.converged);
         }
         settled = converged.unwrap_or(false);
+        notes.extend(reason);
+    } else if !settled {
+        notes.push("the last search level still improved the error by ≥ 0.1 %".into());
     }
     settled &= alternation;
     Ok(KurtFit {
@@ -186,6 +229,7 @@ pub fn fit(data: &dyn Bsdf, transmission: bool, opts: &KurtOptions) -> Result<Ku
             FitStatus::NotConverged
         },
         evaluations,
+        note: notes.join("; "),
     })
 }
 
@@ -233,7 +277,7 @@ fn model_objective(s: &Samples, m: &Kurt) -> f64 {
 ///
 /// Errors: as [`fit`] for bad data.
 pub fn l1_error(data: &dyn Bsdf, model: &dyn Bsdf, transmission: bool) -> Result<[f64; 3]> {
-    let s = samples::sample(data, transmission)?;
+    let s = samples::sample_masked(data, transmission, None)?;
     let one = |set: &PairSet, trans: bool| -> [f64; 3] {
         (0..set.len())
             .into_par_iter()

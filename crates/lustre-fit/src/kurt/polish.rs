@@ -215,6 +215,34 @@ pub(crate) struct Polished {
     pub converged: bool,
     /// Residual-vector evaluations (each over all pairs).
     pub evaluations: usize,
+    /// How LM ended, in words (its termination reason).
+    pub reason: String,
+}
+
+/// LM's termination reason in words.
+fn reason_words(t: &levenberg_marquardt::TerminationReason) -> String {
+    use levenberg_marquardt::TerminationReason as T;
+    match t {
+        T::Converged { ftol, xtol } => format!(
+            "converged ({})",
+            match (ftol, xtol) {
+                (true, true) => "relative reduction of the error and of the step below tolerance",
+                (true, false) => "relative reduction of the error below tolerance",
+                _ => "relative step below tolerance",
+            }
+        ),
+        T::ResidualsZero => "converged (zero residuals)".into(),
+        T::Orthogonal => "converged (gradient orthogonal to the residuals, gtol)".into(),
+        T::NoImprovementPossible(what) => {
+            format!("converged at machine precision ({what} tolerance cannot be met)")
+        }
+        T::LostPatience => "not converged: LM stopped at its evaluation limit (15·(n+1))".into(),
+        T::NoParameters => "nothing to polish (no free parameter)".into(),
+        T::NoResiduals => "nothing to polish (no sample)".into(),
+        T::WrongDimensions(w) => format!("not run: wrong dimensions ({w})"),
+        T::Numerical(w) => format!("not converged: numerical failure in LM ({w})"),
+        T::User(w) => format!("not converged: {w}"),
+    }
 }
 
 /// Runs LM from `model` over the free parameters of `space`.
@@ -225,6 +253,7 @@ pub(crate) fn polish(s: &Samples, space: &Space, model: &Kurt) -> Polished {
             model: model.clone(),
             converged: true,
             evaluations: 0,
+            reason: "nothing to polish (every parameter is fixed)".into(),
         };
     }
     let (mut num, mut den) = (0.0, 0.0);
@@ -265,5 +294,6 @@ pub(crate) fn polish(s: &Samples, space: &Space, model: &Kurt) -> Polished {
                 levenberg_marquardt::TerminationReason::NoImprovementPossible(_)
             ),
         evaluations: problem.evaluations.get(),
+        reason: reason_words(&report.termination),
     }
 }

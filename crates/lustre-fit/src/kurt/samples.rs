@@ -208,7 +208,17 @@ struct RawPair {
 
 /// Samples `data` on the direction set. Errors when a sampled value is not finite or when
 /// every sampled value is zero.
+#[cfg(test)]
 pub(crate) fn sample(data: &dyn Bsdf, transmission: bool) -> Result<Samples> {
+    sample_masked(data, transmission, None)
+}
+
+/// [`sample`] keeping only the pairs `mask` covers (a MERL table's measured bins).
+pub(crate) fn sample_masked(
+    data: &dyn Bsdf,
+    transmission: bool,
+    mask: Option<&lustre_brdf::measured::merl::MerlCoverage>,
+) -> Result<Samples> {
     let anisotropic = data.flags().anisotropic;
     let dirs = incident_directions(anisotropic);
     let mut pairs: Vec<(DVec3, DVec3, f64, bool)> = Vec::new();
@@ -248,6 +258,10 @@ pub(crate) fn sample(data: &dyn Bsdf, transmission: bool) -> Result<Samples> {
         let kept: Vec<RawPair> = vals
             .into_iter()
             .filter(|r| r.p.iter().any(|&v| v != 0.0))
+            .filter(|r| {
+                let wo = if trans { mirror_z(r.wo) } else { r.wo };
+                mask.is_none_or(|m| m.covers(r.wi, wo))
+            })
             .collect();
         total_w += kept.iter().map(|r| r.w).sum::<f64>();
         raw.push(kept);

@@ -1,0 +1,258 @@
+//! The command line on day one (issue 14): unmeasured MERL bins, `lustre score`, the built-in
+//! published data from any directory, batch folders that keep every fit, and the rough edges.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn lustre() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_lustre"));
+    c.env("RUST_BACKTRACE", "0");
+    c
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+fn ok(c: &mut Command) -> String {
+    let o = c.output().expect("runs");
+    let t = text(&o);
+    assert!(o.status.success(), "{c:?}: {t}");
+    t
+}
+
+fn fails(c: &mut Command) -> String {
+    let o = c.output().expect("runs");
+    let t = text(&o);
+    assert!(!o.status.success(), "{c:?} should fail: {t}");
+    assert!(!t.contains("panicked"), "{t}");
+    t
+}
+
+/// A MERL table of a published SGD fit at the bins' lower edges with a block of bins marked
+/// unmeasured (negative), written by `lustre merl synth --from`.
+fn holey_table(dir: &Path) -> PathBuf {
+    let path = dir.join("nickel.binary");
+    let t = ok(lustre()
+        .args(["merl", "synth", "--from", "sgd:nickel", "-o"])
+        .arg(&path));
+    assert!(t.contains("lower-edge"), "{t}");
+    let mut b = std::fs::read(&path).expect("table");
+    // θh index 85..90 of every channel: the grazing half-vectors MERL often lacks.
+    let per = 90 * 180;
+    for c in 0..3 {
+        for n in (c * 90 * per + 85 * per)..(c * 90 * per + 90 * per) {
+            b[12 + 8 * n..20 + 8 * n].copy_from_slice(&(-1.0f64).to_le_bytes());
+        }
+    }
+    std::fs::write(&path, &b).expect("write");
+    path
+}
+
+#[test]
+fn unmeasured_bins_are_masked_everywhere_and_strict_refuses_them() {
+    let dir = tempfile::tempdir().expect("dir");
+    let table = holey_table(dir.path());
+    let t = ok(lustre().args(["merl", "info"]).arg(&table));
+    assert!(
+        t.contains("unmeasured (negative) values: 243000 (81000 of"),
+        "{t}"
+    );
+    let t = ok(lustre().arg("info").arg(&table));
+    assert!(t.contains("masked"), "{t}");
+    for args in [
+        vec!["merl", "info", "--strict"],
+        vec!["info", "--strict"],
+        vec!["plot", "--strict", "--kind", "polar", "--out"],
+    ] {
+        let mut c = lustre();
+        c.args(&args);
+        if args[0] == "plot" {
+            c.arg(dir.path().join("plots"));
+        }
+        let t = fails(c.arg(&table));
+        assert!(
+            t.contains("243000 negative values") && t.contains("--strict") && !t.contains("::"),
+            "{args:?}: {t}"
+        );
+    }
+    ok(lustre()
+        .args(["plot", "--kind", "polar", "--out"])
+        .arg(dir.path().join("plots"))
+        .arg(&table));
+    let out = dir.path().join("fits");
+    let t = ok(lustre()
+        .args(["fit", "--model", "ggx", "--out"])
+        .arg(&out)
+        .arg(&table));
+    assert!(t.contains("masked"), "{t}");
+    let t = ok(lustre()
+        .arg("score")
+        .arg(out.join("nickel.json"))
+        .arg(&table));
+    assert!(
+        t.contains("243000 unmeasured values") && t.contains("Ngan L2"),
+        "{t}"
+    );
+    fails(
+        lustre()
+            .args(["fit", "--strict", "--model", "ggx", "--force", "--out"])
+            .arg(&out)
+            .arg(&table),
+    );
+    // An all-zero table is no measurement.
+    let zero = dir.path().join("zero.binary");
+    let mut b = vec![0u8; 12 + 3 * 90 * 90 * 180 * 8];
+    b[0] = 90;
+    b[4] = 90;
+    b[8] = 180;
+    std::fs::write(&zero, &b).expect("write");
+    let t = fails(lustre().args(["merl", "info"]).arg(&zero));
+    assert!(
+        t.contains("zero.binary") && t.contains("every measured value is zero"),
+        "{t}"
+    );
+}
+
+#[test]
+fn score_lists_errors_and_albedos_without_fitting() {
+    let t = ok(lustre().args(["score", "sgd:nickel", "nbrdf:nickel"]));
+    for needle in [
+        "Ngan L2",
+        "L1 of Eq. 3.7",
+        "albedo at θo = 0, data",
+        "max albedo",
+    ] {
+        assert!(t.contains(needle), "{t}");
+    }
+    let t = fails(lustre().args(["score", "sgd:nope", "nbrdf:nickel"]));
+    assert!(t.contains("nope"), "{t}");
+}
+
+/// The installed binary needs no build tree: run from an empty folder without LUSTRE_DATA, the
+/// published fits and networks are built in, and larger data asks for LUSTRE_DATA or --data.
+#[test]
+fn works_from_any_directory() {
+    let dir = tempfile::tempdir().expect("dir");
+    let run = || {
+        let mut c = lustre();
+        c.current_dir(dir.path()).env_remove("LUSTRE_DATA");
+        c
+    };
+    ok(run().args(["info", "sgd:nickel"]));
+    ok(run().args(["info", "lafortune:nickel"]));
+    ok(run().args(["info", "abc:nickel"]));
+    ok(run().args(["info", "nbrdf:nickel"]));
+    let t = ok(run().args(["merl", "list"]));
+    assert!(t.contains("100 materials in the built-in set"), "{t}");
+    let t = ok(run().arg("list"));
+    assert!(
+        t.contains("the 100 MERL materials") && t.contains("yellow-plastic"),
+        "{t}"
+    );
+    assert!(
+        t.contains("MIT licence") && t.contains("LUSTRE_DATA"),
+        "{t}"
+    );
+    let t = fails(run().args(["info", "data:measured/rgl/paper_white_rgb.bsdf"]));
+    assert!(t.contains("LUSTRE_DATA") && t.contains("--data"), "{t}");
+    let shared = lustre_brdf::shared_data_dir();
+    ok(run()
+        .arg("--data")
+        .arg(&shared)
+        .args(["info", "data:measured/rgl/paper_white_rgb.bsdf"]));
+    // No build-tree path is compiled into the binary.
+    let bin = std::fs::read(env!("CARGO_BIN_EXE_lustre")).expect("binary");
+    assert!(
+        !bin.windows(11).any(|w| w == b"shared/data"),
+        "the binary holds a shared/data path"
+    );
+}
+
+#[test]
+fn rough_edges() {
+    let dir = tempfile::tempdir().expect("dir");
+    // Negative numbers after an option.
+    ok(lustre()
+        .args(["plot", "--kind", "polar", "--phi-i", "-30", "--out"])
+        .arg(dir.path().join("neg")));
+    // The demo writes PNG only, and says so before rendering.
+    let jpg = dir.path().join("x.jpg");
+    let t = fails(lustre().args(["demo", "--out"]).arg(&jpg));
+    assert!(t.contains(".png") && !jpg.exists(), "{t}");
+    // A plot that fails leaves no files behind.
+    let p = dir.path().join("bad");
+    fails(
+        lustre()
+            .args(["plot", "--array-theta", "95", "--out"])
+            .arg(&p),
+    );
+    let left: Vec<_> = std::fs::read_dir(&p).map_or(Vec::new(), |d| d.flatten().collect());
+    assert!(left.is_empty(), "{left:?}");
+    // An OS error once, and no stack trace for a user's error even with RUST_BACKTRACE=1.
+    let t = fails(
+        lustre()
+            .env("RUST_BACKTRACE", "1")
+            .args(["info", "/nonexistent/file.binary"]),
+    );
+    assert_eq!(t.matches("No such file").count(), 1, "{t}");
+    assert!(
+        !t.contains("stack backtrace") && t.starts_with("error: "),
+        "{t}"
+    );
+    // Kurt with no lobe is refused.
+    let t = fails(
+        lustre()
+            .args(["fit", "--model", "kurt", "--lobes", "0", "--out"])
+            .arg(dir.path())
+            .arg("nbrdf:nickel"),
+    );
+    assert!(t.contains("--lobes 0"), "{t}");
+}
+
+/// Reusing a folder with other options never overwrites silently; the summary covers every
+/// material JSON in it; the counts add up.
+#[test]
+fn batch_folders_keep_every_fit() {
+    let dir = tempfile::tempdir().expect("dir");
+    let out = dir.path().join("o");
+    let t = ok(lustre()
+        .args(["fit", "--model", "ggx", "--out"])
+        .arg(&out)
+        .arg("nbrdf:nickel"));
+    assert!(t.contains("1 inputs: 1 fitted, 0 resumed, 0 failed"), "{t}");
+    let t = fails(
+        lustre()
+            .args(["fit", "--model", "beckmann", "--out"])
+            .arg(&out)
+            .arg("nbrdf:nickel"),
+    );
+    assert!(t.contains("--force") && t.contains("--suffix"), "{t}");
+    let t = fails(
+        lustre()
+            .args([
+                "fit", "--model", "beckmann", "--suffix", "beckmann", "--out",
+            ])
+            .arg(&out)
+            .args(["nbrdf:nickel", "nbrdf:no-such-material"]),
+    );
+    assert!(
+        t.contains("2 inputs: 1 fitted, 0 resumed, 1 failed")
+            && t.contains("also lists 1 earlier fits"),
+        "{t}"
+    );
+    let summary = std::fs::read_to_string(out.join("summary.csv")).expect("summary");
+    let names: Vec<&str> = summary
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap_or(""))
+        .collect();
+    assert_eq!(
+        names,
+        ["nickel-beckmann", "no-such-material-beckmann", "nickel"]
+    );
+}
