@@ -17,6 +17,8 @@ pub mod environment;
 pub mod error;
 pub mod material;
 pub mod mesh;
+pub mod mitsuba;
+pub mod obj;
 pub mod texture;
 
 pub use camera::{Camera, CameraPath, FovAxis, Keyframe};
@@ -32,6 +34,14 @@ pub use mesh::{Mesh, ObjectHints};
 pub use texture::{ColorSpace, Texture};
 
 use std::path::{Path, PathBuf};
+
+/// Reads a whole file; failures name it.
+pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|e| SceneError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })
+}
 
 /// The film (output image) size in pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -149,10 +159,43 @@ impl Scene {
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase())
             .unwrap_or_default();
-        Err(SceneError::format(
-            path,
-            format!("scene files with extension {ext:?} cannot be read yet"),
-        ))
+        match ext.as_str() {
+            "xml" => mitsuba::read(path),
+            "obj" => obj::from_slice(path, &read_file(path)?),
+            _ => Err(SceneError::format(
+                path,
+                format!(
+                    "unknown scene extension {ext:?} (expected .gltf, .glb, .obj, .xml or .toml)"
+                ),
+            )),
+        }
+    }
+
+    /// The texture read from `path` in `color_space`, loaded once (later calls return the same
+    /// index); `referrer` is the scene file that names it (a missing file is an error naming
+    /// both).
+    pub fn texture(
+        &mut self,
+        referrer: &Path,
+        path: &Path,
+        color_space: ColorSpace,
+    ) -> Result<TextureRef> {
+        if let Some(i) = self
+            .textures
+            .iter()
+            .position(|t| t.source == path && t.color_space == color_space)
+        {
+            return Ok(TextureRef {
+                texture: i,
+                uv_set: 0,
+            });
+        }
+        self.textures
+            .push(Texture::read(referrer, path, color_space)?);
+        Ok(TextureRef {
+            texture: self.textures.len() - 1,
+            uv_set: 0,
+        })
     }
 
     /// Adds a mesh after validation ([`Mesh::validated`]): degenerate triangles are dropped and

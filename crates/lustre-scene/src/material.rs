@@ -485,3 +485,12 @@ impl Bsdf for SharedBsdf {
         self.0.albedo(wo, n)
     }
 }
+
+/// Mitsuba's named conductor presets reduced to RGB: (η, k) relative to vacuum. `none` is a
+/// perfect mirror (η = 0, k = 1).
+pub fn conductor_preset(name: &str) -> Option<(Rgb, Rgb)> {
+    if name.eq_ignore_ascii_case("none") {
+        return Some((Rgb::ZERO, Rgb::ONE));
+    }
+    None
+}
