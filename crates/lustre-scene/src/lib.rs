@@ -15,10 +15,12 @@
 pub mod camera;
 pub mod environment;
 pub mod error;
+pub mod gltf_io;
 pub mod material;
 pub mod mesh;
 pub mod mitsuba;
 pub mod obj;
+pub mod scene_file;
 pub mod texture;
 
 pub use camera::{Camera, CameraPath, FovAxis, Keyframe};
@@ -161,6 +163,13 @@ impl Scene {
             .unwrap_or_default();
         match ext.as_str() {
             "xml" => mitsuba::read(path),
+            "toml" => {
+                let bytes = read_file(path)?;
+                let text = std::str::from_utf8(&bytes)
+                    .map_err(|e| SceneError::format(path, format!("not UTF-8 text: {e}")))?;
+                scene_file::from_str(path, text)
+            }
+            "gltf" | "glb" => gltf_io::from_slice(path, &read_file(path)?),
             "obj" => obj::from_slice(path, &read_file(path)?),
             _ => Err(SceneError::format(
                 path,
@@ -196,6 +205,47 @@ impl Scene {
             texture: self.textures.len() - 1,
             uv_set: 0,
         })
+    }
+
+    /// Appends `other` (meshes, materials, textures, cameras, paths, warnings, counts), with its
+    /// meshes and cameras moved by `transform`; its environment replaces this one's when this
+    /// one has none. Material and texture indices are renumbered.
+    pub fn merge(&mut self, other: Scene, transform: Option<glam::DMat4>) {
+        let (mat_off, tex_off) = (self.materials.len(), self.textures.len());
+        self.textures.extend(other.textures);
+        for mut m in other.materials {
+            m.for_each_texture_ref(|t| t.texture += tex_off);
+            self.materials.push(m);
+        }
+        for mut m in other.meshes {
+            m.material += mat_off;
+            if let Some(t) = &transform {
+                m.transform(t);
+            }
+            self.meshes.push(m);
+        }
+        for mut c in other.cameras {
+            if let Some(t) = &transform {
+                let p = t.transform_point3(c.position);
+                let f = t.transform_vector3(c.forward);
+                let u = t.transform_vector3(c.up);
+                if let Some(moved) =
+                    Camera::look_at(c.name.clone(), p, p + f, u, c.fov_deg, c.fov_axis)
+                {
+                    c = Camera {
+                        aspect: c.aspect,
+                        ..moved
+                    };
+                }
+            }
+            self.cameras.push(c);
+        }
+        self.camera_paths.extend(other.camera_paths);
+        if self.environment.is_none() {
+            self.environment = other.environment;
+        }
+        self.warnings.extend(other.warnings);
+        self.stats.degenerate_triangles += other.stats.degenerate_triangles;
     }
 
     /// Adds a mesh after validation ([`Mesh::validated`]): degenerate triangles are dropped and

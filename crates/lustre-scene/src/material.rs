@@ -392,28 +392,43 @@ impl Material {
 
     /// Every texture this material refers to.
     pub fn texture_refs(&self) -> Vec<TextureRef> {
+        let mut m = self.clone();
         let mut out = Vec::new();
-        let rgb = |t: &TexturedRgb, out: &mut Vec<TextureRef>| out.extend(t.texture);
-        let sc = |t: &TexturedScalar, out: &mut Vec<TextureRef>| out.extend(t.texture);
-        match &self.kind {
-            MaterialKind::Diffuse { reflectance } => rgb(reflectance, &mut out),
-            MaterialKind::Plastic { diffuse, .. } => rgb(diffuse, &mut out),
-            MaterialKind::RoughPlastic { diffuse, alpha, .. } => {
-                rgb(diffuse, &mut out);
-                sc(alpha, &mut out);
+        m.for_each_texture_ref(|t| out.push(*t));
+        out
+    }
+
+    /// Calls `f` on every texture reference (to renumber textures when scenes are merged).
+    pub fn for_each_texture_ref(&mut self, mut f: impl FnMut(&mut TextureRef)) {
+        let rgb = |t: &mut TexturedRgb, f: &mut dyn FnMut(&mut TextureRef)| {
+            if let Some(r) = &mut t.texture {
+                f(r)
             }
-            MaterialKind::Conductor { specular, .. } => rgb(specular, &mut out),
+        };
+        let sc = |t: &mut TexturedScalar, f: &mut dyn FnMut(&mut TextureRef)| {
+            if let Some(r) = &mut t.texture {
+                f(r)
+            }
+        };
+        match &mut self.kind {
+            MaterialKind::Diffuse { reflectance } => rgb(reflectance, &mut f),
+            MaterialKind::Plastic { diffuse, .. } => rgb(diffuse, &mut f),
+            MaterialKind::RoughPlastic { diffuse, alpha, .. } => {
+                rgb(diffuse, &mut f);
+                sc(alpha, &mut f);
+            }
+            MaterialKind::Conductor { specular, .. } => rgb(specular, &mut f),
             MaterialKind::RoughConductor {
                 specular,
                 alpha_u,
                 alpha_v,
                 ..
             } => {
-                rgb(specular, &mut out);
-                sc(alpha_u, &mut out);
-                sc(alpha_v, &mut out);
+                rgb(specular, &mut f);
+                sc(alpha_u, &mut f);
+                sc(alpha_v, &mut f);
             }
-            MaterialKind::RoughDielectric { alpha, .. } => sc(alpha, &mut out),
+            MaterialKind::RoughDielectric { alpha, .. } => sc(alpha, &mut f),
             MaterialKind::PbrMetallicRoughness {
                 base_color,
                 metallic,
@@ -421,21 +436,24 @@ impl Material {
                 transmission,
                 ..
             } => {
-                rgb(base_color, &mut out);
-                sc(metallic, &mut out);
-                sc(roughness, &mut out);
-                sc(transmission, &mut out);
+                rgb(base_color, &mut f);
+                sc(metallic, &mut f);
+                sc(roughness, &mut f);
+                sc(transmission, &mut f);
             }
             MaterialKind::Dielectric { .. }
             | MaterialKind::ThinDielectric { .. }
             | MaterialKind::Spec(_) => {}
         }
-        if let Some(m) = &self.alpha_mask {
-            sc(&m.opacity, &mut out);
+        if let Some(m) = &mut self.alpha_mask {
+            sc(&mut m.opacity, &mut f);
         }
-        out.extend(self.normal_map.map(|n| n.texture));
-        out.extend(self.emission_texture);
-        out
+        if let Some(n) = &mut self.normal_map {
+            f(&mut n.texture);
+        }
+        if let Some(t) = &mut self.emission_texture {
+            f(t);
+        }
     }
 
     /// Evaluates the textures at a hit (`uv[0]`, `uv[1]`: the hit's two UV sets, zero where the

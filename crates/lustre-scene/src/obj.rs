@@ -63,10 +63,10 @@ pub(crate) fn parse(
 pub(crate) fn to_mesh(path: &Path, model: &tobj::Model, material: usize) -> Result<Mesh> {
     let m = &model.mesh;
     let err = |p: &str| SceneError::geometry(path, &model.name, p.to_string());
-    if m.positions.len() % 3 != 0 || m.normals.len() % 3 != 0 || m.texcoords.len() % 2 != 0 {
+    if !m.positions.len().is_multiple_of(3) || !m.normals.len().is_multiple_of(3) || !m.texcoords.len().is_multiple_of(2) {
         return Err(err("attribute arrays are not whole vectors"));
     }
-    if m.indices.len() % 3 != 0 {
+    if !m.indices.len().is_multiple_of(3) {
         return Err(err("triangulated index count is not a multiple of 3"));
     }
     let positions: Vec<Vec3> = m.positions.chunks_exact(3).map(Vec3::from_slice).collect();
