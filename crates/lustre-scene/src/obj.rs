@@ -63,7 +63,10 @@ pub(crate) fn parse(
 pub(crate) fn to_mesh(path: &Path, model: &tobj::Model, material: usize) -> Result<Mesh> {
     let m = &model.mesh;
     let err = |p: &str| SceneError::geometry(path, &model.name, p.to_string());
-    if !m.positions.len().is_multiple_of(3) || !m.normals.len().is_multiple_of(3) || !m.texcoords.len().is_multiple_of(2) {
+    if !m.positions.len().is_multiple_of(3)
+        || !m.normals.len().is_multiple_of(3)
+        || !m.texcoords.len().is_multiple_of(2)
+    {
         return Err(err("attribute arrays are not whole vectors"));
     }
     if !m.indices.len().is_multiple_of(3) {
