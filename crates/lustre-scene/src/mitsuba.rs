@@ -1285,3 +1285,23 @@ impl<'a, 'i> Reader<'a, 'i> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::normalize_name;
+
+    #[test]
+    fn spellings() {
+        for (a, b) in [
+            ("intIOR", "int_ior"),
+            ("toWorld", "to_world"),
+            ("alphaU", "alpha_u"),
+            ("diffuseReflectance", "diffuse_reflectance"),
+            ("fov_axis", "fov_axis"),
+            ("flipTexCoords", "flip_tex_coords"),
+            ("alpha", "alpha"),
+        ] {
+            assert_eq!(normalize_name(a), b);
+        }
+    }
+}
