@@ -411,6 +411,37 @@ impl Reader<'_> {
         for (i, c) in bc.iter().enumerate() {
             check(&format!("baseColorFactor[{i}]"), f64::from(*c), 0.0, 1.0)?;
         }
+        let warn = |scene: &mut Scene, what: String| {
+            scene.warnings.push(format!(
+                "{}: material {name:?}: {what}",
+                self.path.display()
+            ));
+        };
+        if transmission.factor > 0.0 && transmission.factor < 1.0 || transmission.texture.is_some()
+        {
+            warn(
+                &mut self.scene,
+                format!(
+                "transmission {} read per hit as 0 or 1 (threshold 0.5): no partial transmission",
+                transmission.factor
+            ),
+            );
+        }
+        if anisotropy != 0.0 {
+            warn(
+                &mut self.scene,
+                format!(
+                    "anisotropy {anisotropy} ignored: the glTF BRDF in lustre-brdf is isotropic"
+                ),
+            );
+        }
+        if transmission.factor == 0.0 && transmission.texture.is_none() && (ior - 1.5).abs() > 1e-6
+        {
+            warn(
+                &mut self.scene,
+                format!("ior {ior} ignored: the glTF BRDF uses 1.5 (F0 = 0.04)"),
+            );
+        }
         let mut mat = Material::new(
             name.clone(),
             MaterialKind::PbrMetallicRoughness {

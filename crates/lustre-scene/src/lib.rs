@@ -161,7 +161,7 @@ impl Scene {
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase())
             .unwrap_or_default();
-        match ext.as_str() {
+        let scene = match ext.as_str() {
             "xml" => mitsuba::read(path),
             "toml" => {
                 let bytes = read_file(path)?;
@@ -177,7 +177,23 @@ impl Scene {
                     "unknown scene extension {ext:?} (expected .gltf, .glb, .obj, .xml or .toml)"
                 ),
             )),
+        }?;
+        scene.check_materials()?;
+        Ok(scene)
+    }
+
+    /// Checks that every material builds its BSDF ([`Material::check`]) and prepares the shared
+    /// models; the error names the material and the file.
+    pub fn check_materials(&self) -> Result<()> {
+        for m in &self.materials {
+            m.check(&self.textures).map_err(|e| match e {
+                SceneError::Material { material, problem } => {
+                    SceneError::format(&self.source, format!("material {material:?}: {problem}"))
+                }
+                other => other,
+            })?;
         }
+        Ok(())
     }
 
     /// The texture read from `path` in `color_space`, loaded once (later calls return the same
