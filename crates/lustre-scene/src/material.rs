@@ -488,7 +488,7 @@ impl Material {
     pub fn bsdf_at(&self, textures: &[Texture], uv: &[Vec2; 2]) -> Result<Box<dyn Bsdf>> {
         let err = |e: lustre_brdf::Error| SceneError::material(&self.name, e.to_string());
         if let MaterialKind::Spec(r) = &self.kind {
-            return Ok(self.sided(Box::new(SharedBsdf(r.bsdf.clone())))?);
+            return self.sided(Box::new(SharedBsdf(r.bsdf.clone())));
         }
         let textured = self.kind_is_textured();
         if !textured {
