@@ -649,6 +649,9 @@ impl<'a, 'i> Reader<'a, 'i> {
     }
 
     fn bsdf(&mut self, n: Node<'a, 'i>, name: Option<String>) -> Result<Material> {
+        if n.ancestors().filter(|a| a.has_tag_name("bsdf")).count() > 16 {
+            return Err(self.err(n, "bsdfs nested more than 16 deep"));
+        }
         let mut p = self.plugin(n)?;
         let own = self.attr(n, "id")?;
         let name = name

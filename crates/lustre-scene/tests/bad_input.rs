@@ -382,3 +382,16 @@ fn malformed_and_invalid_toml() {
     let msg = toml_err(&format!("{head}film = {{ width = 0, height = 10 }}\n"));
     assert!(msg.contains("film"), "{msg}");
 }
+
+#[test]
+fn deeply_nested_bsdfs_are_an_error() {
+    let d = dir();
+    let body = format!(
+        "<bsdf type=\"diffuse\" id=\"x\"/><shape type=\"disk\">{}<bsdf type=\"diffuse\"/>{}</shape>",
+        "<bsdf type=\"twosided\">".repeat(40),
+        "</bsdf>".repeat(40)
+    );
+    let p = write(d.path(), "deep.xml", &xml(&body));
+    let msg = Scene::load(&p).unwrap_err().to_string();
+    assert!(msg.contains("nested more than 16 deep"), "{msg}");
+}
