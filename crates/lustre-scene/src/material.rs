@@ -484,7 +484,7 @@ impl Material {
     ///
     /// Cost: a material without textured BSDF parameters is built once and shared (an `Arc`);
     /// a textured (rough) plastic clones a prototype built once (its coating tables cost
-    /// ≈ 0.3 M samples) and sets the base colour; the other models are cheap to build.
+    /// ≈ 0.3 M samples) with `with_reflectances`; the other models are cheap to build.
     pub fn bsdf_at(&self, textures: &[Texture], uv: &[Vec2; 2]) -> Result<Box<dyn Bsdf>> {
         let err = |e: lustre_brdf::Error| SceneError::material(&self.name, e.to_string());
         if let MaterialKind::Spec(r) = &self.kind {
@@ -574,7 +574,7 @@ impl Material {
                 nonlinear,
             } => Prepared::RoughPlastic(
                 self.kind.clone(),
-                RoughPlastic::new(
+                Box::new(RoughPlastic::new(
                     microfacet_type(*distribution),
                     clamp_alpha(alpha.factor),
                     mean(diffuse),
@@ -582,7 +582,7 @@ impl Material {
                     *int_ior,
                     *ext_ior,
                     *nonlinear,
-                )?,
+                )?),
             ),
             _ => {
                 return Err(lustre_brdf::Error::NotFound(
@@ -599,19 +599,22 @@ impl Material {
         let alpha = |t: &TexturedScalar| clamp_alpha(t.at(textures, uv));
         Ok(match &self.kind {
             MaterialKind::Diffuse { reflectance } => Box::new(Lambert::new(rgb(reflectance))?),
-            MaterialKind::Plastic { diffuse, .. } => match self.coat_prototype(textures)? {
-                Prepared::Plastic(_, mut p) => {
-                    p.diffuse_reflectance = rgb(diffuse);
-                    Box::new(p)
+            MaterialKind::Plastic {
+                diffuse, specular, ..
+            } => match self.coat_prototype(textures)? {
+                Prepared::Plastic(_, p) => {
+                    Box::new(p.with_reflectances(rgb(diffuse), specular.map(unit))?)
                 }
                 _ => return Err(mismatch()),
             },
             MaterialKind::RoughPlastic {
-                diffuse, alpha: a, ..
+                diffuse,
+                specular,
+                alpha: a,
+                ..
             } if a.texture.is_none() => match self.coat_prototype(textures)? {
-                Prepared::RoughPlastic(_, mut p) => {
-                    p.diffuse_reflectance = rgb(diffuse);
-                    Box::new(p)
+                Prepared::RoughPlastic(_, p) => {
+                    Box::new((*p).with_reflectances(rgb(diffuse), specular.map(unit))?)
                 }
                 _ => return Err(mismatch()),
             },
@@ -730,7 +733,7 @@ impl Material {
 enum Prepared {
     Whole(MaterialKind, bool, Arc<dyn Bsdf>),
     Plastic(MaterialKind, Plastic),
-    RoughPlastic(MaterialKind, RoughPlastic),
+    RoughPlastic(MaterialKind, Box<RoughPlastic>),
 }
 
 /// The per-material cache of prepared models.
