@@ -12,12 +12,15 @@ use lustre_scene::{FovAxis, MaterialKind, Scene};
 const HALL_TRIANGLES: usize = 31_247;
 const HALL_DEGENERATE: usize = 2_432;
 
-fn hall_xml() -> Scene {
-    Scene::load(&common::hall_xml()).expect("modern hall XML loads")
+/// Loaded once per test binary (building the rough-plastic coating tables dominates).
+fn hall_xml() -> &'static Scene {
+    static S: std::sync::OnceLock<Scene> = std::sync::OnceLock::new();
+    S.get_or_init(|| Scene::load(&common::hall_xml()).expect("modern hall XML loads"))
 }
 
-fn hall_gltf() -> Scene {
-    Scene::load(&common::hall_gltf()).expect("modern hall glTF loads")
+fn hall_gltf() -> &'static Scene {
+    static S: std::sync::OnceLock<Scene> = std::sync::OnceLock::new();
+    S.get_or_init(|| Scene::load(&common::hall_gltf()).expect("modern hall glTF loads"))
 }
 
 #[test]
@@ -140,7 +143,7 @@ fn hall_gltf_matches_xml_geometry() {
     for c in 0..3 {
         assert!((px[c] - pg[c]).abs() < 1e-4 * px[c], "{px:?} vs {pg:?}");
     }
-    for s in [&x, &g] {
+    for s in [x, g] {
         // Emitters at the ceiling (y ≈ 5.61) face down.
         let mut ceiling = 0;
         for m in s.meshes.iter().filter(|m| m.emission.is_some()) {
