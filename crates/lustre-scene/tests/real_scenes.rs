@@ -139,7 +139,7 @@ fn hall_gltf_matches_xml_geometry() {
         }
         p
     };
-    let (px, pg) = (power(&x), power(&g));
+    let (px, pg) = (power(x), power(g));
     for c in 0..3 {
         assert!((px[c] - pg[c]).abs() < 1e-4 * px[c], "{px:?} vs {pg:?}");
     }
