@@ -64,6 +64,22 @@ pub fn from_slice(path: &Path, bytes: &[u8]) -> Result<Scene> {
             });
         }
     }
+    // gltf-json 1.4.1's validation indexes the POSITION accessor before checking that it
+    // exists (a panic): check that reference first.
+    let root = unvalidated.as_json();
+    for (mi, mesh) in root.meshes.iter().enumerate() {
+        for (pi, prim) in mesh.primitives.iter().enumerate() {
+            for (sem, index) in &prim.attributes {
+                if index.value() >= root.accessors.len() {
+                    return Err(fmt(format!(
+                        "mesh {mi} primitive {pi}: attribute {sem:?} names accessor {} of {}",
+                        index.value(),
+                        root.accessors.len()
+                    )));
+                }
+            }
+        }
+    }
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice(bytes).map_err(|e| fmt(format!("invalid glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
