@@ -31,9 +31,10 @@
 //! # Ok::<(), lustre_scene::SceneError>(())
 //! ```
 //!
-//! Measured (debug profile with optimized dependencies, 2 shared cores): the Modern Hall XML
-//! loads in 0.5–1.1 s (most of it building the two rough-plastic coating tables), its glTF in
-//! 0.23–0.34 s, the Cornell box OBJ in < 2 ms.
+//! Measured with `lustre scene info` (dev profile with optimized dependencies, 2 cores shared
+//! with other builds, so a range over runs): the Modern Hall XML loads in 0.35–1.1 s (most of it
+//! building the two rough-plastic coating tables in the material check), its glTF in
+//! 0.16–0.34 s, the Cornell box OBJ in < 2 ms.
 
 pub mod camera;
 pub mod environment;
