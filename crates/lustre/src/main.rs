@@ -6,6 +6,7 @@ mod fit_cmd;
 mod merl_cmd;
 mod plot_cmd;
 mod score_cmd;
+mod scene_cmd;
 
 use anyhow::Context;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
@@ -36,6 +37,9 @@ enum Command {
     Demo(demo_cmd::DemoArgs),
     /// Regular sampling vs Colbert–Křivánek vs reference (002 Fig. 8–10, 000 Fig. 4.24).
     Compare(compare_cmd::CompareArgs),
+    /// Scenes: `lustre scene info SCENE` prints what lustre reads from a glTF, OBJ, Mitsuba XML
+    /// or lustre scene file.
+    Scene(scene_cmd::SceneArgs),
     /// Error metrics and albedos of any material against any measured input, without fitting.
     Score(score_cmd::ScoreArgs),
     /// List built-in materials, analytic models, published fits, the 100 MERL materials and
@@ -110,6 +114,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Merl(args) => merl_cmd::run(&args),
         Command::Demo(args) => demo_cmd::run(&args),
         Command::Compare(args) => compare_cmd::run(&args),
+        Command::Scene(args) => scene_cmd::run(&args),
         Command::Score(args) => score_cmd::run(&args),
         Command::List => list(),
         Command::Info { spec, strict } => info(&spec, strict),
