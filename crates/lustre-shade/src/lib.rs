@@ -5,13 +5,16 @@
 //! - [`image`], [`metrics`]: float images, RMS / PSNR / CIE Lab ΔE, false-colour differences.
 //! - [`kernel`]: per-pixel shading kernels: reference, progressive QMC, regular, Colbert-Křivánek.
 //! - [`scene`], [`render`], [`harness`]: evaluation scenes, image rendering, the comparisons.
+//! - [`accel`], [`path`]: ray casting (BVH, watertight triangles) and the path-traced reference.
 
+pub mod accel;
 pub mod error;
 pub mod harness;
 pub mod image;
 pub mod kernel;
 pub mod metrics;
 pub mod mip;
+pub mod path;
 pub mod pattern;
 pub mod render;
 pub mod scene;
