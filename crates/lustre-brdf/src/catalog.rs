@@ -14,17 +14,29 @@
 
 use crate::bsdf::Bsdf;
 use crate::error::{Error, Result};
+use crate::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
 use crate::microfacet::fresnel::Fresnel;
 use crate::microfacet::ndf::Ndf;
 use crate::models::abc::Abc;
 use crate::models::ashikhmin_shirley::AshikhminShirley;
 use crate::models::blinn_phong::BlinnPhong;
+use crate::models::conductor::{ComplexIor, Conductor};
 use crate::models::cook_torrance::{CookTorrance, CtChannel, G1Model};
+use crate::models::dielectric::{
+    ior_preset, Dielectric, DEFAULT_EXT_IOR, DEFAULT_GLASS_IOR, DEFAULT_PLASTIC_IOR,
+};
 use crate::models::kurt::{Kurt, KurtLobe};
 use crate::models::lafortune::{Lafortune, LafortuneLobe};
 use crate::models::lambert::Lambert;
 use crate::models::oren_nayar::OrenNayar;
+use crate::models::pbr_metallic_roughness::PbrMetallicRoughness;
 use crate::models::phong::Phong;
+use crate::models::plastic::Plastic;
+use crate::models::rough_conductor::RoughConductor;
+use crate::models::rough_dielectric::RoughDielectric;
+use crate::models::rough_plastic::RoughPlastic;
+use crate::models::thin_dielectric::ThinDielectric;
+use crate::models::two_sided::TwoSided;
 use crate::models::ward::Ward;
 use crate::models::ward_duer::WardDuer;
 use crate::models::ward_gmd::WardGmd;
@@ -33,11 +45,14 @@ use glam::DVec3;
 use std::collections::BTreeMap;
 
 /// Parameters of a `MODEL(key=value, ...)` specification, consumed as they are read so that
-/// unknown keys can be reported.
+/// unknown keys can be reported. Values are numbers, except for the few keys read with
+/// [`Params::get_str`] (`material=Au`, `distribution=ggx`); a word where a number is expected is
+/// reported by [`Params::finish`].
 #[derive(Debug, Clone)]
 pub struct Params {
     model: String,
     values: BTreeMap<String, f64>,
+    words: BTreeMap<String, String>,
 }
 
 impl Params {
@@ -54,26 +69,28 @@ impl Params {
             None => (spec, ""),
         };
         let mut values = BTreeMap::new();
+        let mut words = BTreeMap::new();
         for kv in body.split(',').map(str::trim).filter(|s| !s.is_empty()) {
             let (k, v) = kv.split_once('=').ok_or_else(|| {
                 Error::NotFound(format!("{spec:?}: expected key=value, found {kv:?}"))
             })?;
-            let v: f64 = v.trim().parse().map_err(|_| {
-                Error::NotFound(format!(
-                    "{spec:?}: the value of {} is not a number: {v:?}",
-                    k.trim()
-                ))
-            })?;
-            if values.insert(k.trim().to_string(), v).is_some() {
-                return Err(Error::NotFound(format!(
-                    "{spec:?}: {} is given twice",
-                    k.trim()
-                )));
+            let (k, v) = (k.trim().to_string(), v.trim());
+            if values.contains_key(&k) || words.contains_key(&k) {
+                return Err(Error::NotFound(format!("{spec:?}: {k} is given twice")));
+            }
+            match v.parse::<f64>() {
+                Ok(x) => {
+                    values.insert(k, x);
+                }
+                Err(_) => {
+                    words.insert(k, v.to_string());
+                }
             }
         }
         Ok(Params {
             model: model.to_string(),
             values,
+            words,
         })
     }
 
@@ -87,8 +104,27 @@ impl Params {
         self.values.remove(key).unwrap_or(default)
     }
 
-    /// Fails if any key was not consumed.
+    /// Takes a word-valued `key` (e.g. `material=Au`), or `None` when absent. A number given
+    /// for it is returned as written.
+    pub fn get_str(&mut self, key: &str) -> Option<String> {
+        self.words
+            .remove(key)
+            .or_else(|| self.values.remove(key).map(|v| v.to_string()))
+    }
+
+    /// Whether `key` is present (either kind).
+    pub fn has(&self, key: &str) -> bool {
+        self.values.contains_key(key) || self.words.contains_key(key)
+    }
+
+    /// Fails if any key was not consumed, or if a word was given where a number was expected.
     pub fn finish(self) -> Result<()> {
+        if let Some((k, v)) = self.words.iter().next() {
+            return Err(Error::NotFound(format!(
+                "model {}: the value of {k} is not a number: {v:?}",
+                self.model
+            )));
+        }
         if self.values.is_empty() {
             return Ok(());
         }
@@ -156,6 +192,39 @@ pub fn models() -> Vec<(&'static str, &'static str)> {
         (
             "sgd",
             "rho_d, rho_s, alpha, p, f0, f1  (Cook-Torrance, numeric Smith G1)",
+        ),
+        (
+            "conductor",
+            "material (Mitsuba name: Au, Ag, Al, Cu, Cr, …, none) | eta, k; specular  (smooth)",
+        ),
+        (
+            "roughconductor",
+            "material | eta, k; specular; alpha | alpha_u, alpha_v; distribution (ggx | beckmann)",
+        ),
+        (
+            "dielectric",
+            "int_ior, ext_ior (numbers or Mitsuba names: bk7, air, water, …)",
+        ),
+        (
+            "roughdielectric",
+            "int_ior, ext_ior; alpha | alpha_u, alpha_v; distribution",
+        ),
+        ("thindielectric", "int_ior, ext_ior"),
+        (
+            "plastic",
+            "diffuse, specular, int_ior, ext_ior, nonlinear (0 | 1)  (Mitsuba 3's)",
+        ),
+        (
+            "roughplastic",
+            "diffuse, specular, int_ior, ext_ior, nonlinear, alpha, distribution  (Mitsuba 3's)",
+        ),
+        (
+            "pbr",
+            "base_color, metallic, roughness  (glTF 2.0 metallic-roughness)",
+        ),
+        (
+            "twosided:SPEC",
+            "any reflection-only specification, made two-sided",
         ),
     ]
 }
@@ -231,6 +300,7 @@ fn builtin(name: &str) -> Result<Option<Box<dyn Bsdf>>> {
 
 fn resolve_prefixed(prefix: &str, rest: &str) -> Result<Box<dyn Bsdf>> {
     match prefix {
+        "twosided" => Ok(Box::new(TwoSided::new(resolve(rest)?)?)),
         "sgd" => Ok(Box::new(crate::fits::sgd::load(rest)?)),
         "sgd-numeric" => {
             let fits = crate::fits::sgd::SgdFits::load_default()?;
@@ -258,7 +328,7 @@ fn resolve_prefixed(prefix: &str, rest: &str) -> Result<Box<dyn Bsdf>> {
         }
         "lafortune" => Ok(Box::new(crate::fits::lafortune::load(rest)?)),
         other => Err(Error::NotFound(format!(
-            "unknown material source {other:?} (known: sgd:, sgd-numeric:, abc:, lafortune:, nbrdf:)"
+            "unknown material source {other:?} (known: sgd:, sgd-numeric:, abc:, lafortune:, nbrdf:, twosided:)"
         ))),
     }
 }
@@ -401,6 +471,56 @@ fn resolve_model(mut p: Params) -> Result<Box<dyn Bsdf>> {
             };
             Box::new(CookTorrance::gray(model.clone(), rho_d, rho_s, ndf, g1, fresnel)?)
         }
+        "conductor" | "roughconductor" => {
+            let ior = complex_ior(&mut p)?;
+            let spec = p.get_rgb("specular", 1.0);
+            if model == "conductor" {
+                Box::new(Conductor::new(ior.eta, ior.k, spec)?)
+            } else {
+                let d = distribution(&mut p)?;
+                Box::new(RoughConductor::new(d, ior, spec)?)
+            }
+        }
+        "dielectric" | "thindielectric" | "roughdielectric" => {
+            let int = ior_param(&mut p, "int_ior", DEFAULT_GLASS_IOR)?;
+            let ext = ior_param(&mut p, "ext_ior", DEFAULT_EXT_IOR)?;
+            match model.as_str() {
+                "dielectric" => Box::new(Dielectric::new(int, ext)?),
+                "thindielectric" => Box::new(ThinDielectric::new(int, ext)?),
+                _ => Box::new(RoughDielectric::new(distribution(&mut p)?, int, ext)?),
+            }
+        }
+        "plastic" | "roughplastic" => {
+            let (diffuse, spec) = (p.get_rgb("diffuse", 0.5), p.get_rgb("specular", 1.0));
+            let int = ior_param(&mut p, "int_ior", DEFAULT_PLASTIC_IOR)?;
+            let ext = ior_param(&mut p, "ext_ior", DEFAULT_EXT_IOR)?;
+            let nonlinear = p.get("nonlinear", 0.0) != 0.0;
+            if model == "plastic" {
+                Box::new(Plastic::new(diffuse, spec, int, ext, nonlinear)?)
+            } else {
+                let d = distribution(&mut p)?;
+                if d.is_anisotropic() {
+                    return Err(Error::NotFound(
+                        "roughplastic: anisotropic roughness is not supported (as in Mitsuba)"
+                            .into(),
+                    ));
+                }
+                Box::new(RoughPlastic::new(
+                    d.kind(),
+                    d.alpha_u(),
+                    diffuse,
+                    spec,
+                    int,
+                    ext,
+                    nonlinear,
+                )?)
+            }
+        }
+        "pbr" => {
+            let c = p.get_rgb("base_color", 0.8);
+            let (m, r) = (p.get("metallic", 0.0), p.get("roughness", 0.5));
+            Box::new(PbrMetallicRoughness::new(c, m, r)?)
+        }
         other => {
             return Err(Error::NotFound(format!(
                 "unknown material {other:?}: not a built-in ({}), a model ({}), a published fit \
@@ -412,6 +532,49 @@ fn resolve_model(mut p: Params) -> Result<Box<dyn Bsdf>> {
     };
     p.finish()?;
     Ok(b)
+}
+
+/// `material=NAME` (a Mitsuba preset, default `none`) or explicit `eta`, `k` (RGB keys).
+fn complex_ior(p: &mut Params) -> Result<ComplexIor> {
+    let material = p.get_str("material");
+    if p.has("eta") || p.has("k") || p.has("eta_r") || p.has("k_r") {
+        if let Some(m) = material {
+            return Err(Error::NotFound(format!(
+                "model {}: give either material={m} or eta/k, not both",
+                p.model()
+            )));
+        }
+        return ComplexIor::new(p.get_rgb("eta", 0.0), p.get_rgb("k", 1.0));
+    }
+    ComplexIor::preset(material.as_deref().unwrap_or("none"))
+}
+
+/// An index given as a number or one of Mitsuba's names (`bk7`, `air`, …).
+fn ior_param(p: &mut Params, key: &str, default: f64) -> Result<f64> {
+    match p.get_str(key) {
+        None => Ok(default),
+        Some(v) => match v.parse::<f64>() {
+            Ok(x) => Ok(x),
+            Err(_) => ior_preset(&v).ok_or_else(|| {
+                Error::NotFound(format!(
+                    "model {}: unknown {key} {v:?} (a number or a Mitsuba name such as bk7, air, water)",
+                    p.model()
+                ))
+            }),
+        },
+    }
+}
+
+/// `distribution` (Mitsuba's default: beckmann), `alpha` (default 0.1) or `alpha_u`/`alpha_v`.
+fn distribution(p: &mut Params) -> Result<MicrofacetDistribution> {
+    let kind = match p.get_str("distribution") {
+        Some(d) => MicrofacetType::parse(&d)?,
+        None => MicrofacetType::Beckmann,
+    };
+    let alpha = p.get("alpha", 0.1);
+    let au = p.get("alpha_u", alpha);
+    let av = p.get("alpha_v", au);
+    MicrofacetDistribution::new(kind, au, av)
 }
 
 #[cfg(test)]
@@ -453,9 +616,50 @@ mod tests {
             "ggx",
             "exponential",
             "sgd",
+            "conductor",
+            "roughconductor",
+            "dielectric",
+            "roughdielectric",
+            "thindielectric",
+            "plastic",
+            "roughplastic",
+            "pbr",
         ] {
             resolve(m).unwrap_or_else(|e| panic!("{m}: {e}"));
         }
+    }
+
+    #[test]
+    fn physically_based_specs() {
+        use crate::frame::{mirror_z, spherical};
+        let b = resolve("roughconductor(material=Au, alpha=0.1, distribution=ggx)").unwrap();
+        assert!(b.name().contains("ggx") && !b.flags().has_delta());
+        let b = resolve("conductor(material=Cu)").unwrap();
+        assert!(b.flags().delta_only());
+        let b = resolve(
+            "roughconductor(eta_r=0.2, eta_g=0.9, eta_b=1.1, k=3, alpha_u=0.05, alpha_v=0.3)",
+        )
+        .unwrap();
+        assert!(b.flags().anisotropic);
+        assert!(resolve("conductor(material=Au, eta=0.2)").is_err());
+        assert!(resolve("conductor(material=Unobtainium)").is_err());
+        assert!(resolve("roughconductor(distribution=phong)").is_err());
+        let g = resolve("dielectric(int_ior=water, ext_ior=air)").unwrap();
+        assert!(g.flags().transmission && g.flags().has_delta());
+        assert!(resolve("dielectric(int_ior=1.5, ext_ior=1.5)").is_err());
+        assert!(resolve("dielectric(int_ior=unobtainium)").is_err());
+        let p = resolve("roughplastic(diffuse_r=0.8, diffuse_g=0.5, diffuse_b=0.2, alpha=0.1, distribution=ggx, int_ior=1.5, ext_ior=1, nonlinear=1)")
+            .unwrap();
+        assert!(p.name().contains("nonlinear"));
+        assert!(resolve("roughplastic(alpha_u=0.1, alpha_v=0.2)").is_err());
+        assert!(resolve("lambert(kd=abc)").is_err());
+        let t =
+            resolve("twosided:roughconductor(material=Al, alpha=0.1, distribution=ggx)").unwrap();
+        let (wi, wo) = (spherical(0.4, 0.0), spherical(0.4, 3.1));
+        assert!(t.eval(mirror_z(wi), mirror_z(wo)).max_component() > 0.0);
+        assert!(resolve("twosided:dielectric").is_err());
+        assert!(resolve("pbr(base_color=0.9, metallic=1, roughness=0.3)").is_ok());
+        assert!(resolve("pbr(metallic=2)").is_err());
     }
 
     #[test]

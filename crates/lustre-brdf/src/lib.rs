@@ -22,7 +22,7 @@ pub mod rgb;
 pub mod sampling;
 pub mod validate;
 
-pub use bsdf::{Bsdf, BsdfFlags, BsdfSample};
+pub use bsdf::{Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 pub use error::{Error, Result};
 pub use glam::DVec3;
 pub use rgb::Rgb;

@@ -2,6 +2,10 @@
 //! by quadrature, chi-square agreement between `sample` and `pdf`, reciprocity, energy
 //! conservation and finiteness. Public so that measured tables and fitted models can be checked by
 //! the same code from any crate.
+//!
+//! Delta (specular) lobes (see [`crate::bsdf`]) are checked apart: the chi-square and ∫pdf cover
+//! the part with a density, and the frequency of each delta lobe must match the probability its
+//! samples report.
 
 use crate::bsdf::Bsdf;
 use crate::frame::{mirror_z, reflect};
@@ -45,12 +49,14 @@ pub fn pdf_integral(bsdf: &dyn Bsdf, wo: DVec3, q: &SphereQuadrature) -> f64 {
     s
 }
 
-/// Directional albedo by quadrature, per channel (000 Eq. 2.6).
+/// Directional albedo per channel (000 Eq. 2.6): the part with a density by quadrature, plus
+/// the delta lobes' part (if any) from [`DELTA_ALBEDO_SAMPLES`] Hammersley samples (exact up to
+/// the stratification of the lobe choice, ~1/n).
 pub fn albedo_quadrature(bsdf: &dyn Bsdf, wo: DVec3, q: &SphereQuadrature) -> [f64; 3] {
-    let mut out = [0.0; 3];
+    let mut out = delta_albedo(bsdf, wo, DELTA_ALBEDO_SAMPLES);
     for (c, o) in out.iter_mut().enumerate() {
         let g = |wi: DVec3| bsdf.eval(wi, wo)[c] * wi.z.abs();
-        *o = integrate_reflection(g, wo, q);
+        *o += integrate_reflection(g, wo, q);
         if bsdf.flags().transmission {
             *o += integrate_transmission(g, wo, q);
         }
@@ -58,11 +64,37 @@ pub fn albedo_quadrature(bsdf: &dyn Bsdf, wo: DVec3, q: &SphereQuadrature) -> [f
     out
 }
 
-/// Fraction of `n` stratified samples for which `sample` succeeds (what ∫pdf must equal).
+/// Hammersley samples [`albedo_quadrature`] spends on the delta lobes.
+pub const DELTA_ALBEDO_SAMPLES: usize = 1 << 14;
+
+/// The delta lobes' share of the directional albedo, per channel: the mean over `n` Hammersley
+/// samples of the weight of the specular ones (zero for a BSDF without delta lobes).
+pub fn delta_albedo(bsdf: &dyn Bsdf, wo: DVec3, n: usize) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    if !bsdf.flags().has_delta() {
+        return out;
+    }
+    for k in 0..n {
+        let (u1, u2) = crate::sampling::hammersley(k as u32, n as u32);
+        if let Some(s) = bsdf.sample(wo, u1, u2).filter(|s| s.is_delta()) {
+            let w = s.weight();
+            for (o, c) in out.iter_mut().zip(0..3) {
+                *o += w[c] / n as f64;
+            }
+        }
+    }
+    out
+}
+
+/// Fraction of `n` random samples for which `sample` succeeds on a lobe with a density (what
+/// ∫pdf must equal; specular samples are not counted).
 pub fn sample_success_fraction(bsdf: &dyn Bsdf, wo: DVec3, n: usize, seed: u64) -> f64 {
     let mut rng = SplitMix64::new(seed);
     let ok = (0..n)
-        .filter(|_| bsdf.sample(wo, rng.next_f64(), rng.next_f64()).is_some())
+        .filter(|_| {
+            bsdf.sample(wo, rng.next_f64(), rng.next_f64())
+                .is_some_and(|s| !s.is_delta())
+        })
         .count();
     ok as f64 / n as f64
 }
@@ -78,9 +110,15 @@ pub struct Chi2Result {
     pub p_value: f64,
     /// ∫ pdf over the sphere, from the cell integrals.
     pub pdf_integral: f64,
-    /// Fraction of samples that succeeded.
+    /// Fraction of samples that succeeded on a lobe with a density.
     pub sample_fraction: f64,
-    /// Samples whose returned pdf disagrees with `pdf(wi, wo)` or whose value disagrees with `eval`.
+    /// Fraction of samples that came from a delta lobe.
+    pub delta_fraction: f64,
+    /// Over the delta lobes (grouped by their flags): the largest |observed frequency − mean
+    /// reported probability| in binomial standard deviations (0 without delta samples).
+    pub delta_sigma: f64,
+    /// Samples whose returned pdf disagrees with `pdf(wi, wo)` or whose value disagrees with
+    /// `eval`, and delta samples with a probability outside (0, 1] or a non-finite value.
     pub inconsistent: usize,
 }
 
@@ -91,6 +129,7 @@ impl Chi2Result {
         let alpha = 1.0 - (1.0 - significance).powf(1.0 / test_count as f64);
         self.p_value > alpha
             && (self.pdf_integral - self.sample_fraction).abs() < 1e-2
+            && self.delta_sigma < 5.0
             && self.inconsistent == 0
     }
 }
@@ -264,8 +303,24 @@ pub fn chi2_test(
     let mut rng = SplitMix64::new(seed);
     let mut ok = 0usize;
     let mut inconsistent = 0usize;
+    // Delta samples per lobe flags: (count, sum of reported probabilities).
+    let mut delta: Vec<(crate::bsdf::LobeFlags, usize, f64)> = Vec::new();
     for _ in 0..samples {
         if let Some(s) = bsdf.sample(wo, rng.next_f64(), rng.next_f64()) {
+            if s.is_delta() {
+                if !(s.pdf > 0.0 && s.pdf <= 1.0) || !s.value.is_finite() || !s.wi.is_finite() {
+                    inconsistent += 1;
+                    continue;
+                }
+                match delta.iter_mut().find(|d| d.0 == s.lobe) {
+                    Some(d) => {
+                        d.1 += 1;
+                        d.2 += s.pdf;
+                    }
+                    None => delta.push((s.lobe, 1, s.pdf)),
+                }
+                continue;
+            }
             if s.pdf.is_nan() || s.pdf <= 0.0 || !s.pdf.is_finite() || !s.wi.is_finite() {
                 inconsistent += 1;
                 continue;
@@ -331,12 +386,23 @@ pub fn chi2_test(
     } else {
         0.0
     };
+    let n = samples as f64;
+    let delta_sigma = delta
+        .iter()
+        .map(|&(_, count, sum_p)| {
+            let p = sum_p / count as f64;
+            let sd = (p * (1.0 - p) / n).sqrt().max(1.0 / n);
+            (count as f64 / n - p).abs() / sd
+        })
+        .fold(0.0, f64::max);
     Chi2Result {
         statistic: stat,
         dof,
         p_value,
         pdf_integral,
-        sample_fraction: ok as f64 / samples as f64,
+        sample_fraction: ok as f64 / n,
+        delta_fraction: delta.iter().map(|d| d.1).sum::<usize>() as f64 / n,
+        delta_sigma,
         inconsistent,
     }
 }

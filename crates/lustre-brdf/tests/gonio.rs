@@ -8,7 +8,7 @@ use lustre_brdf::sampling::{cosine_hemisphere, cosine_hemisphere_pdf, SplitMix64
 use lustre_brdf::validate::{
     chi2_test, integrate_reflection, integrate_transmission, test_directions,
 };
-use lustre_brdf::{Bsdf, BsdfFlags, BsdfSample, DVec3, Error, Rgb};
+use lustre_brdf::{Bsdf, BsdfFlags, BsdfSample, DVec3, Error, LobeFlags, Rgb};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
@@ -55,20 +55,19 @@ impl Bsdf for Lobe {
     }
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
         let wi = cosine_hemisphere(u1, u2);
-        Some(BsdfSample {
+        Some(BsdfSample::new(
             wi,
-            value: self.eval(wi, wo),
-            pdf: cosine_hemisphere_pdf(wi),
-        })
+            self.eval(wi, wo),
+            cosine_hemisphere_pdf(wi),
+            LobeFlags::GLOSSY_REFLECTION,
+        ))
     }
     fn pdf(&self, wi: DVec3, _wo: DVec3) -> f64 {
         cosine_hemisphere_pdf(wi)
     }
     fn flags(&self) -> BsdfFlags {
-        BsdfFlags {
-            transmission: true,
-            ..Default::default()
-        }
+        BsdfFlags::default()
+            .with_lobes(LobeFlags::GLOSSY_REFLECTION | LobeFlags::GLOSSY_TRANSMISSION)
     }
 }
 

@@ -1,7 +1,7 @@
 //! Known values of the error metrics and the data checks.
 
 use glam::DVec3;
-use lustre_brdf::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
+use lustre_brdf::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use lustre_brdf::models::lambert::Lambert;
 use lustre_brdf::rgb::Rgb;
 use lustre_fit::metrics::{albedo, evaluate};
@@ -88,7 +88,7 @@ impl Bsdf for Constant {
         Rgb::splat(self.0)
     }
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        cosine_sample(self, wo, u1, u2)
+        cosine_sample(self, wo, u1, u2, LobeFlags::GLOSSY)
     }
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
         cosine_pdf(wi, wo)

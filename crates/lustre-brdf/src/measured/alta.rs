@@ -34,7 +34,7 @@
 //! slice outside their range. f = value / max(cos θv, [`ALTA_COS_FLOOR`]) for cosine-weighted
 //! data.
 
-use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use crate::error::{Error, Result};
 use crate::frame::{phi, theta};
 use crate::rgb::Rgb;
@@ -421,7 +421,7 @@ impl Bsdf for AltaTable {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        cosine_sample(self, wo, u1, u2)
+        cosine_sample(self, wo, u1, u2, LobeFlags::GLOSSY)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {

@@ -52,7 +52,7 @@
 //! Incident directions outside the θi axis range use the nearest θi node (clamped). A light
 //! below the surface is handled by mirroring both directions (a two-sided thin sheet).
 
-use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use crate::error::{write_atomic, Error, Result};
 use crate::frame::{half_vector, mirror_z, phi, reflect, rotate_z, spherical};
 use crate::numeric::SphereQuadrature;
@@ -908,11 +908,12 @@ impl Bsdf for GonioBsdf {
         let mut rng =
             SplitMix64::new(u1.to_bits() ^ u2.to_bits().rotate_left(29) ^ 0x5DEE_CE66_D1CE_4E5B);
         let (wi, _) = self.sample_outgoing(wo, &mut rng)?;
-        Some(BsdfSample {
+        Some(BsdfSample::new(
             wi,
-            value: self.eval(wi, wo),
-            pdf: self.pdf(wi, wo),
-        })
+            self.eval(wi, wo),
+            self.pdf(wi, wo),
+            LobeFlags::GLOSSY | LobeFlags::side(wi, wo),
+        ))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
@@ -925,6 +926,11 @@ impl Bsdf for GonioBsdf {
             energy_conserving: false,
             transmission: self.table.has_transmission(),
             anisotropic: self.table.axes.phi_i.len() > 1,
+            lobes: if self.table.has_transmission() {
+                LobeFlags::GLOSSY_REFLECTION | LobeFlags::GLOSSY_TRANSMISSION
+            } else {
+                LobeFlags::GLOSSY_REFLECTION
+            },
         }
     }
 }

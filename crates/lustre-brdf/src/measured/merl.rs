@@ -29,7 +29,7 @@
 //! kept as missing: they evaluate as 0, trilinear interpolation renormalizes over the present
 //! corners, and [`MerlTable::is_missing`] / [`MerlTable::missing_mask`] let a fitter mask them.
 
-use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use crate::error::{write_atomic, Error, Result};
 use crate::frame::{to_half_diff, HalfDiff};
 use crate::rgb::Rgb;
@@ -538,7 +538,7 @@ impl Bsdf for MerlTable {
 
     /// Cosine-weighted hemisphere sampling; fails when `wo` is below the surface.
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        cosine_sample(self, wo, u1, u2)
+        cosine_sample(self, wo, u1, u2, LobeFlags::GLOSSY)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {

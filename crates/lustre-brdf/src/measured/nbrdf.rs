@@ -19,7 +19,7 @@
 //! `exp` per evaluation. To keep every output finite, weights are validated finite with
 //! |w| ≤ 1e6 (so no sum can overflow) and the last pre-activation is capped at 700 before `exp`.
 
-use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use crate::error::{Error, Result};
 use crate::measured::merl::{bin_center, fill_bins, merl_angles, MerlTable};
 use crate::rgb::Rgb;
@@ -194,7 +194,7 @@ impl Bsdf for Nbrdf {
 
     /// Cosine-weighted hemisphere sampling; fails when `wo` is below the surface.
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        cosine_sample(self, wo, u1, u2)
+        cosine_sample(self, wo, u1, u2, LobeFlags::GLOSSY)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {

@@ -26,7 +26,7 @@
 //! factor D/(4σ) applied only when the file's `jacobian` flag is set.
 
 use super::rgl_warp::Marginal2D;
-use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use crate::error::{Error, Result};
 use crate::rgb::Rgb;
 use glam::DVec3;
@@ -813,11 +813,8 @@ impl Bsdf for RglBsdf {
         }
         // Value and density through eval/pdf, so that they are exactly what those report.
         let pdf = self.pdf(wi, wo);
-        (pdf > 0.0).then(|| BsdfSample {
-            wi,
-            value: self.eval(wi, wo),
-            pdf,
-        })
+        (pdf > 0.0)
+            .then(|| BsdfSample::new(wi, self.eval(wi, wo), pdf, LobeFlags::GLOSSY_REFLECTION))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
@@ -835,6 +832,7 @@ impl Bsdf for RglBsdf {
             energy_conserving: false,
             transmission: false,
             anisotropic: !self.isotropic,
+            lobes: LobeFlags::GLOSSY_REFLECTION,
         }
     }
 }

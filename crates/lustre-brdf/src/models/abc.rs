@@ -22,6 +22,7 @@
 
 use crate::bsdf::{
     diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
+    LobeFlags,
 };
 use crate::error::{check_range, check_rgb, Result};
 use crate::frame::{half_vector, reflect};
@@ -172,7 +173,7 @@ impl Bsdf for Abc {
         if wo.z < COS_MIN {
             return None;
         }
-        let wi = sample_diffuse_mixture(&self.weights(), u1, u2, |_, u1, u2| {
+        let (wi, kind) = sample_diffuse_mixture(&self.weights(), u1, u2, |_, u1, u2| {
             let t = self.t_of_u(u1);
             let ct = 1.0 - t;
             let st = (t * (2.0 - t)).max(0.0).sqrt();
@@ -183,7 +184,7 @@ impl Bsdf for Abc {
         if wi.z < COS_MIN {
             return None;
         }
-        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
+        finish_sample(wi, wo, self.pdf(wi, wo), kind, || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
@@ -195,6 +196,7 @@ impl Bsdf for Abc {
 
     fn flags(&self) -> BsdfFlags {
         BsdfFlags::isotropic_reflection(true, false)
+            .with_lobes(LobeFlags::DIFFUSE_REFLECTION | LobeFlags::GLOSSY_REFLECTION)
     }
 }
 

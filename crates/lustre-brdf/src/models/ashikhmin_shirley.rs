@@ -13,6 +13,7 @@
 
 use crate::bsdf::{
     diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
+    LobeFlags,
 };
 use crate::error::{check_range, check_rgb, Result};
 use crate::frame::{half_vector, reflect};
@@ -99,7 +100,7 @@ impl Bsdf for AshikhminShirley {
         if wo.z < COS_MIN {
             return None;
         }
-        let wi = sample_diffuse_mixture(&self.weights(), u1, u2, |_, u1, u2| {
+        let (wi, kind) = sample_diffuse_mixture(&self.weights(), u1, u2, |_, u1, u2| {
             // Quadrant from the first uniform, then the paper's first-quadrant φ.
             let q = ((u1 * 4.0) as usize).min(3);
             let r = u1 * 4.0 - q as f64;
@@ -120,7 +121,7 @@ impl Bsdf for AshikhminShirley {
         if wi.z < COS_MIN {
             return None;
         }
-        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
+        finish_sample(wi, wo, self.pdf(wi, wo), kind, || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
@@ -139,6 +140,7 @@ impl Bsdf for AshikhminShirley {
             energy_conserving: false,
             transmission: false,
             anisotropic: self.nu != self.nv,
+            lobes: LobeFlags::DIFFUSE_REFLECTION | LobeFlags::GLOSSY_REFLECTION,
         }
     }
 }

@@ -13,6 +13,7 @@
 
 use crate::bsdf::{
     diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
+    LobeFlags,
 };
 use crate::error::Result;
 use crate::frame::{half_vector, reflect};
@@ -62,14 +63,15 @@ impl Bsdf for BlinnPhong {
         if wo.z.is_nan() || wo.z <= 0.0 {
             return None;
         }
-        let wi = sample_diffuse_mixture(&weights(self.rho_d, self.rho_s), u1, u2, |_, u1, u2| {
-            let h = cosine_power(u1, u2, self.n);
-            (wo.dot(h) > 0.0).then(|| reflect(wo, h))
-        })?;
+        let (wi, kind) =
+            sample_diffuse_mixture(&weights(self.rho_d, self.rho_s), u1, u2, |_, u1, u2| {
+                let h = cosine_power(u1, u2, self.n);
+                (wo.dot(h) > 0.0).then(|| reflect(wo, h))
+            })?;
         if wi.z.is_nan() || wi.z <= 0.0 {
             return None;
         }
-        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
+        finish_sample(wi, wo, self.pdf(wi, wo), kind, || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
@@ -92,6 +94,7 @@ impl Bsdf for BlinnPhong {
             true,
             self.rho_s.max_component() == 0.0 && self.rho_d.max_component() <= 1.0,
         )
+        .with_lobes(LobeFlags::DIFFUSE_REFLECTION | LobeFlags::GLOSSY_REFLECTION)
     }
 }
 

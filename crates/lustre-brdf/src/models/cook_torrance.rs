@@ -17,7 +17,7 @@
 //! paper's expression omits (test `weight_is_the_papers_up_to_the_jacobian`).
 
 use crate::bsdf::{
-    finish_sample, sample_diffuse_mixture, select_component, Bsdf, BsdfFlags, BsdfSample,
+    finish_sample, sample_diffuse_mixture, select_component, Bsdf, BsdfFlags, BsdfSample, LobeFlags,
 };
 use crate::error::{check_range, Error, Result};
 use crate::frame::reflect;
@@ -242,7 +242,7 @@ impl Bsdf for CookTorrance {
             return None;
         }
         let weights = [1.0 - self.p_spec, self.p_spec];
-        let wi = sample_diffuse_mixture(&weights, u1, u2, |_, u1, u2| {
+        let (wi, kind) = sample_diffuse_mixture(&weights, u1, u2, |_, u1, u2| {
             let (li, u1) = select_component(&self.lobe_weights, u1)?;
             let h = self.lobes[li].0.sample_h(u1, u2);
             Some(reflect(wo, h))
@@ -250,7 +250,7 @@ impl Bsdf for CookTorrance {
         if wi.z.is_nan() || wi.z <= 0.0 || !wi.is_finite() {
             return None;
         }
-        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
+        finish_sample(wi, wo, self.pdf(wi, wo), kind, || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
@@ -272,6 +272,7 @@ impl Bsdf for CookTorrance {
 
     fn flags(&self) -> BsdfFlags {
         BsdfFlags::isotropic_reflection(true, self.energy_conserving)
+            .with_lobes(LobeFlags::DIFFUSE_REFLECTION | LobeFlags::GLOSSY_REFLECTION)
     }
 }
 

@@ -28,7 +28,7 @@
 //! `tests/kurt_battery.rs` measure it by quadrature over roughness and incidence (see
 //! [`Kurt::flags`] for the resulting promise).
 
-use crate::bsdf::{finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use crate::error::{check_range, check_rgb, Result};
 use crate::frame::{half_vector, mirror_z, reflect};
 use crate::rgb::Rgb;
@@ -272,7 +272,7 @@ impl Bsdf for Kurt {
         }
         let weights: Vec<f64> = self.weights().collect();
         let nr = self.reflection.len();
-        let wi_u = sample_diffuse_mixture(&weights, u1, u2, |idx, u1, u2| {
+        let (wi_u, kind) = sample_diffuse_mixture(&weights, u1, u2, |idx, u1, u2| {
             let (lobe, transmit) = if idx <= nr {
                 (&self.reflection[idx - 1], false)
             } else {
@@ -289,7 +289,7 @@ impl Bsdf for Kurt {
             Some(if transmit { mirror_z(r) } else { r })
         })?;
         let wi = if flip { mirror_z(wi_u) } else { wi_u };
-        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
+        finish_sample(wi, wo, self.pdf(wi, wo), kind, || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
@@ -338,6 +338,19 @@ impl Bsdf for Kurt {
             energy_conserving: lobes().all(|l| l.alpha == 0.0) && sum.max_component() <= 1.0,
             transmission: !self.transmission.is_empty(),
             anisotropic: lobes().any(|l| l.mx != l.my),
+            lobes: {
+                let mut l = LobeFlags::NONE;
+                if self.kd.max_component() > 0.0 {
+                    l |= LobeFlags::DIFFUSE_REFLECTION;
+                }
+                if !self.reflection.is_empty() {
+                    l |= LobeFlags::GLOSSY_REFLECTION;
+                }
+                if !self.transmission.is_empty() {
+                    l |= LobeFlags::GLOSSY_TRANSMISSION;
+                }
+                l
+            },
         }
     }
 }

@@ -20,6 +20,7 @@
 
 use crate::bsdf::{
     diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
+    LobeFlags,
 };
 use crate::error::{check_range, check_rgb, Error, Result};
 use crate::models::ward::COS_MIN;
@@ -206,7 +207,7 @@ impl Bsdf for Lafortune {
         if wo.z < COS_MIN {
             return None;
         }
-        let wi = sample_diffuse_mixture(&self.weights(wo), u1, u2, |k, u1, u2| {
+        let (wi, kind) = sample_diffuse_mixture(&self.weights(wo), u1, u2, |k, u1, u2| {
             let l = &self.lobes[k - 1];
             let (axis, _) = l.axis(wo)?;
             Some(to_world(cosine_power(u1, u2, l.n), axis))
@@ -214,7 +215,7 @@ impl Bsdf for Lafortune {
         if wi.z < COS_MIN {
             return None;
         }
-        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
+        finish_sample(wi, wo, self.pdf(wi, wo), kind, || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
@@ -234,6 +235,7 @@ impl Bsdf for Lafortune {
             energy_conserving: false,
             transmission: false,
             anisotropic: self.lobes.iter().any(|l| l.c.x != l.c.y),
+            lobes: LobeFlags::DIFFUSE_REFLECTION | LobeFlags::GLOSSY_REFLECTION,
         }
     }
 }

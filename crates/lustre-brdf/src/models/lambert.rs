@@ -2,7 +2,7 @@
 //!
 //! One-sided: zero unless both directions lie above the surface.
 
-use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use crate::error::{check_rgb, Result};
 use crate::rgb::Rgb;
 use glam::DVec3;
@@ -38,7 +38,7 @@ impl Bsdf for Lambert {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        cosine_sample(self, wo, u1, u2)
+        cosine_sample(self, wo, u1, u2, LobeFlags::DIFFUSE)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
@@ -48,6 +48,7 @@ impl Bsdf for Lambert {
     /// Reciprocal; energy conserving when kd ≤ 1 in every channel (the albedo is exactly kd).
     fn flags(&self) -> BsdfFlags {
         BsdfFlags::isotropic_reflection(true, self.kd.max_component() <= 1.0)
+            .with_lobes(LobeFlags::DIFFUSE_REFLECTION)
     }
 }
 

@@ -8,7 +8,7 @@
 //! at grazing. Symmetric in ωi, ωo, hence reciprocal. σ = 0 is Lambert. Cosine-sampled.
 //! One-sided: zero unless both directions lie above the surface.
 
-use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample};
+use crate::bsdf::{cosine_pdf, cosine_sample, Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use crate::error::{check_range, check_rgb, Result};
 use crate::rgb::Rgb;
 use glam::DVec3;
@@ -65,7 +65,7 @@ impl Bsdf for OrenNayar {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        cosine_sample(self, wo, u1, u2)
+        cosine_sample(self, wo, u1, u2, LobeFlags::DIFFUSE)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
@@ -76,6 +76,7 @@ impl Bsdf for OrenNayar {
     /// merely ρ ≤ 1: see there).
     fn flags(&self) -> BsdfFlags {
         BsdfFlags::isotropic_reflection(true, self.max_albedo().max_component() <= 1.0)
+            .with_lobes(LobeFlags::DIFFUSE_REFLECTION)
     }
 }
 

@@ -11,6 +11,7 @@
 
 use crate::bsdf::{
     diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, Bsdf, BsdfFlags, BsdfSample,
+    LobeFlags,
 };
 use crate::error::{check_range, check_rgb, Result};
 use crate::rgb::Rgb;
@@ -88,13 +89,14 @@ impl Bsdf for Phong {
         if wo.z.is_nan() || wo.z <= 0.0 {
             return None;
         }
-        let wi = sample_diffuse_mixture(&weights(self.rho_d, self.rho_s), u1, u2, |_, u1, u2| {
-            Some(to_world(cosine_power(u1, u2, self.n), mirror(wo)).normalize())
-        })?;
+        let (wi, kind) =
+            sample_diffuse_mixture(&weights(self.rho_d, self.rho_s), u1, u2, |_, u1, u2| {
+                Some(to_world(cosine_power(u1, u2, self.n), mirror(wo)).normalize())
+            })?;
         if wi.z.is_nan() || wi.z <= 0.0 {
             return None;
         }
-        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
+        finish_sample(wi, wo, self.pdf(wi, wo), kind, || self.eval(wi, wo))
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
@@ -109,6 +111,7 @@ impl Bsdf for Phong {
     /// Reciprocal; energy conserving when ρd + ρs ≤ 1 in every channel.
     fn flags(&self) -> BsdfFlags {
         BsdfFlags::isotropic_reflection(true, (self.rho_d + self.rho_s).max_component() <= 1.0)
+            .with_lobes(LobeFlags::DIFFUSE_REFLECTION | LobeFlags::GLOSSY_REFLECTION)
     }
 }
 

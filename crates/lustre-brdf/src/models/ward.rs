@@ -18,7 +18,7 @@
 //! sampled by cosine sampling; the two strategies are mixed with weights mean(ρd) : mean(ρs).
 
 use crate::bsdf::{
-    diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, BsdfFlags, BsdfSample,
+    diffuse_mixture_pdf, finish_sample, sample_diffuse_mixture, BsdfFlags, BsdfSample, LobeFlags,
 };
 use crate::error::{check_range, check_rgb, Result};
 use crate::frame::reflect;
@@ -132,7 +132,7 @@ impl WardCore {
         if wo.z < COS_MIN {
             return None;
         }
-        let wi = sample_diffuse_mixture(&self.weights(), u1, u2, |_, u1, u2| {
+        let (wi, kind) = sample_diffuse_mixture(&self.weights(), u1, u2, |_, u1, u2| {
             // Slope-space Gaussian draw (Walter 2005, see the module docs).
             let r = (-(1.0 - u1).ln()).sqrt();
             let (s, c) = (2.0 * PI * u2).sin_cos();
@@ -142,7 +142,7 @@ impl WardCore {
         if wi.z < COS_MIN {
             return None;
         }
-        finish_sample(wi, self.pdf(wi, wo), || self.eval(wi, wo))
+        finish_sample(wi, wo, self.pdf(wi, wo), kind, || self.eval(wi, wo))
     }
 
     pub(crate) fn anisotropic(&self) -> bool {
@@ -160,6 +160,7 @@ impl WardCore {
             energy_conserving,
             transmission: false,
             anisotropic: self.anisotropic(),
+            lobes: LobeFlags::DIFFUSE_REFLECTION | LobeFlags::GLOSSY_REFLECTION,
         }
     }
 }
