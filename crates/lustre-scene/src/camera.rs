@@ -1,0 +1,189 @@
+//! Pinhole cameras as world transforms, and camera paths (keyframes in time).
+//!
+//! A camera looks along `forward` with `up` up and right = forward × up (right-handed, +y up as in
+//! the rest of lustre). The field of view keeps Mitsuba's meaning: an angle along one axis of the
+//! film ([`FovAxis`]), so the same camera renders the same horizontal extent at any aspect when
+//! the axis is x. [`Camera::fov_y_deg`] gives the vertical angle for a film aspect.
+
+use glam::{DMat4, DQuat, DVec3};
+use serde::{Deserialize, Serialize};
+
+/// Which film axis the field of view spans (Mitsuba's `fovAxis`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum FovAxis {
+    /// Horizontal (Mitsuba's default).
+    #[default]
+    X,
+    /// Vertical (glTF's `yfov`).
+    Y,
+    /// The film diagonal.
+    Diagonal,
+    /// The smaller of the two axes.
+    Smaller,
+    /// The larger of the two axes.
+    Larger,
+}
+
+/// A pinhole camera.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    /// Name (`default` when the file gives none).
+    pub name: String,
+    /// Centre of projection (world).
+    pub position: DVec3,
+    /// Unit viewing direction (the centre pixel's ray).
+    pub forward: DVec3,
+    /// Unit up direction, orthogonal to `forward`.
+    pub up: DVec3,
+    /// Full field of view in degrees along `fov_axis`, in (0, 180).
+    pub fov_deg: f64,
+    /// The film axis `fov_deg` spans.
+    pub fov_axis: FovAxis,
+    /// Aspect ratio (width / height) the camera was made for, where the file says (glTF
+    /// `aspectRatio`); the film decides otherwise.
+    pub aspect: Option<f64>,
+}
+
+impl Camera {
+    /// A camera at `position` looking at `target` with `up` as the up hint (made orthogonal).
+    /// Returns `None` when the view direction is zero or parallel to `up`, or a value is not
+    /// finite.
+    pub fn look_at(
+        name: impl Into<String>,
+        position: DVec3,
+        target: DVec3,
+        up: DVec3,
+        fov_deg: f64,
+        fov_axis: FovAxis,
+    ) -> Option<Camera> {
+        let forward = (target - position).try_normalize()?;
+        let right = forward.cross(up).try_normalize()?;
+        let up = right.cross(forward);
+        if !(position.is_finite() && fov_deg > 0.0 && fov_deg < 180.0) {
+            return None;
+        }
+        Some(Camera {
+            name: name.into(),
+            position,
+            forward,
+            up,
+            fov_deg,
+            fov_axis,
+            aspect: None,
+        })
+    }
+
+    /// Unit right direction, forward × up.
+    pub fn right(&self) -> DVec3 {
+        self.forward.cross(self.up)
+    }
+
+    /// Camera-to-world matrix in the glTF/OpenGL convention (camera looks down −z, +y up,
+    /// +x right).
+    pub fn to_world(&self) -> DMat4 {
+        DMat4::from_cols(
+            self.right().extend(0.0),
+            self.up.extend(0.0),
+            (-self.forward).extend(0.0),
+            self.position.extend(1.0),
+        )
+    }
+
+    /// The vertical field of view in degrees for a film of `aspect` = width / height.
+    pub fn fov_y_deg(&self, aspect: f64) -> f64 {
+        let t = (self.fov_deg.to_radians() * 0.5).tan();
+        let ty = match self.fov_axis {
+            FovAxis::X => t / aspect,
+            FovAxis::Y => t,
+            FovAxis::Diagonal => t / (1.0 + aspect * aspect).sqrt(),
+            FovAxis::Smaller => {
+                if aspect >= 1.0 {
+                    t
+                } else {
+                    t / aspect
+                }
+            }
+            FovAxis::Larger => {
+                if aspect >= 1.0 {
+                    t / aspect
+                } else {
+                    t
+                }
+            }
+        };
+        2.0 * ty.atan().to_degrees()
+    }
+
+    /// The world-space unit ray direction through film point (x, y) in pixels of a W×H film
+    /// (y down, pixel centres at half-integers).
+    pub fn ray_direction(&self, x: f64, y: f64, width: u32, height: u32) -> DVec3 {
+        let aspect = f64::from(width) / f64::from(height);
+        let ty = (self.fov_y_deg(aspect).to_radians() * 0.5).tan();
+        let px = (2.0 * x / f64::from(width) - 1.0) * ty * aspect;
+        let py = (1.0 - 2.0 * y / f64::from(height)) * ty;
+        (self.forward + px * self.right() + py * self.up).normalize()
+    }
+}
+
+/// One keyframe of a camera path.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Keyframe {
+    /// Time in seconds from the start of the path.
+    pub time: f64,
+    /// The camera at that time.
+    pub camera: Camera,
+}
+
+/// A camera path: keyframes with strictly increasing times, interpolated linearly in position and
+/// field of view and spherically in orientation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraPath {
+    /// Name.
+    pub name: String,
+    /// Keyframes (at least one), by increasing time.
+    pub keyframes: Vec<Keyframe>,
+    /// Start again after the last keyframe.
+    pub looped: bool,
+}
+
+impl CameraPath {
+    /// Duration (time of the last keyframe).
+    pub fn duration(&self) -> f64 {
+        self.keyframes.last().map_or(0.0, |k| k.time)
+    }
+
+    /// The camera at time `t` (clamped to the path, or wrapped when looped); `None` for a path
+    /// without keyframes.
+    pub fn at(&self, t: f64) -> Option<Camera> {
+        let first = self.keyframes.first()?;
+        let last = self.keyframes.last()?;
+        let mut t = if t.is_finite() { t } else { first.time };
+        let span = last.time - first.time;
+        if self.looped && span > 0.0 {
+            t = first.time + (t - first.time).rem_euclid(span);
+        }
+        if t <= first.time {
+            return Some(first.camera.clone());
+        }
+        if t >= last.time {
+            return Some(last.camera.clone());
+        }
+        let i = self.keyframes.iter().position(|k| k.time > t)?;
+        let (a, b) = (&self.keyframes[i - 1], &self.keyframes[i]);
+        let s = (t - a.time) / (b.time - a.time);
+        let qa = orientation(&a.camera);
+        let qb = orientation(&b.camera);
+        let q = qa.slerp(qb, s);
+        let mut c = a.camera.clone();
+        c.position = a.camera.position.lerp(b.camera.position, s);
+        c.forward = q * DVec3::NEG_Z;
+        c.up = q * DVec3::Y;
+        c.fov_deg = a.camera.fov_deg + (b.camera.fov_deg - a.camera.fov_deg) * s;
+        Some(c)
+    }
+}
+
+fn orientation(c: &Camera) -> DQuat {
+    DQuat::from_mat3(&glam::DMat3::from_cols(c.right(), c.up, -c.forward))
+}

@@ -1,0 +1,514 @@
+//! The scene's material layer: parameters that may be textured, evaluated at a hit into a
+//! ready [`Bsdf`] from lustre-brdf.
+//!
+//! Textures belong here, not in the BSDF library: a [`Material`] holds constant factors and
+//! optional texture references; [`Material::bsdf_at`] samples the textures at the hit's UVs and
+//! builds the BSDF. Every material is checked once at load ([`Material::check`]), so a scene that
+//! loads builds a BSDF at every hit (texel values are clamped into the models' valid ranges).
+
+use crate::error::{Result, SceneError};
+use crate::texture::Texture;
+use glam::Vec2;
+use lustre_brdf::{Bsdf, BsdfSample, DVec3, Rgb};
+use std::sync::Arc;
+
+/// A texture reference: which texture and which UV set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TextureRef {
+    /// Index into [`crate::Scene::textures`].
+    pub texture: usize,
+    /// 0 for `uv0`, 1 for `uv1`.
+    pub uv_set: u8,
+}
+
+/// An RGB parameter: `factor`, times the texture's RGB where there is one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TexturedRgb {
+    /// Constant factor (the value when untextured).
+    pub factor: Rgb,
+    /// Optional texture multiplied in.
+    pub texture: Option<TextureRef>,
+}
+
+/// A scalar parameter: `factor`, times one channel of the texture where there is one.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TexturedScalar {
+    /// Constant factor (the value when untextured).
+    pub factor: f64,
+    /// Optional texture multiplied in.
+    pub texture: Option<TextureRef>,
+    /// Channel of the texture (0 = R … 3 = A).
+    pub channel: u8,
+}
+
+impl TexturedRgb {
+    /// An untextured value.
+    pub fn constant(c: Rgb) -> Self {
+        TexturedRgb {
+            factor: c,
+            texture: None,
+        }
+    }
+
+    /// A texture, unscaled.
+    pub fn texture(t: TextureRef) -> Self {
+        TexturedRgb {
+            factor: Rgb::ONE,
+            texture: Some(t),
+        }
+    }
+
+    /// The value at a hit.
+    pub fn at(&self, textures: &[Texture], uv: &[Vec2; 2]) -> Rgb {
+        match self.texture.and_then(|t| lookup(textures, t, uv)) {
+            Some(s) => Rgb::new(
+                self.factor[0] * f64::from(s[0]),
+                self.factor[1] * f64::from(s[1]),
+                self.factor[2] * f64::from(s[2]),
+            ),
+            None => self.factor,
+        }
+    }
+}
+
+impl TexturedScalar {
+    /// An untextured value.
+    pub fn constant(v: f64) -> Self {
+        TexturedScalar {
+            factor: v,
+            texture: None,
+            channel: 0,
+        }
+    }
+
+    /// The value at a hit.
+    pub fn at(&self, textures: &[Texture], uv: &[Vec2; 2]) -> f64 {
+        match self.texture.and_then(|t| lookup(textures, t, uv)) {
+            Some(s) => self.factor * f64::from(s[usize::from(self.channel.min(3))]),
+            None => self.factor,
+        }
+    }
+}
+
+fn lookup(textures: &[Texture], t: TextureRef, uv: &[Vec2; 2]) -> Option<[f32; 4]> {
+    let tex = textures.get(t.texture)?;
+    let p = uv[usize::from(t.uv_set.min(1))];
+    Some(tex.sample(p.x, p.y))
+}
+
+/// Microfacet distribution of a rough model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Distribution {
+    /// Beckmann (Mitsuba's default).
+    Beckmann,
+    /// GGX / Trowbridge–Reitz.
+    Ggx,
+}
+
+/// The scattering model of a material and its (possibly textured) parameters. Parameter meanings
+/// and defaults follow Mitsuba's plugins of the same names; `alpha` is the microfacet roughness
+/// (Mitsuba's `alpha`, not perceptual roughness).
+#[derive(Clone, Debug, PartialEq)]
+pub enum MaterialKind {
+    /// Lambertian reflector.
+    Diffuse {
+        /// Albedo.
+        reflectance: TexturedRgb,
+    },
+    /// Smooth dielectric coating over a diffuse base.
+    Plastic {
+        /// Base albedo.
+        diffuse: TexturedRgb,
+        /// Scale of the specular reflection.
+        specular: Rgb,
+        /// Interior index of refraction.
+        int_ior: f64,
+        /// Exterior index of refraction.
+        ext_ior: f64,
+        /// Mitsuba's `nonlinear`: account for the colour shift of internal scattering.
+        nonlinear: bool,
+    },
+    /// Rough dielectric coating over a diffuse base.
+    RoughPlastic {
+        /// Base albedo.
+        diffuse: TexturedRgb,
+        /// Scale of the specular reflection.
+        specular: Rgb,
+        /// Microfacet roughness.
+        alpha: TexturedScalar,
+        /// Microfacet distribution.
+        distribution: Distribution,
+        /// Interior index of refraction.
+        int_ior: f64,
+        /// Exterior index of refraction.
+        ext_ior: f64,
+        /// Mitsuba's `nonlinear`.
+        nonlinear: bool,
+    },
+    /// Smooth metal with a complex index of refraction (relative to the exterior medium).
+    Conductor {
+        /// Real part of the relative index, per channel.
+        eta: Rgb,
+        /// Imaginary part (absorption), per channel.
+        k: Rgb,
+        /// Scale of the reflection.
+        specular: TexturedRgb,
+    },
+    /// Rough metal.
+    RoughConductor {
+        /// Real part of the relative index.
+        eta: Rgb,
+        /// Imaginary part.
+        k: Rgb,
+        /// Scale of the reflection.
+        specular: TexturedRgb,
+        /// Roughness along the tangent.
+        alpha_u: TexturedScalar,
+        /// Roughness along the bitangent.
+        alpha_v: TexturedScalar,
+        /// Microfacet distribution.
+        distribution: Distribution,
+    },
+    /// Smooth glass interface.
+    Dielectric {
+        /// Interior index of refraction.
+        int_ior: f64,
+        /// Exterior index of refraction.
+        ext_ior: f64,
+        /// Scale of the reflection.
+        specular_reflectance: Rgb,
+        /// Scale of the transmission.
+        specular_transmittance: Rgb,
+    },
+    /// Rough glass interface.
+    RoughDielectric {
+        /// Interior index of refraction.
+        int_ior: f64,
+        /// Exterior index of refraction.
+        ext_ior: f64,
+        /// Microfacet roughness.
+        alpha: TexturedScalar,
+        /// Microfacet distribution.
+        distribution: Distribution,
+        /// Scale of the reflection.
+        specular_reflectance: Rgb,
+        /// Scale of the transmission.
+        specular_transmittance: Rgb,
+    },
+    /// A thin glass sheet (both interfaces, no refraction offset).
+    ThinDielectric {
+        /// Interior index of refraction.
+        int_ior: f64,
+        /// Exterior index of refraction.
+        ext_ior: f64,
+        /// Scale of the reflection.
+        specular_reflectance: Rgb,
+        /// Scale of the transmission.
+        specular_transmittance: Rgb,
+    },
+    /// glTF 2.0 metallic-roughness (with KHR_materials_transmission / _ior / _anisotropy).
+    PbrMetallicRoughness {
+        /// Base colour (linear).
+        base_color: TexturedRgb,
+        /// Metalness in [0, 1] (glTF: the texture's B channel).
+        metallic: TexturedScalar,
+        /// Perceptual roughness in [0, 1] (glTF: the texture's G channel); alpha = roughness².
+        roughness: TexturedScalar,
+        /// Transmission weight in [0, 1] (KHR_materials_transmission, texture R channel).
+        transmission: TexturedScalar,
+        /// Index of refraction (KHR_materials_ior; 1.5 by default).
+        ior: f64,
+        /// Anisotropy strength in [0, 1] (KHR_materials_anisotropy; 0 = isotropic).
+        anisotropy: f64,
+        /// Rotation of the anisotropy direction from the tangent, radians.
+        anisotropy_rotation: f64,
+    },
+    /// Any lustre material specification (a fitted material JSON, `sgd:NAME`, an RGL `.bsdf`, a
+    /// MERL `.binary`, `kurt(…)`, …), resolved through `lustre_brdf::catalog` at load.
+    Spec(ResolvedSpec),
+}
+
+/// A lustre material specification and the BSDF it resolved to (shared by every hit).
+#[derive(Clone, Debug)]
+pub struct ResolvedSpec {
+    /// The specification as written (relative paths resolved against the scene file's folder).
+    pub spec: String,
+    /// The resolved BSDF.
+    pub bsdf: Arc<dyn Bsdf>,
+}
+
+impl ResolvedSpec {
+    /// Resolves `spec` through `lustre_brdf::catalog::resolve`; errors name `material`.
+    pub fn resolve(material: &str, spec: &str) -> Result<ResolvedSpec> {
+        let bsdf = lustre_brdf::catalog::resolve(spec)
+            .map_err(|e| SceneError::material(material, format!("spec {spec:?}: {e}")))?;
+        Ok(ResolvedSpec {
+            spec: spec.to_string(),
+            bsdf: Arc::from(bsdf),
+        })
+    }
+}
+
+/// Two resolved specs are equal when their specifications are.
+impl PartialEq for ResolvedSpec {
+    fn eq(&self, other: &Self) -> bool {
+        self.spec == other.spec
+    }
+}
+
+impl MaterialKind {
+    /// The kind's name in Mitsuba's spelling (`diffuse`, `roughplastic`, …; `pbr`, `spec`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            MaterialKind::Diffuse { .. } => "diffuse",
+            MaterialKind::Plastic { .. } => "plastic",
+            MaterialKind::RoughPlastic { .. } => "roughplastic",
+            MaterialKind::Conductor { .. } => "conductor",
+            MaterialKind::RoughConductor { .. } => "roughconductor",
+            MaterialKind::Dielectric { .. } => "dielectric",
+            MaterialKind::RoughDielectric { .. } => "roughdielectric",
+            MaterialKind::ThinDielectric { .. } => "thindielectric",
+            MaterialKind::PbrMetallicRoughness { .. } => "pbr",
+            MaterialKind::Spec(_) => "spec",
+        }
+    }
+}
+
+/// Alpha masking: a surface point is present with probability (or when above `cutoff`) `opacity`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AlphaMask {
+    /// Opacity in [0, 1].
+    pub opacity: TexturedScalar,
+    /// glTF `MASK`: opaque where opacity ≥ cutoff, absent elsewhere. `None`: Mitsuba's `mask`,
+    /// stochastic (present with probability = opacity).
+    pub cutoff: Option<f32>,
+}
+
+/// A tangent-space normal map (glTF convention: RGB in [0, 1] → [−1, 1], +y up in the texture).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalMap {
+    /// The texture (linear).
+    pub texture: TextureRef,
+    /// glTF `normalTexture.scale` (scales x and y).
+    pub scale: f32,
+}
+
+/// A named material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name (the Mitsuba id, the MTL or glTF material name); material overrides match it.
+    pub name: String,
+    /// Scattering model and parameters.
+    pub kind: MaterialKind,
+    /// Scatter on both sides alike (Mitsuba `twosided`, glTF `doubleSided`): the BSDF is applied
+    /// with the normal flipped towards the viewer.
+    pub two_sided: bool,
+    /// Alpha masking (cut-outs).
+    pub alpha_mask: Option<AlphaMask>,
+    /// Normal map.
+    pub normal_map: Option<NormalMap>,
+    /// Emission texture (sRGB-decoded) that multiplies the mesh's emitted radiance (glTF).
+    pub emission_texture: Option<TextureRef>,
+}
+
+impl Material {
+    /// A material with defaults (one-sided, no mask, no normal map, no emission texture).
+    pub fn new(name: impl Into<String>, kind: MaterialKind) -> Self {
+        Material {
+            name: name.into(),
+            kind,
+            two_sided: false,
+            alpha_mask: None,
+            normal_map: None,
+            emission_texture: None,
+        }
+    }
+
+    /// A Lambertian material of constant albedo.
+    pub fn diffuse(name: impl Into<String>, reflectance: Rgb) -> Self {
+        Material::new(
+            name,
+            MaterialKind::Diffuse {
+                reflectance: TexturedRgb::constant(reflectance),
+            },
+        )
+    }
+
+    /// Opacity at a hit (1 without a mask). With a cutoff the answer is 0 or 1.
+    pub fn alpha_at(&self, textures: &[Texture], uv: &[Vec2; 2]) -> f64 {
+        match &self.alpha_mask {
+            None => 1.0,
+            Some(m) => {
+                let a = m.opacity.at(textures, uv).clamp(0.0, 1.0);
+                match m.cutoff {
+                    Some(c) => {
+                        if a >= f64::from(c) {
+                            1.0
+                        } else {
+                            0.0
+                        }
+                    }
+                    None => a,
+                }
+            }
+        }
+    }
+
+    /// The tangent-space shading normal from the normal map at a hit (unit, +z = geometric
+    /// normal); `None` without a normal map.
+    pub fn normal_map_at(&self, textures: &[Texture], uv: &[Vec2; 2]) -> Option<DVec3> {
+        let m = self.normal_map?;
+        let t = lookup(textures, m.texture, uv)?;
+        let x = f64::from((2.0 * t[0] - 1.0) * m.scale);
+        let y = f64::from((2.0 * t[1] - 1.0) * m.scale);
+        let z = f64::from(2.0 * t[2] - 1.0).max(1e-4);
+        Some(DVec3::new(x, y, z).normalize())
+    }
+
+    /// The emission texture's factor at a hit (1 without one).
+    pub fn emission_at(&self, textures: &[Texture], uv: &[Vec2; 2]) -> Rgb {
+        match self.emission_texture.and_then(|t| lookup(textures, t, uv)) {
+            Some(s) => Rgb::new(f64::from(s[0]), f64::from(s[1]), f64::from(s[2])),
+            None => Rgb::ONE,
+        }
+    }
+
+    /// Checks that the material builds a BSDF (at uv = 0 and with every texture at its extreme
+    /// values clamped), that texture references are in range, and names the problem otherwise.
+    pub fn check(&self, textures: &[Texture]) -> Result<()> {
+        let refs = self.texture_refs();
+        if let Some(r) = refs.iter().find(|r| r.texture >= textures.len()) {
+            return Err(SceneError::material(
+                &self.name,
+                format!(
+                    "texture index {} out of range ({} textures)",
+                    r.texture,
+                    textures.len()
+                ),
+            ));
+        }
+        self.bsdf_at(textures, &[Vec2::ZERO; 2]).map(|_| ())
+    }
+
+    /// Every texture this material refers to.
+    pub fn texture_refs(&self) -> Vec<TextureRef> {
+        let mut m = self.clone();
+        let mut out = Vec::new();
+        m.for_each_texture_ref(|t| out.push(*t));
+        out
+    }
+
+    /// Calls `f` on every texture reference (to renumber textures when scenes are merged).
+    pub fn for_each_texture_ref(&mut self, mut f: impl FnMut(&mut TextureRef)) {
+        let rgb = |t: &mut TexturedRgb, f: &mut dyn FnMut(&mut TextureRef)| {
+            if let Some(r) = &mut t.texture {
+                f(r)
+            }
+        };
+        let sc = |t: &mut TexturedScalar, f: &mut dyn FnMut(&mut TextureRef)| {
+            if let Some(r) = &mut t.texture {
+                f(r)
+            }
+        };
+        match &mut self.kind {
+            MaterialKind::Diffuse { reflectance } => rgb(reflectance, &mut f),
+            MaterialKind::Plastic { diffuse, .. } => rgb(diffuse, &mut f),
+            MaterialKind::RoughPlastic { diffuse, alpha, .. } => {
+                rgb(diffuse, &mut f);
+                sc(alpha, &mut f);
+            }
+            MaterialKind::Conductor { specular, .. } => rgb(specular, &mut f),
+            MaterialKind::RoughConductor {
+                specular,
+                alpha_u,
+                alpha_v,
+                ..
+            } => {
+                rgb(specular, &mut f);
+                sc(alpha_u, &mut f);
+                sc(alpha_v, &mut f);
+            }
+            MaterialKind::RoughDielectric { alpha, .. } => sc(alpha, &mut f),
+            MaterialKind::PbrMetallicRoughness {
+                base_color,
+                metallic,
+                roughness,
+                transmission,
+                ..
+            } => {
+                rgb(base_color, &mut f);
+                sc(metallic, &mut f);
+                sc(roughness, &mut f);
+                sc(transmission, &mut f);
+            }
+            MaterialKind::Dielectric { .. }
+            | MaterialKind::ThinDielectric { .. }
+            | MaterialKind::Spec(_) => {}
+        }
+        if let Some(m) = &mut self.alpha_mask {
+            sc(&mut m.opacity, &mut f);
+        }
+        if let Some(n) = &mut self.normal_map {
+            f(&mut n.texture);
+        }
+        if let Some(t) = &mut self.emission_texture {
+            f(t);
+        }
+    }
+
+    /// Evaluates the textures at a hit (`uv[0]`, `uv[1]`: the hit's two UV sets, zero where the
+    /// mesh has none) and returns the BSDF there, in the local shading frame (+z the normal).
+    pub fn bsdf_at(&self, textures: &[Texture], uv: &[Vec2; 2]) -> Result<Box<dyn Bsdf>> {
+        let err = |e: lustre_brdf::Error| SceneError::material(&self.name, e.to_string());
+        match &self.kind {
+            MaterialKind::Diffuse { reflectance } => {
+                let kd = reflectance.at(textures, uv).map(|c| c.clamp(0.0, 1.0));
+                Ok(Box::new(
+                    lustre_brdf::models::lambert::Lambert::new(kd).map_err(err)?,
+                ))
+            }
+            MaterialKind::Spec(r) => Ok(Box::new(SharedBsdf(r.bsdf.clone()))),
+            other => Err(SceneError::material(
+                &self.name,
+                format!(
+                    "the {} model is not in lustre-brdf yet (waiting for the new BSDFs)",
+                    other.name()
+                ),
+            )),
+        }
+    }
+}
+
+/// A BSDF shared between hits (a resolved material spec).
+#[derive(Debug, Clone)]
+pub struct SharedBsdf(pub Arc<dyn Bsdf>);
+
+impl Bsdf for SharedBsdf {
+    fn name(&self) -> String {
+        self.0.name()
+    }
+    fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
+        self.0.eval(wi, wo)
+    }
+    fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
+        self.0.sample(wo, u1, u2)
+    }
+    fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
+        self.0.pdf(wi, wo)
+    }
+    fn flags(&self) -> lustre_brdf::BsdfFlags {
+        self.0.flags()
+    }
+    fn albedo(&self, wo: DVec3, n: usize) -> Rgb {
+        self.0.albedo(wo, n)
+    }
+}
+
+/// Mitsuba's named conductor presets reduced to RGB: (η, k) relative to vacuum. `none` is a
+/// perfect mirror (η = 0, k = 1).
+pub fn conductor_preset(name: &str) -> Option<(Rgb, Rgb)> {
+    if name.eq_ignore_ascii_case("none") {
+        return Some((Rgb::ZERO, Rgb::ONE));
+    }
+    None
+}

@@ -1,0 +1,359 @@
+//! Triangle meshes in world space, and the analytic shapes (rectangle, disk, cube, sphere) that
+//! the scene formats define, tessellated.
+//!
+//! Every mesh goes through [`Mesh::validated`]: non-finite positions, normals, tangents or UVs and
+//! out-of-range indices are errors naming the mesh and the element; attribute arrays must have one
+//! entry per vertex; degenerate triangles (a repeated index or zero area) are dropped and counted.
+//! Texture coordinates follow glTF: v = 0 is the top row of an image (OBJ's v is flipped on read).
+
+use crate::error::{Result, SceneError};
+use glam::{DMat4, Vec2, Vec3, Vec4};
+use lustre_brdf::Rgb;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Segments of a tessellated disk (a triangle fan of this many triangles).
+pub const DISK_SEGMENTS: u32 = 64;
+/// Longitudinal segments of a tessellated sphere.
+pub const SPHERE_SEGMENTS: u32 = 64;
+/// Latitudinal rings of a tessellated sphere.
+pub const SPHERE_RINGS: u32 = 32;
+
+/// Hints for the real-time renderer (probes, reflections, light maps); the path tracer ignores
+/// them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectHints {
+    /// Place a reflection probe at this object.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub probe: bool,
+    /// The object is a plane that should get a planar reflection.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub planar_reflector: bool,
+    /// Shade the object as diffuse only (no glossy lobe in real time).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub diffuse_only: bool,
+    /// Light-map density in texels per metre (world unit); `None`: the renderer's default.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lightmap_texels_per_metre: Option<f32>,
+}
+
+/// A triangle mesh in world space with one material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mesh {
+    /// A name (the shape's id, the OBJ object, the glTF node/mesh), used by hints and overrides.
+    pub name: String,
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Unit shading normals per vertex; `None`: use the geometric (face) normal.
+    pub normals: Option<Vec<Vec3>>,
+    /// Tangents per vertex (xyz unit, w = ±1 handedness of the bitangent), as in glTF.
+    pub tangents: Option<Vec<Vec4>>,
+    /// First texture-coordinate set (glTF convention: v = 0 at the top of an image).
+    pub uv0: Option<Vec<Vec2>>,
+    /// Second texture-coordinate set (light-map UVs, where the file has them).
+    pub uv1: Option<Vec<Vec2>>,
+    /// Triangles, counter-clockwise seen from the front.
+    pub indices: Vec<[u32; 3]>,
+    /// Index into [`crate::Scene::materials`].
+    pub material: usize,
+    /// Emitted radiance (W·sr⁻¹·m⁻², linear RGB) when the mesh is an area emitter, the same over
+    /// its surface and on both sides (modulated by the material's emission texture, if any).
+    pub emission: Option<Rgb>,
+    /// Real-time renderer hints.
+    pub hints: ObjectHints,
+}
+
+impl Mesh {
+    /// A mesh with positions and triangles only (no normals, UVs or emission).
+    pub fn new(
+        name: impl Into<String>,
+        positions: Vec<Vec3>,
+        indices: Vec<[u32; 3]>,
+        material: usize,
+    ) -> Self {
+        Mesh {
+            name: name.into(),
+            positions,
+            normals: None,
+            tangents: None,
+            uv0: None,
+            uv1: None,
+            indices,
+            material,
+            emission: None,
+            hints: ObjectHints::default(),
+        }
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// The corners of triangle `t`.
+    pub fn triangle(&self, t: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.indices[t];
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
+    }
+
+    /// Total surface area.
+    pub fn area(&self) -> f64 {
+        (0..self.indices.len())
+            .map(|t| {
+                let [a, b, c] = self.triangle(t);
+                0.5 * f64::from((b - a).cross(c - a).length())
+            })
+            .sum()
+    }
+
+    /// Axis-aligned bounds (min, max); `None` for a mesh without vertices.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut it = self.positions.iter();
+        let first = *it.next()?;
+        Some(it.fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))))
+    }
+
+    /// Checks the mesh and drops its degenerate triangles; returns it with the number dropped.
+    /// `path` names the file in errors. Errors: a non-finite position, normal, tangent or UV
+    /// (naming the vertex), an attribute array whose length differs from the positions', an index
+    /// out of range (naming the triangle), a material index ≥ `material_count`.
+    pub fn validated(mut self, path: &Path, material_count: usize) -> Result<(Mesh, usize)> {
+        let err = |problem: String| SceneError::geometry(path, &self.name, problem);
+        let n = self.positions.len();
+        if n > u32::MAX as usize {
+            return Err(err(format!("{n} vertices exceed the 32-bit index range")));
+        }
+        if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(err(format!(
+                "vertex {i} has a non-finite position {:?}",
+                self.positions[i]
+            )));
+        }
+        let check_len = |what: &str, len: Option<usize>| -> Result<()> {
+            match len {
+                Some(l) if l != n => Err(err(format!(
+                    "{l} {what} for {n} vertices (one per vertex expected)"
+                ))),
+                _ => Ok(()),
+            }
+        };
+        check_len("normals", self.normals.as_ref().map(Vec::len))?;
+        check_len("tangents", self.tangents.as_ref().map(Vec::len))?;
+        check_len("uv0 coordinates", self.uv0.as_ref().map(Vec::len))?;
+        check_len("uv1 coordinates", self.uv1.as_ref().map(Vec::len))?;
+        if let Some(i) = self.normals.iter().flatten().position(|v| !v.is_finite()) {
+            return Err(err(format!("normal {i} is not finite")));
+        }
+        if let Some(i) = self.tangents.iter().flatten().position(|v| !v.is_finite()) {
+            return Err(err(format!("tangent {i} is not finite")));
+        }
+        for (set, uvs) in [("uv0", &self.uv0), ("uv1", &self.uv1)] {
+            if let Some(i) = uvs.iter().flatten().position(|v| !v.is_finite()) {
+                return Err(err(format!("{set} coordinate {i} is not finite")));
+            }
+        }
+        if self.material >= material_count {
+            return Err(err(format!(
+                "material index {} out of range ({material_count} materials)",
+                self.material
+            )));
+        }
+        if let Some(e) = self.emission {
+            if !e.is_finite() || e.min_component() < 0.0 {
+                return Err(err(format!(
+                    "emitted radiance {:?} is negative or not finite",
+                    e.0
+                )));
+            }
+        }
+        if let Some((t, tri)) = self
+            .indices
+            .iter()
+            .enumerate()
+            .find(|(_, tri)| tri.iter().any(|&i| i as usize >= n))
+        {
+            return Err(err(format!(
+                "triangle {t} has index {tri:?} out of range ({n} vertices)"
+            )));
+        }
+        // Unit normals: renormalise; a zero normal falls back to none for the whole mesh.
+        if let Some(normals) = &mut self.normals {
+            if normals.iter().any(|v| v.length_squared() == 0.0) {
+                self.normals = None;
+            } else {
+                for v in normals.iter_mut() {
+                    *v = v.normalize();
+                }
+            }
+        }
+        let before = self.indices.len();
+        let positions = &self.positions;
+        self.indices.retain(|&[a, b, c]| {
+            if a == b || b == c || a == c {
+                return false;
+            }
+            let (pa, pb, pc) = (
+                positions[a as usize],
+                positions[b as usize],
+                positions[c as usize],
+            );
+            let cross = (pb - pa).cross(pc - pa);
+            cross.length_squared() > 0.0 && cross.is_finite()
+        });
+        let dropped = before - self.indices.len();
+        Ok((self, dropped))
+    }
+
+    /// Applies an affine transform to positions, normals (inverse transpose) and tangents.
+    /// A transform with a negative determinant flips the winding to keep faces front-facing.
+    pub fn transform(&mut self, m: &DMat4) {
+        let normal_m = m.inverse().transpose();
+        for p in &mut self.positions {
+            *p = m.transform_point3(p.as_dvec3()).as_vec3();
+        }
+        if let Some(normals) = &mut self.normals {
+            for v in normals.iter_mut() {
+                *v = normal_m
+                    .transform_vector3(v.as_dvec3())
+                    .normalize_or_zero()
+                    .as_vec3();
+            }
+        }
+        if let Some(tangents) = &mut self.tangents {
+            for t in tangents.iter_mut() {
+                let d = m
+                    .transform_vector3(t.truncate().as_dvec3())
+                    .normalize_or_zero()
+                    .as_vec3();
+                *t = d.extend(t.w);
+            }
+        }
+        if m.determinant() < 0.0 {
+            for tri in &mut self.indices {
+                tri.swap(1, 2);
+            }
+        }
+    }
+}
+
+/// Mitsuba's `rectangle`: the square [−1, 1]² in the plane z = 0, normal +z, uv (0,0) at (−1,−1)
+/// … (1,1) at (1,1) (v flipped to the glTF convention), two triangles.
+pub fn rectangle(name: &str, material: usize) -> Mesh {
+    let positions = vec![
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(-1.0, 1.0, 0.0),
+    ];
+    let uv = vec![
+        Vec2::new(0.0, 1.0),
+        Vec2::new(1.0, 1.0),
+        Vec2::new(1.0, 0.0),
+        Vec2::new(0.0, 0.0),
+    ];
+    let mut m = Mesh::new(name, positions, vec![[0, 1, 2], [0, 2, 3]], material);
+    m.normals = Some(vec![Vec3::Z; 4]);
+    m.uv0 = Some(uv);
+    m
+}
+
+/// Mitsuba's `disk`: the unit disk in the plane z = 0, normal +z, as a fan of [`DISK_SEGMENTS`]
+/// triangles around the centre.
+pub fn disk(name: &str, material: usize) -> Mesh {
+    let n = DISK_SEGMENTS;
+    let mut positions = vec![Vec3::ZERO];
+    let mut uv = vec![Vec2::new(0.5, 0.5)];
+    for k in 0..n {
+        let phi = 2.0 * std::f64::consts::PI * f64::from(k) / f64::from(n);
+        let (s, c) = phi.sin_cos();
+        positions.push(Vec3::new(c as f32, s as f32, 0.0));
+        uv.push(Vec2::new(0.5 + 0.5 * c as f32, 0.5 - 0.5 * s as f32));
+    }
+    let indices = (0..n).map(|k| [0, 1 + k, 1 + (k + 1) % n]).collect();
+    let mut m = Mesh::new(name, positions, indices, material);
+    m.normals = Some(vec![Vec3::Z; (n + 1) as usize]);
+    m.uv0 = Some(uv);
+    m
+}
+
+/// Mitsuba's `cube`: [−1, 1]³, 24 vertices with face normals, 12 triangles.
+pub fn cube(name: &str, material: usize) -> Mesh {
+    let mut positions = Vec::with_capacity(24);
+    let mut normals = Vec::with_capacity(24);
+    let mut uv = Vec::with_capacity(24);
+    let mut indices = Vec::with_capacity(12);
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let mut nrm = Vec3::ZERO;
+            nrm[axis] = sign;
+            // Two tangent axes forming a right-handed frame with the normal.
+            let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+            let base = positions.len() as u32;
+            for (s, t) in [(-1.0f32, -1.0f32), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                let mut p = nrm;
+                p[a] = s;
+                p[b] = t * sign;
+                positions.push(p);
+                normals.push(nrm);
+                uv.push(Vec2::new(0.5 + 0.5 * s, 0.5 - 0.5 * t));
+            }
+            indices.push([base, base + 1, base + 2]);
+            indices.push([base, base + 2, base + 3]);
+        }
+    }
+    let mut m = Mesh::new(name, positions, indices, material);
+    m.normals = Some(normals);
+    m.uv0 = Some(uv);
+    m
+}
+
+/// A sphere of `radius` at `center`, tessellated with [`SPHERE_SEGMENTS`] × [`SPHERE_RINGS`]
+/// (latitude–longitude grid, smooth normals; 2·64·31 = 3,968 triangles after the poles' degenerate
+/// ones are dropped).
+pub fn sphere(name: &str, center: Vec3, radius: f32, material: usize) -> Mesh {
+    let (nu, nv) = (SPHERE_SEGMENTS, SPHERE_RINGS);
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut uv = Vec::new();
+    for j in 0..=nv {
+        let theta = std::f64::consts::PI * f64::from(j) / f64::from(nv);
+        for i in 0..=nu {
+            let phi = 2.0 * std::f64::consts::PI * f64::from(i) / f64::from(nu);
+            let d = Vec3::new(
+                (theta.sin() * phi.cos()) as f32,
+                (theta.sin() * phi.sin()) as f32,
+                theta.cos() as f32,
+            );
+            positions.push(center + radius * d);
+            normals.push(d);
+            uv.push(Vec2::new(i as f32 / nu as f32, j as f32 / nv as f32));
+        }
+    }
+    let row = nu + 1;
+    let mut indices = Vec::new();
+    for j in 0..nv {
+        for i in 0..nu {
+            let (a, b, c, d) = (
+                j * row + i,
+                j * row + i + 1,
+                (j + 1) * row + i + 1,
+                (j + 1) * row + i,
+            );
+            if j != 0 {
+                indices.push([a, d, b]);
+            }
+            if j + 1 != nv {
+                indices.push([b, d, c]);
+            }
+        }
+    }
+    let mut m = Mesh::new(name, positions, indices, material);
+    m.normals = Some(normals);
+    m.uv0 = Some(uv);
+    m
+}
