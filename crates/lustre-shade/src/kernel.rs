@@ -670,7 +670,7 @@ pub fn shade_reference_mis(
                 let wt = s.weight();
                 if wt.is_finite() {
                     let wi = f.to_world(s.wi);
-                    let mis = if strategy == Strategy::Mis {
+                    let mis = if strategy == Strategy::Mis && !s.lobe.is_specular() {
                         power_heuristic(s.pdf, sampler.pdf(wi))
                     } else {
                         1.0

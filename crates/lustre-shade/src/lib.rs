@@ -16,6 +16,7 @@ pub mod metrics;
 pub mod mip;
 pub mod path;
 pub mod pattern;
+pub mod reference;
 pub mod render;
 pub mod scene;
 

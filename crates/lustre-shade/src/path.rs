@@ -95,8 +95,7 @@ impl Bsdf for BsdfRef<'_> {
 /// True when the sample came from a delta (specular) lobe: its pdf is a discrete probability,
 /// so it gets MIS weight 1 and the light it reaches is counted in full.
 pub fn is_delta(s: &BsdfSample) -> bool {
-    let _ = s;
-    false
+    s.lobe.is_specular()
 }
 
 /// World-space triangles with per-corner shading normals and texture coordinates, a material
@@ -477,6 +476,7 @@ impl<'a, 's> PathTracer<'a, 's> {
         let mut prev_pdf = 0.0;
         let mut prev_delta = true;
         let mut prev_p = o;
+        let mut eta_scale = 1.0;
         let mut depth = 0u32; // segments so far
         loop {
             depth += 1;
@@ -525,8 +525,10 @@ impl<'a, 's> PathTracer<'a, 's> {
             let wo_l = frame.to_local(wo);
             // Same side of both normals, or the direction is dropped.
             let consistent = |w: DVec3, wl: DVec3| (w.dot(ng) > 0.0) == (wl.z > 0.0);
-            // Next-event estimation.
-            if use_nee {
+            // Next-event estimation (pointless on a BSDF made only of Dirac lobes).
+            let lobes = bsdf.flags().lobes;
+            let only_delta = lobes.is_specular() && !lobes.is_non_delta();
+            if use_nee && !only_delta {
                 if let Some((wi, pdf_l, le, tmax)) = self.sample_light(&v, rng) {
                     let wi_l = frame.to_local(wi);
                     if consistent(wi, wi_l) {
@@ -559,13 +561,17 @@ impl<'a, 's> PathTracer<'a, 's> {
                 break;
             }
             beta = beta * wt;
+            // Refraction scaled radiance by 1/η²; roulette looks at the flux (pbrt's etaScale).
+            if s.lobe.is_transmission() {
+                eta_scale *= s.eta * s.eta;
+            }
             prev_delta = is_delta(&s);
             prev_pdf = s.pdf;
             prev_p = v.p;
             // With light sampling only, paths continue for indirect light but emitters they
             // reach are not counted (NEE counted them).
             if depth >= self.opts.rr_depth {
-                let q = beta.max_component().min(0.95);
+                let q = (beta.max_component() * eta_scale).min(0.95);
                 if rng.next_f64() >= q {
                     break;
                 }

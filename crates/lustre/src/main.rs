@@ -5,6 +5,7 @@ mod demo_cmd;
 mod fit_cmd;
 mod merl_cmd;
 mod plot_cmd;
+mod reference_cmd;
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
@@ -30,6 +31,8 @@ enum Command {
     Demo(demo_cmd::DemoArgs),
     /// Regular sampling vs Colbert–Křivánek vs reference (002 Fig. 8–10, 000 Fig. 4.24).
     Compare(compare_cmd::CompareArgs),
+    /// Path-traced reference of a scene (lustre TOML, glTF, OBJ, Mitsuba XML), resumable.
+    Reference(reference_cmd::ReferenceArgs),
     /// List built-in materials, analytic models with their parameters, and published fits.
     List,
     /// Print a material's flags, albedo and a few values.
@@ -47,6 +50,7 @@ fn main() -> anyhow::Result<()> {
         Command::Merl(args) => merl_cmd::run(&args),
         Command::Demo(args) => demo_cmd::run(&args),
         Command::Compare(args) => compare_cmd::run(&args),
+        Command::Reference(args) => reference_cmd::run(&args),
         Command::List => {
             println!("built-in materials:");
             for (name, what) in catalog::builtins() {
