@@ -28,6 +28,17 @@ const SPECS: &[&str] = &[
     "abc:gold-metallic-paint",
     "lafortune:gold-metallic-paint",
     "nbrdf:gold-metallic-paint",
+    "conductor(material=Au)",
+    "roughconductor(material=Au, alpha=0.1, distribution=ggx)",
+    "roughconductor(material=Cu, alpha_u=0.05, alpha_v=0.3, distribution=beckmann)",
+    "dielectric(int_ior=1.5, ext_ior=1)",
+    "roughdielectric(int_ior=1.5, ext_ior=1, alpha=0.1, distribution=ggx)",
+    "roughdielectric(int_ior=1.5, ext_ior=1, alpha=0.1, distribution=beckmann)",
+    "thindielectric(int_ior=1.5, ext_ior=1)",
+    "plastic(diffuse=0.5, int_ior=1.5, ext_ior=1)",
+    "roughplastic(diffuse=0.5, alpha=0.1, distribution=ggx, int_ior=1.5, ext_ior=1, nonlinear=1)",
+    "pbr(base_color=0.8, metallic=0.5, roughness=0.4)",
+    "twosided:roughconductor(material=Al, alpha=0.1, distribution=ggx)",
 ];
 
 fn pairs(n: usize) -> Vec<(DVec3, DVec3)> {

@@ -22,6 +22,11 @@
 //! The integral of `pdf` over the sphere plus the total probability of the delta lobes equals
 //! the probability that `sample` succeeds (the battery in [`crate::validate`] checks both parts).
 //!
+//! `sample` takes two uniform numbers. A model that picks a lobe before drawing a direction
+//! picks it with the first number and rescales it (pbrt's trick); one whose choice depends on the
+//! drawn direction (the rough dielectric: reflect or refract by F(wo·m)) splits the second number
+//! into two with [`crate::sampling::split_uniform`].
+//!
 //! # Refraction
 //!
 //! Transmissive models scale radiance by 1/η² across the interface (pbrt-v4's
@@ -205,7 +210,7 @@ impl BsdfSample {
     /// or a probability outside (0, 1].
     pub fn delta(wi: DVec3, weight: Rgb, prob: f64, lobe: LobeFlags, eta: f64) -> Option<Self> {
         let c = wi.z.abs();
-        if !(c > 0.0 && prob > 0.0 && prob <= 1.0) || !wi.is_finite() {
+        if !(c > 0.0 && prob > 0.0 && prob <= 1.0 && wi.is_finite()) {
             return None;
         }
         Some(BsdfSample {

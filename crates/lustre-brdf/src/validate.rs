@@ -308,7 +308,7 @@ pub fn chi2_test(
     for _ in 0..samples {
         if let Some(s) = bsdf.sample(wo, rng.next_f64(), rng.next_f64()) {
             if s.is_delta() {
-                if !(s.pdf > 0.0 && s.pdf <= 1.0) || !s.value.is_finite() || !s.wi.is_finite() {
+                if !(s.pdf > 0.0 && s.pdf <= 1.0 && s.value.is_finite() && s.wi.is_finite()) {
                     inconsistent += 1;
                     continue;
                 }

@@ -85,7 +85,8 @@ fn recovers_beckmann_and_ggx() {
 #[test]
 fn recovers_sgd() {
     // Synthetic SGD with the exact (numeric) Smith G1; the fit's shadowing is that of its own
-    // (α, p), so recovery is to the table's accuracy.
+    // (α, p), built by the same table code, so the exact parameters are a zero of the residual:
+    // recovered to 1.5e-13 (worst: α relative; measured), asserted to 1e-12.
     let ndf = Ndf::sgd(0.02, 0.8).unwrap();
     let fr = Fresnel::generalized_schlick(0.5, 0.2).unwrap();
     let m = CookTorrance::gray("s", 0.08, 0.4, ndf, G1Model::numeric(&ndf), fr).unwrap();
@@ -93,7 +94,7 @@ fn recovers_sgd() {
         &m,
         Distribution::Sgd,
         [0.08, 0.4, 0.02, 0.8, 0.5, 0.2],
-        1e-3,
+        1e-12,
         &no_refine(),
     );
     let c = &f.channels[0];

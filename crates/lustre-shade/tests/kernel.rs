@@ -127,6 +127,19 @@ fn furnace_regular_weightings() {
     // normalizes ∫ D cos θh dωh = 1, so rough lobes read high (+7…15 % at m = 0.4, measured):
     // "a few %" is asserted up to m = 0.2, a loose bound beyond.
     let (mut worst, mut worst_rough): (f64, f64) = (0.0, 0.0);
+    // Eq. 4.24 and 4.25 read high as well, and more (measured worst +2.5 % at m ≤ 0.1, +10.6 %
+    // at m = 0.2, +34.6 % at m = 0.4, all at θo = 60°); on a constant map they agree with each
+    // other to 0.4 %. Asserted with a margin: the bias stays within these bounds and positive.
+    let bound_424 = |m: f64| {
+        if m <= 0.1 {
+            0.03
+        } else if m <= 0.2 {
+            0.12
+        } else {
+            0.40
+        }
+    };
+    let mut worst_424: Vec<(f64, f64)> = Vec::new();
     for m in [0.05, 0.1, 0.2, 0.4] {
         let k = furnace(m);
         for budget in [9, 17, 30] {
@@ -152,6 +165,21 @@ fn furnace_regular_weightings() {
                     v[2],
                     100.0 * (v[2] / a - 1.0)
                 );
+                for (w, x) in [("4.24", v[1]), ("4.25", v[2])] {
+                    let e = x / a - 1.0;
+                    assert!(
+                        e > -0.005 && e < bound_424(m),
+                        "Eq. {w} at m {m}, θo {th}, budget {budget}: {:+.2}%",
+                        100.0 * e
+                    );
+                }
+                assert!(
+                    (v[1] / v[2] - 1.0).abs() < 0.01,
+                    "Eq. 4.24 {} vs 4.25 {}",
+                    v[1],
+                    v[2]
+                );
+                worst_424.push((m, (v[1] / a - 1.0).max(v[2] / a - 1.0)));
                 let e = (v[0] / a - 1.0).abs();
                 if m <= 0.2 {
                     worst = worst.max(e);
@@ -166,6 +194,19 @@ fn furnace_regular_weightings() {
         "worst Pdf002 relative error: {:.2}% (m ≤ 0.2), {:.2}% (m = 0.4)",
         100.0 * worst,
         100.0 * worst_rough
+    );
+    let w424 = |lo: f64, hi: f64| {
+        worst_424
+            .iter()
+            .filter(|x| x.0 > lo && x.0 <= hi)
+            .map(|x| x.1)
+            .fold(f64::MIN, f64::max)
+    };
+    println!(
+        "worst Eq. 4.24/4.25 relative error: {:+.2}% (m ≤ 0.1), {:+.2}% (m = 0.2), {:+.2}% (m = 0.4)",
+        100.0 * w424(0.0, 0.1),
+        100.0 * w424(0.1, 0.2),
+        100.0 * w424(0.2, 0.4)
     );
     assert!(worst < 0.04, "Pdf002 off the albedo by {worst}");
     assert!(
@@ -244,6 +285,7 @@ fn convergence_on_a_smooth_map() {
         );
         ck_err.push(e);
     }
+    let mut errors: Vec<(bool, Weighting, usize, f64)> = Vec::new();
     for (name, thesis) in [("002 concentric", false), ("thesis", true)] {
         for w in [
             Weighting::Pdf002,
@@ -268,10 +310,29 @@ fn convergence_on_a_smooth_map() {
                     "  {name} {w:?} budget {budget:3}: mean relative error {:.3}%",
                     100.0 * e
                 );
-                if !thesis && w == Weighting::Pdf002 && budget >= 17 {
-                    assert!(e < 0.06, "regular {w:?} {budget}: {e}");
+                if w == Weighting::Pdf002 && budget >= 17 {
+                    // Measured: 4.6 %, 3.5 % (002 concentric), 5.0 %, 3.5 % (thesis).
+                    assert!(e < 0.06, "{name} {w:?} {budget}: {e}");
+                } else if w != Weighting::Pdf002 {
+                    // Eq. 4.24/4.25 stay biased, 12–15 % (concentric) and 17–18.6 % (thesis
+                    // patterns) at every budget (measured): bounded, and worse than Pdf002.
+                    assert!(e < 0.20, "{name} {w:?} {budget}: {e}");
                 }
+                errors.push((thesis, w, budget, e));
             }
+        }
+    }
+    for &(thesis, w, budget, e) in &errors {
+        if w != Weighting::Pdf002 && budget >= 17 {
+            let pdf002 = errors
+                .iter()
+                .find(|x| x.0 == thesis && x.1 == Weighting::Pdf002 && x.2 == budget)
+                .map(|x| x.3)
+                .expect("Pdf002 measured");
+            assert!(
+                pdf002 < e,
+                "budget {budget}: Pdf002 {pdf002} not below {w:?} {e}"
+            );
         }
     }
     assert!(ck_err[3] < 0.03, "CK 512 vs reference {}", ck_err[3]);
@@ -336,7 +397,11 @@ fn convergence_on_a_spot_map() {
         println!("  CK N = {n:4}: mean relative error {:.2}%", 100.0 * e);
         ck_err.push(e);
     }
-    for budget in [5, 9, 17, 30] {
+    // Measured mean relative errors of the regular Pdf002 kernel on this map: 27.1 %, 26.4 %,
+    // 17.4 %, 15.0 % at budgets 5, 9, 17, 30 (the reference's own noise: ~1 %, the MC/QMC
+    // difference above). Asserted with a margin, and the decrease from 5 to 30.
+    let mut regular_err = Vec::new();
+    for (budget, bound) in [(5, 0.30), (9, 0.29), (17, 0.20), (30, 0.17)] {
         let got: Vec<Rgb> = px
             .iter()
             .map(|(f, wo, k)| {
@@ -360,7 +425,13 @@ fn convergence_on_a_spot_map() {
             per.join(", ")
         );
         assert!(got.iter().all(|v| v.is_finite()));
+        assert!(e < bound, "regular Pdf002 budget {budget}: {e}");
+        regular_err.push(e);
     }
+    assert!(
+        regular_err[3] < regular_err[0] - 0.08,
+        "regular does not improve with the budget: {regular_err:?}"
+    );
     assert!(ck_err[3] < ck_err[0], "CK does not converge: {ck_err:?}");
 }
 

@@ -76,6 +76,15 @@ fn info(spec: &str) -> anyhow::Result<()> {
         "  reciprocal: {}, energy conserving: {}, transmission: {}, anisotropic: {}",
         flags.reciprocal, flags.energy_conserving, flags.transmission, flags.anisotropic
     );
+    println!(
+        "  lobes: {:?}{}",
+        flags.lobes,
+        if flags.has_delta() {
+            " (has Dirac lobes: eval/pdf see only the rest)"
+        } else {
+            ""
+        }
+    );
     println!("  directional albedo (importance-sampled, 16384 Hammersley points):");
     for deg in [0.0, 30.0, 60.0, 80.0] {
         let wo = frame::spherical(frame::deg(deg), 0.0);

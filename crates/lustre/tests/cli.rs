@@ -77,7 +77,21 @@ fn info_and_list() {
     let s = String::from_utf8_lossy(&out.stdout);
     assert!(s.contains("transmission: true"), "{s}");
     let out = lustre().arg("list").output().expect("runs");
-    assert!(String::from_utf8_lossy(&out.stdout).contains("kurt-demo"));
+    let list = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        list.contains("kurt-demo") && list.contains("roughconductor"),
+        "{list}"
+    );
+    let out = lustre()
+        .args(["info", "conductor(material=Au)"])
+        .output()
+        .expect("runs");
+    assert!(out.status.success());
+    let s = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        s.contains("SPECULAR") && s.contains("has Dirac lobes"),
+        "{s}"
+    );
 }
 
 #[test]

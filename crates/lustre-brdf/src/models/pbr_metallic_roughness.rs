@@ -94,7 +94,12 @@ impl Bsdf for PbrMetallicRoughness {
             return Rgb::ZERO;
         }
         let h = (wi + wo).normalize();
-        let spec = self.distribution.d(h) * self.distribution.g(wi, wo, h) / (4.0 * wi.z * wo.z);
+        let (d, denom) = (self.distribution.d(h), 4.0 * wi.z * wo.z);
+        let spec = if d > 0.0 && denom > 0.0 {
+            d * self.distribution.g(wi, wo, h) / denom
+        } else {
+            0.0
+        };
         let w = schlick5(wo.dot(h));
         let c = self.base_color;
         let metal = c.map(|x| spec * (x + (1.0 - x) * w));

@@ -65,6 +65,19 @@ impl Plastic {
         })
     }
 
+    /// The same coating with other colours in [0, 1] (cheap: Fdr is kept), for textures.
+    pub fn with_reflectances(self, diffuse: Rgb, specular: Rgb) -> Result<Self> {
+        check_rgb("diffuse_reflectance", diffuse, 0.0, 1.0)?;
+        check_rgb("specular_reflectance", specular, 0.0, 1.0)?;
+        let (d, s) = (diffuse.mean(), specular.mean());
+        Ok(Plastic {
+            diffuse_reflectance: diffuse,
+            specular_reflectance: specular,
+            specular_weight: if d + s > 0.0 { s / (d + s) } else { 0.5 },
+            ..self
+        })
+    }
+
     /// The coating's internal diffuse reflectance Fdr(1/η).
     pub fn internal_reflectance(&self) -> f64 {
         self.fdr_int

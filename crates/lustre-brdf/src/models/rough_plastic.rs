@@ -33,8 +33,10 @@ use std::f64::consts::FRAC_1_PI;
 /// `MI_ROUGH_TRANSMITTANCE_RES`).
 const TABLE_RES: usize = 64;
 
-/// A rough plastic.
-#[derive(Clone, Debug, PartialEq)]
+/// A rough plastic. The tables depend only on (distribution, η): a textured material builds one
+/// per (roughness, η) and varies the colours per hit with
+/// [`RoughPlastic::with_reflectances`], which is cheap (the value is `Copy`, tables inline).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RoughPlastic {
     /// The coating's (isotropic) microfacet distribution.
     pub distribution: MicrofacetDistribution,
@@ -46,7 +48,7 @@ pub struct RoughPlastic {
     pub eta: f64,
     /// Mitsuba's `nonlinear` flag.
     pub nonlinear: bool,
-    external_transmittance: Vec<f64>,
+    external_transmittance: [f64; TABLE_RES],
     internal_reflectance: f64,
     specular_weight: f64,
 }
@@ -117,10 +119,10 @@ impl RoughPlastic {
             .map(|i| (i as f64 / (TABLE_RES - 1) as f64).max(1e-6))
             .collect();
         let dir = |mu: f64| DVec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
-        let external_transmittance: Vec<f64> = mus
-            .iter()
-            .map(|&mu| external_transmittance(&distribution, dir(mu), eta, 32))
-            .collect();
+        let mut table = [0.0; TABLE_RES];
+        for (t, &mu) in table.iter_mut().zip(&mus) {
+            *t = external_transmittance(&distribution, dir(mu), eta, 32);
+        }
         // Mitsuba: mean over the same cosines of R_int(μ) μ, times 2.
         let internal_reflectance = 2.0
             * mus
@@ -128,7 +130,7 @@ impl RoughPlastic {
                 .map(|&mu| rough_reflectance(&distribution, dir(mu), 1.0 / eta, 64) * mu)
                 .sum::<f64>()
             / TABLE_RES as f64;
-        if !(internal_reflectance < 1.0) {
+        if internal_reflectance.is_nan() || internal_reflectance >= 1.0 {
             return Err(Error::param(
                 "eta",
                 eta,
@@ -142,9 +144,23 @@ impl RoughPlastic {
             specular_reflectance,
             eta,
             nonlinear,
-            external_transmittance,
+            external_transmittance: table,
             internal_reflectance,
             specular_weight: if d + s > 0.0 { s / (d + s) } else { 0.5 },
+        })
+    }
+
+    /// The same coating (tables kept) with other colours in [0, 1]: what a texture lookup
+    /// produces per shading point.
+    pub fn with_reflectances(self, diffuse: Rgb, specular: Rgb) -> Result<Self> {
+        check_rgb("diffuse_reflectance", diffuse, 0.0, 1.0)?;
+        check_rgb("specular_reflectance", specular, 0.0, 1.0)?;
+        let (d, s) = (diffuse.mean(), specular.mean());
+        Ok(RoughPlastic {
+            diffuse_reflectance: diffuse,
+            specular_reflectance: specular,
+            specular_weight: if d + s > 0.0 { s / (d + s) } else { 0.5 },
+            ..self
         })
     }
 

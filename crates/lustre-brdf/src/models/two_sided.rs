@@ -15,7 +15,7 @@ use crate::rgb::Rgb;
 use glam::DVec3;
 
 /// A reflection-only BSDF made two-sided.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TwoSided<B> {
     inner: B,
 }
