@@ -187,3 +187,86 @@ impl CameraPath {
 fn orientation(c: &Camera) -> DQuat {
     DQuat::from_mat3(&glam::DMat3::from_cols(c.right(), c.up, -c.forward))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cam(axis: FovAxis) -> Camera {
+        Camera::look_at("c", DVec3::ZERO, DVec3::NEG_Z, DVec3::Y, 60.0, axis).unwrap()
+    }
+
+    #[test]
+    fn fov_axes() {
+        let t = |deg: f64| (deg.to_radians() / 2.0).tan();
+        let y = |c: &Camera, a: f64| t(c.fov_y_deg(a));
+        assert!((cam(FovAxis::Y).fov_y_deg(2.0) - 60.0).abs() < 1e-12);
+        assert!((y(&cam(FovAxis::X), 2.0) - t(60.0) / 2.0).abs() < 1e-12);
+        assert!((y(&cam(FovAxis::Diagonal), 1.0) - t(60.0) / 2f64.sqrt()).abs() < 1e-12);
+        assert!((cam(FovAxis::Smaller).fov_y_deg(2.0) - 60.0).abs() < 1e-12);
+        assert!((y(&cam(FovAxis::Smaller), 0.5) - 2.0 * t(60.0)).abs() < 1e-12);
+        assert!((y(&cam(FovAxis::Larger), 2.0) - t(60.0) / 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn frame_and_rays() {
+        let c = cam(FovAxis::Y);
+        assert!((c.right() - DVec3::X).length() < 1e-12);
+        let m = c.to_world();
+        assert!((m.transform_vector3(DVec3::NEG_Z) - c.forward).length() < 1e-12);
+        // The top-left pixel corner looks up and to the left.
+        let d = c.ray_direction(0.0, 0.0, 200, 100);
+        assert!(d.x < 0.0 && d.y > 0.0);
+        assert!((d.y / -d.z - t30()).abs() < 1e-12);
+        assert!(Camera::look_at("c", DVec3::ZERO, DVec3::Y, DVec3::Y, 60.0, FovAxis::Y).is_none());
+        assert!(Camera::look_at("c", DVec3::ZERO, DVec3::X, DVec3::Y, 180.0, FovAxis::Y).is_none());
+    }
+
+    fn t30() -> f64 {
+        30f64.to_radians().tan()
+    }
+
+    #[test]
+    fn paths_interpolate_and_clamp() {
+        let a = cam(FovAxis::Y);
+        let mut b = Camera::look_at(
+            "b",
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(3.0, 0.0, 0.0),
+            DVec3::Y,
+            40.0,
+            FovAxis::Y,
+        )
+        .unwrap();
+        b.name = "b".into();
+        let p = CameraPath {
+            name: "p".into(),
+            keyframes: vec![
+                Keyframe {
+                    time: 1.0,
+                    camera: a.clone(),
+                },
+                Keyframe {
+                    time: 3.0,
+                    camera: b.clone(),
+                },
+            ],
+            looped: false,
+        };
+        assert_eq!(p.at(0.0).unwrap(), a);
+        assert_eq!(p.at(5.0).unwrap(), b);
+        let m = p.at(2.0).unwrap();
+        assert!((m.position - DVec3::new(1.0, 0.0, 0.0)).length() < 1e-12);
+        assert!((m.fov_deg - 50.0).abs() < 1e-12);
+        // Halfway between looking down −z and +x: 45° between them.
+        let half = DVec3::new(1.0, 0.0, -1.0).normalize();
+        assert!((m.forward - half).length() < 1e-9, "{}", m.forward);
+        assert!(CameraPath {
+            name: "e".into(),
+            keyframes: vec![],
+            looped: true
+        }
+        .at(1.0)
+        .is_none());
+    }
+}

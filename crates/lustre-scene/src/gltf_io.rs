@@ -64,6 +64,22 @@ pub fn from_slice(path: &Path, bytes: &[u8]) -> Result<Scene> {
             });
         }
     }
+    // gltf-json 1.4.1's validation indexes the POSITION accessor before checking that it
+    // exists (a panic): check that reference first.
+    let root = unvalidated.as_json();
+    for (mi, mesh) in root.meshes.iter().enumerate() {
+        for (pi, prim) in mesh.primitives.iter().enumerate() {
+            for (sem, index) in &prim.attributes {
+                if index.value() >= root.accessors.len() {
+                    return Err(fmt(format!(
+                        "mesh {mi} primitive {pi}: attribute {sem:?} names accessor {} of {}",
+                        index.value(),
+                        root.accessors.len()
+                    )));
+                }
+            }
+        }
+    }
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice(bytes).map_err(|e| fmt(format!("invalid glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
@@ -410,6 +426,37 @@ impl Reader<'_> {
         check("anisotropyRotation", anisotropy_rotation, -1e3, 1e3)?;
         for (i, c) in bc.iter().enumerate() {
             check(&format!("baseColorFactor[{i}]"), f64::from(*c), 0.0, 1.0)?;
+        }
+        let warn = |scene: &mut Scene, what: String| {
+            scene.warnings.push(format!(
+                "{}: material {name:?}: {what}",
+                self.path.display()
+            ));
+        };
+        if transmission.factor > 0.0 && transmission.factor < 1.0 || transmission.texture.is_some()
+        {
+            warn(
+                &mut self.scene,
+                format!(
+                "transmission {} read per hit as 0 or 1 (threshold 0.5): no partial transmission",
+                transmission.factor
+            ),
+            );
+        }
+        if anisotropy != 0.0 {
+            warn(
+                &mut self.scene,
+                format!(
+                    "anisotropy {anisotropy} ignored: the glTF BRDF in lustre-brdf is isotropic"
+                ),
+            );
+        }
+        if transmission.factor == 0.0 && transmission.texture.is_none() && (ior - 1.5).abs() > 1e-6
+        {
+            warn(
+                &mut self.scene,
+                format!("ior {ior} ignored: the glTF BRDF uses 1.5 (F0 = 0.04)"),
+            );
         }
         let mut mat = Material::new(
             name.clone(),

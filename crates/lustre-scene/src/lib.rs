@@ -6,11 +6,34 @@
 //!   real-time hints), materials ([`Material`]: a model with possibly textured parameters,
 //!   evaluated at a hit by [`Material::bsdf_at`]), textures (linear f32), an optional
 //!   environment, cameras, camera paths, the film size, and the warnings of loading.
-//! - [`Scene::load`] picks the reader by extension: `.gltf`/`.glb`, `.obj`, `.xml` (Mitsuba 0.5
-//!   or 3.x), `.toml` (a lustre scene file). Relative paths resolve against the file's folder.
+//! - [`Scene::load`] picks the reader by extension: `.gltf`/`.glb` ([`gltf_io`]), `.obj`
+//!   ([`obj`]), `.xml` (Mitsuba 0.5 or 3.x, [`mitsuba`]), `.toml` (a lustre scene file,
+//!   [`scene_file`]), then checks that every material builds. In-memory entry points (for
+//!   fuzzing and tests): [`mitsuba::from_str`], [`gltf_io::from_slice`], [`obj::from_slice`],
+//!   [`scene_file::from_str`] / [`scene_file::parse`]; relative paths resolve against the given
+//!   path's folder.
 //!
-//! Conventions: +y up, right-handed, metres where the file says so; triangles counter-clockwise
-//! from the front; UVs with v = 0 at the top of an image (glTF); colours linear RGB.
+//! Conventions: +y up, right-handed; triangles counter-clockwise from the front, and an area
+//! emitter emits from its front face ([`Mesh::emission`], Mitsuba's `area`); UVs with v = 0 at
+//! the top of an image (glTF; OBJ's v is flipped on read); colours linear RGB; environment maps
+//! in lustre-env's equirect convention (Mitsuba's envmap is turned by half a turn on read).
+//!
+//! ```no_run
+//! use lustre_scene::Scene;
+//! let scene = Scene::load("scene.xml".as_ref())?;
+//! let camera = scene.camera(None).expect("a camera");
+//! let dir = camera.ray_direction(0.5, 0.5, scene.film.width, scene.film.height);
+//! for mesh in &scene.meshes {
+//!     let material = &scene.materials[mesh.material];
+//!     let bsdf = material.bsdf_at(&scene.textures, &[lustre_scene::Vec2::ZERO; 2])?;
+//!     # let _ = (bsdf, dir);
+//! }
+//! # Ok::<(), lustre_scene::SceneError>(())
+//! ```
+//!
+//! Measured (debug profile with optimized dependencies, 2 shared cores): the Modern Hall XML
+//! loads in 0.5–1.1 s (most of it building the two rough-plastic coating tables), its glTF in
+//! 0.23–0.34 s, the Cornell box OBJ in < 2 ms.
 
 pub mod camera;
 pub mod environment;
@@ -161,7 +184,7 @@ impl Scene {
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase())
             .unwrap_or_default();
-        match ext.as_str() {
+        let scene = match ext.as_str() {
             "xml" => mitsuba::read(path),
             "toml" => {
                 let bytes = read_file(path)?;
@@ -177,7 +200,23 @@ impl Scene {
                     "unknown scene extension {ext:?} (expected .gltf, .glb, .obj, .xml or .toml)"
                 ),
             )),
+        }?;
+        scene.check_materials()?;
+        Ok(scene)
+    }
+
+    /// Checks that every material builds its BSDF ([`Material::check`]) and prepares the shared
+    /// models; the error names the material and the file.
+    pub fn check_materials(&self) -> Result<()> {
+        for m in &self.materials {
+            m.check(&self.textures).map_err(|e| match e {
+                SceneError::Material { material, problem } => {
+                    SceneError::format(&self.source, format!("material {material:?}: {problem}"))
+                }
+                other => other,
+            })?;
         }
+        Ok(())
     }
 
     /// The texture read from `path` in `color_space`, loaded once (later calls return the same

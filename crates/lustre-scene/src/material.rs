@@ -9,8 +9,19 @@
 use crate::error::{Result, SceneError};
 use crate::texture::Texture;
 use glam::Vec2;
+use lustre_brdf::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
+use lustre_brdf::models::conductor::{ComplexIor, Conductor};
+use lustre_brdf::models::dielectric::Dielectric;
+use lustre_brdf::models::lambert::Lambert;
+use lustre_brdf::models::pbr_metallic_roughness::{PbrMetallicRoughness, PBR_ALPHA_MIN};
+use lustre_brdf::models::plastic::Plastic;
+use lustre_brdf::models::rough_conductor::RoughConductor;
+use lustre_brdf::models::rough_dielectric::RoughDielectric;
+use lustre_brdf::models::rough_plastic::RoughPlastic;
+use lustre_brdf::models::thin_dielectric::ThinDielectric;
+use lustre_brdf::models::two_sided::TwoSided;
 use lustre_brdf::{Bsdf, BsdfSample, DVec3, Rgb};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// A texture reference: which texture and which UV set.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -309,6 +320,8 @@ pub struct Material {
     pub normal_map: Option<NormalMap>,
     /// Emission texture (sRGB-decoded) that multiplies the mesh's emitted radiance (glTF).
     pub emission_texture: Option<TextureRef>,
+    /// Prepared models (see [`Material::bsdf_at`]); filled on first use.
+    cache: BsdfCache,
 }
 
 impl Material {
@@ -321,6 +334,7 @@ impl Material {
             alpha_mask: None,
             normal_map: None,
             emission_texture: None,
+            cache: BsdfCache::default(),
         }
     }
 
@@ -458,25 +472,306 @@ impl Material {
 
     /// Evaluates the textures at a hit (`uv[0]`, `uv[1]`: the hit's two UV sets, zero where the
     /// mesh has none) and returns the BSDF there, in the local shading frame (+z the normal).
+    ///
+    /// Models (lustre-brdf): `Diffuse` → Lambert; `Plastic`/`RoughPlastic` → Mitsuba's
+    /// formulations; `Conductor`/`RoughConductor` → complex-Fresnel metals (anisotropic when
+    /// αu ≠ αv); `Dielectric`/`RoughDielectric`/`ThinDielectric`; `PbrMetallicRoughness` →
+    /// the glTF BRDF, or, with transmission ≥ ½, a (rough) dielectric of the material's ior
+    /// tinted by the base colour (roughness² as α; the glTF model has no transmission lobe);
+    /// `Spec` → the resolved catalog BSDF. Reflection-only models of a two-sided material are
+    /// wrapped in `TwoSided` (transmissive models are two-sided by nature). Texel values are
+    /// clamped to the models' ranges (colours to [0, 1], α to [1e-4, 1]).
+    ///
+    /// Cost: a material without textured BSDF parameters is built once and shared (an `Arc`);
+    /// a textured (rough) plastic clones a prototype built once (its coating tables cost
+    /// ≈ 0.3 M samples) with `with_reflectances`; the other models are cheap to build.
     pub fn bsdf_at(&self, textures: &[Texture], uv: &[Vec2; 2]) -> Result<Box<dyn Bsdf>> {
         let err = |e: lustre_brdf::Error| SceneError::material(&self.name, e.to_string());
-        match &self.kind {
-            MaterialKind::Diffuse { reflectance } => {
-                let kd = reflectance.at(textures, uv).map(|c| c.clamp(0.0, 1.0));
-                Ok(Box::new(
-                    lustre_brdf::models::lambert::Lambert::new(kd).map_err(err)?,
-                ))
+        if let MaterialKind::Spec(r) = &self.kind {
+            return self.sided(Box::new(SharedBsdf(r.bsdf.clone())));
+        }
+        let textured = self.kind_is_textured();
+        if !textured {
+            if let Some(Prepared::Whole(key, two_sided, b)) = self.cache.0.get() {
+                if *key == self.kind && *two_sided == self.two_sided {
+                    return Ok(Box::new(SharedBsdf(b.clone())));
+                }
             }
-            MaterialKind::Spec(r) => Ok(Box::new(SharedBsdf(r.bsdf.clone()))),
-            other => Err(SceneError::material(
-                &self.name,
-                format!(
-                    "the {} model is not in lustre-brdf yet (waiting for the new BSDFs)",
-                    other.name()
-                ),
-            )),
+        }
+        let b = self.build(textures, uv).map_err(err)?;
+        let b = self.sided(b)?;
+        if !textured {
+            let arc: Arc<dyn Bsdf> = Arc::from(b);
+            let _ = self.cache.0.set(Prepared::Whole(
+                self.kind.clone(),
+                self.two_sided,
+                arc.clone(),
+            ));
+            return Ok(Box::new(SharedBsdf(arc)));
+        }
+        Ok(b)
+    }
+
+    fn sided(&self, b: Box<dyn Bsdf>) -> Result<Box<dyn Bsdf>> {
+        if self.two_sided && !b.flags().transmission {
+            let t =
+                TwoSided::new(b).map_err(|e| SceneError::material(&self.name, e.to_string()))?;
+            Ok(Box::new(t))
+        } else {
+            Ok(b)
         }
     }
+
+    /// Whether a BSDF parameter (not the mask, normal map or emission) is textured.
+    fn kind_is_textured(&self) -> bool {
+        let mut m = Material::new("", self.kind.clone());
+        let mut any = false;
+        m.for_each_texture_ref(|_| any = true);
+        any
+    }
+
+    /// A (rough) plastic's prototype, built once per material with the base colour at the
+    /// texture's mean; hits clone it and set the base colour.
+    fn coat_prototype(&self, textures: &[Texture]) -> lustre_brdf::Result<Prepared> {
+        if let Some(p @ (Prepared::Plastic(key, _) | Prepared::RoughPlastic(key, _))) =
+            self.cache.0.get()
+        {
+            if *key == self.kind {
+                return Ok(p.clone());
+            }
+        }
+        let mean = |t: &TexturedRgb| -> Rgb {
+            let m = t
+                .texture
+                .and_then(|r| textures.get(r.texture))
+                .map_or([1.0; 4], |t| t.mean());
+            Rgb::new(t.factor[0] * m[0], t.factor[1] * m[1], t.factor[2] * m[2]).map(unit)
+        };
+        let p = match &self.kind {
+            MaterialKind::Plastic {
+                diffuse,
+                specular,
+                int_ior,
+                ext_ior,
+                nonlinear,
+            } => Prepared::Plastic(
+                self.kind.clone(),
+                Plastic::new(
+                    mean(diffuse),
+                    specular.map(unit),
+                    *int_ior,
+                    *ext_ior,
+                    *nonlinear,
+                )?,
+            ),
+            MaterialKind::RoughPlastic {
+                diffuse,
+                specular,
+                alpha,
+                distribution,
+                int_ior,
+                ext_ior,
+                nonlinear,
+            } => Prepared::RoughPlastic(
+                self.kind.clone(),
+                Box::new(RoughPlastic::new(
+                    microfacet_type(*distribution),
+                    clamp_alpha(alpha.factor),
+                    mean(diffuse),
+                    specular.map(unit),
+                    *int_ior,
+                    *ext_ior,
+                    *nonlinear,
+                )?),
+            ),
+            _ => {
+                return Err(lustre_brdf::Error::NotFound(
+                    "not a plastic material".to_string(),
+                ))
+            }
+        };
+        let _ = self.cache.0.set(p.clone());
+        Ok(p)
+    }
+
+    fn build(&self, textures: &[Texture], uv: &[Vec2; 2]) -> lustre_brdf::Result<Box<dyn Bsdf>> {
+        let rgb = |t: &TexturedRgb| t.at(textures, uv).map(unit);
+        let alpha = |t: &TexturedScalar| clamp_alpha(t.at(textures, uv));
+        Ok(match &self.kind {
+            MaterialKind::Diffuse { reflectance } => Box::new(Lambert::new(rgb(reflectance))?),
+            MaterialKind::Plastic {
+                diffuse, specular, ..
+            } => match self.coat_prototype(textures)? {
+                Prepared::Plastic(_, p) => {
+                    Box::new(p.with_reflectances(rgb(diffuse), specular.map(unit))?)
+                }
+                _ => return Err(mismatch()),
+            },
+            MaterialKind::RoughPlastic {
+                diffuse,
+                specular,
+                alpha: a,
+                ..
+            } if a.texture.is_none() => match self.coat_prototype(textures)? {
+                Prepared::RoughPlastic(_, p) => {
+                    Box::new((*p).with_reflectances(rgb(diffuse), specular.map(unit))?)
+                }
+                _ => return Err(mismatch()),
+            },
+            MaterialKind::RoughPlastic {
+                diffuse,
+                specular,
+                alpha: a,
+                distribution,
+                int_ior,
+                ext_ior,
+                nonlinear,
+            } => Box::new(RoughPlastic::new(
+                microfacet_type(*distribution),
+                alpha(a),
+                rgb(diffuse),
+                specular.map(unit),
+                *int_ior,
+                *ext_ior,
+                *nonlinear,
+            )?),
+            MaterialKind::Conductor { eta, k, specular } => {
+                Box::new(Conductor::new(*eta, *k, rgb(specular))?)
+            }
+            MaterialKind::RoughConductor {
+                eta,
+                k,
+                specular,
+                alpha_u,
+                alpha_v,
+                distribution,
+            } => Box::new(RoughConductor::new(
+                MicrofacetDistribution::new(
+                    microfacet_type(*distribution),
+                    alpha(alpha_u),
+                    alpha(alpha_v),
+                )?,
+                ComplexIor::new(*eta, *k)?,
+                rgb(specular),
+            )?),
+            MaterialKind::Dielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => Box::new(Dielectric::new(*int_ior, *ext_ior)?.with_tints(
+                specular_reflectance.map(unit),
+                specular_transmittance.map(unit),
+            )?),
+            MaterialKind::RoughDielectric {
+                int_ior,
+                ext_ior,
+                alpha: a,
+                distribution,
+                specular_reflectance,
+                specular_transmittance,
+            } => Box::new(
+                RoughDielectric::new(
+                    MicrofacetDistribution::isotropic(microfacet_type(*distribution), alpha(a))?,
+                    *int_ior,
+                    *ext_ior,
+                )?
+                .with_tints(
+                    specular_reflectance.map(unit),
+                    specular_transmittance.map(unit),
+                )?,
+            ),
+            MaterialKind::ThinDielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => Box::new(ThinDielectric::new(*int_ior, *ext_ior)?.with_tints(
+                specular_reflectance.map(unit),
+                specular_transmittance.map(unit),
+            )?),
+            MaterialKind::PbrMetallicRoughness {
+                base_color,
+                metallic,
+                roughness,
+                transmission,
+                ior,
+                ..
+            } => {
+                let c = rgb(base_color);
+                let r = unit(roughness.at(textures, uv));
+                if transmission.at(textures, uv) >= 0.5 {
+                    let a = r * r;
+                    if a < PBR_ALPHA_MIN {
+                        Box::new(Dielectric::new(*ior, 1.0)?.with_tints(Rgb::ONE, c)?)
+                    } else {
+                        Box::new(
+                            RoughDielectric::new(
+                                MicrofacetDistribution::isotropic(MicrofacetType::Ggx, a)?,
+                                *ior,
+                                1.0,
+                            )?
+                            .with_tints(Rgb::ONE, c)?,
+                        )
+                    }
+                } else {
+                    Box::new(PbrMetallicRoughness::new(
+                        c,
+                        unit(metallic.at(textures, uv)),
+                        r,
+                    )?)
+                }
+            }
+            MaterialKind::Spec(r) => Box::new(SharedBsdf(r.bsdf.clone())),
+        })
+    }
+}
+
+/// Prepared models of a material; the key is the kind they were built for (a changed kind is
+/// rebuilt, never served stale).
+#[derive(Clone, Debug)]
+enum Prepared {
+    Whole(MaterialKind, bool, Arc<dyn Bsdf>),
+    Plastic(MaterialKind, Plastic),
+    RoughPlastic(MaterialKind, Box<RoughPlastic>),
+}
+
+/// The per-material cache of prepared models.
+#[derive(Clone, Debug, Default)]
+struct BsdfCache(OnceLock<Prepared>);
+
+/// A cache never makes two materials differ.
+impl PartialEq for BsdfCache {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
+}
+
+fn unit(x: f64) -> f64 {
+    if x.is_nan() {
+        0.0
+    } else {
+        x.clamp(0.0, 1.0)
+    }
+}
+
+fn clamp_alpha(a: f64) -> f64 {
+    if a.is_nan() {
+        1.0
+    } else {
+        a.clamp(1e-4, 1.0)
+    }
+}
+
+fn microfacet_type(d: Distribution) -> MicrofacetType {
+    match d {
+        Distribution::Beckmann => MicrofacetType::Beckmann,
+        Distribution::Ggx => MicrofacetType::Ggx,
+    }
+}
+
+fn mismatch() -> lustre_brdf::Error {
+    lustre_brdf::Error::NotFound("prepared model does not match the material kind".into())
 }
 
 /// A BSDF shared between hits (a resolved material spec).
@@ -502,13 +797,4 @@ impl Bsdf for SharedBsdf {
     fn albedo(&self, wo: DVec3, n: usize) -> Rgb {
         self.0.albedo(wo, n)
     }
-}
-
-/// Mitsuba's named conductor presets reduced to RGB: (η, k) relative to vacuum. `none` is a
-/// perfect mirror (η = 0, k = 1).
-pub fn conductor_preset(name: &str) -> Option<(Rgb, Rgb)> {
-    if name.eq_ignore_ascii_case("none") {
-        return Some((Rgb::ZERO, Rgb::ONE));
-    }
-    None
 }

@@ -357,3 +357,47 @@ pub fn sphere(name: &str, center: Vec3, radius: f32, material: usize) -> Mesh {
     m.uv0 = Some(uv);
     m
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shapes_have_their_areas_and_face_outwards() {
+        let pi = std::f64::consts::PI;
+        assert!((rectangle("r", 0).area() - 4.0).abs() < 1e-6);
+        let d = disk("d", 0);
+        assert_eq!(d.triangle_count(), DISK_SEGMENTS as usize);
+        let inscribed =
+            0.5 * f64::from(DISK_SEGMENTS) * (2.0 * pi / f64::from(DISK_SEGMENTS)).sin();
+        assert!((d.area() - inscribed).abs() < 1e-5);
+        let c = cube("c", 0);
+        assert!((c.area() - 24.0).abs() < 1e-5);
+        for (m, centre) in [(c, Vec3::ZERO), (sphere("s", Vec3::ONE, 2.0, 0), Vec3::ONE)] {
+            let (m, dropped) = m.validated(Path::new("x"), 1).unwrap();
+            assert_eq!(dropped, 0);
+            for t in 0..m.triangle_count() {
+                let [a, b, c] = m.triangle(t);
+                let n = (b - a).cross(c - a);
+                assert!(
+                    n.dot((a + b + c) / 3.0 - centre) > 0.0,
+                    "{} triangle {t}",
+                    m.name
+                );
+            }
+        }
+        for m in [rectangle("r", 0), disk("d", 0)] {
+            let [a, b, c] = m.triangle(0);
+            assert!((b - a).cross(c - a).z > 0.0);
+        }
+    }
+
+    #[test]
+    fn transform_keeps_orientation_under_reflection() {
+        let mut m = rectangle("r", 0);
+        m.transform(&DMat4::from_scale(glam::DVec3::new(1.0, 1.0, -1.0)));
+        let [a, b, c] = m.triangle(0);
+        let n = (b - a).cross(c - a);
+        assert!(n.z < 0.0 && m.normals.as_ref().unwrap()[0].z < 0.0);
+    }
+}

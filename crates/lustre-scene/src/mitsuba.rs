@@ -5,7 +5,7 @@
 //!   winding), `rectangle`, `disk` (a fan of [`crate::mesh::DISK_SEGMENTS`] triangles), `cube`,
 //!   `sphere` (`center`, `radius`; tessellated, see [`crate::mesh::sphere`]), each with `toWorld`.
 //! - **BSDFs**: `diffuse`, `plastic`, `roughplastic`, `conductor`, `roughconductor` (named metal
-//!   presets through `lustre_brdf`), `dielectric`, `roughdielectric`, `thindielectric`,
+//!   presets from `lustre_brdf`), `dielectric`, `roughdielectric`, `thindielectric`,
 //!   `twosided`, `mask`; `bumpmap`/`normalmap` are read through with a warning (the bump is
 //!   ignored). Named IORs (`bk7`, `air`, `water`, …) as Mitsuba's table.
 //! - **Textures**: `bitmap` (sRGB-decoded unless `raw`/`gamma = 1`).
@@ -37,33 +37,6 @@ use std::sync::Arc;
 
 /// Mitsuba's default exterior IOR (air).
 const AIR: f64 = 1.000277;
-
-/// Mitsuba's named indices of refraction (its `ior.h` table).
-pub const NAMED_IORS: &[(&str, f64)] = &[
-    ("vacuum", 1.0),
-    ("helium", 1.000036),
-    ("hydrogen", 1.000132),
-    ("air", 1.000277),
-    ("carbon dioxide", 1.00045),
-    ("water", 1.333),
-    ("acetone", 1.36),
-    ("ethanol", 1.361),
-    ("carbon tetrachloride", 1.461),
-    ("glycerol", 1.4729),
-    ("benzene", 1.501),
-    ("silicone oil", 1.52045),
-    ("bromine", 1.661),
-    ("water ice", 1.31),
-    ("fused quartz", 1.458),
-    ("pyrex", 1.470),
-    ("acrylic glass", 1.49),
-    ("polypropylene", 1.49),
-    ("bk7", 1.5046),
-    ("sodium chloride", 1.544),
-    ("amber", 1.55),
-    ("pet", 1.575),
-    ("diamond", 2.419),
-];
 
 /// Properties that have no meaning for lustre and pass without a warning.
 const SILENT: &[&str] = &[
@@ -597,10 +570,7 @@ impl<'a, 'i> Reader<'a, 'i> {
         };
         let v = if n.tag_name().name() == "string" {
             let s = self.req_attr(n, "value")?;
-            NAMED_IORS
-                .iter()
-                .find(|(k, _)| k.eq_ignore_ascii_case(s.trim()))
-                .map(|(_, v)| *v)
+            lustre_brdf::models::dielectric::ior_preset(s.trim())
                 .ok_or_else(|| self.err(n, format!("unknown IOR name {s:?}")))?
         } else {
             self.float_node(n)?
@@ -679,6 +649,9 @@ impl<'a, 'i> Reader<'a, 'i> {
     }
 
     fn bsdf(&mut self, n: Node<'a, 'i>, name: Option<String>) -> Result<Material> {
+        if n.ancestors().filter(|a| a.has_tag_name("bsdf")).count() > 16 {
+            return Err(self.err(n, "bsdfs nested more than 16 deep"));
+        }
         let mut p = self.plugin(n)?;
         let own = self.attr(n, "id")?;
         let name = name
@@ -756,12 +729,14 @@ impl<'a, 'i> Reader<'a, 'i> {
                     )
                 } else {
                     let m = material.unwrap_or_else(|| "Cu".to_string());
-                    crate::material::conductor_preset(&m).ok_or_else(|| {
-                        SceneError::format(
-                            self.path,
-                            format!("line {}: unknown conductor material {m:?}", p.line),
-                        )
-                    })?
+                    lustre_brdf::models::conductor_presets::conductor_preset(&m).ok_or_else(
+                        || {
+                            SceneError::format(
+                                self.path,
+                                format!("line {}: unknown conductor material {m:?}", p.line),
+                            )
+                        },
+                    )?
                 };
                 let (eta, k) = (eta / ext_eta, k / ext_eta);
                 if p.ty == "conductor" {
@@ -1283,5 +1258,25 @@ impl<'a, 'i> Reader<'a, 'i> {
         self.scene.cameras.push(camera);
         self.finish(&p);
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::normalize_name;
+
+    #[test]
+    fn spellings() {
+        for (a, b) in [
+            ("intIOR", "int_ior"),
+            ("toWorld", "to_world"),
+            ("alphaU", "alpha_u"),
+            ("diffuseReflectance", "diffuse_reflectance"),
+            ("fov_axis", "fov_axis"),
+            ("flipTexCoords", "flip_tex_coords"),
+            ("alpha", "alpha"),
+        ] {
+            assert_eq!(normalize_name(a), b);
+        }
     }
 }

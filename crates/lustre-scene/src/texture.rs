@@ -194,3 +194,45 @@ impl Texture {
         acc.map(|a| a / n)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn checker() -> Texture {
+        // 2×2: (0,0)=0 (1,0)=1 / (0,1)=2 (1,1)=3, grey.
+        Texture::new("t", 2, 2, 1, ColorSpace::Linear, vec![0.0, 1.0, 2.0, 3.0]).unwrap()
+    }
+
+    #[test]
+    fn bilinear_hits_texel_centres_and_wraps() {
+        let t = checker();
+        assert_eq!(t.sample(0.25, 0.25)[0], 0.0);
+        assert_eq!(t.sample(0.75, 0.25)[0], 1.0);
+        assert_eq!(t.sample(0.25, 0.75)[0], 2.0);
+        assert_eq!(t.sample(0.5, 0.25)[0], 0.5);
+        assert_eq!(t.sample(0.5, 0.5)[0], 1.5);
+        // Between the last and the first column: wraps.
+        assert_eq!(t.sample(0.0, 0.25)[0], 0.5);
+        assert_eq!(t.sample(1.25, -0.75)[0], t.sample(0.25, 0.25)[0]);
+        assert_eq!(t.sample(f32::NAN, 0.3), t.sample(0.0, 0.0));
+        assert_eq!(t.sample(0.25, 0.25)[3], 1.0);
+    }
+
+    #[test]
+    fn srgb_decoding() {
+        assert_eq!(srgb_to_linear(0.0), 0.0);
+        assert!((srgb_to_linear(1.0) - 1.0).abs() < 1e-6);
+        assert!((srgb_to_linear(0.5) - 0.214_041).abs() < 1e-5);
+        assert!((srgb_to_linear(0.04) - 0.04 / 12.92).abs() < 1e-9);
+    }
+
+    #[test]
+    fn bad_sizes_and_bytes_are_errors() {
+        assert!(Texture::new("t", 0, 2, 1, ColorSpace::Linear, vec![]).is_err());
+        assert!(Texture::new("t", 2, 2, 5, ColorSpace::Linear, vec![0.0; 20]).is_err());
+        assert!(Texture::new("t", 2, 2, 1, ColorSpace::Linear, vec![0.0; 3]).is_err());
+        let e = Texture::decode(Path::new("x.png"), b"not an image", ColorSpace::Srgb).unwrap_err();
+        assert!(e.to_string().contains("x.png"));
+    }
+}

@@ -382,3 +382,30 @@ fn malformed_and_invalid_toml() {
     let msg = toml_err(&format!("{head}film = {{ width = 0, height = 10 }}\n"));
     assert!(msg.contains("film"), "{msg}");
 }
+
+#[test]
+fn deeply_nested_bsdfs_are_an_error() {
+    let d = dir();
+    let body = format!(
+        "<bsdf type=\"diffuse\" id=\"x\"/><shape type=\"disk\">{}<bsdf type=\"diffuse\"/>{}</shape>",
+        "<bsdf type=\"twosided\">".repeat(40),
+        "</bsdf>".repeat(40)
+    );
+    let p = write(d.path(), "deep.xml", &xml(&body));
+    let msg = Scene::load(&p).unwrap_err().to_string();
+    assert!(msg.contains("nested more than 16 deep"), "{msg}");
+}
+
+/// Found by the gltf fuzz target: gltf-json's validation panics on a POSITION accessor index
+/// out of range; the reader checks that reference first.
+#[test]
+fn gltf_attribute_naming_a_missing_accessor_is_an_error() {
+    let d = dir();
+    let p = gltf_triangle(d.path(), TRI, [0, 1, 2], "");
+    let text = std::fs::read_to_string(&p)
+        .unwrap()
+        .replace("\"POSITION\":0", "\"POSITION\":9");
+    let p = write(d.path(), "bad.gltf", &text);
+    let msg = Scene::load(&p).unwrap_err().to_string();
+    assert!(msg.contains("names accessor 9 of 2"), "{msg}");
+}

@@ -6,6 +6,7 @@ mod fit_cmd;
 mod merl_cmd;
 mod plot_cmd;
 mod reference_cmd;
+mod scene_cmd;
 
 use anyhow::Context;
 use clap::{Parser, Subcommand};
@@ -33,6 +34,9 @@ enum Command {
     Compare(compare_cmd::CompareArgs),
     /// Path-traced reference of a scene (lustre TOML, glTF, OBJ, Mitsuba XML), resumable.
     Reference(reference_cmd::ReferenceArgs),
+    /// Scenes: `lustre scene info SCENE` prints what lustre reads from a glTF, OBJ, Mitsuba XML
+    /// or lustre scene file.
+    Scene(scene_cmd::SceneArgs),
     /// List built-in materials, analytic models with their parameters, and published fits.
     List,
     /// Print a material's flags, albedo and a few values.
@@ -51,6 +55,7 @@ fn main() -> anyhow::Result<()> {
         Command::Demo(args) => demo_cmd::run(&args),
         Command::Compare(args) => compare_cmd::run(&args),
         Command::Reference(args) => reference_cmd::run(&args),
+        Command::Scene(args) => scene_cmd::run(&args),
         Command::List => {
             println!("built-in materials:");
             for (name, what) in catalog::builtins() {

@@ -127,3 +127,31 @@ fn bad_input_is_a_clear_error_not_a_panic() {
         "{err}"
     );
 }
+
+#[test]
+fn scene_info_prints_counts_and_warnings() {
+    let scene = lustre_brdf::shared_data_dir().join("scenes/modern_hall/mitsuba/scene.xml");
+    let out = lustre()
+        .args(["scene", "info"])
+        .arg(&scene)
+        .output()
+        .expect("runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("triangles 28815 (2432 degenerate dropped)"),
+        "{text}"
+    );
+    assert!(text.contains("emitters 13"), "{text}");
+    assert!(text.contains("warnings 2:"), "{text}");
+    let out = lustre()
+        .args(["scene", "info", "no/such.xml"])
+        .output()
+        .expect("runs");
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no/such.xml"));
+}
