@@ -11,6 +11,7 @@ pub mod error;
 pub mod io;
 pub mod irradiance;
 pub mod pyramid;
+pub mod sampling;
 pub mod spot;
 
 pub use cube::CubeMap;
@@ -19,4 +20,5 @@ pub use error::{EnvError, Result};
 pub use io::{parse_exr, parse_hdr, read_map, shared_data_dir, LoadedMap};
 pub use irradiance::irradiance_map;
 pub use pyramid::{CubePyramid, MipFilter};
+pub use sampling::{Distribution1D, EnvSample, EnvSampler};
 pub use spot::{spot_map, SpotMapParams};

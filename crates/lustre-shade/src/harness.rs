@@ -11,8 +11,9 @@
 //!   reports PSNR against a converged QMC reference. The thesis does not list the four materials'
 //!   parameters: the Kurt parameters below are our choice for those names.
 //!
-//! The runner ([`run`]) renders, per material, one reference image (Monte-Carlo importance
-//! sampling on MIP level 0, `reference_spp` samples per pixel, as two independent halves whose
+//! The runner ([`run`]) renders, per material, one reference image (Monte Carlo on MIP level 0,
+//! BSDF and environment importance sampling combined by MIS, `reference_spp` iterations per
+//! pixel, as two independent halves whose
 //! difference estimates the reference's own noise), then per sample count the regular images (one
 //! per method: 002's printed pattern, reach 1, ours = the row lattice) and a CK image, and
 //! measures RMS (linear), PSNR and ΔE (display values) against the reference, the wall time of
@@ -31,7 +32,7 @@ use crate::{Result, ShadeError};
 use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::Rgb;
-use lustre_env::{CubeMap, CubePyramid, MipFilter, SpotMapParams};
+use lustre_env::{CubeMap, CubePyramid, EnvSampler, MipFilter, SpotMapParams};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -444,10 +445,31 @@ fn pixel_seed(hit: &Hit, salt: u64) -> u64 {
     h
 }
 
-/// Renders the reference: MC importance sampling on level 0 with `spp` samples per pixel.
+/// Renders the reference: Monte Carlo on level 0 with `spp` iterations per pixel, BSDF and
+/// environment importance sampling combined by MIS ([`kernel::shade_reference_mis`]); the
+/// sampler is built from the pyramid ([`kernel::env_sampler`]). A black environment renders
+/// black hits (nothing to sample, nothing to see).
 pub fn render_reference(
     scene: &Scene,
     env: &Environment,
+    w: usize,
+    h: usize,
+    spp: usize,
+    seed: u64,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Image {
+    match kernel::env_sampler(env.pyramid) {
+        Ok(sampler) => render_reference_with(scene, env, &sampler, w, h, spp, seed, progress),
+        Err(_) => render_with_progress(scene, w, h, |_| Rgb::ZERO, background(env), progress),
+    }
+}
+
+/// [`render_reference`] with a prebuilt environment sampler (reused across images).
+#[allow(clippy::too_many_arguments)]
+pub fn render_reference_with(
+    scene: &Scene,
+    env: &Environment,
+    sampler: &EnvSampler,
     w: usize,
     h: usize,
     spp: usize,
@@ -460,7 +482,16 @@ pub fn render_reference(
         h,
         |hit| {
             let m = &scene.materials[hit.material];
-            kernel::shade_reference(&hit.frame, hit.wo, m, env, spp, pixel_seed(hit, seed))
+            kernel::shade_reference_mis(
+                &hit.frame,
+                hit.wo,
+                m,
+                env,
+                sampler,
+                kernel::Strategy::Mis,
+                spp,
+                pixel_seed(hit, seed),
+            )
         },
         background(env),
         progress,
@@ -640,11 +671,12 @@ pub fn run(
         })?;
     }
     let n = opts.size;
+    let sampler = kernel::env_sampler(env.pyramid)?;
     let mut report = Report {
         rows: vec![],
         notes: vec![
             format!(
-                "{n}×{n} images; reference: Monte-Carlo importance sampling on MIP level 0, {} samples per pixel (two independent halves; its RMS row is the estimated noise of their mean)",
+                "{n}×{n} images; reference: Monte Carlo on MIP level 0, BSDF + environment importance sampling with MIS (power heuristic), {} iterations per pixel (two independent halves; its RMS row is the estimated noise of their mean)",
                 opts.reference_spp
             ),
             format!(
@@ -676,12 +708,13 @@ pub fn run(
             let half = opts.reference_spp / 2;
             let label = format!("{stem} reference");
             let t0 = Instant::now();
-            let a = render_reference(&scene, env, n, n, half, opts.seed, &|r| {
+            let a = render_reference_with(&scene, env, &sampler, n, n, half, opts.seed, &|r| {
                 progress(&label, r, 2 * n)
             });
-            let b = render_reference(
+            let b = render_reference_with(
                 &scene,
                 env,
+                &sampler,
                 n,
                 n,
                 opts.reference_spp - half,

@@ -6,14 +6,18 @@
 //! - [`kernel`]: per-pixel shading kernels: reference, progressive QMC, regular, Colbert-Křivánek.
 //! - [`scene`], [`render`], [`harness`]: evaluation scenes, image rendering, the comparisons.
 //! - [`truth`]: the exact environment integral over every texel (the truth harness).
+//! - [`accel`], [`path`]: ray casting (BVH, watertight triangles) and the path-traced reference.
 
+pub mod accel;
 pub mod error;
 pub mod harness;
 pub mod image;
 pub mod kernel;
 pub mod metrics;
 pub mod mip;
+pub mod path;
 pub mod pattern;
+pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod truth;

@@ -137,7 +137,9 @@ fn bad_options_are_errors() {
 #[test]
 fn reference_of_a_lambertian_sphere_in_a_white_furnace_is_kd() {
     // Furnace test: under constant radiance 1 a Lambertian surface reflects exactly kd
-    // (∫ kd/π cos θ dω = kd), whatever the sampling.
+    // (∫ kd/π cos θ dω = kd). The reference mixes BSDF and environment samples (MIS), so it is
+    // no longer exact per sample: the mean of the central 4×4 pixels at 1024 iterations has a
+    // relative standard error ≈ 0.2 % (measured per-sample spread ≈ 26 %), asserted at 1 %.
     let env = EnvSetup::new(
         CubeMap::from_fn(8, |_| [1.0; 3]).expect("cube"),
         MipFilter::Gauss6,
@@ -146,11 +148,17 @@ fn reference_of_a_lambertian_sphere_in_a_white_furnace_is_kd() {
     .expect("env");
     let kurt = Kurt::new(Rgb::new(0.5, 0.25, 0.125), vec![], vec![]).expect("kurt");
     let scene = evaluation_scene(kurt);
-    let img = harness::render_reference(&scene, &env.environment(), 16, 16, 64, 3, &|_| {});
-    let (x, y) = (8, 8);
-    let p = img.get(x, y);
+    let img = harness::render_reference(&scene, &env.environment(), 16, 16, 1024, 3, &|_| {});
+    let mut p = [0.0f64; 3];
+    for y in 6..10 {
+        for x in 6..10 {
+            for (c, v) in img.get(x, y).iter().enumerate() {
+                p[c] += *v as f64 / 16.0;
+            }
+        }
+    }
     for (c, want) in [0.5, 0.25, 0.125].into_iter().enumerate() {
-        assert!((p[c] as f64 - want).abs() < 0.01 * want, "{p:?}");
+        assert!((p[c] - want).abs() < 0.01 * want, "{p:?}");
     }
     // Background is the map.
     assert!((img.get(0, 0)[0] - 1.0).abs() < 1e-5);

@@ -6,6 +6,7 @@ mod fit_cmd;
 mod merl_cmd;
 mod plot_cmd;
 mod score_cmd;
+mod reference_cmd;
 mod scene_cmd;
 
 use anyhow::Context;
@@ -37,6 +38,8 @@ enum Command {
     Demo(demo_cmd::DemoArgs),
     /// Regular sampling vs Colbert–Křivánek vs reference (002 Fig. 8–10, 000 Fig. 4.24).
     Compare(compare_cmd::CompareArgs),
+    /// Path-traced reference of a scene (lustre TOML, glTF, OBJ, Mitsuba XML), resumable.
+    Reference(reference_cmd::ReferenceArgs),
     /// Scenes: `lustre scene info SCENE` prints what lustre reads from a glTF, OBJ, Mitsuba XML
     /// or lustre scene file.
     Scene(scene_cmd::SceneArgs),
@@ -114,6 +117,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Merl(args) => merl_cmd::run(&args),
         Command::Demo(args) => demo_cmd::run(&args),
         Command::Compare(args) => compare_cmd::run(&args),
+        Command::Reference(args) => reference_cmd::run(&args),
         Command::Scene(args) => scene_cmd::run(&args),
         Command::Score(args) => score_cmd::run(&args),
         Command::List => list(),

@@ -1,0 +1,793 @@
+//! The converged reference for real scenes: a unidirectional path tracer (Veach 1997 ch. 10;
+//! pbrt-v4 §13.4 `PathIntegrator`, Mitsuba 3 `path`).
+//!
+//! At every vertex: next-event estimation toward one light — the environment (importance-sampled
+//! by [`EnvSampler`]) or an emissive triangle (picked in proportion to its power, a point drawn
+//! uniformly on its area) — and a continuation drawn from the [`Bsdf`]; both are weighted by the
+//! power heuristic (β = 2) against the other technique's density, so a light reached by the
+//! BSDF sample counts with the complementary weight. Delta lobes (weight 1, no NEE) come from
+//! [`is_delta`]. Russian roulette after `rr_depth` bounces (survival = max throughput, ≤ 0.95).
+//!
+//! **Depth** follows Mitsuba: `max_depth` is the longest path in segments (1: only emitters
+//! seen directly; 2: direct lighting).
+//!
+//! **Frames and normals.** The BSDF acts in the shading frame (interpolated normal, tangent
+//! along ∂p/∂u). The geometric normal is turned to the shading normal's side. A direction whose
+//! sides differ between the two normals is dropped (no light leaks through shading normals,
+//! Veach §5.3). A two-sided material flips the frame to face the viewer. Emitters are one-sided
+//! (front = the shading normal's side, as Mitsuba's `area`).
+//!
+//! **Pixels** are box-filtered (uniform jitter). Sample k of pixel (x, y) draws from
+//! [`SplitMix64`] seeded by a hash of (seed, x, y, k), so a render continued with more samples
+//! equals one rendered at once. Even and odd samples accumulate separately: their means are two
+//! independent estimates whose difference measures the noise ([`Accumulator::noise_rms`]).
+
+use crate::accel::{Accel, Hit};
+use crate::image::Image;
+use crate::kernel::{power_heuristic, ShadingFrame};
+use crate::{Result, ShadeError};
+use glam::{DMat3, DVec3};
+use lustre_brdf::bsdf::{Bsdf, BsdfFlags, BsdfSample};
+use lustre_brdf::rgb::Rgb;
+use lustre_brdf::sampling::SplitMix64;
+use lustre_env::{Distribution1D, EnvSampler, EquirectMap};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// What the path tracer asks of a material at a hit.
+pub trait Surface: Send + Sync {
+    /// The BSDF at texture coordinates `uv` (local frame, lustre-brdf conventions).
+    fn bsdf(&self, uv: [f64; 2]) -> Box<dyn Bsdf + '_>;
+    /// Whether the material has an alpha mask at all (lets rays skip the uv lookups).
+    fn masked(&self) -> bool {
+        false
+    }
+    /// Whether the surface exists at `uv` (alpha mask); only asked when [`Surface::masked`].
+    fn opaque(&self, _uv: [f64; 2]) -> bool {
+        true
+    }
+    /// Two-sided: the frame is flipped to face the viewer (Mitsuba's `twosided`).
+    fn two_sided(&self) -> bool {
+        false
+    }
+}
+
+/// A material that is one BSDF everywhere.
+#[derive(Debug)]
+pub struct ConstantSurface {
+    /// The BSDF.
+    pub bsdf: Box<dyn Bsdf>,
+    /// See [`Surface::two_sided`].
+    pub two_sided: bool,
+}
+
+impl Surface for ConstantSurface {
+    fn bsdf(&self, _uv: [f64; 2]) -> Box<dyn Bsdf + '_> {
+        Box::new(BsdfRef(&*self.bsdf))
+    }
+    fn two_sided(&self) -> bool {
+        self.two_sided
+    }
+}
+
+/// A borrowed BSDF behind a box (the [`Surface::bsdf`] of constant materials).
+#[derive(Debug)]
+pub struct BsdfRef<'a>(pub &'a dyn Bsdf);
+
+impl Bsdf for BsdfRef<'_> {
+    fn name(&self) -> String {
+        self.0.name()
+    }
+    fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
+        self.0.eval(wi, wo)
+    }
+    fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
+        self.0.sample(wo, u1, u2)
+    }
+    fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
+        self.0.pdf(wi, wo)
+    }
+    fn flags(&self) -> BsdfFlags {
+        self.0.flags()
+    }
+}
+
+/// True when the sample came from a delta (specular) lobe: its pdf is a discrete probability,
+/// so it gets MIS weight 1 and the light it reaches is counted in full.
+pub fn is_delta(s: &BsdfSample) -> bool {
+    s.lobe.is_specular()
+}
+
+/// World-space triangles with per-corner shading normals and texture coordinates, a material
+/// index and an emitted radiance per triangle. Empty `normals` / `uvs` / `emission` mean
+/// geometric normals, uv = 0 and no emitters.
+#[derive(Clone, Debug, Default)]
+pub struct Geometry {
+    /// Vertices, world space.
+    pub positions: Vec<[DVec3; 3]>,
+    /// Shading normals per corner (same length as `positions`, or empty).
+    pub normals: Vec<[DVec3; 3]>,
+    /// Texture coordinates per corner (same length as `positions`, or empty).
+    pub uvs: Vec<[[f64; 2]; 3]>,
+    /// Material index per triangle.
+    pub material: Vec<u32>,
+    /// Emitted radiance per triangle, front side (same length as `positions`, or empty).
+    pub emission: Vec<Rgb>,
+}
+
+/// An environment light: an equirect map (lustre's convention), a rotation taking map
+/// directions to world directions, and a scale.
+#[derive(Clone, Debug)]
+pub struct EnvLight {
+    map: EquirectMap,
+    sampler: EnvSampler,
+    to_world: DMat3,
+    scale: f64,
+}
+
+impl EnvLight {
+    /// The light of `map` rotated by `to_world` (a rotation matrix) and scaled by `scale` (≥ 0).
+    /// Errors: a black map, a non-finite or negative scale, a matrix that is not a rotation.
+    pub fn new(map: EquirectMap, to_world: DMat3, scale: f64) -> Result<Self> {
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(ShadeError::Parameter(format!(
+                "environment scale {scale} must be finite and ≥ 0"
+            )));
+        }
+        let should_be_id = to_world.transpose() * to_world;
+        if !(should_be_id - DMat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .all(|v| v.abs() < 1e-6)
+        {
+            return Err(ShadeError::Parameter(format!(
+                "environment rotation {to_world:?} is not orthonormal"
+            )));
+        }
+        let sampler = EnvSampler::new(&map)?;
+        Ok(EnvLight {
+            map,
+            sampler,
+            to_world,
+            scale,
+        })
+    }
+
+    /// A constant environment of radiance `l` (an 8×4 uniform map).
+    pub fn constant(l: Rgb) -> Result<Self> {
+        let px = [l[0] as f32, l[1] as f32, l[2] as f32];
+        Self::new(EquirectMap::new(8, 4, vec![px; 32])?, DMat3::IDENTITY, 1.0)
+    }
+
+    /// Radiance arriving from world direction `d` (bilinear).
+    pub fn eval(&self, d: DVec3) -> Rgb {
+        Rgb(self.map.lookup_bilinear(self.to_world.transpose() * d)) * self.scale
+    }
+
+    /// A world direction and its solid-angle density.
+    pub fn sample(&self, u1: f64, u2: f64) -> (DVec3, f64) {
+        let s = self.sampler.sample(u1, u2);
+        (self.to_world * s.dir, s.pdf)
+    }
+
+    /// Density of [`EnvLight::sample`] at world direction `d`.
+    pub fn pdf(&self, d: DVec3) -> f64 {
+        self.sampler.pdf(self.to_world.transpose() * d)
+    }
+}
+
+/// A pinhole camera: position and an orthonormal basis (forward, right, up), vertical field of
+/// view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathCamera {
+    /// Centre of projection.
+    pub origin: DVec3,
+    /// Unit view direction.
+    pub forward: DVec3,
+    /// Unit right vector (image +x).
+    pub right: DVec3,
+    /// Unit up vector (image −y).
+    pub up: DVec3,
+    /// tan(fov_y / 2).
+    pub tan_half_fov_y: f64,
+}
+
+impl PathCamera {
+    /// A camera at `eye` looking at `target` with the up hint `up` and vertical field of view
+    /// `fov_y_deg`. Errors on a degenerate basis or a field of view outside (0, 180).
+    pub fn look_at(eye: DVec3, target: DVec3, up: DVec3, fov_y_deg: f64) -> Result<Self> {
+        let bad = || {
+            ShadeError::Parameter(format!(
+                "camera eye {eye}, target {target}, up {up}, fov {fov_y_deg}° is degenerate"
+            ))
+        };
+        if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
+            return Err(bad());
+        }
+        let forward = (target - eye).try_normalize().ok_or_else(bad)?;
+        let right = forward.cross(up).try_normalize().ok_or_else(bad)?;
+        Ok(PathCamera {
+            origin: eye,
+            forward,
+            right,
+            up: right.cross(forward),
+            tan_half_fov_y: (fov_y_deg.to_radians() * 0.5).tan(),
+        })
+    }
+
+    /// The unit ray direction through image position (x, y) in pixels (0..w, 0..h, y down).
+    pub fn direction(&self, x: f64, y: f64, w: usize, h: usize) -> DVec3 {
+        let (wf, hf) = (w as f64, h as f64);
+        let a = self.tan_half_fov_y;
+        let px = (2.0 * x / wf - 1.0) * a * wf / hf;
+        let py = (1.0 - 2.0 * y / hf) * a;
+        (self.forward + px * self.right + py * self.up).normalize()
+    }
+}
+
+/// A scene as the path tracer sees it.
+pub struct PathScene<'s> {
+    /// Triangles.
+    pub geometry: Geometry,
+    /// Materials, indexed by `geometry.material`.
+    pub materials: Vec<Box<dyn Surface + 's>>,
+    /// The environment (black when `None`).
+    pub environment: Option<EnvLight>,
+}
+
+/// Options of the path tracer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathOptions {
+    /// Longest path in segments (Mitsuba's `max_depth`); ≥ 1.
+    pub max_depth: u32,
+    /// Bounces before Russian roulette starts (Mitsuba's `rr_depth`, default 5).
+    pub rr_depth: u32,
+    /// Which techniques run (all three estimate the same image; the single ones are for tests).
+    pub strategy: crate::kernel::Strategy,
+}
+
+impl Default for PathOptions {
+    fn default() -> Self {
+        PathOptions {
+            max_depth: 16,
+            rr_depth: 5,
+            strategy: crate::kernel::Strategy::Mis,
+        }
+    }
+}
+
+/// The path tracer over a [`PathScene`]: the BVH, the emitter distribution and the options.
+pub struct PathTracer<'a, 's> {
+    scene: &'a PathScene<'s>,
+    accel: Accel,
+    /// Emissive triangles and their selection distribution (by power = luminance · area).
+    lights: Vec<usize>,
+    light_dist: Option<Distribution1D>,
+    /// Per triangle: its index in `lights`, or `usize::MAX`.
+    light_index: Vec<usize>,
+    /// Probability of choosing the environment for NEE.
+    p_env: f64,
+    opts: PathOptions,
+}
+
+/// Area of triangle t.
+fn area(t: &[DVec3; 3]) -> f64 {
+    0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length()
+}
+
+/// A scene point ready for shading.
+struct Vertex {
+    p: DVec3,
+    /// Geometric normal on the shading normal's side.
+    ng: DVec3,
+    /// Shading frame (before any two-sided flip).
+    frame: ShadingFrame,
+    uv: [f64; 2],
+    prim: usize,
+}
+
+/// A small offset that moves a spawned ray off its surface (scaled with the coordinates).
+fn offset(p: DVec3, ng: DVec3, w: DVec3) -> DVec3 {
+    let eps = 2e-5 * (1.0 + p.abs().max_element());
+    if w.dot(ng) >= 0.0 {
+        p + ng * eps
+    } else {
+        p - ng * eps
+    }
+}
+
+impl<'a, 's> PathTracer<'a, 's> {
+    /// Builds the BVH and the emitter distribution. Errors: mismatched array lengths, a
+    /// material index out of range, a non-finite vertex, `max_depth` = 0.
+    pub fn new(scene: &'a PathScene<'s>, opts: PathOptions) -> Result<Self> {
+        let g = &scene.geometry;
+        let n = g.positions.len();
+        for (name, len) in [
+            ("normals", g.normals.len()),
+            ("uvs", g.uvs.len()),
+            ("emission", g.emission.len()),
+        ] {
+            if len != 0 && len != n {
+                return Err(ShadeError::Parameter(format!(
+                    "geometry: {len} {name} for {n} triangles"
+                )));
+            }
+        }
+        if g.material.len() != n {
+            return Err(ShadeError::Parameter(format!(
+                "geometry: {} material indices for {n} triangles",
+                g.material.len()
+            )));
+        }
+        if let Some(k) = g
+            .material
+            .iter()
+            .position(|&m| m as usize >= scene.materials.len())
+        {
+            return Err(ShadeError::Parameter(format!(
+                "triangle {k} uses material {} of {}",
+                g.material[k],
+                scene.materials.len()
+            )));
+        }
+        if opts.max_depth == 0 {
+            return Err(ShadeError::Parameter("max_depth must be ≥ 1".into()));
+        }
+        let accel = Accel::new(&g.positions)?;
+        let mut lights = vec![];
+        let mut power = vec![];
+        let mut light_index = vec![usize::MAX; if g.emission.is_empty() { 0 } else { n }];
+        for (k, e) in g.emission.iter().enumerate() {
+            let p = e.mean() * area(&g.positions[k]);
+            if e.is_finite() && p > 0.0 {
+                light_index[k] = lights.len();
+                lights.push(k);
+                power.push(p);
+            }
+        }
+        let light_dist = (!lights.is_empty()).then(|| Distribution1D::new(power));
+        let p_env = match (&scene.environment, &light_dist) {
+            (Some(_), Some(_)) => 0.5,
+            (Some(_), None) => 1.0,
+            _ => 0.0,
+        };
+        Ok(PathTracer {
+            scene,
+            accel,
+            lights,
+            light_dist,
+            light_index,
+            p_env,
+            opts,
+        })
+    }
+
+    /// The BVH (for benchmarks and ray queries).
+    pub fn accel(&self) -> &Accel {
+        &self.accel
+    }
+
+    /// uv at barycentrics `b` of triangle `prim`.
+    fn uv_at(&self, prim: usize, b: [f64; 3]) -> [f64; 2] {
+        match self.scene.geometry.uvs.get(prim) {
+            Some(t) => [0, 1].map(|c| b[0] * t[0][c] + b[1] * t[1][c] + b[2] * t[2][c]),
+            None => [0.0; 2],
+        }
+    }
+
+    /// The alpha test of hit candidates.
+    fn accept(&self, prim: usize, b: [f64; 3]) -> bool {
+        let m = &self.scene.materials[self.scene.geometry.material[prim] as usize];
+        !m.masked() || m.opaque(self.uv_at(prim, b))
+    }
+
+    /// The closest surface along o + t d, t > 0 (alpha-masked hits skipped).
+    pub fn intersect(&self, o: DVec3, d: DVec3) -> Option<Hit> {
+        self.accel
+            .intersect(o, d, 0.0, f64::INFINITY, |p, b| self.accept(p, b))
+    }
+
+    /// Whether anything opaque lies on o + t d for 0 < t < tmax.
+    pub fn occluded(&self, o: DVec3, d: DVec3, tmax: f64) -> bool {
+        self.accel
+            .occluded(o, d, 0.0, tmax, |p, b| self.accept(p, b))
+    }
+
+    fn vertex(&self, o: DVec3, d: DVec3, h: &Hit) -> Vertex {
+        let g = &self.scene.geometry;
+        let t = &g.positions[h.prim];
+        let b = h.bary;
+        let p = t[0] * b[0] + t[1] * b[1] + t[2] * b[2];
+        let p = if p.is_finite() { p } else { o + d * h.t };
+        let e1 = t[1] - t[0];
+        let e2 = t[2] - t[0];
+        let mut ng = e1.cross(e2).try_normalize().unwrap_or(DVec3::Z);
+        let ns = g
+            .normals
+            .get(h.prim)
+            .and_then(|n| (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).try_normalize())
+            .unwrap_or(ng);
+        if ns.dot(ng) < 0.0 {
+            ng = -ng;
+        }
+        let uv = self.uv_at(h.prim, b);
+        // Tangent along ∂p/∂u (pbrt-v4 Eq. 6.7), e1/e2 when the uvs are degenerate.
+        let dpdu = match g.uvs.get(h.prim) {
+            Some(uvt) => {
+                let (du1, dv1) = (uvt[1][0] - uvt[0][0], uvt[1][1] - uvt[0][1]);
+                let (du2, dv2) = (uvt[2][0] - uvt[0][0], uvt[2][1] - uvt[0][1]);
+                let det = du1 * dv2 - dv1 * du2;
+                if det.abs() > 1e-12 {
+                    (e1 * dv2 - e2 * dv1) / det
+                } else {
+                    e1
+                }
+            }
+            None => e1,
+        };
+        Vertex {
+            p,
+            ng,
+            frame: ShadingFrame::new(ns, dpdu),
+            uv,
+            prim: h.prim,
+        }
+    }
+
+    /// Emitted radiance of triangle `prim` toward `wo` (front side only).
+    fn emitted(&self, v: &Vertex, wo: DVec3) -> Rgb {
+        match self.scene.geometry.emission.get(v.prim) {
+            Some(e) if wo.dot(v.frame.n) > 0.0 => *e,
+            _ => Rgb::ZERO,
+        }
+    }
+
+    /// Solid-angle density of NEE choosing emissive triangle `prim` at the point seen from
+    /// `from` at `to` with (unit) normal `n`.
+    fn area_light_pdf(&self, prim: usize, from: DVec3, to: DVec3, n: DVec3) -> f64 {
+        let (Some(dist), Some(&li)) = (&self.light_dist, self.light_index.get(prim)) else {
+            return 0.0;
+        };
+        if li == usize::MAX {
+            return 0.0;
+        }
+        let d = to - from;
+        let dist2 = d.length_squared();
+        let cos_l = (d.normalize_or_zero().dot(n)).abs();
+        if cos_l <= 0.0 {
+            return 0.0;
+        }
+        (1.0 - self.p_env) * dist.probability(li) / area(&self.scene.geometry.positions[prim])
+            * dist2
+            / cos_l
+    }
+
+    /// Radiance arriving at `o` along unit direction `d` (the path tracer proper).
+    pub fn radiance(&self, o: DVec3, d: DVec3, rng: &mut SplitMix64) -> Rgb {
+        use crate::kernel::Strategy;
+        let strategy = self.opts.strategy;
+        let use_nee = strategy != Strategy::Bsdf;
+        let use_bsdf_hits = strategy != Strategy::Light;
+        let mis = strategy == Strategy::Mis;
+        let mut l = Rgb::ZERO;
+        let mut beta = Rgb::ONE;
+        let (mut o, mut d) = (o, d);
+        // Density of the last BSDF sample (solid angle) and whether it was a delta lobe.
+        let mut prev_pdf = 0.0;
+        let mut prev_delta = true;
+        let mut prev_p = o;
+        let mut eta_scale = 1.0;
+        let mut depth = 0u32; // segments so far
+        loop {
+            depth += 1;
+            let hit = self.intersect(o, d);
+            let Some(h) = hit else {
+                if let Some(env) = &self.scene.environment {
+                    let le = env.eval(d);
+                    let w = if prev_delta {
+                        1.0
+                    } else if !use_bsdf_hits {
+                        0.0
+                    } else if mis {
+                        power_heuristic(prev_pdf, self.p_env * env.pdf(d))
+                    } else {
+                        1.0
+                    };
+                    l += beta * le * w;
+                }
+                break;
+            };
+            let v = self.vertex(o, d, &h);
+            let wo = -d;
+            let le = self.emitted(&v, wo);
+            if le != Rgb::ZERO {
+                let w = if prev_delta {
+                    1.0
+                } else if !use_bsdf_hits {
+                    0.0
+                } else if mis {
+                    power_heuristic(prev_pdf, self.area_light_pdf(v.prim, prev_p, v.p, v.ng))
+                } else {
+                    1.0
+                };
+                l += beta * le * w;
+            }
+            if depth >= self.opts.max_depth {
+                break;
+            }
+            let mat = &self.scene.materials[self.scene.geometry.material[v.prim] as usize];
+            let (frame, ng) = if mat.two_sided() && wo.dot(v.ng) < 0.0 {
+                (v.frame.flipped(), -v.ng)
+            } else {
+                (v.frame, v.ng)
+            };
+            let bsdf = mat.bsdf(v.uv);
+            let wo_l = frame.to_local(wo);
+            // Same side of both normals, or the direction is dropped.
+            let consistent = |w: DVec3, wl: DVec3| (w.dot(ng) > 0.0) == (wl.z > 0.0);
+            // Next-event estimation (pointless on a BSDF made only of Dirac lobes).
+            let lobes = bsdf.flags().lobes;
+            let only_delta = lobes.is_specular() && !lobes.is_non_delta();
+            if use_nee && !only_delta {
+                if let Some((wi, pdf_l, le, tmax)) = self.sample_light(&v, rng) {
+                    let wi_l = frame.to_local(wi);
+                    if consistent(wi, wi_l) {
+                        let f = bsdf.eval(wi_l, wo_l);
+                        if f != Rgb::ZERO && !self.occluded(offset(v.p, ng, wi), wi, tmax) {
+                            let w = if mis {
+                                power_heuristic(pdf_l, bsdf.pdf(wi_l, wo_l))
+                            } else {
+                                1.0
+                            };
+                            let c = beta * f * le * (wi_l.z.abs() / pdf_l * w);
+                            if c.is_finite() {
+                                l += c;
+                            }
+                        }
+                    }
+                }
+            }
+            // Continue the path.
+            let (u1, u2) = (rng.next_f64(), rng.next_f64());
+            let Some(s) = bsdf.sample(wo_l, u1, u2) else {
+                break;
+            };
+            let wi = frame.to_world(s.wi);
+            if !consistent(wi, s.wi) {
+                break;
+            }
+            let wt = s.weight();
+            if !wt.is_finite() || wt == Rgb::ZERO {
+                break;
+            }
+            beta = beta * wt;
+            // Refraction scaled radiance by 1/η²; roulette looks at the flux (pbrt's etaScale).
+            if s.lobe.is_transmission() {
+                eta_scale *= s.eta * s.eta;
+            }
+            prev_delta = is_delta(&s);
+            prev_pdf = s.pdf;
+            prev_p = v.p;
+            // With light sampling only, paths continue for indirect light but emitters they
+            // reach are not counted (NEE counted them).
+            if depth >= self.opts.rr_depth {
+                let q = (beta.max_component() * eta_scale).min(0.95);
+                if rng.next_f64() >= q {
+                    break;
+                }
+                beta *= 1.0 / q;
+            }
+            o = offset(v.p, ng, wi);
+            d = wi;
+        }
+        l
+    }
+
+    /// Draws a light for NEE at `v`: (unit direction, solid-angle pdf including the light
+    /// choice, radiance, shadow-ray tmax along the direction).
+    fn sample_light(&self, v: &Vertex, rng: &mut SplitMix64) -> Option<(DVec3, f64, Rgb, f64)> {
+        let u0 = rng.next_f64();
+        let (u1, u2) = (rng.next_f64(), rng.next_f64());
+        if u0 < self.p_env {
+            let env = self.scene.environment.as_ref()?;
+            let (wi, pdf) = env.sample(u1, u2);
+            let pdf = pdf * self.p_env;
+            return (pdf > 0.0).then(|| (wi, pdf, env.eval(wi), f64::INFINITY));
+        }
+        let dist = self.light_dist.as_ref()?;
+        let (k, _) = dist.sample((u0 - self.p_env) / (1.0 - self.p_env));
+        let prim = self.lights[k];
+        let g = &self.scene.geometry;
+        let t = &g.positions[prim];
+        // Uniform point on the triangle (pbrt-v4 Eq. A.12).
+        let su = u1.sqrt();
+        let b = [1.0 - su, u2 * su, (1.0 - u2) * su];
+        let q = t[0] * b[0] + t[1] * b[1] + t[2] * b[2];
+        let lv = self.vertex(
+            q,
+            DVec3::ZERO,
+            &Hit {
+                prim,
+                t: 0.0,
+                bary: b,
+            },
+        );
+        let to = q - v.p;
+        let dist2 = to.length_squared();
+        let wi = to.try_normalize()?;
+        let le = self.emitted(&lv, -wi);
+        if le == Rgb::ZERO {
+            return None;
+        }
+        let pdf = self.area_light_pdf(prim, v.p, lv.p, lv.ng);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        // Stop the shadow ray just short of the light (relative, in units of the distance).
+        let tmax = dist2.sqrt() * (1.0 - 1e-4);
+        Some((wi, pdf, le, tmax))
+    }
+}
+
+/// Two independent half-images (even / odd samples) of a progressive render.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Accumulator {
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Samples per pixel so far.
+    pub spp: u32,
+    even: Vec<[f64; 3]>,
+    odd: Vec<[f64; 3]>,
+}
+
+impl Accumulator {
+    /// An empty w×h accumulator; errors on a zero size.
+    pub fn new(width: usize, height: usize) -> Result<Self> {
+        if width == 0 || height == 0 {
+            return Err(ShadeError::Parameter(format!(
+                "image size {width}×{height} is empty"
+            )));
+        }
+        Ok(Accumulator {
+            width,
+            height,
+            spp: 0,
+            even: vec![[0.0; 3]; width * height],
+            odd: vec![[0.0; 3]; width * height],
+        })
+    }
+
+    /// Even samples taken so far.
+    fn n_even(&self) -> u32 {
+        self.spp.div_ceil(2)
+    }
+
+    /// Odd samples taken so far.
+    fn n_odd(&self) -> u32 {
+        self.spp / 2
+    }
+
+    /// Restores an accumulator from its two half means (as written by a previous run) and the
+    /// sample count; errors when the sizes differ or `spp` < 2.
+    pub fn from_halves(even: &Image, odd: &Image, spp: u32) -> Result<Self> {
+        if even.width != odd.width || even.height != odd.height || spp < 2 {
+            return Err(ShadeError::Parameter(format!(
+                "resume: halves {}×{} and {}×{} with {spp} samples do not fit together",
+                even.width, even.height, odd.width, odd.height
+            )));
+        }
+        let mut a = Accumulator::new(even.width, even.height)?;
+        a.spp = spp;
+        let (ne, no) = (a.n_even() as f64, a.n_odd() as f64);
+        a.even = even.data.iter().map(|p| p.map(|c| c as f64 * ne)).collect();
+        a.odd = odd.data.iter().map(|p| p.map(|c| c as f64 * no)).collect();
+        Ok(a)
+    }
+
+    fn image_of(&self, f: impl Fn(usize) -> [f64; 3]) -> Image {
+        Image {
+            width: self.width,
+            height: self.height,
+            data: (0..self.width * self.height)
+                .map(|k| f(k).map(|c| c as f32))
+                .collect(),
+        }
+    }
+
+    /// The mean of all samples.
+    pub fn image(&self) -> Image {
+        let n = self.spp.max(1) as f64;
+        self.image_of(|k| [0, 1, 2].map(|c| (self.even[k][c] + self.odd[k][c]) / n))
+    }
+
+    /// The means of the even and of the odd samples.
+    pub fn halves(&self) -> (Image, Image) {
+        let (ne, no) = (self.n_even().max(1) as f64, self.n_odd().max(1) as f64);
+        (
+            self.image_of(|k| self.even[k].map(|c| c / ne)),
+            self.image_of(|k| self.odd[k].map(|c| c / no)),
+        )
+    }
+
+    /// Estimated RMS noise of [`Accumulator::image`] (linear, all channels): RMS(even − odd)/2,
+    /// exact in expectation for an even sample count. `None` below 2 samples.
+    pub fn noise_rms(&self) -> Option<f64> {
+        if self.spp < 2 {
+            return None;
+        }
+        let (a, b) = self.halves();
+        crate::metrics::rms(&a, &b).ok().map(|r| r / 2.0)
+    }
+}
+
+/// The seed of sample `k` of pixel (x, y).
+fn sample_seed(seed: u64, x: usize, y: usize, k: u32) -> u64 {
+    let mut g = SplitMix64::new(
+        seed ^ (x as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ (y as u64).wrapping_mul(0xC2B2_AE3D_27D4_EB4F)
+            ^ (k as u64).wrapping_mul(0x1656_67B1_9E37_79F9),
+    );
+    g.next_u64()
+}
+
+/// One pixel's index and the sums of its even and odd samples in a pass.
+type PixelSums = (usize, [f64; 3], [f64; 3]);
+
+/// Side of the square tiles rendered in parallel.
+pub const TILE: usize = 16;
+
+impl PathTracer<'_, '_> {
+    /// Adds `samples` samples per pixel to `acc` through `camera`, tiles in parallel;
+    /// `progress(tiles_done, tiles)` after each tile.
+    pub fn render(
+        &self,
+        camera: &PathCamera,
+        acc: &mut Accumulator,
+        samples: u32,
+        seed: u64,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) {
+        let (w, h) = (acc.width, acc.height);
+        let (tx, ty) = (w.div_ceil(TILE), h.div_ceil(TILE));
+        let n_tiles = tx * ty;
+        let first = acc.spp;
+        let done = AtomicUsize::new(0);
+        let tiles: Vec<Vec<PixelSums>> = (0..n_tiles)
+            .into_par_iter()
+            .map(|t| {
+                let (x0, y0) = ((t % tx) * TILE, (t / tx) * TILE);
+                let mut out = vec![];
+                for y in y0..(y0 + TILE).min(h) {
+                    for x in x0..(x0 + TILE).min(w) {
+                        let (mut even, mut odd) = ([0.0; 3], [0.0; 3]);
+                        for k in first..first + samples {
+                            let mut rng = SplitMix64::new(sample_seed(seed, x, y, k));
+                            let (jx, jy) = (rng.next_f64(), rng.next_f64());
+                            let d = camera.direction(x as f64 + jx, y as f64 + jy, w, h);
+                            let c = self.radiance(camera.origin, d, &mut rng);
+                            let c = if c.is_finite() { c } else { Rgb::ZERO };
+                            let dst = if k % 2 == 0 { &mut even } else { &mut odd };
+                            for ch in 0..3 {
+                                dst[ch] += c[ch];
+                            }
+                        }
+                        out.push((y * w + x, even, odd));
+                    }
+                }
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1, n_tiles);
+                out
+            })
+            .collect();
+        for tile in tiles {
+            for (k, e, o) in tile {
+                for c in 0..3 {
+                    acc.even[k][c] += e[c];
+                    acc.odd[k][c] += o[c];
+                }
+            }
+        }
+        acc.spp += samples;
+    }
+}

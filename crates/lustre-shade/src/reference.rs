@@ -1,0 +1,386 @@
+//! The path-traced reference of a [`lustre_scene::Scene`]: the adapter from the scene model to
+//! the path tracer's [`PathScene`], and the resumable job behind `lustre reference`.
+//!
+//! Files of a job writing `OUT.exr`: `OUT.exr` (the mean, RGB float), `OUT.even.exr` and
+//! `OUT.odd.exr` (the two independent halves), `OUT.json` (sample count, settings, the noise
+//! estimate, timings) and `OUT.png` (a preview with exposure). All are written atomically after
+//! every pass; `resume` reads the halves and the JSON back and continues with the next sample
+//! index, so a resumed render equals an uninterrupted one (up to the f32 rounding of the halves).
+
+use crate::image::Image;
+use crate::path::{
+    Accumulator, EnvLight, Geometry, PathCamera, PathOptions, PathScene, PathTracer, Surface,
+};
+use crate::{Result, ShadeError};
+use glam::{DMat3, DVec3, Vec2};
+use lustre_brdf::bsdf::Bsdf;
+use lustre_brdf::models::lambert::Lambert;
+use lustre_brdf::rgb::Rgb;
+use lustre_scene::{EnvironmentSource, Material, Scene, Texture};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// A scene material as a [`Surface`]: textures evaluated at the hit by
+/// [`Material::bsdf_at`], alpha masks by [`Material::alpha_at`] (opaque at opacity ≥ ½: a
+/// stochastic Mitsuba `mask` is thresholded), two-sidedness from the material.
+struct SceneSurface<'s> {
+    material: &'s Material,
+    textures: &'s [Texture],
+}
+
+impl Surface for SceneSurface<'_> {
+    fn bsdf(&self, uv: [f64; 2]) -> Box<dyn Bsdf + '_> {
+        let uv = [Vec2::new(uv[0] as f32, uv[1] as f32); 2];
+        match self.material.bsdf_at(self.textures, &uv) {
+            Ok(b) => b,
+            // `path_scene` checked every material at uv = 0; a texel that still fails (it
+            // cannot for clamped textures) renders black rather than aborting a long render.
+            Err(_) => Box::new(Lambert { kd: Rgb::ZERO }),
+        }
+    }
+    fn masked(&self) -> bool {
+        self.material.alpha_mask.is_some()
+    }
+    fn opaque(&self, uv: [f64; 2]) -> bool {
+        let uv = [Vec2::new(uv[0] as f32, uv[1] as f32); 2];
+        self.material.alpha_at(self.textures, &uv) >= 0.5
+    }
+    fn two_sided(&self) -> bool {
+        self.material.two_sided
+    }
+}
+
+/// A material the BSDF library cannot build (reported as a warning, rendered grey).
+#[derive(Debug)]
+struct Fallback(Lambert);
+
+impl Surface for Fallback {
+    fn bsdf(&self, _uv: [f64; 2]) -> Box<dyn Bsdf + '_> {
+        Box::new(self.0)
+    }
+    fn two_sided(&self) -> bool {
+        true
+    }
+}
+
+/// Width of the equirect map a rotated or analytic environment is resampled to.
+pub const ENV_WIDTH: usize = 2048;
+
+/// The path tracer's view of `scene`: world triangles with normals, uv0 and emission, one
+/// [`Surface`] per material and the environment as an importance-sampled [`EnvLight`].
+/// Returns warnings for what is approximated (materials the BSDF library cannot build yet are
+/// rendered as two-sided grey Lambert 0.5, named; normal maps and emission textures are
+/// ignored, named).
+pub fn path_scene(scene: &Scene) -> Result<(PathScene<'_>, Vec<String>)> {
+    let mut warnings = vec![];
+    let mut g = Geometry::default();
+    let any_normals = scene.meshes.iter().any(|m| m.normals.is_some());
+    let any_uvs = scene.meshes.iter().any(|m| m.uv0.is_some());
+    let any_emission = scene.meshes.iter().any(|m| m.emission.is_some());
+    let d = |v: glam::Vec3| DVec3::new(v.x as f64, v.y as f64, v.z as f64);
+    for m in &scene.meshes {
+        for t in &m.indices {
+            let corner = |k: usize| t[k] as usize;
+            let p = [0, 1, 2].map(|k| d(m.positions[corner(k)]));
+            g.positions.push(p);
+            if any_normals {
+                let n = match &m.normals {
+                    Some(n) => [0, 1, 2].map(|k| d(n[corner(k)])),
+                    None => [(p[1] - p[0]).cross(p[2] - p[0]); 3],
+                };
+                g.normals.push(n);
+            }
+            if any_uvs {
+                let uv = match &m.uv0 {
+                    Some(uv) => [0, 1, 2].map(|k| {
+                        let v = uv[corner(k)];
+                        [v.x as f64, v.y as f64]
+                    }),
+                    None => [[0.0; 2]; 3],
+                };
+                g.uvs.push(uv);
+            }
+            if any_emission {
+                g.emission.push(m.emission.unwrap_or(Rgb::ZERO));
+            }
+            g.material.push(m.material as u32);
+        }
+    }
+    let mut materials: Vec<Box<dyn Surface + '_>> = vec![];
+    for mat in &scene.materials {
+        match mat.check(&scene.textures) {
+            Ok(()) => materials.push(Box::new(SceneSurface {
+                material: mat,
+                textures: &scene.textures,
+            })),
+            Err(e) => {
+                warnings.push(format!(
+                    "material {:?} renders as grey Lambert 0.5: {e}",
+                    mat.name
+                ));
+                materials.push(Box::new(Fallback(Lambert {
+                    kd: Rgb::splat(0.5),
+                })));
+            }
+        }
+        if mat.normal_map.is_some() {
+            warnings.push(format!("material {:?}: normal map ignored", mat.name));
+        }
+        if mat.emission_texture.is_some() {
+            warnings.push(format!("material {:?}: emission texture ignored", mat.name));
+        }
+    }
+    let environment = match &scene.environment {
+        None => None,
+        Some(env) => {
+            let width = match env.source {
+                EnvironmentSource::Constant(_) => 8,
+                _ => ENV_WIDTH,
+            };
+            let map = env.to_world_equirect(width);
+            if map.data.iter().all(|p| p.iter().all(|&c| c == 0.0)) {
+                warnings.push("environment is black: ignored".into());
+                None
+            } else {
+                Some(EnvLight::new(map, DMat3::IDENTITY, 1.0)?)
+            }
+        }
+    };
+    Ok((
+        PathScene {
+            geometry: g,
+            materials,
+            environment,
+        },
+        warnings,
+    ))
+}
+
+/// The path camera of the scene's camera `name` (the first one when `None`) for a W×H film. A
+/// scene without cameras (an OBJ) gets an automatic one when no name is asked: 40° vertical
+/// field of view, looking along +z at the centre of the bounds from far enough back to see
+/// them (the Cornell box convention).
+pub fn path_camera(
+    scene: &Scene,
+    name: Option<&str>,
+    width: u32,
+    height: u32,
+) -> Result<PathCamera> {
+    let aspect = f64::from(width) / f64::from(height);
+    if name.is_none() && scene.cameras.is_empty() {
+        let (lo, hi) = scene.bounds().ok_or_else(|| {
+            ShadeError::Parameter(format!("{}: the scene is empty", scene.source.display()))
+        })?;
+        let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+        let c = 0.5 * (lo + hi);
+        let r = 0.5 * (hi - lo).length();
+        let fov: f64 = 40.0;
+        let dist = r
+            / (fov.to_radians() * 0.5)
+                .tan()
+                .min(aspect * (fov.to_radians() * 0.5).tan());
+        return PathCamera::look_at(c - DVec3::Z * dist.max(1e-6), c, DVec3::Y, fov);
+    }
+    let cam = scene.camera(name).ok_or_else(|| {
+        ShadeError::Parameter(match name {
+            Some(n) => format!(
+                "{}: no camera named {n:?} (cameras: {})",
+                scene.source.display(),
+                scene
+                    .cameras
+                    .iter()
+                    .map(|c| c.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            None => format!("{}: the scene has no camera", scene.source.display()),
+        })
+    })?;
+    let fov_y = cam.fov_y_deg(aspect);
+    PathCamera::look_at(cam.position, cam.position + cam.forward, cam.up, fov_y)
+}
+
+/// Settings of a reference job.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReferenceOptions {
+    /// Camera name (the scene's first when `None`).
+    pub camera: Option<String>,
+    /// Samples per pixel in total.
+    pub spp: u32,
+    /// Longest path (segments).
+    pub max_depth: u32,
+    /// Film size; the scene's when `None`.
+    pub size: Option<(u32, u32)>,
+    /// Continue from the files of a previous run.
+    pub resume: bool,
+    /// The output `.exr`.
+    pub out: PathBuf,
+    /// Exposure of the PNG preview.
+    pub exposure: f64,
+    /// Seed of every pixel's sample stream.
+    pub seed: u64,
+}
+
+/// What a job wrote into `OUT.json` (and resumes from).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ReferenceState {
+    /// The scene file.
+    pub scene: String,
+    /// Camera name.
+    pub camera: String,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Samples per pixel accumulated.
+    pub spp: u32,
+    /// Longest path (segments).
+    pub max_depth: u32,
+    /// Seed.
+    pub seed: u64,
+    /// Estimated RMS noise of the mean (linear, all channels): RMS(even − odd)/2.
+    pub noise_rms: f64,
+    /// `noise_rms` / mean pixel value.
+    pub noise_relative: f64,
+    /// Mean pixel value (all channels).
+    pub mean: f64,
+    /// Seconds of rendering, summed over runs.
+    pub seconds: f64,
+}
+
+/// `OUT` with its extension replaced by `ext`.
+fn sibling(out: &Path, ext: &str) -> PathBuf {
+    out.with_extension(ext)
+}
+
+fn read_exr(path: &Path) -> Result<Image> {
+    let img = image::open(path).map_err(|e| {
+        ShadeError::Parameter(format!("resume: cannot read {}: {e}", path.display()))
+    })?;
+    let rgb = img.to_rgb32f();
+    let (w, h) = (rgb.width() as usize, rgb.height() as usize);
+    let data = rgb.pixels().map(|p| p.0).collect();
+    Image::from_data(w, h, data)
+}
+
+fn mean_of(img: &Image) -> f64 {
+    let s: f64 = img
+        .data
+        .iter()
+        .map(|p| p.iter().map(|&c| c as f64).sum::<f64>())
+        .sum();
+    s / (3 * img.data.len()).max(1) as f64
+}
+
+/// Renders (or continues) the reference of `scene` with `opts`, writing the files after every
+/// pass (passes double in size, from 2 up to 64 samples). `progress(spp_done, spp_total,
+/// tiles_done, tiles)` reports. Returns the final state.
+pub fn render_reference(
+    scene: &Scene,
+    opts: &ReferenceOptions,
+    progress: &(dyn Fn(u32, u32, usize, usize) + Sync),
+) -> Result<(ReferenceState, Vec<String>)> {
+    let (w, h) = opts.size.unwrap_or((scene.film.width, scene.film.height));
+    if w == 0 || h == 0 || w > 1 << 15 || h > 1 << 15 {
+        return Err(ShadeError::Parameter(format!(
+            "image size {w}×{h} must be between 1 and 32768"
+        )));
+    }
+    if opts.spp == 0 {
+        return Err(ShadeError::Parameter("--spp must be ≥ 1".into()));
+    }
+    if !(opts.exposure.is_finite() && opts.exposure > 0.0) {
+        return Err(ShadeError::Parameter(format!(
+            "exposure {} must be finite and > 0",
+            opts.exposure
+        )));
+    }
+    let camera = path_camera(scene, opts.camera.as_deref(), w, h)?;
+    let cam_name = scene
+        .camera(opts.camera.as_deref())
+        .map_or_else(|| "auto".to_string(), |c| c.name.clone());
+    let (ps, warnings) = path_scene(scene)?;
+    let pt = PathTracer::new(
+        &ps,
+        PathOptions {
+            max_depth: opts.max_depth,
+            ..PathOptions::default()
+        },
+    )?;
+    let json_path = sibling(&opts.out, "json");
+    let (even_path, odd_path) = (
+        sibling(&opts.out, "even.exr"),
+        sibling(&opts.out, "odd.exr"),
+    );
+    let mut state = ReferenceState {
+        scene: scene.source.display().to_string(),
+        camera: cam_name,
+        width: w,
+        height: h,
+        spp: 0,
+        max_depth: opts.max_depth,
+        seed: opts.seed,
+        noise_rms: f64::NAN,
+        noise_relative: f64::NAN,
+        mean: f64::NAN,
+        seconds: 0.0,
+    };
+    let mut acc = Accumulator::new(w as usize, h as usize)?;
+    if opts.resume {
+        let text = std::fs::read_to_string(&json_path).map_err(|e| ShadeError::Io {
+            path: json_path.clone(),
+            source: e,
+        })?;
+        let old: ReferenceState = serde_json::from_str(&text)
+            .map_err(|e| ShadeError::Parameter(format!("resume: {}: {e}", json_path.display())))?;
+        if (old.width, old.height, old.max_depth, old.seed, &old.camera)
+            != (w, h, opts.max_depth, opts.seed, &state.camera)
+        {
+            return Err(ShadeError::Parameter(format!(
+                "resume: {} was rendered at {}×{}, max depth {}, seed {}, camera {:?}; asked for {w}×{h}, {}, {}, {:?}",
+                json_path.display(),
+                old.width,
+                old.height,
+                old.max_depth,
+                old.seed,
+                old.camera,
+                opts.max_depth,
+                opts.seed,
+                state.camera
+            )));
+        }
+        let (a, b) = (read_exr(&even_path)?, read_exr(&odd_path)?);
+        acc = Accumulator::from_halves(&a, &b, old.spp)?;
+        state.seconds = old.seconds;
+    }
+    let total = opts.spp;
+    while acc.spp < total {
+        let pass = acc.spp.clamp(2, 64).min(total - acc.spp);
+        let t0 = Instant::now();
+        let done = acc.spp;
+        pt.render(&camera, &mut acc, pass, opts.seed, &|t, n| {
+            progress(done, total, t, n)
+        });
+        state.seconds += t0.elapsed().as_secs_f64();
+        state.spp = acc.spp;
+        let img = acc.image();
+        state.mean = mean_of(&img);
+        state.noise_rms = acc.noise_rms().unwrap_or(f64::NAN);
+        state.noise_relative = state.noise_rms / state.mean;
+        let (a, b) = acc.halves();
+        a.write_exr(&even_path)?;
+        b.write_exr(&odd_path)?;
+        img.write_exr(&opts.out)?;
+        img.write_png(&sibling(&opts.out, "png"), opts.exposure)?;
+        let json = serde_json::to_string_pretty(&state)
+            .map_err(|e| ShadeError::Parameter(format!("state: {e}")))?;
+        lustre_brdf::error::write_atomic(&json_path, json.as_bytes())?;
+    }
+    let img = acc.image();
+    state.spp = acc.spp;
+    state.mean = mean_of(&img);
+    state.noise_rms = acc.noise_rms().unwrap_or(f64::NAN);
+    state.noise_relative = state.noise_rms / state.mean;
+    Ok((state, warnings))
+}
