@@ -5,9 +5,9 @@ mod demo_cmd;
 mod fit_cmd;
 mod merl_cmd;
 mod plot_cmd;
-mod score_cmd;
 mod reference_cmd;
 mod scene_cmd;
+mod score_cmd;
 
 use anyhow::Context;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
