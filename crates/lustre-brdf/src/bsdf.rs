@@ -332,26 +332,33 @@ pub trait Bsdf: Send + Sync + std::fmt::Debug {
     }
 }
 
-impl<T: Bsdf + ?Sized> Bsdf for Box<T> {
-    fn name(&self) -> String {
-        (**self).name()
-    }
-    fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
-        (**self).eval(wi, wo)
-    }
-    fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        (**self).sample(wo, u1, u2)
-    }
-    fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        (**self).pdf(wi, wo)
-    }
-    fn flags(&self) -> BsdfFlags {
-        (**self).flags()
-    }
-    fn albedo(&self, wo: DVec3, n: usize) -> Rgb {
-        (**self).albedo(wo, n)
-    }
+/// Boxed, shared and borrowed BSDFs are BSDFs (a scene hands out `Box<dyn Bsdf>` built per
+/// hit, shared `Arc`s of resolved specs, or borrows of constant materials).
+macro_rules! forward_bsdf {
+    ($($ptr:ty),*) => {$(
+        impl<T: Bsdf + ?Sized> Bsdf for $ptr {
+            fn name(&self) -> String {
+                (**self).name()
+            }
+            fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
+                (**self).eval(wi, wo)
+            }
+            fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
+                (**self).sample(wo, u1, u2)
+            }
+            fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
+                (**self).pdf(wi, wo)
+            }
+            fn flags(&self) -> BsdfFlags {
+                (**self).flags()
+            }
+            fn albedo(&self, wo: DVec3, n: usize) -> Rgb {
+                (**self).albedo(wo, n)
+            }
+        }
+    )*};
 }
+forward_bsdf!(Box<T>, std::sync::Arc<T>, &T);
 
 /// Picks one of several components with probabilities proportional to `weights` using `u`,
 /// and returns its index together with `u` rescaled to [0, 1) for reuse (pbrt's trick).

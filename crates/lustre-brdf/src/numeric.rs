@@ -233,6 +233,47 @@ pub fn exp_integral_e1(x: f64) -> f64 {
     }
 }
 
+/// erf⁻¹(x) on (−1, 1) by Giles' single-precision polynomial ("Approximating the erfinv
+/// function", GPU Computing Gems, 2011; relative error < 4e-7). The GPU kernels use the same
+/// polynomial; `microfacet::distribution` refines it to double precision.
+pub fn erfinv_giles(x: f64) -> f64 {
+    let w = -((1.0 - x) * (1.0 + x)).ln();
+    let p = if w < 5.0 {
+        let w = w - 2.5;
+        let mut p = 2.810_226_36e-08;
+        for c in [
+            3.432_739_39e-07,
+            -3.523_387_7e-06,
+            -4.391_506_54e-06,
+            0.000_218_580_87,
+            -0.001_253_725_03,
+            -0.004_177_681_64,
+            0.246_640_727,
+            1.501_409_41,
+        ] {
+            p = c + p * w;
+        }
+        p
+    } else {
+        let w = w.sqrt() - 3.0;
+        let mut p = -0.000_200_214_257;
+        for c in [
+            0.000_100_950_558,
+            0.001_349_343_22,
+            -0.003_673_428_44,
+            0.005_739_507_73,
+            -0.007_622_461_3,
+            0.009_438_870_47,
+            1.001_674_06,
+            2.832_976_82,
+        ] {
+            p = c + p * w;
+        }
+        p
+    };
+    p * x
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -20,7 +20,7 @@ use lustre_brdf::models::rough_dielectric::RoughDielectric;
 use lustre_brdf::models::rough_plastic::RoughPlastic;
 use lustre_brdf::models::thin_dielectric::ThinDielectric;
 use lustre_brdf::models::two_sided::TwoSided;
-use lustre_brdf::{Bsdf, BsdfSample, DVec3, Rgb};
+use lustre_brdf::{Bsdf, DVec3, Rgb};
 use std::sync::{Arc, OnceLock};
 
 /// A texture reference: which texture and which UV set.
@@ -488,13 +488,13 @@ impl Material {
     pub fn bsdf_at(&self, textures: &[Texture], uv: &[Vec2; 2]) -> Result<Box<dyn Bsdf>> {
         let err = |e: lustre_brdf::Error| SceneError::material(&self.name, e.to_string());
         if let MaterialKind::Spec(r) = &self.kind {
-            return self.sided(Box::new(SharedBsdf(r.bsdf.clone())));
+            return self.sided(Box::new(r.bsdf.clone()));
         }
         let textured = self.kind_is_textured();
         if !textured {
             if let Some(Prepared::Whole(key, two_sided, b)) = self.cache.0.get() {
                 if *key == self.kind && *two_sided == self.two_sided {
-                    return Ok(Box::new(SharedBsdf(b.clone())));
+                    return Ok(Box::new(b.clone()));
                 }
             }
         }
@@ -507,7 +507,7 @@ impl Material {
                 self.two_sided,
                 arc.clone(),
             ));
-            return Ok(Box::new(SharedBsdf(arc)));
+            return Ok(Box::new(arc));
         }
         Ok(b)
     }
@@ -722,7 +722,7 @@ impl Material {
                     )?)
                 }
             }
-            MaterialKind::Spec(r) => Box::new(SharedBsdf(r.bsdf.clone())),
+            MaterialKind::Spec(r) => Box::new(r.bsdf.clone()),
         })
     }
 }
@@ -772,29 +772,4 @@ fn microfacet_type(d: Distribution) -> MicrofacetType {
 
 fn mismatch() -> lustre_brdf::Error {
     lustre_brdf::Error::NotFound("prepared model does not match the material kind".into())
-}
-
-/// A BSDF shared between hits (a resolved material spec).
-#[derive(Debug, Clone)]
-pub struct SharedBsdf(pub Arc<dyn Bsdf>);
-
-impl Bsdf for SharedBsdf {
-    fn name(&self) -> String {
-        self.0.name()
-    }
-    fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
-        self.0.eval(wi, wo)
-    }
-    fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        self.0.sample(wo, u1, u2)
-    }
-    fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        self.0.pdf(wi, wo)
-    }
-    fn flags(&self) -> lustre_brdf::BsdfFlags {
-        self.0.flags()
-    }
-    fn albedo(&self, wo: DVec3, n: usize) -> Rgb {
-        self.0.albedo(wo, n)
-    }
 }

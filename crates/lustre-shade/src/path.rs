@@ -27,7 +27,7 @@ use crate::image::Image;
 use crate::kernel::{power_heuristic, ShadingFrame};
 use crate::{Result, ShadeError};
 use glam::{DMat3, DVec3};
-use lustre_brdf::bsdf::{Bsdf, BsdfFlags, BsdfSample};
+use lustre_brdf::bsdf::{Bsdf, BsdfSample};
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
 use lustre_env::{Distribution1D, EnvSampler, EquirectMap};
@@ -63,32 +63,10 @@ pub struct ConstantSurface {
 
 impl Surface for ConstantSurface {
     fn bsdf(&self, _uv: [f64; 2]) -> Box<dyn Bsdf + '_> {
-        Box::new(BsdfRef(&*self.bsdf))
+        Box::new(&*self.bsdf)
     }
     fn two_sided(&self) -> bool {
         self.two_sided
-    }
-}
-
-/// A borrowed BSDF behind a box (the [`Surface::bsdf`] of constant materials).
-#[derive(Debug)]
-pub struct BsdfRef<'a>(pub &'a dyn Bsdf);
-
-impl Bsdf for BsdfRef<'_> {
-    fn name(&self) -> String {
-        self.0.name()
-    }
-    fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
-        self.0.eval(wi, wo)
-    }
-    fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        self.0.sample(wo, u1, u2)
-    }
-    fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        self.0.pdf(wi, wo)
-    }
-    fn flags(&self) -> BsdfFlags {
-        self.0.flags()
     }
 }
 

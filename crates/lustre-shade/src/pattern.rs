@@ -478,41 +478,7 @@ pub const ROW_LATTICE_XI0: f64 = 0.5;
 /// clamped to [1e-7, 1 − 1e-7].
 pub fn gauss_quantile(u: f64) -> f64 {
     let x = (2.0 * u.clamp(1e-7, 1.0 - 1e-7) - 1.0).clamp(-1.0, 1.0);
-    let w0 = -((1.0 - x) * (1.0 + x)).ln();
-    let p = if w0 < 5.0 {
-        let w = w0 - 2.5;
-        let mut p = 2.810_226_36e-08;
-        for c in [
-            3.432_739_39e-07,
-            -3.523_387_7e-06,
-            -4.391_506_54e-06,
-            0.000_218_580_87,
-            -0.001_253_725_03,
-            -0.004_177_681_64,
-            0.246_640_727,
-            1.501_409_41,
-        ] {
-            p = c + p * w;
-        }
-        p
-    } else {
-        let w = w0.sqrt() - 3.0;
-        let mut p = -0.000_200_214_257;
-        for c in [
-            0.000_100_950_558,
-            0.001_349_343_22,
-            -0.003_673_428_44,
-            0.005_739_507_73,
-            -0.007_622_461_3,
-            0.009_438_870_47,
-            1.001_674_06,
-            2.832_976_82,
-        ] {
-            p = c + p * w;
-        }
-        p
-    };
-    p * x
+    lustre_brdf::numeric::erfinv_giles(x)
 }
 
 /// The number of rows of a [`row_lattice`] of `budget` samples for a lobe whose image in ωi

@@ -20,7 +20,10 @@
 //! domain (as Mitsuba does, but iterated to convergence with a bisection safeguard instead of a
 //! fixed three Newton steps).
 
+use crate::bsdf::LobeFlags;
 use crate::error::{check_range, Error, Result};
+use crate::frame::reflect;
+use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -181,6 +184,42 @@ impl MicrofacetDistribution {
         self.d(m) * self.g1(v, m) * vm / v.z
     }
 
+    /// A glossy lobe of this distribution (reflection about a visible normal) mixed with a
+    /// cosine-weighted diffuse lobe, the glossy one picked with probability `ps`: the sampling
+    /// of rough plastic and of the glTF BRDF. Returns the direction and its lobe; `None` below
+    /// the horizon.
+    pub fn sample_with_diffuse(
+        &self,
+        ps: f64,
+        wo: DVec3,
+        u1: f64,
+        u2: f64,
+    ) -> Option<(DVec3, LobeFlags)> {
+        if wo.z.is_nan() || wo.z <= 0.0 {
+            return None;
+        }
+        let (wi, kind) = if u1 < ps {
+            let u1 = (u1 / ps).clamp(0.0, 1.0 - f64::EPSILON);
+            let m = self.sample_visible(wo, u1, u2)?;
+            (reflect(wo, m), LobeFlags::GLOSSY_REFLECTION)
+        } else {
+            let u1 = ((u1 - ps) / (1.0 - ps)).clamp(0.0, 1.0 - f64::EPSILON);
+            (cosine_hemisphere(u1, u2), LobeFlags::DIFFUSE_REFLECTION)
+        };
+        (wi.z > 0.0).then_some((wi, kind))
+    }
+
+    /// The solid-angle density of [`Self::sample_with_diffuse`]:
+    /// ps · D(h) G1(wo, h) / (4 cos θo) + (1 − ps) cos θi / π.
+    pub fn pdf_with_diffuse(&self, ps: f64, wi: DVec3, wo: DVec3) -> f64 {
+        if !(wi.z > 0.0 && wo.z > 0.0) {
+            return 0.0;
+        }
+        let h = (wi + wo).normalize();
+        let spec = self.d(h) * self.g1(wo, h) / (4.0 * wo.z);
+        ps * spec + (1.0 - ps) * cosine_hemisphere_pdf(wi)
+    }
+
     /// Draws a microfacet normal visible from `v` (which must lie above the surface; `None`
     /// otherwise) from two uniform numbers in [0, 1).
     pub fn sample_visible(&self, v: DVec3, u1: f64, u2: f64) -> Option<DVec3> {
@@ -285,41 +324,7 @@ fn beckmann_slopes_11(cos_theta: f64, u1: f64, u2: f64) -> (f64, f64) {
 /// on `libm::erf` (cubic convergence: full double precision). puruspe's `inverf` costs about
 /// four times as much here.
 fn erfinv(x: f64) -> f64 {
-    let w = -((1.0 - x) * (1.0 + x)).ln();
-    let p = if w < 5.0 {
-        let w = w - 2.5;
-        let mut p = 2.810_226_36e-08;
-        for c in [
-            3.432_739_39e-07,
-            -3.523_387_7e-06,
-            -4.391_506_54e-06,
-            0.000_218_580_87,
-            -0.001_253_725_03,
-            -0.004_177_681_64,
-            0.246_640_727,
-            1.501_409_41,
-        ] {
-            p = c + p * w;
-        }
-        p
-    } else {
-        let w = w.sqrt() - 3.0;
-        let mut p = -0.000_200_214_257;
-        for c in [
-            0.000_100_950_558,
-            0.001_349_343_22,
-            -0.003_673_428_44,
-            0.005_739_507_73,
-            -0.007_622_461_3,
-            0.009_438_870_47,
-            1.001_674_06,
-            2.832_976_82,
-        ] {
-            p = c + p * w;
-        }
-        p
-    };
-    let mut y = p * x;
+    let mut y = crate::numeric::erfinv_giles(x);
     for _ in 0..2 {
         let f = libm::erf(y) - x;
         let d = 2.0 / PI.sqrt() * (-y * y).exp();

@@ -18,10 +18,8 @@
 
 use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use crate::error::{check_range, check_rgb, Result};
-use crate::frame::reflect;
 use crate::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
 use crate::rgb::Rgb;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use std::f64::consts::FRAC_1_PI;
 
@@ -109,21 +107,8 @@ impl Bsdf for PbrMetallicRoughness {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        if wo.z.is_nan() || wo.z <= 0.0 {
-            return None;
-        }
         let ps = self.prob_specular(wo);
-        let (wi, kind) = if u1 < ps {
-            let u1 = (u1 / ps).clamp(0.0, 1.0 - f64::EPSILON);
-            let m = self.distribution.sample_visible(wo, u1, u2)?;
-            (reflect(wo, m), LobeFlags::GLOSSY_REFLECTION)
-        } else {
-            let u1 = ((u1 - ps) / (1.0 - ps)).clamp(0.0, 1.0 - f64::EPSILON);
-            (cosine_hemisphere(u1, u2), LobeFlags::DIFFUSE_REFLECTION)
-        };
-        if wi.z.is_nan() || wi.z <= 0.0 {
-            return None;
-        }
+        let (wi, kind) = self.distribution.sample_with_diffuse(ps, wo, u1, u2)?;
         let pdf = self.pdf(wi, wo);
         (pdf > 0.0 && pdf.is_finite()).then(|| BsdfSample::new(wi, self.eval(wi, wo), pdf, kind))
     }
@@ -132,10 +117,8 @@ impl Bsdf for PbrMetallicRoughness {
         if !(wi.z > 0.0 && wo.z > 0.0) {
             return 0.0;
         }
-        let ps = self.prob_specular(wo);
-        let h = (wi + wo).normalize();
-        let spec = self.distribution.d(h) * self.distribution.g1(wo, h) / (4.0 * wo.z);
-        ps * spec + (1.0 - ps) * cosine_hemisphere_pdf(wi)
+        self.distribution
+            .pdf_with_diffuse(self.prob_specular(wo), wi, wo)
     }
 
     /// Reciprocal. Energy conserving only as a pure metal (a rough conductor with F ≤ 1): the
