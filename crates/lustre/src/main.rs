@@ -146,8 +146,10 @@ fn list() -> anyhow::Result<()> {
     }
     let names = lustre_brdf::fits::sgd::list_materials()?;
     writeln!(out, "the {} MERL materials (NAME above):", names.len())?;
+    // One column wider than the longest name, so that names never run together.
+    let width = names.iter().map(|n| n.len()).max().unwrap_or(0) + 2;
     for row in names.chunks(4) {
-        let cells: Vec<String> = row.iter().map(|n| format!("{n:<24}")).collect();
+        let cells: Vec<String> = row.iter().map(|n| format!("{n:<width$}")).collect();
         writeln!(out, "  {}", cells.join("").trim_end())?;
     }
     writeln!(

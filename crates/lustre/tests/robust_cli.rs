@@ -158,6 +158,14 @@ fn works_from_any_directory() {
         t.contains("MIT licence") && t.contains("LUSTRE_DATA"),
         "{t}"
     );
+    // Every MERL name stands on its own (the longest once ran into their neighbours).
+    let words: std::collections::HashSet<&str> = t.split_whitespace().collect();
+    for name in lustre_brdf::fits::sgd::list_materials().expect("names") {
+        assert!(
+            words.contains(name.as_str()),
+            "{name} not listed on its own"
+        );
+    }
     let t = fails(run().args(["info", "data:measured/rgl/paper_white_rgb.bsdf"]));
     assert!(t.contains("LUSTRE_DATA") && t.contains("--data"), "{t}");
     let shared = lustre_brdf::shared_data_dir();
