@@ -42,6 +42,29 @@ pub const SUPPORTED_USED: &[&str] = &[
     "KHR_materials_anisotropy",
 ];
 
+/// gltf 1.4.1 subtracts the 12-byte header from a GLB's declared length before checking it (an
+/// overflow panic where overflow checks are on; found by the `gltf` fuzz target): check the header
+/// here first. Files that do not start with the GLB magic are JSON and pass unchanged.
+fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let Some(length) = bytes.get(8..12) else {
+        return Err(format!(
+            "binary glTF (GLB) truncated: {} bytes, its header alone takes 12",
+            bytes.len()
+        ));
+    };
+    let declared = u32::from_le_bytes([length[0], length[1], length[2], length[3]]) as usize;
+    if declared < 12 {
+        return Err(format!(
+            "binary glTF (GLB) header declares a total length of {declared} bytes, less than \
+             the 12-byte header itself"
+        ));
+    }
+    Ok(())
+}
+
 struct Reader<'a> {
     path: &'a Path,
     base: PathBuf,
@@ -54,6 +77,7 @@ struct Reader<'a> {
 /// external buffers and images.
 pub fn from_slice(path: &Path, bytes: &[u8]) -> Result<Scene> {
     let fmt = |p: String| SceneError::format(path, p);
+    check_glb_header(bytes).map_err(fmt)?;
     let unvalidated = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| fmt(format!("not a valid glTF file: {e}")))?;
     for ext in unvalidated.extensions_required() {
@@ -78,6 +102,27 @@ pub fn from_slice(path: &Path, bytes: &[u8]) -> Result<Scene> {
                     )));
                 }
             }
+        }
+    }
+    // gltf 1.4.1 computes `offset + stride · (count − 1)` unchecked when it reads an accessor: a
+    // count of 0 (the specification requires ≥ 1) or absurd sizes overflow (found by the `gltf`
+    // fuzz target).
+    const MAX_COUNT: u64 = 1 << 31;
+    for (ai, acc) in root.accessors.iter().enumerate() {
+        let sparse = acc.sparse.as_ref().map(|sp| sp.count.0);
+        for (what, n) in [("count", Some(acc.count.0)), ("sparse count", sparse)] {
+            match n {
+                Some(n) if !(1..=MAX_COUNT).contains(&n) => {
+                    return Err(fmt(format!(
+                        "accessor {ai}: {what} {n} outside 1..={MAX_COUNT}"
+                    )))
+                }
+                _ => {}
+            }
+        }
+        let offset = acc.byte_offset.map_or(0, |o| o.0);
+        if offset > MAX_COUNT {
+            return Err(fmt(format!("accessor {ai}: byteOffset {offset} is absurd")));
         }
     }
     let gltf::Gltf { document, blob } =

@@ -409,3 +409,39 @@ fn gltf_attribute_naming_a_missing_accessor_is_an_error() {
     let msg = Scene::load(&p).unwrap_err().to_string();
     assert!(msg.contains("names accessor 9 of 2"), "{msg}");
 }
+
+#[test]
+fn glb_header_shorter_than_itself_is_an_error() {
+    // Found by the `gltf` fuzz target: a declared length under 12 bytes made gltf 1.4.1 subtract
+    // with overflow (a panic in builds with overflow checks).
+    let mut bytes = b"glTF".to_vec();
+    bytes.extend_from_slice(&2u32.to_le_bytes());
+    bytes.extend_from_slice(&0u32.to_le_bytes());
+    bytes.extend_from_slice(b"\x00\x06\x11\x00JSON{}");
+    let e = lustre_scene::gltf_io::from_slice(Path::new("short.glb"), &bytes)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("short.glb") && e.contains("less than"), "{e}");
+    let e = lustre_scene::gltf_io::from_slice(Path::new("tiny.glb"), b"glTF\x02\0")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("tiny.glb") && e.contains("truncated"), "{e}");
+}
+
+#[test]
+fn gltf_accessor_with_count_zero_is_an_error() {
+    // Found by the `gltf` fuzz target: count 0 made gltf 1.4.1 compute `count − 1` and overflow.
+    let d = dir();
+    let p = gltf_triangle(
+        d.path(),
+        [[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        [0, 1, 2],
+        "",
+    );
+    let text = std::fs::read_to_string(&p).unwrap();
+    let bad = text.replacen("\"count\":3", "\"count\":0", 1);
+    assert_ne!(bad, text, "the fixture has a count of 3");
+    std::fs::write(&p, bad).unwrap();
+    let e = Scene::load(&p).unwrap_err().to_string();
+    assert!(e.contains("count 0"), "{e}");
+}
