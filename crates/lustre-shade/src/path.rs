@@ -36,8 +36,10 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// What the path tracer asks of a material at a hit.
 pub trait Surface: Send + Sync {
-    /// The BSDF at texture coordinates `uv` (local frame, lustre-brdf conventions).
-    fn bsdf(&self, uv: [f64; 2]) -> Box<dyn Bsdf + '_>;
+    /// Calls `f` with the BSDF at texture coordinates `uv` (local frame, lustre-brdf
+    /// conventions). A callback rather than a returned box: a textured material builds its
+    /// BSDF on the stack at every hit, without allocating.
+    fn with_bsdf(&self, uv: [f64; 2], f: &mut dyn FnMut(&dyn Bsdf));
     /// Whether the material has an alpha mask at all (lets rays skip the uv lookups).
     fn masked(&self) -> bool {
         false
@@ -62,8 +64,8 @@ pub struct ConstantSurface {
 }
 
 impl Surface for ConstantSurface {
-    fn bsdf(&self, _uv: [f64; 2]) -> Box<dyn Bsdf + '_> {
-        Box::new(&*self.bsdf)
+    fn with_bsdf(&self, _uv: [f64; 2], f: &mut dyn FnMut(&dyn Bsdf)) {
+        f(&*self.bsdf)
     }
     fn two_sided(&self) -> bool {
         self.two_sided
@@ -246,6 +248,12 @@ pub struct PathTracer<'a, 's> {
     /// Probability of choosing the environment for NEE.
     p_env: f64,
     opts: PathOptions,
+    /// Per material: [`Surface::two_sided`] and [`Surface::masked`], asked once.
+    two_sided: Vec<bool>,
+    masked: Vec<bool>,
+    any_masked: bool,
+    /// Unit geometric normal per triangle (+z for a degenerate one).
+    face_normal: Vec<DVec3>,
 }
 
 /// Area of triangle t.
@@ -329,6 +337,8 @@ impl<'a, 's> PathTracer<'a, 's> {
             (Some(_), None) => 1.0,
             _ => 0.0,
         };
+        let two_sided: Vec<bool> = scene.materials.iter().map(|m| m.two_sided()).collect();
+        let masked: Vec<bool> = scene.materials.iter().map(|m| m.masked()).collect();
         Ok(PathTracer {
             scene,
             accel,
@@ -337,6 +347,19 @@ impl<'a, 's> PathTracer<'a, 's> {
             light_index,
             p_env,
             opts,
+            two_sided,
+            any_masked: masked.iter().any(|&m| m),
+            masked,
+            face_normal: g
+                .positions
+                .iter()
+                .map(|t| {
+                    (t[1] - t[0])
+                        .cross(t[2] - t[0])
+                        .try_normalize()
+                        .unwrap_or(DVec3::Z)
+                })
+                .collect(),
         })
     }
 
@@ -355,20 +378,41 @@ impl<'a, 's> PathTracer<'a, 's> {
 
     /// The alpha test of hit candidates.
     fn accept(&self, prim: usize, b: [f64; 3]) -> bool {
-        let m = &self.scene.materials[self.scene.geometry.material[prim] as usize];
-        !m.masked() || m.opaque(self.uv_at(prim, b))
+        let k = self.scene.geometry.material[prim] as usize;
+        !self.masked[k] || self.scene.materials[k].opaque(self.uv_at(prim, b))
     }
 
     /// The closest surface along o + t d, t > 0 (alpha-masked hits skipped).
     pub fn intersect(&self, o: DVec3, d: DVec3) -> Option<Hit> {
-        self.accel
-            .intersect(o, d, 0.0, f64::INFINITY, |p, b| self.accept(p, b))
+        if self.any_masked {
+            self.accel
+                .intersect(o, d, 0.0, f64::INFINITY, |p, b| self.accept(p, b))
+        } else {
+            self.accel.intersect(o, d, 0.0, f64::INFINITY, |_, _| true)
+        }
     }
 
     /// Whether anything opaque lies on o + t d for 0 < t < tmax.
     pub fn occluded(&self, o: DVec3, d: DVec3, tmax: f64) -> bool {
-        self.accel
-            .occluded(o, d, 0.0, tmax, |p, b| self.accept(p, b))
+        if self.any_masked {
+            self.accel
+                .occluded(o, d, 0.0, tmax, |p, b| self.accept(p, b))
+        } else {
+            self.accel.occluded(o, d, 0.0, tmax, |_, _| true)
+        }
+    }
+
+    /// The unit geometric normal (turned to the shading normal's side) and the unit shading
+    /// normal of triangle `prim` at barycentrics `b`.
+    fn normals(&self, prim: usize, b: [f64; 3]) -> (DVec3, DVec3) {
+        let g = &self.scene.geometry;
+        let ng = self.face_normal[prim];
+        let ns = g
+            .normals
+            .get(prim)
+            .and_then(|n| (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).try_normalize())
+            .unwrap_or(ng);
+        (if ns.dot(ng) < 0.0 { -ng } else { ng }, ns)
     }
 
     fn vertex(&self, o: DVec3, d: DVec3, h: &Hit) -> Vertex {
@@ -379,15 +423,7 @@ impl<'a, 's> PathTracer<'a, 's> {
         let p = if p.is_finite() { p } else { o + d * h.t };
         let e1 = t[1] - t[0];
         let e2 = t[2] - t[0];
-        let mut ng = e1.cross(e2).try_normalize().unwrap_or(DVec3::Z);
-        let ns = g
-            .normals
-            .get(h.prim)
-            .and_then(|n| (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).try_normalize())
-            .unwrap_or(ng);
-        if ns.dot(ng) < 0.0 {
-            ng = -ng;
-        }
+        let (ng, ns) = self.normals(h.prim, b);
         let uv = self.uv_at(h.prim, b);
         // Tangent along ∂p/∂u (pbrt-v4 Eq. 6.7), e1/e2 when the uvs are degenerate.
         let dpdu = match g.uvs.get(h.prim) {
@@ -412,10 +448,10 @@ impl<'a, 's> PathTracer<'a, 's> {
         }
     }
 
-    /// Emitted radiance of triangle `prim` toward `wo` (front side only).
-    fn emitted(&self, v: &Vertex, wo: DVec3) -> Rgb {
-        match self.scene.geometry.emission.get(v.prim) {
-            Some(e) if wo.dot(v.frame.n) > 0.0 => *e,
+    /// Emitted radiance of triangle `prim` (shading normal `ns`) toward `wo` (front side only).
+    fn emitted(&self, prim: usize, ns: DVec3, wo: DVec3) -> Rgb {
+        match self.scene.geometry.emission.get(prim) {
+            Some(e) if wo.dot(ns) > 0.0 => *e,
             _ => Rgb::ZERO,
         }
     }
@@ -444,17 +480,17 @@ impl<'a, 's> PathTracer<'a, 's> {
     pub fn radiance(&self, o: DVec3, d: DVec3, rng: &mut SplitMix64) -> Rgb {
         use crate::kernel::Strategy;
         let strategy = self.opts.strategy;
-        let use_nee = strategy != Strategy::Bsdf;
         let use_bsdf_hits = strategy != Strategy::Light;
         let mis = strategy == Strategy::Mis;
-        let mut l = Rgb::ZERO;
-        let mut beta = Rgb::ONE;
+        let mut st = PathState {
+            l: Rgb::ZERO,
+            beta: Rgb::ONE,
+            prev_pdf: 0.0,
+            prev_delta: true,
+            prev_p: o,
+            eta_scale: 1.0,
+        };
         let (mut o, mut d) = (o, d);
-        // Density of the last BSDF sample (solid angle) and whether it was a delta lobe.
-        let mut prev_pdf = 0.0;
-        let mut prev_delta = true;
-        let mut prev_p = o;
-        let mut eta_scale = 1.0;
         let mut depth = 0u32; // segments so far
         loop {
             depth += 1;
@@ -462,108 +498,138 @@ impl<'a, 's> PathTracer<'a, 's> {
             let Some(h) = hit else {
                 if let Some(env) = &self.scene.environment {
                     let le = env.eval(d);
-                    let w = if prev_delta {
+                    let w = if st.prev_delta {
                         1.0
                     } else if !use_bsdf_hits {
                         0.0
                     } else if mis {
-                        power_heuristic(prev_pdf, self.p_env * env.pdf(d))
+                        power_heuristic(st.prev_pdf, self.p_env * env.pdf(d))
                     } else {
                         1.0
                     };
-                    l += beta * le * w;
+                    st.l += st.beta * le * w;
                 }
                 break;
             };
             let v = self.vertex(o, d, &h);
             let wo = -d;
-            let le = self.emitted(&v, wo);
+            let le = self.emitted(v.prim, v.frame.n, wo);
             if le != Rgb::ZERO {
-                let w = if prev_delta {
+                let w = if st.prev_delta {
                     1.0
                 } else if !use_bsdf_hits {
                     0.0
                 } else if mis {
-                    power_heuristic(prev_pdf, self.area_light_pdf(v.prim, prev_p, v.p, v.ng))
+                    power_heuristic(
+                        st.prev_pdf,
+                        self.area_light_pdf(v.prim, st.prev_p, v.p, v.ng),
+                    )
                 } else {
                     1.0
                 };
-                l += beta * le * w;
+                st.l += st.beta * le * w;
             }
             if depth >= self.opts.max_depth {
                 break;
             }
             let mat = &self.scene.materials[self.scene.geometry.material[v.prim] as usize];
-            let (frame, ng) = if mat.two_sided() && wo.dot(v.ng) < 0.0 {
+            let (frame, ng) = if self.two_sided[self.scene.geometry.material[v.prim] as usize]
+                && wo.dot(v.ng) < 0.0
+            {
                 (v.frame.flipped(), -v.ng)
             } else {
                 (v.frame, v.ng)
             };
-            let bsdf = mat.bsdf(v.uv);
-            let wo_l = frame.to_local(wo);
-            // Same side of both normals, or the direction is dropped.
-            let consistent = |w: DVec3, wl: DVec3| (w.dot(ng) > 0.0) == (wl.z > 0.0);
-            // Next-event estimation (pointless on a BSDF made only of Dirac lobes).
-            let lobes = bsdf.flags().lobes;
-            let only_delta = lobes.is_specular() && !lobes.is_non_delta();
-            if use_nee && !only_delta {
-                if let Some((wi, pdf_l, le, tmax)) = self.sample_light(&v, rng) {
-                    let wi_l = frame.to_local(wi);
-                    if consistent(wi, wi_l) {
-                        let f = bsdf.eval(wi_l, wo_l);
-                        if f != Rgb::ZERO && !self.occluded(offset(v.p, ng, wi), wi, tmax) {
-                            let w = if mis {
-                                power_heuristic(pdf_l, bsdf.pdf(wi_l, wo_l))
-                            } else {
-                                1.0
-                            };
-                            let c = beta * f * le * (wi_l.z.abs() / pdf_l * w);
-                            if c.is_finite() {
-                                l += c;
-                            }
+            let mut next = None;
+            mat.with_bsdf(v.uv, &mut |bsdf| {
+                next = self.scatter(bsdf, &v, frame, ng, wo, depth, &mut st, rng);
+            });
+            let Some((o2, d2)) = next else {
+                break;
+            };
+            o = o2;
+            d = d2;
+        }
+        st.l
+    }
+
+    /// One path vertex with its BSDF: next-event estimation (added to `st.l`) and the
+    /// continuation (throughput, MIS state and roulette in `st`); the next ray, or `None` when
+    /// the path ends.
+    #[allow(clippy::too_many_arguments)]
+    fn scatter(
+        &self,
+        bsdf: &dyn Bsdf,
+        v: &Vertex,
+        frame: ShadingFrame,
+        ng: DVec3,
+        wo: DVec3,
+        depth: u32,
+        st: &mut PathState,
+        rng: &mut SplitMix64,
+    ) -> Option<(DVec3, DVec3)> {
+        use crate::kernel::Strategy;
+        let use_nee = self.opts.strategy != Strategy::Bsdf;
+        let mis = self.opts.strategy == Strategy::Mis;
+        let wo_l = frame.to_local(wo);
+        // Same side of both normals, or the direction is dropped.
+        let consistent = |w: DVec3, wl: DVec3| (w.dot(ng) > 0.0) == (wl.z > 0.0);
+        // Next-event estimation (pointless on a BSDF made only of Dirac lobes).
+        let lobes = bsdf.flags().lobes;
+        let only_delta = lobes.is_specular() && !lobes.is_non_delta();
+        if use_nee && !only_delta {
+            if let Some((wi, pdf_l, le, tmax)) = self.sample_light(v.p, rng) {
+                let wi_l = frame.to_local(wi);
+                if consistent(wi, wi_l) {
+                    let f = bsdf.eval(wi_l, wo_l);
+                    if f != Rgb::ZERO && !self.occluded(offset(v.p, ng, wi), wi, tmax) {
+                        let w = if mis {
+                            power_heuristic(pdf_l, bsdf.pdf(wi_l, wo_l))
+                        } else {
+                            1.0
+                        };
+                        let c = st.beta * f * le * (wi_l.z.abs() / pdf_l * w);
+                        if c.is_finite() {
+                            st.l += c;
                         }
                     }
                 }
             }
-            // Continue the path.
-            let (u1, u2) = (rng.next_f64(), rng.next_f64());
-            let Some(s) = bsdf.sample(wo_l, u1, u2) else {
-                break;
-            };
-            let wi = frame.to_world(s.wi);
-            if !consistent(wi, s.wi) {
-                break;
-            }
-            let wt = s.weight();
-            if !wt.is_finite() || wt == Rgb::ZERO {
-                break;
-            }
-            beta = beta * wt;
-            // Refraction scaled radiance by 1/η²; roulette looks at the flux (pbrt's etaScale).
-            if s.lobe.is_transmission() {
-                eta_scale *= s.eta * s.eta;
-            }
-            prev_delta = is_delta(&s);
-            prev_pdf = s.pdf;
-            prev_p = v.p;
-            // With light sampling only, paths continue for indirect light but emitters they
-            // reach are not counted (NEE counted them).
-            if depth >= self.opts.rr_depth {
-                let q = (beta.max_component() * eta_scale).min(0.95);
-                if rng.next_f64() >= q {
-                    break;
-                }
-                beta *= 1.0 / q;
-            }
-            o = offset(v.p, ng, wi);
-            d = wi;
         }
-        l
+        // Continue the path.
+        let (u1, u2) = (rng.next_f64(), rng.next_f64());
+        let s = bsdf.sample(wo_l, u1, u2)?;
+        let wi = frame.to_world(s.wi);
+        if !consistent(wi, s.wi) {
+            return None;
+        }
+        let wt = s.weight();
+        if !wt.is_finite() || wt == Rgb::ZERO {
+            return None;
+        }
+        st.beta = st.beta * wt;
+        // Refraction scaled radiance by 1/η²; roulette looks at the flux (pbrt's etaScale).
+        if s.lobe.is_transmission() {
+            st.eta_scale *= s.eta * s.eta;
+        }
+        st.prev_delta = is_delta(&s);
+        st.prev_pdf = s.pdf;
+        st.prev_p = v.p;
+        // With light sampling only, paths continue for indirect light but emitters they
+        // reach are not counted (NEE counted them).
+        if depth >= self.opts.rr_depth {
+            let q = (st.beta.max_component() * st.eta_scale).min(0.95);
+            if rng.next_f64() >= q {
+                return None;
+            }
+            st.beta *= 1.0 / q;
+        }
+        Some((offset(v.p, ng, wi), wi))
     }
 
-    /// Draws a light for NEE at `v`: (unit direction, solid-angle pdf including the light
-    /// choice, radiance, shadow-ray tmax along the direction).
-    fn sample_light(&self, v: &Vertex, rng: &mut SplitMix64) -> Option<(DVec3, f64, Rgb, f64)> {
+    /// Draws a light for NEE at point `p`: (unit direction, solid-angle pdf including the
+    /// light choice, radiance, shadow-ray tmax along the direction).
+    fn sample_light(&self, p: DVec3, rng: &mut SplitMix64) -> Option<(DVec3, f64, Rgb, f64)> {
         let u0 = rng.next_f64();
         let (u1, u2) = (rng.next_f64(), rng.next_f64());
         if u0 < self.p_env {
@@ -575,29 +641,20 @@ impl<'a, 's> PathTracer<'a, 's> {
         let dist = self.light_dist.as_ref()?;
         let (k, _) = dist.sample((u0 - self.p_env) / (1.0 - self.p_env));
         let prim = self.lights[k];
-        let g = &self.scene.geometry;
-        let t = &g.positions[prim];
+        let t = &self.scene.geometry.positions[prim];
         // Uniform point on the triangle (pbrt-v4 Eq. A.12).
         let su = u1.sqrt();
         let b = [1.0 - su, u2 * su, (1.0 - u2) * su];
         let q = t[0] * b[0] + t[1] * b[1] + t[2] * b[2];
-        let lv = self.vertex(
-            q,
-            DVec3::ZERO,
-            &Hit {
-                prim,
-                t: 0.0,
-                bary: b,
-            },
-        );
-        let to = q - v.p;
+        let (ng, ns) = self.normals(prim, b);
+        let to = q - p;
         let dist2 = to.length_squared();
         let wi = to.try_normalize()?;
-        let le = self.emitted(&lv, -wi);
+        let le = self.emitted(prim, ns, -wi);
         if le == Rgb::ZERO {
             return None;
         }
-        let pdf = self.area_light_pdf(prim, v.p, lv.p, lv.ng);
+        let pdf = self.area_light_pdf(prim, p, q, ng);
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
@@ -605,6 +662,21 @@ impl<'a, 's> PathTracer<'a, 's> {
         let tmax = dist2.sqrt() * (1.0 - 1e-4);
         Some((wi, pdf, le, tmax))
     }
+}
+
+/// The state a path carries from vertex to vertex.
+struct PathState {
+    /// Radiance gathered so far.
+    l: Rgb,
+    /// Throughput.
+    beta: Rgb,
+    /// Density of the last BSDF sample (solid angle) and whether it was a delta lobe.
+    prev_pdf: f64,
+    prev_delta: bool,
+    /// The last scattering point (for the area-light density of an emitter hit by chance).
+    prev_p: DVec3,
+    /// Product of η² over refractions (pbrt's etaScale).
+    eta_scale: f64,
 }
 
 /// Two independent half-images (even / odd samples) of a progressive render.

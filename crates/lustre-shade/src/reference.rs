@@ -30,13 +30,16 @@ struct SceneSurface<'s> {
 }
 
 impl Surface for SceneSurface<'_> {
-    fn bsdf(&self, uv: [f64; 2]) -> Box<dyn Bsdf + '_> {
+    fn with_bsdf(&self, uv: [f64; 2], f: &mut dyn FnMut(&dyn Bsdf)) {
         let uv = [Vec2::new(uv[0] as f32, uv[1] as f32); 2];
-        match self.material.bsdf_at(self.textures, &uv) {
-            Ok(b) => b,
+        if self
+            .material
+            .with_bsdf_at(self.textures, &uv, &mut *f)
+            .is_err()
+        {
             // `path_scene` checked every material at uv = 0; a texel that still fails (it
             // cannot for clamped textures) renders black rather than aborting a long render.
-            Err(_) => Box::new(Lambert { kd: Rgb::ZERO }),
+            f(&Lambert { kd: Rgb::ZERO });
         }
     }
     fn masked(&self) -> bool {
@@ -56,8 +59,8 @@ impl Surface for SceneSurface<'_> {
 struct Fallback(Lambert);
 
 impl Surface for Fallback {
-    fn bsdf(&self, _uv: [f64; 2]) -> Box<dyn Bsdf + '_> {
-        Box::new(self.0)
+    fn with_bsdf(&self, _uv: [f64; 2], f: &mut dyn FnMut(&dyn Bsdf)) {
+        f(&self.0)
     }
     fn two_sided(&self) -> bool {
         true

@@ -201,8 +201,8 @@ fn alpha_masked_surface_lets_light_through() {
     #[derive(Debug)]
     struct Holes;
     impl Surface for Holes {
-        fn bsdf(&self, _uv: [f64; 2]) -> Box<dyn lustre_brdf::bsdf::Bsdf + '_> {
-            Box::new(Lambert::new(Rgb::ZERO).unwrap())
+        fn with_bsdf(&self, _uv: [f64; 2], f: &mut dyn FnMut(&dyn lustre_brdf::bsdf::Bsdf)) {
+            f(&Lambert::new(Rgb::ZERO).unwrap())
         }
         fn masked(&self) -> bool {
             true
