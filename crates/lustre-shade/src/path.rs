@@ -15,7 +15,10 @@
 //! along ∂p/∂u). The geometric normal is turned to the shading normal's side. A direction whose
 //! sides differ between the two normals is dropped (no light leaks through shading normals,
 //! Veach §5.3). A two-sided material flips the frame to face the viewer. Emitters are one-sided
-//! (front = the shading normal's side, as Mitsuba's `area`).
+//! (front = the shading normal's side, as Mitsuba's `area`). A normal map (glTF tangent space:
+//! T from the mesh's tangents or ∂p/∂u, B = w · N × T) replaces the shading normal
+//! ([`mapped_normal`]); an emission texture multiplies the emitted radiance where it is seen
+//! and where NEE samples it.
 //!
 //! **Pixels** are box-filtered (uniform jitter). Sample k of pixel (x, y) draws from
 //! [`SplitMix64`] seeded by a hash of (seed, x, y, k), so a render continued with more samples
@@ -51,6 +54,25 @@ pub trait Surface: Send + Sync {
     /// Two-sided: the frame is flipped to face the viewer (Mitsuba's `twosided`).
     fn two_sided(&self) -> bool {
         false
+    }
+    /// Whether the material has a normal map (lets hits skip the lookup).
+    fn normal_mapped(&self) -> bool {
+        false
+    }
+    /// The tangent-space shading normal at `uv` (unit; +z = the interpolated normal, +x the
+    /// tangent, +y the bitangent: glTF normal maps); only asked when
+    /// [`Surface::normal_mapped`].
+    fn normal_map(&self, _uv: [f64; 2]) -> Option<DVec3> {
+        None
+    }
+    /// Whether the emitted radiance is textured.
+    fn emission_textured(&self) -> bool {
+        false
+    }
+    /// Factor of the triangle's emitted radiance at `uv` (a glTF emissive texture; 1 without
+    /// one); only asked when [`Surface::emission_textured`].
+    fn emission_factor(&self, _uv: [f64; 2]) -> Rgb {
+        Rgb::ONE
     }
 }
 
@@ -89,6 +111,10 @@ pub struct Geometry {
     pub normals: Vec<[DVec3; 3]>,
     /// Texture coordinates per corner (same length as `positions`, or empty).
     pub uvs: Vec<[[f64; 2]; 3]>,
+    /// Tangents per corner for normal maps (xyz, w = ±1 the bitangent's sign: glTF's
+    /// B = w · N × T). Same length as `positions`, or empty; a zero tangent means "derive one
+    /// from the uvs" (T = ∂p/∂u, w such that B points along −∂p/∂v, glTF's v runs down).
+    pub tangents: Vec<[[f64; 4]; 3]>,
     /// Material index per triangle.
     pub material: Vec<u32>,
     /// Emitted radiance per triangle, front side (same length as `positions`, or empty).
@@ -254,6 +280,9 @@ pub struct PathTracer<'a, 's> {
     any_masked: bool,
     /// Unit geometric normal per triangle (+z for a degenerate one).
     face_normal: Vec<DVec3>,
+    /// Per material: [`Surface::normal_mapped`] and [`Surface::emission_textured`].
+    normal_mapped: Vec<bool>,
+    emission_textured: Vec<bool>,
 }
 
 /// Area of triangle t.
@@ -270,6 +299,22 @@ struct Vertex {
     frame: ShadingFrame,
     uv: [f64; 2],
     prim: usize,
+    /// Interpolated shading normal (before any normal map; the emitters' front side).
+    ns: DVec3,
+}
+
+/// The shading normal of a tangent-space normal `n_ts` (+z = `ns`) with tangent `t` and
+/// bitangent sign `sign` (glTF: B = sign · N × T, T made orthogonal to N first), and the
+/// tangent to build the frame with. A degenerate tangent or result keeps `ns`.
+pub fn mapped_normal(ns: DVec3, t: DVec3, sign: f64, n_ts: DVec3) -> (DVec3, DVec3) {
+    let Some(t) = (t - ns * ns.dot(t)).try_normalize() else {
+        return (ns, t);
+    };
+    let b = ns.cross(t) * sign;
+    match (t * n_ts.x + b * n_ts.y + ns * n_ts.z).try_normalize() {
+        Some(n) => (n, t),
+        None => (ns, t),
+    }
 }
 
 /// A small offset that moves a spawned ray off its surface (scaled with the coordinates).
@@ -291,6 +336,7 @@ impl<'a, 's> PathTracer<'a, 's> {
         for (name, len) in [
             ("normals", g.normals.len()),
             ("uvs", g.uvs.len()),
+            ("tangents", g.tangents.len()),
             ("emission", g.emission.len()),
         ] {
             if len != 0 && len != n {
@@ -350,6 +396,12 @@ impl<'a, 's> PathTracer<'a, 's> {
             two_sided,
             any_masked: masked.iter().any(|&m| m),
             masked,
+            normal_mapped: scene.materials.iter().map(|m| m.normal_mapped()).collect(),
+            emission_textured: scene
+                .materials
+                .iter()
+                .map(|m| m.emission_textured())
+                .collect(),
             face_normal: g
                 .positions
                 .iter()
@@ -425,33 +477,72 @@ impl<'a, 's> PathTracer<'a, 's> {
         let e2 = t[2] - t[0];
         let (ng, ns) = self.normals(h.prim, b);
         let uv = self.uv_at(h.prim, b);
-        // Tangent along ∂p/∂u (pbrt-v4 Eq. 6.7), e1/e2 when the uvs are degenerate.
-        let dpdu = match g.uvs.get(h.prim) {
+        // Tangents along ∂p/∂u and ∂p/∂v (pbrt-v4 Eq. 6.7), e1 / none when the uvs are
+        // degenerate.
+        let (dpdu, dpdv) = match g.uvs.get(h.prim) {
             Some(uvt) => {
                 let (du1, dv1) = (uvt[1][0] - uvt[0][0], uvt[1][1] - uvt[0][1]);
                 let (du2, dv2) = (uvt[2][0] - uvt[0][0], uvt[2][1] - uvt[0][1]);
                 let det = du1 * dv2 - dv1 * du2;
                 if det.abs() > 1e-12 {
-                    (e1 * dv2 - e2 * dv1) / det
+                    ((e1 * dv2 - e2 * dv1) / det, (e2 * du1 - e1 * du2) / det)
                 } else {
-                    e1
+                    (e1, DVec3::ZERO)
                 }
             }
-            None => e1,
+            None => (e1, DVec3::ZERO),
+        };
+        let k = g.material[h.prim] as usize;
+        let frame = match self.normal_mapped[k]
+            .then(|| self.scene.materials[k].normal_map(uv))
+            .flatten()
+        {
+            Some(n_ts) => {
+                let (t, sign) = match g.tangents.get(h.prim) {
+                    Some(tc) if tc[0][3] != 0.0 => {
+                        let t = DVec3::new(
+                            b[0] * tc[0][0] + b[1] * tc[1][0] + b[2] * tc[2][0],
+                            b[0] * tc[0][1] + b[1] * tc[1][1] + b[2] * tc[2][1],
+                            b[0] * tc[0][2] + b[1] * tc[1][2] + b[2] * tc[2][2],
+                        );
+                        (t, tc[0][3].signum())
+                    }
+                    _ => (
+                        dpdu,
+                        if ns.cross(dpdu).dot(dpdv) > 0.0 {
+                            -1.0
+                        } else {
+                            1.0
+                        },
+                    ),
+                };
+                let (n, t) = mapped_normal(ns, t, sign, n_ts);
+                ShadingFrame::new(n, t)
+            }
+            None => ShadingFrame::new(ns, dpdu),
         };
         Vertex {
             p,
             ng,
-            frame: ShadingFrame::new(ns, dpdu),
+            frame,
             uv,
             prim: h.prim,
+            ns,
         }
     }
 
-    /// Emitted radiance of triangle `prim` (shading normal `ns`) toward `wo` (front side only).
-    fn emitted(&self, prim: usize, ns: DVec3, wo: DVec3) -> Rgb {
+    /// Emitted radiance of triangle `prim` (shading normal `ns`, texture coordinates `uv`)
+    /// toward `wo` (front side only), times the material's emission texture.
+    fn emitted(&self, prim: usize, ns: DVec3, uv: [f64; 2], wo: DVec3) -> Rgb {
         match self.scene.geometry.emission.get(prim) {
-            Some(e) if wo.dot(ns) > 0.0 => *e,
+            Some(e) if wo.dot(ns) > 0.0 => {
+                let k = self.scene.geometry.material[prim] as usize;
+                if self.emission_textured[k] {
+                    *e * self.scene.materials[k].emission_factor(uv)
+                } else {
+                    *e
+                }
+            }
             _ => Rgb::ZERO,
         }
     }
@@ -513,7 +604,7 @@ impl<'a, 's> PathTracer<'a, 's> {
             };
             let v = self.vertex(o, d, &h);
             let wo = -d;
-            let le = self.emitted(v.prim, v.frame.n, wo);
+            let le = self.emitted(v.prim, v.ns, v.uv, wo);
             if le != Rgb::ZERO {
                 let w = if st.prev_delta {
                     1.0
@@ -650,7 +741,7 @@ impl<'a, 's> PathTracer<'a, 's> {
         let to = q - p;
         let dist2 = to.length_squared();
         let wi = to.try_normalize()?;
-        let le = self.emitted(prim, ns, -wi);
+        let le = self.emitted(prim, ns, self.uv_at(prim, b), -wi);
         if le == Rgb::ZERO {
             return None;
         }
