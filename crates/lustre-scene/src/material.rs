@@ -649,11 +649,9 @@ impl Material {
             MaterialKind::Plastic {
                 diffuse, specular, ..
             } => match &*self.coat_prototype(textures)? {
-                Prepared::Plastic(_, p) => self.emit(
-                    sink,
-                    p.clone()
-                        .with_reflectances(rgb(diffuse), specular.map(unit))?,
-                ),
+                Prepared::Plastic(_, p) => {
+                    self.emit(sink, p.with_reflectances(rgb(diffuse), specular.map(unit))?)
+                }
                 _ => Err(mismatch()),
             },
             MaterialKind::RoughPlastic {
@@ -662,12 +660,9 @@ impl Material {
                 alpha: a,
                 ..
             } if a.texture.is_none() => match &*self.coat_prototype(textures)? {
-                Prepared::RoughPlastic(_, p) => self.emit(
-                    sink,
-                    (**p)
-                        .clone()
-                        .with_reflectances(rgb(diffuse), specular.map(unit))?,
-                ),
+                Prepared::RoughPlastic(_, p) => {
+                    self.emit(sink, p.with_reflectances(rgb(diffuse), specular.map(unit))?)
+                }
                 _ => Err(mismatch()),
             },
             MaterialKind::RoughPlastic {
