@@ -89,6 +89,11 @@ pub fn check_range(name: &str, value: f64, lo: f64, hi: f64) -> Result<f64> {
 /// Checks that every channel of a colour is finite and within [lo, hi] (`hi` may be +∞); errors
 /// name the channel (`name.r`, `name.g`, `name.b`).
 pub fn check_rgb(name: &str, c: crate::rgb::Rgb, lo: f64, hi: f64) -> Result<crate::rgb::Rgb> {
+    // The valid case is tested first without building the channel names: materials are built
+    // at every path-tracer hit.
+    if (0..3).all(|i| c[i].is_finite() && c[i] >= lo && c[i] <= hi) {
+        return Ok(c);
+    }
     for (i, ch) in ["r", "g", "b"].iter().enumerate() {
         check_range(&format!("{name}.{ch}"), c[i], lo, hi)?;
     }

@@ -21,6 +21,7 @@ use lustre_brdf::models::rough_plastic::RoughPlastic;
 use lustre_brdf::models::thin_dielectric::ThinDielectric;
 use lustre_brdf::models::two_sided::TwoSided;
 use lustre_brdf::{Bsdf, DVec3, Rgb};
+use std::borrow::Cow;
 use std::sync::{Arc, OnceLock};
 
 /// A texture reference: which texture and which UV set.
@@ -483,61 +484,95 @@ impl Material {
     /// clamped to the models' ranges (colours to [0, 1], α to [1e-4, 1]).
     ///
     /// Cost: a material without textured BSDF parameters is built once and shared (an `Arc`);
-    /// a textured (rough) plastic clones a prototype built once (its coating tables cost
+    /// a textured (rough) plastic copies a prototype built once (its coating tables cost
     /// ≈ 0.3 M samples) with `with_reflectances`; the other models are cheap to build.
+    /// [`Material::with_bsdf_at`] is the same without the box (nothing allocated per hit).
     pub fn bsdf_at(&self, textures: &[Texture], uv: &[Vec2; 2]) -> Result<Box<dyn Bsdf>> {
+        self.build_into(textures, uv, Boxed)
+    }
+
+    /// [`Material::bsdf_at`] without allocating: the BSDF at the hit is built on the stack (or
+    /// borrowed from the material's cache) and handed to `f`. The path tracer's per-hit call.
+    pub fn with_bsdf_at<R>(
+        &self,
+        textures: &[Texture],
+        uv: &[Vec2; 2],
+        f: impl FnOnce(&dyn Bsdf) -> R,
+    ) -> Result<R> {
+        self.build_into(textures, uv, Call(f))
+    }
+
+    fn build_into<S: BsdfSink>(
+        &self,
+        textures: &[Texture],
+        uv: &[Vec2; 2],
+        sink: S,
+    ) -> Result<S::Out> {
         let err = |e: lustre_brdf::Error| SceneError::material(&self.name, e.to_string());
-        if let MaterialKind::Spec(r) = &self.kind {
-            return self.sided(Box::new(r.bsdf.clone()));
-        }
         let textured = self.kind_is_textured();
         if !textured {
             if let Some(Prepared::Whole(key, two_sided, b)) = self.cache.0.get() {
                 if *key == self.kind && *two_sided == self.two_sided {
-                    return Ok(Box::new(b.clone()));
+                    return Ok(sink.shared(b));
                 }
             }
-        }
-        let b = self.build(textures, uv).map_err(err)?;
-        let b = self.sided(b)?;
-        if !textured {
-            let arc: Arc<dyn Bsdf> = Arc::from(b);
+            let arc: Arc<dyn Bsdf> = Arc::from(self.build(textures, uv, Boxed).map_err(err)?);
             let _ = self.cache.0.set(Prepared::Whole(
                 self.kind.clone(),
                 self.two_sided,
                 arc.clone(),
             ));
-            return Ok(Box::new(arc));
+            return Ok(sink.shared(&arc));
         }
-        Ok(b)
+        self.build(textures, uv, sink).map_err(err)
     }
 
-    fn sided(&self, b: Box<dyn Bsdf>) -> Result<Box<dyn Bsdf>> {
+    /// Hands `b` to the sink, wrapped in `TwoSided` for a two-sided reflection-only material.
+    fn emit<S: BsdfSink, B: Bsdf + 'static>(&self, sink: S, b: B) -> lustre_brdf::Result<S::Out> {
         if self.two_sided && !b.flags().transmission {
-            let t =
-                TwoSided::new(b).map_err(|e| SceneError::material(&self.name, e.to_string()))?;
-            Ok(Box::new(t))
+            Ok(sink.take(TwoSided::new(b)?))
         } else {
-            Ok(b)
+            Ok(sink.take(b))
         }
     }
 
     /// Whether a BSDF parameter (not the mask, normal map or emission) is textured.
     fn kind_is_textured(&self) -> bool {
-        let mut m = Material::new("", self.kind.clone());
-        let mut any = false;
-        m.for_each_texture_ref(|_| any = true);
-        any
+        let r = |t: &TexturedRgb| t.texture.is_some();
+        let s = |t: &TexturedScalar| t.texture.is_some();
+        match &self.kind {
+            MaterialKind::Diffuse { reflectance } => r(reflectance),
+            MaterialKind::Plastic { diffuse, .. } => r(diffuse),
+            MaterialKind::RoughPlastic { diffuse, alpha, .. } => r(diffuse) || s(alpha),
+            MaterialKind::Conductor { specular, .. } => r(specular),
+            MaterialKind::RoughConductor {
+                specular,
+                alpha_u,
+                alpha_v,
+                ..
+            } => r(specular) || s(alpha_u) || s(alpha_v),
+            MaterialKind::RoughDielectric { alpha, .. } => s(alpha),
+            MaterialKind::PbrMetallicRoughness {
+                base_color,
+                metallic,
+                roughness,
+                transmission,
+                ..
+            } => r(base_color) || s(metallic) || s(roughness) || s(transmission),
+            MaterialKind::Dielectric { .. }
+            | MaterialKind::ThinDielectric { .. }
+            | MaterialKind::Spec(_) => false,
+        }
     }
 
     /// A (rough) plastic's prototype, built once per material with the base colour at the
-    /// texture's mean; hits clone it and set the base colour.
-    fn coat_prototype(&self, textures: &[Texture]) -> lustre_brdf::Result<Prepared> {
+    /// texture's mean; hits copy it and set the base colour.
+    fn coat_prototype(&self, textures: &[Texture]) -> lustre_brdf::Result<Cow<'_, Prepared>> {
         if let Some(p @ (Prepared::Plastic(key, _) | Prepared::RoughPlastic(key, _))) =
             self.cache.0.get()
         {
             if *key == self.kind {
-                return Ok(p.clone());
+                return Ok(Cow::Borrowed(p));
             }
         }
         let mean = |t: &TexturedRgb| -> Rgb {
@@ -590,33 +625,45 @@ impl Material {
                 ))
             }
         };
-        let _ = self.cache.0.set(p.clone());
-        Ok(p)
+        // A cache holding a model of another kind (the kind was edited) is not overwritten;
+        // the fresh prototype is then used by value.
+        Ok(match self.cache.0.set(p) {
+            Ok(()) => Cow::Borrowed(self.cache.0.get().ok_or_else(mismatch)?),
+            Err(p) => Cow::Owned(p),
+        })
     }
 
-    fn build(&self, textures: &[Texture], uv: &[Vec2; 2]) -> lustre_brdf::Result<Box<dyn Bsdf>> {
+    /// Builds the BSDF at a hit and hands it to `sink` (two-sided wrapping included).
+    fn build<S: BsdfSink>(
+        &self,
+        textures: &[Texture],
+        uv: &[Vec2; 2],
+        sink: S,
+    ) -> lustre_brdf::Result<S::Out> {
         let rgb = |t: &TexturedRgb| t.at(textures, uv).map(unit);
         let alpha = |t: &TexturedScalar| clamp_alpha(t.at(textures, uv));
-        Ok(match &self.kind {
-            MaterialKind::Diffuse { reflectance } => Box::new(Lambert::new(rgb(reflectance))?),
+        match &self.kind {
+            MaterialKind::Diffuse { reflectance } => {
+                self.emit(sink, Lambert::new(rgb(reflectance))?)
+            }
             MaterialKind::Plastic {
                 diffuse, specular, ..
-            } => match self.coat_prototype(textures)? {
+            } => match &*self.coat_prototype(textures)? {
                 Prepared::Plastic(_, p) => {
-                    Box::new(p.with_reflectances(rgb(diffuse), specular.map(unit))?)
+                    self.emit(sink, p.with_reflectances(rgb(diffuse), specular.map(unit))?)
                 }
-                _ => return Err(mismatch()),
+                _ => Err(mismatch()),
             },
             MaterialKind::RoughPlastic {
                 diffuse,
                 specular,
                 alpha: a,
                 ..
-            } if a.texture.is_none() => match self.coat_prototype(textures)? {
+            } if a.texture.is_none() => match &*self.coat_prototype(textures)? {
                 Prepared::RoughPlastic(_, p) => {
-                    Box::new((*p).with_reflectances(rgb(diffuse), specular.map(unit))?)
+                    self.emit(sink, p.with_reflectances(rgb(diffuse), specular.map(unit))?)
                 }
-                _ => return Err(mismatch()),
+                _ => Err(mismatch()),
             },
             MaterialKind::RoughPlastic {
                 diffuse,
@@ -626,17 +673,20 @@ impl Material {
                 int_ior,
                 ext_ior,
                 nonlinear,
-            } => Box::new(RoughPlastic::new(
-                microfacet_type(*distribution),
-                alpha(a),
-                rgb(diffuse),
-                specular.map(unit),
-                *int_ior,
-                *ext_ior,
-                *nonlinear,
-            )?),
+            } => self.emit(
+                sink,
+                RoughPlastic::new(
+                    microfacet_type(*distribution),
+                    alpha(a),
+                    rgb(diffuse),
+                    specular.map(unit),
+                    *int_ior,
+                    *ext_ior,
+                    *nonlinear,
+                )?,
+            ),
             MaterialKind::Conductor { eta, k, specular } => {
-                Box::new(Conductor::new(*eta, *k, rgb(specular))?)
+                self.emit(sink, Conductor::new(*eta, *k, rgb(specular))?)
             }
             MaterialKind::RoughConductor {
                 eta,
@@ -645,24 +695,30 @@ impl Material {
                 alpha_u,
                 alpha_v,
                 distribution,
-            } => Box::new(RoughConductor::new(
-                MicrofacetDistribution::new(
-                    microfacet_type(*distribution),
-                    alpha(alpha_u),
-                    alpha(alpha_v),
+            } => self.emit(
+                sink,
+                RoughConductor::new(
+                    MicrofacetDistribution::new(
+                        microfacet_type(*distribution),
+                        alpha(alpha_u),
+                        alpha(alpha_v),
+                    )?,
+                    ComplexIor::new(*eta, *k)?,
+                    rgb(specular),
                 )?,
-                ComplexIor::new(*eta, *k)?,
-                rgb(specular),
-            )?),
+            ),
             MaterialKind::Dielectric {
                 int_ior,
                 ext_ior,
                 specular_reflectance,
                 specular_transmittance,
-            } => Box::new(Dielectric::new(*int_ior, *ext_ior)?.with_tints(
-                specular_reflectance.map(unit),
-                specular_transmittance.map(unit),
-            )?),
+            } => self.emit(
+                sink,
+                Dielectric::new(*int_ior, *ext_ior)?.with_tints(
+                    specular_reflectance.map(unit),
+                    specular_transmittance.map(unit),
+                )?,
+            ),
             MaterialKind::RoughDielectric {
                 int_ior,
                 ext_ior,
@@ -670,7 +726,8 @@ impl Material {
                 distribution,
                 specular_reflectance,
                 specular_transmittance,
-            } => Box::new(
+            } => self.emit(
+                sink,
                 RoughDielectric::new(
                     MicrofacetDistribution::isotropic(microfacet_type(*distribution), alpha(a))?,
                     *int_ior,
@@ -686,10 +743,13 @@ impl Material {
                 ext_ior,
                 specular_reflectance,
                 specular_transmittance,
-            } => Box::new(ThinDielectric::new(*int_ior, *ext_ior)?.with_tints(
-                specular_reflectance.map(unit),
-                specular_transmittance.map(unit),
-            )?),
+            } => self.emit(
+                sink,
+                ThinDielectric::new(*int_ior, *ext_ior)?.with_tints(
+                    specular_reflectance.map(unit),
+                    specular_transmittance.map(unit),
+                )?,
+            ),
             MaterialKind::PbrMetallicRoughness {
                 base_color,
                 metallic,
@@ -703,9 +763,10 @@ impl Material {
                 if transmission.at(textures, uv) >= 0.5 {
                     let a = r * r;
                     if a < PBR_ALPHA_MIN {
-                        Box::new(Dielectric::new(*ior, 1.0)?.with_tints(Rgb::ONE, c)?)
+                        self.emit(sink, Dielectric::new(*ior, 1.0)?.with_tints(Rgb::ONE, c)?)
                     } else {
-                        Box::new(
+                        self.emit(
+                            sink,
                             RoughDielectric::new(
                                 MicrofacetDistribution::isotropic(MicrofacetType::Ggx, a)?,
                                 *ior,
@@ -715,15 +776,50 @@ impl Material {
                         )
                     }
                 } else {
-                    Box::new(PbrMetallicRoughness::new(
-                        c,
-                        unit(metallic.at(textures, uv)),
-                        r,
-                    )?)
+                    self.emit(
+                        sink,
+                        PbrMetallicRoughness::new(c, unit(metallic.at(textures, uv)), r)?,
+                    )
                 }
             }
-            MaterialKind::Spec(r) => Box::new(r.bsdf.clone()),
-        })
+            MaterialKind::Spec(r) => self.emit(sink, r.bsdf.clone()),
+        }
+    }
+}
+
+/// Where [`Material::build`] delivers the BSDF it built: boxed ([`Material::bsdf_at`]) or lent to
+/// a closure on the stack ([`Material::with_bsdf_at`]).
+trait BsdfSink {
+    type Out;
+    /// A model built for this hit.
+    fn take<B: Bsdf + 'static>(self, b: B) -> Self::Out;
+    /// The material's cached model (untextured materials).
+    fn shared(self, b: &Arc<dyn Bsdf>) -> Self::Out;
+}
+
+/// Boxes the model.
+struct Boxed;
+
+impl BsdfSink for Boxed {
+    type Out = Box<dyn Bsdf>;
+    fn take<B: Bsdf + 'static>(self, b: B) -> Box<dyn Bsdf> {
+        Box::new(b)
+    }
+    fn shared(self, b: &Arc<dyn Bsdf>) -> Box<dyn Bsdf> {
+        Box::new(b.clone())
+    }
+}
+
+/// Lends the model to a closure.
+struct Call<F>(F);
+
+impl<R, F: FnOnce(&dyn Bsdf) -> R> BsdfSink for Call<F> {
+    type Out = R;
+    fn take<B: Bsdf + 'static>(self, b: B) -> R {
+        (self.0)(&b)
+    }
+    fn shared(self, b: &Arc<dyn Bsdf>) -> R {
+        (self.0)(&**b)
     }
 }
 

@@ -161,7 +161,14 @@ impl Texture {
         let y = v * h - 0.5;
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
-        let wrap = |i: f32, n: u32| -> u32 { (i as i64).rem_euclid(i64::from(n)) as u32 };
+        // Repeat; the common in-range case without the integer division of `rem_euclid`.
+        let wrap = |i: f32, n: u32| -> u32 {
+            if i >= 0.0 && i < n as f32 {
+                i as u32
+            } else {
+                (i as i64).rem_euclid(i64::from(n)) as u32
+            }
+        };
         let (xa, xb) = (wrap(x0, self.width), wrap(x0 + 1.0, self.width));
         let (ya, yb) = (wrap(y0, self.height), wrap(y0 + 1.0, self.height));
         let (t00, t10, t01, t11) = (

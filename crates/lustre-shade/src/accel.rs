@@ -30,12 +30,18 @@ pub struct Hit {
 
 /// A ray prepared for the watertight test: the axis permutation and shear constants of Woop et
 /// al. 2013 §3 (kz = the dominant axis of the direction; kx, ky the others, swapped to keep the
-/// winding when d[kz] < 0).
+/// winding when d[kz] < 0), folded into three row vectors so that the sheared coordinates of a
+/// vertex are dot products: x = v·rx = v[kx] − sx·v[kz], y = v·ry = v[ky] − sy·v[kz],
+/// z = v·rz = sz·v[kz]. The other entries are exact zeros, so each dot product rounds exactly
+/// like the paper's scalar code (watertightness is kept).
 #[derive(Clone, Copy, Debug)]
 struct WoopRay {
-    o: [f32; 3],
-    k: [usize; 3],
-    s: [f32; 3],
+    o: Vec3A,
+    rx: Vec3A,
+    ry: Vec3A,
+    rz: Vec3A,
+    /// False when the direction is zero or not finite (the ray hits nothing).
+    valid: bool,
 }
 
 impl WoopRay {
@@ -53,30 +59,38 @@ impl WoopRay {
         if d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        let (sx, sy, sz) = (d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+        let (sx, sy, sz) = (
+            (d[kx] / d[kz]) as f32,
+            (d[ky] / d[kz]) as f32,
+            (1.0 / d[kz]) as f32,
+        );
+        let mut rx = [0.0f32; 3];
+        let mut ry = [0.0f32; 3];
+        let mut rz = [0.0f32; 3];
+        rx[kx] = 1.0;
+        rx[kz] = -sx;
+        ry[ky] = 1.0;
+        ry[kz] = -sy;
+        rz[kz] = sz;
         WoopRay {
-            o: [o.x as f32, o.y as f32, o.z as f32],
-            k: [kx, ky, kz],
-            s: [sx as f32, sy as f32, sz as f32],
+            o: to3a(o),
+            rx: Vec3A::from_array(rx),
+            ry: Vec3A::from_array(ry),
+            rz: Vec3A::from_array(rz),
+            valid: sx.is_finite() && sy.is_finite() && sz.is_finite() && o.is_finite(),
         }
     }
 
     /// The watertight test against (a, b, c): Some((t, [b0, b1, b2])) for tmin < t < tmax.
     #[inline]
     fn intersect(&self, tri: &Triangle, tmin: f32, tmax: f32) -> Option<(f32, [f32; 3])> {
-        let [kx, ky, kz] = self.k;
-        let [sx, sy, sz] = self.s;
-        let o = Vec3A::from_array(self.o);
-        let a = tri.v0 - o;
-        let b = tri.v1 - o;
-        let c = tri.v2 - o;
+        let a = tri.v0 - self.o;
+        let b = tri.v1 - self.o;
+        let c = tri.v2 - self.o;
         // Shear and scale (Eq. 3–4 of the paper's Fig. 2 code).
-        let ax = a[kx] - sx * a[kz];
-        let ay = a[ky] - sy * a[kz];
-        let bx = b[kx] - sx * b[kz];
-        let by = b[ky] - sy * b[kz];
-        let cx = c[kx] - sx * c[kz];
-        let cy = c[ky] - sy * c[kz];
+        let (ax, ay) = (a.dot(self.rx), a.dot(self.ry));
+        let (bx, by) = (b.dot(self.rx), b.dot(self.ry));
+        let (cx, cy) = (c.dot(self.rx), c.dot(self.ry));
         // Scaled barycentrics (2D edge functions).
         let mut u = cx * by - cy * bx;
         let mut v = ax * cy - ay * cx;
@@ -97,9 +111,9 @@ impl WoopRay {
         if det == 0.0 {
             return None;
         }
-        let az = sz * a[kz];
-        let bz = sz * b[kz];
-        let cz = sz * c[kz];
+        let az = a.dot(self.rz);
+        let bz = b.dot(self.rz);
+        let cz = c.dot(self.rz);
         let t_scaled = u * az + v * bz + w * cz;
         // Depth test without division: t = T / det must lie in (tmin, tmax).
         if det > 0.0 {
@@ -117,7 +131,12 @@ impl WoopRay {
 /// The acceleration structure of a triangle soup.
 pub struct Accel {
     bvh: Option<CwBvh>,
+    /// Triangles in the BVH's leaf order (`tris[i]` is input triangle `prims[i]`), so that a
+    /// leaf reads consecutive triangles without the index indirection.
     tris: Vec<Triangle>,
+    prims: Vec<u32>,
+    /// Number of input triangles.
+    len: usize,
 }
 
 impl std::fmt::Debug for Accel {
@@ -156,17 +175,26 @@ impl Accel {
                 &mut Duration::default(),
             )
         });
-        Ok(Accel { bvh, tris })
+        let prims = bvh
+            .as_ref()
+            .map_or_else(Vec::new, |b| b.primitive_indices.clone());
+        let tris = prims.iter().map(|&k| tris[k as usize]).collect();
+        Ok(Accel {
+            bvh,
+            tris,
+            prims,
+            len: triangles.len(),
+        })
     }
 
     /// Number of triangles.
     pub fn len(&self) -> usize {
-        self.tris.len()
+        self.len
     }
 
     /// True without triangles.
     pub fn is_empty(&self) -> bool {
-        self.tris.is_empty()
+        self.len == 0
     }
 
     /// The closest hit of the ray o + t·d with tmin < t < tmax that `accept` (given the
@@ -181,16 +209,16 @@ impl Accel {
     ) -> Option<Hit> {
         let bvh = self.bvh.as_ref()?;
         let wr = WoopRay::new(o, d);
-        if !wr.s.iter().all(|v| v.is_finite()) || !o.is_finite() {
+        if !wr.valid {
             return None;
         }
         let ray = bvh_ray(o, d, tmin, tmax);
         let mut rh = RayHit::none();
         let mut best: Option<Hit> = None;
-        let tris = &self.tris;
+        let (tris, prims) = (&self.tris, &self.prims);
         bvh.ray_traverse(ray, &mut rh, |r, id| {
-            let prim = bvh.primitive_indices[id] as usize;
-            match wr.intersect(&tris[prim], r.tmin, r.tmax) {
+            let prim = prims[id] as usize;
+            match wr.intersect(&tris[id], r.tmin, r.tmax) {
                 Some((t, b)) => {
                     let bary = b.map(|x| x as f64);
                     if accept(prim, bary) {
@@ -224,14 +252,14 @@ impl Accel {
             return false;
         };
         let wr = WoopRay::new(o, d);
-        if !wr.s.iter().all(|v| v.is_finite()) || !o.is_finite() {
+        if !wr.valid {
             return false;
         }
         let ray = bvh_ray(o, d, tmin, tmax);
-        let tris = &self.tris;
+        let (tris, prims) = (&self.tris, &self.prims);
         !bvh.ray_traverse_miss(ray, |r, id| {
-            let prim = bvh.primitive_indices[id] as usize;
-            match wr.intersect(&tris[prim], r.tmin, r.tmax) {
+            let prim = prims[id] as usize;
+            match wr.intersect(&tris[id], r.tmin, r.tmax) {
                 Some((t, b)) if accept(prim, b.map(|x| x as f64)) => t,
                 _ => f32::INFINITY,
             }

@@ -15,7 +15,10 @@
 //! along ∂p/∂u). The geometric normal is turned to the shading normal's side. A direction whose
 //! sides differ between the two normals is dropped (no light leaks through shading normals,
 //! Veach §5.3). A two-sided material flips the frame to face the viewer. Emitters are one-sided
-//! (front = the shading normal's side, as Mitsuba's `area`).
+//! (front = the shading normal's side, as Mitsuba's `area`). A normal map (glTF tangent space:
+//! T from the mesh's tangents or ∂p/∂u, B = w · N × T) replaces the shading normal
+//! ([`mapped_normal`]); an emission texture multiplies the emitted radiance where it is seen
+//! and where NEE samples it.
 //!
 //! **Pixels** are box-filtered (uniform jitter). Sample k of pixel (x, y) draws from
 //! [`SplitMix64`] seeded by a hash of (seed, x, y, k), so a render continued with more samples
@@ -36,8 +39,10 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// What the path tracer asks of a material at a hit.
 pub trait Surface: Send + Sync {
-    /// The BSDF at texture coordinates `uv` (local frame, lustre-brdf conventions).
-    fn bsdf(&self, uv: [f64; 2]) -> Box<dyn Bsdf + '_>;
+    /// Calls `f` with the BSDF at texture coordinates `uv` (local frame, lustre-brdf
+    /// conventions). A callback rather than a returned box: a textured material builds its
+    /// BSDF on the stack at every hit, without allocating.
+    fn with_bsdf(&self, uv: [f64; 2], f: &mut dyn FnMut(&dyn Bsdf));
     /// Whether the material has an alpha mask at all (lets rays skip the uv lookups).
     fn masked(&self) -> bool {
         false
@@ -49,6 +54,25 @@ pub trait Surface: Send + Sync {
     /// Two-sided: the frame is flipped to face the viewer (Mitsuba's `twosided`).
     fn two_sided(&self) -> bool {
         false
+    }
+    /// Whether the material has a normal map (lets hits skip the lookup).
+    fn normal_mapped(&self) -> bool {
+        false
+    }
+    /// The tangent-space shading normal at `uv` (unit; +z = the interpolated normal, +x the
+    /// tangent, +y the bitangent: glTF normal maps); only asked when
+    /// [`Surface::normal_mapped`].
+    fn normal_map(&self, _uv: [f64; 2]) -> Option<DVec3> {
+        None
+    }
+    /// Whether the emitted radiance is textured.
+    fn emission_textured(&self) -> bool {
+        false
+    }
+    /// Factor of the triangle's emitted radiance at `uv` (a glTF emissive texture; 1 without
+    /// one); only asked when [`Surface::emission_textured`].
+    fn emission_factor(&self, _uv: [f64; 2]) -> Rgb {
+        Rgb::ONE
     }
 }
 
@@ -62,8 +86,8 @@ pub struct ConstantSurface {
 }
 
 impl Surface for ConstantSurface {
-    fn bsdf(&self, _uv: [f64; 2]) -> Box<dyn Bsdf + '_> {
-        Box::new(&*self.bsdf)
+    fn with_bsdf(&self, _uv: [f64; 2], f: &mut dyn FnMut(&dyn Bsdf)) {
+        f(&*self.bsdf)
     }
     fn two_sided(&self) -> bool {
         self.two_sided
@@ -87,6 +111,10 @@ pub struct Geometry {
     pub normals: Vec<[DVec3; 3]>,
     /// Texture coordinates per corner (same length as `positions`, or empty).
     pub uvs: Vec<[[f64; 2]; 3]>,
+    /// Tangents per corner for normal maps (xyz, w = ±1 the bitangent's sign: glTF's
+    /// B = w · N × T). Same length as `positions`, or empty; a zero tangent means "derive one
+    /// from the uvs" (T = ∂p/∂u, w such that B points along −∂p/∂v, glTF's v runs down).
+    pub tangents: Vec<[[f64; 4]; 3]>,
     /// Material index per triangle.
     pub material: Vec<u32>,
     /// Emitted radiance per triangle, front side (same length as `positions`, or empty).
@@ -246,6 +274,15 @@ pub struct PathTracer<'a, 's> {
     /// Probability of choosing the environment for NEE.
     p_env: f64,
     opts: PathOptions,
+    /// Per material: [`Surface::two_sided`] and [`Surface::masked`], asked once.
+    two_sided: Vec<bool>,
+    masked: Vec<bool>,
+    any_masked: bool,
+    /// Unit geometric normal per triangle (+z for a degenerate one).
+    face_normal: Vec<DVec3>,
+    /// Per material: [`Surface::normal_mapped`] and [`Surface::emission_textured`].
+    normal_mapped: Vec<bool>,
+    emission_textured: Vec<bool>,
 }
 
 /// Area of triangle t.
@@ -262,6 +299,22 @@ struct Vertex {
     frame: ShadingFrame,
     uv: [f64; 2],
     prim: usize,
+    /// Interpolated shading normal (before any normal map; the emitters' front side).
+    ns: DVec3,
+}
+
+/// The shading normal of a tangent-space normal `n_ts` (+z = `ns`) with tangent `t` and
+/// bitangent sign `sign` (glTF: B = sign · N × T, T made orthogonal to N first), and the
+/// tangent to build the frame with. A degenerate tangent or result keeps `ns`.
+pub fn mapped_normal(ns: DVec3, t: DVec3, sign: f64, n_ts: DVec3) -> (DVec3, DVec3) {
+    let Some(t) = (t - ns * ns.dot(t)).try_normalize() else {
+        return (ns, t);
+    };
+    let b = ns.cross(t) * sign;
+    match (t * n_ts.x + b * n_ts.y + ns * n_ts.z).try_normalize() {
+        Some(n) => (n, t),
+        None => (ns, t),
+    }
 }
 
 /// A small offset that moves a spawned ray off its surface (scaled with the coordinates).
@@ -283,6 +336,7 @@ impl<'a, 's> PathTracer<'a, 's> {
         for (name, len) in [
             ("normals", g.normals.len()),
             ("uvs", g.uvs.len()),
+            ("tangents", g.tangents.len()),
             ("emission", g.emission.len()),
         ] {
             if len != 0 && len != n {
@@ -329,6 +383,8 @@ impl<'a, 's> PathTracer<'a, 's> {
             (Some(_), None) => 1.0,
             _ => 0.0,
         };
+        let two_sided: Vec<bool> = scene.materials.iter().map(|m| m.two_sided()).collect();
+        let masked: Vec<bool> = scene.materials.iter().map(|m| m.masked()).collect();
         Ok(PathTracer {
             scene,
             accel,
@@ -337,6 +393,25 @@ impl<'a, 's> PathTracer<'a, 's> {
             light_index,
             p_env,
             opts,
+            two_sided,
+            any_masked: masked.iter().any(|&m| m),
+            masked,
+            normal_mapped: scene.materials.iter().map(|m| m.normal_mapped()).collect(),
+            emission_textured: scene
+                .materials
+                .iter()
+                .map(|m| m.emission_textured())
+                .collect(),
+            face_normal: g
+                .positions
+                .iter()
+                .map(|t| {
+                    (t[1] - t[0])
+                        .cross(t[2] - t[0])
+                        .try_normalize()
+                        .unwrap_or(DVec3::Z)
+                })
+                .collect(),
         })
     }
 
@@ -355,20 +430,41 @@ impl<'a, 's> PathTracer<'a, 's> {
 
     /// The alpha test of hit candidates.
     fn accept(&self, prim: usize, b: [f64; 3]) -> bool {
-        let m = &self.scene.materials[self.scene.geometry.material[prim] as usize];
-        !m.masked() || m.opaque(self.uv_at(prim, b))
+        let k = self.scene.geometry.material[prim] as usize;
+        !self.masked[k] || self.scene.materials[k].opaque(self.uv_at(prim, b))
     }
 
     /// The closest surface along o + t d, t > 0 (alpha-masked hits skipped).
     pub fn intersect(&self, o: DVec3, d: DVec3) -> Option<Hit> {
-        self.accel
-            .intersect(o, d, 0.0, f64::INFINITY, |p, b| self.accept(p, b))
+        if self.any_masked {
+            self.accel
+                .intersect(o, d, 0.0, f64::INFINITY, |p, b| self.accept(p, b))
+        } else {
+            self.accel.intersect(o, d, 0.0, f64::INFINITY, |_, _| true)
+        }
     }
 
     /// Whether anything opaque lies on o + t d for 0 < t < tmax.
     pub fn occluded(&self, o: DVec3, d: DVec3, tmax: f64) -> bool {
-        self.accel
-            .occluded(o, d, 0.0, tmax, |p, b| self.accept(p, b))
+        if self.any_masked {
+            self.accel
+                .occluded(o, d, 0.0, tmax, |p, b| self.accept(p, b))
+        } else {
+            self.accel.occluded(o, d, 0.0, tmax, |_, _| true)
+        }
+    }
+
+    /// The unit geometric normal (turned to the shading normal's side) and the unit shading
+    /// normal of triangle `prim` at barycentrics `b`.
+    fn normals(&self, prim: usize, b: [f64; 3]) -> (DVec3, DVec3) {
+        let g = &self.scene.geometry;
+        let ng = self.face_normal[prim];
+        let ns = g
+            .normals
+            .get(prim)
+            .and_then(|n| (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).try_normalize())
+            .unwrap_or(ng);
+        (if ns.dot(ng) < 0.0 { -ng } else { ng }, ns)
     }
 
     fn vertex(&self, o: DVec3, d: DVec3, h: &Hit) -> Vertex {
@@ -379,43 +475,74 @@ impl<'a, 's> PathTracer<'a, 's> {
         let p = if p.is_finite() { p } else { o + d * h.t };
         let e1 = t[1] - t[0];
         let e2 = t[2] - t[0];
-        let mut ng = e1.cross(e2).try_normalize().unwrap_or(DVec3::Z);
-        let ns = g
-            .normals
-            .get(h.prim)
-            .and_then(|n| (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).try_normalize())
-            .unwrap_or(ng);
-        if ns.dot(ng) < 0.0 {
-            ng = -ng;
-        }
+        let (ng, ns) = self.normals(h.prim, b);
         let uv = self.uv_at(h.prim, b);
-        // Tangent along ∂p/∂u (pbrt-v4 Eq. 6.7), e1/e2 when the uvs are degenerate.
-        let dpdu = match g.uvs.get(h.prim) {
+        // Tangents along ∂p/∂u and ∂p/∂v (pbrt-v4 Eq. 6.7), e1 / none when the uvs are
+        // degenerate.
+        let (dpdu, dpdv) = match g.uvs.get(h.prim) {
             Some(uvt) => {
                 let (du1, dv1) = (uvt[1][0] - uvt[0][0], uvt[1][1] - uvt[0][1]);
                 let (du2, dv2) = (uvt[2][0] - uvt[0][0], uvt[2][1] - uvt[0][1]);
                 let det = du1 * dv2 - dv1 * du2;
                 if det.abs() > 1e-12 {
-                    (e1 * dv2 - e2 * dv1) / det
+                    ((e1 * dv2 - e2 * dv1) / det, (e2 * du1 - e1 * du2) / det)
                 } else {
-                    e1
+                    (e1, DVec3::ZERO)
                 }
             }
-            None => e1,
+            None => (e1, DVec3::ZERO),
+        };
+        let k = g.material[h.prim] as usize;
+        let frame = match self.normal_mapped[k]
+            .then(|| self.scene.materials[k].normal_map(uv))
+            .flatten()
+        {
+            Some(n_ts) => {
+                let (t, sign) = match g.tangents.get(h.prim) {
+                    Some(tc) if tc[0][3] != 0.0 => {
+                        let t = DVec3::new(
+                            b[0] * tc[0][0] + b[1] * tc[1][0] + b[2] * tc[2][0],
+                            b[0] * tc[0][1] + b[1] * tc[1][1] + b[2] * tc[2][1],
+                            b[0] * tc[0][2] + b[1] * tc[1][2] + b[2] * tc[2][2],
+                        );
+                        (t, tc[0][3].signum())
+                    }
+                    _ => (
+                        dpdu,
+                        if ns.cross(dpdu).dot(dpdv) > 0.0 {
+                            -1.0
+                        } else {
+                            1.0
+                        },
+                    ),
+                };
+                let (n, t) = mapped_normal(ns, t, sign, n_ts);
+                ShadingFrame::new(n, t)
+            }
+            None => ShadingFrame::new(ns, dpdu),
         };
         Vertex {
             p,
             ng,
-            frame: ShadingFrame::new(ns, dpdu),
+            frame,
             uv,
             prim: h.prim,
+            ns,
         }
     }
 
-    /// Emitted radiance of triangle `prim` toward `wo` (front side only).
-    fn emitted(&self, v: &Vertex, wo: DVec3) -> Rgb {
-        match self.scene.geometry.emission.get(v.prim) {
-            Some(e) if wo.dot(v.frame.n) > 0.0 => *e,
+    /// Emitted radiance of triangle `prim` (shading normal `ns`, texture coordinates `uv`)
+    /// toward `wo` (front side only), times the material's emission texture.
+    fn emitted(&self, prim: usize, ns: DVec3, uv: [f64; 2], wo: DVec3) -> Rgb {
+        match self.scene.geometry.emission.get(prim) {
+            Some(e) if wo.dot(ns) > 0.0 => {
+                let k = self.scene.geometry.material[prim] as usize;
+                if self.emission_textured[k] {
+                    *e * self.scene.materials[k].emission_factor(uv)
+                } else {
+                    *e
+                }
+            }
             _ => Rgb::ZERO,
         }
     }
@@ -444,17 +571,17 @@ impl<'a, 's> PathTracer<'a, 's> {
     pub fn radiance(&self, o: DVec3, d: DVec3, rng: &mut SplitMix64) -> Rgb {
         use crate::kernel::Strategy;
         let strategy = self.opts.strategy;
-        let use_nee = strategy != Strategy::Bsdf;
         let use_bsdf_hits = strategy != Strategy::Light;
         let mis = strategy == Strategy::Mis;
-        let mut l = Rgb::ZERO;
-        let mut beta = Rgb::ONE;
+        let mut st = PathState {
+            l: Rgb::ZERO,
+            beta: Rgb::ONE,
+            prev_pdf: 0.0,
+            prev_delta: true,
+            prev_p: o,
+            eta_scale: 1.0,
+        };
         let (mut o, mut d) = (o, d);
-        // Density of the last BSDF sample (solid angle) and whether it was a delta lobe.
-        let mut prev_pdf = 0.0;
-        let mut prev_delta = true;
-        let mut prev_p = o;
-        let mut eta_scale = 1.0;
         let mut depth = 0u32; // segments so far
         loop {
             depth += 1;
@@ -462,108 +589,138 @@ impl<'a, 's> PathTracer<'a, 's> {
             let Some(h) = hit else {
                 if let Some(env) = &self.scene.environment {
                     let le = env.eval(d);
-                    let w = if prev_delta {
+                    let w = if st.prev_delta {
                         1.0
                     } else if !use_bsdf_hits {
                         0.0
                     } else if mis {
-                        power_heuristic(prev_pdf, self.p_env * env.pdf(d))
+                        power_heuristic(st.prev_pdf, self.p_env * env.pdf(d))
                     } else {
                         1.0
                     };
-                    l += beta * le * w;
+                    st.l += st.beta * le * w;
                 }
                 break;
             };
             let v = self.vertex(o, d, &h);
             let wo = -d;
-            let le = self.emitted(&v, wo);
+            let le = self.emitted(v.prim, v.ns, v.uv, wo);
             if le != Rgb::ZERO {
-                let w = if prev_delta {
+                let w = if st.prev_delta {
                     1.0
                 } else if !use_bsdf_hits {
                     0.0
                 } else if mis {
-                    power_heuristic(prev_pdf, self.area_light_pdf(v.prim, prev_p, v.p, v.ng))
+                    power_heuristic(
+                        st.prev_pdf,
+                        self.area_light_pdf(v.prim, st.prev_p, v.p, v.ng),
+                    )
                 } else {
                     1.0
                 };
-                l += beta * le * w;
+                st.l += st.beta * le * w;
             }
             if depth >= self.opts.max_depth {
                 break;
             }
             let mat = &self.scene.materials[self.scene.geometry.material[v.prim] as usize];
-            let (frame, ng) = if mat.two_sided() && wo.dot(v.ng) < 0.0 {
+            let (frame, ng) = if self.two_sided[self.scene.geometry.material[v.prim] as usize]
+                && wo.dot(v.ng) < 0.0
+            {
                 (v.frame.flipped(), -v.ng)
             } else {
                 (v.frame, v.ng)
             };
-            let bsdf = mat.bsdf(v.uv);
-            let wo_l = frame.to_local(wo);
-            // Same side of both normals, or the direction is dropped.
-            let consistent = |w: DVec3, wl: DVec3| (w.dot(ng) > 0.0) == (wl.z > 0.0);
-            // Next-event estimation (pointless on a BSDF made only of Dirac lobes).
-            let lobes = bsdf.flags().lobes;
-            let only_delta = lobes.is_specular() && !lobes.is_non_delta();
-            if use_nee && !only_delta {
-                if let Some((wi, pdf_l, le, tmax)) = self.sample_light(&v, rng) {
-                    let wi_l = frame.to_local(wi);
-                    if consistent(wi, wi_l) {
-                        let f = bsdf.eval(wi_l, wo_l);
-                        if f != Rgb::ZERO && !self.occluded(offset(v.p, ng, wi), wi, tmax) {
-                            let w = if mis {
-                                power_heuristic(pdf_l, bsdf.pdf(wi_l, wo_l))
-                            } else {
-                                1.0
-                            };
-                            let c = beta * f * le * (wi_l.z.abs() / pdf_l * w);
-                            if c.is_finite() {
-                                l += c;
-                            }
+            let mut next = None;
+            mat.with_bsdf(v.uv, &mut |bsdf| {
+                next = self.scatter(bsdf, &v, frame, ng, wo, depth, &mut st, rng);
+            });
+            let Some((o2, d2)) = next else {
+                break;
+            };
+            o = o2;
+            d = d2;
+        }
+        st.l
+    }
+
+    /// One path vertex with its BSDF: next-event estimation (added to `st.l`) and the
+    /// continuation (throughput, MIS state and roulette in `st`); the next ray, or `None` when
+    /// the path ends.
+    #[allow(clippy::too_many_arguments)]
+    fn scatter(
+        &self,
+        bsdf: &dyn Bsdf,
+        v: &Vertex,
+        frame: ShadingFrame,
+        ng: DVec3,
+        wo: DVec3,
+        depth: u32,
+        st: &mut PathState,
+        rng: &mut SplitMix64,
+    ) -> Option<(DVec3, DVec3)> {
+        use crate::kernel::Strategy;
+        let use_nee = self.opts.strategy != Strategy::Bsdf;
+        let mis = self.opts.strategy == Strategy::Mis;
+        let wo_l = frame.to_local(wo);
+        // Same side of both normals, or the direction is dropped.
+        let consistent = |w: DVec3, wl: DVec3| (w.dot(ng) > 0.0) == (wl.z > 0.0);
+        // Next-event estimation (pointless on a BSDF made only of Dirac lobes).
+        let lobes = bsdf.flags().lobes;
+        let only_delta = lobes.is_specular() && !lobes.is_non_delta();
+        if use_nee && !only_delta {
+            if let Some((wi, pdf_l, le, tmax)) = self.sample_light(v.p, rng) {
+                let wi_l = frame.to_local(wi);
+                if consistent(wi, wi_l) {
+                    let f = bsdf.eval(wi_l, wo_l);
+                    if f != Rgb::ZERO && !self.occluded(offset(v.p, ng, wi), wi, tmax) {
+                        let w = if mis {
+                            power_heuristic(pdf_l, bsdf.pdf(wi_l, wo_l))
+                        } else {
+                            1.0
+                        };
+                        let c = st.beta * f * le * (wi_l.z.abs() / pdf_l * w);
+                        if c.is_finite() {
+                            st.l += c;
                         }
                     }
                 }
             }
-            // Continue the path.
-            let (u1, u2) = (rng.next_f64(), rng.next_f64());
-            let Some(s) = bsdf.sample(wo_l, u1, u2) else {
-                break;
-            };
-            let wi = frame.to_world(s.wi);
-            if !consistent(wi, s.wi) {
-                break;
-            }
-            let wt = s.weight();
-            if !wt.is_finite() || wt == Rgb::ZERO {
-                break;
-            }
-            beta = beta * wt;
-            // Refraction scaled radiance by 1/η²; roulette looks at the flux (pbrt's etaScale).
-            if s.lobe.is_transmission() {
-                eta_scale *= s.eta * s.eta;
-            }
-            prev_delta = is_delta(&s);
-            prev_pdf = s.pdf;
-            prev_p = v.p;
-            // With light sampling only, paths continue for indirect light but emitters they
-            // reach are not counted (NEE counted them).
-            if depth >= self.opts.rr_depth {
-                let q = (beta.max_component() * eta_scale).min(0.95);
-                if rng.next_f64() >= q {
-                    break;
-                }
-                beta *= 1.0 / q;
-            }
-            o = offset(v.p, ng, wi);
-            d = wi;
         }
-        l
+        // Continue the path.
+        let (u1, u2) = (rng.next_f64(), rng.next_f64());
+        let s = bsdf.sample(wo_l, u1, u2)?;
+        let wi = frame.to_world(s.wi);
+        if !consistent(wi, s.wi) {
+            return None;
+        }
+        let wt = s.weight();
+        if !wt.is_finite() || wt == Rgb::ZERO {
+            return None;
+        }
+        st.beta = st.beta * wt;
+        // Refraction scaled radiance by 1/η²; roulette looks at the flux (pbrt's etaScale).
+        if s.lobe.is_transmission() {
+            st.eta_scale *= s.eta * s.eta;
+        }
+        st.prev_delta = is_delta(&s);
+        st.prev_pdf = s.pdf;
+        st.prev_p = v.p;
+        // With light sampling only, paths continue for indirect light but emitters they
+        // reach are not counted (NEE counted them).
+        if depth >= self.opts.rr_depth {
+            let q = (st.beta.max_component() * st.eta_scale).min(0.95);
+            if rng.next_f64() >= q {
+                return None;
+            }
+            st.beta *= 1.0 / q;
+        }
+        Some((offset(v.p, ng, wi), wi))
     }
 
-    /// Draws a light for NEE at `v`: (unit direction, solid-angle pdf including the light
-    /// choice, radiance, shadow-ray tmax along the direction).
-    fn sample_light(&self, v: &Vertex, rng: &mut SplitMix64) -> Option<(DVec3, f64, Rgb, f64)> {
+    /// Draws a light for NEE at point `p`: (unit direction, solid-angle pdf including the
+    /// light choice, radiance, shadow-ray tmax along the direction).
+    fn sample_light(&self, p: DVec3, rng: &mut SplitMix64) -> Option<(DVec3, f64, Rgb, f64)> {
         let u0 = rng.next_f64();
         let (u1, u2) = (rng.next_f64(), rng.next_f64());
         if u0 < self.p_env {
@@ -575,29 +732,20 @@ impl<'a, 's> PathTracer<'a, 's> {
         let dist = self.light_dist.as_ref()?;
         let (k, _) = dist.sample((u0 - self.p_env) / (1.0 - self.p_env));
         let prim = self.lights[k];
-        let g = &self.scene.geometry;
-        let t = &g.positions[prim];
+        let t = &self.scene.geometry.positions[prim];
         // Uniform point on the triangle (pbrt-v4 Eq. A.12).
         let su = u1.sqrt();
         let b = [1.0 - su, u2 * su, (1.0 - u2) * su];
         let q = t[0] * b[0] + t[1] * b[1] + t[2] * b[2];
-        let lv = self.vertex(
-            q,
-            DVec3::ZERO,
-            &Hit {
-                prim,
-                t: 0.0,
-                bary: b,
-            },
-        );
-        let to = q - v.p;
+        let (ng, ns) = self.normals(prim, b);
+        let to = q - p;
         let dist2 = to.length_squared();
         let wi = to.try_normalize()?;
-        let le = self.emitted(&lv, -wi);
+        let le = self.emitted(prim, ns, self.uv_at(prim, b), -wi);
         if le == Rgb::ZERO {
             return None;
         }
-        let pdf = self.area_light_pdf(prim, v.p, lv.p, lv.ng);
+        let pdf = self.area_light_pdf(prim, p, q, ng);
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
@@ -605,6 +753,21 @@ impl<'a, 's> PathTracer<'a, 's> {
         let tmax = dist2.sqrt() * (1.0 - 1e-4);
         Some((wi, pdf, le, tmax))
     }
+}
+
+/// The state a path carries from vertex to vertex.
+struct PathState {
+    /// Radiance gathered so far.
+    l: Rgb,
+    /// Throughput.
+    beta: Rgb,
+    /// Density of the last BSDF sample (solid angle) and whether it was a delta lobe.
+    prev_pdf: f64,
+    prev_delta: bool,
+    /// The last scattering point (for the area-light density of an emitter hit by chance).
+    prev_p: DVec3,
+    /// Product of η² over refractions (pbrt's etaScale).
+    eta_scale: f64,
 }
 
 /// Two independent half-images (even / odd samples) of a progressive render.

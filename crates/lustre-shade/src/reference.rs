@@ -30,13 +30,16 @@ struct SceneSurface<'s> {
 }
 
 impl Surface for SceneSurface<'_> {
-    fn bsdf(&self, uv: [f64; 2]) -> Box<dyn Bsdf + '_> {
+    fn with_bsdf(&self, uv: [f64; 2], f: &mut dyn FnMut(&dyn Bsdf)) {
         let uv = [Vec2::new(uv[0] as f32, uv[1] as f32); 2];
-        match self.material.bsdf_at(self.textures, &uv) {
-            Ok(b) => b,
+        if self
+            .material
+            .with_bsdf_at(self.textures, &uv, &mut *f)
+            .is_err()
+        {
             // `path_scene` checked every material at uv = 0; a texel that still fails (it
             // cannot for clamped textures) renders black rather than aborting a long render.
-            Err(_) => Box::new(Lambert { kd: Rgb::ZERO }),
+            f(&Lambert { kd: Rgb::ZERO });
         }
     }
     fn masked(&self) -> bool {
@@ -49,6 +52,20 @@ impl Surface for SceneSurface<'_> {
     fn two_sided(&self) -> bool {
         self.material.two_sided
     }
+    fn normal_mapped(&self) -> bool {
+        self.material.normal_map.is_some()
+    }
+    fn normal_map(&self, uv: [f64; 2]) -> Option<DVec3> {
+        let uv = [Vec2::new(uv[0] as f32, uv[1] as f32); 2];
+        self.material.normal_map_at(self.textures, &uv)
+    }
+    fn emission_textured(&self) -> bool {
+        self.material.emission_texture.is_some()
+    }
+    fn emission_factor(&self, uv: [f64; 2]) -> Rgb {
+        let uv = [Vec2::new(uv[0] as f32, uv[1] as f32); 2];
+        self.material.emission_at(self.textures, &uv)
+    }
 }
 
 /// A material the BSDF library cannot build (reported as a warning, rendered grey).
@@ -56,8 +73,8 @@ impl Surface for SceneSurface<'_> {
 struct Fallback(Lambert);
 
 impl Surface for Fallback {
-    fn bsdf(&self, _uv: [f64; 2]) -> Box<dyn Bsdf + '_> {
-        Box::new(self.0)
+    fn with_bsdf(&self, _uv: [f64; 2], f: &mut dyn FnMut(&dyn Bsdf)) {
+        f(&self.0)
     }
     fn two_sided(&self) -> bool {
         true
@@ -67,17 +84,18 @@ impl Surface for Fallback {
 /// Width of the equirect map a rotated or analytic environment is resampled to.
 pub const ENV_WIDTH: usize = 2048;
 
-/// The path tracer's view of `scene`: world triangles with normals, uv0 and emission, one
-/// [`Surface`] per material and the environment as an importance-sampled [`EnvLight`].
-/// Returns warnings for what is approximated (materials the BSDF library cannot build yet are
-/// rendered as two-sided grey Lambert 0.5, named; normal maps and emission textures are
-/// ignored, named).
+/// The path tracer's view of `scene`: world triangles with normals, tangents, uv0 and emission,
+/// one [`Surface`] per material (textures, alpha masks, normal maps and emission textures
+/// through [`Material`]) and the environment as an importance-sampled [`EnvLight`]. Returns
+/// warnings for what is approximated (materials the BSDF library cannot build yet are rendered
+/// as two-sided grey Lambert 0.5, named).
 pub fn path_scene(scene: &Scene) -> Result<(PathScene<'_>, Vec<String>)> {
     let mut warnings = vec![];
     let mut g = Geometry::default();
     let any_normals = scene.meshes.iter().any(|m| m.normals.is_some());
     let any_uvs = scene.meshes.iter().any(|m| m.uv0.is_some());
     let any_emission = scene.meshes.iter().any(|m| m.emission.is_some());
+    let any_tangents = scene.meshes.iter().any(|m| m.tangents.is_some());
     let d = |v: glam::Vec3| DVec3::new(v.x as f64, v.y as f64, v.z as f64);
     for m in &scene.meshes {
         for t in &m.indices {
@@ -101,6 +119,16 @@ pub fn path_scene(scene: &Scene) -> Result<(PathScene<'_>, Vec<String>)> {
                 };
                 g.uvs.push(uv);
             }
+            if any_tangents {
+                let t = match &m.tangents {
+                    Some(t) => [0, 1, 2].map(|k| {
+                        let v = t[corner(k)];
+                        [v.x as f64, v.y as f64, v.z as f64, v.w as f64]
+                    }),
+                    None => [[0.0; 4]; 3],
+                };
+                g.tangents.push(t);
+            }
             if any_emission {
                 g.emission.push(m.emission.unwrap_or(Rgb::ZERO));
             }
@@ -123,12 +151,6 @@ pub fn path_scene(scene: &Scene) -> Result<(PathScene<'_>, Vec<String>)> {
                     kd: Rgb::splat(0.5),
                 })));
             }
-        }
-        if mat.normal_map.is_some() {
-            warnings.push(format!("material {:?}: normal map ignored", mat.name));
-        }
-        if mat.emission_texture.is_some() {
-            warnings.push(format!("material {:?}: emission texture ignored", mat.name));
         }
     }
     let environment = match &scene.environment {

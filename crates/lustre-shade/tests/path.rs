@@ -201,8 +201,8 @@ fn alpha_masked_surface_lets_light_through() {
     #[derive(Debug)]
     struct Holes;
     impl Surface for Holes {
-        fn bsdf(&self, _uv: [f64; 2]) -> Box<dyn lustre_brdf::bsdf::Bsdf + '_> {
-            Box::new(Lambert::new(Rgb::ZERO).unwrap())
+        fn with_bsdf(&self, _uv: [f64; 2], f: &mut dyn FnMut(&dyn lustre_brdf::bsdf::Bsdf)) {
+            f(&Lambert::new(Rgb::ZERO).unwrap())
         }
         fn masked(&self) -> bool {
             true
@@ -318,4 +318,173 @@ fn resumed_accumulation_equals_one_run_and_noise_estimate_is_honest() {
         est > 0.5 * actual && est < 2.0 * actual,
         "{est} vs {actual}"
     );
+}
+
+/// Texture coordinates of the two triangles of [`quad`]: u along a, v along b.
+const QUAD_UVS: [[[f64; 2]; 3]; 2] = [
+    [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]],
+    [[0.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+];
+
+/// A black emitter material whose emission texture is 0.25 where u < ½ and 1 elsewhere.
+#[derive(Debug)]
+struct HalfDimmed;
+
+impl Surface for HalfDimmed {
+    fn with_bsdf(&self, _uv: [f64; 2], f: &mut dyn FnMut(&dyn lustre_brdf::bsdf::Bsdf)) {
+        f(&Lambert::new(Rgb::ZERO).unwrap())
+    }
+    fn emission_textured(&self) -> bool {
+        true
+    }
+    fn emission_factor(&self, uv: [f64; 2]) -> Rgb {
+        Rgb::splat(if uv[0] < 0.5 { 0.25 } else { 1.0 })
+    }
+}
+
+#[test]
+fn emission_texture_scales_emitted_radiance_seen_and_sampled() {
+    // Emitter: the square x, y ∈ [−1, 1] at height 1 facing down, radiance 4, u along +x, its
+    // left half (x < 0) dimmed to 0.25 by the texture. Floor: Lambert 0.5 at z = 0.
+    let mut g = Geometry::default();
+    let emitter = quad(
+        DVec3::new(-1.0, 1.0, 1.0),
+        DVec3::new(2.0, 0.0, 0.0),
+        DVec3::new(0.0, -2.0, 0.0),
+    );
+    push_quad(&mut g, emitter, 0, Rgb::splat(4.0));
+    g.uvs.extend(QUAD_UVS);
+    let floor = quad(
+        DVec3::new(-50.0, -50.0, 0.0),
+        DVec3::new(100.0, 0.0, 0.0),
+        DVec3::new(0.0, 100.0, 0.0),
+    );
+    push_quad(&mut g, floor, 1, Rgb::ZERO);
+    g.uvs.extend([[[0.0; 2]; 3]; 2]);
+    let scene = PathScene {
+        geometry: g,
+        materials: vec![Box::new(HalfDimmed), lambert(0.5, false)],
+        environment: None,
+    };
+    // Seen directly (max depth 1): exactly 4 × the texel.
+    let pt = PathTracer::new(&scene, opts(1, Strategy::Mis)).unwrap();
+    let mut rng = SplitMix64::new(1);
+    let up = DVec3::Z;
+    for (x, want) in [(-0.5, 1.0), (0.5, 4.0)] {
+        let l = pt.radiance(DVec3::new(x, 0.2, 0.5), up, &mut rng);
+        assert!((l[0] - want).abs() < 1e-12, "x = {x}: {l:?} vs {want}");
+    }
+    // On the floor below (direct light, max depth 2): L = ρ/π · Σ L_half · E_half(Lambert's
+    // formula), by light sampling, BSDF sampling and MIS alike.
+    let x = DVec3::new(0.3, -0.2, 0.0);
+    let half = |x0: f64, x1: f64| {
+        polygon_irradiance(&[
+            DVec3::new(x0, -1.0, 1.0) - x,
+            DVec3::new(x1, -1.0, 1.0) - x,
+            DVec3::new(x1, 1.0, 1.0) - x,
+            DVec3::new(x0, 1.0, 1.0) - x,
+        ])
+    };
+    let exact = 0.5 / PI * (1.0 * half(-1.0, 0.0) + 4.0 * half(0.0, 1.0));
+    for st in [Strategy::Light, Strategy::Bsdf, Strategy::Mis] {
+        let pt = PathTracer::new(&scene, opts(2, st)).unwrap();
+        let (m, e) = estimate(&pt, x + DVec3::Z * 0.5, -DVec3::Z, 40_000, 7);
+        assert!(
+            (m - exact).abs() < 4.0 * e + 1e-4,
+            "{st:?}: {m} ± {e} vs {exact}"
+        );
+    }
+}
+
+/// A perfect mirror (two-sided off) whose normal map is the constant tangent-space normal
+/// `n_ts`.
+#[derive(Debug)]
+struct MappedMirror {
+    n_ts: DVec3,
+}
+
+impl Surface for MappedMirror {
+    fn with_bsdf(&self, _uv: [f64; 2], f: &mut dyn FnMut(&dyn lustre_brdf::bsdf::Bsdf)) {
+        f(&lustre_brdf::models::conductor::Conductor::preset("none").unwrap())
+    }
+    fn normal_mapped(&self) -> bool {
+        true
+    }
+    fn normal_map(&self, _uv: [f64; 2]) -> Option<DVec3> {
+        Some(self.n_ts)
+    }
+}
+
+#[test]
+fn normal_map_turns_the_mirror_reflection() {
+    // A mirror floor at z = 0 (uvs: u along +x, v along +y) seen straight down. Emitter A
+    // (radiance 1) lies straight above; emitter B (radiance 3) where the reflection goes when
+    // the normal is tilted by 30° towards +x (60° from the vertical), emitter C (radiance 5)
+    // where it goes for the same tilt towards −y. Generated tangent frame: T = ∂p/∂u = +x,
+    // B = −∂p/∂v = −y (glTF's v runs down the image), so n_ts = (sin 30°, 0, cos 30°) turns
+    // the normal towards +x and (0, sin 30°, cos 30°) towards −y. An explicit tangent +x with
+    // w = +1 has B = N × T = +y (the reflection then misses everything); w = −1 gives −y.
+    let (s30, c30) = (0.5f64, 0.75f64.sqrt());
+    let build = |n_ts: DVec3, tangent: Option<[f64; 4]>| {
+        let mut g = Geometry::default();
+        let floor = quad(
+            DVec3::new(-50.0, -50.0, 0.0),
+            DVec3::new(100.0, 0.0, 0.0),
+            DVec3::new(0.0, 100.0, 0.0),
+        );
+        push_quad(&mut g, floor, 0, Rgb::ZERO);
+        // Emitter A: a 1×1 square at height 2 above the origin, facing down.
+        push_quad(
+            &mut g,
+            quad(
+                DVec3::new(-0.5, 0.5, 2.0),
+                DVec3::new(1.0, 0.0, 0.0),
+                DVec3::new(0.0, -1.0, 0.0),
+            ),
+            1,
+            Rgb::ONE,
+        );
+        // Emitters B and C: 1×1 squares facing the origin at distance 2.
+        for (dir, side, l) in [
+            (DVec3::new(c30, 0.0, s30), DVec3::Y, 3.0),
+            (DVec3::new(0.0, -c30, s30), DVec3::X, 5.0),
+        ] {
+            let b = dir.cross(side);
+            push_quad(
+                &mut g,
+                quad(dir * 2.0 - 0.5 * side - 0.5 * b, b, side),
+                1,
+                Rgb::splat(l),
+            );
+        }
+        g.uvs.extend(QUAD_UVS);
+        g.uvs.extend([[[0.0; 2]; 3]; 6]);
+        if let Some(t) = tangent {
+            g.tangents.extend([[t; 3]; 2]);
+            g.tangents.extend([[[0.0; 4]; 3]; 6]);
+        }
+        PathScene {
+            geometry: g,
+            materials: vec![Box::new(MappedMirror { n_ts }), lambert(0.0, true)],
+            environment: None,
+        }
+    };
+    let look = |n_ts: DVec3, tangent: Option<[f64; 4]>| {
+        let scene = build(n_ts, tangent);
+        let pt = PathTracer::new(&scene, opts(2, Strategy::Bsdf)).unwrap();
+        pt.radiance(
+            DVec3::new(0.0, 0.0, 1.0),
+            -DVec3::Z,
+            &mut SplitMix64::new(3),
+        )[0]
+    };
+    let (to_x, to_y) = (DVec3::new(s30, 0.0, c30), DVec3::new(0.0, s30, c30));
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-6 * b.max(1.0);
+    assert!(close(look(DVec3::Z, None), 1.0), "flat map");
+    assert!(close(look(to_x, None), 3.0), "{}", look(to_x, None));
+    assert!(close(look(to_y, None), 5.0), "{}", look(to_y, None));
+    let (w_pos, w_neg) = (Some([1.0, 0.0, 0.0, 1.0]), Some([1.0, 0.0, 0.0, -1.0]));
+    assert!(close(look(to_x, w_pos), 3.0));
+    assert_eq!(look(to_y, w_pos), 0.0);
+    assert!(close(look(to_y, w_neg), 5.0));
 }
