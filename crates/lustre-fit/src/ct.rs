@@ -679,18 +679,24 @@ fn refine_round(
             (m1 * m1 * m1 * m1 * m1, cd)
         })
         .collect();
-    type Cache = Option<([f64; 2], Vec<f64>)>;
-    let cache: std::sync::Mutex<Cache> = std::sync::Mutex::new(None);
+    // Two entries, most recent first: a forward-difference Jacobian steps α and p away from
+    // the current point and back, so the current point's factor is reused.
+    type Cache = Vec<([f64; 2], Vec<f64>)>;
+    let cache: std::sync::Mutex<Cache> = std::sync::Mutex::new(Vec::with_capacity(2));
     let f = |x: &[f64], r: &mut [f64]| {
         let (rd, a) = (pos_of(x[0]), alpha_of(x[2]));
         let p = if sgd { p_of(x[5]) } else { 0.0 };
         let (rs, f0, f1) = fresnel_of(x[1], x[3], x[4]);
         let mut guard = cache.lock().unwrap_or_else(|e| e.into_inner());
-        let stale = guard.as_ref().is_none_or(|(k, _)| *k != [a, p]);
-        if stale {
-            *guard = Some(([a, p], spec_factor(&Dist::new(kind, a, p), g1, set)));
+        match guard.iter().position(|(k, _)| *k == [a, p]) {
+            Some(0) => {}
+            Some(i) => guard.swap(0, i),
+            None => {
+                guard.truncate(1);
+                guard.insert(0, ([a, p], spec_factor(&Dist::new(kind, a, p), g1, set)));
+            }
         }
-        if let Some((_, sf)) = guard.as_ref() {
+        if let Some((_, sf)) = guard.first() {
             for i in 0..n {
                 let (m5, cd) = basis[i];
                 let fres = rs * fresnel_basis(f0, f1, m5, cd);

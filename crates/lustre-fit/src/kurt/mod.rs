@@ -32,8 +32,8 @@
 //! [`KurtFit::status`] is `Converged` when the alternation of several lobes settled (the last
 //! round improved the error by less than 0.1 % of the error without lobes) and then
 //! - with the polish: the LM run whose result was kept (else the first) met one of its
-//!   convergence criteria (ftol/xtol/gtol, zero residuals, or
-//!   tolerances reached at machine precision) — the search only provides its start;
+//!   convergence criteria (relative reduction of the error or relative step below √ε, zero
+//!   gradient, or no improving step at any damping) — the search only provides its start;
 //! - without: the last level of every final lobe search improved the error by less than 0.1 %
 //!   of the error without that lobe.
 //!
