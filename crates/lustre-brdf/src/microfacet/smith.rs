@@ -205,18 +205,30 @@ impl G1Table {
     /// G1 at cos θ (0 at and below the horizon, 1 at normal incidence).
     #[inline]
     pub fn eval(&self, cos_theta: f64) -> f64 {
+        self.eval_coord(cos_theta, Self::coord(cos_theta))
+    }
+
+    /// The table's coordinate of cos θ, ln μ with μ = cot θ (it does not depend on the
+    /// distribution): callers evaluating many tables at fixed angles compute it once and use
+    /// [`Self::eval_coord`].
+    #[inline]
+    pub fn coord(cos_theta: f64) -> f64 {
+        let c2 = cos_theta * cos_theta;
+        0.5 * (c2 / (1.0 - c2)).ln()
+    }
+
+    /// G1 at cos θ given its [`Self::coord`] `s` (equal to [`Self::eval`]).
+    #[inline]
+    pub fn eval_coord(&self, cos_theta: f64, s: f64) -> f64 {
         if cos_theta.is_nan() || cos_theta <= 0.0 {
             return 0.0;
         }
         if cos_theta >= 1.0 {
             return 1.0;
         }
-        let c2 = cos_theta * cos_theta;
-        let mu2 = c2 / (1.0 - c2);
-        let s = 0.5 * mu2.ln();
         let u = (s - self.s0) * self.inv_ds;
         if u < 0.0 {
-            let mu = mu2.sqrt();
+            let mu = s.exp();
             let j = self.j_min + self.k_min * (self.mu_min - mu);
             return PI * mu / (PI * mu + j);
         }
