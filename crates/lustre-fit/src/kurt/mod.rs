@@ -399,6 +399,31 @@ mod tests {
         }
     }
 
+    /// A thinned set (the polish's first stage) estimates the sums over the whole set: its
+    /// weights sum to the same total within 1 %, per incident direction too.
+    #[test]
+    fn thinned_set_estimates_sums() {
+        let m = Kurt::new(
+            Rgb::splat(0.2),
+            vec![KurtLobe::new(Rgb::ONE, 0.05, 0.05, 0.3, 0.2).expect("lobe")],
+            vec![],
+        )
+        .expect("model");
+        let s = samples::sample(&m, false).expect("samples");
+        let thin = s.refl.every(4);
+        assert_eq!(thin.len(), s.refl.len().div_ceil(4));
+        let sum = |set: &PairSet, f: &dyn Fn(usize) -> f64| -> f64 {
+            (0..set.len()).map(|t| set.weight[t] * f(t)).sum()
+        };
+        let (w_all, w_thin) = (sum(&s.refl, &|_| 1.0), sum(&thin, &|_| 1.0));
+        assert!((w_thin - w_all).abs() < 0.01 * w_all, "{w_thin} vs {w_all}");
+        let (p_all, p_thin) = (
+            sum(&s.refl, &|t| s.refl.data[0][t]),
+            sum(&thin, &|t| thin.data[0][t]),
+        );
+        assert!((p_thin - p_all).abs() < 0.01 * p_all, "{p_thin} vs {p_all}");
+    }
+
     /// kd of a Lambertian is recovered exactly by the histogram.
     #[test]
     fn histogram_kd_of_lambertian() {

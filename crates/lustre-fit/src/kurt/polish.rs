@@ -305,8 +305,8 @@ fn marquardt(p: &Problem, x0: DVector<f64>, max_evals: usize) -> (DVector<f64>, 
                     cost = cn;
                     // Nielsen's update from the gain ratio ρ = actual / predicted reduction.
                     let rho = if pred > 0.0 { actual / pred } else { 0.0 };
-                    lambda = (lambda * (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3)))
-                        .max(1e-15);
+                    lambda =
+                        (lambda * (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3))).max(1e-15);
                     nu = 2.0;
                     match (ftol, xtol) {
                         (true, true) => return (x, Stop::Both),
@@ -363,7 +363,6 @@ fn reason_words(t: Stop, n: usize) -> String {
 /// `levenberg-marquardt` crate's LM had here) stopped most multi-lobe polishes at the limit;
 /// 50 lowers the Eq. 3.7 error further on 14 of 15 fits of the regression set (tests/kurt.rs).
 const MAX_EVALS_PER_PARAM: usize = 50;
-
 
 /// Thinning of the first polish stage (every `POLISH_THIN`-th pair, see [`polish`]).
 const POLISH_THIN: usize = 4;

@@ -88,7 +88,12 @@ impl PairSet {
             v.iter().step_by(k).cloned().collect()
         }
         PairSet {
-            weight: self.weight.iter().step_by(k).map(|w| w * k as f64).collect(),
+            weight: self
+                .weight
+                .iter()
+                .step_by(k)
+                .map(|w| w * k as f64)
+                .collect(),
             cos_o: pick(&self.cos_o, k),
             ln_base: pick(&self.ln_base, k),
             tx: pick(&self.tx, k),
