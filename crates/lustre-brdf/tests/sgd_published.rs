@@ -143,3 +143,35 @@ fn published_g1_approximation_vs_numeric_g1() {
     assert!(worst_pub < 2e-3);
     assert!(worst_fit < 2.5e-4);
 }
+
+/// `SgdG1Approx::fit` runs its 32 starts a few LM iterations each and only the best 4 to
+/// convergence: on the published (α, p) of five materials (all channels) its RMS equals the one
+/// of running every start to convergence (recorded from that version; the two agreed on all
+/// 300 published (α, p), none differing at all).
+#[test]
+fn g1_fit_matches_the_all_starts_fit() {
+    let f = SgdFits::load_default().unwrap();
+    let recorded: [(&str, [f64; 3]); 5] = [
+        ("blue-fabric", [1.443611e-4, 1.443958e-4, 1.353952e-4]),
+        ("chrome", [1.129528e-5, 2.129905e-5, 1.869066e-6]),
+        (
+            "gold-metallic-paint",
+            [1.476412e-4, 1.459584e-4, 1.572863e-4],
+        ),
+        ("nickel", [6.854128e-5, 6.994171e-5, 6.911484e-5]),
+        ("white-paint", [1.517514e-4, 1.461127e-4, 2.467309e-4]),
+    ];
+    for (name, want) in recorded {
+        let q = f.params(name).unwrap();
+        for c in 0..3 {
+            let t = G1Table::new(&Ndf::sgd(q[c].alpha, q[c].p).unwrap());
+            let (a, rms) = SgdG1Approx::fit(&t);
+            assert!(
+                rms <= want[c] * (1.0 + 1e-5) && rms >= want[c] * (1.0 - 1e-5),
+                "{name} channel {c}: RMS {rms:.6e} vs recorded {:.6e}",
+                want[c]
+            );
+            assert!((a.l2_error(&t) - rms).abs() <= 1e-12, "{a:?}");
+        }
+    }
+}

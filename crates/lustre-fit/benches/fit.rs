@@ -1,7 +1,10 @@
-//! Timing of one SGD fit and one `metrics::evaluate` on an NBRDF material.
+//! Timing of one SGD fit, one `metrics::evaluate` and Kurt fits with 1 and 3 lobes on an NBRDF
+//! material (issue 14's goal: an SGD fit ≤ 1 s wall with 2 threads; the times are wall times of
+//! the whole fit on `RAYON_NUM_THREADS` threads, the default being all cores).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use lustre_fit::ct::{fit, CtOptions, Distribution};
+use lustre_fit::kurt::{self, KurtOptions};
 use lustre_fit::metrics::evaluate;
 use std::hint::black_box;
 
@@ -25,6 +28,18 @@ fn bench(c: &mut Criterion) {
     g.bench_function("evaluate", |b| {
         b.iter(|| evaluate(black_box(d), black_box(&model), false))
     });
+    g.finish();
+    let mut g = c.benchmark_group("kurt");
+    g.sample_size(10);
+    for lobes in [1, 3] {
+        let opts = KurtOptions {
+            lobes,
+            ..KurtOptions::default()
+        };
+        g.bench_function(format!("fit_{lobes}_lobes"), |b| {
+            b.iter(|| kurt::fit(black_box(d), false, &opts))
+        });
+    }
     g.finish();
 }
 

@@ -4,7 +4,7 @@
 //! MERL materials and the RGL files; all errors by `metrics`.
 //!
 //! `cargo run --release -p lustre-fit --example merl100 -- [--out FILE.md] [--only A,B,...]
-//! [--limit N] [--rgl] [--kurt A,B,...|none] [--kurt-lobes 3]`
+//! [--limit N] [--rgl] [--kurt A,B,...|all|none] [--kurt-lobes 3]`
 //!
 //! A fit is counted unphysical when a channel has ρd < 0 or ρs < 0, F0 outside [0, 1] or F1
 //! outside [F0 − 1, F0] (so that Eq. V.5 leaves [0, 1]), or a directional albedo (θo = 0°, 10°,
@@ -109,6 +109,14 @@ fn ct_one(
     })
 }
 
+/// The 1-, 5- and 15-minute load averages (/proc/loadavg), or "?".
+fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .map(|l| l.split_whitespace().take(3).collect::<Vec<_>>().join(" "))
+        .unwrap_or_else(|| "?".into())
+}
+
 fn stats(v: &[f64]) -> (f64, f64) {
     let mut v = v.to_vec();
     v.sort_by(f64::total_cmp);
@@ -118,19 +126,35 @@ fn stats(v: &[f64]) -> (f64, f64) {
     )
 }
 
+/// One Kurt fit of a material with k lobes.
+struct KurtRow {
+    /// Ngan L2 (mean of channels) of this fit.
+    ngan: f64,
+    /// Eq. 3.7 objective.
+    obj: f64,
+    wall: f64,
+    cpu: f64,
+    converged: bool,
+    /// The polish stopped at its evaluation limit.
+    limit: bool,
+    /// The alternation of lobes did not settle.
+    unsettled: bool,
+    unphysical: bool,
+}
+
 /// Kurt fits with 1..=`max` lobes; per k the Ngan L2 (mean) of that fit, the reported one
-/// (the best of 1..=k, as `lustre fit --model kurt --lobes k` reports), the time and status.
+/// (the best of 1..=k, as `lustre fit --model kurt --lobes k` reports), the times and status.
 fn kurt_rows(
     name: &str,
     d: &dyn Bsdf,
     amax: &[f64; 3],
     max: usize,
-) -> Result<(Vec<String>, usize), Box<dyn std::error::Error>> {
+) -> Result<(Vec<String>, Vec<KurtRow>), Box<dyn std::error::Error>> {
     let mut lines = Vec::new();
+    let mut rows = Vec::new();
     let mut best = f64::INFINITY;
-    let mut bad = 0;
     for k in 1..=max {
-        let t0 = Instant::now();
+        let (t0, c0) = (Instant::now(), cpu_seconds());
         let f = kurt::fit(
             d,
             false,
@@ -139,14 +163,13 @@ fn kurt_rows(
                 ..KurtOptions::default()
             },
         )?;
-        let t = t0.elapsed().as_secs_f64();
+        let (t, cpu) = (t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
         let m = MaterialModel::from_kurt(&f.model).to_bsdf(name)?;
         let e = ngan_l2(d, m.as_ref(), amax);
         best = best.min(mean(&e));
         let why = unphysical(m.as_ref(), None, amax);
-        bad += usize::from(!why.is_empty());
         lines.push(format!(
-            "| {name} | {k} | {:.4e} | {best:.4e} | {:.4e} | {t:.2} | {:?} | {} | {} |",
+            "| {name} | {k} | {:.4e} | {best:.4e} | {:.4e} | {t:.2} | {cpu:.2} | {:?} | {} | {} |",
             mean(&e),
             f.objective,
             f.status,
@@ -157,8 +180,52 @@ fn kurt_rows(
             },
             f.note
         ));
+        rows.push(KurtRow {
+            ngan: mean(&e),
+            obj: f.objective,
+            wall: t,
+            cpu,
+            converged: f.status == lustre_fit::FitStatus::Converged,
+            limit: f.note.contains("evaluation limit"),
+            unsettled: f.note.contains("did not settle"),
+            unphysical: !why.is_empty(),
+        });
     }
-    Ok((lines, bad))
+    Ok((lines, rows))
+}
+
+/// The summary lines of the Kurt fits (`per[input][k − 1]`).
+fn kurt_summary(per: &[Vec<KurtRow>], max: usize) -> Vec<String> {
+    let mut out = Vec::new();
+    let n = per.len();
+    for k in 1..=max {
+        let rows: Vec<&KurtRow> = per.iter().filter_map(|r| r.get(k - 1)).collect();
+        let (mw, ww) = stats(&rows.iter().map(|r| r.wall).collect::<Vec<_>>());
+        let (mc, wc) = stats(&rows.iter().map(|r| r.cpu).collect::<Vec<_>>());
+        let count = |f: &dyn Fn(&KurtRow) -> bool| rows.iter().filter(|r| f(r)).count();
+        out.push(format!(
+            "- Kurt {k} lobe(s), {} inputs: wall median {mw:.2} s, worst {ww:.2} s; CPU median {mc:.2} s, worst {wc:.2} s; status Converged {}, NotConverged {} (polish at its evaluation limit {}, alternation of lobes not settled {}); unphysical {}",
+            rows.len(),
+            count(&|r| r.converged),
+            count(&|r| !r.converged),
+            count(&|r| r.limit),
+            count(&|r| r.unsettled),
+            count(&|r| r.unphysical),
+        ));
+        if k > 1 {
+            let beats = |f: &dyn Fn(&KurtRow) -> f64| {
+                per.iter()
+                    .filter(|r| r.len() >= k && f(&r[k - 1]) < f(&r[0]))
+                    .count()
+            };
+            out.push(format!(
+                "- Kurt {k} lobes lower than 1 lobe: Ngan L2 on {}/{n}, Eq. 3.7 objective on {}/{n}",
+                beats(&|r| r.ngan),
+                beats(&|r| r.obj)
+            ));
+        }
+    }
+    out
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
@@ -190,6 +257,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             other => return Err(format!("unknown argument {other:?}").into()),
         }
     }
+    let (run_start, load_start) = (Instant::now(), load_average());
     let mut inputs = lustre_fit::data::expand_inputs("nbrdf:*")?;
     if let Some(o) = &only {
         inputs.retain(|i| o.iter().any(|n| i == &format!("nbrdf:{n}")));
@@ -220,7 +288,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let (mut wall, mut cpu, mut cpu_b, mut cpu_g) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut kurt_lines = Vec::new();
-    let mut kurt_unphys = 0;
+    let mut kurt_per: Vec<Vec<KurtRow>> = Vec::new();
     for input in &inputs {
         let data = lustre_fit::data::load(input)?;
         let d = data.bsdf.as_ref();
@@ -293,13 +361,14 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         println!("{line}");
         lines.push(line);
         let is_rgl = !input.starts_with("nbrdf:");
-        if kurt_lobes > 0 && (is_rgl || kurt_list.iter().any(|k| k == &data.name)) {
-            let (kl, bad) = kurt_rows(&data.name, d, &amax, kurt_lobes)?;
+        let listed = kurt_list.iter().any(|k| k == &data.name || k == "all");
+        if kurt_lobes > 0 && (is_rgl || listed) {
+            let (kl, rows) = kurt_rows(&data.name, d, &amax, kurt_lobes)?;
             for l in &kl {
                 println!("{l}");
             }
             kurt_lines.extend(kl);
-            kurt_unphys += bad;
+            kurt_per.push(rows);
         }
     }
     let threads = rayon::current_num_threads();
@@ -323,20 +392,22 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
             "- fits whose albedo was capped to stay ≤ 1 (step 5 of ct): SGD {}, Beckmann {}, GGX {}",
             capped[0], capped[1], capped[2]
         ),
-        format!("- SGD fit wall time: median {mw:.3} s, worst {ww:.3} s ({threads} rayon threads, shared machine)"),
+        format!(
+            "- whole run: {:.0} s wall; load average (1, 5, 15 min) at the start {load_start}, at the end {}",
+            run_start.elapsed().as_secs_f64(),
+            load_average()
+        ),
+        format!("- SGD fit wall time: median {mw:.3} s, worst {ww:.3} s ({threads} rayon threads)"),
         format!("- SGD fit CPU time (all threads): median {mc:.2} s, worst {wc:.2} s"),
         format!("- Beckmann CPU: median {mb:.2} s, worst {wb:.2} s; GGX CPU: median {mg:.2} s, worst {wg:.2} s"),
     ];
     if !kurt_lines.is_empty() {
-        summary.push(format!(
-            "- Kurt fits (1..={kurt_lobes} lobes): {} rows, unphysical {kurt_unphys}",
-            kurt_lines.len()
-        ));
+        summary.extend(kurt_summary(&kurt_per, kurt_lobes));
         summary.push(String::new());
         summary.push("## Kurt, 1–3 lobes (raw fit and reported = best of 1..k on Ngan L2)".into());
         summary.push(String::new());
-        summary.push("| material | lobes | Ngan L2 of this fit | reported (best of 1..k) | Eq. 3.7 objective | time (s) | status | unphysical | note |".into());
-        summary.push("|---|---|---|---|---|---|---|---|---|".into());
+        summary.push("| material | lobes | Ngan L2 of this fit | reported (best of 1..k) | Eq. 3.7 objective | wall (s) | CPU (s) | status | unphysical | note |".into());
+        summary.push("|---|---|---|---|---|---|---|---|---|---|".into());
         summary.extend(kurt_lines);
     }
     for s in &summary {

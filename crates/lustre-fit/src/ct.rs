@@ -567,6 +567,8 @@ fn step2(
 struct RefineSet {
     /// (cos θi, cos θo, cos θh, cos θd).
     geo: Vec<[f64; 4]>,
+    /// [`G1Table::coord`] of θi and θo.
+    coord: Vec<[f64; 2]>,
     /// √w of the Ngan quadrature.
     sw: Vec<f64>,
     /// Data per channel.
@@ -590,7 +592,7 @@ impl RefineSet {
             .filter(|p| mask.is_none_or(|m| m.covers(p.wi, p.wo)))
             .collect();
         let vals: Vec<[f64; 3]> = pairs.par_iter().map(|p| data.eval(p.wi, p.wo).0).collect();
-        let geo = pairs
+        let geo: Vec<[f64; 4]> = pairs
             .iter()
             .map(|p| {
                 let h = (p.wi + p.wo).normalize();
@@ -599,6 +601,10 @@ impl RefineSet {
             })
             .collect();
         RefineSet {
+            coord: geo
+                .iter()
+                .map(|g| [G1Table::coord(g[0]), G1Table::coord(g[1])])
+                .collect(),
             geo,
             sw: pairs.iter().map(|p| p.w.sqrt()).collect(),
             m: std::array::from_fn(|c| vals.iter().map(|v| v[c]).collect()),
@@ -621,7 +627,17 @@ fn shadowing_of(kind: Distribution, alpha: f64, p: f64) -> Result<SgdG1> {
 fn spec_factor(d: &Dist, g1: &SgdG1, set: &RefineSet) -> Vec<f64> {
     set.geo
         .iter()
-        .map(|g| d.d(g[2]) * g1_of(d, g1, g[0]) * g1_of(d, g1, g[1]) / (g[0] * g[1]))
+        .zip(&set.coord)
+        .map(|(g, s)| {
+            let (gi, go) = match (d.kind, g1) {
+                // The table at the precomputed coordinates of θi, θo (no logarithm per pair).
+                (Distribution::Sgd, SgdG1::Table(t)) => {
+                    (t.eval_coord(g[0], s[0]), t.eval_coord(g[1], s[1]))
+                }
+                _ => (g1_of(d, g1, g[0]), g1_of(d, g1, g[1])),
+            };
+            d.d(g[2]) * gi * go / (g[0] * g[1])
+        })
         .collect()
 }
 
@@ -679,18 +695,24 @@ fn refine_round(
             (m1 * m1 * m1 * m1 * m1, cd)
         })
         .collect();
-    type Cache = Option<([f64; 2], Vec<f64>)>;
-    let cache: std::sync::Mutex<Cache> = std::sync::Mutex::new(None);
+    // Two entries, most recent first: a forward-difference Jacobian steps α and p away from
+    // the current point and back, so the current point's factor is reused.
+    type Cache = Vec<([f64; 2], Vec<f64>)>;
+    let cache: std::sync::Mutex<Cache> = std::sync::Mutex::new(Vec::with_capacity(2));
     let f = |x: &[f64], r: &mut [f64]| {
         let (rd, a) = (pos_of(x[0]), alpha_of(x[2]));
         let p = if sgd { p_of(x[5]) } else { 0.0 };
         let (rs, f0, f1) = fresnel_of(x[1], x[3], x[4]);
         let mut guard = cache.lock().unwrap_or_else(|e| e.into_inner());
-        let stale = guard.as_ref().is_none_or(|(k, _)| *k != [a, p]);
-        if stale {
-            *guard = Some(([a, p], spec_factor(&Dist::new(kind, a, p), g1, set)));
+        match guard.iter().position(|(k, _)| *k == [a, p]) {
+            Some(0) => {}
+            Some(i) => guard.swap(0, i),
+            None => {
+                guard.truncate(1);
+                guard.insert(0, ([a, p], spec_factor(&Dist::new(kind, a, p), g1, set)));
+            }
         }
-        if let Some((_, sf)) = guard.as_ref() {
+        if let Some((_, sf)) = guard.first() {
             for i in 0..n {
                 let (m5, cd) = basis[i];
                 let fres = rs * fresnel_basis(f0, f1, m5, cd);
@@ -719,13 +741,13 @@ fn refine_round(
     (next, out.ok, out.evals)
 }
 
-/// Steps 1 and 2 for one channel.
+/// Steps 1 and 2 for one channel, as a [`Candidate`] (with the shadowing of its (α, p)).
 fn two_slice(
     input: &str,
     kind: Distribution,
     ch: usize,
     slices: &Slices,
-) -> Result<(CtChannelFit, bool, usize)> {
+) -> Result<(Candidate, usize)> {
     let (s1, ok1, e1) = step1(
         input,
         kind,
@@ -749,7 +771,14 @@ fn two_slice(
         f1,
         g1: None,
     };
-    Ok((c, ok1 && ok2, e1 + e2))
+    Ok((
+        Candidate {
+            c,
+            g1,
+            ok: ok1 && ok2,
+        },
+        e1 + e2,
+    ))
 }
 
 /// A refinement candidate: parameters, the shadowing of its own (α, p), LM success.
@@ -782,10 +811,9 @@ fn fit_channel(
     slices: &Slices,
     sets: Option<(&RefineSet, &RefineSet)>,
 ) -> Result<(CtChannelFit, bool, usize)> {
-    let (c0, ok0, mut evals) = two_slice(input, kind, ch, slices)?;
-    let (mut c, mut g1, mut ok) = (c0, shadowing_of(kind, c0.alpha, c0.p)?, ok0);
+    let (start, mut evals) = two_slice(input, kind, ch, slices)?;
+    let (mut c, mut g1, mut ok) = (start.c, start.g1.clone(), start.ok);
     if let Some((set, select)) = sets {
-        let start = Candidate::new(kind, c0, ok0)?;
         let (refined, e) = start.refine(kind, set, ch)?;
         evals += e;
         let mut cands = vec![start, refined];
@@ -793,8 +821,8 @@ fn fit_channel(
             // A failure here (e.g. a Beckmann α beyond the SGD's range) only drops the candidate.
             let from_beckmann = || -> Result<(Candidate, Candidate, usize)> {
                 let beck = Distribution::Beckmann;
-                let (b0, okb, eb) = two_slice(input, beck, ch, slices)?;
-                let (b1, eb1) = Candidate::new(beck, b0, okb)?.refine(beck, set, ch)?;
+                let (b0, eb) = two_slice(input, beck, ch, slices)?;
+                let (b1, eb1) = b0.refine(beck, set, ch)?;
                 let as_sgd = CtChannelFit {
                     alpha: (b1.c.alpha * b1.c.alpha).clamp(LN_ALPHA.0.exp(), LN_ALPHA.1.exp()),
                     p: 0.0,

@@ -205,18 +205,30 @@ impl G1Table {
     /// G1 at cos θ (0 at and below the horizon, 1 at normal incidence).
     #[inline]
     pub fn eval(&self, cos_theta: f64) -> f64 {
+        self.eval_coord(cos_theta, Self::coord(cos_theta))
+    }
+
+    /// The table's coordinate of cos θ, ln μ with μ = cot θ (it does not depend on the
+    /// distribution): callers evaluating many tables at fixed angles compute it once and use
+    /// [`Self::eval_coord`].
+    #[inline]
+    pub fn coord(cos_theta: f64) -> f64 {
+        let c2 = cos_theta * cos_theta;
+        0.5 * (c2 / (1.0 - c2)).ln()
+    }
+
+    /// G1 at cos θ given its [`Self::coord`] `s` (equal to [`Self::eval`]).
+    #[inline]
+    pub fn eval_coord(&self, cos_theta: f64, s: f64) -> f64 {
         if cos_theta.is_nan() || cos_theta <= 0.0 {
             return 0.0;
         }
         if cos_theta >= 1.0 {
             return 1.0;
         }
-        let c2 = cos_theta * cos_theta;
-        let mu2 = c2 / (1.0 - c2);
-        let s = 0.5 * mu2.ln();
         let u = (s - self.s0) * self.inv_ds;
         if u < 0.0 {
-            let mu = mu2.sqrt();
+            let mu = s.exp();
             let j = self.j_min + self.k_min * (self.mu_min - mu);
             return PI * mu / (PI * mu + j);
         }
@@ -265,6 +277,11 @@ pub struct SgdG1Approx {
 /// Points of the uniform θ grid on [0, π/2] (endpoints included) over which [`SgdG1Approx::fit`]
 /// measures its L2 error.
 pub const FIT_GRID_POINTS: usize = 513;
+
+/// LM patience of the first phase of [`SgdG1Approx::fit`] (every start).
+const G1_FIT_PROBE: usize = 10;
+/// Starts [`SgdG1Approx::fit`] runs to convergence: the best after the first phase.
+const G1_FIT_KEEP: usize = 4;
 
 impl SgdG1Approx {
     /// The approximation with explicit θ0 (λ, c, k finite and > 0; θ0 finite).
@@ -342,21 +359,38 @@ impl SgdG1Approx {
                     .flat_map(move |k| [0.3, 3.0].into_iter().map(move |lam| (t0, k, lam)))
             })
             .collect();
-        let best = starts
+        // Two phases: every start runs a few LM iterations, then only the most promising
+        // [`G1_FIT_KEEP`] run to convergence (most starts fall into the same few basins, and
+        // running all 32 to convergence was 40 % of an SGD fit).
+        let run = |x: Vector3<f64>, patience: usize| {
+            let problem = G1Fit {
+                theta: &theta,
+                target: &target,
+                x,
+            };
+            let (done, _report) = LevenbergMarquardt::new()
+                .with_patience(patience)
+                .minimize(problem);
+            let r = done.rms();
+            r.is_finite().then_some((done.x, r))
+        };
+        let first: Vec<(usize, Vector3<f64>, f64)> = starts
             .par_iter()
             .enumerate()
             .filter_map(|(i, &(t0, k, lam))| {
                 let w = (FRAC_PI_2 - t0).max(1e-4);
-                let problem = G1Fit {
-                    theta: &theta,
-                    target: &target,
-                    x: Vector3::new(f64::ln(lam), w.ln(), f64::ln(k)),
-                };
-                let (done, _report) = LevenbergMarquardt::new()
-                    .with_patience(200)
-                    .minimize(problem);
-                let r = done.rms();
-                r.is_finite().then_some((i, done.x, r))
+                let x = Vector3::new(f64::ln(lam), w.ln(), f64::ln(k));
+                run(x, G1_FIT_PROBE).map(|(x, r)| (i, x, r))
+            })
+            .collect();
+        let mut ranked = first;
+        ranked.sort_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)));
+        ranked.truncate(G1_FIT_KEEP);
+        let best = ranked
+            .par_iter()
+            .filter_map(|&(i, x, r0)| {
+                let (x1, r1) = run(x, 200)?;
+                Some(if r1 <= r0 { (i, x1, r1) } else { (i, x, r0) })
             })
             .reduce_with(|a, b| {
                 if b.2 < a.2 || (b.2 == a.2 && b.0 < a.0) {
@@ -408,35 +442,76 @@ struct G1Fit<'a> {
     x: Vector3<f64>,
 }
 
-impl G1Fit<'_> {
-    /// Model value and its gradient with respect to (ln λ, ln w, ln k).
-    fn model(&self, theta: f64) -> (f64, [f64; 3]) {
-        let (lambda, w, k) = params_of(&self.x);
-        let delta = theta - FRAC_PI_2 + w;
-        if delta.is_nan() || delta <= 0.0 {
-            return (1.0, [0.0; 3]);
+/// The per-parameter constants of [`G1Fit`]'s model, computed once per parameter vector (not
+/// per angle): λ, w, k and l = ln(1 + 1/λ).
+#[derive(Clone, Copy)]
+struct G1Consts {
+    lambda: f64,
+    w: f64,
+    k: f64,
+    l: f64,
+}
+
+impl G1Consts {
+    fn new(x: &Vector3<f64>) -> Self {
+        let (lambda, w, k) = params_of(x);
+        G1Consts {
+            lambda,
+            w,
+            k,
+            l: (1.0 / lambda).ln_1p(),
         }
-        let l = (1.0 / lambda).ln_1p();
-        let ratio = delta / w;
-        let y = ratio.powf(k);
+    }
+
+    /// (ratio = δ/w, ln ratio) at θ, or `None` at and below θ0 (where G1 = 1).
+    #[inline]
+    fn ratio(&self, theta: f64) -> Option<(f64, f64)> {
+        let delta = theta - FRAC_PI_2 + self.w;
+        if delta.is_nan() || delta <= 0.0 {
+            return None;
+        }
+        let ratio = delta / self.w;
+        Some((ratio, ratio.ln()))
+    }
+
+    /// Model value at θ: 1 + λ(1 − exp(l (δ/w)^k)) (Eq. V.3 with c = l/w^k).
+    #[inline]
+    fn value(&self, theta: f64) -> f64 {
+        match self.ratio(theta) {
+            None => 1.0,
+            Some((_, lr)) => {
+                let y = (self.k * lr).exp();
+                1.0 + self.lambda - self.lambda * (self.l * y).exp()
+            }
+        }
+    }
+
+    /// Gradient of the model at θ with respect to (ln λ, ln w, ln k).
+    #[inline]
+    fn gradient(&self, theta: f64) -> [f64; 3] {
+        let Some((ratio, lr)) = self.ratio(theta) else {
+            return [0.0; 3];
+        };
+        let (lambda, w, k, l) = (self.lambda, self.w, self.k, self.l);
+        let delta = ratio * w;
+        let y = (k * lr).exp();
         let q = (l * y).exp();
-        let g = 1.0 + lambda - lambda * q;
         let dg_dlambda = 1.0 - q + q * y / (lambda + 1.0);
         let dg_dy = -lambda * q * l;
         let dy_dw = k * y * (1.0 / delta - 1.0 / w);
-        let dy_dk = y * ratio.ln();
-        (
-            g,
-            [lambda * dg_dlambda, w * dg_dy * dy_dw, k * dg_dy * dy_dk],
-        )
+        let dy_dk = y * lr;
+        [lambda * dg_dlambda, w * dg_dy * dy_dw, k * dg_dy * dy_dk]
     }
+}
 
+impl G1Fit<'_> {
     fn rms(&self) -> f64 {
+        let c = G1Consts::new(&self.x);
         let s: f64 = self
             .theta
             .iter()
             .zip(self.target)
-            .map(|(&t, &g)| (self.model(t).0 - g).powi(2))
+            .map(|(&t, &g)| (c.value(t) - g).powi(2))
             .sum();
         (s / self.theta.len() as f64).sqrt()
     }
@@ -456,11 +531,12 @@ impl LeastSquaresProblem<f64, Dyn, U3> for G1Fit<'_> {
     }
 
     fn residuals(&self) -> Option<Vector<f64, Dyn, Self::ResidualStorage>> {
+        let c = G1Consts::new(&self.x);
         let r: Vec<f64> = self
             .theta
             .iter()
             .zip(self.target)
-            .map(|(&t, &g)| self.model(t).0 - g)
+            .map(|(&t, &g)| c.value(t) - g)
             .collect();
         r.iter()
             .all(|v| v.is_finite())
@@ -470,8 +546,9 @@ impl LeastSquaresProblem<f64, Dyn, U3> for G1Fit<'_> {
     fn jacobian(&self) -> Option<Matrix<f64, Dyn, U3, Self::JacobianStorage>> {
         let n = self.theta.len();
         let mut m = nalgebra::OMatrix::<f64, Dyn, U3>::zeros(n);
+        let c = G1Consts::new(&self.x);
         for (i, &t) in self.theta.iter().enumerate() {
-            let (_, d) = self.model(t);
+            let d = c.gradient(t);
             for (j, v) in d.iter().enumerate() {
                 m[(i, j)] = *v;
             }

@@ -79,6 +79,34 @@ impl PairSet {
         self.weight.len()
     }
 
+    /// Every `k`-th pair (k ≥ 1) with its weight times `k`, so that sums over the subset
+    /// estimate the sums over the whole set (the grid and the mirror patch are thinned alike:
+    /// pairs are stored per incident direction, grid rows then patch rings).
+    pub fn every(&self, k: usize) -> PairSet {
+        let k = k.max(1);
+        fn pick<T: Clone>(v: &[T], k: usize) -> Vec<T> {
+            v.iter().step_by(k).cloned().collect()
+        }
+        PairSet {
+            weight: self
+                .weight
+                .iter()
+                .step_by(k)
+                .map(|w| w * k as f64)
+                .collect(),
+            cos_o: pick(&self.cos_o, k),
+            ln_base: pick(&self.ln_base, k),
+            tx: pick(&self.tx, k),
+            ty: pick(&self.ty, k),
+            ln_cc: pick(&self.ln_cc, k),
+            s5: pick(&self.s5, k),
+            data: std::array::from_fn(|c| pick(&self.data[c], k)),
+            regular: pick(&self.regular, k),
+            wi: pick(&self.wi, k),
+            wo: pick(&self.wo, k),
+        }
+    }
+
     /// Fills `out[t]` with the transfer probability of `lobe` with unit ks at every pair.
     pub fn fill_lobe(&self, lobe: &KurtLobe, kind: LobeKind, out: &mut [f64]) {
         let c = LobeConst::new(lobe, kind);
@@ -133,6 +161,16 @@ pub(crate) struct Samples {
     pub refl: PairSet,
     /// Transmission pairs (ωo below; stored mirrored). Empty unless transmission is fitted.
     pub trans: PairSet,
+}
+
+impl Samples {
+    /// Both hemispheres thinned by [`PairSet::every`].
+    pub fn every(&self, k: usize) -> Samples {
+        Samples {
+            refl: self.refl.every(k),
+            trans: self.trans.every(k),
+        }
+    }
 }
 
 /// Incident directions of the set.
