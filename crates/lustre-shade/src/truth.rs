@@ -157,15 +157,15 @@ impl<'a> TexelTree<'a> {
                                     let o = omega[cj * n + ci];
                                     let d = CubeMap::texel_dir(n, face, ci, cj);
                                     let ll = (l[0] as f64 + l[1] as f64 + l[2] as f64) / 3.0;
-                                    for c in 0..3 {
-                                        s[c] += l[c] as f64 * o;
+                                    for (sc, lc) in s.iter_mut().zip(l) {
+                                        *sc += lc as f64 * o;
                                     }
                                     lum += ll * o;
                                     m += d * (ll * o);
                                 } else {
                                     let b = levels[k - 1][(face * prev + cj) * prev + ci];
-                                    for c in 0..3 {
-                                        s[c] += b.s[c] as f64;
+                                    for (sc, bc) in s.iter_mut().zip(b.s) {
+                                        *sc += bc as f64;
                                     }
                                     lum += b.lum as f64;
                                     m += DVec3::new(b.m[0] as f64, b.m[1] as f64, b.m[2] as f64);
