@@ -23,7 +23,8 @@
 //! plane (their square-root ratio = elongation), against the truth's.
 //!
 //! Run: `cargo run --release -p lustre-shade --example truth_study -- [--face 256]
-//! [--configs 200] [--mc 1024] [--maps a.hdr,b.exr] [--spot] [--out FILE.md]`.
+//! [--configs 200] [--mc 1024] [--maps a.hdr,b.exr] [--materials "iso m 0.1,iso m 0.25"]
+//! [--spot] [--out FILE.md]`.
 
 use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
@@ -236,6 +237,43 @@ fn study(
                 .join(" | ")
         );
     }
+    // The configurations that dominate the lattice's error at θo 60–80°: where the brightest
+    // texel (the sun, on maps with one) lies relative to the lobe and the tangent plane.
+    let sun = brightest(base);
+    let lat = 2;
+    let mut grazing: Vec<(f64, usize)> = rows
+        .iter()
+        .zip(configs)
+        .enumerate()
+        .filter(|(_, (_, c))| c.theta_o_deg >= 60.0 && c.theta_o_deg < 80.0)
+        .map(|(k, ((t, est), _))| {
+            let e = est[lat].0;
+            ((0..3).map(|ch| (e[ch] - t[ch]).powi(2)).sum::<f64>(), k)
+        })
+        .collect();
+    grazing.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let total: f64 = grazing.iter().map(|g| g.0).sum();
+    let _ = writeln!(
+        md,
+        "\nLargest lattice errors at θo 60–80° (share of the bin's squared error; brightest texel: elevation above the tangent plane, angle from the lobe's mirror direction):\n\n| θo | share % | elevation | from mirror | truth | lattice | regular 002 |\n|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    for &(e2, k) in grazing.iter().take(3) {
+        let c = &configs[k];
+        let wo_l = c.frame.to_local(c.wo);
+        let mirror = c.frame.to_world(DVec3::new(-wo_l.x, -wo_l.y, wo_l.z));
+        let (t, est) = &rows[k];
+        let _ = writeln!(
+            md,
+            "| {:.1}° | {:.0} | {:.1}° | {:.1}° | {:.4} | {:.4} | {:.4} |",
+            c.theta_o_deg,
+            100.0 * e2 / total.max(1e-300),
+            c.frame.n.dot(sun).clamp(-1.0, 1.0).asin().to_degrees(),
+            mirror.dot(sun).clamp(-1.0, 1.0).acos().to_degrees(),
+            t.mean(),
+            est[lat].0.mean(),
+            est[0].0.mean()
+        );
+    }
     summary.push((map_name.into(), m.name.into(), rels, low, high));
     eprintln!(
         "{map_name} {}: {:.1} s, rel RMS % {:?}",
@@ -244,6 +282,21 @@ fn study(
         rels.map(|r| (1000.0 * r).round() / 10.0)
     );
     Ok(())
+}
+
+/// The direction of the brightest texel of `map` (channel mean).
+fn brightest(map: &CubeMap) -> DVec3 {
+    let n = map.size;
+    let mut best = (f32::MIN, DVec3::Z);
+    for (face, texels) in map.faces.iter().enumerate() {
+        for (k, l) in texels.iter().enumerate() {
+            let v = l[0] + l[1] + l[2];
+            if v > best.0 {
+                best = (v, CubeMap::texel_dir(n, face, k % n, k / n));
+            }
+        }
+    }
+    best.1
 }
 
 /// A rotation taking local directions to world ones such that local `l` lands on world `s`:
@@ -399,6 +452,12 @@ fn main() -> Res<()> {
         material("aniso 0.08 / 0.3", 0.08, 0.3, 15)?,
         material("iso m 0.25", 0.25, 0.25, 19)?,
     ];
+    // --materials "iso m 0.1,aniso 0.2 / 0.075": a subset by name (all by default).
+    let only: Vec<String> = arg(&args, "--materials", String::new())
+        .split(',')
+        .filter(|s| !s.is_empty())
+        .map(str::to_string)
+        .collect();
     let configs = configurations(n_configs, 85.0, seed);
     let mut md = format!(
         "# Truth harness\n\n- {n_configs} configurations (seed {seed}), θo uniform in [0°, 85°); cube faces {face}², Gaussian 6×6 pyramid; truth = Σ over all {} level-0 texels of L · ∫texel f cos θi dω (exact texel solid angles, supersampled where the lobe is narrow)\n- MC = `shade_reference` with {mc} samples on level 0; every other method with the budget in the heading\n- lookups = filtered pyramid lookups per configuration (samples below the horizon make none)\n",
@@ -418,7 +477,10 @@ fn main() -> Res<()> {
         };
         eprintln!("{map}: loaded in {:.1} s", t0.elapsed().as_secs_f64());
         let _ = writeln!(md, "\n## {map}");
-        for m in &materials {
+        for m in materials
+            .iter()
+            .filter(|m| only.iter().any(|o| m.name == o.as_str()) || only.is_empty())
+        {
             study(map, m, &env, &configs, mc, &mut md, &mut summary)?;
         }
     }

@@ -11,16 +11,19 @@
 //!   reports PSNR against a converged QMC reference. The thesis does not list the four materials'
 //!   parameters: the Kurt parameters below are our choice for those names.
 //!
-//! The runner ([`run`]) renders, per material, one reference image (Monte Carlo on MIP level 0,
-//! BSDF and environment importance sampling combined by MIS, `reference_spp` iterations per
-//! pixel, as two independent halves whose
-//! difference estimates the reference's own noise), then per sample count the regular images (one
-//! per method: 002's printed pattern, reach 1, ours = the row lattice) and a CK image, and
-//! measures RMS (linear), PSNR and ΔE (display values) against the reference, the wall time of
-//! each image and the filtered lookups each method actually made per pixel (mean and largest;
-//! never more than the budget per lobe). It writes PNGs, false-colour differences (002 Fig. 9
-//! style) and a Markdown table. Where a distant environment is the only light, the exact answer
-//! is `crate::truth` (`examples/truth_study.rs`).
+//! The runner ([`run`]) renders, per material, the reference image ([`ReferenceKind`]): by
+//! default the exact integral over every level-0 texel ([`truth::TexelTree`]: the evaluation
+//! sphere is lit by the distant map only, so this is the answer, with no Monte-Carlo noise; its
+//! quadrature error is measured against the full texel sum [`truth::truth`] on a few pixels),
+//! and beside it, when `reference_spp ≥ 2`, the Monte-Carlo reference (level 0, BSDF and
+//! environment importance sampling combined by MIS, two independent halves whose difference
+//! estimates its noise); or the MIS image alone as the reference. Then per sample count the
+//! regular images (one per method: 002's printed pattern, reach 1, ours = the row lattice) and
+//! a CK image, and measures RMS (linear), PSNR and ΔE (display values) against the reference,
+//! the reference's own error over that RMS, the RMS and PSNR against the MIS image, the wall
+//! time of each image and the filtered lookups each method actually made per pixel (mean and
+//! largest; never more than the budget per lobe). It writes PNGs, false-colour differences
+//! (002 Fig. 9 style) and a Markdown table.
 
 use crate::image::Image;
 use crate::kernel::{self, Environment, Weighting};
@@ -28,6 +31,7 @@ use crate::metrics;
 use crate::pattern::ConcentricOptions;
 use crate::render::render_with_progress;
 use crate::scene::{Camera, Hit, Plane, Scene, Sphere};
+use crate::truth;
 use crate::{Result, ShadeError};
 use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
@@ -498,12 +502,35 @@ pub fn render_reference_with(
     )
 }
 
+/// How the reference image of a run is computed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ReferenceKind {
+    /// The exact integral over every level-0 texel ([`truth::TexelTree::integrate`] with this
+    /// absolute tolerance; the sphere scenes are lit by the distant map only, so this is the
+    /// answer). Its own error is measured on `check_pixels` sphere pixels against the full
+    /// texel sum ([`truth::truth`]) and reported as the reference row's RMS.
+    Exact {
+        /// Absolute tolerance per block (radiance units), see [`truth::TexelTree::integrate`].
+        tolerance: f64,
+        /// Sphere pixels checked against the full texel sum (spread over the image).
+        check_pixels: usize,
+    },
+    /// Monte Carlo with MIS ([`render_reference_with`]), `reference_spp` iterations in two
+    /// halves; its RMS row is the noise estimated from the halves.
+    Mis,
+}
+
 /// Run options.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HarnessOptions {
     /// Image width and height in pixels (square images).
     pub size: usize,
-    /// Reference samples per pixel (002 uses > 10,000).
+    /// The reference the methods are measured against.
+    pub reference: ReferenceKind,
+    /// Samples per pixel of the Monte-Carlo (MIS) reference (002 uses > 10,000). With
+    /// [`ReferenceKind::Exact`] the MIS image is rendered too when this is ≥ 2, and reported
+    /// beside the exact one (its noise from two halves, its error against the exact answer,
+    /// every method's RMS and PSNR against it); 0 skips it.
     pub reference_spp: usize,
     /// Exposure of the PNGs, PSNR and ΔE (display = clamp(exposure · linear), sRGB).
     pub exposure: f64,
@@ -514,10 +541,15 @@ pub struct HarnessOptions {
 }
 
 impl Default for HarnessOptions {
-    /// 160² images, 10,240 reference samples per pixel, exposure 1, ramp ±0.5 (002 Fig. 9).
+    /// 160² images, the exact reference (tolerance 1e-6, 32 pixels checked) with a 10,240-sample
+    /// MIS reference beside it, exposure 1, ramp ±0.5 (002 Fig. 9).
     fn default() -> Self {
         HarnessOptions {
             size: 160,
+            reference: ReferenceKind::Exact {
+                tolerance: 1e-6,
+                check_pixels: 32,
+            },
             reference_spp: 10_240,
             exposure: 1.0,
             diff_range: 0.5,
@@ -546,9 +578,16 @@ pub struct Row {
     pub delta_e: f64,
     /// Wall time of the image in seconds.
     pub seconds: f64,
-    /// Filtered lookups per shaded (hit) pixel: mean and largest (the reference's level-0
-    /// lookups are its samples per pixel).
+    /// Filtered lookups per shaded (hit) pixel: mean and largest (the MIS reference's level-0
+    /// lookups are its samples per pixel, the exact reference's its BSDF evaluations).
     pub lookups: (f64, usize),
+    /// The own error of the reference this row is measured against (RMS: the exact
+    /// reference's quadrature error on the checked pixels, or the MIS reference's noise), so
+    /// that `reference_error / rms` shows whether the reference can judge the row.
+    pub reference_error: f64,
+    /// RMS and PSNR against the MIS reference when it is rendered beside the exact one (for
+    /// the MIS row itself: its noise from the two halves, and no PSNR).
+    pub vs_mis: Option<(f64, f64)>,
     /// The PNG written for the image, relative to the output directory (empty without output).
     pub file: String,
 }
@@ -575,7 +614,7 @@ impl Report {
                 last = r.experiment.clone();
                 let _ = write!(
                     s,
-                    "\n## Experiment {last}\n\n| material | n | method | lookups mean / max | RMS | PSNR (dB) | ΔE | time (s) | image |\n|---|---:|---|---:|---:|---:|---:|---:|---|\n"
+                    "\n## Experiment {last}\n\n| material | n | method | lookups mean / max | RMS | ref. error ÷ RMS | PSNR (dB) | ΔE | time (s) | vs MIS: RMS, PSNR (dB) | image |\n|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|\n"
                 );
             }
             let psnr = if r.psnr.is_finite() {
@@ -583,15 +622,29 @@ impl Report {
             } else {
                 "—".into()
             };
+            let ratio = if r.rms > 0.0 && r.method != "reference (exact)" {
+                format!("{:.4}", r.reference_error / r.rms)
+            } else {
+                "—".into()
+            };
+            let rms = if r.rms > 0.0 && r.rms < 1e-4 {
+                format!("{:.1e}", r.rms)
+            } else {
+                format!("{:.5}", r.rms)
+            };
+            let mis = match r.vs_mis {
+                Some((rms, p)) if p.is_finite() => format!("{rms:.5}, {p:.2}"),
+                Some((noise, _)) => format!("noise {noise:.5}"),
+                None => "—".into(),
+            };
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {:.1} / {} | {:.5} | {} | {:.3} | {:.3} | {} |",
+                "| {} | {} | {} | {:.1} / {} | {rms} | {ratio} | {} | {:.3} | {:.3} | {mis} | {} |",
                 r.material,
                 r.samples,
                 r.method,
                 r.lookups.0,
                 r.lookups.1,
-                r.rms,
                 psnr,
                 r.delta_e,
                 r.seconds,
@@ -643,6 +696,43 @@ impl LookupCount {
 /// What the runner reports while it works: a stage label, rows done and rows in the image.
 pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
 
+/// The exact reference's own error: RMS over `count` sphere pixels (spread evenly over the
+/// hit pixels of the n×n image) and channels of [`truth::TexelTree::integrate`] at `tolerance`
+/// against the full texel sum [`truth::truth`] (with [`truth::supersampling`]). 0 when
+/// `count` is 0 or nothing is hit.
+fn exact_check(
+    scene: &Scene,
+    tree: &truth::TexelTree,
+    kurt: &Kurt,
+    tolerance: f64,
+    n: usize,
+    count: usize,
+) -> f64 {
+    use rayon::prelude::*;
+    let hits: Vec<Hit> = (0..n * n)
+        .filter_map(|k| {
+            let (o, d) = scene.primary(k % n, k / n, n, n);
+            scene.intersect(o, d)
+        })
+        .collect();
+    if count == 0 || hits.is_empty() {
+        return 0.0;
+    }
+    let stride = (hits.len() / count).max(1);
+    let picked: Vec<&Hit> = hits.iter().step_by(stride).take(count).collect();
+    let map = tree.map();
+    let sq: f64 = picked
+        .par_iter()
+        .map(|hit| {
+            let s = truth::supersampling(kurt, hit.frame.to_local(hit.wo), map.size);
+            let t = truth::truth(map, &hit.frame, hit.wo, kurt, s);
+            let (a, _) = tree.integrate(&hit.frame, hit.wo, kurt, tolerance);
+            (0..3).map(|c| (a[c] - t[c]).powi(2)).sum::<f64>()
+        })
+        .sum();
+    (sq / (3 * picked.len()) as f64).sqrt()
+}
+
 /// Runs `experiments` on `env` with `opts`; writes images and `compare.md` into `out` when given
 /// (the directory is created). Every image is timed; see the module docs for what is measured.
 pub fn run(
@@ -652,11 +742,18 @@ pub fn run(
     out: Option<&Path>,
     progress: Progress,
 ) -> Result<Report> {
-    if opts.size == 0 || opts.reference_spp < 2 {
+    if opts.size == 0 || (opts.reference == ReferenceKind::Mis && opts.reference_spp < 2) {
         return Err(ShadeError::Parameter(format!(
-            "harness: size {} must be > 0 and reference_spp {} ≥ 2",
+            "harness: size {} must be > 0 and reference_spp {} ≥ 2 for the MIS reference",
             opts.size, opts.reference_spp
         )));
+    }
+    if let ReferenceKind::Exact { tolerance, .. } = opts.reference {
+        if !(tolerance >= 0.0 && tolerance.is_finite()) {
+            return Err(ShadeError::Parameter(format!(
+                "harness: exact-reference tolerance {tolerance} must be finite and ≥ 0"
+            )));
+        }
     }
     if !(opts.exposure > 0.0 && opts.exposure.is_finite()) {
         return Err(ShadeError::Parameter(format!(
@@ -672,13 +769,28 @@ pub fn run(
     }
     let n = opts.size;
     let sampler = kernel::env_sampler(env.pyramid)?;
+    let tree = match opts.reference {
+        ReferenceKind::Exact { .. } => Some(truth::TexelTree::new(&env.pyramid.levels[0])),
+        ReferenceKind::Mis => None,
+    };
     let mut report = Report {
         rows: vec![],
         notes: vec![
-            format!(
-                "{n}×{n} images; reference: Monte Carlo on MIP level 0, BSDF + environment importance sampling with MIS (power heuristic), {} iterations per pixel (two independent halves; its RMS row is the estimated noise of their mean)",
-                opts.reference_spp
-            ),
+            match opts.reference {
+                ReferenceKind::Exact { tolerance, check_pixels } => format!(
+                    "{n}×{n} images; reference: the exact integral ∫ L f |cos θi| dω over every level-0 texel (piecewise-constant texels, exact solid angles; `truth::TexelTree`, adaptive block sums, absolute tolerance {tolerance:e} per block); its RMS row is its measured error against the full texel sum (`truth::truth`) on {check_pixels} sphere pixels; lookups of the exact row = BSDF evaluations per pixel{}",
+                    if opts.reference_spp >= 2 {
+                        format!("; beside it the Monte-Carlo reference (MIS, level 0 bilinear, {} iterations per pixel in two independent halves; its noise = RMS of the halves' difference / 2), and every method's RMS / PSNR against that MIS image", opts.reference_spp)
+                    } else {
+                        String::new()
+                    }
+                ),
+                ReferenceKind::Mis => format!(
+                    "{n}×{n} images; reference: Monte Carlo on MIP level 0, BSDF + environment importance sampling with MIS (power heuristic), {} iterations per pixel (two independent halves; its RMS row is the estimated noise of their mean)",
+                    opts.reference_spp
+                ),
+            },
+            "ref. error ÷ RMS: the reference's own error (exact: quadrature error; MIS: noise) over the row's RMS; ≤ 0.1 means the reference can judge the row".to_string(),
             format!(
                 "environment: {}² faces, {} MIP levels ({:?} filter); RMS on linear radiance of the whole image; PSNR and ΔE on display values (exposure {}, sRGB, peak 1)",
                 env.pyramid.base_size(),
@@ -703,49 +815,138 @@ pub fn run(
             let scene = evaluation_scene(case.kurt.clone());
             scene.validate()?;
             let stem = format!("{}_{}", exp.id, case.name);
-            // Reference in two independent halves (their mean is the reference, their difference
-            // estimates its noise: RMS(mean − truth) ≈ RMS(a − b)/2).
-            let half = opts.reference_spp / 2;
-            let label = format!("{stem} reference");
-            let t0 = Instant::now();
-            let a = render_reference_with(&scene, env, &sampler, n, n, half, opts.seed, &|r| {
-                progress(&label, r, 2 * n)
-            });
-            let b = render_reference_with(
-                &scene,
-                env,
-                &sampler,
-                n,
-                n,
-                opts.reference_spp - half,
-                opts.seed.wrapping_add(0x5851_F42D_4C95_7F2D),
-                &|r| progress(&label, n + r, 2 * n),
-            );
-            let seconds = t0.elapsed().as_secs_f64();
-            let noise = metrics::rms(&a, &b)? / 2.0;
-            let reference = Image {
-                width: n,
-                height: n,
-                data: a
-                    .data
-                    .iter()
-                    .zip(&b.data)
-                    .map(|(p, q)| [0, 1, 2].map(|c| 0.5 * (p[c] + q[c])))
-                    .collect(),
+            let kurt = &scene.materials[0];
+            // The MIS reference in two independent halves (their mean is the reference, their
+            // difference estimates its noise: RMS(mean − truth) ≈ RMS(a − b)/2).
+            let mis = if opts.reference == ReferenceKind::Mis || opts.reference_spp >= 2 {
+                let half = opts.reference_spp / 2;
+                let label = format!("{stem} MIS reference");
+                let t0 = Instant::now();
+                let a = render_reference_with(&scene, env, &sampler, n, n, half, opts.seed, &|r| {
+                    progress(&label, r, 2 * n)
+                });
+                let b = render_reference_with(
+                    &scene,
+                    env,
+                    &sampler,
+                    n,
+                    n,
+                    opts.reference_spp - half,
+                    opts.seed.wrapping_add(0x5851_F42D_4C95_7F2D),
+                    &|r| progress(&label, n + r, 2 * n),
+                );
+                let seconds = t0.elapsed().as_secs_f64();
+                let noise = metrics::rms(&a, &b)? / 2.0;
+                let image = Image {
+                    width: n,
+                    height: n,
+                    data: a
+                        .data
+                        .iter()
+                        .zip(&b.data)
+                        .map(|(p, q)| [0, 1, 2].map(|c| 0.5 * (p[c] + q[c])))
+                        .collect(),
+                };
+                Some((image, noise, seconds))
+            } else {
+                None
             };
-            let file = save(&reference, &format!("{stem}_reference"))?;
-            report.rows.push(Row {
-                experiment: exp.id.clone(),
-                material: case.name.clone(),
-                samples: opts.reference_spp,
-                method: "reference".into(),
-                rms: noise,
-                psnr: f64::INFINITY,
-                delta_e: 0.0,
-                seconds,
-                lookups: (opts.reference_spp as f64, opts.reference_spp),
-                file,
-            });
+            let (reference, reference_error, mis_image) = match (opts.reference, mis) {
+                (
+                    ReferenceKind::Exact {
+                        tolerance,
+                        check_pixels,
+                    },
+                    mis,
+                ) => {
+                    let tree = tree.as_ref().ok_or_else(|| {
+                        ShadeError::Parameter(
+                            "harness: no texel tree for the exact reference".into(),
+                        )
+                    })?;
+                    let label = format!("{stem} exact reference");
+                    let count = LookupCount::default();
+                    let t0 = Instant::now();
+                    let exact = render_with_progress(
+                        &scene,
+                        n,
+                        n,
+                        |hit| {
+                            let (c, st) = tree.integrate(&hit.frame, hit.wo, kurt, tolerance);
+                            count.add((c, st.evals))
+                        },
+                        background(env),
+                        &|r| progress(&label, r, n),
+                    );
+                    let seconds = t0.elapsed().as_secs_f64();
+                    let t1 = Instant::now();
+                    let error = exact_check(&scene, tree, kurt, tolerance, n, check_pixels);
+                    let check_seconds = t1.elapsed().as_secs_f64();
+                    let file = save(&exact, &format!("{stem}_reference"))?;
+                    report.rows.push(Row {
+                        experiment: exp.id.clone(),
+                        material: case.name.clone(),
+                        samples: 0,
+                        method: "reference (exact)".into(),
+                        rms: error,
+                        psnr: f64::INFINITY,
+                        delta_e: 0.0,
+                        seconds,
+                        lookups: count.summary(),
+                        reference_error: error,
+                        vs_mis: None,
+                        file,
+                    });
+                    report.notes.push(format!(
+                        "{stem}: exact reference {seconds:.1} s; its check against the full texel sum on {check_pixels} sphere pixels took {check_seconds:.1} s"
+                    ));
+                    let mis_image = match mis {
+                        Some((img, noise, seconds)) => {
+                            let file = save(&img, &format!("{stem}_reference-mis"))?;
+                            report.rows.push(Row {
+                                experiment: exp.id.clone(),
+                                material: case.name.clone(),
+                                samples: opts.reference_spp,
+                                method: "reference (MIS)".into(),
+                                rms: metrics::rms(&img, &exact)?,
+                                psnr: metrics::psnr(&img, &exact, opts.exposure)?,
+                                delta_e: metrics::delta_e(&img, &exact, opts.exposure)?,
+                                seconds,
+                                lookups: (opts.reference_spp as f64, opts.reference_spp),
+                                reference_error: error,
+                                vs_mis: Some((noise, f64::NAN)),
+                                file,
+                            });
+                            Some(img)
+                        }
+                        None => None,
+                    };
+                    (exact, error, mis_image)
+                }
+                (ReferenceKind::Mis, Some((img, noise, seconds))) => {
+                    let file = save(&img, &format!("{stem}_reference"))?;
+                    report.rows.push(Row {
+                        experiment: exp.id.clone(),
+                        material: case.name.clone(),
+                        samples: opts.reference_spp,
+                        method: "reference (MIS)".into(),
+                        rms: noise,
+                        psnr: f64::INFINITY,
+                        delta_e: 0.0,
+                        seconds,
+                        lookups: (opts.reference_spp as f64, opts.reference_spp),
+                        reference_error: noise,
+                        vs_mis: None,
+                        file,
+                    });
+                    (img, noise, None)
+                }
+                (ReferenceKind::Mis, None) => {
+                    return Err(ShadeError::Parameter(
+                        "harness: the MIS reference needs reference_spp ≥ 2".into(),
+                    ))
+                }
+            };
             for setting in &case.settings {
                 let mut images: Vec<Rendered> = vec![];
                 for m in &exp.methods {
@@ -772,7 +973,6 @@ pub fn run(
                 let label = format!("{stem} n={} CK", setting.samples);
                 let count = LookupCount::default();
                 let t0 = Instant::now();
-                let kurt = &scene.materials[0];
                 let img = render_with_progress(
                     &scene,
                     n,
@@ -811,6 +1011,14 @@ pub fn run(
                         delta_e: metrics::delta_e(&img, &reference, opts.exposure)?,
                         seconds,
                         lookups,
+                        reference_error,
+                        vs_mis: match &mis_image {
+                            Some(m) => Some((
+                                metrics::rms(&img, m)?,
+                                metrics::psnr(&img, m, opts.exposure)?,
+                            )),
+                            None => None,
+                        },
                         file,
                     });
                 }

@@ -8,6 +8,12 @@
 //! weighted by its own exact solid angle ([`supersampling`] picks S). No Monte-Carlo noise: the
 //! only error is the variation of f cos θi inside a (sub-)texel, which [`truth`]'s tests bound.
 //!
+//! [`TexelTree`] gives the same sum fast for images: exact block sums (Σ L Ω and the radiance
+//! centroid per 2^k × 2^k block) are accepted whole where f |cos θi| is nearly linear over the
+//! block and refined down to single texels elsewhere (near the lobe peaks always), so a 1024²
+//! cube costs ≈ 3·10⁴ BSDF evaluations per pixel instead of 6.3 million; its tests and
+//! `lustre compare` measure its difference to [`truth`].
+//!
 //! [`configurations`] draws the seeded shading configurations (normal, tangent, view) the truth
 //! harness (`examples/truth_study.rs`) measures every method on.
 
@@ -90,6 +96,233 @@ pub fn supersampling(kurt: &Kurt, wo_local: DVec3, face_size: usize) -> usize {
         (s as usize).clamp(1, MAX_SUPERSAMPLING)
     } else {
         MAX_SUPERSAMPLING
+    }
+}
+
+/// Face blocks at the coarsest level of a [`TexelTree`] (per face edge, at most).
+const TREE_TOP_BLOCKS: usize = 8;
+
+/// One block of a [`TexelTree`] level: the exact sums over its level-0 texels.
+#[derive(Clone, Copy, Debug, Default)]
+struct Block {
+    /// Σ L_c Ω per channel (W/sr·sr = the block's radiant contribution to a constant f).
+    s: [f32; 3],
+    /// Σ ℓ Ω d, ℓ = the channel mean of L, d the unit texel direction (the block's centroid
+    /// direction, weighted by radiance, unnormalized).
+    m: [f32; 3],
+    /// Σ ℓ Ω.
+    lum: f32,
+}
+
+/// Exact block sums of a cube map's level 0 for [`TexelTree::integrate`]: level k ≥ 1 holds,
+/// per face, ⌈N/2^k⌉² blocks of 2^k × 2^k texels with Σ L Ω (per channel), Σ ℓ Ω and the
+/// radiance-weighted centroid direction Σ ℓ Ω d; level 0 is the map itself with the exact texel
+/// solid angles. Built once per map (sums in f64, stored in f32).
+#[derive(Clone, Debug)]
+pub struct TexelTree<'a> {
+    map: &'a CubeMap,
+    omega: Vec<f64>,
+    levels: Vec<Vec<Block>>,
+}
+
+/// What one [`TexelTree::integrate`] call cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TreeStats {
+    /// BSDF evaluations.
+    pub evals: usize,
+    /// Level-0 texels summed one by one.
+    pub texels: usize,
+}
+
+impl<'a> TexelTree<'a> {
+    /// The tree of `map` (any face size).
+    pub fn new(map: &'a CubeMap) -> Self {
+        let n = map.size;
+        let omega = lustre_env::cube::solid_angle_table(n);
+        let mut levels: Vec<Vec<Block>> = vec![vec![]];
+        // Level 1 from the texels, then each level from the one below.
+        let mut k = 1;
+        loop {
+            let nk = n.div_ceil(1 << k);
+            let prev = n.div_ceil(1 << (k - 1));
+            let mut blocks = vec![Block::default(); 6 * nk * nk];
+            for face in 0..6 {
+                for bj in 0..nk {
+                    for bi in 0..nk {
+                        let (mut s, mut m, mut lum) = ([0.0f64; 3], DVec3::ZERO, 0.0f64);
+                        for cj in 2 * bj..(2 * bj + 2).min(prev) {
+                            for ci in 2 * bi..(2 * bi + 2).min(prev) {
+                                if k == 1 {
+                                    let l = map.faces[face][cj * n + ci];
+                                    let o = omega[cj * n + ci];
+                                    let d = CubeMap::texel_dir(n, face, ci, cj);
+                                    let ll = (l[0] as f64 + l[1] as f64 + l[2] as f64) / 3.0;
+                                    for (sc, lc) in s.iter_mut().zip(l) {
+                                        *sc += lc as f64 * o;
+                                    }
+                                    lum += ll * o;
+                                    m += d * (ll * o);
+                                } else {
+                                    let b = levels[k - 1][(face * prev + cj) * prev + ci];
+                                    for (sc, bc) in s.iter_mut().zip(b.s) {
+                                        *sc += bc as f64;
+                                    }
+                                    lum += b.lum as f64;
+                                    m += DVec3::new(b.m[0] as f64, b.m[1] as f64, b.m[2] as f64);
+                                }
+                            }
+                        }
+                        blocks[(face * nk + bj) * nk + bi] = Block {
+                            s: s.map(|v| v as f32),
+                            m: [m.x as f32, m.y as f32, m.z as f32],
+                            lum: lum as f32,
+                        };
+                    }
+                }
+            }
+            levels.push(blocks);
+            if nk <= TREE_TOP_BLOCKS {
+                break;
+            }
+            k += 1;
+        }
+        TexelTree { map, omega, levels }
+    }
+
+    /// The map the tree sums.
+    pub fn map(&self) -> &CubeMap {
+        self.map
+    }
+
+    /// ∫ L f |cos θi| dω of the Kurt material `kurt` for `frame` and the world direction to the
+    /// viewer `wo`, by adaptive refinement of the block sums: a block is accepted as
+    /// S · g(c) (S its exact Σ L Ω, g = f |cos θi| at its radiance centroid c, exact for g linear
+    /// over the block) when ℓ-sum × max |g(corner) − g(c)| ≤ `tolerance` (absolute, radiance
+    /// units) and it is not within 3 lobe widths of a lobe's peak direction (where it is always
+    /// split until it is 4 times narrower than the lobe); otherwise its four children are
+    /// visited. Level-0 texels are summed as [`truth`] does with [`supersampling`], so as the
+    /// tolerance goes to 0 the result goes to [`truth`]'s (blocks where g is exactly constant at
+    /// all five points, e.g. below the horizon, are still accepted whole). Returns the value and
+    /// the work done.
+    pub fn integrate(
+        &self,
+        frame: &ShadingFrame,
+        wo: DVec3,
+        kurt: &Kurt,
+        tolerance: f64,
+    ) -> (Rgb, TreeStats) {
+        let n = self.map.size;
+        let wo_l = frame.to_local(wo);
+        let mut stats = TreeStats::default();
+        let g = |d: DVec3, st: &mut TreeStats| -> Rgb {
+            st.evals += 1;
+            let wi = frame.to_local(d);
+            kurt.eval(wi, wo_l) * wi.z.abs()
+        };
+        // Lobe peaks (world) and their narrowest angular width in ωi.
+        let cos_o = wo_l.z.abs().max(0.05);
+        let mirror = frame.to_world(DVec3::new(-wo_l.x, -wo_l.y, wo_l.z));
+        let peaks: Vec<(DVec3, f64)> = kurt
+            .reflection
+            .iter()
+            .map(|l| (mirror, 2.0 * l.mx.min(l.my) * cos_o))
+            .chain(
+                kurt.transmission
+                    .iter()
+                    .map(|l| (-wo, 2.0 * l.mx.min(l.my) * cos_o)),
+            )
+            .collect();
+        let ss = supersampling(kurt, wo_l, n);
+        let step = 2.0 / n as f64;
+        let sub = step / ss as f64;
+        let top = self.levels.len() - 1;
+        let nt = n.div_ceil(1 << top);
+        let mut stack: Vec<(usize, usize, usize, usize)> = Vec::with_capacity(256);
+        for face in 0..6 {
+            for bj in 0..nt {
+                for bi in 0..nt {
+                    stack.push((top, face, bi, bj));
+                }
+            }
+        }
+        let mut total = Rgb::ZERO;
+        while let Some((k, face, bi, bj)) = stack.pop() {
+            if k == 0 {
+                let l = self.map.faces[face][bj * n + bi];
+                if l == [0.0; 3] {
+                    continue;
+                }
+                stats.texels += 1;
+                let lr = Rgb([l[0] as f64, l[1] as f64, l[2] as f64]);
+                if ss == 1 {
+                    let d = CubeMap::texel_dir(n, face, bi, bj);
+                    total += lr * g(d, &mut stats) * self.omega[bj * n + bi];
+                } else {
+                    let (x0, y0) = (-1.0 + bi as f64 * step, -1.0 + bj as f64 * step);
+                    let mut acc = Rgb::ZERO;
+                    for b in 0..ss {
+                        let ya = y0 + b as f64 * sub;
+                        for a in 0..ss {
+                            let xa = x0 + a as f64 * sub;
+                            let o = rect_solid_angle(xa, xa + sub, ya, ya + sub);
+                            let d = face_point(face, xa + 0.5 * sub, ya + 0.5 * sub).normalize();
+                            acc += g(d, &mut stats) * o;
+                        }
+                    }
+                    total += lr * acc;
+                }
+                continue;
+            }
+            let nk = n.div_ceil(1 << k);
+            let b = self.levels[k][(face * nk + bj) * nk + bi];
+            if b.lum <= 0.0 {
+                continue;
+            }
+            let w = (1usize << k) as f64 * step;
+            let x0 = -1.0 + bi as f64 * w;
+            let y0 = -1.0 + bj as f64 * w;
+            let x1 = (x0 + w).min(1.0);
+            let y1 = (y0 + w).min(1.0);
+            let corners = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)]
+                .map(|(x, y)| face_point(face, x, y).normalize());
+            let centre = face_point(face, 0.5 * (x0 + x1), 0.5 * (y0 + y1)).normalize();
+            let radius = corners
+                .iter()
+                .map(|c| c.dot(centre).clamp(-1.0, 1.0).acos())
+                .fold(0.0, f64::max);
+            let near_peak = peaks.iter().any(|&(p, width)| {
+                radius > 0.25 * width
+                    && p.dot(centre).clamp(-1.0, 1.0).acos() < radius + 3.0 * width
+            });
+            let accept = !near_peak && {
+                let c = DVec3::new(b.m[0] as f64, b.m[1] as f64, b.m[2] as f64)
+                    .try_normalize()
+                    .unwrap_or(centre);
+                let gc = g(c, &mut stats);
+                let spread = corners
+                    .iter()
+                    .map(|&d| {
+                        let e = g(d, &mut stats) - gc;
+                        e.0.iter().fold(0.0f64, |a, v| a.max(v.abs()))
+                    })
+                    .fold(0.0, f64::max);
+                if b.lum as f64 * spread <= tolerance {
+                    total += Rgb([b.s[0] as f64, b.s[1] as f64, b.s[2] as f64]) * gc;
+                    true
+                } else {
+                    false
+                }
+            };
+            if !accept {
+                let prev = n.div_ceil(1 << (k - 1));
+                for cj in 2 * bj..(2 * bj + 2).min(prev) {
+                    for ci in 2 * bi..(2 * bi + 2).min(prev) {
+                        stack.push((k - 1, face, ci, cj));
+                    }
+                }
+            }
+        }
+        (total, stats)
     }
 }
 
@@ -244,6 +477,52 @@ mod tests {
                 assert!((t[c] - q[c]).abs() < 5e-3 * q[c], "{t:?} vs {q:?}");
             }
         }
+    }
+
+    /// The adaptive tree against the full texel sum on 002's spot map (bright 2–10° spots on a
+    /// dim gradient), isotropic, anisotropic and transmissive lobes, normal to grazing views:
+    /// within 2e-4 relative at tolerance 1e-7; a coarser tolerance (1e-3) is further off and
+    /// needs far fewer BSDF evaluations than there are texels.
+    #[test]
+    fn tree_matches_the_full_texel_sum() {
+        let map = lustre_env::spot_map(&lustre_env::SpotMapParams {
+            size: 64,
+            spots: 48,
+            min_deg: 2.0,
+            max_deg: 10.0,
+            max_ratio: 3000.0,
+            background: [0.01; 3],
+            seed: 3,
+        })
+        .expect("spot map");
+        let tree = TexelTree::new(&map);
+        let glass = Kurt::new(
+            Rgb::new(0.1, 0.05, 0.02),
+            vec![KurtLobe::new(Rgb::ONE, 0.08, 0.08, 0.04, 0.0).expect("lobe")],
+            vec![KurtLobe::new(Rgb::splat(0.9), 0.15, 0.15, 0.04, 0.0).expect("lobe")],
+        )
+        .expect("glass");
+        let mats = [lobe_material(0.1, 0.1), lobe_material(0.2, 0.075), glass];
+        let configs = configurations(12, 85.0, 11);
+        let (mut worst, mut worst_coarse, mut coarse_evals) = (0.0f64, 0.0f64, 0usize);
+        for kurt in &mats {
+            for c in &configs {
+                let s = supersampling(kurt, c.frame.to_local(c.wo), map.size);
+                let t = truth(&map, &c.frame, c.wo, kurt, s);
+                let (a, _) = tree.integrate(&c.frame, c.wo, kurt, 1e-7);
+                let (b, st) = tree.integrate(&c.frame, c.wo, kurt, 1e-3);
+                coarse_evals += st.evals;
+                for ch in 0..3 {
+                    worst = worst.max((a[ch] - t[ch]).abs() / t[ch]);
+                    worst_coarse = worst_coarse.max((b[ch] - t[ch]).abs() / t[ch]);
+                }
+            }
+        }
+        assert!(worst < 2e-4, "worst relative error {worst}");
+        assert!(worst_coarse > worst, "{worst_coarse} vs {worst}");
+        // The coarse tolerance visits far fewer points than the 24,576 texels.
+        let per = coarse_evals / (mats.len() * configs.len());
+        assert!(per < 6 * 64 * 64 / 4, "{per} evaluations per integral");
     }
 
     #[test]

@@ -67,12 +67,12 @@ fn tiny_run_writes_a_table_with_finite_numbers() {
     )
     .expect("run");
     assert!(calls.into_inner() > 0);
-    // 002: 5 settings × (printed, reach-1 and lattice + CK) + 3 references;
-    // 000: 4 × (4 + CK) + 4 references.
-    assert_eq!(report.rows.len(), 5 * 4 + 3 + 4 * 5 + 4);
+    // 002: 5 settings × (printed, reach-1 and lattice + CK) + 3 × (exact + MIS references);
+    // 000: 4 × (4 + CK) + 4 × 2 references.
+    assert_eq!(report.rows.len(), 5 * 4 + 3 * 2 + 4 * 5 + 4 * 2);
     for r in &report.rows {
         // Every method within its budget of filtered lookups per lobe and pixel.
-        if r.method != "reference" {
+        if !r.method.starts_with("reference") {
             let lobes = exps
                 .iter()
                 .flat_map(|e| &e.materials)
@@ -88,10 +88,23 @@ fn tiny_run_writes_a_table_with_finite_numbers() {
         assert!(r.rms.is_finite() && r.rms >= 0.0, "{r:?}");
         assert!(r.delta_e.is_finite() && r.delta_e >= 0.0, "{r:?}");
         assert!(r.seconds.is_finite() && r.seconds >= 0.0, "{r:?}");
-        if r.method == "reference" {
-            assert_eq!(r.samples, 8);
-        } else {
-            assert!(r.psnr.is_finite() || r.rms == 0.0, "{r:?}");
+        match r.method.as_str() {
+            "reference (MIS)" => {
+                // Beside the exact reference: its error against it and its noise.
+                assert_eq!(r.samples, 8);
+                let (noise, _) = r.vs_mis.expect("noise");
+                assert!(noise > 0.0 && r.rms > 0.0, "{r:?}");
+            }
+            "reference (exact)" => {
+                // Its own error against the full texel sum, tiny on a 16² map.
+                assert!(r.rms < 1e-4, "{r:?}");
+                assert_eq!(r.reference_error, r.rms);
+            }
+            _ => {
+                assert!(r.psnr.is_finite() || r.rms == 0.0, "{r:?}");
+                assert!(r.vs_mis.is_some(), "{r:?}");
+                assert!(r.reference_error < 1e-4, "{r:?}");
+            }
         }
         assert!(out.join(&r.file).is_file(), "{r:?}");
     }
@@ -106,7 +119,8 @@ fn tiny_run_writes_a_table_with_finite_numbers() {
         md.contains("| aniso-0.2-0.075 | 17 | lattice (ours) |"),
         "{md}"
     );
-    assert!(md.contains("lookups mean / max"));
+    assert!(md.contains("lookups mean / max") && md.contains("ref. error ÷ RMS"));
+    assert!(md.contains("| iso-0.1 | 0 | reference (exact) |"), "{md}");
     assert!(md.contains("| varnish | 7 | thesis (Eq. 4.25) |"), "{md}");
     assert!(out.join("000_frosted-glass_n5_thesis-424.png").is_file());
     assert!(out.join("002_iso-0.1_n14_ck_diff.png").is_file());
@@ -200,6 +214,7 @@ fn more_samples_come_closer_to_the_reference() {
         &env.environment(),
         &HarnessOptions {
             size: 24,
+            reference: harness::ReferenceKind::Mis,
             reference_spp: 2048,
             ..HarnessOptions::default()
         },
@@ -208,10 +223,56 @@ fn more_samples_come_closer_to_the_reference() {
     )
     .expect("run");
     let get = |n, m| report.rms_of("iso-0.15", n, m).expect("row");
-    let noise = get(2048, "reference");
+    let noise = get(2048, "reference (MIS)");
     for m in ["regular (Pdf002)", "CK"] {
         let (few, many) = (get(14, m), get(270, m));
         assert!(many < few, "{m}: RMS {many} at 270 samples vs {few} at 14");
         assert!(noise < few, "{m}: reference noise {noise} vs RMS {few}");
     }
+}
+
+#[test]
+fn exact_and_mis_references_agree_within_the_mis_noise() {
+    // The sphere is lit by the distant map only, so the exact texel sum is the answer the MIS
+    // estimator converges to: their difference must be of the size of the MIS noise (two
+    // independent halves), not larger. The MIS image reads level 0 bilinearly, the exact one as
+    // piecewise-constant texels; on a smooth 32² sky that difference is far below the noise.
+    let env = EnvSetup::new(
+        CubeMap::from_fn(32, procedural_sky).expect("cube"),
+        MipFilter::Gauss6,
+        8,
+    )
+    .expect("env");
+    let mut exp = harness::experiment_002().expect("002");
+    exp.materials.retain(|m| m.name == "iso-0.15");
+    exp.materials[0].settings.truncate(1);
+    let report = harness::run(
+        &[exp],
+        &env.environment(),
+        &HarnessOptions {
+            size: 12,
+            reference_spp: 4096,
+            ..HarnessOptions::default()
+        },
+        None,
+        &|_, _, _| {},
+    )
+    .expect("run");
+    let mis = report
+        .rows
+        .iter()
+        .find(|r| r.method == "reference (MIS)")
+        .expect("MIS row");
+    let (noise, _) = mis.vs_mis.expect("noise");
+    assert!(
+        mis.rms < 2.0 * noise && mis.rms > 0.3 * noise,
+        "MIS − exact RMS {} vs MIS noise {noise}",
+        mis.rms
+    );
+    let exact = report
+        .rows
+        .iter()
+        .find(|r| r.method == "reference (exact)")
+        .expect("exact row");
+    assert!(exact.rms < 0.05 * noise, "{exact:?}");
 }

@@ -6,7 +6,7 @@
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
 use lustre_env::{CubeMap, MipFilter};
-use lustre_shade::harness::{self, EnvSetup, HarnessOptions};
+use lustre_shade::harness::{self, EnvSetup, HarnessOptions, ReferenceKind};
 use std::path::PathBuf;
 use std::sync::Mutex;
 
@@ -19,7 +19,19 @@ pub struct CompareArgs {
     /// Image width and height in pixels.
     #[arg(long, default_value_t = 160)]
     pub size: usize,
-    /// Reference samples per pixel (002 compares against > 10,000).
+    /// The reference: `exact` (the integral over every level-0 texel: the spheres are lit by
+    /// the distant map only) or `mis` (Monte Carlo, BSDF + environment sampling with MIS).
+    #[arg(long, default_value = "exact")]
+    pub reference: String,
+    /// Absolute tolerance per block of the exact reference (radiance units).
+    #[arg(long, default_value_t = 1e-6)]
+    pub tolerance: f64,
+    /// Sphere pixels on which the exact reference is checked against the full texel sum.
+    #[arg(long, default_value_t = 32)]
+    pub check_pixels: usize,
+    /// Samples per pixel of the MIS reference (002 compares against > 10,000); with
+    /// `--reference exact` it is rendered beside the exact one (its noise and error reported),
+    /// 0 skips it.
     #[arg(long, default_value_t = 10_240)]
     pub reference_spp: usize,
     /// Environment: `spots` (002's tiny bright spots on a dim background) or an .hdr/.exr
@@ -73,7 +85,25 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
             .with_context(|| format!("--map {}: cube-map conversion", path.display()))?;
         EnvSetup::new(base, MipFilter::Gauss6, 16).context("filtering the environment")?
     };
-    if args.reference_spp < 10_000 {
+    let reference = match args.reference.as_str() {
+        "exact" => {
+            if !(args.tolerance >= 0.0 && args.tolerance.is_finite()) {
+                bail!("--tolerance {}: must be finite and ≥ 0", args.tolerance);
+            }
+            ReferenceKind::Exact {
+                tolerance: args.tolerance,
+                check_pixels: args.check_pixels,
+            }
+        }
+        "mis" => {
+            if args.reference_spp < 2 {
+                bail!("--reference mis needs --reference-spp ≥ 2");
+            }
+            ReferenceKind::Mis
+        }
+        other => bail!("--reference {other:?}: expected exact or mis"),
+    };
+    if args.reference_spp > 0 && args.reference_spp < 10_000 {
         eprintln!(
             "note: --reference-spp {} is below the > 10,000 samples per pixel of 002 §8",
             args.reference_spp
@@ -81,6 +111,7 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
     }
     let opts = HarnessOptions {
         size: args.size,
+        reference,
         reference_spp: args.reference_spp,
         exposure: args.exposure,
         seed: args.seed,

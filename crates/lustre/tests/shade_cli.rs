@@ -66,7 +66,25 @@ fn compare_with_a_tiny_configuration_writes_the_table() {
         "{md}"
     );
     assert!(md.contains("lookups mean / max"), "{md}");
+    // The exact reference, with the MIS one beside it.
+    assert!(md.contains("| iso-0.1 | 0 | reference (exact) |"), "{md}");
+    assert!(md.contains("| iso-0.1 | 4 | reference (MIS) |"), "{md}");
     assert!(out.join("002_iso-0.1_reference.png").is_file());
+    assert!(out.join("002_iso-0.1_reference-mis.png").is_file());
+    // The MIS reference alone.
+    let out2 = dir.path().join("cmp-mis");
+    let stdout = run_ok(
+        lustre()
+            .args(["compare", "--experiment", "002", "--size", "8"])
+            .args(["--reference", "mis", "--reference-spp", "4"])
+            .args(["--face-size", "16", "--out"])
+            .arg(&out2),
+    );
+    assert!(
+        stdout.contains("| iso-0.1 | 4 | reference (MIS) |"),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("reference (exact)"), "{stdout}");
 }
 
 #[test]
@@ -90,6 +108,12 @@ fn bad_inputs_are_clear_errors() {
             .arg(dir.path()),
     );
     assert!(e.contains("123"), "{e}");
+    let e = run_err(
+        lustre()
+            .args(["compare", "--reference", "guess", "--out"])
+            .arg(dir.path()),
+    );
+    assert!(e.contains("guess"), "{e}");
     let missing = dir.path().join("no-such-map.hdr");
     let e = run_err(
         lustre()
