@@ -4,7 +4,8 @@
 //! Files of a job writing `OUT.exr`: `OUT.exr` (the mean, RGB float), `OUT.even.exr` and
 //! `OUT.odd.exr` (the two independent halves), `OUT.json` (sample count, settings, the noise
 //! estimate, timings) and `OUT.png` (a preview with exposure). All are written atomically after
-//! every pass; `resume` reads the halves and the JSON back and continues with the next sample
+//! every pass (the halves committed through the JSON, [`commit_halves`], so that a kill at any
+//! point resumes consistently); `resume` reads the halves and the JSON back and continues with the next sample
 //! index, so a resumed render equals an uninterrupted one (up to the f32 rounding of the halves).
 
 use crate::image::Image;
@@ -269,6 +270,38 @@ pub struct ReferenceState {
     pub mean: f64,
     /// Seconds of rendering, summed over runs.
     pub seconds: f64,
+    /// The halves of this `spp` are in `OUT.even.next.exr` / `OUT.odd.next.exr`, not yet moved
+    /// to `OUT.even.exr` / `OUT.odd.exr` (see [`commit_halves`]).
+    #[serde(default)]
+    pub pending: bool,
+}
+
+/// Makes the halves just written to their `.next` files the job's state, so that a kill at any
+/// point leaves a state `resume` reads consistently: the JSON (written atomically) is the commit
+/// point. First the JSON with the new count and `pending`, then the renames, then the JSON
+/// without `pending`. Before the first JSON write, `resume` drops the `.next` files and continues
+/// from the previous count; after it, `resume` finishes the renames.
+fn commit_halves(
+    state: &mut ReferenceState,
+    json_path: &Path,
+    moves: [(&PathBuf, &PathBuf); 2],
+) -> Result<()> {
+    let write = |state: &ReferenceState| -> Result<()> {
+        let json = serde_json::to_string_pretty(state)
+            .map_err(|e| ShadeError::Parameter(format!("state: {e}")))?;
+        lustre_brdf::error::write_atomic(json_path, json.as_bytes())?;
+        Ok(())
+    };
+    state.pending = true;
+    write(state)?;
+    for (next, fin) in moves {
+        std::fs::rename(next, fin).map_err(|e| ShadeError::Io {
+            path: next.clone(),
+            source: e,
+        })?;
+    }
+    state.pending = false;
+    write(state)
 }
 
 /// `OUT` with its extension replaced by `ext`.
@@ -347,7 +380,12 @@ pub fn render_reference(
         noise_relative: f64::NAN,
         mean: f64::NAN,
         seconds: 0.0,
+        pending: false,
     };
+    let (even_next, odd_next) = (
+        sibling(&opts.out, "even.next.exr"),
+        sibling(&opts.out, "odd.next.exr"),
+    );
     let mut acc = Accumulator::new(w as usize, h as usize)?;
     if opts.resume {
         let text = std::fs::read_to_string(&json_path).map_err(|e| ShadeError::Io {
@@ -372,6 +410,21 @@ pub fn render_reference(
                 state.camera
             )));
         }
+        // Finish a commit that was interrupted after its JSON, or drop the halves of a pass
+        // whose JSON was never written.
+        for (next, fin) in [(&even_next, &even_path), (&odd_next, &odd_path)] {
+            if old.pending && next.exists() {
+                std::fs::rename(next, fin).map_err(|e| ShadeError::Io {
+                    path: next.clone(),
+                    source: e,
+                })?;
+            } else if !old.pending && next.exists() {
+                std::fs::remove_file(next).map_err(|e| ShadeError::Io {
+                    path: next.clone(),
+                    source: e,
+                })?;
+            }
+        }
         let (a, b) = (read_exr(&even_path)?, read_exr(&odd_path)?);
         acc = Accumulator::from_halves(&a, &b, old.spp)?;
         state.seconds = old.seconds;
@@ -391,13 +444,15 @@ pub fn render_reference(
         state.noise_rms = acc.noise_rms().unwrap_or(f64::NAN);
         state.noise_relative = state.noise_rms / state.mean;
         let (a, b) = acc.halves();
-        a.write_exr(&even_path)?;
-        b.write_exr(&odd_path)?;
+        a.write_exr(&even_next)?;
+        b.write_exr(&odd_next)?;
+        commit_halves(
+            &mut state,
+            &json_path,
+            [(&even_next, &even_path), (&odd_next, &odd_path)],
+        )?;
         img.write_exr(&opts.out)?;
         img.write_png(&sibling(&opts.out, "png"), opts.exposure)?;
-        let json = serde_json::to_string_pretty(&state)
-            .map_err(|e| ShadeError::Parameter(format!("state: {e}")))?;
-        lustre_brdf::error::write_atomic(&json_path, json.as_bytes())?;
     }
     let img = acc.image();
     state.spp = acc.spp;

@@ -112,6 +112,47 @@ fn reference_job_writes_and_resumes() {
         once.mean,
         resumed.mean
     );
+    // A pass killed after writing its halves but before its JSON: the stale `.next` halves
+    // (here garbage) are dropped and the job continues from the committed count.
+    std::fs::write(out.with_extension("even.next.exr"), b"torn").unwrap();
+    std::fs::write(out.with_extension("odd.next.exr"), b"torn").unwrap();
+    opts.spp = 12;
+    let (after_kill, _) = render_reference(&scene, &opts, &|_, _, _, _| {}).unwrap();
+    assert_eq!(after_kill.spp, 12);
+    assert!(!out.with_extension("even.next.exr").exists());
+    let once12 = ReferenceOptions {
+        resume: false,
+        out: dir.path().join("once12.exr"),
+        ..opts.clone()
+    };
+    let (once12, _) = render_reference(&scene, &once12, &|_, _, _, _| {}).unwrap();
+    assert!(
+        (once12.mean - after_kill.mean).abs() <= 1e-5 * once12.mean.abs().max(1e-3),
+        "{} vs {}",
+        once12.mean,
+        after_kill.mean
+    );
+    // Killed between the JSON marking the halves pending and their renames: resume finishes
+    // the renames (the committed halves are the ones in the `.next` files).
+    let json = out.with_extension("json");
+    let mut state: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    state["pending"] = serde_json::Value::Bool(true);
+    std::fs::write(&json, serde_json::to_string(&state).unwrap()).unwrap();
+    std::fs::rename(
+        out.with_extension("odd.exr"),
+        out.with_extension("odd.next.exr"),
+    )
+    .unwrap();
+    std::fs::write(out.with_extension("odd.exr"), b"torn").unwrap();
+    let (finished, _) = render_reference(&scene, &opts, &|_, _, _, _| {}).unwrap();
+    assert_eq!(finished.spp, 12);
+    assert!(
+        (finished.mean - once12.mean).abs() <= 1e-5 * once12.mean.abs().max(1e-3),
+        "{} vs {}",
+        finished.mean,
+        once12.mean
+    );
     // A different size cannot resume.
     opts.size = Some((8, 8));
     let e = render_reference(&scene, &opts, &|_, _, _, _| {}).unwrap_err();
