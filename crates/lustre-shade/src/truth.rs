@@ -55,23 +55,39 @@ pub fn truth(
                     continue;
                 }
                 let x0 = -1.0 + i as f64 * step;
-                let mut acc = Rgb::ZERO;
-                for b in 0..s {
-                    let ya = y0 + b as f64 * sub;
-                    for a in 0..s {
-                        let xa = x0 + a as f64 * sub;
-                        let omega = rect_solid_angle(xa, xa + sub, ya, ya + sub);
-                        let d = face_point(face, xa + 0.5 * sub, ya + 0.5 * sub).normalize();
-                        let wi = frame.to_local(d);
-                        let f = bsdf.eval(wi, wo_l);
-                        acc += f * (wi.z.abs() * omega);
-                    }
-                }
+                let acc = sub_texel_sum(face, x0, y0, sub, s, |d| {
+                    let wi = frame.to_local(d);
+                    bsdf.eval(wi, wo_l) * wi.z.abs()
+                });
                 total += acc * Rgb([l[0] as f64, l[1] as f64, l[2] as f64]);
             }
         }
     }
     total
+}
+
+/// Σ g(d)·Ω over the `s`² sub-squares of side `sub` (face coordinates) of the texel whose
+/// lower corner is (`x0`, `y0`) on `face`, d the normalized direction to each sub-square's
+/// centre and Ω its exact solid angle.
+fn sub_texel_sum(
+    face: usize,
+    x0: f64,
+    y0: f64,
+    sub: f64,
+    s: usize,
+    mut g: impl FnMut(DVec3) -> Rgb,
+) -> Rgb {
+    let mut acc = Rgb::ZERO;
+    for b in 0..s {
+        let ya = y0 + b as f64 * sub;
+        for a in 0..s {
+            let xa = x0 + a as f64 * sub;
+            let omega = rect_solid_angle(xa, xa + sub, ya, ya + sub);
+            let d = face_point(face, xa + 0.5 * sub, ya + 0.5 * sub).normalize();
+            acc += g(d) * omega;
+        }
+    }
+    acc
 }
 
 /// The supersampling factor for a Kurt material seen from `wo_local` (shading-local) on a cube
@@ -259,17 +275,7 @@ impl<'a> TexelTree<'a> {
                     total += lr * g(d, &mut stats) * self.omega[bj * n + bi];
                 } else {
                     let (x0, y0) = (-1.0 + bi as f64 * step, -1.0 + bj as f64 * step);
-                    let mut acc = Rgb::ZERO;
-                    for b in 0..ss {
-                        let ya = y0 + b as f64 * sub;
-                        for a in 0..ss {
-                            let xa = x0 + a as f64 * sub;
-                            let o = rect_solid_angle(xa, xa + sub, ya, ya + sub);
-                            let d = face_point(face, xa + 0.5 * sub, ya + 0.5 * sub).normalize();
-                            acc += g(d, &mut stats) * o;
-                        }
-                    }
-                    total += lr * acc;
+                    total += lr * sub_texel_sum(face, x0, y0, sub, ss, |d| g(d, &mut stats));
                 }
                 continue;
             }
