@@ -40,6 +40,7 @@ pub mod camera;
 pub mod environment;
 pub mod error;
 pub mod gltf_io;
+pub mod lightmap;
 pub mod material;
 pub mod mesh;
 pub mod mitsuba;
@@ -51,6 +52,7 @@ pub use camera::{Camera, CameraPath, FovAxis, Keyframe};
 pub use environment::{Environment, EnvironmentSource, Sky};
 pub use error::{Result, SceneError};
 pub use glam::{Vec2, Vec3, Vec4};
+pub use lightmap::{AtlasSource, LightmapAtlas};
 pub use lustre_brdf::Rgb;
 pub use material::{
     AlphaMask, Distribution, Material, MaterialKind, NormalMap, ResolvedSpec, TextureRef,
