@@ -10,9 +10,9 @@ For each DIR/NAME.obj it writes DIR/NAME.xatlas.obj: a header line
 `# xatlas width W height H atlases A charts C time_s T padding P`, then per object `o NAME`,
 `v` (positions, split at seams), `vt` (u, 1 - v: OBJ's v points up) and `f v/vt`.
 
-xatlas `padding` adds that many texels around each chart; charts end up at least `padding`
-texels apart. The gutter asked for is used as the padding; `unwrap_compare` measures the
-distance actually achieved.
+xatlas `padding` adds that many texels around each chart, so charts end up about 2·padding
+texels apart (measured: padding 4 gave a clean 8-texel gutter): padding = ⌈gutter / 2⌉, as
+lustre passes uvunwrap. `unwrap_compare` measures the gutter actually achieved.
 """
 
 import sys
@@ -58,7 +58,7 @@ def main():
             atlas.add_mesh(p, f)
         pack = xatlas.PackOptions()
         pack.texels_per_unit = header["density"]
-        pack.padding = header["gutter"]
+        pack.padding = (header["gutter"] + 1) // 2
         pack.resolution = 0
         t0 = time.perf_counter()
         atlas.generate(pack_options=pack)

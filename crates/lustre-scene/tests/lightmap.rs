@@ -517,3 +517,24 @@ fn lightmap_section_is_validated() {
         assert!(err.contains(what) && err.contains("s.toml"), "{err}");
     }
 }
+
+/// The Modern Hall (glTF, 28,479 light-mappable triangles in 19 meshes, 13 emitters): a clean
+/// generated atlas at the requested density (the example `unwrap_compare` reports its time:
+/// seconds).
+#[test]
+fn modern_hall_atlas_is_valid() {
+    let scene = Scene::load(&common::hall_gltf()).expect("hall loads");
+    let mut s = scene.clone();
+    let (atlas, report) = build_atlas(&mut s, &options(16.0, 2)).unwrap();
+    assert!(
+        report.texcoord1_rejected.is_some(),
+        "the hall has no TEXCOORD_1"
+    );
+    assert_eq!(report.skipped_meshes, 13, "{report:?}");
+    assert_eq!(report.meshes, 19);
+    assert_eq!(report.pages, 1);
+    assert_valid_generated(&scene, &s, &atlas);
+    assert!((report.density_ratio - 1.0).abs() < 0.02, "{report:?}");
+    assert!(report.stretch_l2 < 1.05, "{report:?}");
+    assert!(report.utilisation > 0.6, "{report:?}");
+}

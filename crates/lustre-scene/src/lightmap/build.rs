@@ -169,6 +169,18 @@ pub struct AtlasReport {
     pub notes: Vec<String>,
 }
 
+/// Progress of [`build_atlas_with_progress`], for a progress bar.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AtlasProgress {
+    /// The stage: "validating TEXCOORD_1", "segmenting" (counts meshes), "parameterizing"
+    /// (counts triangles), "packing" (counts trials, no total), "output" (counts meshes).
+    pub stage: &'static str,
+    /// Units of work finished in this stage.
+    pub done: usize,
+    /// Units of work in this stage, when known.
+    pub total: Option<usize>,
+}
+
 /// A mesh to light-map: its scene index and texel density.
 struct Target {
     mesh: usize,
@@ -197,6 +209,16 @@ fn unit_err(scene: &Scene, problem: String) -> SceneError {
 pub fn build_atlas(
     scene: &mut Scene,
     options: &AtlasOptions,
+) -> Result<(LightmapAtlas, super::AtlasReport)> {
+    build_atlas_with_progress(scene, options, &|_| {})
+}
+
+/// [`build_atlas`], reporting progress to `progress` (called from worker threads, never
+/// concurrently with itself).
+pub fn build_atlas_with_progress(
+    scene: &mut Scene,
+    options: &AtlasOptions,
+    progress: &(dyn Fn(AtlasProgress) + Sync),
 ) -> Result<(LightmapAtlas, super::AtlasReport)> {
     let start = Instant::now();
     options.validate().map_err(|e| unit_err(scene, e))?;
@@ -251,6 +273,13 @@ pub fn build_atlas(
         .sum();
     let mut notes = Vec::new();
     let mut texcoord1_rejected = None;
+    if options.unwrapper != Unwrapper::Uvunwrap {
+        progress(AtlasProgress {
+            stage: "validating TEXCOORD_1",
+            done: 0,
+            total: None,
+        });
+    }
     let use_texcoord1 = match options.unwrapper {
         Unwrapper::Uvunwrap => None,
         Unwrapper::Texcoord1 => Some(
@@ -276,7 +305,7 @@ pub fn build_atlas(
             AtlasSource::Texcoord1,
         ),
         None => {
-            let g = generate(scene, &targets, options)?;
+            let g = generate(scene, &targets, options, progress)?;
             (
                 g.width,
                 g.height,
@@ -478,7 +507,25 @@ fn uvunwrap_err(scene: &Scene, targets: &[Target], e: uvunwrap::Error) -> SceneE
 }
 
 /// Unwraps and packs the targets with `uvunwrap` and rewrites their meshes.
-fn generate(scene: &mut Scene, targets: &[Target], options: &AtlasOptions) -> Result<Generated> {
+fn generate(
+    scene: &mut Scene,
+    targets: &[Target],
+    options: &AtlasOptions,
+    progress: &(dyn Fn(AtlasProgress) + Sync),
+) -> Result<Generated> {
+    let report = |p: uvunwrap::Progress| {
+        progress(AtlasProgress {
+            stage: match p.stage {
+                uvunwrap::Stage::Segmenting => "segmenting",
+                uvunwrap::Stage::Parameterizing => "parameterizing",
+                uvunwrap::Stage::Packing => "packing",
+                _ => "output",
+            },
+            done: p.done,
+            total: p.total,
+        });
+        true
+    };
     let base = f64::from(options.texels_per_metre);
     let positions: Vec<Vec<[f32; 3]>> = targets
         .iter()
@@ -540,7 +587,7 @@ fn generate(scene: &mut Scene, targets: &[Target], options: &AtlasOptions) -> Re
     // One growing page when the surface fits with room for packing losses, else fixed pages.
     let mut single = None;
     if needed * 2.0 <= page_texels {
-        let atlas = uvunwrap::generate(&inputs(false), &opts(None))
+        let atlas = uvunwrap::generate_with_progress(&inputs(false), &opts(None), report)
             .map_err(|e| uvunwrap_err(scene, targets, e))?;
         if atlas.width <= max && atlas.height <= max && atlas.page_count == 1 {
             single = Some(atlas);
@@ -548,7 +595,7 @@ fn generate(scene: &mut Scene, targets: &[Target], options: &AtlasOptions) -> Re
     }
     let (atlas, instanced) = match single {
         Some(a) => (a, false),
-        None => match uvunwrap::generate(&inputs(true), &opts(Some(max))) {
+        None => match uvunwrap::generate_with_progress(&inputs(true), &opts(Some(max)), report) {
             Ok(a) => (a, true),
             Err(uvunwrap::Error::ChartTooLarge { .. }) => {
                 // Name the mesh that does not fit: unwrap each alone.

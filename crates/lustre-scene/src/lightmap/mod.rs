@@ -28,8 +28,9 @@ mod check;
 mod glb;
 
 pub use build::{
-    build_atlas, measure_atlas, validate_uv1, AtlasMeasures, AtlasOptions, AtlasReport, SkipReason,
-    SkippedMesh, Unwrapper, MAX_GUTTER, MAX_PAGES,
+    build_atlas, build_atlas_with_progress, measure_atlas, validate_uv1, AtlasMeasures,
+    AtlasOptions, AtlasProgress, AtlasReport, SkipReason, SkippedMesh, Unwrapper, MAX_GUTTER,
+    MAX_PAGES,
 };
 pub use check::{
     check_layout, find_overlapping_triangles, raster_conservative, uv1_charts, LayoutCheck,
