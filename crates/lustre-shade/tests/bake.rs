@@ -141,6 +141,7 @@ fn plane_under_constant_sky_gets_pi_l() {
     for c in 0..3 {
         let want = PI * l[c];
         let mean = covered.iter().map(|t| f64::from(t.e[c])).sum::<f64>() / 144.0;
+        eprintln!("channel {c}: mean E / πL = {:.5}", mean / want);
         assert!(
             (mean / want - 1.0).abs() < 0.01,
             "channel {c}: mean E {mean} vs πL = {want}"
@@ -161,6 +162,32 @@ fn plane_under_constant_sky_gets_pi_l() {
     let gutter = img.get_pixel(1, 8).0;
     assert!(gutter[1] > 0.0, "gutter texel dilated: {gutter:?}");
     assert!(a.report.pages[0].noise_std_error > 0.0);
+    // The same tiles assembled with the denoiser (it runs at assembly, outside the hash):
+    // closer to πL, mean kept.
+    let dn = BakeOptions {
+        denoiser: Denoiser::ATrous(Default::default()),
+        ..raw_opts(32, 3)
+    };
+    let d = assemble(&scene, &at, &dn, dir.path()).expect("assemble denoised");
+    let err = |e: &[[f32; 3]]| {
+        let (mut s2, mut s, mut n) = (0.0, 0.0, 0.0);
+        for (k, t) in a.texels[0].iter().enumerate() {
+            if t.covered() {
+                let v = f64::from(e[k][1]) / (PI * l[1]);
+                s2 += (v - 1.0).powi(2);
+                s += v;
+                n += 1.0;
+            }
+        }
+        ((s2 / n).sqrt(), s / n)
+    };
+    let ((raw_rms, raw_mean), (dn_rms, dn_mean)) = (err(&a.pages[0]), err(&d.pages[0]));
+    eprintln!("plane: relative RMS error raw {raw_rms:.4}, denoised {dn_rms:.4}");
+    assert!(dn_rms < raw_rms / 2.0, "denoised {dn_rms} vs raw {raw_rms}");
+    assert!(
+        (dn_mean - raw_mean).abs() < 0.005,
+        "mean {raw_mean} → {dn_mean}"
+    );
 }
 
 /// The inside of the unit box [0, 1]³ at texel size 0.1: six faces, the ceiling in four pieces
@@ -284,6 +311,7 @@ fn closed_box_total_irradiance_is_the_geometric_series() {
         // Every photon lands on the closed box's surface; each landing reflects ρ of it.
         let want = phi * (1.0 - rho.powi(bounces as i32)) / (1.0 - rho);
         let (got, se) = total(&a, texel_area);
+        eprintln!("bounces {bounces}: ∫E dA = {got:.5} ± {se:.5}, series {want:.5}");
         assert!(
             se / want < 0.01,
             "standard error {se} too large for the test"
@@ -351,6 +379,10 @@ fn one_bounce_matches_the_direct_term() {
             sum_want += want;
         }
     }
+    eprintln!(
+        "direct term: floor mean off by {:.3} %, worst texel {worst_z:.2} σ",
+        100.0 * sum_err / sum_want
+    );
     assert!(
         (sum_err / sum_want).abs() < 0.01,
         "floor mean off by {:.3} %",
@@ -525,6 +557,7 @@ fn seams_between_charts_agree_within_the_noise() {
     }
     let rms = |v: &[f64]| (v.iter().map(|z| z * z).sum::<f64>() / v.len() as f64).sqrt();
     let (rs, rc) = (rms(&seam), rms(&control));
+    eprintln!("seam RMS z {rs:.2}, control (inside a chart) {rc:.2}");
     assert!(
         rs < 1.6,
         "seam differences: RMS z = {rs:.2} (control {rc:.2})"

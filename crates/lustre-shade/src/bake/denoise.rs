@@ -188,3 +188,77 @@ pub fn atrous(page: &mut PageBuffer, recs: &[TexelRecord], var: &[f64], o: &ATro
     }
     page.e = e;
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lustre_brdf::sampling::SplitMix64;
+
+    /// A flat 32×16 page: chart 0 on the left half, chart 1 on the right, positions on the
+    /// plane y = 0 with texel size 0.1, normal +y, grey albedo.
+    fn page(values: impl Fn(u32, u32) -> f32) -> (PageBuffer, Vec<TexelRecord>) {
+        let (w, h) = (32u32, 16u32);
+        let mut recs = vec![];
+        let mut e = vec![];
+        for y in 0..h {
+            for x in 0..w {
+                let v = values(x, y);
+                recs.push(TexelRecord {
+                    e: [v; 3],
+                    var: [0.01; 3],
+                    valid: 16,
+                    chart: u32::from(x >= 16),
+                    position: [0.1 * x as f32, 0.0, 0.1 * y as f32],
+                    normal: [0.0, 1.0, 0.0],
+                    albedo: [0.5; 3],
+                });
+                e.push([v; 3]);
+            }
+        }
+        let n = recs.len();
+        (
+            PageBuffer {
+                width: w,
+                height: h,
+                e,
+                chart: recs.iter().map(|r| r.chart).collect(),
+                known: vec![true; n],
+            },
+            recs,
+        )
+    }
+
+    #[test]
+    fn charts_are_never_mixed() {
+        let (mut p, recs) = page(|x, _| if x < 16 { 1.0 } else { 1.2 });
+        let var = vec![0.01; recs.len()];
+        atrous(&mut p, &recs, &var, &ATrousOptions::default());
+        for (k, e) in p.e.iter().enumerate() {
+            let want = if k % 32 < 16 { 1.0 } else { 1.2 };
+            assert_eq!(*e, [want; 3], "texel {k}");
+        }
+    }
+
+    #[test]
+    fn noise_is_reduced_without_bias() {
+        let mut rng = SplitMix64::new(5);
+        let noise: Vec<f32> = (0..32 * 16)
+            .map(|_| (0.1 * 3f64.sqrt() * (2.0 * rng.next_f64() - 1.0)) as f32)
+            .collect();
+        let (mut p, recs) = page(|x, y| 1.0 + noise[(y * 32 + x) as usize]);
+        let var = vec![0.01; recs.len()];
+        let rms = |e: &[[f32; 3]]| {
+            (e.iter()
+                .map(|v| (f64::from(v[0]) - 1.0).powi(2))
+                .sum::<f64>()
+                / e.len() as f64)
+                .sqrt()
+        };
+        let mean = |e: &[[f32; 3]]| e.iter().map(|v| f64::from(v[0])).sum::<f64>() / 512.0;
+        let (before, m0) = (rms(&p.e), mean(&p.e));
+        atrous(&mut p, &recs, &var, &ATrousOptions::default());
+        let (after, m1) = (rms(&p.e), mean(&p.e));
+        assert!(after < before / 4.0, "RMS error {before} → {after}");
+        assert!((m1 - m0).abs() < 0.01, "mean {m0} → {m1}");
+    }
+}
