@@ -164,7 +164,7 @@ pub fn atrous(page: &mut PageBuffer, recs: &[TexelRecord], var: &[f64], o: &ATro
                             * wn
                             * (-da / (2.0 * o.sigma_albedo * o.sigma_albedo)).exp()
                             * (-(lum(e[j]) - lp).abs() / sl).exp();
-                        if !(wgt > 0.0) {
+                        if wgt.is_nan() || wgt <= 0.0 {
                             continue;
                         }
                         for c in 0..3 {

@@ -60,8 +60,8 @@ impl PageBuffer {
                 let mut sum = [0.0f64; 3];
                 let mut n = 0;
                 for &j in nb.iter().filter(|&&j| self.chart[j] == chart) {
-                    for c in 0..3 {
-                        sum[c] += f64::from(self.e[j][c]);
+                    for (s, &v) in sum.iter_mut().zip(&self.e[j]) {
+                        *s += f64::from(v);
                     }
                     n += 1;
                 }

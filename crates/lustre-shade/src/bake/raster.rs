@@ -215,10 +215,10 @@ impl Raster {
             prim += n;
         }
         let mut chart_of_root: HashMap<u32, u32> = HashMap::new();
-        for k in 0..triangles.len() {
+        for (k, t) in triangles.iter_mut().enumerate() {
             let r = find(&mut parent, k as u32);
             let next = chart_of_root.len() as u32;
-            triangles[k].chart = *chart_of_root.entry(r).or_insert(next);
+            t.chart = *chart_of_root.entry(r).or_insert(next);
         }
         let (tx, ty) = (atlas.width.div_ceil(tile), atlas.height.div_ceil(tile));
         let per_page = (tx * ty) as usize;
