@@ -678,3 +678,52 @@ fn bad_input_is_a_clear_error() {
     )
     .is_err());
 }
+
+#[test]
+fn light_mapped_shading_matches_the_path_traced_diffuse_scene() {
+    use lustre_shade::bake::diffuse_path_scene;
+    use lustre_shade::bake::render::render_lightmapped;
+    use lustre_shade::path::{Accumulator, PathCamera, PathOptions, PathTracer};
+    let (rho, le) = (0.5, 10.0);
+    let (scene, at, _) = cornell_like(rho, le);
+    let bounces = 4;
+    let opts = BakeOptions {
+        denoiser: Denoiser::ATrous(Default::default()),
+        ..raw_opts(64, bounces)
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let a = bake(&scene, &at, &opts, dir.path());
+    let cam = PathCamera::look_at(
+        DVec3::new(0.5, 0.5, 0.98),
+        DVec3::new(0.5, 0.45, 0.0),
+        DVec3::Y,
+        60.0,
+    )
+    .unwrap();
+    let (w, h) = (32, 32);
+    let lm = render_lightmapped(&scene, &at, &a.pages, &cam, w, h, 16, 1).unwrap();
+    // The reference: the path tracer on the same diffuse scene, one segment more than the bake
+    // (camera → surface, then the bake's paths).
+    let (ps, _, _) = diffuse_path_scene(&scene).unwrap();
+    let pt = PathTracer::new(
+        &ps,
+        PathOptions {
+            max_depth: bounces + 1,
+            ..PathOptions::default()
+        },
+    )
+    .unwrap();
+    let mut acc = Accumulator::new(w, h).unwrap();
+    pt.render(&cam, &mut acc, 256, 1, &|_, _| {});
+    let reference = acc.image();
+    let noise = acc.noise_rms().unwrap();
+    let mean = |img: &lustre_shade::image::Image| {
+        img.data.iter().map(|p| f64::from(p[1])).sum::<f64>() / img.data.len() as f64
+    };
+    let (m_lm, m_ref) = (mean(&lm), mean(&reference));
+    let psnr = lustre_shade::metrics::psnr(&lm, &reference, 1.0).unwrap();
+    eprintln!(
+        "light-mapped mean {m_lm:.5} vs path traced {m_ref:.5} (noise RMS per pixel {noise:.4}), PSNR {psnr:.1} dB"
+    );
+    assert!((m_lm / m_ref - 1.0).abs() < 0.02, "{m_lm} vs {m_ref}");
+}

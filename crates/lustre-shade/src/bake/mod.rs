@@ -41,6 +41,7 @@ pub mod denoise;
 pub mod fill;
 pub mod output;
 pub mod raster;
+pub mod render;
 pub mod tile;
 pub mod trace;
 
