@@ -197,7 +197,11 @@ pub fn ngan_integral_masked(
             }
             s
         })
-        .reduce(|| [0.0; 3], |x, y| [x[0] + y[0], x[1] + y[1], x[2] + y[2]])
+        // Collected, then summed in row order: the same bits whatever the thread count
+        // (rayon's `reduce` groups the sums by how the work was split).
+        .collect::<Vec<_>>()
+        .into_iter()
+        .fold([0.0; 3], |x, y| [x[0] + y[0], x[1] + y[1], x[2] + y[2]])
 }
 
 /// Directional albedo a(wo) = ∫ f(wi, wo) |cos θi| dωi per channel (000 Eq. 2.6), by the
@@ -299,15 +303,15 @@ pub fn l1_error_masked(
             }
             (num, den)
         })
-        .reduce(
-            || ([0.0; 3], 0.0),
-            |x, y| {
-                (
-                    [x.0[0] + y.0[0], x.0[1] + y.0[1], x.0[2] + y.0[2]],
-                    x.1 + y.1,
-                )
-            },
-        );
+        // Summed in order after collecting: the same bits whatever the thread count.
+        .collect::<Vec<_>>()
+        .into_iter()
+        .fold(([0.0; 3], 0.0), |x, y| {
+            (
+                [x.0[0] + y.0[0], x.0[1] + y.0[1], x.0[2] + y.0[2]],
+                x.1 + y.1,
+            )
+        });
     if den > 0.0 {
         num.map(|v| v / den)
     } else {

@@ -52,7 +52,7 @@ pub use camera::{Camera, CameraPath, FovAxis, Keyframe};
 pub use environment::{Environment, EnvironmentSource, Sky};
 pub use error::{Result, SceneError};
 pub use glam::{Vec2, Vec3, Vec4};
-pub use lightmap::{AtlasSource, LightmapAtlas};
+pub use lightmap::{AtlasSource, LightmapAtlas, SceneLightmap};
 pub use lustre_brdf::Rgb;
 pub use material::{
     AlphaMask, Distribution, Material, MaterialKind, NormalMap, ResolvedSpec, TextureRef,
@@ -128,6 +128,9 @@ pub struct Scene {
     pub warnings: Vec<String>,
     /// Counts gathered while loading.
     pub stats: LoadStats,
+    /// The light map a scene file's `[lightmap]` section names (atlas and baked pages); its
+    /// meshes' `uv1` are the light-map UVs.
+    pub lightmap: Option<SceneLightmap>,
 }
 
 impl Scene {
@@ -144,6 +147,7 @@ impl Scene {
             source: source.into(),
             warnings: Vec::new(),
             stats: LoadStats::default(),
+            lightmap: None,
         }
     }
 

@@ -38,7 +38,19 @@
 //! [objects.Mesh011]                         # hints for the real-time renderer, by mesh name
 //! planar_reflector = true
 //! lightmap_texels_per_metre = 64.0
+//!
+//! [lightmap]                                # light-map UVs and baked pages (`lustre bake`)
+//! atlas = "lightmap.glb"                    # the atlas: light-mapped meshes with TEXCOORD_1
+//! pages = ["lightmap_000.exr"]              # one per atlas page; [] before baking
+//! texels_per_metre = 32.0                   # optional: checked against the atlas
+//! gutter = 4                                # optional: checked against the atlas
 //! ```
+//!
+//! With a `[lightmap]` section, [`build`] reads the atlas ([`crate::lightmap::read_atlas_glb`]):
+//! each light-mapped mesh's vertices and indices are replaced by the atlas's (matched by order
+//! and name; a mismatch is an error naming the `.glb`), so `Mesh::uv1` holds the light-map UVs,
+//! and [`Scene::lightmap`] holds the atlas and the page paths. [`SceneFile::with_lightmap`] adds
+//! the section to a file; [`SceneFile::for_geometry`] wraps a `.xml`/`.gltf`/`.glb`/`.obj` scene.
 //!
 //! [`parse`] checks, in this order: the TOML syntax, the `schema`, the `version`, the fields
 //! (unknown ones are errors), then every value ([`SceneFile::validate`]); names that refer to
@@ -96,6 +108,27 @@ pub struct SceneFile {
     /// Real-time hints by mesh name.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub objects: BTreeMap<String, ObjectHints>,
+    /// The light map: atlas and baked pages.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lightmap: Option<LightmapEntry>,
+}
+
+/// The `[lightmap]` section: the atlas `.glb` ([`crate::lightmap::write_atlas_glb`]) and one
+/// image per page, relative to the scene file's folder.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightmapEntry {
+    /// The atlas (`.glb`).
+    pub atlas: String,
+    /// One image per atlas page (normally half-float EXR), in page order; empty before baking.
+    #[serde(default)]
+    pub pages: Vec<String>,
+    /// The atlas's density (texels per metre); checked against the atlas when given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub texels_per_metre: Option<f32>,
+    /// The atlas's gutter in texels; checked against the atlas when given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gutter: Option<u32>,
 }
 
 /// One geometry file.
@@ -247,7 +280,70 @@ impl SceneFile {
             materials: BTreeMap::new(),
             emitters: Vec::new(),
             objects: BTreeMap::new(),
+            lightmap: None,
         }
+    }
+
+    /// A file whose only geometry is `file` (a `.xml`, `.gltf`, `.glb` or `.obj`, absolute or
+    /// relative to the scene file that will hold this), to which a `[lightmap]` can be added.
+    pub fn for_geometry(file: &str) -> SceneFile {
+        SceneFile {
+            geometry: vec![GeometryEntry {
+                file: file.to_string(),
+                transform: None,
+            }],
+            ..SceneFile::new()
+        }
+    }
+
+    /// This file with a `[lightmap]` section for `atlas` (written by
+    /// [`crate::lightmap::write_atlas_glb`] to `atlas_glb`) and its baked `pages` (one per atlas
+    /// page, or none before baking), paths relative to the folder of the scene file that will
+    /// hold it. Density and gutter are recorded for the check on load.
+    pub fn with_lightmap(
+        mut self,
+        atlas_glb: &str,
+        pages: Vec<String>,
+        atlas: &crate::lightmap::LightmapAtlas,
+    ) -> SceneFile {
+        self.lightmap = Some(LightmapEntry {
+            atlas: atlas_glb.to_string(),
+            pages,
+            texels_per_metre: Some(atlas.texels_per_metre),
+            gutter: Some(atlas.gutter),
+        });
+        self
+    }
+
+    /// This file with every relative path (geometry, environment map, material files, light
+    /// map) made absolute against `base` (the folder of the file it was read from), so that it
+    /// can be written to another folder.
+    pub fn with_absolute_paths(mut self, base: &Path) -> SceneFile {
+        let abs = |p: &str| -> String {
+            if Path::new(p).is_absolute() {
+                p.to_string()
+            } else {
+                base.join(p).to_string_lossy().into_owned()
+            }
+        };
+        for g in &mut self.geometry {
+            g.file = abs(&g.file);
+        }
+        if let Some(e) = &mut self.environment {
+            if let Some(m) = &mut e.map {
+                *m = abs(m);
+            }
+        }
+        for spec in self.materials.values_mut() {
+            *spec = resolve_spec_path(base, spec);
+        }
+        if let Some(l) = &mut self.lightmap {
+            l.atlas = abs(&l.atlas);
+            for p in &mut l.pages {
+                *p = abs(p);
+            }
+        }
+        self
     }
 
     /// Checks every value; the error names the field.
@@ -374,6 +470,22 @@ impl SceneFile {
                     return Err(format!(
                         "emitter[{i}]: a transform applies to a shape, not an object"
                     ));
+                }
+            }
+        }
+        if let Some(l) = &self.lightmap {
+            if l.atlas.trim().is_empty() {
+                return Err("lightmap.atlas is empty".into());
+            }
+            let mut seen = std::collections::HashSet::new();
+            for (i, p) in l.pages.iter().enumerate() {
+                if p.trim().is_empty() || !seen.insert(p.as_str()) {
+                    return Err(format!("lightmap.pages[{i}] {p:?} is empty or given twice"));
+                }
+            }
+            if let Some(d) = l.texels_per_metre {
+                if !(d.is_finite() && d > 0.0) {
+                    return Err(format!("lightmap.texels_per_metre {d} must be > 0"));
                 }
             }
         }
@@ -664,6 +776,59 @@ pub fn build(path: &Path, file: &SceneFile) -> Result<Scene> {
         if !found {
             return Err(fmt(format!("objects: no mesh named {name:?}")));
         }
+    }
+    if let Some(l) = &file.lightmap {
+        let atlas_file = base.join(&l.atlas);
+        if !atlas_file.exists() {
+            return Err(SceneError::MissingFile {
+                path: path.to_path_buf(),
+                referenced: atlas_file,
+            });
+        }
+        let atlas = crate::lightmap::read_atlas_glb(&atlas_file, &mut scene)?;
+        let glb = |p: String| SceneError::format(&atlas_file, p);
+        if let Some(d) = l.texels_per_metre {
+            if d != atlas.texels_per_metre {
+                return Err(glb(format!(
+                    "made at {} texels per metre, {} says {d}",
+                    atlas.texels_per_metre,
+                    path.display()
+                )));
+            }
+        }
+        if let Some(g) = l.gutter {
+            if g != atlas.gutter {
+                return Err(glb(format!(
+                    "made with a {}-texel gutter, {} says {g}",
+                    atlas.gutter,
+                    path.display()
+                )));
+            }
+        }
+        if !l.pages.is_empty() && l.pages.len() != atlas.pages as usize {
+            return Err(fmt(format!(
+                "lightmap.pages names {} images, the atlas {} has {} pages",
+                l.pages.len(),
+                atlas_file.display(),
+                atlas.pages
+            )));
+        }
+        let mut pages = Vec::new();
+        for p in &l.pages {
+            let full = base.join(p);
+            if !full.exists() {
+                return Err(SceneError::MissingFile {
+                    path: path.to_path_buf(),
+                    referenced: full,
+                });
+            }
+            pages.push(full);
+        }
+        scene.lightmap = Some(crate::lightmap::SceneLightmap {
+            atlas,
+            atlas_file,
+            pages,
+        });
     }
     Ok(scene)
 }

@@ -44,8 +44,8 @@ pub enum MetricArg {
 #[derive(Debug, clap::Args)]
 pub struct FitArgs {
     /// The model to fit.
-    #[arg(long, value_enum)]
-    pub model: ModelArg,
+    #[arg(long, value_enum, required_unless_present = "merge")]
+    pub model: Option<ModelArg>,
     /// Kurt: number of reflection lobes.
     #[arg(long, default_value_t = 1)]
     pub lobes: usize,
@@ -85,9 +85,17 @@ pub struct FitArgs {
     /// Output folder: NAME.json per input and summary.csv (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    #[command(flatten)]
+    pub shard: crate::shard::ShardArgs,
+    /// Assemble the shards of a batch (`--shard K/N` runs) into --out: checks that all N are
+    /// there, copies the fits of shards run into other folders (given as INPUTs) and writes
+    /// summary.csv as one unsharded run would.
+    #[arg(long, conflicts_with_all = ["shard", "shard_count", "model", "plots", "force"])]
+    pub merge: bool,
     /// Measured inputs: .binary (MERL), .bsdf (RGL), .gonio, .dat, nbrdf:NAME, nbrdf:FILE#NAME,
-    /// nbrdf:FILE#* (every material of a network file).
-    #[arg(value_name = "INPUT", required = true)]
+    /// nbrdf:FILE#* (every material of a network file). With --merge: the shards' output
+    /// folders, when they are not --out.
+    #[arg(value_name = "INPUT", required_unless_present = "merge")]
     pub inputs: Vec<String>,
 }
 
@@ -157,7 +165,10 @@ fn parse_range(s: &str) -> std::result::Result<(String, f64, f64), String> {
 impl FitArgs {
     /// The batch options, after the checks that do not depend on the inputs.
     pub fn batch_options(&self) -> Result<BatchOptions> {
-        let model = ModelChoice::from(self.model);
+        let Some(model) = self.model else {
+            bail!("--model is required");
+        };
+        let model = ModelChoice::from(model);
         if model != ModelChoice::Kurt {
             if !self.fix.is_empty() || !self.range.is_empty() {
                 bail!("--fix and --range apply to --model kurt only");
@@ -190,6 +201,7 @@ impl FitArgs {
             out: self.out.clone(),
             progress: true,
             suffix: self.suffix.clone().unwrap_or_default(),
+            shard: self.shard.resolve()?,
         })
     }
 }
@@ -202,11 +214,28 @@ pub fn run(args: &FitArgs) -> Result<()> {
 /// Runs `lustre fit` with `fitter`: the batch, a line per input, the plots; an error when any
 /// input (or plot) failed, after everything else is done.
 pub fn run_with(args: &FitArgs, fitter: &dyn Fitter) -> Result<()> {
+    if args.merge {
+        return merge(args);
+    }
     let opts = args.batch_options()?;
     let summary = batch::run(&args.inputs, &opts, fitter)
         .with_context(|| format!("fitting into {}", args.out.display()))?;
     for r in summary.batch_rows() {
         println!("{}", row_line(r));
+    }
+    if let Some((k, n)) = opts.shard {
+        println!(
+            "shard {k}/{n}: {} inputs: {} fitted, {} resumed, {} failed; {} written (when all {n} \
+             shards are done: lustre fit --merge --out {})",
+            summary.batch,
+            summary.fitted(),
+            summary.resumed(),
+            summary.failed(),
+            summary.summary_path.display(),
+            args.out.display()
+        );
+        // A failed input is a row of the merged summary; the merge reports it.
+        return Ok(());
     }
     let mut plot_failures = 0;
     if args.plots {
@@ -240,6 +269,29 @@ pub fn run_with(args: &FitArgs, fitter: &dyn Fitter) -> Result<()> {
     }
     if plot_failures > 0 {
         bail!("the plots of {plot_failures} inputs failed");
+    }
+    Ok(())
+}
+
+/// `lustre fit --merge`: the shards into one folder and its summary.
+fn merge(args: &FitArgs) -> Result<()> {
+    let from: Vec<PathBuf> = args.inputs.iter().map(PathBuf::from).collect();
+    let summary = batch::merge(&args.out, &from)
+        .with_context(|| format!("merging shards into {}", args.out.display()))?;
+    println!(
+        "{}: {} inputs merged: {} with a fit, {} failed",
+        summary.summary_path.display(),
+        summary.batch,
+        summary.batch - summary.failed(),
+        summary.failed()
+    );
+    if summary.failed() > 0 {
+        bail!(
+            "{} of {} inputs failed (see {})",
+            summary.failed(),
+            summary.batch,
+            summary.summary_path.display()
+        );
     }
     Ok(())
 }

@@ -8,6 +8,7 @@ mod plot_cmd;
 mod reference_cmd;
 mod scene_cmd;
 mod score_cmd;
+mod shard;
 
 use anyhow::Context;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};

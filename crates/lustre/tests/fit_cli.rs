@@ -1,5 +1,6 @@
 //! End-to-end runs of `lustre fit`: a Kurt fit of a synthetic goniometric table next to a broken
-//! file (resume, plots, CSV, exit status), a GGX fit of a neural BRDF, bad arguments.
+//! file (resume, plots, CSV, exit status), a GGX fit of a neural BRDF, bad arguments, a batch
+//! split into shards (by `--shard K/N` and by a job array's index) and merged.
 
 use lustre_brdf::material;
 use lustre_brdf::measured::gonio::{GonioAxes, GonioTable};
@@ -188,4 +189,131 @@ fn bad_arguments_are_clear_errors() {
         assert!(!t.contains("panicked"), "{args:?}: {t}");
         assert!(t.contains(needle), "{args:?}: {t}");
     }
+}
+
+/// The material JSON files and summary.csv of a folder with every wall time (`time_s`) taken
+/// out: the only numbers two runs of the same batch may differ in.
+fn batch_files(dir: &Path) -> Vec<(String, String)> {
+    let mut files: Vec<(String, String)> = std::fs::read_dir(dir)
+        .expect("folder")
+        .flatten()
+        .filter(|e| e.path().is_file())
+        .map(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let text = std::fs::read_to_string(e.path()).expect("text");
+            let text = if name.ends_with(".json") {
+                let mut v: serde_json::Value = serde_json::from_str(&text).expect("json");
+                v["fit"]["time_s"] = 0.into();
+                v.to_string()
+            } else {
+                // summary.csv: time_s is the 17th column, before the (quoted) message.
+                text.lines()
+                    .map(|l| {
+                        let mut c: Vec<&str> = l.splitn(18, ',').collect();
+                        assert_eq!(c.len(), 18, "{l}");
+                        c[16] = "0";
+                        c.join(",")
+                    })
+                    .collect::<Vec<_>>()
+                    .join("\n")
+            };
+            (name, text)
+        })
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn sharded_batch_merges_to_the_unsharded_result() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut inputs = Vec::new();
+    for (name, m) in [("a", 0.1), ("b", 0.2), ("c", 0.3)] {
+        let truth =
+            lustre_brdf::catalog::resolve(&format!("kurt(kd=0.1, ks=0.6, mx={m}, my={m}, r0=0.9)"))
+                .expect("model");
+        let axes = GonioAxes::regular_degrees(15.0, 360.0, 10.0, 20.0, false).expect("axes");
+        let path = dir.path().join(format!("{name}.gonio"));
+        GonioTable::tabulate(truth.as_ref(), axes)
+            .expect("table")
+            .write(&path)
+            .expect("write");
+        inputs.push(path);
+    }
+    let fit = |out: &Path, extra: &[&str], envs: &[(&str, &str)]| {
+        let mut c = lustre();
+        c.args(["fit", "--model", "kurt", "--jobs", "1", "--out"])
+            .arg(out)
+            .args(extra)
+            .args(&inputs);
+        for (k, v) in envs {
+            c.env(k, v);
+        }
+        let o = c.output().expect("runs");
+        assert!(o.status.success(), "{}", text(&o));
+        text(&o)
+    };
+    let whole = dir.path().join("whole");
+    fit(&whole, &[], &[]);
+    // Two shards into one folder: one by --shard, one by a Kubernetes Indexed Job's index.
+    let shared = dir.path().join("shared");
+    let t = fit(&shared, &["--shard", "0/2"], &[]);
+    assert!(
+        t.contains("shard 0/2: 2 inputs") && t.contains("--merge"),
+        "{t}"
+    );
+    assert!(!shared.join("summary.csv").exists());
+    let o = lustre()
+        .args(["fit", "--merge", "--out"])
+        .arg(&shared)
+        .output()
+        .expect("runs");
+    assert!(
+        !o.status.success() && text(&o).contains("missing"),
+        "{}",
+        text(&o)
+    );
+    fit(
+        &shared,
+        &["--shard-count", "2"],
+        &[("JOB_COMPLETION_INDEX", "1")],
+    );
+    let o = lustre()
+        .args(["fit", "--merge", "--out"])
+        .arg(&shared)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("3 inputs merged"), "{}", text(&o));
+    assert_eq!(batch_files(&shared), batch_files(&whole));
+    // Shards in their own folders (a SLURM array from 1), merged into another.
+    let parts = [dir.path().join("p0"), dir.path().join("p1")];
+    for (k, part) in parts.iter().enumerate() {
+        let id = (k + 1).to_string();
+        fit(
+            part,
+            &["--shard-count", "2"],
+            &[("SLURM_ARRAY_TASK_ID", &id), ("SLURM_ARRAY_TASK_MIN", "1")],
+        );
+    }
+    let merged = dir.path().join("merged");
+    let o = lustre()
+        .args(["fit", "--merge", "--out"])
+        .arg(&merged)
+        .args(&parts)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(batch_files(&merged), batch_files(&whole));
+    // --shard-count outside a job array is a clear error.
+    let o = lustre()
+        .args(["fit", "--model", "kurt", "--shard-count", "2", "--out"])
+        .arg(dir.path().join("x"))
+        .arg(&inputs[0])
+        .env_remove("JOB_COMPLETION_INDEX")
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .output()
+        .expect("runs");
+    assert!(!o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("--shard K/2"), "{}", text(&o));
 }

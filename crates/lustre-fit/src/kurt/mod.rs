@@ -235,19 +235,30 @@ pub fn fit_masked(
 
 /// Σ_t a_t |p_measured − p_model| of one hemisphere, per channel.
 fn set_error(set: &PairSet, kd: [f64; 3], lobes: &[(LobeConst, [f64; 3])]) -> [f64; 3] {
-    (0..set.len())
+    // Fixed chunks summed in order: the same bits whatever the thread count (rayon's `reduce`
+    // groups the sums by how the work was split).
+    const CHUNK: usize = 256;
+    (0..set.len().div_ceil(CHUNK))
         .into_par_iter()
-        .map(|t| {
-            let mut p = kd.map(|k| k / PI * set.cos_o[t]);
-            for (c, ks) in lobes {
-                let g = c.eval(set, t);
+        .map(|c| {
+            let mut e = [0.0; 3];
+            for t in c * CHUNK..((c + 1) * CHUNK).min(set.len()) {
+                let mut p = kd.map(|k| k / PI * set.cos_o[t]);
+                for (lobe, ks) in lobes {
+                    let g = lobe.eval(set, t);
+                    for ch in 0..3 {
+                        p[ch] += ks[ch] * g;
+                    }
+                }
                 for ch in 0..3 {
-                    p[ch] += ks[ch] * g;
+                    e[ch] += set.weight[t] * (set.data[ch][t] - p[ch]).abs();
                 }
             }
-            std::array::from_fn(|ch| set.weight[t] * (set.data[ch][t] - p[ch]).abs())
+            e
         })
-        .reduce(|| [0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
+        .collect::<Vec<[f64; 3]>>()
+        .into_iter()
+        .fold([0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
 }
 
 /// The Eq. 3.7 error of a Kurt model on the samples, mean over channels (the fast path).
@@ -292,7 +303,10 @@ pub fn l1_error(data: &dyn Bsdf, model: &dyn Bsdf, transmission: bool) -> Result
                     set.weight[t] * (set.data[ch][t] - f[ch] * wo.z.abs()).abs()
                 })
             })
-            .reduce(|| [0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
+            // Summed in order after collecting: the same bits whatever the thread count.
+            .collect::<Vec<[f64; 3]>>()
+            .into_iter()
+            .fold([0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]])
     };
     let r = one(&s.refl, false);
     let t = one(&s.trans, true);
