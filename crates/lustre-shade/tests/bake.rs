@@ -793,3 +793,47 @@ fn partially_buried_texels_are_not_brighter_than_their_valid_points() {
     assert!(checked > 70, "only {checked} partially buried texels");
     assert!(worst > 0.5, "no lit partially buried texel was checked");
 }
+
+#[test]
+fn modern_hall_floor_under_walls_and_steps_does_not_leak() {
+    use lustre_scene::lightmap::{build_atlas, AtlasOptions};
+    let path = lustre_env::shared_data_dir().join("scenes/modern_hall/mitsuba/scene.xml");
+    let mut scene = Scene::load(&path).expect("Modern Hall");
+    let (at, report) = build_atlas(
+        &mut scene,
+        &AtlasOptions {
+            texels_per_metre: 4.0,
+            ..AtlasOptions::default()
+        },
+    )
+    .expect("atlas");
+    let opts = BakeOptions {
+        spp: 8,
+        bounces: 2,
+        seed: 1,
+        tile: 64,
+        denoiser: Denoiser::ATrous(Default::default()),
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let t0 = std::time::Instant::now();
+    let a = bake(&scene, &at, &opts, dir.path());
+    let p = &a.report.pages[0];
+    eprintln!(
+        "Modern Hall at 4 texels/m: {} charts, {}×{} × {} page(s), {} covered texels, {} buried (filled {}), bake {:.2} s",
+        report.charts,
+        at.width,
+        at.height,
+        at.pages,
+        p.covered_texels,
+        p.buried_filled + p.buried_unfilled,
+        p.buried_filled,
+        t0.elapsed().as_secs_f64()
+    );
+    assert!(
+        p.buried_filled > 0,
+        "no texel under a wall or step was found buried"
+    );
+    let (checked, worst) = check_partial_texels(&scene, &a, 2, 150);
+    eprintln!("Modern Hall: {checked} partially buried texels checked, largest baked/dense ratio {worst:.3}");
+    assert!(checked > 50, "only {checked} partially buried texels");
+}

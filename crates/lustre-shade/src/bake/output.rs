@@ -15,7 +15,7 @@ use std::time::Instant;
 
 /// File name of page `p`'s EXR in the output folder.
 pub fn page_file_name(p: u32) -> String {
-    format!("lightmap_page{p}.exr")
+    format!("lightmap_{p:03}.exr")
 }
 
 /// Name of the report in the output folder.
