@@ -7,8 +7,10 @@
 //! - [`scene`], [`render`], [`harness`]: evaluation scenes, image rendering, the comparisons.
 //! - [`truth`]: the exact environment integral over every texel (the truth harness).
 //! - [`accel`], [`path`]: ray casting (BVH, watertight triangles) and the path-traced reference.
+//! - [`bake`]: light maps of irradiance (000 §4.3), tiled, resumable, shardable, denoised.
 
 pub mod accel;
+pub mod bake;
 pub mod error;
 pub mod harness;
 pub mod image;

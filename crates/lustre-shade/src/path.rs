@@ -318,7 +318,7 @@ pub fn mapped_normal(ns: DVec3, t: DVec3, sign: f64, n_ts: DVec3) -> (DVec3, DVe
 }
 
 /// A small offset that moves a spawned ray off its surface (scaled with the coordinates).
-fn offset(p: DVec3, ng: DVec3, w: DVec3) -> DVec3 {
+pub(crate) fn offset(p: DVec3, ng: DVec3, w: DVec3) -> DVec3 {
     let eps = 2e-5 * (1.0 + p.abs().max_element());
     if w.dot(ng) >= 0.0 {
         p + ng * eps
@@ -569,11 +569,7 @@ impl<'a, 's> PathTracer<'a, 's> {
 
     /// Radiance arriving at `o` along unit direction `d` (the path tracer proper).
     pub fn radiance(&self, o: DVec3, d: DVec3, rng: &mut SplitMix64) -> Rgb {
-        use crate::kernel::Strategy;
-        let strategy = self.opts.strategy;
-        let use_bsdf_hits = strategy != Strategy::Light;
-        let mis = strategy == Strategy::Mis;
-        let mut st = PathState {
+        let st = PathState {
             l: Rgb::ZERO,
             beta: Rgb::ONE,
             prev_pdf: 0.0,
@@ -581,8 +577,62 @@ impl<'a, 's> PathTracer<'a, 's> {
             prev_p: o,
             eta_scale: 1.0,
         };
+        self.trace(o, d, 0, st, rng)
+    }
+
+    /// Irradiance E = ∫ L(p, ω) cos θ dω (the path tracer's units) on the side of `ns` at the
+    /// surface point `p` with geometric normal `ng`: π times the radiance a white Lambertian
+    /// surface at `p` would reflect (Lo = E/π, 000 Eq. 4.1 with kd = 1), estimated by the same
+    /// next-event estimation, MIS and continuation as [`PathTracer::radiance`] from a first
+    /// vertex at `p` (depth 1, as if a camera ray had reached it; `max_depth` = 2 is direct
+    /// light only). `ng` is turned to `ns`'s side; ray origins are offset along it.
+    pub fn irradiance(&self, p: DVec3, ng: DVec3, ns: DVec3, rng: &mut SplitMix64) -> Rgb {
+        let ng = if ng.dot(ns) < 0.0 { -ng } else { ng };
+        let frame = ShadingFrame::new(ns, ns.any_orthonormal_vector());
+        let v = Vertex {
+            p,
+            ng,
+            frame,
+            uv: [0.0; 2],
+            prim: usize::MAX,
+            ns,
+        };
+        let mut st = PathState {
+            l: Rgb::ZERO,
+            beta: Rgb::ONE,
+            prev_pdf: 0.0,
+            prev_delta: true,
+            prev_p: p,
+            eta_scale: 1.0,
+        };
+        if self.opts.max_depth < 2 {
+            return Rgb::ZERO;
+        }
+        let white = lustre_brdf::models::lambert::Lambert { kd: Rgb::ONE };
+        let next = self.scatter(&white, &v, frame, ng, ns, 1, &mut st, rng);
+        let l = match next {
+            Some((o, d)) => self.trace(o, d, 1, st, rng),
+            None => st.l,
+        };
+        l * std::f64::consts::PI
+    }
+
+    /// Follows the path from the ray o + t·d after `depth` segments with state `st`; the
+    /// radiance gathered.
+    fn trace(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        depth: u32,
+        mut st: PathState,
+        rng: &mut SplitMix64,
+    ) -> Rgb {
+        use crate::kernel::Strategy;
+        let strategy = self.opts.strategy;
+        let use_bsdf_hits = strategy != Strategy::Light;
+        let mis = strategy == Strategy::Mis;
         let (mut o, mut d) = (o, d);
-        let mut depth = 0u32; // segments so far
+        let mut depth = depth; // segments so far
         loop {
             depth += 1;
             let hit = self.intersect(o, d);

@@ -1,5 +1,6 @@
 //! The lustre command line: thin over the libraries.
 
+mod bake_cmd;
 mod compare_cmd;
 mod demo_cmd;
 mod fit_cmd;
@@ -41,6 +42,9 @@ enum Command {
     Compare(compare_cmd::CompareArgs),
     /// Path-traced reference of a scene (lustre TOML, glTF, OBJ, Mitsuba XML), resumable.
     Reference(reference_cmd::ReferenceArgs),
+    /// Light maps: atlas, multi-bounce irradiance in resumable tiles, denoised EXR pages and an
+    /// updated scene file.
+    Bake(bake_cmd::BakeArgs),
     /// Scenes: `lustre scene info SCENE` prints what lustre reads from a glTF, OBJ, Mitsuba XML
     /// or lustre scene file.
     Scene(scene_cmd::SceneArgs),
@@ -119,6 +123,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Demo(args) => demo_cmd::run(&args),
         Command::Compare(args) => compare_cmd::run(&args),
         Command::Reference(args) => reference_cmd::run(&args),
+        Command::Bake(args) => bake_cmd::run(&args),
         Command::Scene(args) => scene_cmd::run(&args),
         Command::Score(args) => score_cmd::run(&args),
         Command::List => list(),

@@ -1,0 +1,143 @@
+//! Light-mapped diffuse shading on the CPU (000 §4.3, Eq. 4.1): the image the real-time
+//! renderer draws from the baked maps, without its glossy part. Per pixel, jittered camera rays
+//! (the path tracer's box filter and sample seeds); at the first hit, the emitted radiance (front
+//! side) plus kd·E/π, with kd the material's [`super::diffuse_albedo`] at the hit and E read
+//! bilinearly from the hit's light-map page at its uv1 (texel centres at ((x+½)/W, (y+½)/H),
+//! clamped at the page border); meshes without a light map are black; rays that miss see the
+//! environment. Comparing this image with the path tracer's image of the diffuse scene
+//! ([`super::diffuse_path_scene`]) measures the whole bake.
+
+use super::raster::Raster;
+use super::{diffuse_albedo, diffuse_path_scene};
+use crate::image::Image;
+use crate::path::{PathCamera, PathOptions, PathTracer};
+use crate::{Result, ShadeError};
+use glam::{DVec3, Vec2};
+use lustre_brdf::rgb::Rgb;
+use lustre_brdf::sampling::SplitMix64;
+use lustre_scene::lightmap::LightmapAtlas;
+use lustre_scene::Scene;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// Bilinear lookup of `page` (W×H texels) at texel-unit coordinates (u·W, v·H).
+pub fn bilinear(page: &[[f32; 3]], w: u32, h: u32, x: f64, y: f64) -> Rgb {
+    let fx = (x - 0.5).clamp(0.0, f64::from(w - 1));
+    let fy = (y - 0.5).clamp(0.0, f64::from(h - 1));
+    let (x0, y0) = (fx.floor() as u32, fy.floor() as u32);
+    let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+    let (tx, ty) = (fx - f64::from(x0), fy - f64::from(y0));
+    let at = |x: u32, y: u32| Rgb(page[(y * w + x) as usize].map(f64::from));
+    (at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx) * (1.0 - ty)
+        + (at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx) * ty
+}
+
+/// Renders `scene` at `camera` (w×h, `spp` jittered samples per pixel, seeded by `seed`)
+/// shaded from the light maps `pages` of `atlas` (as [`super::assemble`] returns them).
+#[allow(clippy::too_many_arguments)]
+pub fn render_lightmapped(
+    scene: &Scene,
+    atlas: &LightmapAtlas,
+    pages: &[Vec<[f32; 3]>],
+    camera: &PathCamera,
+    w: usize,
+    h: usize,
+    spp: u32,
+    seed: u64,
+) -> Result<Image> {
+    let n = (atlas.width * atlas.height) as usize;
+    if pages.len() != atlas.pages as usize || pages.iter().any(|p| p.len() != n) {
+        return Err(ShadeError::Parameter(format!(
+            "{} light-map pages do not fit an atlas of {} pages of {}×{}",
+            pages.len(),
+            atlas.pages,
+            atlas.width,
+            atlas.height
+        )));
+    }
+    if w == 0 || h == 0 || spp == 0 {
+        return Err(ShadeError::Parameter(format!(
+            "image {w}×{h} at {spp} spp is empty"
+        )));
+    }
+    let (ps, spec, _) = diffuse_path_scene(scene)?;
+    let pt = PathTracer::new(&ps, PathOptions::default())?;
+    let raster = Raster::new(scene, atlas, atlas.width.max(atlas.height))?;
+    let mut mapped = vec![u32::MAX; ps.geometry.positions.len()];
+    for (k, t) in raster.triangles.iter().enumerate() {
+        mapped[t.prim as usize] = k as u32;
+    }
+    let g = &ps.geometry;
+    let shade = |o: DVec3, d: DVec3| -> Rgb {
+        let Some(hit) = pt.intersect(o, d) else {
+            return ps.environment.as_ref().map_or(Rgb::ZERO, |e| e.eval(d));
+        };
+        let prim = hit.prim;
+        let b = hit.bary;
+        let tri = &g.positions[prim];
+        let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+        let ns = g
+            .normals
+            .get(prim)
+            .map_or(ng, |nn| nn[0] * b[0] + nn[1] * b[1] + nn[2] * b[2]);
+        let front = ns.dot(-d) > 0.0;
+        let mut l = match g.emission.get(prim) {
+            Some(e) if front => *e,
+            _ => Rgb::ZERO,
+        };
+        let k = mapped[prim];
+        if k != u32::MAX {
+            let t = &raster.triangles[k as usize];
+            let uv1 = [0, 1].map(|c| b[0] * t.uv[0][c] + b[1] * t.uv[1][c] + b[2] * t.uv[2][c]);
+            let e = bilinear(
+                &pages[t.page as usize],
+                atlas.width,
+                atlas.height,
+                uv1[0],
+                uv1[1],
+            );
+            let uv0 = g.uvs.get(prim).map_or([0.0; 2], |u| {
+                [0, 1].map(|c| b[0] * u[0][c] + b[1] * u[1][c] + b[2] * u[2][c])
+            });
+            let m = g.material[prim] as usize;
+            let two_sided = scene.materials[m].two_sided;
+            if front || two_sided {
+                let kd = diffuse_albedo(
+                    &scene.materials[m],
+                    &scene.textures,
+                    &[
+                        Vec2::new(uv0[0] as f32, uv0[1] as f32),
+                        Vec2::new(
+                            (uv1[0] / f64::from(atlas.width)) as f32,
+                            (uv1[1] / f64::from(atlas.height)) as f32,
+                        ),
+                    ],
+                    spec[m],
+                );
+                l += kd * e * (1.0 / PI);
+            }
+        }
+        l
+    };
+    let data: Vec<[f32; 3]> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let mut sum = Rgb::ZERO;
+            for k in 0..spp {
+                let mut rng = SplitMix64::new(
+                    seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                        ^ u64::from(k).wrapping_mul(0xC2B2_AE3D_27D4_EB4F),
+                );
+                let (jx, jy) = (rng.next_f64(), rng.next_f64());
+                let d = camera.direction(x as f64 + jx, y as f64 + jy, w, h);
+                let c = shade(camera.origin, d);
+                if c.is_finite() {
+                    sum += c;
+                }
+            }
+            (sum / f64::from(spp)).0.map(|c| c as f32)
+        })
+        .collect();
+    Image::from_data(w, h, data)
+}

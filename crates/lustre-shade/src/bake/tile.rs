@@ -1,0 +1,291 @@
+//! Tiles: the unit of baking, resuming and sharding.
+//!
+//! Tile k (pages in order, tiles of [`super::BakeOptions::tile`]² texels row-major within a page;
+//! edge tiles are smaller) is stored in `OUT/tiles/page{P}_tile{K}.bin`, written atomically:
+//!
+//! ```text
+//! magic "LBAKTIL1" | hash u64 | page u32 | tile u32 | x0 u32 | y0 u32 | w u32 | h u32
+//! | w·h texel records (17 × u32/f32 each, row-major) | CRC-32 of everything before it
+//! ```
+//! (little-endian; the hash is [`super::bake_hash`]). A file whose size, magic, CRC, rectangle
+//! or hash is wrong is reported (named) and baked again.
+
+use super::raster::Raster;
+use super::trace::{TexelBaker, TexelRecord};
+use super::{bake_hash, diffuse_path_scene, BakeOptions};
+use crate::path::{PathOptions, PathTracer};
+use crate::{Result, ShadeError};
+use lustre_scene::lightmap::LightmapAtlas;
+use lustre_scene::Scene;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// First bytes of a tile file (the format version is its last character).
+pub const MAGIC: &[u8; 8] = b"LBAKTIL1";
+const HEADER: usize = 8 + 8 + 6 * 4;
+const RECORD: usize = 17 * 4;
+
+/// A tile: its global index, page and texel rectangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TileRect {
+    /// Global index (pages in order, row-major within a page).
+    pub index: u32,
+    /// Page.
+    pub page: u32,
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// Width in texels.
+    pub w: u32,
+    /// Height in texels.
+    pub h: u32,
+}
+
+/// Every tile of an atlas, in index order.
+pub fn tiles(atlas: &LightmapAtlas, tile: u32) -> Vec<TileRect> {
+    let (tx, ty) = (atlas.width.div_ceil(tile), atlas.height.div_ceil(tile));
+    let mut out = vec![];
+    for page in 0..atlas.pages {
+        for j in 0..ty {
+            for i in 0..tx {
+                let (x0, y0) = (i * tile, j * tile);
+                out.push(TileRect {
+                    index: out.len() as u32,
+                    page,
+                    x0,
+                    y0,
+                    w: tile.min(atlas.width - x0),
+                    h: tile.min(atlas.height - y0),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The file of tile `r` under `out_dir`.
+pub fn tile_path(out_dir: &Path, r: &TileRect) -> PathBuf {
+    out_dir
+        .join("tiles")
+        .join(format!("page{}_tile{:05}.bin", r.page, r.index))
+}
+
+/// The bytes of a tile file.
+pub fn encode(hash: u64, r: &TileRect, texels: &[TexelRecord]) -> Vec<u8> {
+    let mut b = Vec::with_capacity(HEADER + texels.len() * RECORD + 4);
+    b.extend_from_slice(MAGIC);
+    b.extend_from_slice(&hash.to_le_bytes());
+    for v in [r.page, r.index, r.x0, r.y0, r.w, r.h] {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    for t in texels {
+        let f = |b: &mut Vec<u8>, v: &[f32; 3]| {
+            for c in v {
+                b.extend_from_slice(&c.to_le_bytes());
+            }
+        };
+        f(&mut b, &t.e);
+        f(&mut b, &t.var);
+        b.extend_from_slice(&t.valid.to_le_bytes());
+        b.extend_from_slice(&t.chart.to_le_bytes());
+        f(&mut b, &t.position);
+        f(&mut b, &t.normal);
+        f(&mut b, &t.albedo);
+    }
+    let crc = crc32fast::hash(&b);
+    b.extend_from_slice(&crc.to_le_bytes());
+    b
+}
+
+/// Reads a tile file's bytes back; `Err` says what is wrong with it.
+pub fn decode(
+    bytes: &[u8],
+    hash: u64,
+    r: &TileRect,
+) -> std::result::Result<Vec<TexelRecord>, String> {
+    let n = (r.w * r.h) as usize;
+    let want = HEADER + n * RECORD + 4;
+    if bytes.len() < HEADER || &bytes[..8] != MAGIC {
+        return Err("not a lustre bake tile (bad magic or truncated header)".into());
+    }
+    let u32_at =
+        |o: usize| u32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+    let h = u64::from_le_bytes([
+        bytes[8], bytes[9], bytes[10], bytes[11], bytes[12], bytes[13], bytes[14], bytes[15],
+    ]);
+    if h != hash {
+        return Err(format!(
+            "baked for another scene or other settings (hash {h:016x}, expected {hash:016x})"
+        ));
+    }
+    let hdr = [16, 20, 24, 28, 32, 36].map(u32_at);
+    if hdr != [r.page, r.index, r.x0, r.y0, r.w, r.h] {
+        return Err(format!(
+            "holds page {} tile {} at ({}, {}) {}×{}, expected page {} tile {} at ({}, {}) {}×{}",
+            hdr[0], hdr[1], hdr[2], hdr[3], hdr[4], hdr[5], r.page, r.index, r.x0, r.y0, r.w, r.h
+        ));
+    }
+    if bytes.len() != want {
+        return Err(format!(
+            "{} bytes, expected {want} (truncated?)",
+            bytes.len()
+        ));
+    }
+    let crc = u32_at(want - 4);
+    if crc32fast::hash(&bytes[..want - 4]) != crc {
+        return Err("checksum mismatch (corrupt)".into());
+    }
+    let f = |o: usize| f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+    let v3 = |o: usize| [f(o), f(o + 4), f(o + 8)];
+    Ok((0..n)
+        .map(|k| {
+            let o = HEADER + k * RECORD;
+            TexelRecord {
+                e: v3(o),
+                var: v3(o + 12),
+                valid: u32_at(o + 24),
+                chart: u32_at(o + 28),
+                position: v3(o + 32),
+                normal: v3(o + 44),
+                albedo: v3(o + 56),
+            }
+        })
+        .collect())
+}
+
+/// Reads tile `r` from `out_dir`: `Ok(None)` when the file does not exist, `Err(reason)` when
+/// it is unreadable, corrupt or mismatched.
+pub fn read_tile(
+    out_dir: &Path,
+    hash: u64,
+    r: &TileRect,
+) -> std::result::Result<Option<Vec<TexelRecord>>, String> {
+    let path = tile_path(out_dir, r);
+    match std::fs::read(&path) {
+        Ok(b) => decode(&b, hash, r).map(Some),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// What [`bake_tiles`] did.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TilesReport {
+    /// Tiles of this shard.
+    pub tiles: usize,
+    /// Tiles baked now.
+    pub baked: usize,
+    /// Tiles found complete on disk (resumed).
+    pub reused: usize,
+    /// Texels covered by a chart in the tiles baked now.
+    pub texels: u64,
+    /// Paths traced (valid samples) in the tiles baked now.
+    pub paths: u64,
+    /// Samples found invalid (under or inside geometry).
+    pub invalid_samples: u64,
+    /// Light-mapped triangles skipped for a zero area.
+    pub skipped_triangles: usize,
+    /// Seconds building the BVH, the diffuse scene and the coverage.
+    pub setup_seconds: f64,
+    /// Seconds tracing.
+    pub trace_seconds: f64,
+    /// Problems met (corrupt or mismatched tiles re-baked, material approximations).
+    pub warnings: Vec<String>,
+}
+
+/// Checks a `(K, N)` shard.
+pub fn check_shard(shard: Option<(u32, u32)>) -> Result<()> {
+    match shard {
+        Some((k, n)) if n == 0 || k >= n => Err(ShadeError::Parameter(format!(
+            "shard {k}/{n}: need 0 ≤ K < N"
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// Bakes the tiles of `shard` (`Some((K, N))`: the tiles whose index mod N is K; `None`: all)
+/// that `out_dir/tiles/` does not already hold intact, writing each atomically as it finishes.
+/// `progress(done, total)` after each tile of the shard (reused ones included). Errors: bad
+/// options or shard, an atlas that does not fit the scene, a scene without light, I/O.
+pub fn bake_tiles(
+    scene: &Scene,
+    atlas: &LightmapAtlas,
+    opts: &BakeOptions,
+    out_dir: &Path,
+    shard: Option<(u32, u32)>,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<TilesReport> {
+    opts.validate()?;
+    check_shard(shard)?;
+    let t0 = Instant::now();
+    let hash = bake_hash(scene, atlas, opts);
+    let (ps, spec, warnings) = diffuse_path_scene(scene)?;
+    let pt = PathTracer::new(
+        &ps,
+        PathOptions {
+            max_depth: opts.bounces + 1,
+            ..PathOptions::default()
+        },
+    )?;
+    let raster = Raster::new(scene, atlas, opts.tile)?;
+    let baker = TexelBaker {
+        scene,
+        ps: &ps,
+        pt: &pt,
+        raster: &raster,
+        spec: &spec,
+        opts,
+    };
+    let dir = out_dir.join("tiles");
+    std::fs::create_dir_all(&dir).map_err(|e| ShadeError::Io {
+        path: dir.clone(),
+        source: e,
+    })?;
+    let mine: Vec<TileRect> = tiles(atlas, opts.tile)
+        .into_iter()
+        .filter(|r| shard.is_none_or(|(k, n)| r.index % n == k))
+        .collect();
+    let mut report = TilesReport {
+        tiles: mine.len(),
+        skipped_triangles: raster.skipped,
+        warnings,
+        setup_seconds: t0.elapsed().as_secs_f64(),
+        ..TilesReport::default()
+    };
+    let t1 = Instant::now();
+    for (done, r) in mine.iter().enumerate() {
+        match read_tile(out_dir, hash, r) {
+            Ok(Some(_)) => {
+                report.reused += 1;
+                progress(done + 1, mine.len());
+                continue;
+            }
+            Ok(None) => {}
+            Err(why) => report.warnings.push(format!(
+                "{}: {why}; baking it again",
+                tile_path(out_dir, r).display()
+            )),
+        }
+        let texels: Vec<_> = (0..r.w * r.h)
+            .into_par_iter()
+            .map(|k| baker.texel(r.page, r.x0 + k % r.w, r.y0 + k / r.w))
+            .collect();
+        for (t, c) in &texels {
+            if t.covered() {
+                report.texels += 1;
+            }
+            report.paths += c.samples - c.invalid;
+            report.invalid_samples += c.invalid;
+        }
+        let recs: Vec<TexelRecord> = texels.into_iter().map(|(t, _)| t).collect();
+        let path = tile_path(out_dir, r);
+        lustre_brdf::error::write_atomic(&path, &encode(hash, r, &recs))?;
+        report.baked += 1;
+        progress(done + 1, mine.len());
+    }
+    report.trace_seconds = t1.elapsed().as_secs_f64();
+    Ok(report)
+}

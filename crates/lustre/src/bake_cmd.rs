@@ -1,0 +1,247 @@
+//! `lustre bake`: light maps of irradiance (000 §4.3, Eq. 4.1: Lo = kd·E/π) for any scene:
+//! the light-map atlas (the scene's TEXCOORD_1 when valid, else generated), the bake in
+//! resumable tiles, the assembly (buried fill, denoise, dilation) into half-float EXR pages,
+//! and an updated scene file that references them.
+
+use anyhow::{bail, Context};
+use indicatif::{ProgressBar, ProgressStyle};
+use lustre_scene::lightmap::{build_atlas, write_atlas_glb, AtlasOptions, LightmapAtlas};
+use lustre_scene::scene_file::{self, SceneFile};
+use lustre_scene::Scene;
+use lustre_shade::bake::{assemble, bake_tiles, ATrousOptions, BakeOptions, Denoiser};
+use std::path::{Path, PathBuf};
+
+/// Arguments of `lustre bake`.
+#[derive(clap::Args, Debug)]
+pub struct BakeArgs {
+    /// The scene: a lustre scene file (.toml), glTF (.gltf/.glb), OBJ or Mitsuba XML.
+    pub scene: PathBuf,
+    /// Output folder (tiles/, the atlas .glb, the page EXRs, bake.json, scene.toml).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Sample points (one path each) per texel.
+    #[arg(long, default_value_t = 256)]
+    pub spp: u32,
+    /// Diffuse bounces (1 = direct light only).
+    #[arg(long, default_value_t = 4)]
+    pub bounces: u32,
+    /// Light-map texel density, texels per metre (scene unit); the atlas builder's default
+    /// when absent.
+    #[arg(long)]
+    pub texels_per_metre: Option<f32>,
+    /// Seed of the per-texel sample streams.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Tile side in texels (the unit of resuming and sharding).
+    #[arg(long, default_value_t = 64)]
+    pub tile: u32,
+    /// Write the raw Monte Carlo means (no à-trous denoising).
+    #[arg(long)]
+    pub no_denoise: bool,
+}
+
+impl BakeArgs {
+    /// The bake settings of these arguments.
+    pub fn options(&self) -> BakeOptions {
+        BakeOptions {
+            spp: self.spp,
+            bounces: self.bounces,
+            seed: self.seed,
+            tile: self.tile,
+            denoiser: if self.no_denoise {
+                Denoiser::None
+            } else {
+                Denoiser::ATrous(ATrousOptions::default())
+            },
+        }
+    }
+}
+
+/// File name of the atlas (the light-mapped meshes with their light-map uvs as TEXCOORD_1).
+pub const ATLAS_FILE: &str = "lightmap.glb";
+/// File name of the updated scene file.
+pub const SCENE_FILE: &str = "scene.toml";
+
+/// Loads the scene and its light-map atlas: the one its scene file's `[lightmap]` names when
+/// there is one and no `--texels-per-metre` asks for another, else [`build_atlas`] (the scene's
+/// valid TEXCOORD_1, or generated charts). Writes the atlas .glb into `out`. The same inputs
+/// give the same atlas, so shards and the merge may each call this.
+pub fn prepare(args: &BakeArgs) -> anyhow::Result<(Scene, LightmapAtlas)> {
+    let mut scene =
+        Scene::load(&args.scene).with_context(|| format!("loading {}", args.scene.display()))?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let existing = scene.lightmap.as_ref().map(|l| l.atlas.clone());
+    let atlas = match existing {
+        Some(a) if args.texels_per_metre.is_none() => {
+            eprintln!(
+                "atlas: the scene's own ({} page(s) of {}×{}, {} texels/m)",
+                a.pages, a.width, a.height, a.texels_per_metre
+            );
+            a
+        }
+        _ => {
+            let mut aopts = AtlasOptions::default();
+            if let Some(d) = args.texels_per_metre {
+                if !(d.is_finite() && d > 0.0) {
+                    bail!("--texels-per-metre {d}: must be finite and > 0");
+                }
+                aopts.texels_per_metre = d;
+            }
+            let (atlas, r) = build_atlas(&mut scene, &aopts)
+                .with_context(|| format!("light-map atlas of {}", args.scene.display()))?;
+            eprintln!(
+                "atlas: {:?}, {} charts on {} page(s) of {}×{}, {} meshes ({} skipped), {} triangles, utilisation {:.1} %, stretch L2 {:.3} / max {:.3}, {:.2} s",
+                r.source,
+                r.charts,
+                r.pages,
+                r.width,
+                r.height,
+                r.meshes,
+                r.skipped_meshes,
+                r.triangles,
+                100.0 * r.utilisation,
+                r.stretch_l2,
+                r.stretch_max,
+                r.time_s
+            );
+            for n in &r.notes {
+                eprintln!("note: {n}");
+            }
+            atlas
+        }
+    };
+    let glb = args.out.join(ATLAS_FILE);
+    write_atlas_glb(&scene, &atlas, &glb).with_context(|| format!("writing {}", glb.display()))?;
+    Ok((scene, atlas))
+}
+
+/// Writes `out/scene.toml`: the input scene (its scene file with absolute paths, or a file whose
+/// geometry is the input) with a `[lightmap]` section naming the atlas and the baked pages.
+pub fn write_scene_file(
+    input: &Path,
+    atlas: &LightmapAtlas,
+    pages: &[PathBuf],
+    out: &Path,
+) -> anyhow::Result<PathBuf> {
+    let input_abs =
+        std::path::absolute(input).with_context(|| format!("resolving {}", input.display()))?;
+    let is_toml = input
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+    let base = if is_toml {
+        let text = std::fs::read_to_string(input)
+            .with_context(|| format!("reading {}", input.display()))?;
+        let dir = input_abs.parent().unwrap_or(Path::new("/"));
+        let mut f = scene_file::parse(input, &text)?.with_absolute_paths(dir);
+        f.lightmap = None;
+        f
+    } else {
+        SceneFile::for_geometry(&input_abs.to_string_lossy())
+    };
+    let names = pages
+        .iter()
+        .map(|p| {
+            p.file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        })
+        .collect();
+    let file = base.with_lightmap(ATLAS_FILE, names, atlas);
+    let path = out.join(SCENE_FILE);
+    scene_file::write(&path, &file).with_context(|| format!("writing {}", path.display()))?;
+    Ok(path)
+}
+
+/// Bakes the tiles of `shard` (all for `None`) with a progress bar over tiles; resumes from the
+/// tiles already in `out/tiles/`.
+pub fn bake_phase(
+    scene: &Scene,
+    atlas: &LightmapAtlas,
+    opts: &BakeOptions,
+    out: &Path,
+    shard: Option<(u32, u32)>,
+) -> anyhow::Result<()> {
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("baking [{bar:30}] {pos}/{len} tiles, {elapsed} (eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let r = bake_tiles(scene, atlas, opts, out, shard, &|done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })
+    .with_context(|| format!("baking {}", scene.source.display()))?;
+    bar.finish_and_clear();
+    for w in &r.warnings {
+        eprintln!("warning: {w}");
+    }
+    let secs = r.trace_seconds.max(1e-9);
+    println!(
+        "tiles: {} ({} baked, {} resumed); {} texels, {} paths, {} invalid samples, {} zero-area triangles skipped; setup {:.2} s, trace {:.2} s ({:.0} texels/s, {:.0} paths/s)",
+        r.tiles,
+        r.baked,
+        r.reused,
+        r.texels,
+        r.paths,
+        r.invalid_samples,
+        r.skipped_triangles,
+        r.setup_seconds,
+        r.trace_seconds,
+        r.texels as f64 / secs,
+        r.paths as f64 / secs
+    );
+    Ok(())
+}
+
+/// Assembles the tiles into the page EXRs and `bake.json`, and prints the per-page noise.
+pub fn merge_phase(
+    scene: &Scene,
+    atlas: &LightmapAtlas,
+    opts: &BakeOptions,
+    out: &Path,
+) -> anyhow::Result<Vec<PathBuf>> {
+    let a = assemble(scene, atlas, opts, out)
+        .with_context(|| format!("assembling the light maps in {}", out.display()))?;
+    for p in &a.report.pages {
+        println!(
+            "page {}: {} covered texels ({} buried filled, {} unfilled, {} gutter texels dilated), mean E {:.4}, noise (std error) {:.4} = {:.2} %",
+            p.page,
+            p.covered_texels,
+            p.buried_filled,
+            p.buried_unfilled,
+            p.dilated_texels,
+            p.mean_irradiance,
+            p.noise_std_error,
+            100.0 * p.noise_relative
+        );
+    }
+    println!(
+        "assembly: fill {:.2} s, denoise {:.2} s, dilate + write {:.2} s",
+        a.report.fill_seconds, a.report.denoise_seconds, a.report.write_seconds
+    );
+    Ok(a.files)
+}
+
+/// Runs `lustre bake`.
+pub fn run(args: &BakeArgs) -> anyhow::Result<()> {
+    let opts = args.options();
+    opts.validate().context("bake settings")?;
+    let (scene, atlas) = prepare(args)?;
+    bake_phase(&scene, &atlas, &opts, &args.out, None)?;
+    let files = merge_phase(&scene, &atlas, &opts, &args.out)?;
+    for f in &files {
+        println!("wrote {}", f.display());
+    }
+    let scene_path = write_scene_file(&args.scene, &atlas, &files, &args.out)?;
+    println!(
+        "wrote {} and {}",
+        args.out.join(ATLAS_FILE).display(),
+        scene_path.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,92 @@
+//! `lustre bake` end to end on a tiny scene (an OBJ floor and block under a constant sky):
+//! files written, the updated scene file loads, a second run resumes every tile, and a scene
+//! without light is a clear error.
+
+use std::process::Command;
+
+fn lustre() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_lustre"))
+}
+
+const OBJ: &str = "v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\n\
+v -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 1 -0.5\nv -0.5 1 -0.5\n\
+v -0.5 0 0.5\nv 0.5 0 0.5\nv 0.5 1 0.5\nv -0.5 1 0.5\n\
+f 1 3 2\nf 1 4 3\n\
+f 5 8 7\nf 5 7 6\nf 9 10 11\nf 9 11 12\nf 5 9 12\nf 5 12 8\nf 6 7 11\nf 6 11 10\nf 8 12 11\nf 8 11 7\n";
+
+#[test]
+fn bake_writes_pages_and_a_scene_file_and_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("floor.obj"), OBJ).unwrap();
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(
+        &scene,
+        "schema = \"lustre-scene\"\nversion = 1\n[[geometry]]\nfile = \"floor.obj\"\n[environment]\nconstant = [1.0, 1.0, 1.0]\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out");
+    let args = |c: &mut Command| {
+        c.arg("bake").arg(&scene).arg("--out").arg(&out).args([
+            "--spp",
+            "4",
+            "--bounces",
+            "2",
+            "--texels-per-metre",
+            "8",
+        ]);
+    };
+    let mut c = lustre();
+    args(&mut c);
+    let o = c.output().unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        stdout.contains("baked") && stdout.contains("noise"),
+        "{stdout}"
+    );
+    for f in [
+        "lightmap_000.exr",
+        "lightmap.glb",
+        "scene.toml",
+        "bake.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let exr = std::fs::read(out.join("lightmap_000.exr")).unwrap();
+    let info = lustre()
+        .args(["scene", "info"])
+        .arg(out.join("scene.toml"))
+        .output()
+        .unwrap();
+    assert!(
+        info.status.success(),
+        "{}",
+        String::from_utf8_lossy(&info.stderr)
+    );
+    let mut c = lustre();
+    args(&mut c);
+    let o = c.output().unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success());
+    assert!(stdout.contains("0 baked"), "{stdout}");
+    assert_eq!(std::fs::read(out.join("lightmap_000.exr")).unwrap(), exr);
+    // Without the environment: no light at all.
+    std::fs::write(
+        &scene,
+        "schema = \"lustre-scene\"\nversion = 1\n[[geometry]]\nfile = \"floor.obj\"\n",
+    )
+    .unwrap();
+    let o = lustre()
+        .arg("bake")
+        .arg(&scene)
+        .arg("--out")
+        .arg(dir.path().join("dark"))
+        .args(["--spp", "4", "--texels-per-metre", "8"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && stderr.contains("no emitter"),
+        "{stderr}"
+    );
+}
