@@ -2,6 +2,10 @@
 //! the light-map atlas (the scene's TEXCOORD_1 when valid, else generated), the bake in
 //! resumable tiles, the assembly (buried fill, denoise, dilation) into half-float EXR pages,
 //! and an updated scene file that references them.
+//!
+//! On many machines: `--shard K/N` (or `--shard-count N` inside a Kubernetes Indexed Job or a
+//! SLURM array) bakes only the tiles whose index mod N is K into the shared `--out`; the same
+//! command with `--merge` instead assembles them once all tiles are there (deploy/README.md).
 
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -38,6 +42,12 @@ pub struct BakeArgs {
     /// Write the raw Monte Carlo means (no à-trous denoising).
     #[arg(long)]
     pub no_denoise: bool,
+    #[command(flatten)]
+    pub shard: crate::shard::ShardArgs,
+    /// Assemble the tiles that the shards (`--shard K/N` runs with the same scene and options)
+    /// baked into --out: fill, denoise, dilate, the page EXRs and the updated scene file.
+    #[arg(long, conflicts_with_all = ["shard", "shard_count"])]
+    pub merge: bool,
 }
 
 impl BakeArgs {
@@ -231,8 +241,26 @@ pub fn merge_phase(
 pub fn run(args: &BakeArgs) -> anyhow::Result<()> {
     let opts = args.options();
     opts.validate().context("bake settings")?;
+    let shard = match args.shard.resolve()? {
+        Some((k, n)) => {
+            let k = u32::try_from(k).context("shard index")?;
+            let n = u32::try_from(n).context("shard count")?;
+            Some((k, n))
+        }
+        None => None,
+    };
     let (scene, atlas) = prepare(args)?;
-    bake_phase(&scene, &atlas, &opts, &args.out, None)?;
+    if !args.merge {
+        bake_phase(&scene, &atlas, &opts, &args.out, shard)?;
+    }
+    if let Some((k, n)) = shard {
+        println!(
+            "shard {k}/{n} done; when all {n} are: lustre bake {} --out {} (same options) --merge",
+            args.scene.display(),
+            args.out.display()
+        );
+        return Ok(());
+    }
     let files = merge_phase(&scene, &atlas, &opts, &args.out)?;
     for f in &files {
         println!("wrote {}", f.display());
