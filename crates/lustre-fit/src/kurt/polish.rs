@@ -222,81 +222,83 @@ impl Problem<'_> {
                 };
                 let consts: Vec<LobeConst> =
                     lobes.iter().map(|l| LobeConst::new(l, kind)).collect();
-                (0..set.len())
+                let init = || {
+                    (
+                        vec![0.0; n * n],
+                        vec![0.0; n],
+                        vec![0.0; 3 * n],
+                        vec![(0.0, [0.0; 4]); lobes.len()],
+                    )
+                };
+                type Acc = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<(f64, [f64; 4])>);
+                let step = |(mut a, mut g, mut row, mut grads): Acc, t: usize| -> Acc {
+                    let mut p = kd.map(|k| k / PI * set.cos_o[t]);
+                    for ((c, l), gr) in consts.iter().zip(lobes).zip(grads.iter_mut()) {
+                        *gr = c.eval_grad(set, t);
+                        for (pc, ks) in p.iter_mut().zip(l.ks.0) {
+                            *pc += ks * gr.0;
+                        }
+                    }
+                    let sw = set.weight[t].sqrt();
+                    let drde: [f64; 3] = std::array::from_fn(|ch| {
+                        let e = set.data[ch][t] - p[ch];
+                        let q = (e * e + delta * delta).sqrt();
+                        sw * (q + delta).sqrt() / (2.0 * q)
+                    });
+                    row.fill(0.0);
+                    for (k, (slot, dvk)) in slots.iter().zip(&dv).enumerate() {
+                        match slot.target {
+                            Target::Kd(c) if !trans => {
+                                row[c * n + k] = -drde[c] * set.cos_o[t] / PI * dvk;
+                            }
+                            Target::Ks(tt, i, c) if tt == trans => {
+                                row[c * n + k] = -drde[c] * grads[i].0 * dvk;
+                            }
+                            Target::Shape(tt, i, which) if tt == trans => {
+                                let dg = &grads[i].1;
+                                let d = if which == 0 && ties.contains(&(tt, i)) {
+                                    dg[0] + dg[1]
+                                } else {
+                                    dg[which]
+                                };
+                                for ch in 0..3 {
+                                    row[ch * n + k] = -drde[ch] * lobes[i].ks.0[ch] * d * dvk;
+                                }
+                            }
+                            _ => {}
+                        }
+                    }
+                    for ch in 0..3 {
+                        let jr = &row[ch * n..(ch + 1) * n];
+                        let rv = r[3 * t + ch];
+                        for i in 0..n {
+                            let ji = jr[i];
+                            if ji == 0.0 {
+                                continue;
+                            }
+                            g[i] += ji * rv;
+                            for k in 0..=i {
+                                a[i * n + k] += ji * jr[k];
+                            }
+                        }
+                    }
+                    (a, g, row, grads)
+                };
+                // Fixed chunks summed in order: the same sums whatever the threads do.
+                let partial: Vec<(Vec<f64>, Vec<f64>)> = (0..set.len().div_ceil(PAIR_CHUNK))
                     .into_par_iter()
-                    .fold(
-                        || {
-                            (
-                                vec![0.0; n * n],
-                                vec![0.0; n],
-                                vec![0.0; 3 * n],
-                                vec![(0.0, [0.0; 4]); lobes.len()],
-                            )
-                        },
-                        |(mut a, mut g, mut row, mut grads), t| {
-                            let mut p = kd.map(|k| k / PI * set.cos_o[t]);
-                            for ((c, l), gr) in consts.iter().zip(lobes).zip(grads.iter_mut()) {
-                                *gr = c.eval_grad(set, t);
-                                for (pc, ks) in p.iter_mut().zip(l.ks.0) {
-                                    *pc += ks * gr.0;
-                                }
-                            }
-                            let sw = set.weight[t].sqrt();
-                            let drde: [f64; 3] = std::array::from_fn(|ch| {
-                                let e = set.data[ch][t] - p[ch];
-                                let q = (e * e + delta * delta).sqrt();
-                                sw * (q + delta).sqrt() / (2.0 * q)
-                            });
-                            row.fill(0.0);
-                            for (k, (slot, dvk)) in slots.iter().zip(&dv).enumerate() {
-                                match slot.target {
-                                    Target::Kd(c) if !trans => {
-                                        row[c * n + k] = -drde[c] * set.cos_o[t] / PI * dvk;
-                                    }
-                                    Target::Ks(tt, i, c) if tt == trans => {
-                                        row[c * n + k] = -drde[c] * grads[i].0 * dvk;
-                                    }
-                                    Target::Shape(tt, i, which) if tt == trans => {
-                                        let dg = &grads[i].1;
-                                        let d = if which == 0 && ties.contains(&(tt, i)) {
-                                            dg[0] + dg[1]
-                                        } else {
-                                            dg[which]
-                                        };
-                                        for ch in 0..3 {
-                                            row[ch * n + k] =
-                                                -drde[ch] * lobes[i].ks.0[ch] * d * dvk;
-                                        }
-                                    }
-                                    _ => {}
-                                }
-                            }
-                            for ch in 0..3 {
-                                let jr = &row[ch * n..(ch + 1) * n];
-                                let rv = r[3 * t + ch];
-                                for i in 0..n {
-                                    let ji = jr[i];
-                                    if ji == 0.0 {
-                                        continue;
-                                    }
-                                    g[i] += ji * rv;
-                                    for k in 0..=i {
-                                        a[i * n + k] += ji * jr[k];
-                                    }
-                                }
-                            }
-                            (a, g, row, grads)
-                        },
-                    )
-                    .map(|(a, g, _, _)| (a, g))
-                    .reduce(
-                        || (vec![0.0; n * n], vec![0.0; n]),
-                        |(mut a, mut g), (b, h)| {
-                            a.iter_mut().zip(&b).for_each(|(u, v)| *u += v);
-                            g.iter_mut().zip(&h).for_each(|(u, v)| *u += v);
-                            (a, g)
-                        },
-                    )
+                    .map(|k| {
+                        let pairs = k * PAIR_CHUNK..((k + 1) * PAIR_CHUNK).min(set.len());
+                        let (a, g, _, _) = pairs.fold(init(), step);
+                        (a, g)
+                    })
+                    .collect();
+                let mut sum = (vec![0.0; n * n], vec![0.0; n]);
+                for (b, h) in partial {
+                    sum.0.iter_mut().zip(&b).for_each(|(u, v)| *u += v);
+                    sum.1.iter_mut().zip(&h).for_each(|(u, v)| *u += v);
+                }
+                sum
             };
         let (ra, rg) = accumulate(
             &self.s.refl,
@@ -324,6 +326,9 @@ impl Problem<'_> {
         (a.iter().chain(g.iter()).all(|v| v.is_finite())).then_some((a, g))
     }
 }
+
+/// Pairs per partial sum of [`Problem::normal_equations`].
+const PAIR_CHUNK: usize = 512;
 
 /// How [`marquardt`] ended.
 #[derive(Clone, Copy, Debug, PartialEq)]
