@@ -135,7 +135,7 @@ struct KurtRow {
     wall: f64,
     cpu: f64,
     converged: bool,
-    /// The polish stopped at its evaluation limit.
+    /// The polish stopped at its iteration limit.
     limit: bool,
     /// The alternation of lobes did not settle.
     unsettled: bool,
@@ -186,7 +186,7 @@ fn kurt_rows(
             wall: t,
             cpu,
             converged: f.status == lustre_fit::FitStatus::Converged,
-            limit: f.note.contains("evaluation limit"),
+            limit: f.note.contains("iteration limit"),
             unsettled: f.note.contains("did not settle"),
             unphysical: !why.is_empty(),
         });
@@ -204,7 +204,7 @@ fn kurt_summary(per: &[Vec<KurtRow>], max: usize) -> Vec<String> {
         let (mc, wc) = stats(&rows.iter().map(|r| r.cpu).collect::<Vec<_>>());
         let count = |f: &dyn Fn(&KurtRow) -> bool| rows.iter().filter(|r| f(r)).count();
         out.push(format!(
-            "- Kurt {k} lobe(s), {} inputs: wall median {mw:.2} s, worst {ww:.2} s; CPU median {mc:.2} s, worst {wc:.2} s; status Converged {}, NotConverged {} (polish at its evaluation limit {}, alternation of lobes not settled {}); unphysical {}",
+            "- Kurt {k} lobe(s), {} inputs: wall median {mw:.2} s, worst {ww:.2} s; CPU median {mc:.2} s, worst {wc:.2} s; status Converged {}, NotConverged {} (polish at its iteration limit {}, alternation of lobes not settled {}); unphysical {}",
             rows.len(),
             count(&|r| r.converged),
             count(&|r| !r.converged),

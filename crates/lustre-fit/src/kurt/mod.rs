@@ -106,7 +106,7 @@ pub struct KurtFit {
     pub objective: f64,
     /// Whether the search and the polish settled (see the module documentation).
     pub status: FitStatus,
-    /// Lobe-shape evaluations of the search plus residual evaluations of the polish, each over
+    /// Lobe-shape evaluations of the search plus residual and Jacobian passes of the polish, each over
     /// the whole direction set.
     pub evaluations: usize,
     /// Why the fit is (not) converged, in words: how the alternation of lobes ended and LM's

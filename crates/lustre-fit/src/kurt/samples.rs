@@ -121,6 +121,8 @@ impl PairSet {
 pub(crate) struct LobeConst {
     ix2: f64,
     iy2: f64,
+    imx: f64,
+    imy: f64,
     alpha: f64,
     ln_norm: f64,
     r0: f64,
@@ -133,6 +135,8 @@ impl LobeConst {
         LobeConst {
             ix2: 1.0 / (lobe.mx * lobe.mx),
             iy2: 1.0 / (lobe.my * lobe.my),
+            imx: 1.0 / lobe.mx,
+            imy: 1.0 / lobe.my,
             alpha: lobe.alpha,
             ln_norm: (PI * lobe.mx * lobe.my).ln(),
             r0: lobe.r0,
@@ -151,6 +155,35 @@ impl LobeConst {
         let f = self.r0 + (1.0 - self.r0) * s.s5[t];
         let fres = if self.transmission { 1.0 - f } else { f };
         fres * e.exp()
+    }
+
+    /// [`Self::eval`] and its derivatives with respect to (mx, my, r0, α):
+    /// ∂g/∂mx = g (2 tx/mx² − 1)/mx, ∂g/∂my likewise, ∂g/∂r0 = ±(1 − s5)·exp(…), ∂g/∂α =
+    /// −ln(cos θi cos θo)·g.
+    #[inline]
+    pub fn eval_grad(&self, s: &PairSet, t: usize) -> (f64, [f64; 4]) {
+        let ex = (s.ln_base[t]
+            - s.tx[t] * self.ix2
+            - s.ty[t] * self.iy2
+            - self.ln_norm
+            - self.alpha * s.ln_cc[t])
+            .exp();
+        let f = self.r0 + (1.0 - self.r0) * s.s5[t];
+        let (fres, dfres) = if self.transmission {
+            (1.0 - f, s.s5[t] - 1.0)
+        } else {
+            (f, 1.0 - s.s5[t])
+        };
+        let g = fres * ex;
+        (
+            g,
+            [
+                g * (2.0 * s.tx[t] * self.ix2 - 1.0) * self.imx,
+                g * (2.0 * s.ty[t] * self.iy2 - 1.0) * self.imy,
+                dfres * ex,
+                -s.ln_cc[t] * g,
+            ],
+        )
     }
 }
 
