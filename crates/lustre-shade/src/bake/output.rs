@@ -105,6 +105,9 @@ pub fn encode_exr_half(width: u32, height: u32, e: &[[f32; 3]]) -> Result<Vec<u8
     let mut bytes = Vec::new();
     image
         .write()
+        // Blocks compressed in parallel are written in the order they finish: the same pixels,
+        // other bytes. One thread keeps a page byte-identical across runs, shards and resumes.
+        .non_parallel()
         .to_buffered(Cursor::new(&mut bytes))
         .map_err(|e| ShadeError::Parameter(format!("EXR encoding: {e}")))?;
     Ok(bytes)
