@@ -456,7 +456,7 @@ impl<'a, 's> PathTracer<'a, 's> {
 
     /// The unit geometric normal (turned to the shading normal's side) and the unit shading
     /// normal of triangle `prim` at barycentrics `b`.
-    fn normals(&self, prim: usize, b: [f64; 3]) -> (DVec3, DVec3) {
+    pub(crate) fn normals(&self, prim: usize, b: [f64; 3]) -> (DVec3, DVec3) {
         let g = &self.scene.geometry;
         let ng = self.face_normal[prim];
         let ns = g

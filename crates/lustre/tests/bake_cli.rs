@@ -15,16 +15,23 @@ v -0.5 0 0.5\nv 0.5 0 0.5\nv 0.5 1 0.5\nv -0.5 1 0.5\n\
 f 1 3 2\nf 1 4 3\n\
 f 5 8 7\nf 5 7 6\nf 9 10 11\nf 9 11 12\nf 5 9 12\nf 5 12 8\nf 6 7 11\nf 6 11 10\nf 8 12 11\nf 8 11 7\n";
 
-#[test]
-fn bake_writes_pages_and_a_scene_file_and_resumes() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("floor.obj"), OBJ).unwrap();
-    let scene = dir.path().join("scene.toml");
+/// Writes the floor-and-block OBJ and a scene file lighting it with a constant sky into `dir`;
+/// returns the scene file.
+fn write_scene(dir: &std::path::Path) -> std::path::PathBuf {
+    std::fs::write(dir.join("floor.obj"), OBJ).unwrap();
+    let scene = dir.join("scene.toml");
     std::fs::write(
         &scene,
         "schema = \"lustre-scene\"\nversion = 1\n[[geometry]]\nfile = \"floor.obj\"\n[environment]\nconstant = [1.0, 1.0, 1.0]\n",
     )
     .unwrap();
+    scene
+}
+
+#[test]
+fn bake_writes_pages_and_a_scene_file_and_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path());
     let out = dir.path().join("out");
     let args = |c: &mut Command| {
         c.arg("bake").arg(&scene).arg("--out").arg(&out).args([
@@ -95,13 +102,7 @@ fn bake_writes_pages_and_a_scene_file_and_resumes() {
 #[test]
 fn sharded_bake_merges_to_the_unsharded_pages() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("floor.obj"), OBJ).unwrap();
-    let scene = dir.path().join("scene.toml");
-    std::fs::write(
-        &scene,
-        "schema = \"lustre-scene\"\nversion = 1\n[[geometry]]\nfile = \"floor.obj\"\n[environment]\nconstant = [1.0, 1.0, 1.0]\n",
-    )
-    .unwrap();
+    let scene = write_scene(dir.path());
     let bake = |out: &std::path::Path, extra: &[&str], envs: &[(&str, &str)]| {
         let mut c = lustre();
         c.arg("bake").arg(&scene).arg("--out").arg(out).args([

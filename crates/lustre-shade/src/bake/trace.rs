@@ -69,17 +69,9 @@ pub struct TexelCounts {
 
 impl TexelBaker<'_, '_> {
     /// Geometric normal of triangle `prim` turned to its shading normal's side at `b`, and the
-    /// unit shading normal.
+    /// unit shading normal (the path tracer's own).
     fn normals(&self, prim: usize, b: [f64; 3]) -> (DVec3, DVec3) {
-        let g = &self.ps.geometry;
-        let t = &g.positions[prim];
-        let ng = (t[1] - t[0]).cross(t[2] - t[0]).normalize_or(DVec3::Z);
-        let ns = g
-            .normals
-            .get(prim)
-            .and_then(|n| (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).try_normalize())
-            .unwrap_or(ng);
-        (if ns.dot(ng) < 0.0 { -ng } else { ng }, ns)
+        self.pt.normals(prim, b)
     }
 
     fn point(&self, tri: u32, b: [f64; 3], uv: [f64; 2], x: u32, y: u32) -> Point {
