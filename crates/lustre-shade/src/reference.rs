@@ -243,6 +243,9 @@ pub struct ReferenceOptions {
     pub exposure: f64,
     /// Seed of every pixel's sample stream.
     pub seed: u64,
+    /// Render the bake's diffuse scene ([`crate::bake::diffuse_path_scene`]: every material
+    /// replaced by its diffuse albedo), the image light-mapped shading converges to.
+    pub diffuse: bool,
 }
 
 /// What a job wrote into `OUT.json` (and resumes from).
@@ -262,6 +265,9 @@ pub struct ReferenceState {
     pub max_depth: u32,
     /// Seed.
     pub seed: u64,
+    /// The diffuse scene ([`ReferenceOptions::diffuse`]).
+    #[serde(default)]
+    pub diffuse: bool,
     /// Estimated RMS noise of the mean (linear, all channels): RMS(even − odd)/2.
     pub noise_rms: f64,
     /// `noise_rms` / mean pixel value.
@@ -355,7 +361,12 @@ pub fn render_reference(
     let cam_name = scene
         .camera(opts.camera.as_deref())
         .map_or_else(|| "auto".to_string(), |c| c.name.clone());
-    let (ps, warnings) = path_scene(scene)?;
+    let (ps, warnings) = if opts.diffuse {
+        let (ps, _, warnings) = crate::bake::diffuse_path_scene(scene)?;
+        (ps, warnings)
+    } else {
+        path_scene(scene)?
+    };
     let pt = PathTracer::new(
         &ps,
         PathOptions {
@@ -376,6 +387,7 @@ pub fn render_reference(
         spp: 0,
         max_depth: opts.max_depth,
         seed: opts.seed,
+        diffuse: opts.diffuse,
         noise_rms: f64::NAN,
         noise_relative: f64::NAN,
         mean: f64::NAN,
@@ -394,20 +406,28 @@ pub fn render_reference(
         })?;
         let old: ReferenceState = serde_json::from_str(&text)
             .map_err(|e| ShadeError::Parameter(format!("resume: {}: {e}", json_path.display())))?;
-        if (old.width, old.height, old.max_depth, old.seed, &old.camera)
-            != (w, h, opts.max_depth, opts.seed, &state.camera)
+        if (
+            old.width,
+            old.height,
+            old.max_depth,
+            old.seed,
+            &old.camera,
+            old.diffuse,
+        ) != (w, h, opts.max_depth, opts.seed, &state.camera, opts.diffuse)
         {
             return Err(ShadeError::Parameter(format!(
-                "resume: {} was rendered at {}×{}, max depth {}, seed {}, camera {:?}; asked for {w}×{h}, {}, {}, {:?}",
+                "resume: {} was rendered at {}×{}, max depth {}, seed {}, camera {:?}, diffuse {}; asked for {w}×{h}, {}, {}, {:?}, {}",
                 json_path.display(),
                 old.width,
                 old.height,
                 old.max_depth,
                 old.seed,
                 old.camera,
+                old.diffuse,
                 opts.max_depth,
                 opts.seed,
-                state.camera
+                state.camera,
+                opts.diffuse
             )));
         }
         // Finish a commit that was interrupted after its JSON, or drop the halves of a pass

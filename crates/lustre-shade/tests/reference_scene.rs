@@ -89,6 +89,7 @@ fn reference_job_writes_and_resumes() {
         out: out.clone(),
         exposure: 1.0,
         seed: 3,
+        diffuse: false,
     };
     let (s4, _) = render_reference(&scene, &opts, &|_, _, _, _| {}).unwrap();
     assert_eq!(s4.spp, 4);
@@ -126,6 +127,30 @@ fn reference_job_writes_and_resumes() {
         ..opts.clone()
     };
     let (once12, _) = render_reference(&scene, &once12, &|_, _, _, _| {}).unwrap();
+    // The bake's diffuse scene: the Cornell box is diffuse already, so the same image; resuming
+    // a plain job as a diffuse one is refused.
+    let diffuse12 = ReferenceOptions {
+        resume: false,
+        out: dir.path().join("diffuse12.exr"),
+        diffuse: true,
+        ..opts.clone()
+    };
+    let (d12, _) = render_reference(&scene, &diffuse12, &|_, _, _, _| {}).unwrap();
+    assert!(d12.diffuse);
+    assert!(
+        (d12.mean - once12.mean).abs() <= 1e-5 * once12.mean,
+        "diffuse {} vs plain {}",
+        d12.mean,
+        once12.mean
+    );
+    let mismatched = ReferenceOptions {
+        diffuse: true,
+        ..opts.clone()
+    };
+    let err = render_reference(&scene, &mismatched, &|_, _, _, _| {})
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("diffuse false"), "{err}");
     assert!(
         (once12.mean - after_kill.mean).abs() <= 1e-5 * once12.mean.abs().max(1e-3),
         "{} vs {}",

@@ -137,8 +137,10 @@ pub fn write_scene_file(
     pages: &[PathBuf],
     out: &Path,
 ) -> anyhow::Result<PathBuf> {
+    // Canonical (no `..`, no symlinks), so the scene file works from any directory and reads
+    // cleanly; the input was just loaded, so it exists.
     let input_abs =
-        std::path::absolute(input).with_context(|| format!("resolving {}", input.display()))?;
+        std::fs::canonicalize(input).with_context(|| format!("resolving {}", input.display()))?;
     let is_toml = input
         .extension()
         .and_then(|e| e.to_str())

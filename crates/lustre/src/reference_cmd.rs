@@ -32,6 +32,10 @@ pub struct ReferenceArgs {
     /// Seed of the per-pixel sample streams.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Render the scene with every material made diffuse (the albedo `lustre bake` uses): the
+    /// image that light-mapped shading (kd·E/π) converges to.
+    #[arg(long)]
+    pub diffuse: bool,
     /// Output OpenEXR file (OUT.png, OUT.json, OUT.even.exr, OUT.odd.exr are written beside it).
     #[arg(long)]
     pub out: PathBuf,
@@ -89,6 +93,7 @@ pub fn run(args: &ReferenceArgs) -> anyhow::Result<()> {
         out: args.out.clone(),
         exposure: args.exposure,
         seed: args.seed,
+        diffuse: args.diffuse,
     };
     let bar = ProgressBar::new(args.spp as u64);
     bar.set_style(

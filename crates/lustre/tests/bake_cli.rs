@@ -78,6 +78,22 @@ fn bake_writes_pages_and_a_scene_file_and_resumes() {
     assert!(o.status.success());
     assert!(stdout.contains("0 baked"), "{stdout}");
     assert_eq!(std::fs::read(out.join("lightmap_000.exr")).unwrap(), exr);
+    // A relative input with `..`: the written scene file names it by its canonical path.
+    let sub = dir.path().join("sub");
+    std::fs::create_dir(&sub).unwrap();
+    let o = lustre()
+        .current_dir(&sub)
+        .args(["bake", "../scene.toml", "--out", "../rel", "--spp", "1"])
+        .args(["--bounces", "1", "--texels-per-metre", "4"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let written = std::fs::read_to_string(dir.path().join("rel/scene.toml")).unwrap();
+    let floor = std::fs::canonicalize(dir.path().join("floor.obj")).unwrap();
+    assert!(
+        written.contains(&*floor.to_string_lossy()) && !written.contains(".."),
+        "{written}"
+    );
     // Without the environment: no light at all.
     std::fs::write(
         &scene,

@@ -47,7 +47,7 @@ pub mod trace;
 
 pub use denoise::{ATrousOptions, Denoiser};
 pub use output::{assemble, Assembled, BakeReport, PageReport};
-pub use tile::{bake_tiles, TilesReport};
+pub use tile::{bake_texels, bake_tiles, TilesReport};
 
 use crate::path::{PathScene, Surface};
 use crate::{Result, ShadeError};

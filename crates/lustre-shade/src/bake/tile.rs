@@ -218,10 +218,23 @@ pub fn bake_tiles(
     shard: Option<(u32, u32)>,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<TilesReport> {
-    opts.validate()?;
     check_shard(shard)?;
     let t0 = Instant::now();
     let hash = bake_hash(scene, atlas, opts);
+    with_baker(scene, atlas, opts, |baker, warnings| {
+        bake_tiles_with(baker, warnings, atlas, out_dir, shard, hash, t0, progress)
+    })
+}
+
+/// Sets up the path tracer and coverage of a bake and hands the per-texel estimator to `f`
+/// with the scene's warnings.
+fn with_baker<R>(
+    scene: &Scene,
+    atlas: &LightmapAtlas,
+    opts: &BakeOptions,
+    f: impl FnOnce(&TexelBaker, Vec<String>) -> Result<R>,
+) -> Result<R> {
+    opts.validate()?;
     let (ps, spec, warnings) = diffuse_path_scene(scene)?;
     let pt = PathTracer::new(
         &ps,
@@ -239,6 +252,47 @@ pub fn bake_tiles(
         spec: &spec,
         opts,
     };
+    f(&baker, warnings)
+}
+
+/// Bakes the listed texels `(page, x, y)` of `atlas` with `opts` as [`bake_tiles`] would (the
+/// same seeds, so the same records), writing nothing: for checks and tools that need a few
+/// texels, e.g. at another spp. Errors: as [`bake_tiles`], and a texel outside the atlas.
+pub fn bake_texels(
+    scene: &Scene,
+    atlas: &LightmapAtlas,
+    opts: &BakeOptions,
+    texels: &[(u32, u32, u32)],
+) -> Result<Vec<TexelRecord>> {
+    if let Some(&(p, x, y)) = texels
+        .iter()
+        .find(|&&(p, x, y)| p >= atlas.pages || x >= atlas.width || y >= atlas.height)
+    {
+        return Err(ShadeError::Parameter(format!(
+            "texel ({x}, {y}) of page {p} is outside the {}×{} × {} atlas",
+            atlas.width, atlas.height, atlas.pages
+        )));
+    }
+    with_baker(scene, atlas, opts, |baker, _| {
+        Ok(texels
+            .par_iter()
+            .map(|&(p, x, y)| baker.texel(p, x, y).0)
+            .collect())
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn bake_tiles_with(
+    baker: &TexelBaker,
+    warnings: Vec<String>,
+    atlas: &LightmapAtlas,
+    out_dir: &Path,
+    shard: Option<(u32, u32)>,
+    hash: u64,
+    t0: Instant,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<TilesReport> {
+    let opts = baker.opts;
     let dir = out_dir.join("tiles");
     std::fs::create_dir_all(&dir).map_err(|e| ShadeError::Io {
         path: dir.clone(),
@@ -250,7 +304,7 @@ pub fn bake_tiles(
         .collect();
     let mut report = TilesReport {
         tiles: mine.len(),
-        skipped_triangles: raster.skipped,
+        skipped_triangles: baker.raster.skipped,
         warnings,
         setup_seconds: t0.elapsed().as_secs_f64(),
         ..TilesReport::default()
