@@ -67,7 +67,7 @@ def run_lustre(args):
     c2 = children_cpu()
     m = re.search(r"(\d+) texels, (\d+) paths, (\d+) invalid samples.*trace ([\d.]+) s", first)
     assert m, first
-    assert " 0 baked" in second, second
+    assert "(0 baked" in second, second
     report = json.load(open(os.path.join(out, "bake.json")))
     return dict(
         name="lustre bake",

@@ -194,8 +194,8 @@ fn main() {
     .unwrap();
     writeln!(
         md,
-        "| texels/m | spp | charts | page(s) | covered texels | paths | unwrap s | trace s (CPU s) | fill s | denoise s | write s | texels/s | paths/s | paths/CPU-s | PSNR raw / denoised (dB) | rel. RMS raw / denoised | without ref. noise raw / denoised | mean ratio |\n\
-         |---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---|---:|"
+        "| texels/m | spp | charts | page(s) | covered texels | paths | unwrap s | trace s (CPU s) | fill s | denoise s | write s | texels/s | paths/s | paths/CPU-s | PSNR raw / denoised (dB) | rel. RMS raw / denoised | without ref. noise raw / denoised | mean ratio raw / denoised |\n\
+         |---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---|---|"
     )
     .unwrap();
     for &d in &a.densities {
@@ -251,16 +251,14 @@ fn main() {
             img_den
                 .write_png(&a.out.join(format!("lm-d{d}-s{spp}.png")), 1.0)
                 .expect("png");
-            let (p_raw, r_raw, c_raw, _) = errors(&img_raw, &reference, noise);
+            img_den
+                .write_exr(&a.out.join(format!("lm-d{d}-s{spp}.exr")))
+                .expect("exr");
+            let (p_raw, r_raw, c_raw, ratio_raw) = errors(&img_raw, &reference, noise);
             let (p_den, r_den, c_den, ratio) = errors(&img_den, &reference, noise);
-            let covered: u64 = den
-                .report
-                .pages
-                .iter()
-                .map(|p| p.covered_texels as u64)
-                .sum();
+            let covered: u64 = den.report.pages.iter().map(|p| p.covered_texels).sum();
             let row = format!(
-                "| {d} | {spp} | {} | {} × {}×{} | {covered} | {} | {:.2} | {:.2} ({:.2}) | {:.3} | {:.3} | {:.3} | {:.0} | {:.0} | {:.0} | {p_raw:.2} / {p_den:.2} | {:.2} % / {:.2} % | {:.2} % / {:.2} % | {ratio:.4} |",
+                "| {d} | {spp} | {} | {} × {}×{} | {covered} | {} | {:.2} | {:.2} ({:.2}) | {:.3} | {:.3} | {:.3} | {:.0} | {:.0} | {:.0} | {p_raw:.2} / {p_den:.2} | {:.2} % / {:.2} % | {:.2} % / {:.2} % | {ratio_raw:.4} / {ratio:.4} |",
                 ar.charts,
                 atlas.pages,
                 atlas.width,

@@ -9,7 +9,9 @@
 
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
-use lustre_scene::lightmap::{build_atlas, write_atlas_glb, AtlasOptions, LightmapAtlas};
+use lustre_scene::lightmap::{
+    build_atlas_with_progress, write_atlas_glb, AtlasOptions, LightmapAtlas,
+};
 use lustre_scene::scene_file::{self, SceneFile};
 use lustre_scene::Scene;
 use lustre_shade::bake::{assemble, bake_tiles, ATrousOptions, BakeOptions, Denoiser};
@@ -73,8 +75,8 @@ pub const ATLAS_FILE: &str = "lightmap.glb";
 pub const SCENE_FILE: &str = "scene.toml";
 
 /// Loads the scene and its light-map atlas: the one its scene file's `[lightmap]` names when
-/// there is one and no `--texels-per-metre` asks for another, else [`build_atlas`] (the scene's
-/// valid TEXCOORD_1, or generated charts). Writes the atlas .glb into `out`. The same inputs
+/// there is one and no `--texels-per-metre` asks for another, else
+/// [`lustre_scene::lightmap::build_atlas`] (the scene's valid TEXCOORD_1, or generated charts). Writes the atlas .glb into `out`. The same inputs
 /// give the same atlas, so shards and the merge may each call this.
 pub fn prepare(args: &BakeArgs) -> anyhow::Result<(Scene, LightmapAtlas)> {
     let mut scene =
@@ -101,8 +103,19 @@ pub fn prepare(args: &BakeArgs) -> anyhow::Result<(Scene, LightmapAtlas)> {
                 }
                 aopts.texels_per_metre = d;
             }
-            let (atlas, r) = build_atlas(&mut scene, &aopts)
-                .with_context(|| format!("light-map atlas of {}", args.scene.display()))?;
+            let bar = ProgressBar::new(0);
+            bar.set_style(
+                ProgressStyle::with_template("atlas: {msg} [{bar:30}] {pos}/{len}, {elapsed}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+            let built = build_atlas_with_progress(&mut scene, &aopts, &|p| {
+                bar.set_message(p.stage);
+                bar.set_length(p.total.unwrap_or(p.done) as u64);
+                bar.set_position(p.done as u64);
+            });
+            bar.finish_and_clear();
+            let (atlas, r) =
+                built.with_context(|| format!("light-map atlas of {}", args.scene.display()))?;
             eprintln!(
                 "atlas: {:?}, {} charts on {} page(s) of {}×{}, {} meshes ({} skipped), {} triangles, utilisation {:.1} %, stretch L2 {:.3} / max {:.3}, {:.2} s",
                 r.source,
