@@ -75,7 +75,20 @@ fn negative_numbers(cmd: clap::Command) -> clap::Command {
     .mut_subcommands(negative_numbers)
 }
 
+/// Restores the default action of SIGPIPE (Rust ignores it, so every `println!` after the
+/// reader left, as in `lustre scene info … | head`, would panic): the process ends quietly, as
+/// command-line tools do.
+fn default_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: called first in `main`, before any other thread exists; SIG_DFL is a valid
+    // disposition for SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 fn main() -> ExitCode {
+    default_sigpipe();
     quiet_vulkan_loader();
     let matches = negative_numbers(Cli::command()).get_matches();
     let result = Cli::from_arg_matches(&matches)
@@ -83,6 +96,16 @@ fn main() -> ExitCode {
         .and_then(run);
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // The reader of our output went away (`lustre list | head`): stop quietly, as a
+        // program killed by SIGPIPE would.
+        Err(e)
+            if e.chain().any(|c| {
+                c.downcast_ref::<std::io::Error>()
+                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            }) =>
+        {
+            ExitCode::FAILURE
+        }
         Err(e) => {
             // The chain in words; no backtrace for a user's error, even with RUST_BACKTRACE.
             eprintln!("error: {}", error_chain(&e));
