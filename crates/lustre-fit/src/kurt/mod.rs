@@ -286,59 +286,41 @@ pub fn fit_judged(
             for c in candidates.iter_mut() {
                 judged(c)?;
             }
-            // Ngan's integrand f²·cos θi·cos θo of a lobe ∝ ((ωi·n)(ωo·n))^(1 − 2α) stays bounded
-            // at grazing angles only for α ≤ ½: a polish that lowered the Eq. 3.7 error (which
-            // weighs f by cos θi·cos θo, bounded for α ≤ 1) by raising α above ½ can be far worse
-            // on Ngan's L2 than the search it started from (blue-fabric, one lobe: 4.85 vs 0.65,
-            // all of the difference from pairs beyond 80°). Such a polish is run again with
-            // α ≤ ½ from the same start.
-            if judge.metric() == Metric::NganL2 && opts.polish {
-                let capped = cap_alpha(&space);
-                let search_metric = candidates[0].metric.unwrap_or(f64::INFINITY);
-                let runaway: Vec<(String, Kurt)> = candidates
-                    .iter()
-                    .skip(1)
-                    .filter(|c| {
-                        c.metric.is_some_and(|v| v > search_metric)
-                            && lobes_over_half(&c.model)
-                    })
-                    .map(|c| (c.label.clone(), c.model.clone()))
-                    .collect();
-                if let Some(capped) = capped.filter(|_| !runaway.is_empty()) {
-                    for (label, _) in runaway {
-                        let start = if label.ends_with("one-lobe fit") {
-                            &single
-                        } else {
-                            &candidates[0].model
-                        };
-                        let p = polish::polish(&s, &capped, start);
-                        evaluations += p.evaluations;
-                        if p.model.validate().is_ok() {
-                            let mut c = Candidate {
-                                label: format!("{label} with α ≤ ½"),
-                                objective: model_objective(&s, &p.model),
-                                model: p.model,
-                                converged: p.converged,
-                                reason: p.reason,
-                                metric: None,
-                            };
-                            judged(&mut c)?;
-                            candidates.push(c);
-                        }
+            // The best so far on the metric; for Ngan's L2 (a weighted least-squares problem)
+            // LM then polishes it on the metric itself (on a coarser quadrature, see
+            // NGAN_POLISH_QUADRATURE), and that result competes too.
+            let best = |c: &[Candidate]| {
+                let key = |c: &Candidate| (c.metric.unwrap_or(f64::INFINITY), c.objective);
+                let mut k = 0;
+                for (i, ci) in c.iter().enumerate().skip(1) {
+                    let (a, b) = (key(ci), key(&c[k]));
+                    if a.0 < b.0 || (a.0 == b.0 && a.1 < b.1) {
+                        k = i;
                     }
                 }
-            }
-            // The best on the metric; among equals the lower Eq. 3.7 objective.
-            let key = |c: &Candidate| (c.metric.unwrap_or(f64::INFINITY), c.objective);
-            let mut k = 0;
-            for (i, c) in candidates.iter().enumerate().skip(1) {
-                if key(c).0 < key(&candidates[k]).0
-                    || (key(c).0 == key(&candidates[k]).0 && key(c).1 < key(&candidates[k]).1)
-                {
-                    k = i;
+                k
+            };
+            if judge.metric() == Metric::NganL2 && opts.polish {
+                let from = best(&candidates);
+                let iso = !data.flags().anisotropic
+                    && space.refl.iter().chain(&space.trans).all(|l| l.tie_my);
+                let set = samples::ngan_set(data, &NGAN_POLISH_QUADRATURE, iso, mask)?;
+                let p = polish::polish_squares(&set, &space, &candidates[from].model);
+                evaluations += p.evaluations;
+                if p.model.validate().is_ok() {
+                    let mut c = Candidate {
+                        label: format!("Ngan-L2 polish from {}", candidates[from].label),
+                        objective: model_objective(&s, &p.model),
+                        model: p.model,
+                        converged: p.converged,
+                        reason: p.reason,
+                        metric: None,
+                    };
+                    judged(&mut c)?;
+                    candidates.push(c);
                 }
             }
-            k
+            best(&candidates)
         }
     };
     if candidates.len() > 1 || judge.is_some() {
@@ -377,6 +359,17 @@ pub fn fit_judged(
     })
 }
 
+/// The quadrature of the Ngan-L2 polish ([`fit_judged`]): half the nodes of
+/// [`crate::metrics::NganQuadrature::default`] per axis (32 × 16 × 24 for isotropic models,
+/// about as many pairs as the Eq. 3.7 direction set); the judge then scores its result on the
+/// full quadrature.
+const NGAN_POLISH_QUADRATURE: crate::metrics::NganQuadrature = crate::metrics::NganQuadrature {
+    theta_h_panels: 4,
+    theta_d_panels: 2,
+    phi_d: 24,
+    phi_h: 4,
+};
+
 /// One model a fit produced: the search's result or a polish of it.
 struct Candidate {
     /// Where it comes from ("the search", "polish from the search", ...).
@@ -390,30 +383,6 @@ struct Candidate {
     reason: String,
     /// The judge's metric of it, when judged.
     metric: Option<f64>,
-}
-
-/// The space with every free α bounded above by ½ (where its range reaches below ½); `None`
-/// when that changes no range.
-fn cap_alpha(space: &params::Space) -> Option<params::Space> {
-    let mut out = space.clone();
-    let mut changed = false;
-    for l in out.refl.iter_mut().chain(out.trans.iter_mut()) {
-        if let Param::Free { lo, hi, log } = l.shape[3] {
-            if lo < 0.5 && hi > 0.5 {
-                l.shape[3] = Param::Free { lo, hi: 0.5, log };
-                changed = true;
-            }
-        }
-    }
-    changed.then_some(out)
-}
-
-/// Whether a lobe with non-zero weight has α > ½.
-fn lobes_over_half(m: &Kurt) -> bool {
-    m.reflection
-        .iter()
-        .chain(&m.transmission)
-        .any(|l| l.alpha > 0.5 && l.ks.max_component() > 0.0)
 }
 
 /// Σ_t a_t |p_measured − p_model| of one hemisphere, per channel.
