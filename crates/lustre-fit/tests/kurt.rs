@@ -433,7 +433,7 @@ fn one_lobe_polish_of_merl_materials_converges() {
         let f = run(d.bsdf.as_ref(), false, &KurtOptions::default());
         assert_eq!(f.status, FitStatus::Converged, "{input}: {}", f.note);
         assert!(
-            f.note.contains("kept: converged (") && !f.note.contains("not converged"),
+            f.kept.starts_with("polish from the search: converged ("),
             "{input}: {}",
             f.note
         );
@@ -442,5 +442,42 @@ fn one_lobe_polish_of_merl_materials_converges() {
             "{input}: objective {:.6e} vs recorded {recorded:.6e}",
             f.objective
         );
+    }
+}
+
+/// Issue 14, deliverable 4, on real data (blue-fabric, one lobe): the Eq. 3.7 polish drives the
+/// lobe to α = 1, r0 = 1, where f ∝ (cos θi·cos θo)^−1 blows Ngan's L2 up at grazing angles
+/// (4.85 reported before, against 0.646 for the search's result it started from; 0.683 with the
+/// earlier, unconverged polish). Judged by the user's metric (Ngan's L2 and the L1) the reported
+/// fit is never worse than the search's result (`refine` off), and with Ngan's L2 the kept
+/// candidate is the converged Ngan-L2 polish (measured 0.225).
+#[test]
+fn kurt_fit_is_never_worse_on_the_users_metric_than_its_search() {
+    use lustre_fit::batch::{FitSettings, Fitter, MeasuredFitter, Metric, ModelChoice};
+    for metric in [Metric::NganL2, Metric::L1] {
+        let settings = |refine| FitSettings {
+            metric,
+            refine,
+            ..FitSettings::new(ModelChoice::Kurt)
+        };
+        let fit = |refine| {
+            MeasuredFitter
+                .fit("nbrdf:blue-fabric", &settings(refine), &|_| {})
+                .expect("fit")
+        };
+        let (polished, search) = (fit(true), fit(false));
+        let (p, s) = (metric.of(&polished.errors), metric.of(&search.errors));
+        eprintln!("{metric:?}: search {s:.4e}, reported {p:.4e}\n{}", polished.message);
+        assert!(p <= s, "{metric:?}: reported {p} > search {s}");
+        assert!(polished.message.contains("kept"), "{}", polished.message);
+        if metric == Metric::NganL2 {
+            assert!(p < 0.3, "Ngan L2 {p}");
+            assert_eq!(polished.status, FitStatus::Converged, "{}", polished.message);
+            assert!(
+                polished.message.contains("kept Ngan-L2 polish from"),
+                "{}",
+                polished.message
+            );
+        }
     }
 }
