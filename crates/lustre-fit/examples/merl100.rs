@@ -412,7 +412,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     if !kurt_lines.is_empty() {
         summary.extend(kurt_summary(&kurt_per, kurt_lobes));
         summary.push(String::new());
-        summary.push("## Kurt, 1–3 lobes (raw fit and reported = best of 1..k on Ngan L2)".into());
+        summary.push("## Kurt, 1–3 lobes (the k-lobe fit judged by Ngan L2, and reported = best of 1..k on Ngan L2)".into());
+        summary.push(String::new());
+        summary.push("Each k-lobe fit keeps the best on Ngan's L2 of its candidates (the search's result, the Eq. 3.7 polish from it and, for k > 1, from the one-lobe fit, and the Ngan-L2 polish of the best of those), as `lustre fit --model kurt` does (`kurt::fit_judged`); the note lists them.".into());
         summary.push(String::new());
         summary.push("| material | lobes | Ngan L2 of this fit | reported (best of 1..k) | Eq. 3.7 objective | wall (s) | CPU (s) | status | unphysical | note |".into());
         summary.push("|---|---|---|---|---|---|---|---|---|---|".into());

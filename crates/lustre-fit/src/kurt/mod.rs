@@ -62,8 +62,8 @@ pub use params::parameter_names;
 
 use crate::metrics::{Metric, MetricJudge};
 use crate::{FitError, FitStatus, Result};
-use lustre_brdf::measured::merl::MerlCoverage;
 use lustre_brdf::frame::mirror_z;
+use lustre_brdf::measured::merl::MerlCoverage;
 use lustre_brdf::models::kurt::{Kurt, LobeKind};
 use lustre_brdf::{Bsdf, Rgb};
 use params::Param;
@@ -121,8 +121,9 @@ pub struct KurtFit {
     pub objective: f64,
     /// Whether the search and the polish settled (see the module documentation).
     pub status: FitStatus,
-    /// Lobe-shape evaluations of the search plus residual and Jacobian passes of the polish, each over
-    /// the whole direction set.
+    /// Lobe-shape evaluations of the search plus residual and Jacobian passes of the polishes,
+    /// each over the whole direction set (the Ngan-L2 polish's over its own quadrature, about
+    /// as many pairs).
     pub evaluations: usize,
     /// Why the fit is (not) converged, in words: how the alternation of lobes ended, every
     /// candidate (the search, each polish with LM's termination reason) with its Eq. 3.7 error
@@ -277,7 +278,10 @@ pub fn fit_judged(
                 if !v.is_finite() {
                     return Err(FitError::Data {
                         input: data.name(),
-                        problem: format!("the {} of a Kurt fit is not finite", judge.metric().as_str()),
+                        problem: format!(
+                            "the {} of a Kurt fit is not finite",
+                            judge.metric().as_str()
+                        ),
                     });
                 }
                 c.metric = Some(v);
@@ -327,13 +331,10 @@ pub fn fit_judged(
         let list: Vec<String> = candidates
             .iter()
             .map(|c| {
-                let m = c
-                    .metric
-                    .map_or(String::new(), |v| format!("{} {v:.4e}, ", judge.map_or("", |j| j.metric().as_str())));
-                format!(
-                    "{}: {m}Eq. 3.7 {:.4e}, {}",
-                    c.label, c.objective, c.reason
-                )
+                let m = c.metric.map_or(String::new(), |v| {
+                    format!("{} {v:.4e}, ", judge.map_or("", |j| j.metric().as_str()))
+                });
+                format!("{}: {m}Eq. 3.7 {:.4e}, {}", c.label, c.objective, c.reason)
             })
             .collect();
         notes.push(format!("candidates: {}", list.join(" | ")));
