@@ -37,9 +37,12 @@
 //!    lower Eq. 3.7 by raising α above ½, which blows up Ngan's L2 at grazing angles (measured:
 //!    blue-fabric, one lobe, α → 1: Ngan 0.65 → 4.85, of which 0.21 → 0.14 with both
 //!    directions within 80°; alumina-oxide, two lobes, α → 0.58: 5.6 → 83.5, 1.75 → 2.29
-//!    within 80°). So for Ngan's L2 a polish that ends worse than the search with some α > ½ is
-//!    run again with every α ≤ ½ (ranges permitting) and that result is a candidate too.
-//!    The note lists every candidate with its metric, Eq. 3.7 error and how it ended.
+//!    within 80°; white-marble, three lobes: 10.0 → 466, 0.75 → 1.01 within 80°; the polished
+//!    lobes have α = 1.0, 0.58, and 0.99 and 0.61). So with Ngan's L2 as the judge, LM also minimizes Ngan's L2 itself — a weighted
+//!    sum of squares of f on its quadrature (`samples::ngan_set`, half the nodes per axis of
+//!    the metric's), the same normal-equation LM with the squared loss — from the best
+//!    candidate so far; its result is a candidate too (blue-fabric: 0.225, converged). The note
+//!    lists every candidate with its metric, Eq. 3.7 error and how it ended.
 //!
 //! [`KurtFit::status`] is that of the kept candidate: for a polish, `Converged` when its LM run
 //! met one of its convergence criteria (relative reduction of the error or relative step below
@@ -156,9 +159,10 @@ pub fn fit_masked(
 }
 
 /// [`fit_masked`] where `judge` (when given) chooses the reported model among the fit's
-/// candidates — the search's result, each polish, and for Ngan's L2 a polish rerun with α ≤ ½
-/// (see the module documentation) — by the user's metric, so that the fit is never worse on
-/// that metric than the search's result it started from. [`KurtFit::metric`] is the judge's
+/// candidates — the search's result, each Eq. 3.7 polish and, when the judge is Ngan's L2, an
+/// LM polish of Ngan's L2 from the best of those (see the module documentation) — by the
+/// user's metric, so that the fit is never worse on that metric than the search's result it
+/// started from. [`KurtFit::metric`] is the judge's
 /// value of the reported model. Without a judge the Eq. 3.7 error decides.
 pub fn fit_judged(
     data: &dyn Bsdf,

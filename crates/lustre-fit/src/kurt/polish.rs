@@ -7,7 +7,10 @@
 //! |data|. All free parameters are polished jointly (kd, every ks/kt channel, mx, my, r0, α of
 //! every lobe; mx, my in ln; a tied my follows mx), each projected onto its range. The Jacobian is
 //! analytic ([`Problem::normal_equations`]). Two stages: on every 4th pair, then on all pairs from there ([`polish`]).
-//! The polished model is kept only when it lowers the true Eq. 3.7 error (on all pairs).
+//! Bounds are handled by projection plus an active set: a parameter on a bound whose descent
+//! direction leaves the range is held there for the iteration. With the squared loss
+//! ([`polish_squares`]) the same LM minimizes Ngan's L2 on its quadrature. Which result the fit
+//! keeps is decided in `kurt::fit_judged` (the Eq. 3.7 error, or the user's metric).
 
 use super::params::{Param, Space};
 use super::samples::{LobeConst, PairSet, Samples};
