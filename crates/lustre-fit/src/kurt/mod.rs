@@ -334,14 +334,21 @@ pub fn fit_judged(
     if candidates.len() > 1 || judge.is_some() {
         let list: Vec<String> = candidates
             .iter()
-            .map(|c| {
+            .enumerate()
+            .map(|(i, c)| {
                 let m = c.metric.map_or(String::new(), |v| {
                     format!("{} {v:.4e}, ", judge.map_or("", |j| j.metric().as_str()))
                 });
-                format!("{}: {m}Eq. 3.7 {:.4e}, {}", c.label, c.objective, c.reason)
+                format!(
+                    "({}) {}: {m}Eq. 3.7 {:.4e}, {}",
+                    i + 1,
+                    c.label,
+                    c.objective,
+                    c.reason
+                )
             })
             .collect();
-        notes.push(format!("candidates: {}", list.join(" | ")));
+        notes.push(format!("candidates: {}", list.join("; ")));
     }
     let k = &candidates[kept];
     notes.push(match judge {
