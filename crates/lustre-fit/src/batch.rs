@@ -107,8 +107,9 @@ pub struct FitSettings {
     pub ranges: Vec<(String, f64, f64)>,
     /// Refine the fit (CT: over the full data; Kurt: the final polish).
     pub refine: bool,
-    /// Kurt: the metric by which fits with 1..=`lobes` lobes are compared (the reported fit is
-    /// the best of them, so more lobes never report a worse fit).
+    /// Kurt: the metric the fit is judged by: each fit keeps the best on it of its candidates
+    /// ([`kurt::fit_judged`]), and fits with 1..=`lobes` lobes are compared on it (the reported
+    /// fit is the best of them, so more lobes never report a worse fit).
     pub metric: Metric,
     /// Refuse MERL tables with unmeasured bins instead of masking them.
     pub strict: bool,
