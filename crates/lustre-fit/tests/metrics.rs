@@ -171,12 +171,11 @@ fn metric_judge_equals_the_reported_metrics() {
     let a = Lambert::new(r1).unwrap();
     let judge = MetricJudge::new(Metric::NganL2, &a, false, None);
     let e = judge.per_channel(&Lambert::new(r2).unwrap());
-    for c in 0..3 {
+    for (c, ec) in e.iter().enumerate() {
         let want = (r1.0[c] - r2.0[c]).abs() / r1.0[c];
         assert!(
-            (e[c] - want).abs() < 3e-4 * want.max(1.0),
-            "{c}: {} vs {want}",
-            e[c]
+            (ec - want).abs() < 3e-4 * want.max(1.0),
+            "{c}: {ec} vs {want}"
         );
     }
 }
