@@ -79,26 +79,9 @@ impl ModelChoice {
     }
 }
 
-/// The metric a Kurt fit with several lobes is judged by (`lustre fit --metric`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Metric {
-    /// Ngan's normalized L2 (004 §V.5.3), mean of the channels.
-    #[default]
-    NganL2,
-    /// The L1 of transfer probabilities (000 Eq. 3.7), mean of the channels.
-    L1,
-}
+pub use crate::metrics::Metric;
 
 impl Metric {
-    /// `ngan-l2` or `l1`.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Metric::NganL2 => "ngan-l2",
-            Metric::L1 => "l1",
-        }
-    }
-
     /// The metric's value (mean of the channels) in `e`.
     pub fn of(self, e: &FitErrors) -> f64 {
         let v = match self {
@@ -124,8 +107,9 @@ pub struct FitSettings {
     pub ranges: Vec<(String, f64, f64)>,
     /// Refine the fit (CT: over the full data; Kurt: the final polish).
     pub refine: bool,
-    /// Kurt: the metric by which fits with 1..=`lobes` lobes are compared (the reported fit is
-    /// the best of them, so more lobes never report a worse fit).
+    /// Kurt: the metric the fit is judged by: each fit keeps the best on it of its candidates
+    /// ([`kurt::fit_judged`]), and fits with 1..=`lobes` lobes are compared on it (the reported
+    /// fit is the best of them, so more lobes never report a worse fit).
     pub metric: Metric,
     /// Refuse MERL tables with unmeasured bins instead of masking them.
     pub strict: bool,
@@ -247,6 +231,13 @@ impl Fitter for MeasuredFitter {
                 // best on the user's metric, so more lobes never report a worse fit.
                 let mut best: Option<(MaterialModel, FitStatus, metrics::ErrorReport, usize)> =
                     None;
+                // The metric's data side, evaluated once for every lobe count's candidates.
+                let judge = metrics::MetricJudge::new(
+                    s.metric,
+                    data.bsdf.as_ref(),
+                    data.transmission,
+                    mask,
+                );
                 let counts: Vec<usize> = if s.lobes <= 1 {
                     vec![s.lobes]
                 } else {
@@ -258,7 +249,13 @@ impl Fitter for MeasuredFitter {
                         lobes: k,
                         ..kurt_options(s)
                     };
-                    let f = kurt::fit_masked(data.bsdf.as_ref(), data.transmission, &opts, mask)?;
+                    let f = kurt::fit_judged(
+                        data.bsdf.as_ref(),
+                        data.transmission,
+                        &opts,
+                        mask,
+                        Some(&judge),
+                    )?;
                     let mut m = f.model.clone();
                     // Pad to L lobes with ks = 0 so that the model has the requested shape.
                     while m.reflection.len() < s.lobes {

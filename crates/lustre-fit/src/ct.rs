@@ -587,6 +587,12 @@ struct RefineSet {
     sw: Vec<f64>,
     /// Data per channel.
     m: [Vec<f64>; 3],
+    /// The index of each pair's cos θh in `cos_h`: D depends on θh only, so it is evaluated
+    /// once per distinct value, not once per pair.
+    row: Vec<usize>,
+    /// The distinct values (to the bit) of cos θh over the pairs (a few per θh node of the
+    /// quadrature: the half vectors of one node agree to rounding).
+    cos_h: Vec<f64>,
 }
 
 /// The quadrature of the refinement LM.
@@ -614,6 +620,17 @@ impl RefineSet {
                 [ci, co, h.z, p.wi.dot(h)]
             })
             .collect();
+        let mut index = std::collections::HashMap::new();
+        let mut cos_h = Vec::new();
+        let row = geo
+            .iter()
+            .map(|g| {
+                *index.entry(g[2].to_bits()).or_insert_with(|| {
+                    cos_h.push(g[2]);
+                    cos_h.len() - 1
+                })
+            })
+            .collect();
         RefineSet {
             coord: geo
                 .iter()
@@ -622,6 +639,8 @@ impl RefineSet {
             geo,
             sw: pairs.iter().map(|p| p.w.sqrt()).collect(),
             m: std::array::from_fn(|c| vals.iter().map(|v| v[c]).collect()),
+            row,
+            cos_h,
         }
     }
 }
@@ -637,22 +656,61 @@ fn shadowing_of(kind: Distribution, alpha: f64, p: f64) -> Result<SgdG1> {
     })
 }
 
-/// D(θh) G1(θi) G1(θo)/(cos θi cos θo) at every point of the set.
-fn spec_factor(d: &Dist, g1: &SgdG1, set: &RefineSet) -> Vec<f64> {
-    set.geo
-        .iter()
-        .zip(&set.coord)
-        .map(|(g, s)| {
-            let (gi, go) = match (d.kind, g1) {
-                // The table at the precomputed coordinates of θi, θo (no logarithm per pair).
-                (Distribution::Sgd, SgdG1::Table(t)) => {
-                    (t.eval_coord(g[0], s[0]), t.eval_coord(g[1], s[1]))
-                }
-                _ => (g1_of(d, g1, g[0]), g1_of(d, g1, g[1])),
-            };
-            d.d(g[2]) * gi * go / (g[0] * g[1])
-        })
-        .collect()
+/// G1(θi) and G1(θo) of one pair of the set (`g`: its geometry, `s`: its table coordinates).
+#[inline]
+fn shadowing(d: &Dist, g1: &SgdG1, g: &[f64; 4], s: &[f64; 2]) -> (f64, f64) {
+    match (d.kind, g1) {
+        // The table at the precomputed coordinates of θi, θo (no logarithm per pair).
+        (Distribution::Sgd, SgdG1::Table(t)) => {
+            (t.eval_coord(g[0], s[0]), t.eval_coord(g[1], s[1]))
+        }
+        _ => (g1_of(d, g1, g[0]), g1_of(d, g1, g[1])),
+    }
+}
+
+/// G1(θi), G1(θo) of every pair when they do not change with (α, p) during an LM run: the
+/// SGD's fixed numeric table (`None` for the closed forms of Beckmann and GGX, which follow α).
+fn fixed_shadowing(kind: Distribution, g1: &SgdG1, set: &RefineSet) -> Option<Vec<(f64, f64)>> {
+    if kind != Distribution::Sgd {
+        return None;
+    }
+    let d = Dist {
+        kind,
+        alpha: 1.0,
+        p: 0.0,
+        ln_kap: 0.0,
+    };
+    Some(
+        set.geo
+            .iter()
+            .zip(&set.coord)
+            .map(|(g, s)| shadowing(&d, g1, g, s))
+            .collect(),
+    )
+}
+
+/// D(θh) G1(θi) G1(θo)/(cos θi cos θo) at every point of the set; D once per distinct cos θh,
+/// the shadowing from `fixed` when given ([`fixed_shadowing`]). The same operations per pair
+/// as evaluating everything per pair, so the same bits.
+fn spec_factor(d: &Dist, g1: &SgdG1, set: &RefineSet, fixed: Option<&[(f64, f64)]>) -> Vec<f64> {
+    let dh: Vec<f64> = set.cos_h.iter().map(|&c| d.d(c)).collect();
+    let one = |g: &[f64; 4], r: usize, (gi, go): (f64, f64)| dh[r] * gi * go / (g[0] * g[1]);
+    match fixed {
+        Some(f) => set
+            .geo
+            .iter()
+            .zip(&set.row)
+            .zip(f)
+            .map(|((g, &r), &s)| one(g, r, s))
+            .collect(),
+        None => set
+            .geo
+            .iter()
+            .zip(&set.coord)
+            .zip(&set.row)
+            .map(|((g, s), &r)| one(g, r, shadowing(d, g1, g, s)))
+            .collect(),
+    }
 }
 
 /// Σ w (f − m)² of channel `ch` on the refinement set with shadowing `g1`.
@@ -665,7 +723,7 @@ fn refine_cost(
 ) -> f64 {
     let d = Dist::new(kind, c.alpha, c.p);
     let fr = Fresnel::GeneralizedSchlick { f0: c.f0, f1: c.f1 };
-    spec_factor(&d, g1, set)
+    spec_factor(&d, g1, set, fixed_shadowing(kind, g1, set).as_deref())
         .iter()
         .zip(&set.geo)
         .zip(&set.sw)
@@ -688,7 +746,8 @@ fn sgd_g1_fit(table: &G1Table) -> Option<[f64; 3]> {
 
 /// One refinement LM of channel `ch` with the SGD shadowing held at `g1` (a numeric table).
 /// Variables: ln ρd, ln ρs, ln α, the Fresnel variables of [`fresnel_of`] and, for SGD, q
-/// (p = −1.9 + 4.8 sigmoid q). D·G is cached per (α, p), so the
+/// (p = −1.9 + 4.8 sigmoid q). D is evaluated once per θh node of the set, the SGD shadowing
+/// (a fixed table during the run) once per pair and run; D·G is cached per (α, p), so the
 /// Jacobian columns of the linear parameters cost a few multiplies per point.
 fn refine_round(
     kind: Distribution,
@@ -713,6 +772,8 @@ fn refine_round(
     // the current point and back, so the current point's factor is reused.
     type Cache = Vec<([f64; 2], Vec<f64>)>;
     let cache: std::sync::Mutex<Cache> = std::sync::Mutex::new(Vec::with_capacity(2));
+    // The SGD shadowing is held fixed during the run: computed once, not once per evaluation.
+    let fixed = fixed_shadowing(kind, g1, set);
     let f = |x: &[f64], r: &mut [f64]| {
         let (rd, a) = (pos_of(x[0]), alpha_of(x[2]));
         let p = if sgd { p_of(x[5]) } else { 0.0 };
@@ -723,7 +784,8 @@ fn refine_round(
             Some(i) => guard.swap(0, i),
             None => {
                 guard.truncate(1);
-                guard.insert(0, ([a, p], spec_factor(&Dist::new(kind, a, p), g1, set)));
+                let sf = spec_factor(&Dist::new(kind, a, p), g1, set, fixed.as_deref());
+                guard.insert(0, ([a, p], sf));
             }
         }
         if let Some((_, sf)) = guard.first() {

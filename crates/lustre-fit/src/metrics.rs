@@ -181,27 +181,50 @@ pub fn ngan_integral_masked(
     mask: Option<&MerlCoverage>,
 ) -> [f64; 3] {
     let iso = !a.flags().anisotropic && !b.flags().anisotropic;
-    let rows = q.pairs(iso);
-    rows.par_iter()
-        .map(|row| {
-            let mut s = [0.0; 3];
-            for p in row {
-                if mask.is_some_and(|m| !m.covers(p.wi, p.wo)) {
-                    continue;
+    NganRows::new(a, q, iso, mask).integral(b)
+}
+
+/// The Ngan quadrature nodes that `mask` covers with the data's values there, grouped by θh
+/// node: the data side of [`ngan_integral_masked`], evaluated once.
+#[derive(Clone, Debug)]
+struct NganRows(Vec<Vec<(WeightedPair, [f64; 3])>>);
+
+impl NganRows {
+    fn new(data: &dyn Bsdf, q: &NganQuadrature, iso: bool, mask: Option<&MerlCoverage>) -> Self {
+        NganRows(
+            q.pairs(iso)
+                .into_par_iter()
+                .map(|row| {
+                    row.into_iter()
+                        .filter(|p| mask.is_none_or(|m| m.covers(p.wi, p.wo)))
+                        .map(|p| (p, data.eval(p.wi, p.wo).0))
+                        .collect()
+                })
+                .collect(),
+        )
+    }
+
+    /// ∫∫ (data − model)² cos θi cos θo dωi dωo per channel.
+    fn integral(&self, model: &dyn Bsdf) -> [f64; 3] {
+        self.0
+            .par_iter()
+            .map(|row| {
+                let mut s = [0.0; 3];
+                for (p, fa) in row {
+                    let fb = model.eval(p.wi, p.wo);
+                    for (c, sc) in s.iter_mut().enumerate() {
+                        let d = fa[c] - fb.0[c];
+                        *sc += p.w * d * d;
+                    }
                 }
-                let (fa, fb) = (a.eval(p.wi, p.wo), b.eval(p.wi, p.wo));
-                for (c, sc) in s.iter_mut().enumerate() {
-                    let d = fa.0[c] - fb.0[c];
-                    *sc += p.w * d * d;
-                }
-            }
-            s
-        })
-        // Collected, then summed in row order: the same bits whatever the thread count
-        // (rayon's `reduce` groups the sums by how the work was split).
-        .collect::<Vec<_>>()
-        .into_iter()
-        .fold([0.0; 3], |x, y| [x[0] + y[0], x[1] + y[1], x[2] + y[2]])
+                s
+            })
+            // Collected, then summed in row order: the same bits whatever the thread count
+            // (rayon's `reduce` groups the sums by how the work was split).
+            .collect::<Vec<_>>()
+            .into_iter()
+            .fold([0.0; 3], |x, y| [x[0] + y[0], x[1] + y[1], x[2] + y[2]])
+    }
 }
 
 /// Directional albedo a(wo) = ∫ f(wi, wo) |cos θi| dωi per channel (000 Eq. 2.6), by the
@@ -265,57 +288,89 @@ pub fn l1_error_masked(
     transmission: bool,
     mask: Option<&MerlCoverage>,
 ) -> [f64; 3] {
-    let n_t = 18;
-    let dt = FRAC_PI_2 / n_t as f64;
-    let n_po = 36;
-    let dpo = 2.0 * PI / n_po as f64;
     let aniso = data.flags().anisotropic || model.flags().anisotropic;
-    let phis_i: Vec<f64> = if aniso {
-        (0..4).map(|k| k as f64 * FRAC_PI_2 / 2.0).collect()
-    } else {
-        vec![0.0]
-    };
-    let n_to = if transmission { 2 * n_t } else { n_t };
-    let (num, den) = (0..n_t)
-        .into_par_iter()
-        .map(|a| {
-            let ti = (a as f64 + 0.5) * dt;
-            let mut num = [0.0; 3];
-            let mut den = 0.0;
-            for &pi in &phis_i {
-                let wi = spherical(ti, pi);
-                for b in 0..n_to {
-                    let to = (b as f64 + 0.5) * dt;
-                    let w = to.sin().abs();
-                    for k in 0..n_po {
-                        let wo = spherical(to, (k as f64 + 0.5) * dpo);
-                        if mask.is_some_and(|m| !m.covers(wi, wo)) {
-                            continue;
+    L1Rows::new(data, transmission, aniso, mask).error(model)
+}
+
+/// One measurement tuple of the L1 grid: directions, the weight |sin θo| |cos θi| |cos θo| and
+/// the data's value.
+type L1Tuple = (DVec3, DVec3, f64, [f64; 3]);
+
+/// The tuples of the L1 grid that `mask` covers with the data's values, per θi row, and the
+/// row's Σ |sin θo|: the data side of [`l1_error_masked`], evaluated once.
+#[derive(Clone, Debug)]
+struct L1Rows(Vec<(Vec<L1Tuple>, f64)>);
+
+impl L1Rows {
+    fn new(data: &dyn Bsdf, transmission: bool, aniso: bool, mask: Option<&MerlCoverage>) -> Self {
+        let n_t = 18;
+        let dt = FRAC_PI_2 / n_t as f64;
+        let n_po = 36;
+        let dpo = 2.0 * PI / n_po as f64;
+        let phis_i: Vec<f64> = if aniso {
+            (0..4).map(|k| k as f64 * FRAC_PI_2 / 2.0).collect()
+        } else {
+            vec![0.0]
+        };
+        let n_to = if transmission { 2 * n_t } else { n_t };
+        L1Rows(
+            (0..n_t)
+                .into_par_iter()
+                .map(|a| {
+                    let ti = (a as f64 + 0.5) * dt;
+                    let mut row = Vec::new();
+                    let mut den = 0.0;
+                    for &pi in &phis_i {
+                        let wi = spherical(ti, pi);
+                        for b in 0..n_to {
+                            let to = (b as f64 + 0.5) * dt;
+                            let w = to.sin().abs();
+                            for k in 0..n_po {
+                                let wo = spherical(to, (k as f64 + 0.5) * dpo);
+                                if mask.is_some_and(|m| !m.covers(wi, wo)) {
+                                    continue;
+                                }
+                                let g = w * wi.z.abs() * wo.z.abs();
+                                row.push((wi, wo, g, data.eval(wi, wo).0));
+                                den += w;
+                            }
                         }
-                        let (fd, fm) = (data.eval(wi, wo), model.eval(wi, wo));
-                        let g = w * wi.z.abs() * wo.z.abs();
-                        for (c, nc) in num.iter_mut().enumerate() {
-                            *nc += g * (fd.0[c] - fm.0[c]).abs();
-                        }
-                        den += w;
+                    }
+                    (row, den)
+                })
+                .collect(),
+        )
+    }
+
+    /// The L1 of `model` per channel.
+    fn error(&self, model: &dyn Bsdf) -> [f64; 3] {
+        let (num, den) = self
+            .0
+            .par_iter()
+            .map(|(row, den)| {
+                let mut num = [0.0; 3];
+                for (wi, wo, g, fd) in row {
+                    let fm = model.eval(*wi, *wo);
+                    for (c, nc) in num.iter_mut().enumerate() {
+                        *nc += g * (fd[c] - fm.0[c]).abs();
                     }
                 }
-            }
-            (num, den)
-        })
-        // Summed in order after collecting: the same bits whatever the thread count.
-        .collect::<Vec<_>>()
-        .into_iter()
-        .fold(([0.0; 3], 0.0), |x, y| {
-            (
-                [x.0[0] + y.0[0], x.0[1] + y.0[1], x.0[2] + y.0[2]],
-                x.1 + y.1,
-            )
-        });
-    if den > 0.0 {
-        num.map(|v| v / den)
-    } else {
-        [0.0; 3]
+                (num, *den)
+            })
+            // Summed in order after collecting: the same bits whatever the thread count.
+            .collect::<Vec<_>>()
+            .into_iter()
+            .fold(([0.0; 3], 0.0), |x, y| {
+                (
+                    [x.0[0] + y.0[0], x.0[1] + y.0[1], x.0[2] + y.0[2]],
+                    x.1 + y.1,
+                )
+            });
+        if den > 0.0 {
+            num.map(|v| v / den)
+        } else {
+            [0.0; 3]
+        }
     }
 }
 
@@ -402,6 +457,11 @@ pub fn ngan_l2_masked(
     mask: Option<&MerlCoverage>,
 ) -> [f64; 3] {
     let integral = ngan_integral_masked(data, model, &NganQuadrature::default(), mask);
+    ngan_normalized(integral, amax)
+}
+
+/// √integral / A_max per channel (a channel with zero albedo by the largest, see [`evaluate`]).
+fn ngan_normalized(integral: [f64; 3], amax: &[f64; 3]) -> [f64; 3] {
     let top = amax.iter().cloned().fold(0.0, f64::max);
     std::array::from_fn(|c| {
         let norm = if amax[c] > 0.0 {
@@ -413,4 +473,93 @@ pub fn ngan_l2_masked(
         };
         integral[c].max(0.0).sqrt() / norm
     })
+}
+
+/// The metric a fit's candidates are judged by (`lustre fit --metric`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Metric {
+    /// Ngan's normalized L2 (004 §V.5.3), mean of the channels.
+    #[default]
+    NganL2,
+    /// The L1 of transfer probabilities (000 Eq. 3.7) on the grid of [`l1_error`], mean of the
+    /// channels.
+    L1,
+}
+
+impl Metric {
+    /// `ngan-l2` or `l1`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Metric::NganL2 => "ngan-l2",
+            Metric::L1 => "l1",
+        }
+    }
+}
+
+/// A [`Metric`] against one data set, its data side evaluated once (on first use per isotropy
+/// of the model), so that many candidate models of one fit are judged at the cost of evaluating
+/// the models only. [`MetricJudge::of`] equals, to the bit, the mean over the channels of
+/// [`ngan_l2_masked`] (with [`max_albedo`] of the data) or [`l1_error_masked`].
+pub struct MetricJudge<'a> {
+    metric: Metric,
+    data: &'a dyn Bsdf,
+    transmission: bool,
+    mask: Option<&'a MerlCoverage>,
+    amax: std::sync::OnceLock<[f64; 3]>,
+    ngan: [std::sync::OnceLock<NganRows>; 2],
+    l1: [std::sync::OnceLock<L1Rows>; 2],
+}
+
+impl<'a> MetricJudge<'a> {
+    /// The judge of `metric` against `data` (with `transmission`, both hemispheres for the L1
+    /// and the albedo), over the pairs `mask` covers.
+    pub fn new(
+        metric: Metric,
+        data: &'a dyn Bsdf,
+        transmission: bool,
+        mask: Option<&'a MerlCoverage>,
+    ) -> Self {
+        MetricJudge {
+            metric,
+            data,
+            transmission,
+            mask,
+            amax: Default::default(),
+            ngan: Default::default(),
+            l1: Default::default(),
+        }
+    }
+
+    /// The metric judged.
+    pub fn metric(&self) -> Metric {
+        self.metric
+    }
+
+    /// The metric of `model` per channel.
+    pub fn per_channel(&self, model: &dyn Bsdf) -> [f64; 3] {
+        let (data, mask) = (self.data, self.mask);
+        match self.metric {
+            Metric::NganL2 => {
+                let iso = !data.flags().anisotropic && !model.flags().anisotropic;
+                let rows = self.ngan[usize::from(iso)]
+                    .get_or_init(|| NganRows::new(data, &NganQuadrature::default(), iso, mask));
+                let amax = self
+                    .amax
+                    .get_or_init(|| max_albedo(data, self.transmission));
+                ngan_normalized(rows.integral(model), amax)
+            }
+            Metric::L1 => {
+                let aniso = data.flags().anisotropic || model.flags().anisotropic;
+                self.l1[usize::from(aniso)]
+                    .get_or_init(|| L1Rows::new(data, self.transmission, aniso, mask))
+                    .error(model)
+            }
+        }
+    }
+
+    /// The metric of `model`, mean of the channels.
+    pub fn of(&self, model: &dyn Bsdf) -> f64 {
+        self.per_channel(model).iter().sum::<f64>() / 3.0
+    }
 }

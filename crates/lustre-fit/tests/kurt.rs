@@ -433,7 +433,7 @@ fn one_lobe_polish_of_merl_materials_converges() {
         let f = run(d.bsdf.as_ref(), false, &KurtOptions::default());
         assert_eq!(f.status, FitStatus::Converged, "{input}: {}", f.note);
         assert!(
-            f.note.contains("kept: converged (") && !f.note.contains("not converged"),
+            f.kept.starts_with("polish from the search: converged ("),
             "{input}: {}",
             f.note
         );
@@ -443,4 +443,76 @@ fn one_lobe_polish_of_merl_materials_converges() {
             f.objective
         );
     }
+}
+
+/// Issue 14, deliverable 4, on real data (blue-fabric, one lobe): the Eq. 3.7 polish drives the
+/// lobe to α = 1, r0 = 1, where f ∝ (cos θi·cos θo)^−1 blows Ngan's L2 up at grazing angles
+/// (4.85 reported before, against 0.646 for the search's result it started from; 0.683 with the
+/// earlier, unconverged polish). Judged by the user's metric (Ngan's L2 and the L1) the reported
+/// fit is never worse than the search's result (`refine` off), and with Ngan's L2 the kept
+/// candidate is the converged Ngan-L2 polish (measured 0.225).
+#[test]
+fn kurt_fit_is_never_worse_on_the_users_metric_than_its_search() {
+    use lustre_fit::batch::{FitSettings, Fitter, MeasuredFitter, Metric, ModelChoice};
+    for metric in [Metric::NganL2, Metric::L1] {
+        let settings = |refine| FitSettings {
+            metric,
+            refine,
+            ..FitSettings::new(ModelChoice::Kurt)
+        };
+        let fit = |refine| {
+            MeasuredFitter
+                .fit("nbrdf:blue-fabric", &settings(refine), &|_| {})
+                .expect("fit")
+        };
+        let (polished, search) = (fit(true), fit(false));
+        let (p, s) = (metric.of(&polished.errors), metric.of(&search.errors));
+        eprintln!(
+            "{metric:?}: search {s:.4e}, reported {p:.4e}\n{}",
+            polished.message
+        );
+        assert!(p <= s, "{metric:?}: reported {p} > search {s}");
+        assert!(polished.message.contains("kept"), "{}", polished.message);
+        if metric == Metric::NganL2 {
+            assert!(p < 0.3, "Ngan L2 {p}");
+            assert_eq!(
+                polished.status,
+                FitStatus::Converged,
+                "{}",
+                polished.message
+            );
+            assert!(
+                polished.message.contains("kept Ngan-L2 polish from"),
+                "{}",
+                polished.message
+            );
+        }
+    }
+}
+
+/// Issue 14, deliverable 4 (multi-lobe convergence), on real data: blue-fabric with two lobes.
+/// The alternation of lobes does not settle in 3 rounds, and the polish stopped at its iteration
+/// limit while its error still fell (docs/results/merl100.md before: NotConverged, Eq. 3.7
+/// 3.8028e-4). The joint polish of all lobes now holds parameters on a bound that the gradient
+/// pushes outward (active set) and converges; its convergence decides the status, and the
+/// alternation is only noted. The objective is no worse than recorded then (measured 3.6713e-4).
+#[test]
+fn multi_lobe_polish_converges_where_the_alternation_does_not_settle() {
+    let d = lustre_fit::data::load("nbrdf:blue-fabric").unwrap();
+    let f = run(
+        d.bsdf.as_ref(),
+        false,
+        &KurtOptions {
+            lobes: 2,
+            ..KurtOptions::default()
+        },
+    );
+    assert!(f.note.contains("did not settle"), "{}", f.note);
+    assert_eq!(f.status, FitStatus::Converged, "{}", f.note);
+    assert!(
+        f.kept.starts_with("polish from the") && f.kept.contains(": converged ("),
+        "{}",
+        f.kept
+    );
+    assert!(f.objective <= 3.8028e-4, "objective {:.6e}", f.objective);
 }

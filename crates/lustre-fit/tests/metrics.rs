@@ -138,3 +138,44 @@ fn nbrdf_inputs_expand_and_load() {
     assert!(data::load("nbrdf:all").is_err());
     assert!(data::load("nbrdf:no-such-material").is_err());
 }
+
+/// The judge a fit uses to pick among its candidates (`MetricJudge`, data side evaluated once)
+/// gives the same bits as the metric functions the batch reports, for Ngan's L2 and the L1, on a
+/// real input against two published fits (one judge reused across models), and with a Lambertian
+/// whose Ngan L2 is known (|ρ − ρ'|/ρ, see `lambert_known_values`).
+#[test]
+fn metric_judge_equals_the_reported_metrics() {
+    use lustre_fit::metrics::{l1_error, max_albedo, ngan_l2, Metric, MetricJudge};
+    let d = data::load("nbrdf:nickel").unwrap();
+    let data = d.bsdf.as_ref();
+    let models = [
+        lustre_brdf::catalog::resolve("sgd:nickel").unwrap(),
+        lustre_brdf::catalog::resolve("sgd:gold-metallic-paint").unwrap(),
+    ];
+    let ngan = MetricJudge::new(Metric::NganL2, data, false, None);
+    let l1 = MetricJudge::new(Metric::L1, data, false, None);
+    let amax = max_albedo(data, false);
+    for m in &models {
+        assert_eq!(
+            ngan.per_channel(m.as_ref()),
+            ngan_l2(data, m.as_ref(), &amax)
+        );
+        assert_eq!(
+            l1.per_channel(m.as_ref()),
+            l1_error(data, m.as_ref(), false)
+        );
+        let mean = ngan_l2(data, m.as_ref(), &amax).iter().sum::<f64>() / 3.0;
+        assert_eq!(ngan.of(m.as_ref()), mean);
+    }
+    let (r1, r2) = (Rgb::new(0.5, 0.3, 0.8), Rgb::new(0.4, 0.35, 0.2));
+    let a = Lambert::new(r1).unwrap();
+    let judge = MetricJudge::new(Metric::NganL2, &a, false, None);
+    let e = judge.per_channel(&Lambert::new(r2).unwrap());
+    for (c, ec) in e.iter().enumerate() {
+        let want = (r1.0[c] - r2.0[c]).abs() / r1.0[c];
+        assert!(
+            (ec - want).abs() < 3e-4 * want.max(1.0),
+            "{c}: {ec} vs {want}"
+        );
+    }
+}

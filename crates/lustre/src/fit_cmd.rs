@@ -62,8 +62,10 @@ pub struct FitArgs {
     /// Skip the refinement (CT: over the full data; Kurt: the final polish).
     #[arg(long = "no-refine")]
     pub no_refine: bool,
-    /// Kurt: the metric by which fits with 1..=LOBES lobes are compared; the reported fit is
-    /// the best of them, so more lobes never report a worse fit.
+    /// Kurt: the metric the fit is judged by. Each fit keeps the best on it of its candidates
+    /// (the search's result, the Eq. 3.7 polishes and, with ngan-l2, a polish of Ngan's L2), and
+    /// fits with 1..=LOBES lobes are compared on it; the reported fit is the best of them, so
+    /// more lobes never report a worse fit.
     #[arg(long, value_enum, default_value_t = MetricArg::NganL2)]
     pub metric: MetricArg,
     /// Refuse MERL tables with unmeasured (negative) bins instead of masking them.

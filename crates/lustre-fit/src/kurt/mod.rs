@@ -25,17 +25,33 @@
 //!    (for L1 the clamping does not move the minimum — a lobe is non-negative, so a negative
 //!    target adds the same constant to every candidate — but it is kept as in the thesis).
 //!    Transmission lobes are fitted the same way on the transmission hemisphere.
-//! 4. A Levenberg-Marquardt polish of all free parameters ([`polish`]); kept only if it lowers
-//!    the Eq. 3.7 error. With several lobes LM runs twice, from the search result and from the
-//!    first one-lobe search (other lobes at ks = 0); the better result is kept.
+//! 4. A Levenberg-Marquardt polish of all free parameters jointly ([`polish`]). With several
+//!    lobes LM runs twice, from the search result and from the first one-lobe search (other
+//!    lobes at ks = 0).
+//! 5. The reported model is one of these candidates (the search's result, each polish): without
+//!    a judge the one with the lowest Eq. 3.7 error; with a [`MetricJudge`] ([`fit_judged`],
+//!    `lustre fit --metric`) the one best on the user's metric, so that the fit is never worse
+//!    on it than the search's result. The two can disagree: Eq. 3.7 weighs f by
+//!    cos θi·cos θo, which keeps a lobe's (cos θi·cos θo)^−α bounded at grazing angles for any
+//!    α ≤ 1, while Ngan's L2 weighs f² by cos θi·cos θo, bounded only for α ≤ ½. The polish can
+//!    lower Eq. 3.7 by raising α above ½, which blows up Ngan's L2 at grazing angles (measured:
+//!    blue-fabric, one lobe, α → 1: Ngan 0.65 → 4.85, of which 0.21 → 0.14 with both
+//!    directions within 80°; alumina-oxide, two lobes, α → 0.58: 5.6 → 83.5, 1.75 → 2.29
+//!    within 80°; white-marble, three lobes: 10.0 → 466, 0.75 → 1.01 within 80°; the polished
+//!    lobes have α = 1.0, 0.58, and 0.99 and 0.61). So with Ngan's L2 as the judge, LM also minimizes Ngan's L2 itself — a weighted
+//!    sum of squares of f on its quadrature (`samples::ngan_set`, half the nodes per axis of
+//!    the metric's), the same normal-equation LM with the squared loss — from the best
+//!    candidate so far; its result is a candidate too (blue-fabric: 0.225, converged). The note
+//!    lists every candidate with its metric, Eq. 3.7 error and how it ended.
 //!
-//! [`KurtFit::status`] is `Converged` when the alternation of several lobes settled (the last
-//! round improved the error by less than 0.1 % of the error without lobes) and then
-//! - with the polish: the LM run whose result was kept (else the first) met one of its
-//!   convergence criteria (relative reduction of the error or relative step below √ε, zero
-//!   gradient, or no improving step at any damping) — the search only provides its start;
-//! - without: the last level of every final lobe search improved the error by less than 0.1 %
-//!   of the error without that lobe.
+//! [`KurtFit::status`] is that of the kept candidate: for a polish, `Converged` when its LM run
+//! met one of its convergence criteria (relative reduction of the error or relative step below
+//! √ε, zero projected gradient, or no improving step at any damping) — the alternation of lobes
+//! only provides its start, so an alternation that did not settle in 3 rounds is noted, not a
+//! reason for `NotConverged`; for the search's result (also without the polish), `Converged`
+//! when the alternation of several lobes settled (the last round improved the error by less
+//! than 0.1 % of the error without lobes) and the last level of every final lobe search
+//! improved the error by less than 0.1 % of the error without that lobe.
 //!
 //! Otherwise `NotConverged`. Data with NaN/infinite samples or no
 //! non-zero sample is a [`FitError::Data`].
@@ -47,8 +63,10 @@ mod search;
 
 pub use params::parameter_names;
 
+use crate::metrics::{Metric, MetricJudge};
 use crate::{FitError, FitStatus, Result};
 use lustre_brdf::frame::mirror_z;
+use lustre_brdf::measured::merl::MerlCoverage;
 use lustre_brdf::models::kurt::{Kurt, LobeKind};
 use lustre_brdf::{Bsdf, Rgb};
 use params::Param;
@@ -106,12 +124,18 @@ pub struct KurtFit {
     pub objective: f64,
     /// Whether the search and the polish settled (see the module documentation).
     pub status: FitStatus,
-    /// Lobe-shape evaluations of the search plus residual and Jacobian passes of the polish, each over
-    /// the whole direction set.
+    /// Lobe-shape evaluations of the search plus residual and Jacobian passes of the polishes,
+    /// each over the whole direction set (the Ngan-L2 polish's over its own quadrature, about
+    /// as many pairs).
     pub evaluations: usize,
-    /// Why the fit is (not) converged, in words: how the alternation of lobes ended and LM's
-    /// termination reason for the polish whose result was kept.
+    /// Why the fit is (not) converged, in words: how the alternation of lobes ended, every
+    /// candidate (the search, each polish with LM's termination reason) with its Eq. 3.7 error
+    /// and the judge's metric, and which one was kept.
     pub note: String,
+    /// The judge's metric of the reported model ([`fit_judged`]); `None` without a judge.
+    pub metric: Option<f64>,
+    /// The kept candidate and how it ended, e.g. `polish from the search: converged (…)`.
+    pub kept: String,
 }
 
 /// Fits a Kurt model to `data` (000 §3.4.1). With `transmission` the transmission hemisphere is
@@ -129,7 +153,23 @@ pub fn fit_masked(
     data: &dyn Bsdf,
     transmission: bool,
     opts: &KurtOptions,
-    mask: Option<&lustre_brdf::measured::merl::MerlCoverage>,
+    mask: Option<&MerlCoverage>,
+) -> Result<KurtFit> {
+    fit_judged(data, transmission, opts, mask, None)
+}
+
+/// [`fit_masked`] where `judge` (when given) chooses the reported model among the fit's
+/// candidates — the search's result, each Eq. 3.7 polish and, when the judge is Ngan's L2, an
+/// LM polish of Ngan's L2 from the best of those (see the module documentation) — by the
+/// user's metric, so that the fit is never worse on that metric than the search's result it
+/// started from. [`KurtFit::metric`] is the judge's
+/// value of the reported model. Without a judge the Eq. 3.7 error decides.
+pub fn fit_judged(
+    data: &dyn Bsdf,
+    transmission: bool,
+    opts: &KurtOptions,
+    mask: Option<&MerlCoverage>,
+    judge: Option<&MetricJudge>,
 ) -> Result<KurtFit> {
     if opts.lobes == 0 && opts.transmission_lobes == 0 {
         return Err(FitError::Option(
@@ -168,69 +208,193 @@ pub fn fit_masked(
         opts.levels,
     );
     let single = Kurt::new(Rgb(kd), refl.single, trans.single)?;
-    let mut model = Kurt::new(Rgb(kd), refl.lobes, trans.lobes)?;
-    let mut objective = model_objective(&s, &model);
+    let model = Kurt::new(Rgb(kd), refl.lobes, trans.lobes)?;
     let mut evaluations = refl.evaluations + trans.evaluations;
     let alternation = refl.alternation_settled && trans.alternation_settled;
-    let mut settled = refl.settled && trans.settled;
+    let several = opts.lobes > 1 || opts.transmission_lobes > 1;
     let mut notes = Vec::new();
     if !alternation {
-        notes.push(
-            "the alternation of lobes did not settle in 3 rounds (last round improved the \
-             error by ≥ 0.1 % of the lobe-free error)"
-                .to_string(),
-        );
+        notes.push(format!(
+            "the alternation of lobes did not settle in {} rounds (last round improved the \
+             error by ≥ 0.1 % of the lobe-free error){}",
+            search::MAX_ROUNDS,
+            if opts.polish {
+                "; it only starts the joint polish of all lobes, whose convergence decides the \
+                 status"
+            } else {
+                ""
+            }
+        ));
     }
+    let search_settled = refl.settled && trans.settled;
+    let mut candidates = vec![Candidate {
+        label: "the search".into(),
+        objective: model_objective(&s, &model),
+        model,
+        converged: search_settled,
+        reason: if search_settled {
+            "the last level of every lobe search improved the error by < 0.1 %".into()
+        } else if alternation {
+            "the last search level still improved the error by ≥ 0.1 %".into()
+        } else {
+            "the alternation of lobes did not settle".into()
+        },
+        metric: None,
+    }];
     if opts.polish {
         // With several lobes LM also starts from the one-lobe fit (other lobes at ks = 0), so
         // that the polished L-lobe model does not end in a worse basin than a one-lobe fit.
-        let several = opts.lobes > 1 || opts.transmission_lobes > 1;
-        let starts = if several {
-            vec![model.clone(), single]
-        } else {
-            vec![model.clone()]
-        };
-        let mut converged = None;
-        let mut reason = None;
-        for (k, start) in starts.iter().enumerate() {
+        let mut starts = vec![("polish from the search", candidates[0].model.clone())];
+        if several {
+            starts.push(("polish from the one-lobe fit", single.clone()));
+        }
+        for (label, start) in &starts {
             let p = polish::polish(&s, &space, start);
             evaluations += p.evaluations;
-            let obj = model_objective(&s, &p.model);
-            let from = if k == 0 {
-                "from the search"
+            if p.model.validate().is_ok() {
+                candidates.push(Candidate {
+                    label: (*label).into(),
+                    objective: model_objective(&s, &p.model),
+                    model: p.model,
+                    converged: p.converged,
+                    reason: p.reason,
+                    metric: None,
+                });
             } else {
-                "from the one-lobe fit"
-            };
-            if obj < objective && p.model.validate().is_ok() {
-                model = p.model;
-                objective = obj;
-                converged = Some(p.converged);
-                reason = Some(format!("polish {from} kept: {}", p.reason));
-            } else if reason.is_none() {
-                reason = Some(format!(
-                    "polish {from} did not lower the Eq. 3.7 error and was dropped ({})",
-                    p.reason
-                ));
+                notes.push(format!("{label} gave an invalid model and was dropped"));
             }
-            converged.get_or_insert(p.converged);
         }
-        settled = converged.unwrap_or(false);
-        notes.extend(reason);
-    } else if !settled {
-        notes.push("the last search level still improved the error by ≥ 0.1 %".into());
     }
-    settled &= alternation;
+    let kept = match judge {
+        None => {
+            // The Eq. 3.7 objective decides: a polish is kept only if it lowers it.
+            let mut k = 0;
+            for (i, c) in candidates.iter().enumerate().skip(1) {
+                if c.objective < candidates[k].objective {
+                    k = i;
+                }
+            }
+            k
+        }
+        Some(judge) => {
+            let judged = |c: &mut Candidate| -> Result<()> {
+                let v = judge.of(&c.model);
+                if !v.is_finite() {
+                    return Err(FitError::Data {
+                        input: data.name(),
+                        problem: format!(
+                            "the {} of a Kurt fit is not finite",
+                            judge.metric().as_str()
+                        ),
+                    });
+                }
+                c.metric = Some(v);
+                Ok(())
+            };
+            for c in candidates.iter_mut() {
+                judged(c)?;
+            }
+            // The best so far on the metric; for Ngan's L2 (a weighted least-squares problem)
+            // LM then polishes it on the metric itself (on a coarser quadrature, see
+            // NGAN_POLISH_QUADRATURE), and that result competes too.
+            let best = |c: &[Candidate]| {
+                let key = |c: &Candidate| (c.metric.unwrap_or(f64::INFINITY), c.objective);
+                let mut k = 0;
+                for (i, ci) in c.iter().enumerate().skip(1) {
+                    let (a, b) = (key(ci), key(&c[k]));
+                    if a.0 < b.0 || (a.0 == b.0 && a.1 < b.1) {
+                        k = i;
+                    }
+                }
+                k
+            };
+            if judge.metric() == Metric::NganL2 && opts.polish {
+                let from = best(&candidates);
+                let iso = !data.flags().anisotropic
+                    && space.refl.iter().chain(&space.trans).all(|l| l.tie_my);
+                let set = samples::ngan_set(data, &NGAN_POLISH_QUADRATURE, iso, mask)?;
+                let p = polish::polish_squares(&set, &space, &candidates[from].model);
+                evaluations += p.evaluations;
+                if p.model.validate().is_ok() {
+                    let mut c = Candidate {
+                        label: format!("Ngan-L2 polish from {}", candidates[from].label),
+                        objective: model_objective(&s, &p.model),
+                        model: p.model,
+                        converged: p.converged,
+                        reason: p.reason,
+                        metric: None,
+                    };
+                    judged(&mut c)?;
+                    candidates.push(c);
+                }
+            }
+            best(&candidates)
+        }
+    };
+    if candidates.len() > 1 || judge.is_some() {
+        let list: Vec<String> = candidates
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let m = c.metric.map_or(String::new(), |v| {
+                    format!("{} {v:.4e}, ", judge.map_or("", |j| j.metric().as_str()))
+                });
+                format!(
+                    "({}) {}: {m}Eq. 3.7 {:.4e}, {}",
+                    i + 1,
+                    c.label,
+                    c.objective,
+                    c.reason
+                )
+            })
+            .collect();
+        notes.push(format!("candidates: {}", list.join("; ")));
+    }
+    let k = &candidates[kept];
+    notes.push(match judge {
+        Some(j) => format!("kept {} (lowest {})", k.label, j.metric().as_str()),
+        None => format!("kept {} (lowest Eq. 3.7 error)", k.label),
+    });
+    let k = candidates.swap_remove(kept);
     Ok(KurtFit {
-        model,
-        objective,
-        status: if settled {
+        kept: format!("{}: {}", k.label, k.reason),
+        model: k.model,
+        objective: k.objective,
+        status: if k.converged {
             FitStatus::Converged
         } else {
             FitStatus::NotConverged
         },
         evaluations,
         note: notes.join("; "),
+        metric: k.metric,
     })
+}
+
+/// The quadrature of the Ngan-L2 polish ([`fit_judged`]): half the nodes of
+/// [`crate::metrics::NganQuadrature::default`] per axis (32 × 16 × 24 for isotropic models,
+/// about as many pairs as the Eq. 3.7 direction set); the judge then scores its result on the
+/// full quadrature.
+const NGAN_POLISH_QUADRATURE: crate::metrics::NganQuadrature = crate::metrics::NganQuadrature {
+    theta_h_panels: 4,
+    theta_d_panels: 2,
+    phi_d: 24,
+    phi_h: 4,
+};
+
+/// One model a fit produced: the search's result or a polish of it.
+struct Candidate {
+    /// Where it comes from ("the search", "polish from the search", ...).
+    label: String,
+    model: Kurt,
+    /// Its Eq. 3.7 error.
+    objective: f64,
+    /// Whether the step that produced it converged (see the module documentation).
+    converged: bool,
+    /// How that step ended, in words.
+    reason: String,
+    /// The judge's metric of it, when judged.
+    metric: Option<f64>,
 }
 
 /// Σ_t a_t |p_measured − p_model| of one hemisphere, per channel.

@@ -7,7 +7,10 @@
 //! |data|. All free parameters are polished jointly (kd, every ks/kt channel, mx, my, r0, α of
 //! every lobe; mx, my in ln; a tied my follows mx), each projected onto its range. The Jacobian is
 //! analytic ([`Problem::normal_equations`]). Two stages: on every 4th pair, then on all pairs from there ([`polish`]).
-//! The polished model is kept only when it lowers the true Eq. 3.7 error (on all pairs).
+//! Bounds are handled by projection plus an active set: a parameter on a bound whose descent
+//! direction leaves the range is held there for the iteration. With the squared loss
+//! ([`polish_squares`]) the same LM minimizes Ngan's L2 on its quadrature. Which result the fit
+//! keeps is decided in `kurt::fit_judged` (the Eq. 3.7 error, or the user's metric).
 
 use super::params::{Param, Space};
 use super::samples::{LobeConst, PairSet, Samples};
@@ -41,8 +44,17 @@ struct Problem<'a> {
     slots: Vec<Slot>,
     /// Lobes whose my follows mx: (transmission?, index).
     ties: Vec<(bool, usize)>,
-    delta: f64,
+    loss: Loss,
     evaluations: Cell<usize>,
+}
+
+/// The loss of a pair's error e = data − p (weight a).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Loss {
+    /// a·(√(e² + δ²) − δ): ≈ a|e|, the L1 of Eq. 3.7, smooth at 0.
+    PseudoHuber(f64),
+    /// a·e²: Ngan's L2 on its quadrature ([`super::samples::ngan_set`]).
+    Squares,
 }
 
 /// Collects the free parameters of `space` with their current values in `model`.
@@ -133,7 +145,7 @@ impl Problem<'_> {
         let nt = self.s.trans.len();
         let mut out = vec![0.0; 3 * (nr + nt)];
         let (ro, to) = out.split_at_mut(3 * nr);
-        let delta = self.delta;
+        let loss = self.loss;
         let fill =
             |set: &PairSet, out: &mut [f64], kd: [f64; 3], lobes: &[(LobeConst, [f64; 3])]| {
                 out.par_chunks_mut(3).enumerate().for_each(|(t, r)| {
@@ -146,8 +158,13 @@ impl Problem<'_> {
                     }
                     for ch in 0..3 {
                         let e = set.data[ch][t] - p[ch];
-                        let rho = (e * e + delta * delta).sqrt() - delta;
-                        r[ch] = e.signum() * (set.weight[t] * rho).sqrt();
+                        r[ch] = match loss {
+                            Loss::PseudoHuber(delta) => {
+                                let rho = (e * e + delta * delta).sqrt() - delta;
+                                e.signum() * (set.weight[t] * rho).sqrt()
+                            }
+                            Loss::Squares => set.weight[t].sqrt() * e,
+                        };
                     }
                 });
             };
@@ -210,7 +227,7 @@ impl Problem<'_> {
                 _ => 1.0,
             })
             .collect();
-        let (slots, ties, delta) = (&self.slots, &self.ties, self.delta);
+        let (slots, ties, loss) = (&self.slots, &self.ties, self.loss);
         let nr = self.s.refl.len();
         // Per set: JᵀJ (row-major n × n, lower triangle) and Jᵀr summed over its pairs.
         let accumulate =
@@ -240,10 +257,13 @@ impl Problem<'_> {
                         }
                     }
                     let sw = set.weight[t].sqrt();
-                    let drde: [f64; 3] = std::array::from_fn(|ch| {
-                        let e = set.data[ch][t] - p[ch];
-                        let q = (e * e + delta * delta).sqrt();
-                        sw * (q + delta).sqrt() / (2.0 * q)
+                    let drde: [f64; 3] = std::array::from_fn(|ch| match loss {
+                        Loss::PseudoHuber(delta) => {
+                            let e = set.data[ch][t] - p[ch];
+                            let q = (e * e + delta * delta).sqrt();
+                            sw * (q + delta).sqrt() / (2.0 * q)
+                        }
+                        Loss::Squares => sw,
                     });
                     row.fill(0.0);
                     for (k, (slot, dvk)) in slots.iter().zip(&dv).enumerate() {
@@ -339,7 +359,7 @@ enum Stop {
     Xtol,
     /// Both of the above on the same step.
     Both,
-    /// Zero gradient.
+    /// Zero projected gradient (every component zero or pointing out of its range at a bound).
     Gtol,
     /// No step lowers the error even with the largest damping (a minimum at machine precision).
     Precision,
@@ -377,9 +397,25 @@ fn marquardt(p: &Problem, x0: DVector<f64>, max_iters: usize) -> (DVector<f64>, 
     let mut history = Vec::with_capacity(max_iters);
     for _ in 0..max_iters {
         history.push(cost);
-        let Some((a, g)) = p.normal_equations(&x, &r) else {
+        let Some((mut a, mut g)) = p.normal_equations(&x, &r) else {
             return (x, Stop::NonFinite);
         };
+        // Active set: a parameter on a bound whose descent direction −g leaves the range is held
+        // there for this iteration (its row and column of JᵀJ cleared, its gradient zeroed), so
+        // that the step of the others is the reduced Gauss-Newton step rather than a step
+        // computed for a move the projection then cancels (which stalled 2- and 3-lobe polishes
+        // with a lobe's α or r0 at 1 at the iteration limit).
+        for (i, s) in p.slots.iter().enumerate() {
+            if (x[i] <= s.lo && g[i] > 0.0) || (x[i] >= s.hi && g[i] < 0.0) {
+                g[i] = 0.0;
+                for k in 0..n {
+                    if k != i {
+                        a[(i, k)] = 0.0;
+                        a[(k, i)] = 0.0;
+                    }
+                }
+            }
+        }
         if g.iter().all(|v| *v == 0.0) {
             return (x, Stop::Gtol);
         }
@@ -481,7 +517,7 @@ fn reason_words(t: Stop, n: usize, per_param: usize) -> String {
         Stop::Both => {
             "converged (relative reduction of the error and of the step below tolerance)".into()
         }
-        Stop::Gtol => "converged (zero gradient)".into(),
+        Stop::Gtol => "converged (zero projected gradient)".into(),
         Stop::Precision => {
             "converged at machine precision (no step lowers the error at any damping)".into()
         }
@@ -524,7 +560,12 @@ fn polish_limited(s: &Samples, space: &Space, model: &Kurt, per_param: usize) ->
 
 /// The least-squares problem of the free parameters of `space` from `model` on the pairs of
 /// `s`, with its start vector; `None` when every parameter is fixed.
-fn problem<'a>(s: &'a Samples, space: &Space, model: &Kurt) -> Option<(Problem<'a>, Vec<f64>)> {
+fn problem<'a>(
+    s: &'a Samples,
+    space: &Space,
+    model: &Kurt,
+    squares: bool,
+) -> Option<(Problem<'a>, Vec<f64>)> {
     let (slots, x) = free_slots(space, model);
     if slots.is_empty() {
         return None;
@@ -536,7 +577,11 @@ fn problem<'a>(s: &'a Samples, space: &Space, model: &Kurt) -> Option<(Problem<'
             den += set.weight[t];
         }
     }
-    let delta = (0.01 * num / den.max(f64::MIN_POSITIVE)).max(1e-12);
+    let loss = if squares {
+        Loss::Squares
+    } else {
+        Loss::PseudoHuber((0.01 * num / den.max(f64::MIN_POSITIVE)).max(1e-12))
+    };
     let ties = [(false, &space.refl), (true, &space.trans)]
         .into_iter()
         .flat_map(|(t, v)| {
@@ -551,7 +596,7 @@ fn problem<'a>(s: &'a Samples, space: &Space, model: &Kurt) -> Option<(Problem<'
         base: model.clone(),
         slots,
         ties,
-        delta,
+        loss,
         evaluations: Cell::new(0),
     };
     Some((problem, x))
@@ -559,7 +604,25 @@ fn problem<'a>(s: &'a Samples, space: &Space, model: &Kurt) -> Option<(Problem<'
 
 /// One LM run from `model` over the free parameters of `space` on the pairs of `s`.
 fn polish_on(s: &Samples, space: &Space, model: &Kurt, per_param: usize) -> Polished {
-    let Some((problem, x)) = problem(s, space, model) else {
+    polish_loss(s, space, model, per_param, false)
+}
+
+/// LM from `model` over the free parameters of `space` minimizing Σ a·(data − p)² on the pairs
+/// of `s` (one stage; for Ngan's L2 on [`super::samples::ngan_set`]), at most
+/// [`MAX_ITERS_PER_PARAM`]·(n + 1) iterations.
+pub(crate) fn polish_squares(s: &Samples, space: &Space, model: &Kurt) -> Polished {
+    polish_loss(s, space, model, MAX_ITERS_PER_PARAM, true)
+}
+
+/// One LM run with the pseudo-Huber loss or (`squares`) the squared error.
+fn polish_loss(
+    s: &Samples,
+    space: &Space,
+    model: &Kurt,
+    per_param: usize,
+    squares: bool,
+) -> Polished {
+    let Some((problem, x)) = problem(s, space, model, squares) else {
         return Polished {
             model: model.clone(),
             converged: true,
@@ -613,13 +676,13 @@ mod tests {
     }
 
     /// JᵀJ and Jᵀr of the analytic Jacobian equal those of central differences of the
-    /// residuals, with my free and with my tied to mx.
+    /// residuals, with my free and with my tied to mx, for the pseudo-Huber and the squared loss.
     #[test]
     fn normal_equations_match_finite_differences() {
         let (s, start) = case();
-        for isotropic in [false, true] {
+        for (isotropic, squares) in [(false, false), (true, false), (false, true), (true, true)] {
             let sp = space(isotropic);
-            let (p, x) = problem(&s, &sp, &start).expect("free parameters");
+            let (p, x) = problem(&s, &sp, &start, squares).expect("free parameters");
             let n = x.len();
             assert_eq!(n, if isotropic { 3 + 2 * 6 } else { 3 + 2 * 7 });
             let x = DVector::from_vec(x);
@@ -642,14 +705,14 @@ mod tests {
                 let gi = cols[i].dot(&r);
                 assert!(
                     (gi - g[i]).abs() <= 1e-5 * gmax,
-                    "isotropic {isotropic}, Jᵀr[{i}]: {} vs {gi}",
+                    "isotropic {isotropic}, squares {squares}, Jᵀr[{i}]: {} vs {gi}",
                     g[i]
                 );
                 for k in 0..n {
                     let aik = cols[i].dot(&cols[k]);
                     assert!(
                         (aik - a[(i, k)]).abs() <= 1e-5 * amax,
-                        "isotropic {isotropic}, JᵀJ[{i},{k}]: {} vs {aik}",
+                        "isotropic {isotropic}, squares {squares}, JᵀJ[{i},{k}]: {} vs {aik}",
                         a[(i, k)]
                     );
                 }

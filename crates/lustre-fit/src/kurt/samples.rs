@@ -384,6 +384,56 @@ fn build_set(raw: Vec<RawPair>, total_w: f64) -> PairSet {
     s
 }
 
+/// The nodes of Ngan's quadrature `q` (`isotropic`: φh integrated out) that `mask` covers, as
+/// a reflection [`PairSet`] whose Σ a·(data − p)² is Ngan's integral
+/// ∫∫ (f_data − f_model)² cos θi cos θo dωi dωo: data p = f·cos θo and a = w / cos²θo with w
+/// the node's weight. Zero data values count (it is an L2 of f, not of the measured pairs).
+/// Errors when a value is not finite.
+pub(crate) fn ngan_set(
+    data: &dyn Bsdf,
+    q: &crate::metrics::NganQuadrature,
+    isotropic: bool,
+    mask: Option<&lustre_brdf::measured::merl::MerlCoverage>,
+) -> Result<Samples> {
+    let raw: Vec<RawPair> = q
+        .pairs(isotropic)
+        .into_par_iter()
+        .flat_map_iter(|row| {
+            row.into_iter()
+                .filter(|p| mask.is_none_or(|m| m.covers(p.wi, p.wo)))
+                .map(|p| {
+                    let f = data.eval(p.wi, p.wo);
+                    let c = p.wo.z;
+                    RawPair {
+                        wi: p.wi,
+                        wo: p.wo,
+                        // build_set multiplies by cos θi.
+                        w: p.w / (c * c * p.wi.z),
+                        regular: false,
+                        p: [f[0] * c, f[1] * c, f[2] * c],
+                    }
+                })
+        })
+        .collect();
+    let bad = raw
+        .iter()
+        .filter(|r| r.p.iter().any(|v| !v.is_finite()))
+        .count();
+    if bad > 0 {
+        return Err(FitError::Data {
+            input: data.name(),
+            problem: format!(
+                "{bad} of {} BSDF values on Ngan's quadrature are NaN or infinite",
+                raw.len()
+            ),
+        });
+    }
+    Ok(Samples {
+        refl: build_set(raw, 1.0),
+        trans: PairSet::default(),
+    })
+}
+
 /// kd from the histogram of measured BRDF values (000 §3.4.1): kd/π is the most common value of
 /// f = p / cos θo over the reflection hemisphere. The histogram has logarithmic bins 5 % wide,
 /// each sample counted with its solid angle (on the regular grid only, so the dense specular

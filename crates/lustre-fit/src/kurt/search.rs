@@ -11,7 +11,7 @@ use rayon::prelude::*;
 /// alternation round) counts as settled.
 const SETTLE_TOL: f64 = 1e-3;
 /// Alternation rounds for more than one lobe (each round refits every lobe once).
-const MAX_ROUNDS: usize = 3;
+pub(crate) const MAX_ROUNDS: usize = 3;
 
 /// The outcome of a search.
 #[derive(Clone, Debug)]
