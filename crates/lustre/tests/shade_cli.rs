@@ -1,4 +1,5 @@
-//! End-to-end runs of `lustre demo` and `lustre compare` at tiny sizes, and their input errors.
+//! End-to-end runs of `lustre demo` and `lustre compare` at tiny sizes, and their input errors;
+//! output into a closed pipe.
 
 use std::process::Command;
 
@@ -123,4 +124,24 @@ fn bad_inputs_are_clear_errors() {
             .arg(dir.path()),
     );
     assert!(e.contains("no-such-map.hdr"), "{e}");
+}
+
+#[test]
+fn output_into_a_closed_pipe_ends_quietly() {
+    // `lustre scene info … | head` when head has already gone: the first write fails.
+    let scene = lustre_brdf::shared_data_dir().join("scenes/cornell_box/cornell_box.obj");
+    let mut child = lustre()
+        .args(["scene", "info"])
+        .arg(&scene)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("runs");
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("waits");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !err.contains("panicked") && !err.contains("Broken pipe"),
+        "{err}"
+    );
 }
