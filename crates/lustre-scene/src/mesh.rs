@@ -58,7 +58,8 @@ pub struct Mesh {
     /// Index into [`crate::Scene::materials`].
     pub material: usize,
     /// Emitted radiance (W·sr⁻¹·m⁻², linear RGB) when the mesh is an area emitter, the same over
-    /// its surface and on both sides (modulated by the material's emission texture, if any).
+    /// its surface, from its front side only (the side its shading normals face, as Mitsuba's
+    /// `area` emitters; modulated by the material's emission texture, if any).
     pub emission: Option<Rgb>,
     /// Real-time renderer hints.
     pub hints: ObjectHints,
