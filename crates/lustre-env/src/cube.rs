@@ -165,6 +165,37 @@ fn wrap_edge(size: usize, face: usize, i: i64, j: i64) -> (usize, usize, usize) 
     }
 }
 
+/// The texels [`CubeMap::fetch`] reads for tap (i, j) of `face` on faces of `size` texels (i, j
+/// within `size` texels of the face): (face, i, j) of each, and how many (1 on the face or
+/// beyond one edge; 3 beyond a corner, to be averaged). The GPU pyramid builder uploads these
+/// as a table so that both read the same texels.
+pub fn fetch_sources(
+    size: usize,
+    face: usize,
+    i: i64,
+    j: i64,
+) -> ([(usize, usize, usize); 3], usize) {
+    let nn = size as i64;
+    let out_i = i < 0 || i >= nn;
+    let out_j = j < 0 || j >= nn;
+    match (out_i, out_j) {
+        (false, false) => ([(face, i as usize, j as usize); 3], 1),
+        (true, false) | (false, true) => ([wrap_edge(size, face, i, j); 3], 1),
+        (true, true) => {
+            let ci = i.clamp(0, nn - 1);
+            let cj = j.clamp(0, nn - 1);
+            (
+                [
+                    (face, ci as usize, cj as usize),
+                    wrap_edge(size, face, i, cj),
+                    wrap_edge(size, face, ci, j),
+                ],
+                3,
+            )
+        }
+    }
+}
+
 /// Face coordinates (s, t) of direction `d` on a given face (which need not be its major face;
 /// `d` must have a non-zero component along the face's axis).
 fn project_on(face: usize, d: DVec3) -> (f64, f64) {
@@ -227,29 +258,18 @@ impl CubeMap {
     /// outside in both coordinates (beyond a corner, where no texel exists) is the average of
     /// the three texels meeting there, as Vulkan's seamless cube filtering does.
     pub fn fetch(&self, face: usize, i: i64, j: i64) -> [f64; 3] {
-        let nn = self.size as i64;
-        let out_i = i < 0 || i >= nn;
-        let out_j = j < 0 || j >= nn;
-        let get = |f: usize, a: usize, b: usize| {
+        let (src, n) = fetch_sources(self.size, face, i, j);
+        let mut acc = [0.0f64; 3];
+        for &(f, a, b) in &src[..n] {
             let v = self.faces[f][b * self.size + a];
-            [v[0] as f64, v[1] as f64, v[2] as f64]
-        };
-        match (out_i, out_j) {
-            (false, false) => get(face, i as usize, j as usize),
-            (true, false) | (false, true) => {
-                let (f, a, b) = wrap_edge(self.size, face, i, j);
-                get(f, a, b)
+            for c in 0..3 {
+                acc[c] += f64::from(v[c]);
             }
-            (true, true) => {
-                let ci = i.clamp(0, nn - 1);
-                let cj = j.clamp(0, nn - 1);
-                let own = get(face, ci as usize, cj as usize);
-                let (f1, a1, b1) = wrap_edge(self.size, face, i, cj);
-                let (f2, a2, b2) = wrap_edge(self.size, face, ci, j);
-                let v1 = get(f1, a1, b1);
-                let v2 = get(f2, a2, b2);
-                std::array::from_fn(|c| (own[c] + v1[c] + v2[c]) / 3.0)
-            }
+        }
+        if n == 1 {
+            acc
+        } else {
+            acc.map(|v| v / n as f64)
         }
     }
 

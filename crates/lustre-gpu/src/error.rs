@@ -46,3 +46,19 @@ pub(crate) fn invalid(parameter: impl Into<String>, message: impl Into<String>) 
         message: message.into(),
     }
 }
+
+/// A [`GpuError::Wgpu`] for `stage`.
+pub(crate) fn wgpu_error(stage: &'static str, e: impl std::fmt::Display) -> GpuError {
+    GpuError::Wgpu {
+        stage,
+        message: e.to_string(),
+    }
+}
+
+/// Pops a validation scope: the first error wgpu reported in it, as a [`GpuError::Wgpu`].
+pub(crate) fn scope_result(scope: wgpu::ErrorScopeGuard, stage: &'static str) -> Result<()> {
+    match pollster::block_on(scope.pop()) {
+        Some(e) => Err(wgpu_error(stage, e)),
+        None => Ok(()),
+    }
+}

@@ -21,6 +21,7 @@ pub mod contract;
 pub mod cube;
 pub mod error;
 pub mod packed;
+pub mod pyramid;
 pub mod shade;
 
 pub use context::GpuContext;
@@ -30,4 +31,5 @@ pub use packed::{
     CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, PackedScene, LOBE_SCHEME_LATTICE,
     LOBE_SCHEME_PATTERN,
 };
+pub use pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_WGSL};
 pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_WGSL};

@@ -3,7 +3,7 @@
 
 use crate::context::GpuContext;
 use crate::cube::{linear_sampler, CubeLevelRef, GpuCube};
-use crate::error::{invalid, GpuError, Result};
+use crate::error::{invalid, scope_result, wgpu_error, Result};
 use crate::packed::{f3, PackedScene, LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN};
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
@@ -296,20 +296,6 @@ fn buffer(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry {
         binding,
         resource: b.as_entire_binding(),
-    }
-}
-
-fn wgpu_error(stage: &'static str, e: impl std::fmt::Display) -> GpuError {
-    GpuError::Wgpu {
-        stage,
-        message: e.to_string(),
-    }
-}
-
-fn scope_result(scope: wgpu::ErrorScopeGuard, stage: &'static str) -> Result<()> {
-    match pollster::block_on(scope.pop()) {
-        Some(e) => Err(wgpu_error(stage, e)),
-        None => Ok(()),
     }
 }
 
