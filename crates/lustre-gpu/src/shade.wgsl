@@ -522,9 +522,9 @@ fn lattice_cells(mx: f32, my: f32, e1: vec2<f32>, wo_l: vec3<f32>,
     for (var cells = budget; cells >= 1u; cells--) {
         let rows = lattice_rows(cells, ratio);
         var total = 0u;
-        for (var j = 0u; j < rows; j++) {
+        for (var j = 0u; j < rows && total <= budget; j++) {
             let m = row_length(cells, rows, j);
-            for (var i = 0u; i < m; i++) {
+            for (var i = 0u; i < m && total <= budget; i++) {
                 total += lattice_taps(mx, my, e1, wo_l, i, m, j, rows, max_taps).x;
             }
         }

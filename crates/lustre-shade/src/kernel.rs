@@ -737,18 +737,19 @@ pub fn lattice_cells(
     if max_taps <= 1 {
         return (budget, pattern::lattice_rows(budget, ratio));
     }
-    for cells in (1..=budget).rev() {
+    'count: for cells in (1..=budget).rev() {
         let rows = pattern::lattice_rows(cells, ratio);
         let mut total = 0;
         for j in 0..rows {
             let m = pattern::row_length(cells, rows, j);
             for i in 0..m {
                 total += lattice_taps(geo, i, m, j, rows, max_taps).0;
+                if total > budget {
+                    continue 'count;
+                }
             }
         }
-        if total <= budget {
-            return (cells, rows);
-        }
+        return (cells, rows);
     }
     (1, 1)
 }
