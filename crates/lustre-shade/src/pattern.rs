@@ -486,8 +486,9 @@ pub fn tap_lattice(mx: f64, my: f64, budget: usize) -> Result<Pattern> {
     })
 }
 
-/// The most taps one cell of a [`tap_lattice`] takes (measured on the truth harness: 3 and 4
-/// give the same errors, 2 is worse on the 0.08 / 0.3 lobe).
+/// The most taps one cell of a [`tap_lattice`] takes (measured on six truth-harness cases,
+/// BENCHMARKS.md issue 8: 3 and 4 within 0.2 points of each other, 2 worse on the 0.08 / 0.3
+/// lobe).
 pub const LATTICE_MAX_TAPS: usize = 3;
 
 /// The `xi0` stored with a [`PatternKind::RowLattice`] pattern: unused by the estimator (the
