@@ -4,8 +4,8 @@
 //! those are measured separately in the `transfer` group.
 //!
 //! The `scheme` group compares the two regular kernels per pixel at 480×270, a screen full of
-//! one-lobe specular pixels: 002's stored pattern (Pdf002) and ours, the per-pixel row lattice,
-//! at 14 and 17 lookups per lobe.
+//! one-lobe specular pixels: 002's stored pattern (Pdf002), ours, the per-pixel row lattice, and
+//! the lattice with several taps in its long cells, at 14 and 17 lookups per lobe.
 //!
 //! Run one group quickly: `cargo bench -p lustre-gpu --bench frame -- --quick frame_full/7`.
 
@@ -13,7 +13,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use glam::DVec3;
 use lustre_gpu::{
     CameraBasis, CubeLevelRef, GpuContext, GpuEnvironment, GpuLobe, GpuMaterial, GpuPlane,
-    GpuRenderer, GpuScene, PackedScene, RenderTarget, LOBE_SCHEME_LATTICE,
+    GpuRenderer, GpuScene, PackedScene, RenderTarget, LOBE_SCHEME_LATTICE, LOBE_SCHEME_TAP_LATTICE,
 };
 use std::f64::consts::PI;
 
@@ -174,17 +174,20 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("scheme");
     g.sample_size(10);
     for n in [14, 17] {
-        for lattice in [false, true] {
+        for (name, scheme) in [
+            ("pattern", None),
+            ("lattice", Some(LOBE_SCHEME_LATTICE)),
+            ("taps", Some(LOBE_SCHEME_TAP_LATTICE)),
+        ] {
             let mut packed = scene(n, false);
-            if lattice {
-                packed.lobes[0].scheme = LOBE_SCHEME_LATTICE;
+            if let Some(scheme) = scheme {
+                packed.lobes[0].scheme = scheme;
                 packed.lobes[0].sample_count = n as u32;
             }
             let gs = GpuScene::upload(&ctx, &packed).unwrap_or_else(|e| panic!("{e}"));
             let frame = renderer
                 .bind(&gs, &env, &small)
                 .unwrap_or_else(|e| panic!("{e}"));
-            let name = if lattice { "lattice" } else { "pattern" };
             g.bench_with_input(BenchmarkId::new(name, n), &frame, |b, frame| {
                 b.iter(|| renderer.draw(frame).unwrap_or_else(|e| panic!("{e}")))
             });

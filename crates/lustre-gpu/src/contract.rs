@@ -6,7 +6,7 @@ use crate::cube::CubeLevelRef;
 use crate::error::{invalid, Result};
 use crate::packed::{
     f3, CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, PackedScene, LOBE_SCHEME_LATTICE,
-    LOBE_SCHEME_PATTERN,
+    LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
 };
 use crate::shade::{GpuEnvironment, GpuRenderer};
 use lustre_brdf::models::kurt::KurtLobe;
@@ -109,6 +109,7 @@ impl PackedScene {
         let p = &plan.pattern;
         let (scheme, count) = match p.kind {
             PatternKind::RowLattice { budget } => (LOBE_SCHEME_LATTICE, index(budget)),
+            PatternKind::TapLattice { budget } => (LOBE_SCHEME_TAP_LATTICE, index(budget)),
             _ => (LOBE_SCHEME_PATTERN, p.h.len() as u32),
         };
         self.lobes.push(GpuLobe {

@@ -29,7 +29,7 @@ pub use cube::{CubeLevelRef, GpuCube};
 pub use error::{GpuError, Result};
 pub use packed::{
     CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, PackedScene, LOBE_SCHEME_LATTICE,
-    LOBE_SCHEME_PATTERN,
+    LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
 };
 pub use pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_WGSL};
 pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_WGSL};

@@ -113,10 +113,12 @@ pub struct GpuLobe {
     pub pdf_constant: f32,
     /// First half vector in the sample array.
     pub sample_start: u32,
-    /// Number of half vectors; for [`LOBE_SCHEME_LATTICE`] the budget (no stored vectors).
+    /// Number of half vectors; for [`LOBE_SCHEME_LATTICE`] and [`LOBE_SCHEME_TAP_LATTICE`] the
+    /// budget (no stored vectors).
     pub sample_count: u32,
-    /// [`LOBE_SCHEME_PATTERN`] (002's stored pattern, Pdf002 weights) or
-    /// [`LOBE_SCHEME_LATTICE`] (ours, the per-pixel row lattice).
+    /// [`LOBE_SCHEME_PATTERN`] (002's stored pattern, Pdf002 weights),
+    /// [`LOBE_SCHEME_LATTICE`] (ours, the per-pixel row lattice) or
+    /// [`LOBE_SCHEME_TAP_LATTICE`] (the lattice with several taps in its long cells).
     pub scheme: u32,
 }
 
@@ -124,6 +126,9 @@ pub struct GpuLobe {
 pub const LOBE_SCHEME_PATTERN: u32 = 0;
 /// `GpuLobe::scheme` of ours, the per-pixel row lattice (`kernel::plan_lattice`).
 pub const LOBE_SCHEME_LATTICE: u32 = 1;
+/// `GpuLobe::scheme` of the row lattice with anisotropic footprints
+/// (`kernel::plan_tap_lattice`; up to `pattern::LATTICE_MAX_TAPS` taps per cell).
+pub const LOBE_SCHEME_TAP_LATTICE: u32 = 2;
 
 /// Everything `shade.wgsl` reads besides the environment, ready to upload.
 #[derive(Clone, Debug, PartialEq)]

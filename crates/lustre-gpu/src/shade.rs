@@ -4,7 +4,9 @@
 use crate::context::GpuContext;
 use crate::cube::{linear_sampler, CubeLevelRef, GpuCube};
 use crate::error::{invalid, scope_result, wgpu_error, Result};
-use crate::packed::{f3, PackedScene, LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN};
+use crate::packed::{
+    f3, PackedScene, LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
+};
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
@@ -145,7 +147,7 @@ fn check(scene: &PackedScene) -> Result<()> {
         // A row-lattice lobe stores no half vectors: sample_count is its budget.
         let stored = match l.scheme {
             LOBE_SCHEME_PATTERN => l.sample_count as usize,
-            LOBE_SCHEME_LATTICE => 0,
+            LOBE_SCHEME_LATTICE | LOBE_SCHEME_TAP_LATTICE => 0,
             other => {
                 return Err(invalid(
                     format!("lobe {i}"),

@@ -57,10 +57,11 @@ struct Lobe {
     xi0: f32,
     pdf_constant: f32,
     // The pattern's half vectors: samples[sample_start .. sample_start + sample_count]; for the
-    // row lattice (scheme 1) sample_count is the budget and nothing is stored.
+    // row lattices (schemes 1, 2) sample_count is the budget and nothing is stored.
     sample_start: u32,
     sample_count: u32,
-    // 0: stored pattern with Pdf002 weights; 1: the row lattice (packed::LOBE_SCHEME_*).
+    // 0: stored pattern with Pdf002 weights; 1: the row lattice; 2: the row lattice with
+    // several taps in its long cells (packed::LOBE_SCHEME_*).
     scheme: u32,
 }
 
@@ -465,11 +466,82 @@ fn shade_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>,
     return lobe.ks * sum / f32(count);
 }
 
-// kernel::lattice_lobe: ours, the row lattice of `budget` equal-mass cells of the slope-space
-// Gaussian, rows along the minor axis of the lobe's image in ωi (kernel::lattice_axes), each cell
-// read once at the level of its solid angle μ/p(ωi); weight μ F cos θi / (G cos θh).
+// pattern::LATTICE_MAX_TAPS: the most taps one cell of the tap lattice (scheme 2) takes.
+const LATTICE_MAX_TAPS: u32 = 3u;
+
+// kernel::LatticeGeometry::slope: x e1 + y e2 with e2 = e1 turned by 90°.
+fn lattice_slope(e1: vec2<f32>, x: f32, y: f32) -> vec2<f32> {
+    return vec2<f32>(x * e1.x - y * e1.y, x * e1.y + y * e1.x);
+}
+
+// kernel::LatticeGeometry::stretch: |∂ωi/∂s| along the slope-space unit vector e at h = n/|n|.
+fn lattice_stretch(mx: f32, my: f32, wo_l: vec3<f32>, h: vec3<f32>, len: f32,
+                   e: vec2<f32>) -> f32 {
+    let dn = vec3<f32>(mx * e.x, my * e.y, 0.0);
+    let dh = (dn - h * dot(h, dn)) / len;
+    return length(2.0 * (dot(wo_l, dh) * h + dot(wo_l, h) * dh));
+}
+
+// kernel::lattice_taps: the taps of cell i of m in row j of rows (x: the count, 0 for a cell
+// whose centre lies below the horizon; y: 1 along e1, 0 along e2).
+fn lattice_taps(mx: f32, my: f32, e1: vec2<f32>, wo_l: vec3<f32>,
+                i: u32, m: u32, j: u32, rows: u32, max_taps: u32) -> vec2<u32> {
+    let x = gauss_quantile((f32(i) + 0.5) / f32(m));
+    let y = gauss_quantile((f32(j) + 0.5) / f32(rows));
+    let s = lattice_slope(e1, x, y);
+    let nv = vec3<f32>(mx * s.x, my * s.y, 1.0);
+    let len = length(nv);
+    let h = nv / len;
+    let ho = dot(wo_l, h);
+    if (!(ho > 0.0 && reflect_about(wo_l, h).z > 0.0)) {
+        return vec2<u32>(0u, 1u);
+    }
+    let wx = lattice_stretch(mx, my, wo_l, h, len, e1) * exp(x * x) / f32(m);
+    let wy = lattice_stretch(mx, my, wo_l, h, len, vec2<f32>(-e1.y, e1.x)) * exp(y * y)
+        / f32(rows);
+    let aspect = wx / wy;
+    if (!(aspect > 0.0 && aspect <= 3.4e38)) {
+        return vec2<u32>(1u, 1u);
+    }
+    var t = aspect;
+    var along = 1u;
+    if (aspect < 1.0) {
+        t = 1.0 / aspect;
+        along = 0u;
+    }
+    return vec2<u32>(u32(clamp(round(t), 1.0, f32(max(max_taps, 1u)))), along);
+}
+
+// kernel::lattice_cells: with one tap per cell, budget cells; otherwise the largest cell count
+// whose taps fit the budget. x: cells, y: rows.
+fn lattice_cells(mx: f32, my: f32, e1: vec2<f32>, wo_l: vec3<f32>,
+                 budget: u32, ratio: f32, max_taps: u32) -> vec2<u32> {
+    if (max_taps <= 1u) {
+        return vec2<u32>(budget, lattice_rows(budget, ratio));
+    }
+    for (var cells = budget; cells >= 1u; cells--) {
+        let rows = lattice_rows(cells, ratio);
+        var total = 0u;
+        for (var j = 0u; j < rows && total <= budget; j++) {
+            let m = row_length(cells, rows, j);
+            for (var i = 0u; i < m && total <= budget; i++) {
+                total += lattice_taps(mx, my, e1, wo_l, i, m, j, rows, max_taps).x;
+            }
+        }
+        if (total <= budget) {
+            return vec2<u32>(cells, rows);
+        }
+    }
+    return vec2<u32>(1u, 1u);
+}
+
+// kernel::lattice_lobe: ours, the row lattice of `budget` lookups: equal-mass cells of the
+// slope-space Gaussian, rows along the minor axis of the lobe's image in ωi
+// (kernel::lattice_axes), each cell read once (max_taps = 1) or, for the tap lattice, by up to
+// max_taps taps at its sub-quantiles along its long axis, each at the level of its solid angle
+// μ/p(ωi); weight μ F cos θi / (G cos θh).
 fn lattice_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>,
-                t: vec3<f32>, b: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+                t: vec3<f32>, b: vec3<f32>, n: vec3<f32>, max_taps_in: u32) -> vec3<f32> {
     let budget = lobe.sample_count;
     if (budget == 0u) {
         return vec3<f32>(0.0);
@@ -495,43 +567,60 @@ fn lattice_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>,
     if (len > 0.0 && len <= 3.4e38) {
         e1 = ev / len;
     }
-    let e2 = vec2<f32>(-e1.y, e1.x);
-    let rows = lattice_rows(budget, ratio);
+    let max_taps = clamp(max_taps_in, 1u, budget);
+    let lattice = lattice_cells(mx, my, e1, wo_l, budget, ratio, max_taps);
+    let cells = lattice.x;
+    let rows = lattice.y;
     var sum = vec3<f32>(0.0);
     for (var j = 0u; j < rows; j++) {
-        let m = row_length(budget, rows, j);
-        let y = gauss_quantile((f32(j) + 0.5) / f32(rows));
-        let mass = 1.0 / f32(rows * m);
+        let m = row_length(cells, rows, j);
         for (var i = 0u; i < m; i++) {
-            let x = gauss_quantile((f32(i) + 0.5) / f32(m));
-            let s = x * e1 + y * e2;
-            let h = normalize(vec3<f32>(mx * s.x, my * s.y, 1.0));
-            let ho = dot(wo_l, h);
-            if (!(ho > 0.0)) {
+            var taps = vec2<u32>(1u, 1u);
+            if (max_taps > 1u) {
+                taps = lattice_taps(mx, my, e1, wo_l, i, m, j, rows, max_taps);
+            }
+            if (taps.x == 0u) {
                 continue;
             }
-            let r = reflect_about(wo_l, h);
-            let cos_i = r.z;
-            if (!(cos_i > 0.0)) {
-                continue;
+            let mass = 1.0 / f32(rows * m * taps.x);
+            for (var q = 0u; q < taps.x; q++) {
+                let sub = (f32(q) + 0.5) / f32(taps.x);
+                var ux = (f32(i) + 0.5) / f32(m);
+                var uy = (f32(j) + 0.5) / f32(rows);
+                if (taps.y == 1u) {
+                    ux = (f32(i) + sub) / f32(m);
+                } else {
+                    uy = (f32(j) + sub) / f32(rows);
+                }
+                let s = lattice_slope(e1, gauss_quantile(ux), gauss_quantile(uy));
+                let h = normalize(vec3<f32>(mx * s.x, my * s.y, 1.0));
+                let ho = dot(wo_l, h);
+                if (!(ho > 0.0)) {
+                    continue;
+                }
+                let r = reflect_about(wo_l, h);
+                let cos_i = r.z;
+                if (!(cos_i > 0.0)) {
+                    continue;
+                }
+                var wi_l = r;
+                if (transmission) {
+                    wi_l = vec3<f32>(r.x, r.y, -r.z);
+                }
+                let wi = to_world(wi_l, t, b, n);
+                let cell = mass * 4.0 * PI * mx * my * ho * h.z * h.z * h.z * exp(dot(s, s));
+                let level = min(footprint_level(cell, wi, face), globals.params.z);
+                let li = textureSampleLevel(pyramid, linear_sampler, wi, level).rgb;
+                var fresnel = schlick(lobe.r0, ho);
+                if (transmission) {
+                    fresnel = 1.0 - fresnel;
+                }
+                var shadow = 1.0;
+                if (lobe.alpha != 0.0) {
+                    shadow = pow(cos_i * wo_l.z, lobe.alpha);
+                }
+                sum += li * (mass * fresnel * cos_i / (shadow * h.z));
             }
-            var wi_l = r;
-            if (transmission) {
-                wi_l = vec3<f32>(r.x, r.y, -r.z);
-            }
-            let wi = to_world(wi_l, t, b, n);
-            let cell = mass * 4.0 * PI * mx * my * ho * h.z * h.z * h.z * exp(dot(s, s));
-            let level = min(footprint_level(cell, wi, face), globals.params.z);
-            let li = textureSampleLevel(pyramid, linear_sampler, wi, level).rgb;
-            var fresnel = schlick(lobe.r0, ho);
-            if (transmission) {
-                fresnel = 1.0 - fresnel;
-            }
-            var shadow = 1.0;
-            if (lobe.alpha != 0.0) {
-                shadow = pow(cos_i * wo_l.z, lobe.alpha);
-            }
-            sum += li * (mass * fresnel * cos_i / (shadow * h.z));
         }
     }
     return lobe.ks * sum;
@@ -566,7 +655,9 @@ fn shade(hit: Hit, wo: vec3<f32>) -> vec3<f32> {
     for (var k = 0u; k < m.reflection + m.transmission; k++) {
         let lobe = lobes[m.lobe_start + k];
         if (lobe.scheme == 1u) {
-            c += lattice_lobe(lobe, k >= m.reflection, wo_l, t, b, n);
+            c += lattice_lobe(lobe, k >= m.reflection, wo_l, t, b, n, 1u);
+        } else if (lobe.scheme == 2u) {
+            c += lattice_lobe(lobe, k >= m.reflection, wo_l, t, b, n, LATTICE_MAX_TAPS);
         } else {
             c += shade_lobe(lobe, k >= m.reflection, wo_l, t, b, n);
         }

@@ -1,5 +1,6 @@
 //! GPU ↔ CPU parity: the same scene, material plans (002's stored patterns with
-//! Weighting::Pdf002, and ours, the row lattice of `plan_lattice`) and environment rendered by
+//! Weighting::Pdf002, ours, the row lattice of `plan_lattice`, and the lattice with several taps
+//! in its long cells of `plan_tap_lattice`) and environment rendered by
 //! `lustre_shade::render` with `kernel::shade_regular` in f64 and by the
 //! WGSL kernel in f32 must agree to PSNR ≥ 45 dB (≥ 90 dB on lavapipe, whose float filtering
 //! leaves only f32 rounding). Fails (does not skip) without an adapter. Set
@@ -12,7 +13,8 @@ use lustre_env::{CubeMap, CubePyramid, MipFilter};
 use lustre_gpu::{GpuContext, GpuRenderer};
 use lustre_shade::image::Image;
 use lustre_shade::kernel::{
-    plan_lattice, plan_regular, shade_regular, Environment, MaterialPlan, Weighting,
+    plan_lattice, plan_regular, plan_tap_lattice, shade_regular, Environment, MaterialPlan,
+    Weighting,
 };
 use lustre_shade::metrics::{psnr, rms};
 use lustre_shade::render::render;
@@ -145,20 +147,26 @@ fn gpu_render_matches_cpu_shade_regular() {
         pyramid: &pyramid,
         irradiance: &irradiance,
     };
-    for (budget, lattice) in [(7, false), (19, false), (7, true), (17, true)] {
+    for (budget, tag) in [
+        (7, "regular"),
+        (19, "regular"),
+        (7, "lattice"),
+        (17, "lattice"),
+        (7, "taps"),
+        (17, "taps"),
+    ] {
         let plans: Vec<MaterialPlan> = scene
             .materials
             .iter()
             .map(|k| {
-                if lattice {
-                    plan_lattice(k, budget)
-                } else {
-                    plan_regular(k, budget, 0.1)
+                match tag {
+                    "lattice" => plan_lattice(k, budget),
+                    "taps" => plan_tap_lattice(k, budget),
+                    _ => plan_regular(k, budget, 0.1),
                 }
                 .unwrap_or_else(|e| panic!("{e}"))
             })
             .collect();
-        let tag = if lattice { "lattice" } else { "regular" };
         let cpu = cpu_render(&scene, &plans, &env);
         let renderer = GpuRenderer::new(&ctx).unwrap_or_else(|e| panic!("{e}"));
         let gpu = renderer

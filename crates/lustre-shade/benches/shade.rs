@@ -9,8 +9,8 @@ use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::rgb::Rgb;
 use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter};
 use lustre_shade::kernel::{
-    plan_lattice, plan_regular, shade_ck, shade_reference, shade_regular, Environment,
-    ShadingFrame, Weighting,
+    plan_lattice, plan_regular, plan_tap_lattice, shade_ck, shade_reference, shade_regular,
+    Environment, ShadingFrame, Weighting,
 };
 use std::hint::black_box;
 
@@ -62,6 +62,19 @@ fn bench(c: &mut Criterion) {
     g.throughput(Throughput::Elements(PIXELS as u64));
     for budget in [14, 17, 30] {
         let plan = plan_lattice(&kurt, budget).expect("plan");
+        g.bench_with_input(BenchmarkId::from_parameter(budget), &plan, |b, plan| {
+            b.iter(|| {
+                for (f, wo) in &pixels {
+                    black_box(shade_regular(f, *wo, plan, &env, Weighting::Pdf002));
+                }
+            })
+        });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("shade_tap_lattice");
+    g.throughput(Throughput::Elements(PIXELS as u64));
+    for budget in [14, 17, 30] {
+        let plan = plan_tap_lattice(&kurt, budget).expect("plan");
         g.bench_with_input(BenchmarkId::from_parameter(budget), &plan, |b, plan| {
             b.iter(|| {
                 for (f, wo) in &pixels {

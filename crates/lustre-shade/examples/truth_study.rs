@@ -9,6 +9,8 @@
 //! - `regular 002`: `plan_regular` (002 §5 as printed, Pdf002 weights, 002 Eq. 16 levels);
 //! - `reach 1`: the same with the rings stretched to θmax (`ConcentricOptions { reach: 1 }`);
 //! - `lattice`: ours, `plan_lattice` (per-pixel row lattice, one lookup per cell);
+//! - `lattice + taps`: `plan_tap_lattice`, the lattice whose long cells take up to 3 taps along
+//!   their long axis (an anisotropic footprint), fewer cells so the taps fit the same budget;
 //! - `CK`: Colbert–Křivánek with the same budget;
 //! - `MC`: the Monte-Carlo estimator `shade_reference` with `--mc` samples on level 0;
 //!
@@ -31,8 +33,8 @@ use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::rgb::Rgb;
 use lustre_env::{irradiance_map, read_map, shared_data_dir, CubeMap, CubePyramid, MipFilter};
 use lustre_shade::kernel::{
-    plan_lattice, plan_regular, plan_regular_with, shade_ck_counted, shade_reference,
-    shade_regular_counted, Environment, MaterialPlan, ShadingFrame, Weighting,
+    plan_lattice, plan_regular, plan_regular_with, plan_tap_lattice, shade_ck_counted,
+    shade_reference, shade_regular_counted, Environment, MaterialPlan, ShadingFrame, Weighting,
 };
 use lustre_shade::pattern::ConcentricOptions;
 use lustre_shade::truth::{configurations, supersampling, truth, Configuration};
@@ -52,7 +54,16 @@ const BINS: [(f64, f64); 6] = [
     (80.0, 85.0),
 ];
 
-const METHODS: [&str; 5] = ["regular 002", "reach 1", "lattice (ours)", "CK", "MC"];
+const METHODS: [&str; 6] = [
+    "regular 002",
+    "reach 1",
+    "lattice (ours)",
+    "lattice + taps",
+    "CK",
+    "MC",
+];
+/// Number of methods.
+const NM: usize = METHODS.len();
 
 struct Material {
     name: &'static str,
@@ -83,12 +94,13 @@ fn arg<T: std::str::FromStr>(args: &[String], name: &str, default: T) -> T {
 }
 
 /// Map, material, and per method the relative RMS overall, at θo < 60° and at 60–80°.
-type SummaryRow = (String, String, [f64; 5], [f64; 5], [f64; 5]);
+type SummaryRow = (String, String, [f64; NM], [f64; NM], [f64; NM]);
 
 struct Plans {
     printed: MaterialPlan,
     reach: MaterialPlan,
     lattice: MaterialPlan,
+    taps: MaterialPlan,
 }
 
 /// Every method on one configuration: (estimate, lookups) in `METHODS` order.
@@ -99,12 +111,13 @@ fn shade_all(
     env: &Environment,
     mc: usize,
     seed: u64,
-) -> [(Rgb, usize); 5] {
+) -> [(Rgb, usize); NM] {
     let w = Weighting::Pdf002;
     [
         shade_regular_counted(&c.frame, c.wo, &p.printed, env, w),
         shade_regular_counted(&c.frame, c.wo, &p.reach, env, w),
         shade_regular_counted(&c.frame, c.wo, &p.lattice, env, w),
+        shade_regular_counted(&c.frame, c.wo, &p.taps, env, w),
         shade_ck_counted(&c.frame, c.wo, &m.kurt, m.budget, env),
         (shade_reference(&c.frame, c.wo, &m.kurt, env, mc, seed), mc),
     ]
@@ -163,10 +176,11 @@ fn study(
             ConcentricOptions { reach: Some(1.0) },
         )?,
         lattice: plan_lattice(&m.kurt, m.budget)?,
+        taps: plan_tap_lattice(&m.kurt, m.budget)?,
     };
     let base = &env.pyramid.levels[0];
     let face = base.size;
-    let rows: Vec<(Rgb, [(Rgb, usize); 5])> = configs
+    let rows: Vec<(Rgb, [(Rgb, usize); NM])> = configs
         .par_iter()
         .enumerate()
         .map(|(k, c)| {
@@ -190,9 +204,9 @@ fn study(
             .join(" | "),
         "---:|".repeat(BINS.len())
     );
-    let mut rels = [0.0; 5];
-    let mut low = [0.0; 5];
-    let mut high = [0.0; 5];
+    let mut rels = [0.0; NM];
+    let mut low = [0.0; NM];
+    let mut high = [0.0; NM];
     for (mi, name) in METHODS.iter().enumerate() {
         let mut all = Acc::default();
         let mut bins = vec![Acc::default(); BINS.len()];
@@ -255,7 +269,7 @@ fn study(
     let total: f64 = grazing.iter().map(|g| g.0).sum();
     let _ = writeln!(
         md,
-        "\nLargest lattice errors at θo 60–80° (share of the bin's squared error; brightest texel: elevation above the tangent plane, angle from the lobe's mirror direction):\n\n| θo | share % | elevation | from mirror | truth | lattice | regular 002 |\n|---:|---:|---:|---:|---:|---:|---:|"
+        "\nLargest lattice errors at θo 60–80° (share of the bin's squared error; brightest texel: elevation above the tangent plane, angle from the lobe's mirror direction):\n\n| θo | share % | elevation | from mirror | truth | lattice | lattice + taps | regular 002 |\n|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
     for &(e2, k) in grazing.iter().take(3) {
         let c = &configs[k];
@@ -264,13 +278,14 @@ fn study(
         let (t, est) = &rows[k];
         let _ = writeln!(
             md,
-            "| {:.1}° | {:.0} | {:.1}° | {:.1}° | {:.4} | {:.4} | {:.4} |",
+            "| {:.1}° | {:.0} | {:.1}° | {:.1}° | {:.4} | {:.4} | {:.4} | {:.4} |",
             c.theta_o_deg,
             100.0 * e2 / total.max(1e-300),
             c.frame.n.dot(sun).clamp(-1.0, 1.0).asin().to_degrees(),
             mirror.dot(sun).clamp(-1.0, 1.0).acos().to_degrees(),
             t.mean(),
             est[lat].0.mean(),
+            est[lat + 1].0.mean(),
             est[0].0.mean()
         );
     }
@@ -351,10 +366,11 @@ fn elongation(face: usize, mx: f64, my: f64, budget: usize, md: &mut String) -> 
             ConcentricOptions { reach: Some(1.0) },
         )?,
         lattice: plan_lattice(&m.kurt, budget)?,
+        taps: plan_tap_lattice(&m.kurt, budget)?,
     };
     let _ = writeln!(
         md,
-        "\n### Elongation: mx {mx}, my {my}, budget {budget} (one 1.5° spot, {face}² faces)\n\n√(M_t/M_b) of the response over a 41×41 grid of spot positions around the mirror direction (M_t, M_b: second moments along the tangent's and bitangent's projections on the ωi tangent plane); in brackets the response's relative RMS against the truth's.\n\n| θo, φo | truth | regular 002 | reach 1 | lattice (ours) | CK |\n|---|---:|---:|---:|---:|---:|"
+        "\n### Elongation: mx {mx}, my {my}, budget {budget} (one 1.5° spot, {face}² faces)\n\n√(M_t/M_b) of the response over a 41×41 grid of spot positions around the mirror direction (M_t, M_b: second moments along the tangent's and bitangent's projections on the ωi tangent plane); in brackets the response's relative RMS against the truth's.\n\n| θo, φo | truth | regular 002 | reach 1 | lattice (ours) | lattice + taps | CK |\n|---|---:|---:|---:|---:|---:|---:|"
     );
     for (th, ph) in [
         (0.0f64, 0.0f64),
@@ -377,11 +393,11 @@ fn elongation(face: usize, mx: f64, my: f64, budget: usize, md: &mut String) -> 
                 (a, b, (r0 + et * a + eb * b).normalize())
             })
             .collect();
-        let resp: Vec<[f64; 5]> = grid
+        let resp: Vec<[f64; NM]> = grid
             .par_iter()
             .map(|&(_, _, l)| {
                 if l.z <= 0.0 {
-                    return [0.0; 5];
+                    return [0.0; NM];
                 }
                 let frame = frame_through(l, spot);
                 let c = Configuration {
@@ -397,11 +413,12 @@ fn elongation(face: usize, mx: f64, my: f64, budget: usize, md: &mut String) -> 
                     e[1].0.mean(),
                     e[2].0.mean(),
                     e[3].0.mean(),
+                    e[4].0.mean(),
                 ]
             })
             .collect();
         let mut cells = vec![];
-        for mi in 0..5 {
+        for mi in 0..NM {
             let (mut w, mut mt, mut mb, mut ma, mut mbb) = (0.0, 0.0, 0.0, 0.0, 0.0);
             for (r, (a, b, _)) in resp.iter().zip(&grid) {
                 w += r[mi];
@@ -491,7 +508,7 @@ fn main() -> Res<()> {
         "---:|".repeat(METHODS.len())
     );
     for (map, mat, rel, lo, hi) in &summary {
-        let cells: Vec<String> = (0..5)
+        let cells: Vec<String> = (0..NM)
             .map(|i| format!("{} ({} / {})", pct(rel[i]), pct(lo[i]), pct(hi[i])))
             .collect();
         let _ = writeln!(md, "| {map} | {mat} | {} |", cells.join(" | "));

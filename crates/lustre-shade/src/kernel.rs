@@ -286,6 +286,16 @@ pub fn plan_lattice(kurt: &Kurt, budget_per_lobe: usize) -> Result<MaterialPlan>
     })
 }
 
+/// Plans every lobe with the row lattice whose long cells are read by several taps along their
+/// long axis ([`pattern::tap_lattice`], an anisotropic footprint per cell): still at most
+/// `budget_per_lobe` filtered lookups per lobe, with fewer cells where cells take several taps.
+/// See [`shade_regular_with`]. Errors as [`plan_regular`].
+pub fn plan_tap_lattice(kurt: &Kurt, budget_per_lobe: usize) -> Result<MaterialPlan> {
+    plan_with(kurt, budget_per_lobe, |l| {
+        pattern::tap_lattice(l.mx, l.my, budget_per_lobe)
+    })
+}
+
 /// Validates the material and the budget, then builds one pattern per lobe with `make`.
 fn plan_with(
     kurt: &Kurt,
@@ -350,7 +360,9 @@ pub fn shade_regular_counted(
 /// Lobes planned with [`plan_lattice`] ([`PatternKind::RowLattice`]) take ours instead, and
 /// ignore `w` ([`lattice_lobe`]): equal-mass cells of the slope-space Gaussian, laid out per
 /// pixel in rows across the lobe's image in ωi so that every cell is about round there, each
-/// read once at the level of its own solid angle ([`mip::footprint_level`]).
+/// read once at the level of its own solid angle ([`mip::footprint_level`]); lobes planned with
+/// [`plan_tap_lattice`] ([`PatternKind::TapLattice`]) read the cells that are long in ωi by
+/// several taps along their long axis, within the same budget.
 pub fn shade_regular_with(
     f: &ShadingFrame,
     wo: DVec3,
@@ -397,7 +409,10 @@ fn shade_regular_full(
             lookup,
         };
         let (c, n) = match lp.pattern.kind {
-            PatternKind::RowLattice { budget } => lattice_lobe(&px, lobe, kind, budget),
+            PatternKind::RowLattice { budget } => lattice_lobe(&px, lobe, kind, budget, 1),
+            PatternKind::TapLattice { budget } => {
+                lattice_lobe(&px, lobe, kind, budget, pattern::LATTICE_MAX_TAPS)
+            }
             _ => regular_lobe(&px, lobe, kind, &lp.pattern, w),
         };
         out += c;
@@ -526,24 +541,38 @@ pub fn lattice_axes(mx: f64, my: f64, wo_l: DVec3) -> ((f64, f64), f64) {
     (e1, if ratio.is_finite() { ratio } else { 1.0 })
 }
 
-/// One lobe with ours, the row lattice of `budget` samples (a [`PatternKind::RowLattice`]
-/// plan); the radiance and the lookups made (≤ `budget`).
+/// One lobe with ours, the row lattice of `budget` lookups (a [`PatternKind::RowLattice`] plan
+/// with `max_taps` = 1, a [`PatternKind::TapLattice`] plan with [`pattern::LATTICE_MAX_TAPS`]);
+/// the radiance and the lookups made (≤ `budget`).
 ///
 /// 1. The lobe is the Gaussian e^{−|s|²}/π of the slope-space point s (h ∝ (mx sx, my sy, 1);
 ///    its density is D(h) cos θh, 000 Eq. 4.5–4.7). Its image in ωi has the axes of
 ///    [`lattice_axes`]: major e1, ratio ρ.
-/// 2. k = [`pattern::lattice_rows`]`(budget, ρ)` rows along the minor axis e2 at the quantiles
+/// 2. k = [`pattern::lattice_rows`]`(c, ρ)` rows along the minor axis e2 at the quantiles
 ///    y_j = [`pattern::gauss_quantile`]((j + ½)/k), row j holding m_j = [`pattern::row_length`]
-///    samples at x_i = quantile((i + ½)/m_j) along e1: `budget` cells of mass μ = 1/(k m_j),
-///    about round in ωi (grazing views and anisotropy stretch the lattice, not the cells).
-/// 3. Each s = x e1 + y e2 gives h and ωi = 2(ωo·h)h − ωo (mirrored through the tangent plane
+///    cells at x_i = quantile((i + ½)/m_j) along e1: c cells of mass μ = 1/(k m_j), about
+///    round in ωi near the centre (grazing views and anisotropy stretch the lattice, not the
+///    cells). With one tap per cell, c = `budget`.
+/// 3. With taps ([`lattice_taps`]): a cell that is long in ωi (the tails: a quantile cell
+///    widens as the density falls) is read by t = round(long/short) ≤ `max_taps` taps at its
+///    sub-quantiles along the long axis, each of mass μ/t and read at its own (≈ the short
+///    axis's) level — hardware anisotropic filtering inside the cell. c is the largest cell
+///    count whose taps fit the budget ([`lattice_cells`]); cells whose centre lies below the
+///    horizon count 0 taps.
+/// 4. Each s = x e1 + y e2 gives h and ωi = 2(ωo·h)h − ωo (mirrored through the tangent plane
 ///    for transmission, 000 Eq. 3.5); samples with ωo·h ≤ 0 or ωi below the horizon contribute
 ///    nothing and make no lookup (the integrand is zero there).
-/// 4. The cell's solid angle is μ / p(ωi), p = D cos θh / (4 ωo·h) (000 Eq. 4.9) =
-///    e^{−|s|²} / (4π mx my (ωo·h) cos³θh); it is read once at [`mip::footprint_level`].
-/// 5. Weight μ · f cos θi / p = μ · F cos θi / (((cos θi cos θo)^α) cos θh) (000 Eq. 3.4 over
+/// 5. The tap's solid angle is μ / p(ωi), p = D cos θh / (4 ωo·h) (000 Eq. 4.9) =
+///    e^{−|s|²} / (4π mx my (ωo·h) cos³θh); it is read at [`mip::footprint_level`].
+/// 6. Weight μ · f cos θi / p = μ · F cos θi / (((cos θi cos θo)^α) cos θh) (000 Eq. 3.4 over
 ///    Eq. 4.9; F = 1 − Schlick for transmission), so L = ks Σ μ F cos θi L̄ / (G cos θh).
-fn lattice_lobe(px: &Pixel, lobe: &KurtLobe, kind: LobeKind, budget: usize) -> (Rgb, usize) {
+fn lattice_lobe(
+    px: &Pixel,
+    lobe: &KurtLobe,
+    kind: LobeKind,
+    budget: usize,
+    max_taps: usize,
+) -> (Rgb, usize) {
     let Pixel {
         frame,
         wo_l,
@@ -556,56 +585,173 @@ fn lattice_lobe(px: &Pixel, lobe: &KurtLobe, kind: LobeKind, budget: usize) -> (
     let face = env.pyramid.base_size();
     let (mx, my) = (lobe.mx, lobe.my);
     let ((e1x, e1y), ratio) = lattice_axes(mx, my, wo_l);
-    let (e2x, e2y) = (-e1y, e1x);
-    let rows = pattern::lattice_rows(budget, ratio);
+    let geo = LatticeGeometry {
+        mx,
+        my,
+        e1: (e1x, e1y),
+        wo_l,
+    };
+    let max_taps = max_taps.clamp(1, budget);
+    let (cells, rows) = lattice_cells(&geo, budget, ratio, max_taps);
     let mut sum = Rgb::ZERO;
     let mut lookups = 0;
     for j in 0..rows {
-        let m = pattern::row_length(budget, rows, j);
-        let y = pattern::gauss_quantile((j as f64 + 0.5) / rows as f64);
-        let mass = 1.0 / (rows * m) as f64;
+        let m = pattern::row_length(cells, rows, j);
         for i in 0..m {
-            let x = pattern::gauss_quantile((i as f64 + 0.5) / m as f64);
-            let (sx, sy) = (x * e1x + y * e2x, x * e1y + y * e2y);
-            let h = DVec3::new(mx * sx, my * sy, 1.0).normalize();
-            let ho = wo_l.dot(h);
-            if ho.is_nan() || ho <= 0.0 {
-                continue;
-            }
-            let r = reflect(wo_l, h);
-            let cos_i = r.z;
-            if cos_i.is_nan() || cos_i <= 0.0 {
-                continue;
-            }
-            let wi_l = match kind {
-                LobeKind::Reflection => r,
-                LobeKind::Transmission => mirror_z(r),
-            };
-            let wi = frame.to_world(wi_l);
-            let cell = mass
-                * 4.0
-                * std::f64::consts::PI
-                * mx
-                * my
-                * ho
-                * h.z.powi(3)
-                * (sx * sx + sy * sy).exp();
-            let li = incident(env, lookup, wi, mip::footprint_level(cell, wi, face));
-            lookups += 1;
-            let f = schlick(lobe.r0, ho);
-            let fresnel = match kind {
-                LobeKind::Reflection => f,
-                LobeKind::Transmission => 1.0 - f,
-            };
-            let shadow = if lobe.alpha == 0.0 {
-                1.0
+            let (taps, along_e1) = if max_taps > 1 {
+                lattice_taps(&geo, i, m, j, rows, max_taps)
             } else {
-                (cos_i * wo_l.z).powf(lobe.alpha)
+                (1, true)
             };
-            sum += li * (mass * fresnel * cos_i / (shadow * h.z));
+            let mass = 1.0 / (rows * m * taps) as f64;
+            for q in 0..taps {
+                let sub = (q as f64 + 0.5) / taps as f64;
+                let (ux, uy) = if along_e1 {
+                    ((i as f64 + sub) / m as f64, (j as f64 + 0.5) / rows as f64)
+                } else {
+                    ((i as f64 + 0.5) / m as f64, (j as f64 + sub) / rows as f64)
+                };
+                let s = geo.slope(pattern::gauss_quantile(ux), pattern::gauss_quantile(uy));
+                let h = DVec3::new(mx * s.0, my * s.1, 1.0).normalize();
+                let ho = wo_l.dot(h);
+                if ho.is_nan() || ho <= 0.0 {
+                    continue;
+                }
+                let r = reflect(wo_l, h);
+                let cos_i = r.z;
+                if cos_i.is_nan() || cos_i <= 0.0 {
+                    continue;
+                }
+                let wi_l = match kind {
+                    LobeKind::Reflection => r,
+                    LobeKind::Transmission => mirror_z(r),
+                };
+                let wi = frame.to_world(wi_l);
+                let cell = mass
+                    * 4.0
+                    * std::f64::consts::PI
+                    * mx
+                    * my
+                    * ho
+                    * h.z.powi(3)
+                    * (s.0 * s.0 + s.1 * s.1).exp();
+                let li = incident(env, lookup, wi, mip::footprint_level(cell, wi, face));
+                lookups += 1;
+                let f = schlick(lobe.r0, ho);
+                let fresnel = match kind {
+                    LobeKind::Reflection => f,
+                    LobeKind::Transmission => 1.0 - f,
+                };
+                let shadow = if lobe.alpha == 0.0 {
+                    1.0
+                } else {
+                    (cos_i * wo_l.z).powf(lobe.alpha)
+                };
+                sum += li * (mass * fresnel * cos_i / (shadow * h.z));
+            }
         }
     }
     (lobe.ks * sum, lookups)
+}
+
+/// The lattice of one lobe at one pixel: roughness, the major axis e1 of the lobe's image in ωi
+/// (in slope space; e2 = e1 turned by 90°) and ωo (local, above the surface).
+pub struct LatticeGeometry {
+    /// Roughness along the tangent.
+    pub mx: f64,
+    /// Roughness along the bitangent.
+    pub my: f64,
+    /// The unit major axis in slope space ([`lattice_axes`]).
+    pub e1: (f64, f64),
+    /// ωo in the local frame.
+    pub wo_l: DVec3,
+}
+
+impl LatticeGeometry {
+    /// The slope-space point x e1 + y e2.
+    #[inline]
+    pub fn slope(&self, x: f64, y: f64) -> (f64, f64) {
+        let (a, b) = self.e1;
+        (x * a - y * b, x * b + y * a)
+    }
+
+    /// |∂ωi/∂s| along the slope-space unit vector `e` at the half vector h = n/|n|, n = (mx sx,
+    /// my sy, 1): dh = (dn − h (h·dn))/|n| with dn = (mx e_x, my e_y, 0), dωi = 2((ωo·dh) h +
+    /// (ωo·h) dh).
+    fn stretch(&self, h: DVec3, len: f64, e: (f64, f64)) -> f64 {
+        let dn = DVec3::new(self.mx * e.0, self.my * e.1, 0.0);
+        let dh = (dn - h * h.dot(dn)) / len;
+        (2.0 * (self.wo_l.dot(dh) * h + self.wo_l.dot(h) * dh)).length()
+    }
+}
+
+/// The taps of cell (i of `m`, row j of `rows`) of a lattice and whether they run along e1
+/// (else along e2): the cell's widths at its centre s = x_i e1 + y_j e2 are the quantile steps
+/// 1/m / φ(x_i) and 1/rows / φ(y_j) (φ(x) = e^{−x²}/√π, the marginal density) times
+/// |∂ωi/∂s| along e1 and e2 ([`LatticeGeometry::stretch`]); the cell gets t = round(long /
+/// short) taps, clamped to 1 ..= `max_taps`, along its long axis. A cell whose centre has
+/// ωo·h ≤ 0 or ωi below the horizon gets 0 taps (the integrand is zero there; its taps are
+/// not read).
+pub fn lattice_taps(
+    geo: &LatticeGeometry,
+    i: usize,
+    m: usize,
+    j: usize,
+    rows: usize,
+    max_taps: usize,
+) -> (usize, bool) {
+    let x = pattern::gauss_quantile((i as f64 + 0.5) / m as f64);
+    let y = pattern::gauss_quantile((j as f64 + 0.5) / rows as f64);
+    let s = geo.slope(x, y);
+    let n = DVec3::new(geo.mx * s.0, geo.my * s.1, 1.0);
+    let len = n.length();
+    let h = n / len;
+    let ho = geo.wo_l.dot(h);
+    if !(ho > 0.0 && reflect(geo.wo_l, h).z > 0.0) {
+        return (0, true);
+    }
+    let (a, b) = geo.e1;
+    let wx = geo.stretch(h, len, (a, b)) * (x * x).exp() / m as f64;
+    let wy = geo.stretch(h, len, (-b, a)) * (y * y).exp() / rows as f64;
+    let aspect = wx / wy;
+    if !(aspect.is_finite() && aspect > 0.0) {
+        return (1, true);
+    }
+    let (t, along_e1) = if aspect >= 1.0 {
+        (aspect, true)
+    } else {
+        (1.0 / aspect, false)
+    };
+    ((t.round() as usize).clamp(1, max_taps.max(1)), along_e1)
+}
+
+/// The cells and rows of a lattice with at most `budget` taps: with `max_taps` = 1, `budget`
+/// cells in [`pattern::lattice_rows`]`(budget, ratio)` rows; otherwise the largest cell count
+/// c ≤ `budget` whose taps ([`lattice_taps`] summed over its cells) are at most `budget`.
+pub fn lattice_cells(
+    geo: &LatticeGeometry,
+    budget: usize,
+    ratio: f64,
+    max_taps: usize,
+) -> (usize, usize) {
+    if max_taps <= 1 {
+        return (budget, pattern::lattice_rows(budget, ratio));
+    }
+    'count: for cells in (1..=budget).rev() {
+        let rows = pattern::lattice_rows(cells, ratio);
+        let mut total = 0;
+        for j in 0..rows {
+            let m = pattern::row_length(cells, rows, j);
+            for i in 0..m {
+                total += lattice_taps(geo, i, m, j, rows, max_taps).0;
+                if total > budget {
+                    continue 'count;
+                }
+            }
+        }
+        return (cells, rows);
+    }
+    (1, 1)
 }
 
 /// Colbert & Křivánek (2007) filtered importance sampling with [`Kurt`] lobes. See

@@ -55,6 +55,13 @@ pub enum PatternKind {
         /// Samples (= filtered lookups) per lobe.
         budget: usize,
     },
+    /// Ours with anisotropic footprints ([`tap_lattice`]): the row lattice whose cells that are
+    /// long in ωi are read by up to [`LATTICE_MAX_TAPS`] taps along their long axis, with fewer
+    /// cells so that the taps fit the budget.
+    TapLattice {
+        /// Filtered lookups (taps) per lobe.
+        budget: usize,
+    },
 }
 
 /// A regular pattern of half vectors for one lobe.
@@ -467,6 +474,22 @@ pub fn row_lattice(mx: f64, my: f64, budget: usize) -> Result<Pattern> {
         xi0: ROW_LATTICE_XI0,
     })
 }
+
+/// The row lattice with anisotropic footprints (`kernel::plan_tap_lattice`): like
+/// [`row_lattice`], per pixel, at most `budget` lookups in all; `kernel::shade_regular` gives a
+/// cell that is long in ωi up to [`LATTICE_MAX_TAPS`] taps along its long axis.
+pub fn tap_lattice(mx: f64, my: f64, budget: usize) -> Result<Pattern> {
+    let p = row_lattice(mx, my, budget)?;
+    Ok(Pattern {
+        kind: PatternKind::TapLattice { budget },
+        ..p
+    })
+}
+
+/// The most taps one cell of a [`tap_lattice`] takes (measured on six truth-harness cases,
+/// BENCHMARKS.md issue 8: 3 and 4 within 0.2 points of each other, 2 worse on the 0.08 / 0.3
+/// lobe).
+pub const LATTICE_MAX_TAPS: usize = 3;
 
 /// The `xi0` stored with a [`PatternKind::RowLattice`] pattern: unused by the estimator (the
 /// lattice covers the whole lobe by equal-mass cells), kept inside (0, 1) for the GPU records.
