@@ -26,10 +26,11 @@
 //! 4. SGD: the Eq. V.3 shadowing approximation (λ, c, k) by `SgdG1Approx::fit` of the numeric
 //!    G1 table of the final (α, p), and kap = 1/(αΓ(1−p, α)).
 //!
-//! 5. Albedo bound: where the data's directional albedo stays ≤ 1 (max over θo = 0°, 10°, …,
-//!    80°), a channel whose model albedo exceeds 1 has ρd capped at 1 and ρs scaled down until
-//!    ρd + ρs·a_s(θo) ≤ 1 at every such θo (a_s: the specular albedo at ρs = 1); the fit's
-//!    message says so ([`CtFit::notes`]).
+//! 5. Albedo bound (`metrics::albedo_bound`, shared with the Kurt fits): where the data's
+//!    directional albedo stays ≤ 1 (max over θo = 0°, 10°, …, 80°), a channel whose model
+//!    albedo exceeds 0.999 has ρd capped at 0.999 and ρs scaled down until
+//!    ρd + ρs·a_s(θo) ≤ 0.999 at every such θo (a_s: the specular albedo at ρs = 1; the margin
+//!    covers the quadrature's error); the fit's message says so ([`CtFit::notes`]).
 //!
 //! # Physical by construction
 //! Every optimization is `levenberg_marquardt::LevenbergMarquardt` with a forward-difference
@@ -1089,13 +1090,8 @@ pub fn fit_masked(
     })
 }
 
-/// The view angles of the albedo bound (module notes, step 5): θo = 0°, 10°, …, 80°.
-fn albedo_angles() -> impl Iterator<Item = glam::DVec3> {
-    (0..9).map(|k| lustre_brdf::frame::spherical((10.0 * k as f64).to_radians(), 0.0))
-}
-
-/// Step 5: caps ρd at 1 and scales ρs down where the model's directional albedo exceeds 1 while
-/// the data's does not; returns a note per changed channel.
+/// Step 5: caps ρd and scales ρs down where the model's directional albedo exceeds 1 while the
+/// data's does not (`metrics::albedo_bound`); returns a note per changed channel.
 fn cap_albedo(
     data: &dyn Bsdf,
     distribution: Distribution,
@@ -1116,36 +1112,19 @@ fn cap_albedo(
         notes: Vec::new(),
     }
     .to_bsdf("unit specular")?;
-    let a_s: Vec<[f64; 3]> = albedo_angles()
-        .map(|wo| crate::metrics::albedo(&spec, wo, false))
-        .collect();
+    let caps = crate::metrics::albedo_bound(
+        data_max,
+        channels.map(|c| c.rho_d),
+        channels.map(|c| c.rho_s),
+        &spec,
+        false,
+    );
     let mut notes = Vec::new();
-    for (c, ch) in channels.iter_mut().enumerate() {
-        if data_max[c] > 1.0 {
-            continue;
-        }
-        let worst = a_s.iter().map(|a| a[c]).fold(0.0, f64::max);
-        let total = ch.rho_d + ch.rho_s * worst;
-        // A small margin keeps the quadrature's own error (≈1e-4) on the safe side.
-        let limit = 0.999;
-        if total <= limit {
-            continue;
-        }
-        let before = (ch.rho_d, ch.rho_s);
-        ch.rho_d = ch.rho_d.min(limit);
-        if worst > 0.0 {
-            ch.rho_s = ch.rho_s.min((limit - ch.rho_d).max(0.0) / worst);
-        }
-        notes.push(format!(
-            "channel {}: albedo {total:.3} > 1 where the data's is {:.3}: rho_d {:.4} -> {:.4}, \
-             rho_s {:.4} -> {:.4}",
-            ["r", "g", "b"][c],
-            data_max[c],
-            before.0,
-            ch.rho_d,
-            before.1,
-            ch.rho_s
-        ));
+    for cap in caps {
+        let ch = &mut channels[cap.channel];
+        notes.push(cap.describe(("rho_d", ch.rho_d), ("rho_s", ch.rho_s)));
+        ch.rho_d = cap.diffuse;
+        ch.rho_s = cap.scale;
     }
     Ok(notes)
 }

@@ -392,6 +392,84 @@ pub fn max_albedo(bsdf: &dyn Bsdf, transmission: bool) -> [f64; 3] {
         )
 }
 
+/// One channel changed by [`albedo_bound`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct AlbedoCap {
+    /// The channel (0, 1, 2: r, g, b).
+    pub channel: usize,
+    /// The model's largest directional albedo before the cap.
+    pub before: f64,
+    /// The data's largest directional albedo (≤ 1).
+    pub data: f64,
+    /// The diffuse albedo after the cap.
+    pub diffuse: f64,
+    /// The scale of the other terms after the cap.
+    pub scale: f64,
+}
+
+impl AlbedoCap {
+    /// The cap in words: `channel b: albedo 1.011 > 1 where the data's is 0.93: kd 0.8 ->
+    /// 0.8, ks 1 -> 0.97` with the callers' names of the diffuse term and of the scale.
+    pub fn describe(&self, diffuse: (&str, f64), scale: (&str, f64)) -> String {
+        format!(
+            "channel {}: albedo {:.3} > 1 where the data's is {:.3}: {} {:.4} -> {:.4}, {} \
+             {:.4} -> {:.4}",
+            ["r", "g", "b"][self.channel],
+            self.before,
+            self.data,
+            diffuse.0,
+            diffuse.1,
+            self.diffuse,
+            scale.0,
+            scale.1,
+            self.scale
+        )
+    }
+}
+
+/// The albedo bound of the fits (`ct` step 5, `kurt` step 6), for a model that is per channel
+/// `diffuse`·Lambert + `scale`·U, U (`unit`) the rest of the model at scale 1 (its albedo is
+/// linear in the scale). Where the data's directional albedo stays ≤ 1 (`data_max`, from
+/// [`max_albedo`]), a channel whose largest model albedo diffuse + scale·a_U(θo) over θo = 0°,
+/// 10°, …, 80° exceeds 0.999 (a small margin keeps the quadrature's own error, ≈1e-4, on the
+/// safe side) has the diffuse albedo capped at 0.999 and the scale lowered until
+/// diffuse + scale·a_U(θo) ≤ 0.999 at every such θo. Returns the changed channels; the others
+/// keep their values.
+pub(crate) fn albedo_bound(
+    data_max: [f64; 3],
+    diffuse: [f64; 3],
+    scale: [f64; 3],
+    unit: &dyn Bsdf,
+    transmission: bool,
+) -> Vec<AlbedoCap> {
+    const LIMIT: f64 = 0.999;
+    let worst = max_albedo(unit, transmission);
+    let mut caps = Vec::new();
+    for c in 0..3 {
+        if data_max[c] > 1.0 {
+            continue;
+        }
+        let before = diffuse[c] + scale[c] * worst[c];
+        if before <= LIMIT {
+            continue;
+        }
+        let d = diffuse[c].min(LIMIT);
+        let s = if worst[c] > 0.0 {
+            scale[c].min((LIMIT - d).max(0.0) / worst[c])
+        } else {
+            scale[c]
+        };
+        caps.push(AlbedoCap {
+            channel: c,
+            before,
+            data: data_max[c],
+            diffuse: d,
+            scale: s,
+        });
+    }
+    caps
+}
+
 /// The cosine-weighted average of the directional albedo over all view directions,
 /// (1/π) ∫ a(o) cos θo dωo per channel (the albedo under uniform illumination): Gauss nodes in
 /// μ² = cos²θo (16 nodes, since (1/π)∫ cos θo dωo = ∫₀¹ d(μ²)), 8 azimuths for anisotropic

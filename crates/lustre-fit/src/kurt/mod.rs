@@ -43,6 +43,18 @@
 //!    the metric's), the same normal-equation LM with the squared loss — from the best
 //!    candidate so far; its result is a candidate too (blue-fabric: 0.225, converged). The note
 //!    lists every candidate with its metric, Eq. 3.7 error and how it ended.
+//! 6. Physical by construction: every candidate (the search's result, each polish) is held to
+//!    the albedo bound of the Cook-Torrance fits ([`crate::ct`] step 5, the same code) before it
+//!    is scored: where the data's directional albedo stays ≤ 1 (max over θo = 0°, 10°, …, 80°,
+//!    with `transmission` reflection plus transmission), a channel whose model albedo exceeds
+//!    0.999 has kd capped at 0.999 and the ks (kt) of every lobe scaled by one factor per
+//!    channel until the albedo is ≤ 0.999 at every such θo. So a fit is never discarded for its
+//!    albedo and never reports an albedo above 1 where the data's is not (RGL paper_white, blue,
+//!    one lobe: 1.011 before, Ngan L2 2.4567e-1 → 2.4575e-1). The polishes start from the
+//!    search's result before the bound; the judge compares the bounded candidates, so "never
+//!    worse than the search's result" means its bounded version. The note and
+//!    [`KurtFit::albedo_caps`] say what was capped. kd ≥ 0, ks, r0, α ∈ [0, 1] come from the
+//!    search box and the polish's parametrization, so the model is never negative.
 //!
 //! [`KurtFit::status`] is that of the kept candidate: for a polish, `Converged` when its LM run
 //! met one of its convergence criteria (relative reduction of the error or relative step below
@@ -136,6 +148,9 @@ pub struct KurtFit {
     pub metric: Option<f64>,
     /// The kept candidate and how it ended, e.g. `polish from the search: converged (…)`.
     pub kept: String,
+    /// What the albedo bound (step 6 of the module documentation) changed in the reported
+    /// model, one note per channel (also in [`KurtFit::note`]); empty when nothing.
+    pub albedo_caps: Vec<String>,
 }
 
 /// Fits a Kurt model to `data` (000 §3.4.1). With `transmission` the transmission hemisphere is
@@ -227,24 +242,38 @@ pub fn fit_judged(
         ));
     }
     let search_settled = refl.settled && trans.settled;
-    let mut candidates = vec![Candidate {
-        label: "the search".into(),
-        objective: model_objective(&s, &model),
+    // Step 6: every candidate is held to the albedo bound before it is scored.
+    let data_max = crate::metrics::max_albedo(data, transmission);
+    let candidate = |label: String, mut model: Kurt, converged: bool, reason: String| {
+        let caps = bound_albedo(data_max, &mut model, transmission);
+        Candidate {
+            label,
+            objective: model_objective(&s, &model),
+            model,
+            converged,
+            reason,
+            metric: None,
+            caps,
+        }
+    };
+    // The polishes start from the search's own result (before the bound).
+    let search_model = model.clone();
+    let mut candidates = vec![candidate(
+        "the search".into(),
         model,
-        converged: search_settled,
-        reason: if search_settled {
+        search_settled,
+        if search_settled {
             "the last level of every lobe search improved the error by < 0.1 %".into()
         } else if alternation {
             "the last search level still improved the error by ≥ 0.1 %".into()
         } else {
             "the alternation of lobes did not settle".into()
         },
-        metric: None,
-    }];
+    )];
     if opts.polish {
         // With several lobes LM also starts from the one-lobe fit (other lobes at ks = 0), so
         // that the polished L-lobe model does not end in a worse basin than a one-lobe fit.
-        let mut starts = vec![("polish from the search", candidates[0].model.clone())];
+        let mut starts = vec![("polish from the search", search_model)];
         if several {
             starts.push(("polish from the one-lobe fit", single.clone()));
         }
@@ -252,14 +281,7 @@ pub fn fit_judged(
             let p = polish::polish(&s, &space, start);
             evaluations += p.evaluations;
             if p.model.validate().is_ok() {
-                candidates.push(Candidate {
-                    label: (*label).into(),
-                    objective: model_objective(&s, &p.model),
-                    model: p.model,
-                    converged: p.converged,
-                    reason: p.reason,
-                    metric: None,
-                });
+                candidates.push(candidate((*label).into(), p.model, p.converged, p.reason));
             } else {
                 notes.push(format!("{label} gave an invalid model and was dropped"));
             }
@@ -316,14 +338,12 @@ pub fn fit_judged(
                 let p = polish::polish_squares(&set, &space, &candidates[from].model);
                 evaluations += p.evaluations;
                 if p.model.validate().is_ok() {
-                    let mut c = Candidate {
-                        label: format!("Ngan-L2 polish from {}", candidates[from].label),
-                        objective: model_objective(&s, &p.model),
-                        model: p.model,
-                        converged: p.converged,
-                        reason: p.reason,
-                        metric: None,
-                    };
+                    let mut c = candidate(
+                        format!("Ngan-L2 polish from {}", candidates[from].label),
+                        p.model,
+                        p.converged,
+                        p.reason,
+                    );
                     judged(&mut c)?;
                     candidates.push(c);
                 }
@@ -339,8 +359,13 @@ pub fn fit_judged(
                 let m = c.metric.map_or(String::new(), |v| {
                     format!("{} {v:.4e}, ", judge.map_or("", |j| j.metric().as_str()))
                 });
+                let caps = if c.caps.is_empty() {
+                    String::new()
+                } else {
+                    format!(", albedo bound: {}", c.caps.join(", "))
+                };
                 format!(
-                    "({}) {}: {m}Eq. 3.7 {:.4e}, {}",
+                    "({}) {}: {m}Eq. 3.7 {:.4e}, {}{caps}",
                     i + 1,
                     c.label,
                     c.objective,
@@ -355,6 +380,12 @@ pub fn fit_judged(
         Some(j) => format!("kept {} (lowest {})", k.label, j.metric().as_str()),
         None => format!("kept {} (lowest Eq. 3.7 error)", k.label),
     });
+    if !k.caps.is_empty() {
+        notes.push(format!(
+            "its albedo was capped to stay ≤ 1 (step 6): {}",
+            k.caps.join(", ")
+        ));
+    }
     let k = candidates.swap_remove(kept);
     Ok(KurtFit {
         kept: format!("{}: {}", k.label, k.reason),
@@ -368,7 +399,30 @@ pub fn fit_judged(
         evaluations,
         note: notes.join("; "),
         metric: k.metric,
+        albedo_caps: k.caps,
     })
+}
+
+/// Step 6 (module documentation): [`crate::metrics::albedo_bound`] with kd as the diffuse
+/// albedo and, per channel, one factor on the ks (kt) of every lobe as the scale (the lobes'
+/// albedo is linear in it). Returns a note per changed channel.
+fn bound_albedo(data_max: [f64; 3], model: &mut Kurt, transmission: bool) -> Vec<String> {
+    let lobes = Kurt {
+        kd: Rgb::ZERO,
+        reflection: model.reflection.clone(),
+        transmission: model.transmission.clone(),
+    };
+    let caps = crate::metrics::albedo_bound(data_max, model.kd.0, [1.0; 3], &lobes, transmission);
+    let mut notes = Vec::new();
+    for cap in caps {
+        let c = cap.channel;
+        notes.push(cap.describe(("kd", model.kd.0[c]), ("factor on every ks", 1.0)));
+        model.kd.0[c] = cap.diffuse;
+        for l in model.reflection.iter_mut().chain(&mut model.transmission) {
+            l.ks.0[c] *= cap.scale;
+        }
+    }
+    notes
 }
 
 /// The quadrature of the Ngan-L2 polish ([`fit_judged`]): half the nodes of
@@ -395,6 +449,8 @@ struct Candidate {
     reason: String,
     /// The judge's metric of it, when judged.
     metric: Option<f64>,
+    /// What the albedo bound changed (step 6), per channel; empty when nothing.
+    caps: Vec<String>,
 }
 
 /// Σ_t a_t |p_measured − p_model| of one hemisphere, per channel.
