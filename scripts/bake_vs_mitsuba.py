@@ -36,7 +36,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-HALL = "../shared/data/scenes/modern_hall"
+from hall_vs_mitsuba import HALL, reference_cmd
 
 
 def children_cpu():
@@ -112,24 +112,7 @@ def diffuse_xml(max_depth):
 def run_reference(args, w, h, spp):
     """`lustre reference --diffuse` of the same camera paths Mitsuba traces."""
     out = os.path.join(args.out, "lustre_reference.exr")
-    for ext in ("json", "even.exr", "odd.exr"):
-        p = out[: -len("exr")] + ext
-        if os.path.exists(p):
-            os.remove(p)
-    cmd = [
-        args.lustre,
-        "reference",
-        f"{HALL}/mitsuba/scene.xml",
-        "--diffuse",
-        "--size",
-        f"{w}x{h}",
-        "--spp",
-        str(spp),
-        "--max-depth",
-        str(args.bounces + 1),
-        "--out",
-        out,
-    ]
+    cmd = reference_cmd(args.lustre, out, f"{w}x{h}", spp, args.bounces + 1, ["--diffuse"])
     c0 = children_cpu()
     subprocess.run(cmd, check=True, capture_output=True)
     cpu = children_cpu() - c0

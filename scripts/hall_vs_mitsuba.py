@@ -62,25 +62,32 @@ def errors(img, ref):
     return mean_ratio, rel_rms, 10 * np.log10(1 / mse)
 
 
-def run_lustre(args, n):
-    out = os.path.join(args.out, f"lustre_{n}_{args.spp}.exr")
+def reference_cmd(lustre, out, size, spp, max_depth, extra=()):
+    """The `lustre reference` command of the Hall's XML writing `out`, after removing the files
+    of an earlier job there (so that it starts afresh instead of resuming)."""
     for ext in ("json", "even.exr", "odd.exr"):
         p = out[: -len("exr")] + ext
         if os.path.exists(p):
             os.remove(p)
-    cmd = [
-        args.lustre,
+    return [
+        lustre,
         "reference",
         f"{HALL}/mitsuba/scene.xml",
+        *extra,
         "--size",
-        f"{n}x{n}",
+        size,
         "--spp",
-        str(args.spp),
+        str(spp),
         "--max-depth",
-        str(args.max_depth),
+        str(max_depth),
         "--out",
         out,
     ]
+
+
+def run_lustre(args, n):
+    out = os.path.join(args.out, f"lustre_{n}_{args.spp}.exr")
+    cmd = reference_cmd(args.lustre, out, f"{n}x{n}", args.spp, args.max_depth)
     r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.time()
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)

@@ -8,6 +8,7 @@
 //! tap beyond a face edge reads come from [`lustre_env::cube::fetch_sources`], uploaded per
 //! level as a table, so the CPU and the GPU read the same texels by construction.
 
+use crate::compute::{compute_pipeline, storage_entry, uniform_entry};
 use crate::context::GpuContext;
 use crate::error::{invalid, scope_result, wgpu_error, Result};
 use lustre_env::cube::{fetch_sources, solid_angle_table};
@@ -82,63 +83,20 @@ fn ring_table(n: usize) -> Vec<[i32; 4]> {
 impl GpuPyramidBuilder {
     /// Compiles `pyramid.wgsl`.
     pub fn new(ctx: &GpuContext) -> Result<Self> {
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = ctx
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("pyramid.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(PYRAMID_WGSL.into()),
-            });
-        let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let layout = ctx
-            .device
-            .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("pyramid.wgsl"),
-                entries: &[
-                    wgpu::BindGroupLayoutEntry {
-                        binding: 0,
-                        visibility: wgpu::ShaderStages::COMPUTE,
-                        ty: wgpu::BindingType::Buffer {
-                            ty: wgpu::BufferBindingType::Uniform,
-                            has_dynamic_offset: false,
-                            min_binding_size: None,
-                        },
-                        count: None,
-                    },
-                    storage(1, true),
-                    storage(2, true),
-                    storage(3, true),
-                    storage(4, true),
-                    storage(5, false),
-                ],
-            });
-        let pipeline_layout = ctx
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("pyramid.wgsl"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
-        let pipeline = ctx
-            .device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("pyramid.wgsl"),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some("main"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-        scope_result(scope, "compiling pyramid.wgsl")?;
+        let (pipeline, layout) = compute_pipeline(
+            ctx,
+            "pyramid.wgsl",
+            "compiling pyramid.wgsl",
+            PYRAMID_WGSL,
+            &[
+                uniform_entry(0),
+                storage_entry(1, true),
+                storage_entry(2, true),
+                storage_entry(3, true),
+                storage_entry(4, true),
+                storage_entry(5, false),
+            ],
+        )?;
         Ok(GpuPyramidBuilder { pipeline, layout })
     }
 
@@ -146,7 +104,6 @@ impl GpuPyramidBuilder {
     /// (returns once the GPU has finished). Errors: a face larger than the device's storage
     /// buffers allow, wgpu validation.
     pub fn build(&self, ctx: &GpuContext, base: &CubeMap, filter: MipFilter) -> Result<GpuPyramid> {
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let limit = ctx.device.limits().max_storage_buffer_binding_size as usize;
         let bytes = 6 * base.size * base.size * 16;
         if bytes > limit {
@@ -158,29 +115,34 @@ impl GpuPyramidBuilder {
                 ),
             ));
         }
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            ctx.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents,
+                    usage,
+                })
+        };
         let texels: Vec<[f32; 4]> = base
             .faces
             .iter()
             .flat_map(|f| f.iter().map(|v| [v[0], v[1], v[2], 1.0]))
             .collect();
-        let mut levels = vec![ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("pyramid level 0"),
-                contents: bytemuck::cast_slice(&texels),
-                usage,
-            })];
+        let mut levels = vec![init(
+            "pyramid level 0",
+            bytemuck::cast_slice(&texels),
+            usage,
+        )];
         let mut sizes = vec![base.size];
         let (kernel, first) = filter.kernel();
         let weights: Vec<f32> = kernel.iter().map(|&w| w as f32).collect();
-        let weights = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("pyramid kernel"),
-                contents: bytemuck::cast_slice(&weights),
-                usage: wgpu::BufferUsages::STORAGE,
-            });
+        let weights = init(
+            "pyramid kernel",
+            bytemuck::cast_slice(&weights),
+            wgpu::BufferUsages::STORAGE,
+        );
         let mut enc = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -192,28 +154,22 @@ impl GpuPyramidBuilder {
             }
             let m = (n / 2).max(1);
             let params: [u32; 4] = [n as u32, m as u32, kernel.len() as u32, first as i32 as u32];
-            let params = ctx
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("pyramid params"),
-                    contents: bytemuck::cast_slice(&params),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                });
+            let params = init(
+                "pyramid params",
+                bytemuck::cast_slice(&params),
+                wgpu::BufferUsages::UNIFORM,
+            );
             let omega: Vec<f32> = solid_angle_table(n).iter().map(|&w| w as f32).collect();
-            let omega = ctx
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("pyramid solid angles"),
-                    contents: bytemuck::cast_slice(&omega),
-                    usage: wgpu::BufferUsages::STORAGE,
-                });
-            let ring = ctx
-                .device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("pyramid ring"),
-                    contents: bytemuck::cast_slice(&ring_table(n)),
-                    usage: wgpu::BufferUsages::STORAGE,
-                });
+            let omega = init(
+                "pyramid solid angles",
+                bytemuck::cast_slice(&omega),
+                wgpu::BufferUsages::STORAGE,
+            );
+            let ring = init(
+                "pyramid ring",
+                bytemuck::cast_slice(&ring_table(n)),
+                wgpu::BufferUsages::STORAGE,
+            );
             let child = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("pyramid level"),
                 size: (6 * m * m * 16) as u64,
