@@ -409,6 +409,13 @@ fn kurt_fits_of_real_data_are_no_worse_than_recorded() {
                 k + 1,
                 f.objective
             );
+            assert_eq!(
+                f.status,
+                FitStatus::Converged,
+                "{input}, {} lobe(s): {}",
+                k + 1,
+                f.note
+            );
             assert!(
                 f.note.contains("polish from the") && f.note.contains("converged"),
                 "{}",
