@@ -105,31 +105,15 @@ fn cpu_seconds() -> f64 {
     (tick(11) + tick(12)) / 100.0
 }
 
-fn mean(img: &Image) -> f64 {
-    img.data
-        .iter()
-        .map(|p| p.iter().map(|&c| f64::from(c)).sum::<f64>())
-        .sum::<f64>()
-        / (3 * img.data.len()) as f64
-}
-
-fn read_exr(path: &std::path::Path) -> Image {
-    let img = image::open(path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-        .to_rgb32f();
-    let (w, h) = (img.width() as usize, img.height() as usize);
-    Image::from_data(w, h, img.pixels().map(|p| p.0).collect()).expect("image")
-}
-
 /// (PSNR dB, rel. RMS, rel. RMS without the reference's noise, mean ratio) of `img`.
 fn errors(img: &Image, reference: &Image, noise: f64) -> (f64, f64, f64, f64) {
-    let m = mean(reference);
+    let m = reference.mean();
     let r = rms(img, reference).expect("same size");
     (
         psnr(img, reference, 1.0).expect("same size"),
         r / m,
         (r * r - noise * noise).max(0.0).sqrt() / m,
-        mean(img) / m,
+        img.mean() / m,
     )
 }
 
@@ -171,7 +155,7 @@ fn main() {
         state.seconds,
         t0.elapsed().as_secs_f64()
     );
-    let reference = read_exr(&ref_out);
+    let reference = Image::read_exr(&ref_out).unwrap_or_else(|e| panic!("{e}"));
     let noise = state.noise_rms;
 
     let mut md = String::new();

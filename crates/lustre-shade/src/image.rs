@@ -139,6 +139,25 @@ impl Image {
         Ok(())
     }
 
+    /// Reads an image file (OpenEXR, or anything the `image` crate reads) as linear RGB.
+    pub fn read_exr(path: &Path) -> Result<Image> {
+        let img = image::open(path)
+            .map_err(|e| ShadeError::Parameter(format!("cannot read {}: {e}", path.display())))?;
+        let rgb = img.to_rgb32f();
+        let (w, h) = (rgb.width() as usize, rgb.height() as usize);
+        Image::from_data(w, h, rgb.pixels().map(|p| p.0).collect())
+    }
+
+    /// Mean of the linear values over all pixels and channels (0 for an empty image).
+    pub fn mean(&self) -> f64 {
+        let s: f64 = self
+            .data
+            .iter()
+            .map(|p| p.iter().map(|&c| f64::from(c)).sum::<f64>())
+            .sum();
+        s / (3 * self.data.len()).max(1) as f64
+    }
+
     /// Writes the linear values as a 32-bit float RGB OpenEXR file atomically.
     pub fn write_exr(&self, path: &Path) -> Result<()> {
         let raw: Vec<f32> = self.data.iter().flatten().copied().collect();

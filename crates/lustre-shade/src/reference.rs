@@ -316,22 +316,7 @@ fn sibling(out: &Path, ext: &str) -> PathBuf {
 }
 
 fn read_exr(path: &Path) -> Result<Image> {
-    let img = image::open(path).map_err(|e| {
-        ShadeError::Parameter(format!("resume: cannot read {}: {e}", path.display()))
-    })?;
-    let rgb = img.to_rgb32f();
-    let (w, h) = (rgb.width() as usize, rgb.height() as usize);
-    let data = rgb.pixels().map(|p| p.0).collect();
-    Image::from_data(w, h, data)
-}
-
-fn mean_of(img: &Image) -> f64 {
-    let s: f64 = img
-        .data
-        .iter()
-        .map(|p| p.iter().map(|&c| c as f64).sum::<f64>())
-        .sum();
-    s / (3 * img.data.len()).max(1) as f64
+    Image::read_exr(path).map_err(|e| ShadeError::Parameter(format!("resume: {e}")))
 }
 
 /// Renders (or continues) the reference of `scene` with `opts`, writing the files after every
@@ -460,7 +445,7 @@ pub fn render_reference(
         state.seconds += t0.elapsed().as_secs_f64();
         state.spp = acc.spp;
         let img = acc.image();
-        state.mean = mean_of(&img);
+        state.mean = img.mean();
         state.noise_rms = acc.noise_rms().unwrap_or(f64::NAN);
         state.noise_relative = state.noise_rms / state.mean;
         let (a, b) = acc.halves();
@@ -476,7 +461,7 @@ pub fn render_reference(
     }
     let img = acc.image();
     state.spp = acc.spp;
-    state.mean = mean_of(&img);
+    state.mean = img.mean();
     state.noise_rms = acc.noise_rms().unwrap_or(f64::NAN);
     state.noise_relative = state.noise_rms / state.mean;
     Ok((state, warnings))

@@ -28,24 +28,26 @@ fn write_scene(dir: &std::path::Path) -> std::path::PathBuf {
     scene
 }
 
+/// `lustre bake SCENE --out OUT` at the tests' small settings (4 spp, 2 bounces, 8 texels/m).
+fn bake_cmd(scene: &std::path::Path, out: &std::path::Path) -> Command {
+    let mut c = lustre();
+    c.arg("bake").arg(scene).arg("--out").arg(out).args([
+        "--spp",
+        "4",
+        "--bounces",
+        "2",
+        "--texels-per-metre",
+        "8",
+    ]);
+    c
+}
+
 #[test]
 fn bake_writes_pages_and_a_scene_file_and_resumes() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_scene(dir.path());
     let out = dir.path().join("out");
-    let args = |c: &mut Command| {
-        c.arg("bake").arg(&scene).arg("--out").arg(&out).args([
-            "--spp",
-            "4",
-            "--bounces",
-            "2",
-            "--texels-per-metre",
-            "8",
-        ]);
-    };
-    let mut c = lustre();
-    args(&mut c);
-    let o = c.output().unwrap();
+    let o = bake_cmd(&scene, &out).output().unwrap();
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(
@@ -71,9 +73,7 @@ fn bake_writes_pages_and_a_scene_file_and_resumes() {
         "{}",
         String::from_utf8_lossy(&info.stderr)
     );
-    let mut c = lustre();
-    args(&mut c);
-    let o = c.output().unwrap();
+    let o = bake_cmd(&scene, &out).output().unwrap();
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success());
     assert!(stdout.contains("0 baked"), "{stdout}");
@@ -100,14 +100,7 @@ fn bake_writes_pages_and_a_scene_file_and_resumes() {
         "schema = \"lustre-scene\"\nversion = 1\n[[geometry]]\nfile = \"floor.obj\"\n",
     )
     .unwrap();
-    let o = lustre()
-        .arg("bake")
-        .arg(&scene)
-        .arg("--out")
-        .arg(dir.path().join("dark"))
-        .args(["--spp", "4", "--texels-per-metre", "8"])
-        .output()
-        .unwrap();
+    let o = bake_cmd(&scene, &dir.path().join("dark")).output().unwrap();
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success() && stderr.contains("no emitter"),
@@ -120,18 +113,8 @@ fn sharded_bake_merges_to_the_unsharded_pages() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write_scene(dir.path());
     let bake = |out: &std::path::Path, extra: &[&str], envs: &[(&str, &str)]| {
-        let mut c = lustre();
-        c.arg("bake").arg(&scene).arg("--out").arg(out).args([
-            "--spp",
-            "4",
-            "--bounces",
-            "2",
-            "--texels-per-metre",
-            "8",
-            "--tile",
-            "8",
-        ]);
-        c.args(extra);
+        let mut c = bake_cmd(&scene, out);
+        c.args(["--tile", "8"]).args(extra);
         for (k, v) in envs {
             c.env(k, v);
         }
