@@ -10,7 +10,7 @@
 use super::raster::Raster;
 use super::{diffuse_albedo, diffuse_path_scene};
 use crate::image::Image;
-use crate::path::{PathCamera, PathOptions, PathTracer};
+use crate::path::{Geometry, PathCamera, PathOptions, PathTracer};
 use crate::{Result, ShadeError};
 use glam::{DVec3, Vec2};
 use lustre_brdf::rgb::Rgb;
@@ -32,6 +32,114 @@ pub fn bilinear(page: &[[f32; 3]], w: u32, h: u32, x: f64, y: f64) -> Rgb {
         + (at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx) * ty
 }
 
+/// The light-mapped diffuse radiance of a scene's surfaces (000 Eq. 4.1): what a camera ray,
+/// a probe capture or a mirror pass sees where it hits the scene. Built once per set of pages and
+/// shared by every ray; plain data, no tracer (the caller intersects with its own).
+pub struct Lightmapped<'a> {
+    scene: &'a Scene,
+    atlas: &'a LightmapAtlas,
+    pages: &'a [Vec<[f32; 3]>],
+    raster: Raster,
+    mapped: Vec<u32>,
+    spec: Vec<Rgb>,
+}
+
+impl<'a> Lightmapped<'a> {
+    /// Checks that `pages` fit `atlas` and maps every triangle of `geometry` (the triangles of
+    /// [`super::diffuse_path_scene`], in its order) to its light-map triangle. `spec` is the
+    /// per-material diffuse albedo of spec materials that [`super::diffuse_path_scene`] returns.
+    pub fn new(
+        scene: &'a Scene,
+        atlas: &'a LightmapAtlas,
+        pages: &'a [Vec<[f32; 3]>],
+        geometry: &Geometry,
+        spec: Vec<Rgb>,
+    ) -> Result<Self> {
+        let n = (atlas.width * atlas.height) as usize;
+        if pages.len() != atlas.pages as usize || pages.iter().any(|p| p.len() != n) {
+            return Err(ShadeError::Parameter(format!(
+                "{} light-map pages do not fit an atlas of {} pages of {}×{}",
+                pages.len(),
+                atlas.pages,
+                atlas.width,
+                atlas.height
+            )));
+        }
+        let raster = Raster::new(scene, atlas, atlas.width.max(atlas.height))?;
+        let mut mapped = vec![u32::MAX; geometry.positions.len()];
+        for (k, t) in raster.triangles.iter().enumerate() {
+            if let Some(m) = mapped.get_mut(t.prim as usize) {
+                *m = k as u32;
+            }
+        }
+        Ok(Lightmapped {
+            scene,
+            atlas,
+            pages,
+            raster,
+            mapped,
+            spec,
+        })
+    }
+
+    /// Whether triangle `prim` has a light map.
+    pub fn has_lightmap(&self, prim: usize) -> bool {
+        self.mapped.get(prim).is_some_and(|&k| k != u32::MAX)
+    }
+
+    /// Radiance leaving triangle `prim` of `g` at barycentrics `bary` towards −`d` (`d` the
+    /// incoming ray's direction): its emission (front side) plus kd·E/π, E read bilinearly from
+    /// its page at uv1 (texel centres at ((x+½)/W, (y+½)/H), clamped at the page border). Black
+    /// for back faces of one-sided materials and for triangles without a light map.
+    pub fn radiance(&self, g: &Geometry, prim: usize, bary: [f64; 3], d: DVec3) -> Rgb {
+        let b = bary;
+        let tri = &g.positions[prim];
+        let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+        let ns = g
+            .normals
+            .get(prim)
+            .map_or(ng, |nn| nn[0] * b[0] + nn[1] * b[1] + nn[2] * b[2]);
+        let front = ns.dot(-d) > 0.0;
+        let mut l = match g.emission.get(prim) {
+            Some(e) if front => *e,
+            _ => Rgb::ZERO,
+        };
+        let k = self.mapped.get(prim).copied().unwrap_or(u32::MAX);
+        if k != u32::MAX {
+            let (atlas, t) = (self.atlas, &self.raster.triangles[k as usize]);
+            let uv1 = [0, 1].map(|c| b[0] * t.uv[0][c] + b[1] * t.uv[1][c] + b[2] * t.uv[2][c]);
+            let e = bilinear(
+                &self.pages[t.page as usize],
+                atlas.width,
+                atlas.height,
+                uv1[0],
+                uv1[1],
+            );
+            let uv0 = g.uvs.get(prim).map_or([0.0; 2], |u| {
+                [0, 1].map(|c| b[0] * u[0][c] + b[1] * u[1][c] + b[2] * u[2][c])
+            });
+            let m = g.material[prim] as usize;
+            let material = &self.scene.materials[m];
+            if front || material.two_sided {
+                let kd = diffuse_albedo(
+                    material,
+                    &self.scene.textures,
+                    &[
+                        Vec2::new(uv0[0] as f32, uv0[1] as f32),
+                        Vec2::new(
+                            (uv1[0] / f64::from(atlas.width)) as f32,
+                            (uv1[1] / f64::from(atlas.height)) as f32,
+                        ),
+                    ],
+                    self.spec[m],
+                );
+                l += kd * e * (1.0 / PI);
+            }
+        }
+        l
+    }
+}
+
 /// Renders `scene` at `camera` (w×h, `spp` jittered samples per pixel, seeded by `seed`)
 /// shaded from the light maps `pages` of `atlas` (as [`super::assemble`] returns them).
 #[allow(clippy::too_many_arguments)]
@@ -45,79 +153,19 @@ pub fn render_lightmapped(
     spp: u32,
     seed: u64,
 ) -> Result<Image> {
-    let n = (atlas.width * atlas.height) as usize;
-    if pages.len() != atlas.pages as usize || pages.iter().any(|p| p.len() != n) {
-        return Err(ShadeError::Parameter(format!(
-            "{} light-map pages do not fit an atlas of {} pages of {}×{}",
-            pages.len(),
-            atlas.pages,
-            atlas.width,
-            atlas.height
-        )));
-    }
     if w == 0 || h == 0 || spp == 0 {
         return Err(ShadeError::Parameter(format!(
             "image {w}×{h} at {spp} spp is empty"
         )));
     }
     let (ps, spec, _) = diffuse_path_scene(scene)?;
+    let lit = Lightmapped::new(scene, atlas, pages, &ps.geometry, spec)?;
     let pt = PathTracer::new(&ps, PathOptions::default())?;
-    let raster = Raster::new(scene, atlas, atlas.width.max(atlas.height))?;
-    let mut mapped = vec![u32::MAX; ps.geometry.positions.len()];
-    for (k, t) in raster.triangles.iter().enumerate() {
-        mapped[t.prim as usize] = k as u32;
-    }
-    let g = &ps.geometry;
     let shade = |o: DVec3, d: DVec3| -> Rgb {
-        let Some(hit) = pt.intersect(o, d) else {
-            return ps.environment.as_ref().map_or(Rgb::ZERO, |e| e.eval(d));
-        };
-        let prim = hit.prim;
-        let b = hit.bary;
-        let tri = &g.positions[prim];
-        let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-        let ns = g
-            .normals
-            .get(prim)
-            .map_or(ng, |nn| nn[0] * b[0] + nn[1] * b[1] + nn[2] * b[2]);
-        let front = ns.dot(-d) > 0.0;
-        let mut l = match g.emission.get(prim) {
-            Some(e) if front => *e,
-            _ => Rgb::ZERO,
-        };
-        let k = mapped[prim];
-        if k != u32::MAX {
-            let t = &raster.triangles[k as usize];
-            let uv1 = [0, 1].map(|c| b[0] * t.uv[0][c] + b[1] * t.uv[1][c] + b[2] * t.uv[2][c]);
-            let e = bilinear(
-                &pages[t.page as usize],
-                atlas.width,
-                atlas.height,
-                uv1[0],
-                uv1[1],
-            );
-            let uv0 = g.uvs.get(prim).map_or([0.0; 2], |u| {
-                [0, 1].map(|c| b[0] * u[0][c] + b[1] * u[1][c] + b[2] * u[2][c])
-            });
-            let m = g.material[prim] as usize;
-            let two_sided = scene.materials[m].two_sided;
-            if front || two_sided {
-                let kd = diffuse_albedo(
-                    &scene.materials[m],
-                    &scene.textures,
-                    &[
-                        Vec2::new(uv0[0] as f32, uv0[1] as f32),
-                        Vec2::new(
-                            (uv1[0] / f64::from(atlas.width)) as f32,
-                            (uv1[1] / f64::from(atlas.height)) as f32,
-                        ),
-                    ],
-                    spec[m],
-                );
-                l += kd * e * (1.0 / PI);
-            }
+        match pt.intersect(o, d) {
+            Some(hit) => lit.radiance(&ps.geometry, hit.prim, hit.bary, d),
+            None => ps.environment.as_ref().map_or(Rgb::ZERO, |e| e.eval(d)),
         }
-        l
     };
     let data: Vec<[f32; 3]> = (0..w * h)
         .into_par_iter()
