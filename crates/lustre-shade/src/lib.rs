@@ -12,6 +12,7 @@
 pub mod accel;
 pub mod bake;
 pub mod error;
+pub mod frame;
 pub mod harness;
 pub mod image;
 pub mod kernel;
@@ -19,6 +20,7 @@ pub mod metrics;
 pub mod mip;
 pub mod path;
 pub mod pattern;
+pub mod probe;
 pub mod reference;
 pub mod render;
 pub mod scene;

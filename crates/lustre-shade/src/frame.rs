@@ -1,0 +1,335 @@
+//! The walkthrough frame on the CPU (000 §4, Fig. 4.1): at every camera hit, the light-mapped
+//! diffuse term kd·E/π (000 Eq. 4.1) plus the view-dependent rest of the material integrated
+//! against pre-filtered incident light: the probe of the object hit (or the nearest probe),
+//! looked up through its bounding planes (000 §4.4.1), or the environment when the scene has no
+//! probe. The rest of the material, f − kd/π, is integrated by pushing a regular point set
+//! (a Fibonacci lattice) through the material's own sampling warp, each sample read at the MIP
+//! level of its cell, the solid angle 1/(n·pdf) ([`footprint_level`], the level the truth
+//! harness measured for the Kurt row lattice); `Ck` draws the same number of random points and
+//! reads Colbert–Křivánek's level (with their +1 bias); `Progressive` rotates the lattice frame
+//! after frame (Cranley–Patterson, R2 offsets) and reads the level of the accumulated count, so
+//! it converges to the integral of the same incident light (000 §4.4.2).
+//!
+//! This is the CPU frame the GPU renderer mirrors and the fallback when there is no adapter.
+
+use crate::image::Image;
+use crate::kernel::{BoundingPlane, Lookup};
+use crate::mip::{ck_level_at, footprint_level};
+use crate::path::PathCamera;
+use crate::probe::{LitScene, Probe};
+use crate::{Result, ShadeError};
+use glam::DVec3;
+use lustre_brdf::bsdf::Bsdf;
+use lustre_brdf::rgb::Rgb;
+use lustre_brdf::sampling::SplitMix64;
+use lustre_env::pyramid::CubePyramid;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// Largest sample count per pixel and lobe the regular methods accept.
+pub const MAX_SAMPLES: usize = 256;
+
+/// How the glossy part is integrated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameMethod {
+    /// A fixed regular point set through the material's warp, MIP-filtered.
+    Regular,
+    /// Colbert–Křivánek: the same number of random points, MIP-filtered.
+    Ck,
+    /// `frames` still frames of the regular set, each rotated, averaged.
+    Progressive {
+        /// Frames accumulated.
+        frames: u32,
+    },
+}
+
+/// Options of a frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameOptions {
+    /// Glossy samples per pixel (per camera ray).
+    pub samples: usize,
+    /// Integration method.
+    pub method: FrameMethod,
+    /// Camera rays per pixel (jittered as [`crate::bake::render::render_lightmapped`] does).
+    pub spp: u32,
+    /// Seed of the camera jitter and of the random methods.
+    pub seed: u64,
+}
+
+impl FrameOptions {
+    /// Errors on a sample count of 0 or above [`MAX_SAMPLES`], no camera rays, or no frames.
+    pub fn validate(&self) -> Result<()> {
+        if self.samples == 0 || self.samples > MAX_SAMPLES {
+            return Err(ShadeError::Parameter(format!(
+                "{} glossy samples per pixel is outside 1..={MAX_SAMPLES}",
+                self.samples
+            )));
+        }
+        if self.spp == 0 {
+            return Err(ShadeError::Parameter("0 camera rays per pixel".into()));
+        }
+        if let FrameMethod::Progressive { frames: 0 } = self.method {
+            return Err(ShadeError::Parameter(
+                "progressive refinement of 0 frames".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The pre-filtered incident light of a frame: the probes, and the environment's pyramid for
+/// scenes without probes.
+pub struct FrameLight<'p> {
+    /// Captured probes.
+    pub probes: &'p [Probe],
+    /// The environment, when no probe exists (distant light, no parallax).
+    pub environment: Option<&'p CubePyramid>,
+}
+
+/// Per-frame counts.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameStats {
+    /// Camera rays that hit a surface with a glossy part.
+    pub glossy_hits: u64,
+    /// Filtered lookups made.
+    pub lookups: u64,
+}
+
+/// The i-th of n points of the regular set: a Fibonacci lattice ((i + ½)/n, frac(i/φ)),
+/// shifted by `offset` modulo 1 (zero for the fixed set).
+#[inline]
+pub fn lattice_point(i: usize, n: usize, offset: (f64, f64)) -> (f64, f64) {
+    const INV_PHI: f64 = 0.618_033_988_749_894_8;
+    let u = (i as f64 + 0.5) / n as f64 + offset.0;
+    let v = i as f64 * INV_PHI + offset.1;
+    (u - u.floor(), v - v.floor())
+}
+
+/// The glossy radiance towards `wo_local` of `bsdf` minus its light-mapped diffuse part
+/// `kd`/π, from `n` points pushed through the BSDF's sampling warp, each looked up at
+/// `level(pdf, wi_world)`; `points(i)` gives the i-th point in [0, 1)². Returns the radiance
+/// and the lookups made (at most `n`).
+#[allow(clippy::too_many_arguments)]
+pub fn glossy_warp(
+    bsdf: &dyn Bsdf,
+    kd: Rgb,
+    to_world: impl Fn(DVec3) -> DVec3,
+    wo_local: DVec3,
+    n: usize,
+    points: impl Fn(usize) -> (f64, f64),
+    light: impl Fn(DVec3, f64) -> Rgb,
+    level: impl Fn(f64, DVec3) -> f64,
+) -> (Rgb, usize) {
+    let mut sum = Rgb::ZERO;
+    let mut lookups = 0;
+    for i in 0..n {
+        let (u1, u2) = points(i);
+        let Some(s) = bsdf.sample(wo_local, u1, u2) else {
+            continue;
+        };
+        if s.pdf.is_nan() || s.pdf <= 0.0 || !s.wi.is_finite() {
+            continue;
+        }
+        let wi = to_world(s.wi);
+        let weight = if s.is_delta() {
+            s.weight()
+        } else {
+            // f − kd/π on the reflection side: the light map already holds the diffuse part.
+            let reflect = s.wi.z * wo_local.z > 0.0;
+            let f = if reflect {
+                s.value - kd * (1.0 / PI)
+            } else {
+                s.value
+            };
+            f * (s.wi.z.abs() / s.pdf)
+        };
+        let lod = if s.is_delta() { 0.0 } else { level(s.pdf, wi) };
+        lookups += 1;
+        sum += light(wi, lod) * weight;
+    }
+    (sum * (1.0 / n as f64), lookups)
+}
+
+/// Renders a w×h frame of `lit` at `camera` with the incident light `light`.
+pub fn render_frame(
+    lit: &LitScene,
+    light: &FrameLight,
+    camera: &PathCamera,
+    w: usize,
+    h: usize,
+    opts: &FrameOptions,
+) -> Result<(Image, FrameStats)> {
+    opts.validate()?;
+    if w == 0 || h == 0 {
+        return Err(ShadeError::Parameter(format!("image {w}×{h} is empty")));
+    }
+    let probe_of_mesh: Vec<Option<usize>> = (0..lit.scene.meshes.len())
+        .map(|m| light.probes.iter().position(|p| p.mesh as usize == m))
+        .collect();
+    let ps = lit.path_scene;
+    let g = &ps.geometry;
+    let frames = match opts.method {
+        FrameMethod::Progressive { frames } => frames as usize,
+        _ => 1,
+    };
+    let shade = |o: DVec3, d: DVec3, rng: &mut SplitMix64| -> (Rgb, u64, bool) {
+        let Some(hit) = lit.tracer.intersect(o, d) else {
+            return (
+                ps.environment.as_ref().map_or(Rgb::ZERO, |e| e.eval(d)),
+                0,
+                false,
+            );
+        };
+        let mut l = lit.lit.radiance(g, hit.prim, hit.bary, d);
+        let mesh = lit.mesh_of[hit.prim] as usize;
+        if lit.scene.meshes[mesh].hints.diffuse_only {
+            return (l, 0, false);
+        }
+        let k = g.material[hit.prim] as usize;
+        let surface = &ps.materials[k];
+        let kd = lit.lit.albedo(g, hit.prim, hit.bary, d);
+        let (p, frame, uv) = lit.tracer.shading_point(o, d, &hit);
+        let wo = -d;
+        let frame = if surface.two_sided() && wo.dot(frame.n) < 0.0 {
+            frame.flipped()
+        } else {
+            frame
+        };
+        let wo_local = frame.to_local(wo);
+        // The incident light: this object's probe, else the nearest, else the environment.
+        let probe = probe_of_mesh[mesh].map(|i| &light.probes[i]).or_else(|| {
+            light.probes.iter().min_by(|a, b| {
+                a.centre
+                    .distance_squared(p)
+                    .total_cmp(&b.centre.distance_squared(p))
+            })
+        });
+        let (pyramid, planes, rel): (&CubePyramid, &[BoundingPlane], DVec3) = match probe {
+            Some(pr) => (&pr.pyramid, &pr.planes, p - pr.centre),
+            None => match light.environment {
+                Some(env) => (env, &[], DVec3::ZERO),
+                None => return (l, 0, false),
+            },
+        };
+        let lookup = Lookup {
+            position: rel,
+            planes,
+        };
+        let face = pyramid.base_size();
+        let fetch = |wi: DVec3, lod: f64| -> Rgb {
+            let dir = if lookup.planes.is_empty() {
+                wi
+            } else {
+                crate::kernel::corrected_direction(lookup.planes, lookup.position, wi)
+            };
+            Rgb(pyramid.sample(dir, lod))
+        };
+        let n = opts.samples;
+        let mut glossy = Rgb::ZERO;
+        let mut lookups = 0u64;
+        surface.with_bsdf(uv, &mut |bsdf| {
+            let to_world = |v: DVec3| frame.to_world(v);
+            match opts.method {
+                FrameMethod::Regular => {
+                    let (c, k) = glossy_warp(
+                        bsdf,
+                        kd,
+                        to_world,
+                        wo_local,
+                        n,
+                        |i| lattice_point(i, n, (0.0, 0.0)),
+                        fetch,
+                        |pdf, wi| footprint_level(1.0 / (n as f64 * pdf), wi, face),
+                    );
+                    glossy = c;
+                    lookups = k as u64;
+                }
+                FrameMethod::Ck => {
+                    let pts: Vec<(f64, f64)> =
+                        (0..n).map(|_| (rng.next_f64(), rng.next_f64())).collect();
+                    let (c, k) = glossy_warp(
+                        bsdf,
+                        kd,
+                        to_world,
+                        wo_local,
+                        n,
+                        |i| pts[i],
+                        fetch,
+                        |pdf, wi| ck_level_at(pdf, n, face, wi),
+                    );
+                    glossy = c;
+                    lookups = k as u64;
+                }
+                FrameMethod::Progressive { .. } => {
+                    // Frame f of `frames`: the set rotated by an R2 offset; the level of the
+                    // accumulated count f·n, so the filtering shrinks as frames accumulate.
+                    let mut acc = Rgb::ZERO;
+                    for f in 0..frames {
+                        let off = r2(f);
+                        let total = n * (f + 1);
+                        let (c, k) = glossy_warp(
+                            bsdf,
+                            kd,
+                            to_world,
+                            wo_local,
+                            n,
+                            |i| lattice_point(i, n, off),
+                            fetch,
+                            |pdf, wi| footprint_level(1.0 / (total as f64 * pdf), wi, face),
+                        );
+                        acc += c;
+                        lookups += k as u64;
+                    }
+                    glossy = acc * (1.0 / frames as f64);
+                }
+            }
+        });
+        if glossy.is_finite() {
+            l += glossy.map(|c| c.max(0.0));
+        }
+        (l, lookups, true)
+    };
+    let seed = opts.seed;
+    let spp = opts.spp;
+    let rows: Vec<([f32; 3], u64, u64)> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let mut sum = Rgb::ZERO;
+            let (mut hits, mut lookups) = (0u64, 0u64);
+            for k in 0..spp {
+                let mut rng = SplitMix64::new(
+                    seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                        ^ u64::from(k).wrapping_mul(0xC2B2_AE3D_27D4_EB4F),
+                );
+                let (jx, jy) = (rng.next_f64(), rng.next_f64());
+                let d = camera.direction(x as f64 + jx, y as f64 + jy, w, h);
+                let (c, n, glossy) = shade(camera.origin, d, &mut rng);
+                if c.is_finite() {
+                    sum += c;
+                }
+                hits += u64::from(glossy);
+                lookups += n;
+            }
+            ((sum / f64::from(spp)).0.map(|c| c as f32), hits, lookups)
+        })
+        .collect();
+    let mut stats = FrameStats::default();
+    let data = rows
+        .into_iter()
+        .map(|(c, hits, n)| {
+            stats.glossy_hits += hits;
+            stats.lookups += n;
+            c
+        })
+        .collect();
+    Ok((Image::from_data(w, h, data)?, stats))
+}
+
+/// The f-th point of the R2 sequence (Roberts 2018): the per-frame rotation of the set.
+fn r2(f: usize) -> (f64, f64) {
+    const A1: f64 = 0.754_877_666_246_692_7;
+    const A2: f64 = 0.569_840_290_998_053_3;
+    let (u, v) = (f as f64 * A1, f as f64 * A2);
+    (u - u.floor(), v - v.floor())
+}
