@@ -15,7 +15,7 @@ use crate::{Result, ShadeError};
 use glam::{DVec3, Vec2};
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
-use lustre_scene::lightmap::LightmapAtlas;
+use lustre_scene::lightmap::{LightmapAtlas, SceneLightmap};
 use lustre_scene::Scene;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -201,4 +201,49 @@ pub fn render_lightmapped(
         })
         .collect();
     Image::from_data(w, h, data)
+}
+
+/// Reads the baked pages a scene file's `[lightmap]` names (OpenEXR, as `lustre bake` writes
+/// them). Errors name the file: unreadable, or not the atlas's page size; no pages at all (the
+/// atlas has not been baked).
+pub fn read_pages(lightmap: &SceneLightmap) -> Result<Vec<Vec<[f32; 3]>>> {
+    let atlas = &lightmap.atlas;
+    if lightmap.pages.is_empty() {
+        return Err(ShadeError::Parameter(format!(
+            "the light-map atlas {} has no baked pages (run `lustre bake`)",
+            lightmap.atlas_file.display()
+        )));
+    }
+    if lightmap.pages.len() != atlas.pages as usize {
+        return Err(ShadeError::Parameter(format!(
+            "{} light-map page files for an atlas of {} pages ({})",
+            lightmap.pages.len(),
+            atlas.pages,
+            lightmap.atlas_file.display()
+        )));
+    }
+    lightmap
+        .pages
+        .iter()
+        .map(|p| {
+            let img = Image::read_exr(p)?;
+            if img.width != atlas.width as usize || img.height != atlas.height as usize {
+                return Err(ShadeError::Parameter(format!(
+                    "{}: light-map page is {}×{}, the atlas's pages are {}×{}",
+                    p.display(),
+                    img.width,
+                    img.height,
+                    atlas.width,
+                    atlas.height
+                )));
+            }
+            if img.data.iter().flatten().any(|c| !c.is_finite()) {
+                return Err(ShadeError::Parameter(format!(
+                    "{}: light-map page has NaN or infinite texels",
+                    p.display()
+                )));
+            }
+            Ok(img.data)
+        })
+        .collect()
 }
