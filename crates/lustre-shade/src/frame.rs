@@ -10,11 +10,20 @@
 //! after frame (Cranley–Patterson, R2 offsets) and reads the level of the accumulated count, so
 //! it converges to the integral of the same incident light (000 §4.4.2).
 //!
+//! Planar reflectors (meshes hinted `planar_reflector`) read a mirror buffer rendered for the
+//! frame's camera ([`crate::mirror`], 000 §4.5) instead: each sample is projected into it by the
+//! two tangent-plane intersections and read at the level of its footprint there; samples that
+//! leave the buffer fall back to the probe or the environment. The Fibonacci lattice pushed
+//! through the warp puts every sample on its own ring around the lobe centre, denser where the
+//! lobe is stronger: the multi-ring pattern of 000 §4.5.3 (Fig. 4.33b) taken to one sample per
+//! ring.
+//!
 //! This is the CPU frame the GPU renderer mirrors and the fallback when there is no adapter.
 
 use crate::image::Image;
-use crate::kernel::{BoundingPlane, Lookup};
-use crate::mip::{ck_level_at, footprint_level};
+use crate::kernel::{corrected_direction, BoundingPlane};
+use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
+use crate::mirror::render_mirror;
 use crate::path::PathCamera;
 use crate::probe::{LitScene, Probe};
 use crate::{Result, ShadeError};
@@ -93,6 +102,10 @@ pub struct FrameStats {
     pub glossy_hits: u64,
     /// Filtered lookups made.
     pub lookups: u64,
+    /// Mirror buffers rendered (one per planar reflector).
+    pub mirrors: usize,
+    /// Time of the mirror pass, seconds.
+    pub mirror_seconds: f64,
 }
 
 /// The i-th of n points of the regular set: a Fibonacci lattice ((i + ½)/n, frac(i/φ)),
@@ -106,10 +119,10 @@ pub fn lattice_point(i: usize, n: usize, offset: (f64, f64)) -> (f64, f64) {
 }
 
 /// The glossy radiance towards `wo_local` of `bsdf` minus its light-mapped diffuse part
-/// `kd`/π, from `n` points pushed through the BSDF's sampling warp, each looked up at
-/// `level(pdf, wi_world)`; `points(i)` gives the i-th point in [0, 1)². Returns the radiance
-/// and the lookups made (at most `n`).
-#[allow(clippy::too_many_arguments)]
+/// `kd`/π, from `n` points pushed through the BSDF's sampling warp; `points(i)` gives the i-th
+/// point in [0, 1)², `light(wi_world, pdf)` the filtered incident radiance of a sample drawn
+/// with density `pdf` (`None` for a Dirac sample, read unfiltered). Returns the radiance and
+/// the lookups made (at most `n`).
 pub fn glossy_warp(
     bsdf: &dyn Bsdf,
     kd: Rgb,
@@ -117,8 +130,7 @@ pub fn glossy_warp(
     wo_local: DVec3,
     n: usize,
     points: impl Fn(usize) -> (f64, f64),
-    light: impl Fn(DVec3, f64) -> Rgb,
-    level: impl Fn(f64, DVec3) -> f64,
+    light: impl Fn(DVec3, Option<f64>) -> Rgb,
 ) -> (Rgb, usize) {
     let mut sum = Rgb::ZERO;
     let mut lookups = 0;
@@ -143,9 +155,9 @@ pub fn glossy_warp(
             };
             f * (s.wi.z.abs() / s.pdf)
         };
-        let lod = if s.is_delta() { 0.0 } else { level(s.pdf, wi) };
+        let pdf = (!s.is_delta()).then_some(s.pdf);
         lookups += 1;
-        sum += light(wi, lod) * weight;
+        sum += light(wi, pdf) * weight;
     }
     (sum * (1.0 / n as f64), lookups)
 }
@@ -165,6 +177,27 @@ pub fn render_frame(
     }
     let probe_of_mesh: Vec<Option<usize>> = (0..lit.scene.meshes.len())
         .map(|m| light.probes.iter().position(|p| p.mesh as usize == m))
+        .collect();
+    // The mirror pass: one buffer per planar reflector, for this camera (000 §4.5.1).
+    let t_mirror = std::time::Instant::now();
+    let mut mirrors = vec![];
+    let mut mirror_of_mesh = vec![None; lit.scene.meshes.len()];
+    for (m, mesh) in lit.scene.meshes.iter().enumerate() {
+        if mesh.hints.planar_reflector {
+            mirror_of_mesh[m] = Some(mirrors.len());
+            mirrors.push(render_mirror(lit, m, camera, w, h)?);
+        }
+    }
+    let mirror_seconds = t_mirror.elapsed().as_secs_f64();
+    let first_prim: Vec<usize> = lit
+        .scene
+        .meshes
+        .iter()
+        .scan(0, |acc, m| {
+            let first = *acc;
+            *acc += m.indices.len();
+            Some(first)
+        })
         .collect();
     let ps = lit.path_scene;
     let g = &ps.geometry;
@@ -204,25 +237,48 @@ pub fn render_frame(
                     .total_cmp(&b.centre.distance_squared(p))
             })
         });
-        let (pyramid, planes, rel): (&CubePyramid, &[BoundingPlane], DVec3) = match probe {
-            Some(pr) => (&pr.pyramid, &pr.planes, p - pr.centre),
-            None => match light.environment {
-                Some(env) => (env, &[], DVec3::ZERO),
-                None => return (l, 0, false),
-            },
+        let env_light: Option<(&CubePyramid, &[BoundingPlane], DVec3)> = match probe {
+            Some(pr) => Some((&pr.pyramid, &pr.planes, p - pr.centre)),
+            None => light.environment.map(|env| (env, &[][..], DVec3::ZERO)),
         };
-        let lookup = Lookup {
-            position: rel,
-            planes,
-        };
-        let face = pyramid.base_size();
-        let fetch = |wi: DVec3, lod: f64| -> Rgb {
-            let dir = if lookup.planes.is_empty() {
-                wi
-            } else {
-                crate::kernel::corrected_direction(lookup.planes, lookup.position, wi)
-            };
-            Rgb(pyramid.sample(dir, lod))
+        // The mirror buffer, for the reflector's in-plane triangles.
+        let mirror = mirror_of_mesh[mesh]
+            .map(|i| &mirrors[i])
+            .filter(|m| m.reflector.in_plane[hit.prim - first_prim[mesh]]);
+        if env_light.is_none() && mirror.is_none() {
+            return (l, 0, false);
+        }
+        // The filtered radiance of a sample along `wi` drawn with density `pdf` (None: Dirac)
+        // out of `total`; `ck` picks Colbert–Křivánek's level instead of the footprint's.
+        let fetch = |wi: DVec3, pdf: Option<f64>, total: usize, ck: bool| -> Rgb {
+            if let Some(m) = mirror {
+                if let Some(((x, y), found)) = m.locate(p, wi) {
+                    let lod = pdf.map_or(0.0, |pd| {
+                        let bias = if ck { 1.0 } else { FOOTPRINT_LEVEL_BIAS };
+                        m.level(p, wi, found, 1.0 / (total as f64 * pd), bias)
+                    });
+                    return m.sample(x, y, lod);
+                }
+            }
+            match env_light {
+                Some((pyramid, planes, rel)) => {
+                    let face = pyramid.base_size();
+                    let lod = pdf.map_or(0.0, |pd| {
+                        if ck {
+                            ck_level_at(pd, total, face, wi)
+                        } else {
+                            footprint_level(1.0 / (total as f64 * pd), wi, face)
+                        }
+                    });
+                    let dir = if planes.is_empty() {
+                        wi
+                    } else {
+                        corrected_direction(planes, rel, wi)
+                    };
+                    Rgb(pyramid.sample(dir, lod))
+                }
+                None => ps.environment.as_ref().map_or(Rgb::ZERO, |e| e.eval(wi)),
+            }
         };
         let n = opts.samples;
         let mut glossy = Rgb::ZERO;
@@ -238,8 +294,7 @@ pub fn render_frame(
                         wo_local,
                         n,
                         |i| lattice_point(i, n, (0.0, 0.0)),
-                        fetch,
-                        |pdf, wi| footprint_level(1.0 / (n as f64 * pdf), wi, face),
+                        |wi, pdf| fetch(wi, pdf, n, false),
                     );
                     glossy = c;
                     lookups = k as u64;
@@ -254,8 +309,7 @@ pub fn render_frame(
                         wo_local,
                         n,
                         |i| pts[i],
-                        fetch,
-                        |pdf, wi| ck_level_at(pdf, n, face, wi),
+                        |wi, pdf| fetch(wi, pdf, n, true),
                     );
                     glossy = c;
                     lookups = k as u64;
@@ -274,8 +328,7 @@ pub fn render_frame(
                             wo_local,
                             n,
                             |i| lattice_point(i, n, off),
-                            fetch,
-                            |pdf, wi| footprint_level(1.0 / (total as f64 * pdf), wi, face),
+                            |wi, pdf| fetch(wi, pdf, total, false),
                         );
                         acc += c;
                         lookups += k as u64;
@@ -314,7 +367,11 @@ pub fn render_frame(
             ((sum / f64::from(spp)).0.map(|c| c as f32), hits, lookups)
         })
         .collect();
-    let mut stats = FrameStats::default();
+    let mut stats = FrameStats {
+        mirrors: mirrors.len(),
+        mirror_seconds,
+        ..FrameStats::default()
+    };
     let data = rows
         .into_iter()
         .map(|(c, hits, n)| {

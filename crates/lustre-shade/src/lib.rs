@@ -18,6 +18,7 @@ pub mod image;
 pub mod kernel;
 pub mod metrics;
 pub mod mip;
+pub mod mirror;
 pub mod path;
 pub mod pattern;
 pub mod probe;

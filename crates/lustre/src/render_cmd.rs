@@ -70,15 +70,28 @@ pub struct RenderArgs {
     pub out: PathBuf,
 }
 
+/// Wall time per stage.
+struct Stages {
+    times: Vec<(String, f64)>,
+    t: Instant,
+}
+
+impl Stages {
+    /// Ends the current stage as `name` and starts the next.
+    fn lap(&mut self, name: impl Into<String>) {
+        self.times
+            .push((name.into(), self.t.elapsed().as_secs_f64()));
+        self.t = Instant::now();
+    }
+}
+
 /// Runs `lustre render`.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
-    let mut times: Vec<(String, f64)> = vec![];
-    let mut lap = |name: String, t: &mut Instant| {
-        times.push((name, t.elapsed().as_secs_f64()));
-        *t = Instant::now();
+    let mut st = Stages {
+        times: vec![],
+        t: Instant::now(),
     };
-    let mut t = Instant::now();
     let method = match args.method {
         Method::Regular => FrameMethod::Regular,
         Method::Ck => FrameMethod::Ck,
@@ -115,7 +128,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         None => (scene.film.width, scene.film.height),
     };
     let camera = lustre_shade::reference::path_camera(&scene, args.camera.as_deref(), w, h)?;
-    lap("load".into(), &mut t);
+    st.lap("load");
     let pages = read_pages(lightmap).with_context(|| format!("{}", args.scene.display()))?;
     let (ps, warnings) = lustre_shade::reference::path_scene(&scene)?;
     for w in &warnings {
@@ -126,16 +139,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .with_context(|| format!("{}: light maps", args.scene.display()))?;
     let pt = PathTracer::new(&ps, PathOptions::default())?;
     let lit = LitScene::new(&scene, &ps, &pt, &lm)?;
-    lap("light maps and BVH".into(), &mut t);
+    st.lap("light maps and BVH");
 
     let mut probes = vec![];
     for (m, mesh) in scene.meshes.iter().enumerate() {
-        if mesh.hints.planar_reflector {
-            eprintln!(
-                "note: {:?} is a planar reflector; the mirror pass is not part of the CPU frame yet, it reflects its nearest probe",
-                mesh.name
-            );
-        }
         if !mesh.hints.probe {
             continue;
         }
@@ -150,7 +157,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             probe.planes.len(),
             args.probe_size
         );
-        lap(format!("probe {}", probe.name), &mut t);
+        st.lap(format!("probe {}", probe.name));
         probes.push(probe);
     }
     let env_pyramid = match (&probes[..], &ps.environment) {
@@ -158,7 +165,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             eprintln!("no probe objects: glossy surfaces reflect the environment only");
             let cube = CubeMap::from_fn(args.probe_size, |d| env.eval(d).0)?;
             let p = CubePyramid::build(cube, MipFilter::Gauss6)?;
-            lap("environment pyramid".into(), &mut t);
+            st.lap("environment pyramid");
             Some(p)
         }
         ([], None) => {
@@ -180,7 +187,18 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     let (img, stats) = render_frame(&lit, &light, &camera, w as usize, h as usize, &opts)?;
     bar.finish_and_clear();
-    lap("frame".into(), &mut t);
+    st.lap("frame");
+    if stats.mirrors > 0 {
+        // The mirror pass runs inside the frame; report it as its own stage.
+        let (_, frame_s) = st.times.pop().unwrap_or_default();
+        st.times.push(("mirror pass".into(), stats.mirror_seconds));
+        st.times
+            .push(("frame".into(), (frame_s - stats.mirror_seconds).max(0.0)));
+        eprintln!(
+            "{} mirror buffer(s) of {w}×{h} in {:.3} s",
+            stats.mirrors, stats.mirror_seconds
+        );
+    }
 
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
@@ -219,9 +237,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             img.mean() / r.mean().max(1e-12)
         );
     }
-    lap("write".into(), &mut t);
+    st.lap("write");
     let mut csv = String::from("stage,seconds\n");
-    for (name, s) in &times {
+    for (name, s) in &st.times {
         writeln!(csv, "{},{s:.4}", name.replace(',', " "))?;
     }
     writeln!(csv, "total,{:.4}", t0.elapsed().as_secs_f64())?;
