@@ -23,15 +23,17 @@
 use crate::image::Image;
 use crate::kernel::{corrected_direction, BoundingPlane};
 use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
-use crate::mirror::render_mirror;
+use crate::mirror::{render_mirror, render_see_through, ViewBuffer};
 use crate::path::PathCamera;
 use crate::probe::{LitScene, Probe};
 use crate::{Result, ShadeError};
 use glam::DVec3;
+use glam::Vec2;
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
 use lustre_env::pyramid::CubePyramid;
+use lustre_scene::{Material, MaterialKind};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -104,7 +106,9 @@ pub struct FrameStats {
     pub lookups: u64,
     /// Mirror buffers rendered (one per planar reflector).
     pub mirrors: usize,
-    /// Time of the mirror pass, seconds.
+    /// See-through buffers rendered (one per transmissive probe object).
+    pub see_throughs: usize,
+    /// Time of the mirror and see-through passes, seconds.
     pub mirror_seconds: f64,
 }
 
@@ -134,6 +138,24 @@ pub fn glossy_warp(
 ) -> (Rgb, usize) {
     let mut sum = Rgb::ZERO;
     let mut lookups = 0;
+    if bsdf.flags().delta_only() && n >= 2 {
+        // Only Dirac lobes (a mirror, a glass sheet): the integral is a sum over the branches,
+        // found at the two ends of the lobe-selection coordinate and weighted by their
+        // probabilities (value·|cos| = weight·probability) — exact, with at most 2 lookups.
+        let mut seen: Vec<DVec3> = vec![];
+        for u1 in [1e-9, 1.0 - 1e-9] {
+            let Some(s) = bsdf.sample(wo_local, u1, 0.5) else {
+                continue;
+            };
+            if !s.wi.is_finite() || seen.iter().any(|w| w.distance_squared(s.wi) < 1e-18) {
+                continue;
+            }
+            seen.push(s.wi);
+            lookups += 1;
+            sum += light(to_world(s.wi), None) * (s.value * s.wi.z.abs());
+        }
+        return (sum, lookups);
+    }
     for i in 0..n {
         let (u1, u2) = points(i);
         let Some(s) = bsdf.sample(wo_local, u1, u2) else {
@@ -188,7 +210,44 @@ pub fn render_frame(
             mirrors.push(render_mirror(lit, m, camera, w, h)?);
         }
     }
+    // The see-through pass: the camera's view without each transmissive probe object.
+    let mut see_throughs = vec![];
+    let mut see_through_of_mesh = vec![None; lit.scene.meshes.len()];
+    for (m, mesh) in lit.scene.meshes.iter().enumerate() {
+        let transmits = lit.scene.materials.get(mesh.material).is_some_and(|mat| {
+            mat.bsdf_at(&lit.scene.textures, &[Vec2::ZERO; 2])
+                .is_ok_and(|b| b.flags().transmission)
+        });
+        if mesh.hints.probe && transmits {
+            see_through_of_mesh[m] = Some(see_throughs.len());
+            see_throughs.push(render_see_through(lit, m, camera, w, h)?);
+        }
+    }
     let mirror_seconds = t_mirror.elapsed().as_secs_f64();
+    // Smooth glass is shaded as a thin sheet (straight through, both interfaces' Fresnel):
+    // a pane or a rail seen through, as the thin BTDF lobes of 000 §3.3.1.
+    let thin: Vec<Option<Material>> = lit
+        .scene
+        .materials
+        .iter()
+        .map(|m| match &m.kind {
+            MaterialKind::Dielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => Some(Material::new(
+                m.name.clone(),
+                MaterialKind::ThinDielectric {
+                    int_ior: *int_ior,
+                    ext_ior: *ext_ior,
+                    specular_reflectance: *specular_reflectance,
+                    specular_transmittance: *specular_transmittance,
+                },
+            )),
+            _ => None,
+        })
+        .collect();
     let first_prim: Vec<usize> = lit
         .scene
         .meshes
@@ -245,19 +304,32 @@ pub fn render_frame(
         let mirror = mirror_of_mesh[mesh]
             .map(|i| &mirrors[i])
             .filter(|m| m.reflector.in_plane[hit.prim - first_prim[mesh]]);
-        if env_light.is_none() && mirror.is_none() {
+        if env_light.is_none() && mirror.is_none() && see_through_of_mesh[mesh].is_none() {
             return (l, 0, false);
         }
+        let see_through = see_through_of_mesh[mesh].map(|i| &see_throughs[i]);
+        // A view buffer's filtered radiance for a sample along `wi` (None when it leaves it).
+        let read_view = |v: &ViewBuffer, wi: DVec3, pdf: Option<f64>, total: usize, ck: bool| {
+            let ((x, y), found) = v.locate(p, wi)?;
+            let lod = pdf.map_or(0.0, |pd| {
+                let bias = if ck { 1.0 } else { FOOTPRINT_LEVEL_BIAS };
+                v.level(p, wi, found, 1.0 / (total as f64 * pd), bias)
+            });
+            Some(v.sample(x, y, lod))
+        };
         // The filtered radiance of a sample along `wi` drawn with density `pdf` (None: Dirac)
         // out of `total`; `ck` picks Colbert–Křivánek's level instead of the footprint's.
         let fetch = |wi: DVec3, pdf: Option<f64>, total: usize, ck: bool| -> Rgb {
             if let Some(m) = mirror {
-                if let Some(((x, y), found)) = m.locate(p, wi) {
-                    let lod = pdf.map_or(0.0, |pd| {
-                        let bias = if ck { 1.0 } else { FOOTPRINT_LEVEL_BIAS };
-                        m.level(p, wi, found, 1.0 / (total as f64 * pd), bias)
-                    });
-                    return m.sample(x, y, lod);
+                if let Some(c) = read_view(&m.view, wi, pdf, total, ck) {
+                    return c;
+                }
+            }
+            if let Some(v) = see_through {
+                if wi.dot(frame.n) * wo.dot(frame.n) < 0.0 {
+                    if let Some(c) = read_view(v, wi, pdf, total, ck) {
+                        return c;
+                    }
                 }
             }
             match env_light {
@@ -283,7 +355,16 @@ pub fn render_frame(
         let n = opts.samples;
         let mut glossy = Rgb::ZERO;
         let mut lookups = 0u64;
-        surface.with_bsdf(uv, &mut |bsdf| {
+        let with_bsdf = |f: &mut dyn FnMut(&dyn Bsdf)| match &thin[k] {
+            Some(m) => {
+                let uv2 = [Vec2::new(uv[0] as f32, uv[1] as f32); 2];
+                if m.with_bsdf_at(&lit.scene.textures, &uv2, &mut *f).is_err() {
+                    surface.with_bsdf(uv, f);
+                }
+            }
+            None => surface.with_bsdf(uv, f),
+        };
+        with_bsdf(&mut |bsdf| {
             let to_world = |v: DVec3| frame.to_world(v);
             match opts.method {
                 FrameMethod::Regular => {
@@ -369,6 +450,7 @@ pub fn render_frame(
         .collect();
     let mut stats = FrameStats {
         mirrors: mirrors.len(),
+        see_throughs: see_throughs.len(),
         mirror_seconds,
         ..FrameStats::default()
     };

@@ -184,17 +184,15 @@ pub struct MirrorTexel {
     pub normal: DVec3,
 }
 
-/// The mirror buffer of one reflector for one view: w×h texels (the frame's resolution, 000
-/// §4.5.1) and the radiance's MIP pyramid (2×2 box means, level l of size ⌈w/2^l⌉ × ⌈h/2^l⌉).
+/// A view of the light-mapped scene with one object left out, as a buffer of radiance,
+/// positions and normals with the radiance's MIP pyramid (2×2 box means, level l of size
+/// ⌈w/2^l⌉ × ⌈h/2^l⌉): the mirror camera's view beyond a reflector ([`render_mirror`]), or the
+/// camera's own view behind a transmissive object ([`render_see_through`]).
 #[derive(Clone, Debug)]
-pub struct MirrorBuffer {
-    /// The reflector's mesh index.
+pub struct ViewBuffer {
+    /// The mesh left out.
     pub mesh: u32,
-    /// Its plane and in-plane triangles.
-    pub reflector: Reflector,
-    /// Its plane.
-    pub plane: ReflectorPlane,
-    /// The mirrored camera.
+    /// The camera the buffer was rendered from.
     pub camera: PathCamera,
     /// Width in texels.
     pub width: usize,
@@ -204,6 +202,19 @@ pub struct MirrorBuffer {
     pub texels: Vec<MirrorTexel>,
     /// Radiance levels: (width, height, texels), finest first (level 0 = the texels').
     pub levels: Vec<(usize, usize, Vec<Rgb>)>,
+    /// For a mirror buffer: the reflector's plane; samples below it are not answered.
+    pub front: Option<ReflectorPlane>,
+}
+
+/// The mirror buffer of one reflector for one view (000 §4.5.1): the frame's resolution.
+#[derive(Clone, Debug)]
+pub struct MirrorBuffer {
+    /// The reflector's plane and in-plane triangles.
+    pub reflector: Reflector,
+    /// Its plane.
+    pub plane: ReflectorPlane,
+    /// What the mirrored camera sees beyond the plane.
+    pub view: ViewBuffer,
 }
 
 /// Renders the mirror buffer of reflector `mesh` for `camera` at w×h: one ray per texel centre
@@ -216,29 +227,67 @@ pub fn render_mirror(
     w: usize,
     h: usize,
 ) -> Result<MirrorBuffer> {
-    if w == 0 || h == 0 {
-        return Err(ShadeError::Parameter(format!(
-            "mirror buffer {w}×{h} is empty"
-        )));
-    }
     let reflector = ReflectorPlane::of_mesh(lit, mesh)?;
     let plane = reflector.plane;
     let cam = mirror_camera(camera, &plane);
+    let mut view = render_view(lit, mesh, &cam, w, h, |d| {
+        // Start on the plane: what lies between the mirrored eye and the plane is behind the
+        // reflector in the real view.
+        let denom = d.dot(plane.normal);
+        if denom.abs() > 1e-12 {
+            ((plane.point - cam.origin).dot(plane.normal) / denom).max(0.0)
+        } else {
+            0.0
+        }
+    })?;
+    view.front = Some(plane);
+    Ok(MirrorBuffer {
+        reflector,
+        plane,
+        view,
+    })
+}
+
+/// Renders what `camera` sees at w×h with mesh `mesh` left out: the light arriving through a
+/// transmissive object (a glass rail, a window pane), read by its transmitted samples as the
+/// mirror buffer is read by reflected ones.
+pub fn render_see_through(
+    lit: &LitScene,
+    mesh: usize,
+    camera: &PathCamera,
+    w: usize,
+    h: usize,
+) -> Result<ViewBuffer> {
+    if mesh >= lit.scene.meshes.len() {
+        return Err(ShadeError::Parameter(format!(
+            "{}: no mesh {mesh} to see through",
+            lit.scene.source.display()
+        )));
+    }
+    render_view(lit, mesh, camera, w, h, |_| 0.0)
+}
+
+/// One ray per texel centre of `cam`, from `start(d)` along it, mesh `mesh` left out.
+fn render_view(
+    lit: &LitScene,
+    mesh: usize,
+    cam: &PathCamera,
+    w: usize,
+    h: usize,
+    start: impl Fn(DVec3) -> f64 + Sync,
+) -> Result<ViewBuffer> {
+    if w == 0 || h == 0 {
+        return Err(ShadeError::Parameter(format!(
+            "view buffer {w}×{h} is empty"
+        )));
+    }
     let g = &lit.path_scene.geometry;
     let texels: Vec<MirrorTexel> = (0..w * h)
         .into_par_iter()
         .map(|i| {
             let (x, y) = (i % w, i / w);
             let d = cam.direction(x as f64 + 0.5, y as f64 + 0.5, w, h);
-            // Start on the plane: what lies between the mirrored eye and the plane is behind
-            // the reflector in the real view.
-            let denom = d.dot(plane.normal);
-            let t0 = if denom.abs() > 1e-12 {
-                ((plane.point - cam.origin).dot(plane.normal) / denom).max(0.0)
-            } else {
-                0.0
-            };
-            let o = cam.origin + d * t0;
+            let o = cam.origin + d * start(d);
             let hit = lit
                 .tracer
                 .intersect_filtered(o, d, |p| lit.mesh_of[p] == mesh as u32);
@@ -290,19 +339,18 @@ pub fn render_mirror(
         }
         levels.push((nw, nh, next));
     }
-    Ok(MirrorBuffer {
+    Ok(ViewBuffer {
         mesh: mesh as u32,
-        reflector,
-        plane,
-        camera: cam,
+        camera: *cam,
         width: w,
         height: h,
         texels,
         levels,
+        front: None,
     })
 }
 
-impl MirrorBuffer {
+impl ViewBuffer {
     /// The texel nearest to image position (x, y), `None` outside the buffer.
     pub fn texel_at(&self, x: f64, y: f64) -> Option<&MirrorTexel> {
         if !(x >= 0.0 && y >= 0.0 && x < self.width as f64 && y < self.height as f64) {
@@ -320,7 +368,7 @@ impl MirrorBuffer {
     /// with the normal of its tangent plane (`None` at infinity); `None` when the position
     /// leaves the buffer or `wi` points below the plane.
     pub fn locate(&self, p: DVec3, wi: DVec3) -> Option<Located> {
-        if wi.dot(self.plane.normal) <= 0.0 {
+        if self.front.is_some_and(|f| wi.dot(f.normal) <= 0.0) {
             return None;
         }
         let (w, h) = (self.width, self.height);

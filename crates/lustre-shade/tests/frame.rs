@@ -432,11 +432,11 @@ fn mirror_lookups_see_what_rays_from_the_floor_see() {
             if wi.y <= 0.05 {
                 continue;
             }
-            let Some(((lx, ly), _)) = m.locate(p, wi) else {
+            let Some(((lx, ly), _)) = m.view.locate(p, wi) else {
                 left += 1;
                 continue;
             };
-            let got = m.sample(lx, ly, 0.0);
+            let got = m.view.sample(lx, ly, 0.0);
             let truth = lit.radiance(p, wi, Some(0));
             for c in 0..3 {
                 err += (got.0[c] - truth.0[c]).powi(2);
@@ -499,4 +499,118 @@ fn a_glossy_mirror_floor_converges_and_regular_beats_ck() {
             }
         });
     }
+}
+
+/// The room with a glass pane (smooth dielectric, reflection tinted black so only the
+/// transmission remains) at z = 3.5 in front of the far wall, a probe object; or without it.
+fn room_with_pane(with_pane: bool) -> (Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>) {
+    let (mut scene, mut atlas, pages) = room(rough_metal(0.2));
+    // A glowing post close behind the pane: a probe at the pane's centre would see it from
+    // another angle (parallax no plane corrects); the see-through buffer sees it as the camera.
+    let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let mut post = Mesh::new(
+        "post",
+        vec![
+            v(2.4, 1.8, 3.7),
+            v(2.8, 1.8, 3.7),
+            v(2.8, 2.6, 3.7),
+            v(2.4, 2.6, 3.7),
+        ],
+        vec![[0, 2, 1], [0, 3, 2]],
+        0,
+    );
+    post.emission = Some(Rgb::splat(5.0));
+    scene.meshes.push(post);
+    atlas.mesh_page.push(None);
+    if with_pane {
+        scene.materials.push(Material::new(
+            "glass",
+            MaterialKind::Dielectric {
+                int_ior: 1.5,
+                ext_ior: 1.0,
+                specular_reflectance: Rgb::ZERO,
+                specular_transmittance: Rgb::ONE,
+            },
+        ));
+        let v = |x: f32, y: f32| Vec3::new(x, y, 3.5);
+        let mut pane = Mesh::new(
+            "pane",
+            vec![v(1.8, 1.4), v(3.4, 1.4), v(3.4, 3.0), v(1.8, 3.0)],
+            vec![[0, 2, 1], [0, 3, 2]],
+            2,
+        );
+        pane.hints.probe = true;
+        scene.meshes.push(pane);
+        atlas.mesh_page.push(None);
+    }
+    (scene, atlas, pages)
+}
+
+#[test]
+fn a_glass_pane_transmits_what_lies_behind_it() {
+    let cam = PathCamera::look_at(
+        DVec3::new(2.6, 2.2, 0.5),
+        DVec3::new(2.6, 2.2, 3.5),
+        DVec3::Y,
+        20.0,
+    )
+    .unwrap();
+    let (w, h) = (32, 32);
+    let render = |with_pane: bool| {
+        let (scene, atlas, pages) = room_with_pane(with_pane);
+        with_lit(&scene, &atlas, &pages, |lit| {
+            let probes: Vec<_> = if with_pane {
+                vec![capture_probe(lit, 8, &probe_opts()).unwrap()]
+            } else {
+                vec![]
+            };
+            let light = FrameLight {
+                probes: &probes,
+                environment: None,
+            };
+            let opts = FrameOptions {
+                samples: 8,
+                method: FrameMethod::Regular,
+                spp: 1,
+                seed: 1,
+            };
+            render_frame(lit, &light, &cam, w, h, &opts).unwrap()
+        })
+    };
+    let (with, stats) = render(true);
+    assert_eq!(stats.see_throughs, 1);
+    let (without, _) = render(false);
+    // At the centre the view is normal to the pane: a thin sheet transmits 1 − R' with
+    // R' = 2R/(1 + R), R = ((1.5 − 1)/(1.5 + 1))² (both interfaces, all internal bounces).
+    let r = (0.5f64 / 2.5).powi(2);
+    let t = 1.0 - 2.0 * r / (1.0 + r);
+    let centre = (h / 2) * w + w / 2;
+    for c in 0..3 {
+        let ratio = f64::from(with.data[centre][c]) / f64::from(without.data[centre][c]);
+        assert!((ratio - t).abs() < 0.005, "channel {c}: {ratio} vs {t}");
+    }
+    // Every pane pixel is the wall behind it, dimmed by the sheet (no reflection: tint 0).
+    // Inside the post and the wall, away from the post's edges (where the buffer's texels
+    // blend what a jittered ray sees sharply), every pixel is what lies behind, dimmed.
+    let (mut good, mut total, mut post) = (0, 0, 0);
+    for y in 2..h - 2 {
+        for x in 2..w - 2 {
+            let b = without.data[y * w + x][1];
+            let on_post = |q: f32| q > 4.0;
+            let edge = (0..25).any(|k| {
+                let q = without.data[(y + k / 5 - 2) * w + x + k % 5 - 2][1];
+                on_post(q) != on_post(b)
+            });
+            if edge {
+                continue;
+            }
+            let ratio = f64::from(with.data[y * w + x][1]) / f64::from(b);
+            total += 1;
+            good += usize::from((ratio - t).abs() < 0.03);
+            post += usize::from(b > 4.0 && (ratio - t).abs() < 0.03);
+        }
+    }
+    eprintln!("{good} of {total} pixels off the post's edges within 0.03 of T = {t:.4}, {post} on the post");
+    assert!(post > 20, "the post behind the pane: {post} pixels");
+    assert!(good as f64 >= 0.97 * total as f64, "{good} of {total}");
 }

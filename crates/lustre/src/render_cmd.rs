@@ -188,15 +188,16 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let (img, stats) = render_frame(&lit, &light, &camera, w as usize, h as usize, &opts)?;
     bar.finish_and_clear();
     st.lap("frame");
-    if stats.mirrors > 0 {
-        // The mirror pass runs inside the frame; report it as its own stage.
+    if stats.mirrors + stats.see_throughs > 0 {
+        // The mirror and see-through passes run inside the frame; report them as a stage.
         let (_, frame_s) = st.times.pop().unwrap_or_default();
-        st.times.push(("mirror pass".into(), stats.mirror_seconds));
+        st.times
+            .push(("mirror and see-through passes".into(), stats.mirror_seconds));
         st.times
             .push(("frame".into(), (frame_s - stats.mirror_seconds).max(0.0)));
         eprintln!(
-            "{} mirror buffer(s) of {w}×{h} in {:.3} s",
-            stats.mirrors, stats.mirror_seconds
+            "{} mirror and {} see-through buffer(s) of {w}×{h} in {:.3} s",
+            stats.mirrors, stats.see_throughs, stats.mirror_seconds
         );
     }
 
