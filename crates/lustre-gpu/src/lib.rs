@@ -35,5 +35,5 @@ pub use packed::{
     LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
 };
 pub use pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_WGSL};
-pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_PASS_WGSL};
 pub use shade::shade_wgsl;
+pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_PASS_WGSL};

@@ -5,10 +5,10 @@ use crate::compute::{compute_pipeline, storage_entry, uniform_entry};
 use crate::context::GpuContext;
 use crate::cube::{linear_sampler, CubeLevelRef, GpuCube};
 use crate::error::{invalid, scope_result, wgpu_error, Result};
-use crate::wgsl::{self, compose};
 use crate::packed::{
     f3, PackedScene, LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
 };
+use crate::wgsl::{self, compose};
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 

@@ -144,7 +144,10 @@ mod tests {
             assert!(ALL[i + 1..].iter().all(|b| b.name != a.name), "{}", a.name);
             // The header names the module.
             let first = a.source.lines().next().unwrap_or("");
-            assert!(first.starts_with(&format!("// module {}:", a.name)), "{first}");
+            assert!(
+                first.starts_with(&format!("// module {}:", a.name)),
+                "{first}"
+            );
         }
     }
 }
