@@ -75,9 +75,25 @@ pub const QMC: Module = Module {
     deps: &[],
 };
 
+/// Anisotropic GGX and Beckmann: D, Smith G1, visible-normal density and sampling, and the
+/// rough-conductor lobe's value, pdf and sampling warp (unit Fresnel).
+pub const MICROFACET: Module = Module {
+    name: "microfacet",
+    source: include_str!("wgsl/microfacet.wgsl"),
+    deps: &[&TYPES, &FRAME, &PATTERN],
+};
+
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 8] = [
-    &TYPES, &FRAME, &LOBE, &MIP, &PATTERN, &REGULAR, &PLANES, &QMC,
+pub const ALL: [&Module; 9] = [
+    &TYPES,
+    &FRAME,
+    &LOBE,
+    &MIP,
+    &PATTERN,
+    &REGULAR,
+    &PLANES,
+    &QMC,
+    &MICROFACET,
 ];
 
 /// The source of a pass: every module in `imports` and, transitively, the modules they use,

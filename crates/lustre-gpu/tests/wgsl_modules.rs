@@ -1,7 +1,8 @@
 //! The binding-free WGSL modules of `lustre_gpu::wgsl`: each validates with naga composed with
 //! its dependencies alone and declares no binding or entry point; the functions new on the GPU
-//! (bounding planes, QMC points and seeds) run in a small test kernel and are compared with
-//! their CPU twins in lustre-shade. The sphere-kernel modules (lobe, mip, pattern, regular) are
+//! (bounding planes, QMC points and seeds, GGX/Beckmann microfacet evaluation, densities and
+//! sampling warps) run in a small test kernel and are compared with their CPU twins in
+//! lustre-shade and lustre-brdf. The sphere-kernel modules (lobe, mip, pattern, regular) are
 //! checked end to end by `tests/parity.rs`. GPU tests fail (never skip) without an adapter.
 
 use glam::DVec3;
@@ -402,4 +403,146 @@ fn qmc_matches_sobol02_and_pixel_seed() {
          {worst_point:.2e} on {}",
         ctx.describe()
     );
+}
+
+/// Words per microfacet case: kind, αu, αv, ωo, ωi, u1, u2.
+const MF_CASE: usize = 11;
+/// Words out per microfacet case: D(h), G1(ωo, h), eval, pdf, sampled normal (3), sampled
+/// ωi (3) and its pdf.
+const MF_OUT: usize = 11;
+
+#[test]
+fn microfacet_matches_the_cpu_distributions() {
+    use lustre_brdf::bsdf::Bsdf;
+    use lustre_brdf::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
+    use lustre_brdf::models::conductor::ComplexIor;
+    use lustre_brdf::models::rough_conductor::RoughConductor;
+    use lustre_brdf::rgb::Rgb;
+    let ctx = ctx();
+    let mut g = SplitMix64::new(0x00f1_ce75);
+    let mut cases = Vec::new();
+    for k in 0..800 {
+        let kind = if k % 2 == 0 {
+            MicrofacetType::Ggx
+        } else {
+            MicrofacetType::Beckmann
+        };
+        // A quarter of the cases isotropic, the rest anisotropic.
+        let au = [0.05, 0.1, 0.2, 0.3, 0.5][(k / 2) % 5];
+        let av = if k % 8 < 2 {
+            au
+        } else {
+            [0.075, 0.15, 0.4][(k / 2) % 3]
+        };
+        // ωo with θo up to 80°, ωi from the sampler of a nearby configuration.
+        let th = 80f64.to_radians() * g.next_f64();
+        let ph = 2.0 * std::f64::consts::PI * g.next_f64();
+        let wo = f32_round(DVec3::new(
+            th.sin() * ph.cos(),
+            th.sin() * ph.sin(),
+            th.cos(),
+        ));
+        let wi = f32_round(uniform_sphere(0.5 * g.next_f64(), g.next_f64()));
+        let (u1, u2) = (
+            f64::from(g.next_f64() as f32),
+            f64::from(g.next_f64() as f32),
+        );
+        cases.push((kind, au, av, wo, wi, u1.min(0.999_999), u2.min(0.999_999)));
+    }
+    let mut input = Vec::with_capacity(cases.len() * MF_CASE);
+    for &(kind, au, av, wo, wi, u1, u2) in &cases {
+        input.push(match kind {
+            MicrofacetType::Beckmann => 0,
+            MicrofacetType::Ggx => 1,
+        });
+        for v in [au, av, wo.x, wo.y, wo.z, wi.x, wi.y, wi.z, u1, u2] {
+            input.push((v as f32).to_bits());
+        }
+    }
+    let n = cases.len();
+    let body = format!(
+        "let b = i * {MF_CASE}u;\n\
+         var f: array<f32, {MF_CASE}>;\n\
+         for (var k = 1u; k < {MF_CASE}u; k++) {{ f[k] = bitcast<f32>(input[b + k]); }}\n\
+         let mf = Microfacet(f[1], f[2], input[b]);\n\
+         let wo = vec3<f32>(f[3], f[4], f[5]);\n\
+         let wi = vec3<f32>(f[6], f[7], f[8]);\n\
+         let u1 = f[9];\n\
+         let u2 = f[10];\n\
+         let h = normalize(wi + wo);\n\
+         let m = microfacet_sample_visible(mf, wo, u1, u2);\n\
+         let s = microfacet_sample(mf, wo, u1, u2);\n\
+         let out = array<f32, {MF_OUT}>(microfacet_d(mf, h), microfacet_g1(mf, wo, h),\n\
+             microfacet_eval(mf, wi, wo), microfacet_pdf(mf, wi, wo), m.x, m.y, m.z,\n\
+             s.x, s.y, s.z, s.w);\n\
+         for (var k = 0u; k < {MF_OUT}u; k++) {{ output[i * {MF_OUT}u + k] = bitcast<u32>(out[k]); }}"
+    );
+    let out = run_kernel(
+        &ctx,
+        &[&wgsl::MICROFACET],
+        &body,
+        &input,
+        n * MF_OUT,
+        n as u32,
+    );
+    let f = |w: u32| f64::from(f32::from_bits(w));
+    let rel = |a: f64, b: f64| (a - b).abs() / b.abs().max(1e-3);
+    let (mut e_d, mut e_g, mut e_f, mut e_p, mut e_m, mut e_wi, mut e_sp) =
+        (0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut sampled = 0;
+    for (k, &(kind, au, av, wo, wi, u1, u2)) in cases.iter().enumerate() {
+        let o: Vec<f64> = out[MF_OUT * k..MF_OUT * (k + 1)]
+            .iter()
+            .map(|&w| f(w))
+            .collect();
+        let dist = MicrofacetDistribution::new(kind, au, av).unwrap_or_else(|e| panic!("{e}"));
+        let rc = RoughConductor::new(
+            dist,
+            ComplexIor::preset("none").unwrap_or_else(|e| panic!("{e}")),
+            Rgb::ONE,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let h = (wi + wo).normalize();
+        let what = format!("case {k}: {kind:?} αu {au} αv {av} ωo {wo} ωi {wi} u ({u1}, {u2})");
+        e_d = e_d.max(rel(o[0], dist.d(h)));
+        e_g = e_g.max(rel(o[1], dist.g1(wo, h)));
+        e_f = e_f.max(rel(o[2], rc.eval(wi, wo)[0]));
+        e_p = e_p.max(rel(o[3], rc.pdf(wi, wo)));
+        match dist.sample_visible(wo, u1, u2) {
+            Some(m) => {
+                let a = angle(m, DVec3::new(o[4], o[5], o[6]));
+                assert!(a < 1e-3, "{what}: normal {m} vs GPU {:?}", &o[4..7]);
+                e_m = e_m.max(a);
+            }
+            None => assert_eq!(o[6], 0.0, "{what}: GPU sampled a normal, CPU none"),
+        }
+        match rc.sample(wo, u1, u2) {
+            Some(s) => {
+                sampled += 1;
+                let gwi = DVec3::new(o[7], o[8], o[9]);
+                e_wi = e_wi.max(angle(s.wi, gwi));
+                // The density at the GPU's own direction, so that direction and density
+                // errors are told apart.
+                e_sp = e_sp.max(rel(o[10], rc.pdf(f32_round(gwi).normalize(), wo)));
+            }
+            None => assert!(
+                o[10] == 0.0 || o[9] < 1e-3,
+                "{what}: GPU sampled {:?}, CPU none",
+                &o[7..11]
+            ),
+        }
+    }
+    println!(
+        "microfacet: {n} cases ({sampled} sampled on the CPU), max relative error D {e_d:.1e}, \
+         G1 {e_g:.1e}, f {e_f:.1e}, pdf {e_p:.1e}, sampled pdf {e_sp:.1e}; max angle visible \
+         normal {e_m:.1e} rad, ωi {e_wi:.1e} rad on {}",
+        ctx.describe()
+    );
+    assert!(
+        e_d < 2e-5 && e_g < 2e-5 && e_f < 2e-5 && e_p < 2e-5,
+        "values {e_d} {e_g} {e_f} {e_p}"
+    );
+    assert!(e_sp < 1e-4, "sampled pdf {e_sp}");
+    assert!(e_m < 1e-4 && e_wi < 1e-4, "directions {e_m} {e_wi}");
+    assert!(sampled > n / 2, "{sampled} of {n} sampled");
 }
