@@ -83,8 +83,16 @@ pub const MICROFACET: Module = Module {
     deps: &[&TYPES, &FRAME, &PATTERN],
 };
 
+/// Regular sampling through the rough conductor's warp: the Fibonacci lattice, footprint
+/// levels (`lustre_shade::warp::shade_regular_warp`).
+pub const WARP: Module = Module {
+    name: "warp",
+    source: include_str!("wgsl/warp.wgsl"),
+    deps: &[&TYPES, &FRAME, &MIP, &MICROFACET],
+};
+
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 9] = [
+pub const ALL: [&Module; 10] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -94,6 +102,7 @@ pub const ALL: [&Module; 9] = [
     &PLANES,
     &QMC,
     &MICROFACET,
+    &WARP,
 ];
 
 /// The source of a pass: every module in `imports` and, transitively, the modules they use,

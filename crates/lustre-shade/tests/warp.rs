@@ -161,7 +161,10 @@ fn regular_warp_beats_ck_against_the_exact_integral() {
     println!("{report}");
     for (b, &n) in BUDGETS.iter().enumerate() {
         let (reg, rnd) = (pooled[b][0].sqrt(), pooled[b][1].sqrt());
-        println!("n = {n}: root-sum-square of the materials' relative RMS: regular {reg:.3}, random/fp {rnd:.3}");
+        println!(
+            "n = {n}: root-sum-square of the materials' relative RMS: regular {reg:.3}, \
+             random/fp {rnd:.3}"
+        );
         assert!(reg < rnd, "n = {n}: regular {reg} vs random {rnd}");
     }
 }
