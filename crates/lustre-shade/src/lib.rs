@@ -26,5 +26,6 @@ pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod truth;
+pub mod warp;
 
 pub use error::{Result, ShadeError};
