@@ -85,10 +85,7 @@ fn sphere(name: &str, centre: Vec3, radius: f32, material: usize) -> Mesh {
             let d = DVec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin());
             p.push(centre + d.as_vec3() * radius);
             n.push(d.as_vec3());
-            uv.push(Vec2::new(
-                i as f32 / nu as f32,
-                j as f32 / nv as f32,
-            ));
+            uv.push(Vec2::new(i as f32 / nu as f32, j as f32 / nv as f32));
             let tan = DVec3::new(-ph.sin(), 0.0, ph.cos());
             t.push(Vec4::new(tan.x as f32, 0.0, tan.z as f32, 1.0));
         }
@@ -159,11 +156,41 @@ pub fn room() -> Result<Scene> {
     ];
     let (wall, ceiling, floor, pedestal, lamp) = (0, 1, 2, 3, 4);
     let mut meshes = vec![
-        quad("floor", v(0.0, 0.0, 0.0), v(0.0, 0.0, d), v(w, 0.0, 0.0), floor),
-        quad("ceiling", v(0.0, h, 0.0), v(w, 0.0, 0.0), v(0.0, 0.0, d), ceiling),
-        quad("wall-left", v(0.0, 0.0, 0.0), v(0.0, h, 0.0), v(0.0, 0.0, d), wall),
-        quad("wall-right", v(w, 0.0, 0.0), v(0.0, 0.0, d), v(0.0, h, 0.0), wall),
-        quad("wall-back", v(0.0, 0.0, 0.0), v(w, 0.0, 0.0), v(0.0, h, 0.0), wall),
+        quad(
+            "floor",
+            v(0.0, 0.0, 0.0),
+            v(0.0, 0.0, d),
+            v(w, 0.0, 0.0),
+            floor,
+        ),
+        quad(
+            "ceiling",
+            v(0.0, h, 0.0),
+            v(w, 0.0, 0.0),
+            v(0.0, 0.0, d),
+            ceiling,
+        ),
+        quad(
+            "wall-left",
+            v(0.0, 0.0, 0.0),
+            v(0.0, h, 0.0),
+            v(0.0, 0.0, d),
+            wall,
+        ),
+        quad(
+            "wall-right",
+            v(w, 0.0, 0.0),
+            v(0.0, 0.0, d),
+            v(0.0, h, 0.0),
+            wall,
+        ),
+        quad(
+            "wall-back",
+            v(0.0, 0.0, 0.0),
+            v(w, 0.0, 0.0),
+            v(0.0, h, 0.0),
+            wall,
+        ),
     ];
     // The far wall (z = d, facing −z) around a window x ∈ [1.5, 4.5], y ∈ [0.8, 2.5].
     let (x0, x1, y0, y1) = (1.5, 4.5, 0.8, 2.5);
@@ -183,10 +210,34 @@ pub fn room() -> Result<Scene> {
     }
     // The window's reveal (the wall's thickness, 0.2 m), facing into the opening.
     let t = 0.2;
-    meshes.push(quad("reveal-bottom", v(x0, y0, d), v(0.0, 0.0, t), v(x1 - x0, 0.0, 0.0), wall));
-    meshes.push(quad("reveal-top", v(x0, y1, d), v(x1 - x0, 0.0, 0.0), v(0.0, 0.0, t), wall));
-    meshes.push(quad("reveal-left", v(x0, y0, d), v(0.0, y1 - y0, 0.0), v(0.0, 0.0, t), wall));
-    meshes.push(quad("reveal-right", v(x1, y0, d), v(0.0, 0.0, t), v(0.0, y1 - y0, 0.0), wall));
+    meshes.push(quad(
+        "reveal-bottom",
+        v(x0, y0, d),
+        v(0.0, 0.0, t),
+        v(x1 - x0, 0.0, 0.0),
+        wall,
+    ));
+    meshes.push(quad(
+        "reveal-top",
+        v(x0, y1, d),
+        v(x1 - x0, 0.0, 0.0),
+        v(0.0, 0.0, t),
+        wall,
+    ));
+    meshes.push(quad(
+        "reveal-left",
+        v(x0, y0, d),
+        v(0.0, y1 - y0, 0.0),
+        v(0.0, 0.0, t),
+        wall,
+    ));
+    meshes.push(quad(
+        "reveal-right",
+        v(x1, y0, d),
+        v(0.0, 0.0, t),
+        v(0.0, y1 - y0, 0.0),
+        wall,
+    ));
     let mut panel = quad(
         "lamp",
         v(2.4, h - 0.01, 3.0),

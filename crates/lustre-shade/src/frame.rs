@@ -26,6 +26,7 @@ use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
 use crate::mirror::{render_mirror, render_see_through, ViewBuffer};
 use crate::path::PathCamera;
 use crate::probe::{LitScene, Probe};
+use crate::warp::{fibonacci_point, integrate_warp};
 use crate::{Result, ShadeError};
 use glam::DVec3;
 use glam::Vec2;
@@ -35,7 +36,6 @@ use lustre_brdf::sampling::SplitMix64;
 use lustre_env::pyramid::CubePyramid;
 use lustre_scene::{Material, MaterialKind};
 use rayon::prelude::*;
-use std::f64::consts::PI;
 
 /// Largest sample count per pixel and lobe the regular methods accept.
 pub const MAX_SAMPLES: usize = 256;
@@ -110,78 +110,6 @@ pub struct FrameStats {
     pub see_throughs: usize,
     /// Time of the mirror and see-through passes, seconds.
     pub mirror_seconds: f64,
-}
-
-/// The i-th of n points of the regular set: a Fibonacci lattice ((i + ½)/n, frac(i/φ)),
-/// shifted by `offset` modulo 1 (zero for the fixed set).
-#[inline]
-pub fn lattice_point(i: usize, n: usize, offset: (f64, f64)) -> (f64, f64) {
-    const INV_PHI: f64 = 0.618_033_988_749_894_8;
-    let u = (i as f64 + 0.5) / n as f64 + offset.0;
-    let v = i as f64 * INV_PHI + offset.1;
-    (u - u.floor(), v - v.floor())
-}
-
-/// The glossy radiance towards `wo_local` of `bsdf` minus its light-mapped diffuse part
-/// `kd`/π, from `n` points pushed through the BSDF's sampling warp; `points(i)` gives the i-th
-/// point in [0, 1)², `light(wi_world, pdf)` the filtered incident radiance of a sample drawn
-/// with density `pdf` (`None` for a Dirac sample, read unfiltered). Returns the radiance and
-/// the lookups made (at most `n`).
-pub fn glossy_warp(
-    bsdf: &dyn Bsdf,
-    kd: Rgb,
-    to_world: impl Fn(DVec3) -> DVec3,
-    wo_local: DVec3,
-    n: usize,
-    points: impl Fn(usize) -> (f64, f64),
-    light: impl Fn(DVec3, Option<f64>) -> Rgb,
-) -> (Rgb, usize) {
-    let mut sum = Rgb::ZERO;
-    let mut lookups = 0;
-    if bsdf.flags().delta_only() && n >= 2 {
-        // Only Dirac lobes (a mirror, a glass sheet): the integral is a sum over the branches,
-        // found at the two ends of the lobe-selection coordinate and weighted by their
-        // probabilities (value·|cos| = weight·probability) — exact, with at most 2 lookups.
-        let mut seen: Vec<DVec3> = vec![];
-        for u1 in [1e-9, 1.0 - 1e-9] {
-            let Some(s) = bsdf.sample(wo_local, u1, 0.5) else {
-                continue;
-            };
-            if !s.wi.is_finite() || seen.iter().any(|w| w.distance_squared(s.wi) < 1e-18) {
-                continue;
-            }
-            seen.push(s.wi);
-            lookups += 1;
-            sum += light(to_world(s.wi), None) * (s.value * s.wi.z.abs());
-        }
-        return (sum, lookups);
-    }
-    for i in 0..n {
-        let (u1, u2) = points(i);
-        let Some(s) = bsdf.sample(wo_local, u1, u2) else {
-            continue;
-        };
-        if s.pdf.is_nan() || s.pdf <= 0.0 || !s.wi.is_finite() {
-            continue;
-        }
-        let wi = to_world(s.wi);
-        let weight = if s.is_delta() {
-            s.weight()
-        } else {
-            // f − kd/π on the reflection side: the light map already holds the diffuse part.
-            let reflect = s.wi.z * wo_local.z > 0.0;
-            let f = if reflect {
-                s.value - kd * (1.0 / PI)
-            } else {
-                s.value
-            };
-            f * (s.wi.z.abs() / s.pdf)
-        };
-        let pdf = (!s.is_delta()).then_some(s.pdf);
-        lookups += 1;
-        sum += light(wi, pdf) * weight;
-    }
-    (sum * (1.0 / n as f64), lookups)
 }
 
 /// Renders a w×h frame of `lit` at `camera` with the incident light `light`.
@@ -368,13 +296,13 @@ pub fn render_frame(
             let to_world = |v: DVec3| frame.to_world(v);
             match opts.method {
                 FrameMethod::Regular => {
-                    let (c, k) = glossy_warp(
+                    let (c, k) = integrate_warp(
                         bsdf,
                         kd,
                         to_world,
                         wo_local,
                         n,
-                        |i| lattice_point(i, n, (0.0, 0.0)),
+                        |i| fibonacci_point(i, n),
                         |wi, pdf| fetch(wi, pdf, n, false),
                     );
                     glossy = c;
@@ -383,7 +311,7 @@ pub fn render_frame(
                 FrameMethod::Ck => {
                     let pts: Vec<(f64, f64)> =
                         (0..n).map(|_| (rng.next_f64(), rng.next_f64())).collect();
-                    let (c, k) = glossy_warp(
+                    let (c, k) = integrate_warp(
                         bsdf,
                         kd,
                         to_world,
@@ -402,13 +330,16 @@ pub fn render_frame(
                     for f in 0..frames {
                         let off = r2(f);
                         let total = n * (f + 1);
-                        let (c, k) = glossy_warp(
+                        let (c, k) = integrate_warp(
                             bsdf,
                             kd,
                             to_world,
                             wo_local,
                             n,
-                            |i| lattice_point(i, n, off),
+                            |i| {
+                                let (u, v) = fibonacci_point(i, n);
+                                ((u + off.0).fract(), (v + off.1).fract())
+                            },
                             |wi, pdf| fetch(wi, pdf, total, false),
                         );
                         acc += c;
