@@ -147,7 +147,7 @@ pub fn room() -> Result<Scene> {
             MaterialKind::RoughDielectric {
                 int_ior: 1.5,
                 ext_ior: 1.0,
-                alpha: TexturedScalar::constant(0.08),
+                alpha: TexturedScalar::constant(0.2),
                 distribution: Distribution::Ggx,
                 specular_reflectance: Rgb::ONE,
                 specular_transmittance: Rgb::ONE,

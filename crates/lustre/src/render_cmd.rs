@@ -9,14 +9,17 @@ use indicatif::{ProgressBar, ProgressStyle};
 use lustre_brdf::rgb::Rgb;
 use lustre_env::cube::CubeMap;
 use lustre_env::pyramid::{CubePyramid, MipFilter};
+use lustre_scene::lightmap::{build_atlas, AtlasOptions, LightmapAtlas};
+use lustre_scene::Scene;
 use lustre_shade::bake::render::{read_pages, Lightmapped};
 use lustre_shade::bake::spec_albedo;
+use lustre_shade::bake::{assemble, bake_tiles, BakeOptions, Transport};
 use lustre_shade::frame::{render_frame, FrameLight, FrameMethod, FrameOptions};
 use lustre_shade::image::Image;
 use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// How the glossy part is integrated.
@@ -33,8 +36,10 @@ pub enum Method {
 /// Arguments of `lustre render`.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// A scene with baked light maps: the scene.toml `lustre bake --out DIR` writes.
-    pub scene: PathBuf,
+    /// A scene with baked light maps: the scene.toml `lustre bake --out DIR` writes. Without
+    /// one, the built-in room (its light maps baked into OUT/bake on the first run, reused
+    /// after).
+    pub scene: Option<PathBuf>,
     /// Camera name (the scene's first camera by default).
     #[arg(long)]
     pub camera: Option<String>,
@@ -68,6 +73,57 @@ pub struct RenderArgs {
     /// Output folder (frame.exr, frame.png, times.csv; diff.png with --compare-reference).
     #[arg(long)]
     pub out: PathBuf,
+}
+
+/// A scene file with baked light maps: the scene, its atlas and its pages.
+fn load_baked(path: &Path) -> anyhow::Result<(Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>)> {
+    let scene = Scene::load(path).with_context(|| format!("loading {}", path.display()))?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let Some(lightmap) = &scene.lightmap else {
+        bail!(
+            "{}: no light maps; bake them first (`lustre bake {} --out DIR`) and render DIR/scene.toml",
+            path.display(),
+            path.display()
+        );
+    };
+    let pages = read_pages(lightmap).with_context(|| format!("{}", path.display()))?;
+    let atlas = lightmap.atlas.clone();
+    Ok((scene, atlas, pages))
+}
+
+/// The built-in room with its light maps: an atlas at 16 texels/m and a bake of 64 paths per
+/// texel through the full materials, into `out/bake` (tiles reused on the next run).
+fn builtin(out: &Path) -> anyhow::Result<(Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>)> {
+    let mut scene = lustre_scene::builtin::room()?;
+    let aopts = AtlasOptions {
+        texels_per_metre: 16.0,
+        ..AtlasOptions::default()
+    };
+    let (atlas, _) = build_atlas(&mut scene, &aopts).context("the built-in room's atlas")?;
+    let dir = out.join("bake");
+    let opts = BakeOptions {
+        spp: 64,
+        bounces: 8,
+        transport: Transport::Full,
+        ..BakeOptions::default()
+    };
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "baking the built-in room: [{bar:30}] {pos}/{len} tiles, {elapsed}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bake_tiles(&scene, &atlas, &opts, &dir, None, &|k, n| {
+        bar.set_length(n as u64);
+        bar.set_position(k as u64);
+    })
+    .context("baking the built-in room")?;
+    bar.finish_and_clear();
+    let assembled = assemble(&scene, &atlas, &opts, &dir).context("assembling its light maps")?;
+    Ok((scene, atlas, assembled.pages))
 }
 
 /// Wall time per stage.
@@ -111,35 +167,30 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         ..ProbeOptions::default()
     };
     probe_opts.validate()?;
-    let scene = lustre_scene::Scene::load(&args.scene)
-        .with_context(|| format!("loading {}", args.scene.display()))?;
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
-    let Some(lightmap) = &scene.lightmap else {
-        bail!(
-            "{}: no light maps; bake them first (`lustre bake {} --out DIR`) and render DIR/scene.toml",
-            args.scene.display(),
-            args.scene.display()
-        );
+    let (scene, atlas, pages) = match &args.scene {
+        Some(path) => load_baked(path)?,
+        None => builtin(&args.out)?,
     };
+    let name = args.scene.as_ref().map_or_else(
+        || "the built-in room".to_string(),
+        |p| p.display().to_string(),
+    );
     let (w, h) = match args.size.as_deref() {
         Some(s) => crate::reference_cmd::parse_size(s)?,
         None => (scene.film.width, scene.film.height),
     };
     let camera = lustre_shade::reference::path_camera(&scene, args.camera.as_deref(), w, h)?;
-    st.lap("load");
-    let pages = read_pages(lightmap).with_context(|| format!("{}", args.scene.display()))?;
+    st.lap("load, light maps");
     let (ps, warnings) = lustre_shade::reference::path_scene(&scene)?;
     for w in &warnings {
         eprintln!("warning: {w}");
     }
     let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = Lightmapped::new(&scene, &lightmap.atlas, &pages, &ps.geometry, spec)
-        .with_context(|| format!("{}: light maps", args.scene.display()))?;
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec)
+        .with_context(|| format!("{name}: light maps"))?;
     let pt = PathTracer::new(&ps, PathOptions::default())?;
     let lit = LitScene::new(&scene, &ps, &pt, &lm)?;
-    st.lap("light maps and BVH");
+    st.lap("BVH");
 
     let mut probes = vec![];
     for (m, mesh) in scene.meshes.iter().enumerate() {

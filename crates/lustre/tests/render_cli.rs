@@ -222,3 +222,55 @@ fn render_refuses_bad_input_and_says_what_it_renders() {
         "{all}"
     );
 }
+
+#[test]
+fn render_without_a_scene_renders_the_built_in_room() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |out: &str, extra: &[&str]| {
+        lustre()
+            .current_dir(dir.path())
+            .args(["render", "--out", out, "--size", "64x36", "--spp", "1"])
+            .args(["--probe-size", "32"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    // The converged integral of the same incident light, then the regular frame against it.
+    let o = run("truth", &["--method", "progressive", "--frames", "64"]);
+    let all = text(&o);
+    assert!(o.status.success(), "{all}");
+    for probe in ["gold-paint", "brushed-aluminium", "frosted-glass"] {
+        assert!(
+            all.contains(&format!("probe \"{probe}\"")),
+            "{probe}: {all}"
+        );
+    }
+    assert!(
+        all.contains("1 mirror and 1 see-through buffer(s)"),
+        "{all}"
+    );
+    assert!(dir.path().join("truth/bake").is_dir());
+    let truth = dir.path().join("truth/frame.exr");
+    let img = Image::read_exr(&truth).unwrap();
+    assert_eq!((img.width, img.height), (64, 36));
+    // The bake is reused from the first run's folder only; a new --out bakes again, so share it.
+    std::fs::rename(dir.path().join("truth/bake"), dir.path().join("bake")).unwrap();
+    let o = run(
+        ".",
+        &[
+            "--samples",
+            "19",
+            "--compare-reference",
+            truth.to_str().unwrap(),
+        ],
+    );
+    let all = text(&o);
+    assert!(o.status.success(), "{all}");
+    let psnr: f64 = all
+        .split("PSNR ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("{all}"));
+    assert!(psnr > 35.0, "regular (19 samples) vs converged: {psnr} dB");
+}
