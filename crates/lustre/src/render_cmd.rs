@@ -75,8 +75,11 @@ pub struct RenderArgs {
     pub out: PathBuf,
 }
 
+/// A scene with its light-map atlas and baked pages.
+type Baked = (Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>);
+
 /// A scene file with baked light maps: the scene, its atlas and its pages.
-fn load_baked(path: &Path) -> anyhow::Result<(Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>)> {
+fn load_baked(path: &Path) -> anyhow::Result<Baked> {
     let scene = Scene::load(path).with_context(|| format!("loading {}", path.display()))?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
@@ -95,7 +98,7 @@ fn load_baked(path: &Path) -> anyhow::Result<(Scene, LightmapAtlas, Vec<Vec<[f32
 
 /// The built-in room with its light maps: an atlas at 16 texels/m and a bake of 64 paths per
 /// texel through the full materials, into `out/bake` (tiles reused on the next run).
-fn builtin(out: &Path) -> anyhow::Result<(Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>)> {
+fn builtin(out: &Path) -> anyhow::Result<Baked> {
     let mut scene = lustre_scene::builtin::room()?;
     let aopts = AtlasOptions {
         texels_per_metre: 16.0,
