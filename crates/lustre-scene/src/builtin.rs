@@ -11,9 +11,8 @@ use crate::material::{
 };
 use crate::mesh::Mesh;
 use crate::{Film, Result, Scene, SceneError};
-use glam::{DMat3, DVec3, Vec2, Vec3, Vec4};
+use glam::{DMat3, DVec3, Vec2, Vec3};
 use lustre_brdf::rgb::Rgb;
-use std::f64::consts::PI;
 
 /// Room width (x), height (y) and depth (z), metres.
 pub const ROOM: [f32; 3] = [6.0, 3.0, 8.0];
@@ -70,38 +69,6 @@ fn block(name: &str, lo: Vec3, hi: Vec3, material: usize) -> Mesh {
     }
     let mut m = Mesh::new(name, positions, indices, material);
     m.normals = Some(normals);
-    m
-}
-
-/// A UV sphere with normals, uv0 (u along the longitude) and tangents along the longitude
-/// (the brushing direction of an anisotropic material).
-fn sphere(name: &str, centre: Vec3, radius: f32, material: usize) -> Mesh {
-    let (nu, nv) = (48u32, 24u32);
-    let (mut p, mut n, mut uv, mut t) = (vec![], vec![], vec![], vec![]);
-    for j in 0..=nv {
-        let th = PI * f64::from(j) / f64::from(nv);
-        for i in 0..=nu {
-            let ph = 2.0 * PI * f64::from(i) / f64::from(nu);
-            let d = DVec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin());
-            p.push(centre + d.as_vec3() * radius);
-            n.push(d.as_vec3());
-            uv.push(Vec2::new(i as f32 / nu as f32, j as f32 / nv as f32));
-            let tan = DVec3::new(-ph.sin(), 0.0, ph.cos());
-            t.push(Vec4::new(tan.x as f32, 0.0, tan.z as f32, 1.0));
-        }
-    }
-    let at = |i: u32, j: u32| j * (nu + 1) + i;
-    let mut idx = vec![];
-    for j in 0..nv {
-        for i in 0..nu {
-            idx.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
-            idx.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
-        }
-    }
-    let mut m = Mesh::new(name, p, idx, material);
-    m.normals = Some(n);
-    m.uv0 = Some(uv);
-    m.tangents = Some(t);
     m
 }
 
@@ -263,7 +230,7 @@ pub fn room() -> Result<Scene> {
             v(x + 0.3, 0.6, z + 0.3),
             pedestal,
         ));
-        let mut s = sphere(name, v(x, 0.6 + r, z), r, m);
+        let mut s = Mesh::uv_sphere(name, v(x, 0.6 + r, z), r, m);
         s.hints.probe = true;
         meshes.push(s);
     }

@@ -69,6 +69,16 @@ fn text(o: &Output) -> String {
     )
 }
 
+/// The PSNR `--compare-reference` printed.
+fn psnr_of(output: &str) -> f64 {
+    output
+        .split("PSNR ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no PSNR in {output}"))
+}
+
 #[test]
 fn render_writes_a_frame_times_and_a_comparison() {
     let dir = tempfile::tempdir().unwrap();
@@ -127,12 +137,7 @@ fn render_writes_a_frame_times_and_a_comparison() {
         );
         let all = text(&o);
         assert!(o.status.success(), "{method}: {all}");
-        let psnr: f64 = all
-            .split("PSNR ")
-            .nth(1)
-            .and_then(|s| s.split(' ').next())
-            .and_then(|s| s.parse().ok())
-            .unwrap_or_else(|| panic!("{all}"));
+        let psnr = psnr_of(&all);
         assert!(psnr.is_finite() && psnr > 20.0, "{method}: {psnr} dB");
     }
     // A reference of another size is refused, naming both sizes.
@@ -266,11 +271,6 @@ fn render_without_a_scene_renders_the_built_in_room() {
     );
     let all = text(&o);
     assert!(o.status.success(), "{all}");
-    let psnr: f64 = all
-        .split("PSNR ")
-        .nth(1)
-        .and_then(|s| s.split(' ').next())
-        .and_then(|s| s.parse().ok())
-        .unwrap_or_else(|| panic!("{all}"));
+    let psnr = psnr_of(&all);
     assert!(psnr > 35.0, "regular (19 samples) vs converged: {psnr} dB");
 }
