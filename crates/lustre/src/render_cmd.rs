@@ -5,12 +5,14 @@
 //! false-colour difference.
 
 use anyhow::{bail, Context};
+use glam::DMat3;
 use indicatif::{ProgressBar, ProgressStyle};
 use lustre_brdf::rgb::Rgb;
 use lustre_env::cube::CubeMap;
 use lustre_env::pyramid::{CubePyramid, MipFilter};
-use lustre_scene::lightmap::{build_atlas, AtlasOptions, LightmapAtlas};
+use lustre_scene::lightmap::{build_atlas, AtlasOptions, AtlasSource, LightmapAtlas};
 use lustre_scene::Scene;
+use lustre_scene::{Environment, EnvironmentSource};
 use lustre_shade::bake::render::{read_pages, Lightmapped};
 use lustre_shade::bake::spec_albedo;
 use lustre_shade::bake::{assemble, bake_tiles, BakeOptions, Transport};
@@ -20,6 +22,7 @@ use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// How the glossy part is integrated.
@@ -40,6 +43,14 @@ pub struct RenderArgs {
     /// one, the built-in room (its light maps baked into OUT/bake on the first run, reused
     /// after).
     pub scene: Option<PathBuf>,
+    /// Render this material (any material specification, `lustre list`) on a sphere under the
+    /// environment instead of a scene: the material preview.
+    #[arg(long, conflicts_with = "scene")]
+    pub material: Option<String>,
+    /// An equirect `.hdr` / `.exr` environment for the preview or the built-in room (the
+    /// built-in sky by default).
+    #[arg(long, conflicts_with = "scene")]
+    pub env: Option<PathBuf>,
     /// Camera name (the scene's first camera by default).
     #[arg(long)]
     pub camera: Option<String>,
@@ -98,8 +109,11 @@ fn load_baked(path: &Path) -> anyhow::Result<Baked> {
 
 /// The built-in room with its light maps: an atlas at 16 texels/m and a bake of 64 paths per
 /// texel through the full materials, into `out/bake` (tiles reused on the next run).
-fn builtin(out: &Path) -> anyhow::Result<Baked> {
+fn builtin(out: &Path, environment: Option<Environment>) -> anyhow::Result<Baked> {
     let mut scene = lustre_scene::builtin::room()?;
+    if environment.is_some() {
+        scene.environment = environment;
+    }
     let aopts = AtlasOptions {
         texels_per_metre: 16.0,
         ..AtlasOptions::default()
@@ -127,6 +141,36 @@ fn builtin(out: &Path) -> anyhow::Result<Baked> {
     bar.finish_and_clear();
     let assembled = assemble(&scene, &atlas, &opts, &dir).context("assembling its light maps")?;
     Ok((scene, atlas, assembled.pages))
+}
+
+/// An equirect map as the scene's environment.
+fn read_environment(path: &Path) -> anyhow::Result<Environment> {
+    let loaded = lustre_env::io::read_map(path)?;
+    Ok(Environment {
+        source: EnvironmentSource::Map {
+            path: path.to_path_buf(),
+            map: Arc::new(loaded.map),
+        },
+        to_local: DMat3::IDENTITY,
+        intensity: 1.0,
+    })
+}
+
+/// The material preview: a sphere of `spec` under `environment` (the built-in sky by default),
+/// no light maps (an atlas of one black texel that no mesh uses).
+fn preview(spec: &str, environment: Option<Environment>) -> anyhow::Result<Baked> {
+    let scene = lustre_scene::builtin::preview(spec, environment)
+        .with_context(|| format!("--material {spec}"))?;
+    let atlas = LightmapAtlas {
+        width: 1,
+        height: 1,
+        pages: 1,
+        mesh_page: vec![None; scene.meshes.len()],
+        gutter: 0,
+        texels_per_metre: 0.0,
+        source: AtlasSource::Texcoord1,
+    };
+    Ok((scene, atlas, vec![vec![[0.0; 3]]]))
 }
 
 /// Wall time per stage.
@@ -170,14 +214,17 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         ..ProbeOptions::default()
     };
     probe_opts.validate()?;
-    let (scene, atlas, pages) = match &args.scene {
-        Some(path) => load_baked(path)?,
-        None => builtin(&args.out)?,
+    let environment = args.env.as_deref().map(read_environment).transpose()?;
+    let (scene, atlas, pages) = match (&args.scene, &args.material) {
+        (Some(path), _) => load_baked(path)?,
+        (None, Some(spec)) => preview(spec, environment)?,
+        (None, None) => builtin(&args.out, environment)?,
     };
-    let name = args.scene.as_ref().map_or_else(
-        || "the built-in room".to_string(),
-        |p| p.display().to_string(),
-    );
+    let name = match (&args.scene, &args.material) {
+        (Some(p), _) => p.display().to_string(),
+        (None, Some(spec)) => format!("the preview of {spec}"),
+        (None, None) => "the built-in room".to_string(),
+    };
     let (w, h) = match args.size.as_deref() {
         Some(s) => crate::reference_cmd::parse_size(s)?,
         None => (scene.film.width, scene.film.height),
@@ -216,7 +263,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let env_pyramid = match (&probes[..], &ps.environment) {
         ([], Some(env)) => {
-            eprintln!("no probe objects: glossy surfaces reflect the environment only");
+            if args.material.is_none() {
+                eprintln!("no probe objects: glossy surfaces reflect the environment only");
+            }
             let cube = CubeMap::from_fn(args.probe_size, |d| env.eval(d).0)?;
             let p = CubePyramid::build(cube, MipFilter::Gauss6)?;
             st.lap("environment pyramid");
