@@ -293,7 +293,13 @@ pub fn render_frame(
             }
             None => surface.with_bsdf(uv, f),
         };
+        let mut view_dependent = true;
         with_bsdf(&mut |bsdf| {
+            // A Lambertian surface the light map covers has no view-dependent part left.
+            if bsdf.flags().diffuse_only() && kd != Rgb::ZERO {
+                view_dependent = false;
+                return;
+            }
             let to_world = |v: DVec3| frame.to_world(v);
             match opts.method {
                 FrameMethod::Regular => {
@@ -353,7 +359,7 @@ pub fn render_frame(
         if glossy.is_finite() {
             l += glossy.map(|c| c.max(0.0));
         }
-        (l, lookups, true)
+        (l, lookups, view_dependent)
     };
     let seed = opts.seed;
     let spp = opts.spp;
