@@ -4,7 +4,7 @@
 //! MERL's gold metallic paint), a brushed-aluminium sphere (anisotropic) and a frosted-glass
 //! sphere (transmissive). What `lustre render` shows with no scene given.
 
-use crate::camera::{Camera, FovAxis};
+use crate::camera::{Camera, CameraPath, FovAxis, Keyframe};
 use crate::environment::{Environment, EnvironmentSource, Sky};
 use crate::material::{
     Distribution, Material, MaterialKind, ResolvedSpec, TexturedRgb, TexturedScalar,
@@ -259,7 +259,33 @@ pub fn room() -> Result<Scene> {
         path: "built-in room".into(),
         problem: "the camera is degenerate".into(),
     })?;
-    scene.cameras = vec![camera];
+    let close = Camera::look_at(
+        "close",
+        DVec3::new(2.2, 1.2, 2.9),
+        DVec3::new(3.0, 0.9, 5.0),
+        DVec3::Y,
+        55.0,
+        FovAxis::X,
+    )
+    .ok_or_else(|| SceneError::Format {
+        path: "built-in room".into(),
+        problem: "the close camera is degenerate".into(),
+    })?;
+    scene.camera_paths = vec![CameraPath {
+        name: "walk".into(),
+        keyframes: vec![
+            Keyframe {
+                time: 0.0,
+                camera: camera.clone(),
+            },
+            Keyframe {
+                time: 2.0,
+                camera: close.clone(),
+            },
+        ],
+        looped: false,
+    }];
+    scene.cameras = vec![camera, close];
     scene.film = Film {
         width: 960,
         height: 540,

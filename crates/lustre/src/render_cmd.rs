@@ -16,8 +16,9 @@ use lustre_scene::{Environment, EnvironmentSource};
 use lustre_shade::bake::render::{read_pages, Lightmapped};
 use lustre_shade::bake::spec_albedo;
 use lustre_shade::bake::{assemble, bake_tiles, BakeOptions, Transport};
-use lustre_shade::frame::{render_frame, FrameLight, FrameMethod, FrameOptions};
+use lustre_shade::frame::{render_frame, FrameLight, FrameMethod, FrameOptions, FrameStats};
 use lustre_shade::image::Image;
+use lustre_shade::path::PathCamera;
 use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use std::fmt::Write as _;
@@ -52,8 +53,14 @@ pub struct RenderArgs {
     #[arg(long, conflicts_with = "scene")]
     pub env: Option<PathBuf>,
     /// Camera name (the scene's first camera by default).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "path")]
     pub camera: Option<String>,
+    /// Render the frames of this camera path (frame_0000.png …), at --fps.
+    #[arg(long, conflicts_with = "compare_reference")]
+    pub path: Option<String>,
+    /// Frames per second along --path.
+    #[arg(long, default_value_t = 24.0)]
+    pub fps: f64,
     /// Glossy samples per pixel (per camera ray), 1–256.
     #[arg(long, default_value_t = 16)]
     pub samples: usize,
@@ -229,7 +236,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         Some(s) => crate::reference_cmd::parse_size(s)?,
         None => (scene.film.width, scene.film.height),
     };
-    let camera = lustre_shade::reference::path_camera(&scene, args.camera.as_deref(), w, h)?;
+    let cameras = match &args.path {
+        None => vec![(
+            "frame".to_string(),
+            lustre_shade::reference::path_camera(&scene, args.camera.as_deref(), w, h)?,
+        )],
+        Some(p) => path_cameras(&scene, p, args.fps, w, h)?,
+    };
     st.lap("load, light maps");
     let (ps, warnings) = lustre_shade::reference::path_scene(&scene)?;
     for w in &warnings {
@@ -281,33 +294,69 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         probes: &probes,
         environment: env_pyramid.as_ref(),
     };
-    let bar = ProgressBar::new_spinner();
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let bar = ProgressBar::new(cameras.len() as u64);
     bar.set_style(
-        ProgressStyle::with_template("{spinner} {msg} {elapsed}")
-            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    bar.set_message(format!("frame {w}×{h}, {} spp", args.spp));
-    bar.enable_steady_tick(std::time::Duration::from_millis(200));
-    let (img, stats) = render_frame(&lit, &light, &camera, w as usize, h as usize, &opts)?;
+    bar.set_message(format!("{w}×{h}, {} camera rays/pixel", args.spp));
+    for (stem, camera) in &cameras {
+        let (img, stats) = render_frame(&lit, &light, camera, w as usize, h as usize, &opts)?;
+        bar.inc(1);
+        st.lap(stem.clone());
+        if stats.mirrors + stats.see_throughs > 0 {
+            // The mirror and see-through passes run inside the frame; report them apart.
+            let (_, frame_s) = st.times.pop().unwrap_or_default();
+            st.times.push((
+                format!("{stem}: mirror and see-through passes"),
+                stats.mirror_seconds,
+            ));
+            st.times
+                .push((stem.clone(), (frame_s - stats.mirror_seconds).max(0.0)));
+        }
+        img.write_exr(&args.out.join(format!("{stem}.exr")))?;
+        img.write_png_dithered(
+            &args.out.join(format!("{stem}.png")),
+            args.exposure,
+            args.seed,
+        )?;
+        if cameras.len() == 1 {
+            bar.finish_and_clear();
+            report(args, &img, &stats, (w, h))?;
+        }
+        st.lap(format!("{stem}: write"));
+    }
     bar.finish_and_clear();
-    st.lap("frame");
+    eprintln!("rendered on the CPU (lustre_shade::frame; the GPU frame is not assembled yet)");
+    let mut csv = String::from("stage,seconds\n");
+    for (name, s) in &st.times {
+        writeln!(csv, "{},{s:.4}", name.replace(',', " "))?;
+    }
+    writeln!(csv, "total,{:.4}", t0.elapsed().as_secs_f64())?;
+    lustre_brdf::error::write_atomic(&args.out.join("times.csv"), csv.as_bytes())?;
+    println!(
+        "wrote {} ({} frame(s) as EXR and PNG, times.csv)",
+        args.out.display(),
+        cameras.len()
+    );
+    Ok(())
+}
+
+/// Prints a single frame's counts and, with --compare-reference, its comparison.
+fn report(
+    args: &RenderArgs,
+    img: &Image,
+    stats: &FrameStats,
+    (w, h): (u32, u32),
+) -> anyhow::Result<()> {
     if stats.mirrors + stats.see_throughs > 0 {
-        // The mirror and see-through passes run inside the frame; report them as a stage.
-        let (_, frame_s) = st.times.pop().unwrap_or_default();
-        st.times
-            .push(("mirror and see-through passes".into(), stats.mirror_seconds));
-        st.times
-            .push(("frame".into(), (frame_s - stats.mirror_seconds).max(0.0)));
         eprintln!(
             "{} mirror and {} see-through buffer(s) of {w}×{h} in {:.3} s",
             stats.mirrors, stats.see_throughs, stats.mirror_seconds
         );
     }
-
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
-    img.write_exr(&args.out.join("frame.exr"))?;
-    img.write_png_dithered(&args.out.join("frame.png"), args.exposure, args.seed)?;
     let glossy_rays = stats.glossy_hits.max(1);
     println!(
         "{w}×{h}, {} camera rays/pixel, {:?} with {} samples: {} glossy hits, {:.2} lookups per glossy hit",
@@ -329,10 +378,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 img.height
             );
         }
-        let psnr = lustre_shade::metrics::psnr(&img, &r, args.exposure)?;
-        let de = lustre_shade::metrics::delta_e(&img, &r, args.exposure)?;
-        let rel = lustre_shade::metrics::rms(&img, &r)? / r.mean().max(1e-12);
-        let diff = lustre_shade::metrics::false_colour(&img, &r, 0.1 * r.mean().max(1e-6))?;
+        let psnr = lustre_shade::metrics::psnr(img, &r, args.exposure)?;
+        let de = lustre_shade::metrics::delta_e(img, &r, args.exposure)?;
+        let rel = lustre_shade::metrics::rms(img, &r)? / r.mean().max(1e-12);
+        let diff = lustre_shade::metrics::false_colour(img, &r, 0.1 * r.mean().max(1e-6))?;
         diff.write_png(&args.out.join("diff.png"), 1.0)?;
         println!(
             "against {}: PSNR {psnr:.2} dB, mean ΔE {de:.2}, relative RMS {:.2} %, mean ratio {:.4}",
@@ -341,16 +390,48 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             img.mean() / r.mean().max(1e-12)
         );
     }
-    st.lap("write");
-    let mut csv = String::from("stage,seconds\n");
-    for (name, s) in &st.times {
-        writeln!(csv, "{},{s:.4}", name.replace(',', " "))?;
-    }
-    writeln!(csv, "total,{:.4}", t0.elapsed().as_secs_f64())?;
-    lustre_brdf::error::write_atomic(&args.out.join("times.csv"), csv.as_bytes())?;
-    println!(
-        "wrote {} (frame.exr, frame.png, times.csv)",
-        args.out.display()
-    );
     Ok(())
+}
+
+/// The cameras of path `name` at `fps` frames per second, named frame_0000 …
+fn path_cameras(
+    scene: &Scene,
+    name: &str,
+    fps: f64,
+    w: u32,
+    h: u32,
+) -> anyhow::Result<Vec<(String, PathCamera)>> {
+    if !(fps.is_finite() && fps > 0.0 && fps <= 1000.0) {
+        bail!("--fps {fps}: must be in (0, 1000]");
+    }
+    let path = scene
+        .camera_paths
+        .iter()
+        .find(|p| p.name == name)
+        .with_context(|| {
+            let names: Vec<&str> = scene.camera_paths.iter().map(|p| p.name.as_str()).collect();
+            format!(
+                "no camera path named {name:?} (paths: {})",
+                names.join(", ")
+            )
+        })?;
+    let n = (path.duration() * fps).floor() as usize + 1;
+    if n > 100_000 {
+        bail!("camera path {name:?} at {fps} fps is {n} frames: too many");
+    }
+    let aspect = f64::from(w) / f64::from(h);
+    (0..n)
+        .map(|k| {
+            let c = path
+                .at(k as f64 / fps)
+                .with_context(|| format!("camera path {name:?} has no keyframes"))?;
+            let cam = PathCamera::look_at(
+                c.position,
+                c.position + c.forward,
+                c.up,
+                c.fov_y_deg(aspect),
+            )?;
+            Ok((format!("frame_{k:04}"), cam))
+        })
+        .collect()
 }

@@ -273,6 +273,22 @@ fn render_without_a_scene_renders_the_built_in_room() {
     assert!(o.status.success(), "{all}");
     let psnr = psnr_of(&all);
     assert!(psnr > 35.0, "regular (19 samples) vs converged: {psnr} dB");
+    // The built-in camera path, 2 s at 1 frame per second: frames 0, 1 and 2.
+    let o = run(".", &["--path", "walk", "--fps", "1", "--samples", "4"]);
+    assert!(o.status.success(), "{}", text(&o));
+    for k in 0..3 {
+        assert!(
+            dir.path().join(format!("frame_{k:04}.png")).is_file(),
+            "frame {k}"
+        );
+    }
+    assert!(!dir.path().join("frame_0003.png").exists());
+    let o = run(".", &["--path", "nope"]);
+    assert!(
+        !o.status.success() && text(&o).contains("no camera path named \"nope\" (paths: walk)"),
+        "{}",
+        text(&o)
+    );
 }
 
 #[test]
