@@ -167,7 +167,11 @@ pub fn shade_gbuffer(
 ) -> Result<Image> {
     gb.check()?;
     let ku = k as usize;
-    if k == 0 || k > MAX_SUPERSAMPLING || gb.width % ku != 0 || gb.height % ku != 0 {
+    if k == 0
+        || k > MAX_SUPERSAMPLING
+        || !gb.width.is_multiple_of(ku)
+        || !gb.height.is_multiple_of(ku)
+    {
         return Err(ShadeError::Parameter(format!(
             "G-buffer {}×{} is not {k}×{k} supersampled (k between 1 and {MAX_SUPERSAMPLING})",
             gb.width, gb.height
