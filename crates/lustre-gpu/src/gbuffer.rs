@@ -15,12 +15,81 @@
 
 use crate::context::GpuContext;
 use crate::error::{invalid, scope_result, wgpu_error, Result};
+use lustre_scene::Scene;
 use lustre_shade::bake::gbuffer::{GBuffer, SKY};
 use lustre_shade::path::{Geometry, PathCamera};
 use wgpu::util::DeviceExt;
 
-/// The WGSL source of the raster pass.
-pub const GBUFFER_WGSL: &str = include_str!("gbuffer.wgsl");
+/// The WGSL source of the raster pass (with the shared texture lookup prepended).
+pub const GBUFFER_WGSL: &str = concat!(
+    include_str!("texture_sample.wgsl"),
+    include_str!("gbuffer.wgsl")
+);
+
+/// Vec4s per triangle in the raster pass's triangle buffer.
+const STRIDE: usize = 8;
+
+/// The texels of `scene`'s textures `slots` (in that order) as RGBA f32, and per texture
+/// (first texel, width, height, 0), as `texture_sample.wgsl` reads them; one dummy texel when
+/// there are none. Errors: more texels than a storage buffer of `limit` bytes holds.
+pub(crate) fn pack_textures(
+    scene: &Scene,
+    slots: &[usize],
+    limit: usize,
+) -> Result<(Vec<[f32; 4]>, Vec<[u32; 4]>)> {
+    let total: usize = slots
+        .iter()
+        .map(|&t| scene.textures[t].width as usize * scene.textures[t].height as usize)
+        .sum();
+    if total * 16 > limit || total > u32::MAX as usize {
+        return Err(invalid(
+            "textures",
+            format!(
+                "{total} texels need {} bytes; the device's storage buffers hold {limit}",
+                total * 16
+            ),
+        ));
+    }
+    let mut texels = Vec::with_capacity(total.max(1));
+    let mut info = Vec::with_capacity(slots.len().max(1));
+    for &t in slots {
+        let tex = &scene.textures[t];
+        info.push([texels.len() as u32, tex.width, tex.height, 0]);
+        for y in 0..tex.height {
+            for x in 0..tex.width {
+                texels.push(tex.texel(x, y));
+            }
+        }
+    }
+    if texels.is_empty() {
+        texels.push([0.0; 4]);
+        info.push([0; 4]);
+    }
+    Ok((texels, info))
+}
+
+/// The slot of texture `t` in `slots` (appended when new). Errors: `t` beyond the scene's
+/// textures (names the material).
+pub(crate) fn texture_slot(
+    scene: &Scene,
+    material: &str,
+    t: usize,
+    slots: &mut Vec<usize>,
+) -> Result<i32> {
+    if t >= scene.textures.len() {
+        return Err(invalid(
+            format!("material {material:?}"),
+            format!("texture {t} of {} textures", scene.textures.len()),
+        ));
+    }
+    Ok(match slots.iter().position(|&s| s == t) {
+        Some(s) => s as i32,
+        None => {
+            slots.push(t);
+            slots.len() as i32 - 1
+        }
+    })
+}
 
 /// Format of the triangle-id target.
 pub const PRIM_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
@@ -29,11 +98,16 @@ pub const FLOAT_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// Format of the depth buffer (reverse Z).
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
-/// A scene's triangles on the GPU: per triangle its corners' positions and shading normals.
+/// A scene's triangles on the GPU: per triangle its corners' positions, shading normals and
+/// uv0, and its material; the materials' alpha masks with their opacity textures.
 #[derive(Debug)]
 pub struct GpuGeometry {
-    /// 6 vec4 per triangle: positions of corners 0..2, then their shading normals.
+    /// 8 vec4 per triangle: positions of corners 0..2, their shading normals, (uv0 a, b),
+    /// (uv0 c, material bits, 0).
     pub triangles: wgpu::Buffer,
+    masks: wgpu::Buffer,
+    texels: wgpu::Buffer,
+    texture_info: wgpu::Buffer,
     /// Number of triangles.
     pub count: u32,
     /// Near plane (view depth) of the projection: 10⁻⁵ of the scene's bounding diagonal.
@@ -41,15 +115,16 @@ pub struct GpuGeometry {
 }
 
 impl GpuGeometry {
-    /// Uploads `g` (the triangles of `diffuse_path_scene`, in its order). Corners without
-    /// shading normals get the geometric normal. Errors: no triangles, non-finite positions,
-    /// more triangles than a storage buffer of the device holds.
-    pub fn upload(ctx: &GpuContext, g: &Geometry) -> Result<Self> {
+    /// Uploads `g` (the triangles of `diffuse_path_scene(scene)`, in its order). Corners
+    /// without shading normals get the geometric normal. Errors: no triangles, non-finite
+    /// positions, material indices beyond `scene`'s, more data than a storage buffer of the
+    /// device holds.
+    pub fn upload(ctx: &GpuContext, scene: &Scene, g: &Geometry) -> Result<Self> {
         if g.positions.is_empty() {
             return Err(invalid("scene", "the scene has no triangles to draw"));
         }
         let limit = ctx.device.limits().max_storage_buffer_binding_size as usize;
-        let bytes = g.positions.len() * 6 * 16;
+        let bytes = g.positions.len() * STRIDE * 16;
         if bytes > limit || g.positions.len() > (u32::MAX / 3) as usize {
             return Err(invalid(
                 "scene",
@@ -60,7 +135,7 @@ impl GpuGeometry {
             ));
         }
         let (mut lo, mut hi) = (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY);
-        let mut data: Vec<[f32; 4]> = Vec::with_capacity(g.positions.len() * 6);
+        let mut data: Vec<[f32; 4]> = Vec::with_capacity(g.positions.len() * STRIDE);
         for (i, tri) in g.positions.iter().enumerate() {
             if tri.iter().any(|p| !p.is_finite()) {
                 return Err(invalid(
@@ -78,17 +153,57 @@ impl GpuGeometry {
             for n in ns {
                 data.push([n.x as f32, n.y as f32, n.z as f32, 0.0]);
             }
+            let uv = g.uvs.get(i).copied().unwrap_or([[0.0; 2]; 3]);
+            let m = g.material.get(i).copied().unwrap_or(0);
+            if m as usize >= scene.materials.len() {
+                return Err(invalid(
+                    "scene",
+                    format!("triangle {i} has material {m} of {}", scene.materials.len()),
+                ));
+            }
+            let f = |v: f64| v as f32;
+            data.push([f(uv[0][0]), f(uv[0][1]), f(uv[1][0]), f(uv[1][1])]);
+            data.push([f(uv[2][0]), f(uv[2][1]), f32::from_bits(m), 0.0]);
         }
-        let near = ((hi - lo).length() * 1e-5).max(1e-6) as f32;
-        let triangles = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("gbuffer triangles"),
-                contents: bytemuck::cast_slice(&data),
-                usage: wgpu::BufferUsages::STORAGE,
+        // The alpha test of `PathTracer::intersect`: opacity (at uv0, whichever set the texture
+        // names) clamped to [0, 1], present at ≥ the cutoff (½ without one).
+        let mut slots = Vec::new();
+        let mut masks: Vec<[f32; 4]> = Vec::with_capacity(scene.materials.len().max(1));
+        for m in &scene.materials {
+            masks.push(match &m.alpha_mask {
+                None => [0.0, 0.0, f32::from_bits(-2i32 as u32), 0.0],
+                Some(a) => {
+                    let t = match a.opacity.texture {
+                        Some(r) => texture_slot(scene, &m.name, r.texture, &mut slots)?,
+                        None => -1,
+                    };
+                    [
+                        a.opacity.factor as f32,
+                        a.cutoff.unwrap_or(0.5),
+                        f32::from_bits(t as u32),
+                        f32::from_bits(u32::from(a.opacity.channel.min(3))),
+                    ]
+                }
             });
+        }
+        if masks.is_empty() {
+            masks.push([0.0; 4]);
+        }
+        let (texels, info) = pack_textures(scene, &slots, limit)?;
+        let near = ((hi - lo).length() * 1e-5).max(1e-6) as f32;
+        let storage = |label: &str, contents: &[u8]| {
+            ctx.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents,
+                    usage: wgpu::BufferUsages::STORAGE,
+                })
+        };
         Ok(GpuGeometry {
-            triangles,
+            triangles: storage("gbuffer triangles", bytemuck::cast_slice(&data)),
+            masks: storage("gbuffer alpha masks", bytemuck::cast_slice(&masks)),
+            texels: storage("gbuffer opacity texels", bytemuck::cast_slice(&texels)),
+            texture_info: storage("gbuffer opacity textures", bytemuck::cast_slice(&info)),
             count: g.positions.len() as u32,
             near,
         })
@@ -301,7 +416,7 @@ impl GBufferPass {
             });
         let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
             binding,
-            visibility: wgpu::ShaderStages::VERTEX,
+            visibility: wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT,
             ty: wgpu::BindingType::Buffer {
                 ty,
                 has_dynamic_offset: false,
@@ -316,6 +431,9 @@ impl GBufferPass {
                 entries: &[
                     entry(0, wgpu::BufferBindingType::Storage { read_only: true }),
                     entry(1, wgpu::BufferBindingType::Uniform),
+                    entry(2, wgpu::BufferBindingType::Storage { read_only: true }),
+                    entry(3, wgpu::BufferBindingType::Storage { read_only: true }),
+                    entry(4, wgpu::BufferBindingType::Storage { read_only: true }),
                 ],
             });
         let pipeline_layout = ctx
@@ -401,6 +519,18 @@ impl GBufferPass {
                 wgpu::BindGroupEntry {
                     binding: 1,
                     resource: uniform.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: geometry.masks.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: geometry.texels.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: geometry.texture_info.as_entire_binding(),
                 },
             ],
         });

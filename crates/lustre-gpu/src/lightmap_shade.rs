@@ -8,15 +8,16 @@
 //! Uploads: light-map pages as one Rgba32Float 2D texture array; the environment as an
 //! Rgba32Float 2D texture; base-colour textures as RGBA f32 texels in a storage buffer; all
 //! read with `textureLoad` / indexing and filtered by hand (the CPU's texel-centre, clamp and
-//! wrap rules). Gaps (named errors or warnings, see [`GpuLightmapScene::upload`]): glTF
-//! materials with textured metallic or transmission are refused; alpha masks are ignored by the
-//! raster pass (drawn opaque, with a warning).
+//! wrap rules). Gap (a named error, see [`GpuLightmapScene::upload`]): glTF materials with
+//! textured metallic or transmission are refused.
 //!
 //! [`LightmapRenderer`] runs both passes: [`LightmapRenderer::render`].
 
 use crate::context::GpuContext;
 use crate::error::{invalid, scope_result, wgpu_error, Result};
-use crate::gbuffer::{camera_uniform, map_read, GBufferPass, GBufferTarget, GpuGeometry};
+use crate::gbuffer::{
+    camera_uniform, map_read, pack_textures, texture_slot, GBufferPass, GBufferTarget, GpuGeometry,
+};
 use lustre_brdf::rgb::Rgb;
 use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::{MaterialKind, Scene, TexturedRgb};
@@ -28,7 +29,10 @@ use lustre_shade::path::{EnvLight, Geometry, PathCamera};
 use wgpu::util::DeviceExt;
 
 /// The WGSL source of the shading pass.
-pub const LIGHTMAP_SHADE_WGSL: &str = include_str!("lightmap_shade.wgsl");
+pub const LIGHTMAP_SHADE_WGSL: &str = concat!(
+    include_str!("texture_sample.wgsl"),
+    include_str!("lightmap_shade.wgsl")
+);
 
 const NO_PAGE: u32 = u32::MAX;
 
@@ -46,8 +50,6 @@ pub struct GpuLightmapScene {
     env: Option<([[f32; 4]; 3], f32)>,
     /// Triangles (as in the geometry).
     pub count: u32,
-    /// Named approximations (alpha masks drawn opaque).
-    pub warnings: Vec<String>,
 }
 
 /// A material as `lightmap_shade.wgsl` reads it: (factor, k) and (texture, uv set, two-sided).
@@ -55,7 +57,7 @@ fn gpu_material(
     scene: &Scene,
     m: usize,
     spec: Rgb,
-    texture_slot: &mut Vec<usize>,
+    slots: &mut Vec<usize>,
 ) -> Result<[[f32; 4]; 2]> {
     let material = &scene.materials[m];
     let untextured = |c: Rgb, k: f64| {
@@ -99,22 +101,10 @@ fn gpu_material(
         _ => untextured(Rgb::ZERO, 0.0),
     };
     let (tex, uv_set) = match texture {
-        Some(r) => {
-            if r.texture >= scene.textures.len() {
-                return Err(invalid(
-                    format!("material {:?}", material.name),
-                    format!("texture {} of {} textures", r.texture, scene.textures.len()),
-                ));
-            }
-            let slot = match texture_slot.iter().position(|&t| t == r.texture) {
-                Some(s) => s,
-                None => {
-                    texture_slot.push(r.texture);
-                    texture_slot.len() - 1
-                }
-            };
-            (slot as i32, u32::from(r.uv_set.min(1)))
-        }
+        Some(r) => (
+            texture_slot(scene, &material.name, r.texture, slots)?,
+            u32::from(r.uv_set.min(1)),
+        ),
         None => (-1, 0),
     };
     let f = factor.0.map(|v| v as f32);
@@ -150,48 +140,17 @@ impl GpuLightmapScene {
         if g.positions.is_empty() {
             return Err(invalid("scene", "the scene has no triangles to shade"));
         }
-        let mut warnings = Vec::new();
         let mut slots = Vec::new();
         let mut mats = Vec::with_capacity(2 * scene.materials.len());
         for m in 0..scene.materials.len() {
             let s = spec.get(m).copied().unwrap_or(Rgb::ZERO);
             mats.extend(gpu_material(scene, m, s, &mut slots)?);
-            if scene.materials[m].alpha_mask.is_some() {
-                warnings.push(format!(
-                    "material {:?}: alpha mask ignored by the G-buffer (drawn opaque)",
-                    scene.materials[m].name
-                ));
-            }
         }
         if mats.is_empty() {
             mats.push([0.0; 4]);
         }
-        let mut texels: Vec<[f32; 4]> = Vec::new();
-        let mut info: Vec<[u32; 4]> = Vec::new();
-        for &t in &slots {
-            let tex = &scene.textures[t];
-            info.push([texels.len() as u32, tex.width, tex.height, 0]);
-            for y in 0..tex.height {
-                for x in 0..tex.width {
-                    texels.push(tex.texel(x, y));
-                }
-            }
-        }
         let max_buffer = limits.max_storage_buffer_binding_size as usize;
-        if texels.len() * 16 > max_buffer || texels.len() > u32::MAX as usize {
-            return Err(invalid(
-                "textures",
-                format!(
-                    "{} base-colour texels need {} bytes; the device's storage buffers hold {max_buffer}",
-                    texels.len(),
-                    texels.len() * 16
-                ),
-            ));
-        }
-        if texels.is_empty() {
-            texels.push([0.0; 4]);
-            info.push([0; 4]);
-        }
+        let (texels, info) = pack_textures(scene, &slots, max_buffer)?;
         let mut tris: Vec<[f32; 4]> = Vec::with_capacity(8 * g.positions.len());
         let v4 = |p: [f64; 2], q: [f64; 2]| [p[0] as f32, p[1] as f32, q[0] as f32, q[1] as f32];
         for (i, tri) in g.positions.iter().enumerate() {
@@ -328,7 +287,6 @@ impl GpuLightmapScene {
             page_size: [atlas.width, atlas.height],
             env,
             count: g.positions.len() as u32,
-            warnings,
         };
         scope_result(scope, "uploading the light-mapped scene")?;
         Ok(out)
@@ -617,7 +575,7 @@ impl LightmapFrameScene {
         }
         let lit =
             Lightmapped::new(scene, atlas, pages, &ps.geometry, spec.clone()).map_err(shade_err)?;
-        let geometry = GpuGeometry::upload(ctx, &ps.geometry)?;
+        let geometry = GpuGeometry::upload(ctx, scene, &ps.geometry)?;
         let shading = GpuLightmapScene::upload(
             ctx,
             scene,
