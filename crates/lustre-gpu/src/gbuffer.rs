@@ -29,6 +29,9 @@ pub const GBUFFER_WGSL: &str = concat!(
 /// Vec4s per triangle in the raster pass's triangle buffer.
 const STRIDE: usize = 8;
 
+/// RGBA f32 texels of several textures, and per texture (first texel, width, height, 0).
+pub(crate) type PackedTextures = (Vec<[f32; 4]>, Vec<[u32; 4]>);
+
 /// The texels of `scene`'s textures `slots` (in that order) as RGBA f32, and per texture
 /// (first texel, width, height, 0), as `texture_sample.wgsl` reads them; one dummy texel when
 /// there are none. Errors: more texels than a storage buffer of `limit` bytes holds.
@@ -36,7 +39,7 @@ pub(crate) fn pack_textures(
     scene: &Scene,
     slots: &[usize],
     limit: usize,
-) -> Result<(Vec<[f32; 4]>, Vec<[u32; 4]>)> {
+) -> Result<PackedTextures> {
     let total: usize = slots
         .iter()
         .map(|&t| scene.textures[t].width as usize * scene.textures[t].height as usize)
