@@ -8,8 +8,7 @@
 //! Uploads: light-map pages as one Rgba32Float 2D texture array; the environment as an
 //! Rgba32Float 2D texture; base-colour textures as RGBA f32 texels in a storage buffer; all
 //! read with `textureLoad` / indexing and filtered by hand (the CPU's texel-centre, clamp and
-//! wrap rules). Gap (a named error, see [`GpuLightmapScene::upload`]): glTF materials with
-//! textured metallic or transmission are refused.
+//! wrap rules).
 //!
 //! [`LightmapRenderer`] runs both passes: [`LightmapRenderer::render`].
 
@@ -20,7 +19,7 @@ use crate::gbuffer::{
 };
 use lustre_brdf::rgb::Rgb;
 use lustre_scene::lightmap::LightmapAtlas;
-use lustre_scene::{MaterialKind, Scene, TexturedRgb};
+use lustre_scene::{MaterialKind, Scene, TexturedRgb, TexturedScalar};
 use lustre_shade::bake::diffuse_path_scene;
 use lustre_shade::bake::gbuffer::{gbuffer_size, GBuffer};
 use lustre_shade::bake::render::Lightmapped;
@@ -52,13 +51,39 @@ pub struct GpuLightmapScene {
     pub count: u32,
 }
 
-/// A material as `lightmap_shade.wgsl` reads it: (factor, k) and (texture, uv set, two-sided).
+/// A textured scalar as `lightmap_shade.wgsl`'s `scalar_at` reads it: (factor, texture slot
+/// bits (−1 none), uv set bits, channel bits).
+fn gpu_scalar(
+    scene: &Scene,
+    material: &str,
+    v: &TexturedScalar,
+    slots: &mut Vec<usize>,
+) -> Result<[f32; 4]> {
+    let (t, uv_set) = match v.texture {
+        Some(r) => (
+            texture_slot(scene, material, r.texture, slots)?,
+            u32::from(r.uv_set.min(1)),
+        ),
+        None => (-1, 0),
+    };
+    Ok([
+        v.factor as f32,
+        f32::from_bits(t as u32),
+        f32::from_bits(uv_set),
+        f32::from_bits(u32::from(v.channel.min(3))),
+    ])
+}
+
+/// A material as `lightmap_shade.wgsl` reads it ([`lustre_shade::bake::diffuse_albedo`]):
+/// (base factor, k), (base texture slot bits, uv set bits, two-sided, 1 when metallic or
+/// transmission is textured), then metallic and transmission as [`gpu_scalar`]. Untextured
+/// factors are clamped here; with textured metallic or transmission, k is computed per pixel.
 fn gpu_material(
     scene: &Scene,
     m: usize,
     spec: Rgb,
     slots: &mut Vec<usize>,
-) -> Result<[[f32; 4]; 2]> {
+) -> Result<[[f32; 4]; 4]> {
     let material = &scene.materials[m];
     let untextured = |c: Rgb, k: f64| {
         let c = c.map(|v| {
@@ -74,6 +99,7 @@ fn gpu_material(
         Some(r) => (t.factor, Some(r), k),
         None => untextured(t.factor, k),
     };
+    let mut scalars = None;
     let (factor, texture, k) = match &material.kind {
         MaterialKind::Diffuse { reflectance } => rgb(reflectance, 1.0),
         MaterialKind::Plastic { diffuse, .. } | MaterialKind::RoughPlastic { diffuse, .. } => {
@@ -86,12 +112,12 @@ fn gpu_material(
             ..
         } => {
             if metallic.texture.is_some() || transmission.texture.is_some() {
-                return Err(invalid(
-                    format!("material {:?}", material.name),
-                    "textured metallic or transmission is not supported by the GPU light-map shading",
-                ));
-            }
-            if transmission.factor >= 0.5 {
+                scalars = Some([
+                    gpu_scalar(scene, &material.name, metallic, slots)?,
+                    gpu_scalar(scene, &material.name, transmission, slots)?,
+                ]);
+                rgb(base_color, 1.0)
+            } else if transmission.factor >= 0.5 {
                 untextured(Rgb::ZERO, 0.0)
             } else {
                 rgb(base_color, 1.0 - metallic.factor.clamp(0.0, 1.0))
@@ -108,14 +134,17 @@ fn gpu_material(
         None => (-1, 0),
     };
     let f = factor.0.map(|v| v as f32);
+    let [metal, trans] = scalars.unwrap_or([[0.0; 4]; 2]);
     Ok([
         [f[0], f[1], f[2], k as f32],
         [
             f32::from_bits(tex as u32),
             f32::from_bits(uv_set),
             if material.two_sided { 1.0 } else { 0.0 },
-            0.0,
+            if scalars.is_some() { 1.0 } else { 0.0 },
         ],
+        metal,
+        trans,
     ])
 }
 
@@ -123,7 +152,7 @@ impl GpuLightmapScene {
     /// Uploads what shading needs: per triangle of `g` (the geometry `lit` was built for) its
     /// normals, uv0, light-map page and uv1, emission and material; the materials' diffuse
     /// albedo (`spec` as `diffuse_path_scene` returns it); the light-map pages of `atlas`;
-    /// `environment`. Errors: materials the GPU cannot shade exactly (named), pages or textures
+    /// `environment`. Errors: texture references beyond the scene's (named), pages or textures
     /// beyond the device's limits.
     #[allow(clippy::too_many_arguments)]
     pub fn upload(
@@ -141,7 +170,7 @@ impl GpuLightmapScene {
             return Err(invalid("scene", "the scene has no triangles to shade"));
         }
         let mut slots = Vec::new();
-        let mut mats = Vec::with_capacity(2 * scene.materials.len());
+        let mut mats = Vec::with_capacity(4 * scene.materials.len());
         for m in 0..scene.materials.len() {
             let s = spec.get(m).copied().unwrap_or(Rgb::ZERO);
             mats.extend(gpu_material(scene, m, s, &mut slots)?);

@@ -29,8 +29,9 @@ struct Shade {
 // 8 vec4 per triangle: shading normals of corners 0..2; uv0 (a.xy, b.xy), (c.xy, uv1 a.xy);
 // uv1 (b.xy, c.xy) in texel units; (emission rgb, page bits); (material bits, 0, 0, 0).
 @group(0) @binding(3) var<storage, read> tris: array<vec4<f32>>;
-// 2 vec4 per material: (factor rgb, scale k); (texture index bits (i32, −1 none), uv set bits,
-// two-sided, 0).
+// 4 vec4 per material: (base factor rgb, scale k); (base texture slot bits (i32, −1 none), uv set
+// bits, two-sided, 1 when metallic or transmission is textured); metallic and transmission as
+// (factor, texture slot bits, uv set bits, channel bits).
 @group(0) @binding(4) var<storage, read> mats: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> texels: array<vec4<f32>>;
 // Per texture: (first texel, width, height, 0).
@@ -67,13 +68,34 @@ fn finite3(c: vec3<f32>) -> bool {
     return all(abs(c) <= vec3<f32>(3.0e38));
 }
 
-// `lustre_shade::bake::diffuse_albedo` as uploaded: clamp(factor · texture, 0, 1) · k.
+// `TexturedScalar::at`: factor × the texture's channel at the uv set it names.
+fn scalar_at(q: vec4<f32>, uv0: vec2<f32>, uv1: vec2<f32>) -> f32 {
+    let t = bitcast<i32>(q.y);
+    if t < 0 {
+        return q.x;
+    }
+    var uv = uv0;
+    if bitcast<u32>(q.z) == 1u {
+        uv = uv1;
+    }
+    return q.x * texture_sample(u32(t), uv)[bitcast<u32>(q.w)];
+}
+
+// `lustre_shade::bake::diffuse_albedo` as uploaded: clamp(base factor · texture, 0, 1) · k, with
+// k = 1 − clamp(metallic, 0, 1), or 0 where transmission ≥ ½, per pixel when those are textured.
 fn albedo(m: u32, uv0: vec2<f32>, uv1: vec2<f32>) -> vec3<f32> {
-    let a = mats[2u * m];
-    let b = mats[2u * m + 1u];
+    let a = mats[4u * m];
+    let b = mats[4u * m + 1u];
+    var k = a.w;
+    if b.w > 0.5 {
+        if scalar_at(mats[4u * m + 3u], uv0, uv1) >= 0.5 {
+            return vec3<f32>(0.0);
+        }
+        k = 1.0 - clamp(scalar_at(mats[4u * m + 2u], uv0, uv1), 0.0, 1.0);
+    }
     let t = bitcast<i32>(b.x);
     if t < 0 {
-        return a.xyz * a.w;
+        return a.xyz * k;
     }
     var uv = uv0;
     if bitcast<u32>(b.y) == 1u {
@@ -83,7 +105,7 @@ fn albedo(m: u32, uv0: vec2<f32>, uv1: vec2<f32>) -> vec3<f32> {
     if !finite3(c) {
         c = vec3<f32>(0.0);
     }
-    return clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)) * a.w;
+    return clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)) * k;
 }
 
 // `Lightmapped::radiance`.
@@ -105,7 +127,7 @@ fn radiance(prim: u32, b: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
         let q3 = tris[base + 3u];
         let uv0 = q3.xy * b.x + q3.zw * b.y + q4.xy * b.z;
         let m = bitcast<u32>(tris[base + 7u].x);
-        let two_sided = mats[2u * m + 1u].z > 0.5;
+        let two_sided = mats[4u * m + 1u].z > 0.5;
         if front || two_sided {
             let kd = albedo(m, uv0, uv1 / vec2<f32>(f32(u.page.x), f32(u.page.y)));
             l += kd * irr * (1.0 / PI);
