@@ -590,3 +590,40 @@ impl GBufferPass {
         scope_result(scope, "drawing the G-buffer")
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lightmap_shade::LIGHTMAP_SHADE_WGSL;
+    use wgpu::naga;
+
+    /// Both shaders (with the shared texture lookup) parse and validate without an adapter, and
+    /// the uniform blocks have the sizes the Rust side writes.
+    #[test]
+    fn wgsl_parses_and_validates_with_naga() {
+        for (src, entries, uniform, bytes) in [
+            (GBUFFER_WGSL, &["vs_main", "fs_main"][..], "Camera", 5 * 16),
+            (LIGHTMAP_SHADE_WGSL, &["main"][..], "Shade", 11 * 16),
+        ] {
+            let m = naga::front::wgsl::parse_str(src)
+                .unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
+            let mut v = naga::valid::Validator::new(
+                naga::valid::ValidationFlags::all(),
+                naga::valid::Capabilities::empty(),
+            );
+            if let Err(e) = v.validate(&m) {
+                panic!("{}", e.emit_to_string(src));
+            }
+            for e in entries {
+                assert!(m.entry_points.iter().any(|p| p.name == *e), "{e}");
+            }
+            let size = m
+                .types
+                .iter()
+                .find(|(_, t)| t.name.as_deref() == Some(uniform))
+                .map(|(_, t)| t.inner.size(m.to_ctx()))
+                .unwrap_or_else(|| panic!("no struct {uniform}"));
+            assert_eq!(size, bytes, "{uniform}");
+        }
+    }
+}
