@@ -2,7 +2,9 @@
 //! [`lustre_shade::bake::diffuse_path_scene`]'s geometry (so triangle ids agree with the CPU),
 //! drawn at a [`PathCamera`] into a G-buffer of triangle id (R32Uint, [`SKY`] where nothing
 //! is drawn), barycentrics (b1, b2) and view depth (Rgba32Float), and unit shading normal
-//! (Rgba32Float), with a Depth32Float reverse-Z depth test. Formats are the ones lavapipe
+//! (Rgba32Float), with a Depth32Float reverse-Z depth test; alpha-masked materials discard
+//! the fragments the CPU's ray test skips (opacity at uv0 below the cutoff, or below ½ without
+//! one; `texture_sample.wgsl` is the CPU's texture lookup). Formats are the ones lavapipe
 //! renders to (TOOLCHAIN.md: Rgba32Float; R32Uint and Depth32Float are Vulkan-mandatory
 //! attachments).
 //!
