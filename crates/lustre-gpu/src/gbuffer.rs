@@ -117,6 +117,8 @@ pub struct GpuGeometry {
     pub count: u32,
     /// Near plane (view depth) of the projection: 10⁻⁵ of the scene's bounding diagonal.
     pub near: f32,
+    /// Whether any material has an alpha mask (drawn with the discarding fragment shader).
+    pub masked: bool,
 }
 
 impl GpuGeometry {
@@ -211,6 +213,7 @@ impl GpuGeometry {
             texture_info: storage("gbuffer opacity textures", bytemuck::cast_slice(&info)),
             count: g.positions.len() as u32,
             near,
+            masked: scene.materials.iter().any(|m| m.alpha_mask.is_some()),
         })
     }
 }
@@ -405,7 +408,8 @@ pub(crate) fn map_read(
 /// The compiled raster pass.
 #[derive(Debug)]
 pub struct GBufferPass {
-    pipeline: wgpu::RenderPipeline,
+    /// Without alpha masks (`fs_main`), with them (`fs_masked`).
+    pipelines: [wgpu::RenderPipeline; 2],
     layout: wgpu::BindGroupLayout,
 }
 
@@ -455,45 +459,47 @@ impl GBufferPass {
                 write_mask: wgpu::ColorWrites::ALL,
             })
         };
-        let pipeline = ctx
-            .device
-            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("gbuffer.wgsl"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::TriangleList,
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Greater),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[
-                        target(PRIM_FORMAT),
-                        target(FLOAT_FORMAT),
-                        target(FLOAT_FORMAT),
-                    ],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
+        let pipeline = |fragment: &'static str| {
+            ctx.device
+                .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("gbuffer.wgsl"),
+                    layout: Some(&pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &module,
+                        entry_point: Some("vs_main"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: wgpu::PrimitiveState {
+                        topology: wgpu::PrimitiveTopology::TriangleList,
+                        cull_mode: None,
+                        ..Default::default()
+                    },
+                    depth_stencil: Some(wgpu::DepthStencilState {
+                        format: DEPTH_FORMAT,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::Greater),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    multisample: Default::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &module,
+                        entry_point: Some(fragment),
+                        compilation_options: Default::default(),
+                        targets: &[
+                            target(PRIM_FORMAT),
+                            target(FLOAT_FORMAT),
+                            target(FLOAT_FORMAT),
+                        ],
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                })
+        };
+        let pipelines = [pipeline("fs_main"), pipeline("fs_masked")];
         scope_result(scope, "compiling gbuffer.wgsl")?;
-        Ok(GBufferPass { pipeline, layout })
+        Ok(GBufferPass { pipelines, layout })
     }
 
     /// Draws `geometry` seen from `camera` into `target` (submitted; returns without waiting).
@@ -584,7 +590,7 @@ impl GBufferPass {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.pipeline);
+            pass.set_pipeline(&self.pipelines[usize::from(geometry.masked)]);
             pass.set_bind_group(0, &bind, &[]);
             pass.draw(0..geometry.count * 3, 0..1);
         }
@@ -604,7 +610,12 @@ mod tests {
     #[test]
     fn wgsl_parses_and_validates_with_naga() {
         for (src, entries, uniform, bytes) in [
-            (GBUFFER_WGSL, &["vs_main", "fs_main"][..], "Camera", 5 * 16),
+            (
+                GBUFFER_WGSL,
+                &["vs_main", "fs_main", "fs_masked"][..],
+                "Camera",
+                5 * 16,
+            ),
             (LIGHTMAP_SHADE_WGSL, &["main"][..], "Shade", 11 * 16),
         ] {
             let m = naga::front::wgsl::parse_str(src)

@@ -84,11 +84,7 @@ fn present(prim: u32, b: vec2<f32>) -> bool {
     return clamp(a, 0.0, 1.0) >= mask.y;
 }
 
-@fragment
-fn fs_main(v: VsOut) -> FsOut {
-    if !present(v.prim, v.bary) {
-        discard;
-    }
+fn write(v: VsOut) -> FsOut {
     var out: FsOut;
     out.prim = v.prim;
     out.bary_depth = vec4<f32>(v.bary, v.depth, 0.0);
@@ -99,4 +95,19 @@ fn fs_main(v: VsOut) -> FsOut {
     }
     out.normal = vec4<f32>(n, 0.0);
     return out;
+}
+
+// Scenes without alpha masks: no discard, so the depth test may run before the shader.
+@fragment
+fn fs_main(v: VsOut) -> FsOut {
+    return write(v);
+}
+
+// Scenes with alpha masks.
+@fragment
+fn fs_masked(v: VsOut) -> FsOut {
+    if !present(v.prim, v.bary) {
+        discard;
+    }
+    return write(v);
 }
