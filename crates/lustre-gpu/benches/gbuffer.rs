@@ -38,8 +38,8 @@ fn frame(c: &mut Criterion) {
         spp: 1,
         bounces: 2,
         seed: 5,
-        tile: 64,
         denoiser: Denoiser::None,
+        ..BakeOptions::default()
     };
     let dir = fail(tempfile::tempdir());
     fail(bake_tiles(

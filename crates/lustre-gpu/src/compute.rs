@@ -38,7 +38,7 @@ pub(crate) fn compute_pipeline(
     ctx: &GpuContext,
     label: &'static str,
     stage: &'static str,
-    source: &'static str,
+    source: &str,
     entries: &[wgpu::BindGroupLayoutEntry],
 ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout)> {
     let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);

@@ -2,7 +2,8 @@
 //!
 //! `shade.wgsl` mirrors `lustre_shade::kernel::shade_regular` with `Weighting::Pdf002` (002 §4–7,
 //! the pseudo code `EvaluateSpecularLobe`) and the scene ray casting of `lustre_shade::scene`, in
-//! f32. The environment pyramid is one cube texture with all its mip levels, faces in Vulkan
+//! f32; its lobe, MIP-level, lattice and weighting functions are the binding-free modules of
+//! [`wgsl`] (`src/wgsl/*.wgsl`), composed in front of it by [`shade_wgsl`]. The environment pyramid is one cube texture with all its mip levels, faces in Vulkan
 //! order as lustre-env stores them, sampled trilinearly and seamlessly by the hardware.
 //!
 //! Use: `GpuContext::new()?`, `GpuRenderer::new(&ctx)?`, then
@@ -26,6 +27,7 @@ pub mod lightmap_shade;
 pub mod packed;
 pub mod pyramid;
 pub mod shade;
+pub mod wgsl;
 
 pub use context::GpuContext;
 pub use cube::{CubeLevelRef, GpuCube};
@@ -40,4 +42,5 @@ pub use packed::{
     LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
 };
 pub use pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_WGSL};
-pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_WGSL};
+pub use shade::shade_wgsl;
+pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_PASS_WGSL};

@@ -8,11 +8,18 @@ use crate::error::{invalid, scope_result, wgpu_error, Result};
 use crate::packed::{
     f3, PackedScene, LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
 };
+use crate::wgsl::{self, compose};
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
-/// The WGSL source of the kernel.
-pub const SHADE_WGSL: &str = include_str!("shade.wgsl");
+/// The pass's own WGSL (`shade.wgsl`): the scene, the bindings and the entry point.
+pub const SHADE_PASS_WGSL: &str = include_str!("shade.wgsl");
+
+/// The complete WGSL source of the kernel: the modules of [`crate::wgsl`] it imports, then
+/// `shade.wgsl`.
+pub fn shade_wgsl() -> String {
+    compose(&[&wgsl::REGULAR], SHADE_PASS_WGSL)
+}
 
 /// Workgroup edge of the compute shader (`@workgroup_size(8, 8, 1)`).
 const WORKGROUP: u32 = 8;
@@ -336,7 +343,7 @@ impl GpuRenderer {
             ctx,
             "shade.wgsl",
             "compiling shade.wgsl",
-            SHADE_WGSL,
+            &shade_wgsl(),
             &[
                 uniform_entry(0),
                 storage_entry(1, true),
@@ -507,9 +514,10 @@ mod tests {
     use wgpu::naga;
 
     fn module() -> naga::Module {
-        match naga::front::wgsl::parse_str(SHADE_WGSL) {
+        let src = shade_wgsl();
+        match naga::front::wgsl::parse_str(&src) {
             Ok(m) => m,
-            Err(e) => panic!("{}", e.emit_to_string(SHADE_WGSL)),
+            Err(e) => panic!("{}", e.emit_to_string(&src)),
         }
     }
 
@@ -521,7 +529,7 @@ mod tests {
             naga::valid::Capabilities::empty(),
         );
         if let Err(e) = v.validate(&m) {
-            panic!("{}", e.emit_to_string(SHADE_WGSL));
+            panic!("{}", e.emit_to_string(&shade_wgsl()));
         }
         assert!(m.entry_points.iter().any(|e| e.name == "main"));
     }

@@ -44,8 +44,8 @@ fn baked(rel: &str, texels_per_metre: f32) -> Baked {
         spp: 1,
         bounces: 2,
         seed: 5,
-        tile: 64,
         denoiser: Denoiser::None,
+        ..BakeOptions::default()
     };
     let dir = tempfile::tempdir().expect("tempdir");
     bake_tiles(&scene, &atlas, &opts, dir.path(), None, &|_, _| {}).expect("bake");

@@ -36,6 +36,7 @@
 //! building the two rough-plastic coating tables in the material check), its glTF in
 //! 0.16–0.34 s, the Cornell box OBJ in < 2 ms.
 
+pub mod builtin;
 pub mod camera;
 pub mod environment;
 pub mod error;

@@ -200,6 +200,7 @@ fn main() {
                 seed: 0,
                 tile: 64,
                 denoiser: Denoiser::None,
+                transport: Default::default(),
             };
             let c0 = cpu_seconds();
             let tr = bake_tiles(&scene, &atlas, &opts, &dir, None, &|k, n| {

@@ -43,6 +43,17 @@ pub fn display_value(v: f64, exposure: f64) -> f64 {
     srgb_oetf(x)
 }
 
+/// Encodes interleaved 8-bit RGB as PNG and writes it atomically.
+fn write_png_bytes(path: &Path, width: usize, height: usize, rgb: Vec<u8>) -> Result<()> {
+    let buf = image::RgbImage::from_raw(width as u32, height as u32, rgb)
+        .ok_or_else(|| encode_error(path, "PNG", "buffer size mismatch"))?;
+    let mut bytes = Vec::new();
+    buf.write_to(&mut Cursor::new(&mut bytes), image::ImageFormat::Png)
+        .map_err(|e| encode_error(path, "PNG", e))?;
+    lustre_brdf::error::write_atomic(path, &bytes)?;
+    Ok(())
+}
+
 fn encode_error(path: &Path, what: &str, e: impl std::fmt::Display) -> ShadeError {
     ShadeError::Io {
         path: path.to_path_buf(),
@@ -124,19 +135,42 @@ impl Image {
             .collect()
     }
 
+    /// Interleaved 8-bit sRGB like [`Image::to_srgb8`] with triangular dither of ±1 step (the
+    /// sum of two uniform hashes of pixel, channel and `seed`): smooth gradients do not band.
+    pub fn to_srgb8_dithered(&self, exposure: f64, seed: u64) -> Vec<u8> {
+        let unit = |k: u64| {
+            let mut z = k.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        self.data
+            .iter()
+            .enumerate()
+            .flat_map(|(i, p)| {
+                (0..3).map(move |c| {
+                    let k = seed ^ ((i as u64 * 3 + c as u64) << 1);
+                    let d = unit(k) + unit(k ^ 1) - 1.0;
+                    let v = display_value(f64::from(p[c]), exposure) * 255.0 + d;
+                    v.round().clamp(0.0, 255.0) as u8
+                })
+            })
+            .collect()
+    }
+
+    /// Writes an 8-bit sRGB PNG ([`Image::to_srgb8_dithered`]) atomically.
+    pub fn write_png_dithered(&self, path: &Path, exposure: f64, seed: u64) -> Result<()> {
+        write_png_bytes(
+            path,
+            self.width,
+            self.height,
+            self.to_srgb8_dithered(exposure, seed),
+        )
+    }
+
     /// Writes an 8-bit sRGB PNG ([`Image::to_srgb8`]) atomically.
     pub fn write_png(&self, path: &Path, exposure: f64) -> Result<()> {
-        let buf = image::RgbImage::from_raw(
-            self.width as u32,
-            self.height as u32,
-            self.to_srgb8(exposure),
-        )
-        .ok_or_else(|| encode_error(path, "PNG", "buffer size mismatch"))?;
-        let mut bytes = Vec::new();
-        buf.write_to(&mut Cursor::new(&mut bytes), image::ImageFormat::Png)
-            .map_err(|e| encode_error(path, "PNG", e))?;
-        lustre_brdf::error::write_atomic(path, &bytes)?;
-        Ok(())
+        write_png_bytes(path, self.width, self.height, self.to_srgb8(exposure))
     }
 
     /// Reads an image file (OpenEXR, or anything the `image` crate reads) as linear RGB.

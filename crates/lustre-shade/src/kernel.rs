@@ -197,7 +197,7 @@ pub struct Lookup<'a> {
 /// Radiance from `env` along the world direction `wi` at MIP level `lod`, through the optional
 /// bounding-plane correction.
 #[inline]
-fn incident(env: &Environment, lookup: Option<&Lookup>, wi: DVec3, lod: f64) -> Rgb {
+pub(crate) fn incident(env: &Environment, lookup: Option<&Lookup>, wi: DVec3, lod: f64) -> Rgb {
     let d = match lookup {
         Some(l) => corrected_direction(l.planes, l.position, wi),
         None => wi,

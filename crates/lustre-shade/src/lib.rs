@@ -12,16 +12,20 @@
 pub mod accel;
 pub mod bake;
 pub mod error;
+pub mod frame;
 pub mod harness;
 pub mod image;
 pub mod kernel;
 pub mod metrics;
 pub mod mip;
+pub mod mirror;
 pub mod path;
 pub mod pattern;
+pub mod probe;
 pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod truth;
+pub mod warp;
 
 pub use error::{Result, ShadeError};

@@ -459,6 +459,19 @@ impl<'a, 's> PathTracer<'a, 's> {
         }
     }
 
+    /// The closest surface along o + t d, t > 0, skipping alpha-masked hits and the triangles
+    /// for which `skip(prim)` holds (a probe capture leaves its own object out).
+    pub fn intersect_filtered(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        skip: impl Fn(usize) -> bool,
+    ) -> Option<Hit> {
+        self.accel.intersect(o, d, 0.0, f64::INFINITY, |p, b| {
+            !skip(p) && (!self.any_masked || self.accept(p, b))
+        })
+    }
+
     /// Whether anything opaque lies on o + t d for 0 < t < tmax.
     pub fn occluded(&self, o: DVec3, d: DVec3, tmax: f64) -> bool {
         if self.any_masked {
@@ -480,6 +493,13 @@ impl<'a, 's> PathTracer<'a, 's> {
             .and_then(|n| (n[0] * b[0] + n[1] * b[1] + n[2] * b[2]).try_normalize())
             .unwrap_or(ng);
         (if ns.dot(ng) < 0.0 { -ng } else { ng }, ns)
+    }
+
+    /// The shading point of hit `h` of the ray o + t d: position, shading frame (normal map
+    /// applied, tangent along ∂p/∂u) and texture coordinates, as the path tracer shades it.
+    pub fn shading_point(&self, o: DVec3, d: DVec3, h: &Hit) -> (DVec3, ShadingFrame, [f64; 2]) {
+        let v = self.vertex(o, d, h);
+        (v.p, v.frame, v.uv)
     }
 
     fn vertex(&self, o: DVec3, d: DVec3, h: &Hit) -> Vertex {

@@ -102,10 +102,18 @@ pub fn supersampling(kurt: &Kurt, wo_local: DVec3, face_size: usize) -> usize {
         .chain(&kurt.transmission)
         .map(|l| l.mx.min(l.my))
         .fold(f64::INFINITY, f64::min);
-    if !m.is_finite() {
+    supersampling_for(m, wo_local, face_size)
+}
+
+/// [`supersampling`] for any lobe whose smallest slope-space width is `roughness` (Beckmann's
+/// m, a microfacet α; for a model without one, a lower bound of its lobe width): at least 3
+/// sub-texels across 2 · `roughness` · max(cos θo, 0.05). 1 when `roughness` is infinite (no
+/// lobe), [`MAX_SUPERSAMPLING`] when it is 0 or NaN.
+pub fn supersampling_for(roughness: f64, wo_local: DVec3, face_size: usize) -> usize {
+    if roughness == f64::INFINITY {
         return 1;
     }
-    let width = 2.0 * m * wo_local.z.abs().max(0.05);
+    let width = 2.0 * roughness * wo_local.z.abs().max(0.05);
     let texel = 2.0 / face_size.max(1) as f64;
     let s = (3.0 * texel / width).ceil();
     if s.is_finite() {

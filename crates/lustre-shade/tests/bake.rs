@@ -100,6 +100,7 @@ fn raw_opts(spp: u32, bounces: u32) -> BakeOptions {
         seed: 7,
         tile: 16,
         denoiser: Denoiser::None,
+        transport: Default::default(),
     }
 }
 
@@ -440,6 +441,7 @@ fn no_light_leaks_under_thin_walls() {
         seed: 3,
         tile: 16,
         denoiser: Denoiser::ATrous(Default::default()),
+        transport: Default::default(),
     };
     let dir = tempfile::tempdir().unwrap();
     let a = bake(&scene, &at, &opts, dir.path());
@@ -578,6 +580,7 @@ fn resume_and_shards_are_bit_identical_and_bad_tiles_are_rebaked() {
         seed: 11,
         tile: 8,
         denoiser: Denoiser::ATrous(Default::default()),
+        transport: Default::default(),
     };
     let dir = tempfile::tempdir().unwrap();
     let whole = dir.path().join("whole");
@@ -852,6 +855,7 @@ fn modern_hall_floor_under_walls_and_steps_does_not_leak() {
         seed: 1,
         tile: 64,
         denoiser: Denoiser::ATrous(Default::default()),
+        transport: Default::default(),
     };
     let dir = tempfile::tempdir().unwrap();
     let t0 = std::time::Instant::now();

@@ -14,7 +14,7 @@ use lustre_scene::lightmap::{
 };
 use lustre_scene::scene_file::{self, SceneFile};
 use lustre_scene::Scene;
-use lustre_shade::bake::{assemble, bake_tiles, ATrousOptions, BakeOptions, Denoiser};
+use lustre_shade::bake::{assemble, bake_tiles, ATrousOptions, BakeOptions, Denoiser, Transport};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `lustre bake`.
@@ -44,12 +44,27 @@ pub struct BakeArgs {
     /// Write the raw Monte Carlo means (no à-trous denoising).
     #[arg(long)]
     pub no_denoise: bool,
+    /// Light transport in the irradiance: `diffuse` (paths through the scene made diffuse; the
+    /// image converges to `lustre reference --diffuse`) or `full` (paths through the scene's own
+    /// materials: light reflected by glossy floors and glass reaches the light maps, for
+    /// `lustre render`).
+    #[arg(long, value_enum, default_value_t = TransportArg::Diffuse)]
+    pub transport: TransportArg,
     #[command(flatten)]
     pub shard: crate::shard::ShardArgs,
     /// Assemble the tiles that the shards (`--shard K/N` runs with the same scene and options)
     /// baked into --out: fill, denoise, dilate, the page EXRs and the updated scene file.
     #[arg(long, conflicts_with_all = ["shard", "shard_count"])]
     pub merge: bool,
+}
+
+/// `--transport`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransportArg {
+    /// The diffuse scene.
+    Diffuse,
+    /// The scene's own materials.
+    Full,
 }
 
 impl BakeArgs {
@@ -64,6 +79,10 @@ impl BakeArgs {
                 Denoiser::None
             } else {
                 Denoiser::ATrous(ATrousOptions::default())
+            },
+            transport: match self.transport {
+                TransportArg::Diffuse => Transport::Diffuse,
+                TransportArg::Full => Transport::Full,
             },
         }
     }

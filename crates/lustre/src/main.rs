@@ -7,6 +7,7 @@ mod fit_cmd;
 mod merl_cmd;
 mod plot_cmd;
 mod reference_cmd;
+mod render_cmd;
 mod scene_cmd;
 mod score_cmd;
 mod shard;
@@ -42,6 +43,9 @@ enum Command {
     Compare(compare_cmd::CompareArgs),
     /// Path-traced reference of a scene (lustre TOML, glTF, OBJ, Mitsuba XML), resumable.
     Reference(reference_cmd::ReferenceArgs),
+    /// A walkthrough frame of a light-mapped scene: light maps, probes with bounding planes,
+    /// regular sampling of every material (CPU), PNG/EXR, stage times, reference comparison.
+    Render(render_cmd::RenderArgs),
     /// Light maps: atlas, multi-bounce irradiance in resumable tiles, denoised EXR pages and an
     /// updated scene file.
     Bake(bake_cmd::BakeArgs),
@@ -146,6 +150,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Demo(args) => demo_cmd::run(&args),
         Command::Compare(args) => compare_cmd::run(&args),
         Command::Reference(args) => reference_cmd::run(&args),
+        Command::Render(args) => render_cmd::run(&args),
         Command::Bake(args) => bake_cmd::run(&args),
         Command::Scene(args) => scene_cmd::run(&args),
         Command::Score(args) => score_cmd::run(&args),

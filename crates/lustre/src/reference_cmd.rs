@@ -42,7 +42,7 @@ pub struct ReferenceArgs {
 }
 
 /// Parses `WxH`.
-fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
+pub(crate) fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
     let (w, h) = s
         .split_once(['x', 'X', '×'])
         .with_context(|| format!("--size {s:?}: expected WxH, e.g. 1024x1024"))?;

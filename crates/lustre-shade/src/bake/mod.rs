@@ -80,6 +80,21 @@ pub struct BakeOptions {
     pub tile: u32,
     /// The denoiser run by [`assemble`].
     pub denoiser: Denoiser,
+    /// Which light transport the irradiance includes.
+    pub transport: Transport,
+}
+
+/// The light transport a bake's irradiance E includes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Transport {
+    /// Paths through the diffuse scene ([`diffuse_path_scene`]: every material replaced by its
+    /// diffuse albedo): the image kd·E/π converges to `lustre reference --diffuse`.
+    #[default]
+    Diffuse,
+    /// Paths through the scene's own materials: E also carries light that glossy and specular
+    /// surfaces (a glossy floor, glass) reflect onto the light-mapped ones, as a walkthrough
+    /// renderer that adds only the last, view-dependent bounce needs.
+    Full,
 }
 
 impl Default for BakeOptions {
@@ -90,6 +105,7 @@ impl Default for BakeOptions {
             seed: 0,
             tile: 64,
             denoiser: Denoiser::ATrous(ATrousOptions::default()),
+            transport: Transport::Diffuse,
         }
     }
 }
@@ -349,6 +365,7 @@ pub fn bake_hash(scene: &Scene, atlas: &LightmapAtlas, opts: &BakeOptions) -> u6
         u64::from(opts.bounces),
         opts.seed,
         u64::from(opts.tile),
+        opts.transport as u64,
     ] {
         h.u64(v);
     }

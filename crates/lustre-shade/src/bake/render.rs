@@ -15,7 +15,7 @@ use crate::{Result, ShadeError};
 use glam::{DVec3, Vec2};
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
-use lustre_scene::lightmap::LightmapAtlas;
+use lustre_scene::lightmap::{LightmapAtlas, SceneLightmap};
 use lustre_scene::Scene;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -101,6 +101,18 @@ impl<'a> Lightmapped<'a> {
     /// its page at uv1 (texel centres at ((x+½)/W, (y+½)/H), clamped at the page border). Black
     /// for back faces of one-sided materials and for triangles without a light map.
     pub fn radiance(&self, g: &Geometry, prim: usize, bary: [f64; 3], d: DVec3) -> Rgb {
+        let (l, kd, e) = self.parts(g, prim, bary, d);
+        l + kd * e * (1.0 / PI)
+    }
+
+    /// The diffuse albedo kd that [`Lightmapped::radiance`] applies at this hit (zero where it
+    /// adds no light-mapped term): the part of the material a glossy pass must leave out.
+    pub fn albedo(&self, g: &Geometry, prim: usize, bary: [f64; 3], d: DVec3) -> Rgb {
+        self.parts(g, prim, bary, d).1
+    }
+
+    /// (emission, kd, E) at a hit.
+    fn parts(&self, g: &Geometry, prim: usize, bary: [f64; 3], d: DVec3) -> (Rgb, Rgb, Rgb) {
         let b = bary;
         let tri = &g.positions[prim];
         let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
@@ -109,43 +121,44 @@ impl<'a> Lightmapped<'a> {
             .get(prim)
             .map_or(ng, |nn| nn[0] * b[0] + nn[1] * b[1] + nn[2] * b[2]);
         let front = ns.dot(-d) > 0.0;
-        let mut l = match g.emission.get(prim) {
+        let l = match g.emission.get(prim) {
             Some(e) if front => *e,
             _ => Rgb::ZERO,
         };
         let k = self.mapped.get(prim).copied().unwrap_or(u32::MAX);
-        if k != u32::MAX {
-            let (atlas, t) = (self.atlas, &self.raster.triangles[k as usize]);
-            let uv1 = [0, 1].map(|c| b[0] * t.uv[0][c] + b[1] * t.uv[1][c] + b[2] * t.uv[2][c]);
-            let e = bilinear(
-                &self.pages[t.page as usize],
-                atlas.width,
-                atlas.height,
-                uv1[0],
-                uv1[1],
-            );
-            let uv0 = g.uvs.get(prim).map_or([0.0; 2], |u| {
-                [0, 1].map(|c| b[0] * u[0][c] + b[1] * u[1][c] + b[2] * u[2][c])
-            });
-            let m = g.material[prim] as usize;
-            let material = &self.scene.materials[m];
-            if front || material.two_sided {
-                let kd = diffuse_albedo(
-                    material,
-                    &self.scene.textures,
-                    &[
-                        Vec2::new(uv0[0] as f32, uv0[1] as f32),
-                        Vec2::new(
-                            (uv1[0] / f64::from(atlas.width)) as f32,
-                            (uv1[1] / f64::from(atlas.height)) as f32,
-                        ),
-                    ],
-                    self.spec[m],
-                );
-                l += kd * e * (1.0 / PI);
-            }
+        if k == u32::MAX {
+            return (l, Rgb::ZERO, Rgb::ZERO);
         }
-        l
+        let (atlas, t) = (self.atlas, &self.raster.triangles[k as usize]);
+        let m = g.material[prim] as usize;
+        let material = &self.scene.materials[m];
+        if !(front || material.two_sided) {
+            return (l, Rgb::ZERO, Rgb::ZERO);
+        }
+        let uv1 = [0, 1].map(|c| b[0] * t.uv[0][c] + b[1] * t.uv[1][c] + b[2] * t.uv[2][c]);
+        let e = bilinear(
+            &self.pages[t.page as usize],
+            atlas.width,
+            atlas.height,
+            uv1[0],
+            uv1[1],
+        );
+        let uv0 = g.uvs.get(prim).map_or([0.0; 2], |u| {
+            [0, 1].map(|c| b[0] * u[0][c] + b[1] * u[1][c] + b[2] * u[2][c])
+        });
+        let kd = diffuse_albedo(
+            material,
+            &self.scene.textures,
+            &[
+                Vec2::new(uv0[0] as f32, uv0[1] as f32),
+                Vec2::new(
+                    (uv1[0] / f64::from(atlas.width)) as f32,
+                    (uv1[1] / f64::from(atlas.height)) as f32,
+                ),
+            ],
+            self.spec[m],
+        );
+        (l, kd, e)
     }
 }
 
@@ -197,4 +210,49 @@ pub fn render_lightmapped(
         })
         .collect();
     Image::from_data(w, h, data)
+}
+
+/// Reads the baked pages a scene file's `[lightmap]` names (OpenEXR, as `lustre bake` writes
+/// them). Errors name the file: unreadable, or not the atlas's page size; no pages at all (the
+/// atlas has not been baked).
+pub fn read_pages(lightmap: &SceneLightmap) -> Result<Vec<Vec<[f32; 3]>>> {
+    let atlas = &lightmap.atlas;
+    if lightmap.pages.is_empty() {
+        return Err(ShadeError::Parameter(format!(
+            "the light-map atlas {} has no baked pages (run `lustre bake`)",
+            lightmap.atlas_file.display()
+        )));
+    }
+    if lightmap.pages.len() != atlas.pages as usize {
+        return Err(ShadeError::Parameter(format!(
+            "{} light-map page files for an atlas of {} pages ({})",
+            lightmap.pages.len(),
+            atlas.pages,
+            lightmap.atlas_file.display()
+        )));
+    }
+    lightmap
+        .pages
+        .iter()
+        .map(|p| {
+            let img = Image::read_exr(p)?;
+            if img.width != atlas.width as usize || img.height != atlas.height as usize {
+                return Err(ShadeError::Parameter(format!(
+                    "{}: light-map page is {}×{}, the atlas's pages are {}×{}",
+                    p.display(),
+                    img.width,
+                    img.height,
+                    atlas.width,
+                    atlas.height
+                )));
+            }
+            if img.data.iter().flatten().any(|c| !c.is_finite()) {
+                return Err(ShadeError::Parameter(format!(
+                    "{}: light-map page has NaN or infinite texels",
+                    p.display()
+                )));
+            }
+            Ok(img.data)
+        })
+        .collect()
 }

@@ -236,6 +236,10 @@ fn with_baker<R>(
 ) -> Result<R> {
     opts.validate()?;
     let (ps, spec, warnings) = diffuse_path_scene(scene)?;
+    let ps = match opts.transport {
+        super::Transport::Diffuse => ps,
+        super::Transport::Full => crate::reference::path_scene(scene)?.0,
+    };
     let pt = PathTracer::new(
         &ps,
         PathOptions {

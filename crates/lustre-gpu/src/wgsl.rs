@@ -1,0 +1,178 @@
+//! The WGSL modules every pass imports and the composer that joins them to a pass's source.
+//!
+//! A module is a piece of WGSL without bindings or entry points (`wgsl/*.wgsl`): the Kurt lobe,
+//! the MIP levels, the row lattice, the regular-sampling weights, the bounding planes, the QMC
+//! points. Each names its CPU twin in its header. WGSL has no imports, so a pass is the plain
+//! concatenation [`compose`] builds: the modules it asks for and, transitively, theirs, each
+//! once and after everything it depends on, then the pass's own source (its bindings, its entry
+//! point, what only it needs). Functions that read the environment take the cube texture and
+//! its sampler as parameters, so one function serves every pass whatever its bindings.
+
+/// One WGSL module: a name (unique), its source and the modules it uses.
+#[derive(Debug)]
+pub struct Module {
+    /// The module's name, `wgsl/<name>.wgsl`.
+    pub name: &'static str,
+    /// The WGSL source: constants, structs and functions only.
+    pub source: &'static str,
+    /// The modules whose declarations the source uses.
+    pub deps: &'static [&'static Module],
+}
+
+/// `PI`, the `Material` and `Lobe` records (`packed::GpuMaterial`, `packed::GpuLobe`).
+pub const TYPES: Module = Module {
+    name: "types",
+    source: include_str!("wgsl/types.wgsl"),
+    deps: &[],
+};
+
+/// Reflection about a half vector, the tangent-plane mirror, local → world.
+pub const FRAME: Module = Module {
+    name: "frame",
+    source: include_str!("wgsl/frame.wgsl"),
+    deps: &[],
+};
+
+/// The Kurt lobe: Schlick, Beckmann D, the lobe's value (002 Eq. 2–5).
+pub const LOBE: Module = Module {
+    name: "lobe",
+    source: include_str!("wgsl/lobe.wgsl"),
+    deps: &[&TYPES],
+};
+
+/// Per-sample MIP levels: lobe area, 002 Eq. 16, texel solid angle, footprint level.
+pub const MIP: Module = Module {
+    name: "mip",
+    source: include_str!("wgsl/mip.wgsl"),
+    deps: &[&TYPES, &FRAME],
+};
+
+/// The row lattice: Gaussian quantile, rows, row lengths.
+pub const PATTERN: Module = Module {
+    name: "pattern",
+    source: include_str!("wgsl/pattern.wgsl"),
+    deps: &[],
+};
+
+/// Regular in-lobe sampling and its weighting: stored-pattern samples, the (tap) row lattice.
+pub const REGULAR: Module = Module {
+    name: "regular",
+    source: include_str!("wgsl/regular.wgsl"),
+    deps: &[&TYPES, &FRAME, &LOBE, &MIP, &PATTERN],
+};
+
+/// Bounding-plane (parallax) correction of cube-map lookups (000 §4.4.1).
+pub const PLANES: Module = Module {
+    name: "planes",
+    source: include_str!("wgsl/planes.wgsl"),
+    deps: &[],
+};
+
+/// Sobol' (0,2) points, SplitMix64 pixel seeds and rotations (000 §4.4.2).
+pub const QMC: Module = Module {
+    name: "qmc",
+    source: include_str!("wgsl/qmc.wgsl"),
+    deps: &[],
+};
+
+/// Anisotropic GGX and Beckmann: D, Smith G1, visible-normal density and sampling, and the
+/// rough-conductor lobe's value, pdf and sampling warp (unit Fresnel).
+pub const MICROFACET: Module = Module {
+    name: "microfacet",
+    source: include_str!("wgsl/microfacet.wgsl"),
+    deps: &[&TYPES, &FRAME, &PATTERN],
+};
+
+/// Regular sampling through the rough conductor's warp: the Fibonacci lattice, footprint
+/// levels (`lustre_shade::warp::shade_regular_warp`).
+pub const WARP: Module = Module {
+    name: "warp",
+    source: include_str!("wgsl/warp.wgsl"),
+    deps: &[&TYPES, &FRAME, &MIP, &MICROFACET],
+};
+
+/// Every module, in an order [`compose`] would emit them.
+pub const ALL: [&Module; 10] = [
+    &TYPES,
+    &FRAME,
+    &LOBE,
+    &MIP,
+    &PATTERN,
+    &REGULAR,
+    &PLANES,
+    &QMC,
+    &MICROFACET,
+    &WARP,
+];
+
+/// The source of a pass: every module in `imports` and, transitively, the modules they use,
+/// each once and after its dependencies (depth-first, in the order listed), then `pass`. Each
+/// module is preceded by a comment line naming it.
+pub fn compose(imports: &[&Module], pass: &str) -> String {
+    let mut order: Vec<&Module> = Vec::new();
+    for m in imports {
+        visit(m, &mut order);
+    }
+    let mut out = String::new();
+    for m in &order {
+        out.push_str("// ---------------------------------------------------------------- module ");
+        out.push_str(m.name);
+        out.push_str(".wgsl\n");
+        out.push_str(m.source);
+        if !m.source.ends_with('\n') {
+            out.push('\n');
+        }
+        out.push('\n');
+    }
+    out.push_str("// ---------------------------------------------------------------- pass\n");
+    out.push_str(pass);
+    out
+}
+
+/// Post-order depth-first visit: `m`'s dependencies, then `m`, skipping modules already placed
+/// (modules are `const`s, so identity is the name).
+fn visit<'a>(m: &'a Module, order: &mut Vec<&'a Module>) {
+    if order.iter().any(|o| o.name == m.name) {
+        return;
+    }
+    for d in m.deps {
+        visit(d, order);
+    }
+    order.push(m);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn compose_emits_each_dependency_once_before_its_users() {
+        let src = compose(&[&REGULAR, &LOBE, &QMC], "// the pass\n");
+        let at = |name: &str| {
+            let tag = format!("module {name}.wgsl\n");
+            assert_eq!(src.matches(&tag).count(), 1, "{name} once");
+            src.find(&tag).unwrap_or(usize::MAX)
+        };
+        for m in [&REGULAR, &QMC] {
+            for d in m.deps {
+                assert!(at(d.name) < at(m.name), "{} before {}", d.name, m.name);
+            }
+        }
+        assert!(!src.contains("module planes.wgsl"));
+        assert!(src.ends_with("// the pass\n"));
+        assert!(at("qmc") < src.find("// the pass").unwrap_or(0));
+    }
+
+    #[test]
+    fn module_names_are_unique_and_match_their_files() {
+        for (i, a) in ALL.iter().enumerate() {
+            assert!(ALL[i + 1..].iter().all(|b| b.name != a.name), "{}", a.name);
+            // The header names the module.
+            let first = a.source.lines().next().unwrap_or("");
+            assert!(
+                first.starts_with(&format!("// module {}:", a.name)),
+                "{first}"
+            );
+        }
+    }
+}

@@ -1,0 +1,301 @@
+//! The built-in scene (no files needed): a 6 × 3 × 8 m room with a window in the far wall open
+//! to the built-in sky, a ceiling light panel, a glossy dark-wood floor (the planar reflector),
+//! and on pedestals three probe objects — a sphere of a fitted measured material (the SGD fit of
+//! MERL's gold metallic paint), a brushed-aluminium sphere (anisotropic) and a frosted-glass
+//! sphere (transmissive). What `lustre render` shows with no scene given.
+
+use crate::camera::{Camera, FovAxis};
+use crate::environment::{Environment, EnvironmentSource, Sky};
+use crate::material::{
+    Distribution, Material, MaterialKind, ResolvedSpec, TexturedRgb, TexturedScalar,
+};
+use crate::mesh::Mesh;
+use crate::{Film, Result, Scene, SceneError};
+use glam::{DMat3, DVec3, Vec2, Vec3, Vec4};
+use lustre_brdf::rgb::Rgb;
+use std::f64::consts::PI;
+
+/// Room width (x), height (y) and depth (z), metres.
+pub const ROOM: [f32; 3] = [6.0, 3.0, 8.0];
+
+/// The fitted measured material of the first sphere.
+pub const FITTED_SPEC: &str = "sgd:gold-metallic-paint";
+
+/// A quad p0, p0+eu, p0+eu+ev, p0+ev facing eu × ev.
+fn quad(name: &str, p0: Vec3, eu: Vec3, ev: Vec3, material: usize) -> Mesh {
+    let n = eu.cross(ev).normalize();
+    let mut m = Mesh::new(
+        name,
+        vec![p0, p0 + eu, p0 + eu + ev, p0 + ev],
+        vec![[0, 1, 2], [0, 2, 3]],
+        material,
+    );
+    m.normals = Some(vec![n; 4]);
+    m.uv0 = Some(vec![
+        Vec2::new(0.0, 0.0),
+        Vec2::new(1.0, 0.0),
+        Vec2::new(1.0, 1.0),
+        Vec2::new(0.0, 1.0),
+    ]);
+    m
+}
+
+/// A closed axis-aligned box [lo, hi] with outward faces.
+fn block(name: &str, lo: Vec3, hi: Vec3, material: usize) -> Mesh {
+    let c = |i: usize| {
+        Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    };
+    // Per face: the four corners counter-clockwise seen from outside, and the normal.
+    let faces: [([usize; 4], Vec3); 6] = [
+        ([0, 2, 3, 1], Vec3::NEG_Z),
+        ([4, 5, 7, 6], Vec3::Z),
+        ([0, 4, 6, 2], Vec3::NEG_X),
+        ([1, 3, 7, 5], Vec3::X),
+        ([0, 1, 5, 4], Vec3::NEG_Y),
+        ([2, 6, 7, 3], Vec3::Y),
+    ];
+    let mut positions = vec![];
+    let mut normals = vec![];
+    let mut indices = vec![];
+    for (q, n) in faces {
+        let b = positions.len() as u32;
+        positions.extend(q.iter().map(|&i| c(i)));
+        normals.extend([n; 4]);
+        indices.push([b, b + 1, b + 2]);
+        indices.push([b, b + 2, b + 3]);
+    }
+    let mut m = Mesh::new(name, positions, indices, material);
+    m.normals = Some(normals);
+    m
+}
+
+/// A UV sphere with normals, uv0 (u along the longitude) and tangents along the longitude
+/// (the brushing direction of an anisotropic material).
+fn sphere(name: &str, centre: Vec3, radius: f32, material: usize) -> Mesh {
+    let (nu, nv) = (48u32, 24u32);
+    let (mut p, mut n, mut uv, mut t) = (vec![], vec![], vec![], vec![]);
+    for j in 0..=nv {
+        let th = PI * f64::from(j) / f64::from(nv);
+        for i in 0..=nu {
+            let ph = 2.0 * PI * f64::from(i) / f64::from(nu);
+            let d = DVec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin());
+            p.push(centre + d.as_vec3() * radius);
+            n.push(d.as_vec3());
+            uv.push(Vec2::new(i as f32 / nu as f32, j as f32 / nv as f32));
+            let tan = DVec3::new(-ph.sin(), 0.0, ph.cos());
+            t.push(Vec4::new(tan.x as f32, 0.0, tan.z as f32, 1.0));
+        }
+    }
+    let at = |i: u32, j: u32| j * (nu + 1) + i;
+    let mut idx = vec![];
+    for j in 0..nv {
+        for i in 0..nu {
+            idx.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            idx.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    let mut m = Mesh::new(name, p, idx, material);
+    m.normals = Some(n);
+    m.uv0 = Some(uv);
+    m.tangents = Some(t);
+    m
+}
+
+/// The built-in scene. Errors only if the built-in fitted material cannot be resolved.
+pub fn room() -> Result<Scene> {
+    let [w, h, d] = ROOM;
+    let v = Vec3::new;
+    let diffuse = |name: &str, c: [f64; 3]| Material::diffuse(name, Rgb(c));
+    let materials = vec![
+        diffuse("wall", [0.78, 0.76, 0.72]),
+        diffuse("ceiling", [0.85, 0.85, 0.85]),
+        Material::new(
+            "floor",
+            MaterialKind::RoughPlastic {
+                diffuse: TexturedRgb::constant(Rgb([0.22, 0.14, 0.09])),
+                specular: Rgb::ONE,
+                alpha: TexturedScalar::constant(0.04),
+                distribution: Distribution::Ggx,
+                int_ior: 1.5,
+                ext_ior: 1.0,
+                nonlinear: false,
+            },
+        ),
+        diffuse("pedestal", [0.55, 0.56, 0.6]),
+        diffuse("lamp", [0.8, 0.8, 0.8]),
+        Material::new(
+            "gold-paint",
+            MaterialKind::Spec(ResolvedSpec::resolve("gold-paint", FITTED_SPEC)?),
+        ),
+        Material::new(
+            "brushed-aluminium",
+            MaterialKind::RoughConductor {
+                eta: Rgb([1.66, 0.88, 0.52]),
+                k: Rgb([9.22, 6.27, 4.84]),
+                specular: TexturedRgb::constant(Rgb::ONE),
+                alpha_u: TexturedScalar::constant(0.3),
+                alpha_v: TexturedScalar::constant(0.04),
+                distribution: Distribution::Ggx,
+            },
+        ),
+        Material::new(
+            "frosted-glass",
+            MaterialKind::RoughDielectric {
+                int_ior: 1.5,
+                ext_ior: 1.0,
+                alpha: TexturedScalar::constant(0.08),
+                distribution: Distribution::Ggx,
+                specular_reflectance: Rgb::ONE,
+                specular_transmittance: Rgb::ONE,
+            },
+        ),
+    ];
+    let (wall, ceiling, floor, pedestal, lamp) = (0, 1, 2, 3, 4);
+    let mut meshes = vec![
+        quad(
+            "floor",
+            v(0.0, 0.0, 0.0),
+            v(0.0, 0.0, d),
+            v(w, 0.0, 0.0),
+            floor,
+        ),
+        quad(
+            "ceiling",
+            v(0.0, h, 0.0),
+            v(w, 0.0, 0.0),
+            v(0.0, 0.0, d),
+            ceiling,
+        ),
+        quad(
+            "wall-left",
+            v(0.0, 0.0, 0.0),
+            v(0.0, h, 0.0),
+            v(0.0, 0.0, d),
+            wall,
+        ),
+        quad(
+            "wall-right",
+            v(w, 0.0, 0.0),
+            v(0.0, 0.0, d),
+            v(0.0, h, 0.0),
+            wall,
+        ),
+        quad(
+            "wall-back",
+            v(0.0, 0.0, 0.0),
+            v(w, 0.0, 0.0),
+            v(0.0, h, 0.0),
+            wall,
+        ),
+    ];
+    // The far wall (z = d, facing −z) around a window x ∈ [1.5, 4.5], y ∈ [0.8, 2.5].
+    let (x0, x1, y0, y1) = (1.5, 4.5, 0.8, 2.5);
+    for (name, lo, hi) in [
+        ("wall-window-left", v(0.0, 0.0, d), v(x0, h, d)),
+        ("wall-window-right", v(x1, 0.0, d), v(w, h, d)),
+        ("wall-window-below", v(x0, 0.0, d), v(x1, y0, d)),
+        ("wall-window-above", v(x0, y1, d), v(x1, h, d)),
+    ] {
+        meshes.push(quad(
+            name,
+            lo,
+            v(0.0, hi.y - lo.y, 0.0),
+            v(hi.x - lo.x, 0.0, 0.0),
+            wall,
+        ));
+    }
+    // The window's reveal (the wall's thickness, 0.2 m), facing into the opening.
+    let t = 0.2;
+    meshes.push(quad(
+        "reveal-bottom",
+        v(x0, y0, d),
+        v(0.0, 0.0, t),
+        v(x1 - x0, 0.0, 0.0),
+        wall,
+    ));
+    meshes.push(quad(
+        "reveal-top",
+        v(x0, y1, d),
+        v(x1 - x0, 0.0, 0.0),
+        v(0.0, 0.0, t),
+        wall,
+    ));
+    meshes.push(quad(
+        "reveal-left",
+        v(x0, y0, d),
+        v(0.0, y1 - y0, 0.0),
+        v(0.0, 0.0, t),
+        wall,
+    ));
+    meshes.push(quad(
+        "reveal-right",
+        v(x1, y0, d),
+        v(0.0, 0.0, t),
+        v(0.0, y1 - y0, 0.0),
+        wall,
+    ));
+    let mut panel = quad(
+        "lamp",
+        v(2.4, h - 0.01, 3.0),
+        v(1.2, 0.0, 0.0),
+        v(0.0, 0.0, 1.2),
+        lamp,
+    );
+    panel.emission = Some(Rgb([9.0, 8.5, 7.5]));
+    meshes.push(panel);
+    // Pedestals and spheres.
+    let r = 0.38;
+    for (k, (x, z, name, m)) in [
+        (1.6, 4.6, "gold-paint", 5),
+        (3.0, 5.4, "brushed-aluminium", 6),
+        (4.4, 4.6, "frosted-glass", 7),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        meshes.push(block(
+            &format!("pedestal-{k}"),
+            v(x - 0.3, 0.0, z - 0.3),
+            v(x + 0.3, 0.6, z + 0.3),
+            pedestal,
+        ));
+        let mut s = sphere(name, v(x, 0.6 + r, z), r, m);
+        s.hints.probe = true;
+        meshes.push(s);
+    }
+    meshes[0].hints.planar_reflector = true;
+    let mut scene = Scene::new("built-in room");
+    scene.materials = materials;
+    scene.meshes = meshes;
+    scene.environment = Some(Environment {
+        source: EnvironmentSource::Sky(Sky {
+            zenith: [1.0, 1.7, 3.4],
+            horizon: [3.6, 3.8, 4.0],
+            ground: [0.9, 0.85, 0.75],
+        }),
+        to_local: DMat3::IDENTITY,
+        intensity: 1.0,
+    });
+    let camera = Camera::look_at(
+        "default",
+        DVec3::new(3.0, 1.55, 0.9),
+        DVec3::new(3.0, 0.85, 5.6),
+        DVec3::Y,
+        62.0,
+        FovAxis::X,
+    )
+    .ok_or_else(|| SceneError::Format {
+        path: "built-in room".into(),
+        problem: "the camera is degenerate".into(),
+    })?;
+    scene.cameras = vec![camera];
+    scene.film = Film {
+        width: 960,
+        height: 540,
+    };
+    Ok(scene)
+}

@@ -1,0 +1,405 @@
+//! The walkthrough frame on the CPU (000 §4, Fig. 4.1): at every camera hit, the light-mapped
+//! diffuse term kd·E/π (000 Eq. 4.1) plus the view-dependent rest of the material integrated
+//! against pre-filtered incident light: the probe of the object hit (or the nearest probe),
+//! looked up through its bounding planes (000 §4.4.1), or the environment when the scene has no
+//! probe. The rest of the material, f − kd/π, is integrated by pushing a regular point set
+//! (a Fibonacci lattice) through the material's own sampling warp, each sample read at the MIP
+//! level of its cell, the solid angle 1/(n·pdf) ([`footprint_level`], the level the truth
+//! harness measured for the Kurt row lattice); `Ck` draws the same number of random points and
+//! reads Colbert–Křivánek's level (with their +1 bias); `Progressive` rotates the lattice frame
+//! after frame (Cranley–Patterson, R2 offsets) and reads the level of the accumulated count, so
+//! it converges to the integral of the same incident light (000 §4.4.2).
+//!
+//! Planar reflectors (meshes hinted `planar_reflector`) read a mirror buffer rendered for the
+//! frame's camera ([`crate::mirror`], 000 §4.5) instead: each sample is projected into it by the
+//! two tangent-plane intersections and read at the level of its footprint there; samples that
+//! leave the buffer fall back to the probe or the environment. The Fibonacci lattice pushed
+//! through the warp puts every sample on its own ring around the lobe centre, denser where the
+//! lobe is stronger: the multi-ring pattern of 000 §4.5.3 (Fig. 4.33b) taken to one sample per
+//! ring.
+//!
+//! This is the CPU frame the GPU renderer mirrors and the fallback when there is no adapter.
+
+use crate::image::Image;
+use crate::kernel::{corrected_direction, BoundingPlane};
+use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
+use crate::mirror::{render_mirror, render_see_through, ViewBuffer};
+use crate::path::PathCamera;
+use crate::probe::{LitScene, Probe};
+use crate::warp::{fibonacci_point, integrate_warp};
+use crate::{Result, ShadeError};
+use glam::DVec3;
+use glam::Vec2;
+use lustre_brdf::bsdf::Bsdf;
+use lustre_brdf::rgb::Rgb;
+use lustre_brdf::sampling::SplitMix64;
+use lustre_env::pyramid::CubePyramid;
+use lustre_scene::{Material, MaterialKind};
+use rayon::prelude::*;
+
+/// Largest sample count per pixel and lobe the regular methods accept.
+pub const MAX_SAMPLES: usize = 256;
+
+/// How the glossy part is integrated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameMethod {
+    /// A fixed regular point set through the material's warp, MIP-filtered.
+    Regular,
+    /// Colbert–Křivánek: the same number of random points, MIP-filtered.
+    Ck,
+    /// `frames` still frames of the regular set, each rotated, averaged.
+    Progressive {
+        /// Frames accumulated.
+        frames: u32,
+    },
+}
+
+/// Options of a frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameOptions {
+    /// Glossy samples per pixel (per camera ray).
+    pub samples: usize,
+    /// Integration method.
+    pub method: FrameMethod,
+    /// Camera rays per pixel (jittered as [`crate::bake::render::render_lightmapped`] does).
+    pub spp: u32,
+    /// Seed of the camera jitter and of the random methods.
+    pub seed: u64,
+}
+
+impl FrameOptions {
+    /// Errors on a sample count of 0 or above [`MAX_SAMPLES`], no camera rays, or no frames.
+    pub fn validate(&self) -> Result<()> {
+        if self.samples == 0 || self.samples > MAX_SAMPLES {
+            return Err(ShadeError::Parameter(format!(
+                "{} glossy samples per pixel is outside 1..={MAX_SAMPLES}",
+                self.samples
+            )));
+        }
+        if self.spp == 0 {
+            return Err(ShadeError::Parameter("0 camera rays per pixel".into()));
+        }
+        if let FrameMethod::Progressive { frames: 0 } = self.method {
+            return Err(ShadeError::Parameter(
+                "progressive refinement of 0 frames".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The pre-filtered incident light of a frame: the probes, and the environment's pyramid for
+/// scenes without probes.
+pub struct FrameLight<'p> {
+    /// Captured probes.
+    pub probes: &'p [Probe],
+    /// The environment, when no probe exists (distant light, no parallax).
+    pub environment: Option<&'p CubePyramid>,
+}
+
+/// Per-frame counts.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameStats {
+    /// Camera rays that hit a surface with a glossy part.
+    pub glossy_hits: u64,
+    /// Filtered lookups made.
+    pub lookups: u64,
+    /// Mirror buffers rendered (one per planar reflector).
+    pub mirrors: usize,
+    /// See-through buffers rendered (one per transmissive probe object).
+    pub see_throughs: usize,
+    /// Time of the mirror and see-through passes, seconds.
+    pub mirror_seconds: f64,
+}
+
+/// Renders a w×h frame of `lit` at `camera` with the incident light `light`.
+pub fn render_frame(
+    lit: &LitScene,
+    light: &FrameLight,
+    camera: &PathCamera,
+    w: usize,
+    h: usize,
+    opts: &FrameOptions,
+) -> Result<(Image, FrameStats)> {
+    opts.validate()?;
+    if w == 0 || h == 0 {
+        return Err(ShadeError::Parameter(format!("image {w}×{h} is empty")));
+    }
+    let probe_of_mesh: Vec<Option<usize>> = (0..lit.scene.meshes.len())
+        .map(|m| light.probes.iter().position(|p| p.mesh as usize == m))
+        .collect();
+    // The mirror pass: one buffer per planar reflector, for this camera (000 §4.5.1).
+    let t_mirror = std::time::Instant::now();
+    let mut mirrors = vec![];
+    let mut mirror_of_mesh = vec![None; lit.scene.meshes.len()];
+    for (m, mesh) in lit.scene.meshes.iter().enumerate() {
+        if mesh.hints.planar_reflector {
+            mirror_of_mesh[m] = Some(mirrors.len());
+            mirrors.push(render_mirror(lit, m, camera, w, h)?);
+        }
+    }
+    // The see-through pass: the camera's view without each transmissive probe object.
+    let mut see_throughs = vec![];
+    let mut see_through_of_mesh = vec![None; lit.scene.meshes.len()];
+    for (m, mesh) in lit.scene.meshes.iter().enumerate() {
+        let transmits = lit.scene.materials.get(mesh.material).is_some_and(|mat| {
+            mat.bsdf_at(&lit.scene.textures, &[Vec2::ZERO; 2])
+                .is_ok_and(|b| b.flags().transmission)
+        });
+        if mesh.hints.probe && transmits {
+            see_through_of_mesh[m] = Some(see_throughs.len());
+            see_throughs.push(render_see_through(lit, m, camera, w, h)?);
+        }
+    }
+    let mirror_seconds = t_mirror.elapsed().as_secs_f64();
+    // Smooth glass is shaded as a thin sheet (straight through, both interfaces' Fresnel):
+    // a pane or a rail seen through, as the thin BTDF lobes of 000 §3.3.1.
+    let thin: Vec<Option<Material>> = lit
+        .scene
+        .materials
+        .iter()
+        .map(|m| match &m.kind {
+            MaterialKind::Dielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => Some(Material::new(
+                m.name.clone(),
+                MaterialKind::ThinDielectric {
+                    int_ior: *int_ior,
+                    ext_ior: *ext_ior,
+                    specular_reflectance: *specular_reflectance,
+                    specular_transmittance: *specular_transmittance,
+                },
+            )),
+            _ => None,
+        })
+        .collect();
+    let first_prim: Vec<usize> = lit
+        .scene
+        .meshes
+        .iter()
+        .scan(0, |acc, m| {
+            let first = *acc;
+            *acc += m.indices.len();
+            Some(first)
+        })
+        .collect();
+    let ps = lit.path_scene;
+    let g = &ps.geometry;
+    let frames = match opts.method {
+        FrameMethod::Progressive { frames } => frames as usize,
+        _ => 1,
+    };
+    let shade = |o: DVec3, d: DVec3, rng: &mut SplitMix64| -> (Rgb, u64, bool) {
+        let Some(hit) = lit.tracer.intersect(o, d) else {
+            return (
+                ps.environment.as_ref().map_or(Rgb::ZERO, |e| e.eval(d)),
+                0,
+                false,
+            );
+        };
+        let mut l = lit.lit.radiance(g, hit.prim, hit.bary, d);
+        let mesh = lit.mesh_of[hit.prim] as usize;
+        if lit.scene.meshes[mesh].hints.diffuse_only {
+            return (l, 0, false);
+        }
+        let k = g.material[hit.prim] as usize;
+        let surface = &ps.materials[k];
+        let kd = lit.lit.albedo(g, hit.prim, hit.bary, d);
+        let (p, frame, uv) = lit.tracer.shading_point(o, d, &hit);
+        let wo = -d;
+        let frame = if surface.two_sided() && wo.dot(frame.n) < 0.0 {
+            frame.flipped()
+        } else {
+            frame
+        };
+        let wo_local = frame.to_local(wo);
+        // The incident light: this object's probe, else the nearest, else the environment.
+        let probe = probe_of_mesh[mesh].map(|i| &light.probes[i]).or_else(|| {
+            light.probes.iter().min_by(|a, b| {
+                a.centre
+                    .distance_squared(p)
+                    .total_cmp(&b.centre.distance_squared(p))
+            })
+        });
+        let env_light: Option<(&CubePyramid, &[BoundingPlane], DVec3)> = match probe {
+            Some(pr) => Some((&pr.pyramid, &pr.planes, p - pr.centre)),
+            None => light.environment.map(|env| (env, &[][..], DVec3::ZERO)),
+        };
+        // The mirror buffer, for the reflector's in-plane triangles.
+        let mirror = mirror_of_mesh[mesh]
+            .map(|i| &mirrors[i])
+            .filter(|m| m.reflector.in_plane[hit.prim - first_prim[mesh]]);
+        if env_light.is_none() && mirror.is_none() && see_through_of_mesh[mesh].is_none() {
+            return (l, 0, false);
+        }
+        let see_through = see_through_of_mesh[mesh].map(|i| &see_throughs[i]);
+        // A view buffer's filtered radiance for a sample along `wi` (None when it leaves it).
+        let read_view = |v: &ViewBuffer, wi: DVec3, pdf: Option<f64>, total: usize, ck: bool| {
+            let ((x, y), found) = v.locate(p, wi)?;
+            let lod = pdf.map_or(0.0, |pd| {
+                let bias = if ck { 1.0 } else { FOOTPRINT_LEVEL_BIAS };
+                v.level(p, wi, found, 1.0 / (total as f64 * pd), bias)
+            });
+            Some(v.sample(x, y, lod))
+        };
+        // The filtered radiance of a sample along `wi` drawn with density `pdf` (None: Dirac)
+        // out of `total`; `ck` picks Colbert–Křivánek's level instead of the footprint's.
+        let fetch = |wi: DVec3, pdf: Option<f64>, total: usize, ck: bool| -> Rgb {
+            if let Some(m) = mirror {
+                if let Some(c) = read_view(&m.view, wi, pdf, total, ck) {
+                    return c;
+                }
+            }
+            if let Some(v) = see_through {
+                if wi.dot(frame.n) * wo.dot(frame.n) < 0.0 {
+                    if let Some(c) = read_view(v, wi, pdf, total, ck) {
+                        return c;
+                    }
+                }
+            }
+            match env_light {
+                Some((pyramid, planes, rel)) => {
+                    let face = pyramid.base_size();
+                    let lod = pdf.map_or(0.0, |pd| {
+                        if ck {
+                            ck_level_at(pd, total, face, wi)
+                        } else {
+                            footprint_level(1.0 / (total as f64 * pd), wi, face)
+                        }
+                    });
+                    let dir = if planes.is_empty() {
+                        wi
+                    } else {
+                        corrected_direction(planes, rel, wi)
+                    };
+                    Rgb(pyramid.sample(dir, lod))
+                }
+                None => ps.environment.as_ref().map_or(Rgb::ZERO, |e| e.eval(wi)),
+            }
+        };
+        let n = opts.samples;
+        let mut glossy = Rgb::ZERO;
+        let mut lookups = 0u64;
+        let with_bsdf = |f: &mut dyn FnMut(&dyn Bsdf)| match &thin[k] {
+            Some(m) => {
+                let uv2 = [Vec2::new(uv[0] as f32, uv[1] as f32); 2];
+                if m.with_bsdf_at(&lit.scene.textures, &uv2, &mut *f).is_err() {
+                    surface.with_bsdf(uv, f);
+                }
+            }
+            None => surface.with_bsdf(uv, f),
+        };
+        with_bsdf(&mut |bsdf| {
+            let to_world = |v: DVec3| frame.to_world(v);
+            match opts.method {
+                FrameMethod::Regular => {
+                    let (c, k) = integrate_warp(
+                        bsdf,
+                        kd,
+                        to_world,
+                        wo_local,
+                        n,
+                        |i| fibonacci_point(i, n),
+                        |wi, pdf| fetch(wi, pdf, n, false),
+                    );
+                    glossy = c;
+                    lookups = k as u64;
+                }
+                FrameMethod::Ck => {
+                    let pts: Vec<(f64, f64)> =
+                        (0..n).map(|_| (rng.next_f64(), rng.next_f64())).collect();
+                    let (c, k) = integrate_warp(
+                        bsdf,
+                        kd,
+                        to_world,
+                        wo_local,
+                        n,
+                        |i| pts[i],
+                        |wi, pdf| fetch(wi, pdf, n, true),
+                    );
+                    glossy = c;
+                    lookups = k as u64;
+                }
+                FrameMethod::Progressive { .. } => {
+                    // Frame f of `frames`: the set rotated by an R2 offset; the level of the
+                    // accumulated count f·n, so the filtering shrinks as frames accumulate.
+                    let mut acc = Rgb::ZERO;
+                    for f in 0..frames {
+                        let off = r2(f);
+                        let total = n * (f + 1);
+                        let (c, k) = integrate_warp(
+                            bsdf,
+                            kd,
+                            to_world,
+                            wo_local,
+                            n,
+                            |i| {
+                                let (u, v) = fibonacci_point(i, n);
+                                ((u + off.0).fract(), (v + off.1).fract())
+                            },
+                            |wi, pdf| fetch(wi, pdf, total, false),
+                        );
+                        acc += c;
+                        lookups += k as u64;
+                    }
+                    glossy = acc * (1.0 / frames as f64);
+                }
+            }
+        });
+        if glossy.is_finite() {
+            l += glossy.map(|c| c.max(0.0));
+        }
+        (l, lookups, true)
+    };
+    let seed = opts.seed;
+    let spp = opts.spp;
+    let rows: Vec<([f32; 3], u64, u64)> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let mut sum = Rgb::ZERO;
+            let (mut hits, mut lookups) = (0u64, 0u64);
+            for k in 0..spp {
+                let mut rng = SplitMix64::new(
+                    seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                        ^ u64::from(k).wrapping_mul(0xC2B2_AE3D_27D4_EB4F),
+                );
+                let (jx, jy) = (rng.next_f64(), rng.next_f64());
+                let d = camera.direction(x as f64 + jx, y as f64 + jy, w, h);
+                let (c, n, glossy) = shade(camera.origin, d, &mut rng);
+                if c.is_finite() {
+                    sum += c;
+                }
+                hits += u64::from(glossy);
+                lookups += n;
+            }
+            ((sum / f64::from(spp)).0.map(|c| c as f32), hits, lookups)
+        })
+        .collect();
+    let mut stats = FrameStats {
+        mirrors: mirrors.len(),
+        see_throughs: see_throughs.len(),
+        mirror_seconds,
+        ..FrameStats::default()
+    };
+    let data = rows
+        .into_iter()
+        .map(|(c, hits, n)| {
+            stats.glossy_hits += hits;
+            stats.lookups += n;
+            c
+        })
+        .collect();
+    Ok((Image::from_data(w, h, data)?, stats))
+}
+
+/// The f-th point of the R2 sequence (Roberts 2018): the per-frame rotation of the set.
+fn r2(f: usize) -> (f64, f64) {
+    const A1: f64 = 0.754_877_666_246_692_7;
+    const A2: f64 = 0.569_840_290_998_053_3;
+    let (u, v) = (f as f64 * A1, f as f64 * A2);
+    (u - u.floor(), v - v.floor())
+}

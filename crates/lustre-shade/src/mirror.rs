@@ -1,0 +1,476 @@
+//! Planar reflectors (000 §4.5): the light-mapped scene rendered from the camera mirrored in the
+//! reflector's plane into a buffer of radiance, positions and normals (§4.5.1, Fig. 4.26), its
+//! MIP pyramid, and the projection of a lobe sample into the buffer by intersecting the sample
+//! ray with the tangent plane of the mirror-direction hit, then once more with the tangent plane
+//! of what the buffer shows there (§4.5.2, Fig. 4.28–4.31). Samples that leave the buffer (or
+//! point below the plane) are not answered here: the caller falls back to a probe or the
+//! environment.
+//!
+//! This is the CPU definition of the mirror pass; the GPU pass renders the same buffer.
+
+use crate::path::PathCamera;
+use crate::probe::LitScene;
+use crate::{Result, ShadeError};
+use glam::DVec3;
+use lustre_brdf::rgb::Rgb;
+use rayon::prelude::*;
+
+/// Largest distance of a reflector's vertex from its plane, relative to the mesh's extent, for
+/// a triangle to lie in the plane.
+pub const PLANARITY_TOLERANCE: f64 = 1e-3;
+
+/// Smallest share of a reflector's area that must lie in its plane. A floor mesh with a thin
+/// riser along one edge still counts (the riser's triangles are shaded like any other glossy
+/// surface); a curved or folded mesh does not.
+pub const PLANAR_AREA_SHARE: f64 = 0.99;
+
+/// The plane of a planar reflector.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReflectorPlane {
+    /// A point on the plane (the area-weighted centroid of the in-plane triangles).
+    pub point: DVec3,
+    /// Unit normal, on the side of those triangles' face normals.
+    pub normal: DVec3,
+}
+
+/// A reflector's plane and which of its triangles lie in it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reflector {
+    /// The plane.
+    pub plane: ReflectorPlane,
+    /// Per triangle of the mesh (in its order): whether it lies in the plane.
+    pub in_plane: Vec<bool>,
+    /// The share of the mesh's area in the plane.
+    pub area_share: f64,
+}
+
+impl ReflectorPlane {
+    /// The plane of mesh `m` of `lit`'s scene: the plane of its largest triangle, refined as the
+    /// area-weighted mean normal and centroid of the triangles parallel to it (cos > 0.999), and
+    /// the triangles within [`PLANARITY_TOLERANCE`] × the mesh's extent of it. Errors (naming the
+    /// mesh): no such mesh, no triangle of non-zero area, or less than [`PLANAR_AREA_SHARE`] of
+    /// the area in the plane (not planar).
+    pub fn of_mesh(lit: &LitScene, m: usize) -> Result<Reflector> {
+        let mesh = lit.scene.meshes.get(m).ok_or_else(|| {
+            ShadeError::Parameter(format!(
+                "{}: no mesh {m} to reflect in",
+                lit.scene.source.display()
+            ))
+        })?;
+        let p: Vec<DVec3> = mesh.positions.iter().map(|v| v.as_dvec3()).collect();
+        let tris: Vec<[DVec3; 3]> = mesh
+            .indices
+            .iter()
+            .map(|t| t.map(|i| p.get(i as usize).copied().unwrap_or(DVec3::NAN)))
+            .collect();
+        let cross: Vec<DVec3> = tris
+            .iter()
+            .map(|[a, b, c]| (*b - *a).cross(*c - *a))
+            .collect();
+        let no_area = || {
+            ShadeError::Parameter(format!(
+                "planar reflector {:?} has no triangle of non-zero area",
+                mesh.name
+            ))
+        };
+        let largest = cross
+            .iter()
+            .filter(|c| c.is_finite())
+            .max_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
+            .and_then(|c| c.try_normalize())
+            .ok_or_else(no_area)?;
+        let (mut n, mut c, mut a_par) = (DVec3::ZERO, DVec3::ZERO, 0.0);
+        for (t, x) in tris.iter().zip(&cross) {
+            let a = x.length();
+            if a > 0.0 && x.dot(largest) > 0.999 * a {
+                n += *x;
+                c += (t[0] + t[1] + t[2]) / 3.0 * a;
+                a_par += a;
+            }
+        }
+        let normal = n.try_normalize().ok_or_else(no_area)?;
+        let point = c / a_par;
+        let (lo, hi) = p.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &v| (lo.min(v), hi.max(v)),
+        );
+        let tol = PLANARITY_TOLERANCE * (hi - lo).length().max(1e-12);
+        let in_plane: Vec<bool> = tris
+            .iter()
+            .map(|t| t.iter().all(|v| (*v - point).dot(normal).abs() <= tol))
+            .collect();
+        let total: f64 = cross
+            .iter()
+            .map(|x| x.length())
+            .filter(|a| a.is_finite())
+            .sum();
+        let inside: f64 = cross
+            .iter()
+            .zip(&in_plane)
+            .filter(|(_, &k)| k)
+            .map(|(x, _)| x.length())
+            .sum();
+        let area_share = inside / total.max(1e-300);
+        if area_share.is_nan() || area_share < PLANAR_AREA_SHARE {
+            return Err(ShadeError::Parameter(format!(
+                "planar reflector {:?} is not planar: only {:.1} % of its area lies in one plane (within {tol:.4})",
+                mesh.name,
+                100.0 * area_share
+            )));
+        }
+        Ok(Reflector {
+            plane: ReflectorPlane { point, normal },
+            in_plane,
+            area_share,
+        })
+    }
+
+    /// `v` mirrored in the plane (a point).
+    pub fn reflect_point(&self, v: DVec3) -> DVec3 {
+        v - 2.0 * (v - self.point).dot(self.normal) * self.normal
+    }
+
+    /// `d` mirrored in the plane (a direction).
+    pub fn reflect_dir(&self, d: DVec3) -> DVec3 {
+        d - 2.0 * d.dot(self.normal) * self.normal
+    }
+}
+
+/// The camera mirrored in `plane`: origin and axes reflected, so that pixel (x, y) of the mirror
+/// camera looks along the reflection of the real camera's ray through (x, y).
+pub fn mirror_camera(camera: &PathCamera, plane: &ReflectorPlane) -> PathCamera {
+    PathCamera {
+        origin: plane.reflect_point(camera.origin),
+        forward: plane.reflect_dir(camera.forward),
+        right: plane.reflect_dir(camera.right),
+        up: plane.reflect_dir(camera.up),
+        tan_half_fov_y: camera.tan_half_fov_y,
+    }
+}
+
+/// Image position (x, y) in pixels (0..w, 0..h) where `camera` sees the point `p`, the inverse
+/// of [`PathCamera::direction`]; `None` behind the camera.
+pub fn project(camera: &PathCamera, w: usize, h: usize, p: DVec3) -> Option<(f64, f64)> {
+    project_dir(camera, w, h, p - camera.origin)
+}
+
+/// Image position of the direction `v` from the camera (a point at infinity along `v`).
+pub fn project_dir(camera: &PathCamera, w: usize, h: usize, v: DVec3) -> Option<(f64, f64)> {
+    let z = v.dot(camera.forward);
+    if z.is_nan() || z <= 1e-12 {
+        return None;
+    }
+    let a = camera.tan_half_fov_y;
+    let (wf, hf) = (w as f64, h as f64);
+    let px = v.dot(camera.right) / z;
+    let py = v.dot(camera.up) / z;
+    let x = (px / (a * wf / hf) + 1.0) * 0.5 * wf;
+    let y = (1.0 - py / a) * 0.5 * hf;
+    (x.is_finite() && y.is_finite()).then_some((x, y))
+}
+
+/// Where a sample found its radiance in a mirror buffer: the image position and, unless at
+/// infinity, the point and the normal of its tangent plane.
+pub type Located = ((f64, f64), Option<(DVec3, DVec3)>);
+
+/// One texel of the mirror buffer: what the mirror camera sees beyond the plane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MirrorTexel {
+    /// Light-mapped radiance towards the mirror camera (or the environment).
+    pub radiance: Rgb,
+    /// World position of the surface seen; `None` for the environment (a point at infinity).
+    pub position: Option<DVec3>,
+    /// Unit geometric normal of the surface seen (zero for the environment).
+    pub normal: DVec3,
+}
+
+/// A view of the light-mapped scene with one object left out, as a buffer of radiance,
+/// positions and normals with the radiance's MIP pyramid (2×2 box means, level l of size
+/// ⌈w/2^l⌉ × ⌈h/2^l⌉): the mirror camera's view beyond a reflector ([`render_mirror`]), or the
+/// camera's own view behind a transmissive object ([`render_see_through`]).
+#[derive(Clone, Debug)]
+pub struct ViewBuffer {
+    /// The mesh left out.
+    pub mesh: u32,
+    /// The camera the buffer was rendered from.
+    pub camera: PathCamera,
+    /// Width in texels.
+    pub width: usize,
+    /// Height in texels.
+    pub height: usize,
+    /// Level-0 texels, row-major.
+    pub texels: Vec<MirrorTexel>,
+    /// Radiance levels: (width, height, texels), finest first (level 0 = the texels').
+    pub levels: Vec<(usize, usize, Vec<Rgb>)>,
+    /// For a mirror buffer: the reflector's plane; samples below it are not answered.
+    pub front: Option<ReflectorPlane>,
+}
+
+/// The mirror buffer of one reflector for one view (000 §4.5.1): the frame's resolution.
+#[derive(Clone, Debug)]
+pub struct MirrorBuffer {
+    /// The reflector's plane and in-plane triangles.
+    pub reflector: Reflector,
+    /// Its plane.
+    pub plane: ReflectorPlane,
+    /// What the mirrored camera sees beyond the plane.
+    pub view: ViewBuffer,
+}
+
+/// Renders the mirror buffer of reflector `mesh` for `camera` at w×h: one ray per texel centre
+/// from the mirrored camera, starting where it crosses the plane (the plane itself and what lies
+/// behind it left out), shaded with the light-mapped scene (diffuse only, as 000 §4.5.1).
+pub fn render_mirror(
+    lit: &LitScene,
+    mesh: usize,
+    camera: &PathCamera,
+    w: usize,
+    h: usize,
+) -> Result<MirrorBuffer> {
+    let reflector = ReflectorPlane::of_mesh(lit, mesh)?;
+    let plane = reflector.plane;
+    let cam = mirror_camera(camera, &plane);
+    let mut view = render_view(lit, mesh, &cam, w, h, |d| {
+        // Start on the plane: what lies between the mirrored eye and the plane is behind the
+        // reflector in the real view.
+        let denom = d.dot(plane.normal);
+        if denom.abs() > 1e-12 {
+            ((plane.point - cam.origin).dot(plane.normal) / denom).max(0.0)
+        } else {
+            0.0
+        }
+    })?;
+    view.front = Some(plane);
+    Ok(MirrorBuffer {
+        reflector,
+        plane,
+        view,
+    })
+}
+
+/// Renders what `camera` sees at w×h with mesh `mesh` left out: the light arriving through a
+/// transmissive object (a glass rail, a window pane), read by its transmitted samples as the
+/// mirror buffer is read by reflected ones.
+pub fn render_see_through(
+    lit: &LitScene,
+    mesh: usize,
+    camera: &PathCamera,
+    w: usize,
+    h: usize,
+) -> Result<ViewBuffer> {
+    if mesh >= lit.scene.meshes.len() {
+        return Err(ShadeError::Parameter(format!(
+            "{}: no mesh {mesh} to see through",
+            lit.scene.source.display()
+        )));
+    }
+    render_view(lit, mesh, camera, w, h, |_| 0.0)
+}
+
+/// One ray per texel centre of `cam`, from `start(d)` along it, mesh `mesh` left out.
+fn render_view(
+    lit: &LitScene,
+    mesh: usize,
+    cam: &PathCamera,
+    w: usize,
+    h: usize,
+    start: impl Fn(DVec3) -> f64 + Sync,
+) -> Result<ViewBuffer> {
+    if w == 0 || h == 0 {
+        return Err(ShadeError::Parameter(format!(
+            "view buffer {w}×{h} is empty"
+        )));
+    }
+    let g = &lit.path_scene.geometry;
+    let texels: Vec<MirrorTexel> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let d = cam.direction(x as f64 + 0.5, y as f64 + 0.5, w, h);
+            let o = cam.origin + d * start(d);
+            let hit = lit
+                .tracer
+                .intersect_filtered(o, d, |p| lit.mesh_of[p] == mesh as u32);
+            match hit {
+                Some(hh) => {
+                    let tri = &g.positions[hh.prim];
+                    let ng = (tri[1] - tri[0])
+                        .cross(tri[2] - tri[0])
+                        .try_normalize()
+                        .unwrap_or(DVec3::ZERO);
+                    MirrorTexel {
+                        radiance: lit.lit.radiance(g, hh.prim, hh.bary, d),
+                        position: Some(o + d * hh.t),
+                        normal: ng,
+                    }
+                }
+                None => MirrorTexel {
+                    radiance: lit
+                        .path_scene
+                        .environment
+                        .as_ref()
+                        .map_or(Rgb::ZERO, |e| e.eval(d)),
+                    position: None,
+                    normal: DVec3::ZERO,
+                },
+            }
+        })
+        .collect();
+    let mut levels = vec![(w, h, texels.iter().map(|t| t.radiance).collect::<Vec<_>>())];
+    while let Some((lw, lh, data)) = levels.last() {
+        if *lw == 1 && *lh == 1 {
+            break;
+        }
+        let (nw, nh) = (lw.div_ceil(2), lh.div_ceil(2));
+        let mut next = vec![Rgb::ZERO; nw * nh];
+        for y in 0..nh {
+            for x in 0..nw {
+                let mut sum = Rgb::ZERO;
+                let mut k = 0.0;
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let (sx, sy) = (2 * x + dx, 2 * y + dy);
+                    if sx < *lw && sy < *lh {
+                        sum += data[sy * lw + sx];
+                        k += 1.0;
+                    }
+                }
+                next[y * nw + x] = sum * (1.0 / k);
+            }
+        }
+        levels.push((nw, nh, next));
+    }
+    Ok(ViewBuffer {
+        mesh: mesh as u32,
+        camera: *cam,
+        width: w,
+        height: h,
+        texels,
+        levels,
+        front: None,
+    })
+}
+
+impl ViewBuffer {
+    /// The texel nearest to image position (x, y), `None` outside the buffer.
+    pub fn texel_at(&self, x: f64, y: f64) -> Option<&MirrorTexel> {
+        if !(x >= 0.0 && y >= 0.0 && x < self.width as f64 && y < self.height as f64) {
+            return None;
+        }
+        self.texels.get(y as usize * self.width + x as usize)
+    }
+
+    /// Where the sample ray from `p` (on the reflector) along `wi` finds its radiance in the
+    /// buffer (000 §4.5.2): intersected with the tangent plane of the surface the mirror camera
+    /// sees at `p`'s own position, projected into the mirror camera, then intersected with the
+    /// tangent plane of what the buffer shows there and projected again (the additional
+    /// intersection step, Fig. 4.31). A sample towards the environment, or whose plane it does
+    /// not meet, is projected as a direction. Returns the image position and the point found
+    /// with the normal of its tangent plane (`None` at infinity); `None` when the position
+    /// leaves the buffer or `wi` points below the plane.
+    pub fn locate(&self, p: DVec3, wi: DVec3) -> Option<Located> {
+        if self.front.is_some_and(|f| wi.dot(f.normal) <= 0.0) {
+            return None;
+        }
+        let (w, h) = (self.width, self.height);
+        let (x0, y0) = project(&self.camera, w, h, p)?;
+        let first = self.texel_at(x0, y0)?;
+        let step = |t: &MirrorTexel| -> Option<Located> {
+            let hit = t
+                .position
+                .and_then(|q| ray_plane(p, wi, q, t.normal).map(|pi| (pi, t.normal)));
+            match hit {
+                Some((pi, n)) => Some((project(&self.camera, w, h, pi)?, Some((pi, n)))),
+                None => Some((project_dir(&self.camera, w, h, wi)?, None)),
+            }
+        };
+        let ((x1, y1), _) = step(first)?;
+        let second = self.texel_at(x1, y1)?;
+        let ((x2, y2), pi) = step(second)?;
+        self.texel_at(x2, y2)?;
+        Some(((x2, y2), pi))
+    }
+
+    /// Trilinear lookup of the radiance at image position (x, y) (level-0 pixels) and MIP level
+    /// `lod` (clamped to the pyramid).
+    pub fn sample(&self, x: f64, y: f64, lod: f64) -> Rgb {
+        let top = (self.levels.len() - 1) as f64;
+        let lod = if lod.is_nan() {
+            0.0
+        } else {
+            lod.clamp(0.0, top)
+        };
+        let l0 = lod.floor() as usize;
+        let l1 = (l0 + 1).min(self.levels.len() - 1);
+        let f = lod - l0 as f64;
+        let a = self.bilinear(l0, x, y);
+        if f == 0.0 {
+            a
+        } else {
+            a * (1.0 - f) + self.bilinear(l1, x, y) * f
+        }
+    }
+
+    fn bilinear(&self, level: usize, x: f64, y: f64) -> Rgb {
+        let (lw, lh, data) = &self.levels[level];
+        let s = (1u64 << level) as f64;
+        let fx = (x / s - 0.5).clamp(0.0, (*lw - 1) as f64);
+        let fy = (y / s - 0.5).clamp(0.0, (*lh - 1) as f64);
+        let (x0, y0) = (fx.floor() as usize, fy.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(lw - 1), (y0 + 1).min(lh - 1));
+        let (tx, ty) = (fx - x0 as f64, fy - y0 as f64);
+        let at = |x: usize, y: usize| data[y * lw + x];
+        (at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx) * (1.0 - ty)
+            + (at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx) * ty
+    }
+
+    /// The MIP level of a sample of solid angle `omega` (sr) from `p` along `wi` that the buffer
+    /// answers at `found` (a point and its tangent plane's normal, from [`MirrorBuffer::locate`];
+    /// 000 §4.5.3 per sample): the cone of that solid angle around `wi` cut with the tangent
+    /// plane, the patch projected into the buffer (finite differences of two edge rays), ½ log2
+    /// of its area in texels, plus `bias`, clamped to the pyramid. At infinity the cone's
+    /// directions are projected.
+    pub fn level(
+        &self,
+        p: DVec3,
+        wi: DVec3,
+        found: Option<(DVec3, DVec3)>,
+        omega: f64,
+        bias: f64,
+    ) -> f64 {
+        let (w, h) = (self.width, self.height);
+        let (t, b) = wi.any_orthonormal_pair();
+        let e = omega.max(0.0).sqrt();
+        let (wu, wv) = (wi + t * e, wi + b * e);
+        let pts = match found {
+            Some((q, n)) => (
+                project(&self.camera, w, h, q),
+                ray_plane(p, wu, q, n).and_then(|x| project(&self.camera, w, h, x)),
+                ray_plane(p, wv, q, n).and_then(|x| project(&self.camera, w, h, x)),
+            ),
+            None => (
+                project_dir(&self.camera, w, h, wi),
+                project_dir(&self.camera, w, h, wu),
+                project_dir(&self.camera, w, h, wv),
+            ),
+        };
+        let top = (self.levels.len() - 1) as f64;
+        let (Some(c), Some(u), Some(v)) = pts else {
+            return top;
+        };
+        let area = ((u.0 - c.0) * (v.1 - c.1) - (u.1 - c.1) * (v.0 - c.0)).abs();
+        if !(area > 0.0 && area.is_finite()) {
+            return 0.0;
+        }
+        (0.5 * area.log2() + bias).clamp(0.0, top)
+    }
+}
+
+/// Where the ray p + s·d (s > 0) meets the plane through `q` with normal `n`.
+fn ray_plane(p: DVec3, d: DVec3, q: DVec3, n: DVec3) -> Option<DVec3> {
+    let denom = d.dot(n);
+    if denom.is_nan() || denom.abs() < 1e-12 {
+        return None;
+    }
+    let s = (q - p).dot(n) / denom;
+    (s > 0.0 && s.is_finite()).then(|| p + d * s)
+}

@@ -1,0 +1,224 @@
+//! `lustre render` end to end on a tiny baked scene (an OBJ floor and a gold block under a
+//! constant sky, the block a probe object): the frame files, the stage times, each method, the
+//! reference comparison, and clear errors for a scene without light maps, bad sample counts and
+//! a reference of another size.
+
+use lustre_shade::image::Image;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn lustre() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_lustre"))
+}
+
+const MTL: &str = "newmtl grey\nKd 0.6 0.6 0.6\nnewmtl metal\nKd 0.5 0.5 0.5\n";
+
+const OBJ: &str = "mtllib floor.mtl\nusemtl grey\no floor\n\
+v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nf 1 3 2\nf 1 4 3\n\
+o block\nusemtl metal\n\
+v -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 1 -0.5\nv -0.5 1 -0.5\n\
+v -0.5 0 0.5\nv 0.5 0 0.5\nv 0.5 1 0.5\nv -0.5 1 0.5\n\
+f 5 8 7\nf 5 7 6\nf 9 10 11\nf 9 11 12\nf 5 9 12\nf 5 12 8\nf 6 7 11\nf 6 11 10\nf 8 12 11\nf 8 11 7\n";
+
+/// The scene file: the OBJ under a constant sky, the block made of rough gold, and `extra`.
+fn write_scene(dir: &Path, extra: &str) -> PathBuf {
+    std::fs::write(dir.join("floor.obj"), OBJ).unwrap();
+    std::fs::write(dir.join("floor.mtl"), MTL).unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "schema = \"lustre-scene\"\nversion = 1\n[[geometry]]\nfile = \"floor.obj\"\n\
+             [environment]\nconstant = [1.0, 1.0, 1.0]\n\
+             [materials]\nmetal = \"roughconductor(material=Au, alpha=0.2)\"\n{extra}"
+        ),
+    )
+    .unwrap();
+    scene
+}
+
+fn bake(scene: &Path, out: &Path) {
+    let o = lustre()
+        .arg("bake")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .args(["--spp", "4", "--bounces", "2", "--texels-per-metre", "8"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+fn render(scene: &Path, out: &Path, args: &[&str]) -> Output {
+    lustre()
+        .arg("render")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .args(["--size", "48x32", "--probe-size", "32"])
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn text(o: &Output) -> String {
+    format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+#[test]
+fn render_writes_a_frame_times_and_a_comparison() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_scene(dir.path(), "[objects.block]\nprobe = true\n");
+    let baked = dir.path().join("baked");
+    bake(&scene, &baked);
+    let frames = dir.path().join("frames");
+    let o = render(&baked.join("scene.toml"), &frames, &["--samples", "8"]);
+    let all = text(&o);
+    assert!(o.status.success(), "{all}");
+    assert!(all.contains("probe \"block\""), "{all}");
+    // At most the budget of 8 lookups per glossy hit (samples the warp rejects make none).
+    let per_hit: f64 = all
+        .split(" lookups per glossy hit")
+        .next()
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("{all}"));
+    assert!(per_hit > 6.0 && per_hit <= 8.0, "{per_hit}");
+    let png = Image::read_exr(&frames.join("frame.png")).unwrap();
+    assert_eq!((png.width, png.height), (48, 32));
+    let times = std::fs::read_to_string(frames.join("times.csv")).unwrap();
+    for stage in ["stage,seconds", "probe block,", "frame,", "total,"] {
+        assert!(times.contains(stage), "{stage} missing: {times}");
+    }
+    // The frame against itself, and against a different method.
+    let reference = dir.path().join("self.exr");
+    std::fs::copy(frames.join("frame.exr"), &reference).unwrap();
+    let o = render(
+        &baked.join("scene.toml"),
+        &frames,
+        &[
+            "--samples",
+            "8",
+            "--compare-reference",
+            reference.to_str().unwrap(),
+        ],
+    );
+    let all = text(&o);
+    assert!(o.status.success() && all.contains("PSNR inf dB"), "{all}");
+    assert!(frames.join("diff.png").is_file());
+    for method in ["ck", "progressive"] {
+        let o = render(
+            &baked.join("scene.toml"),
+            &dir.path().join(method),
+            &[
+                "--samples",
+                "4",
+                "--method",
+                method,
+                "--frames",
+                "4",
+                "--compare-reference",
+                reference.to_str().unwrap(),
+            ],
+        );
+        let all = text(&o);
+        assert!(o.status.success(), "{method}: {all}");
+        let psnr: f64 = all
+            .split("PSNR ")
+            .nth(1)
+            .and_then(|s| s.split(' ').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap_or_else(|| panic!("{all}"));
+        assert!(psnr.is_finite() && psnr > 20.0, "{method}: {psnr} dB");
+    }
+    // A reference of another size is refused, naming both sizes.
+    let other = dir.path().join("other.exr");
+    Image::from_data(40, 30, vec![[0.5; 3]; 1200])
+        .unwrap()
+        .write_exr(&other)
+        .unwrap();
+    let o = render(
+        &baked.join("scene.toml"),
+        &frames,
+        &["--compare-reference", other.to_str().unwrap()],
+    );
+    let all = text(&o);
+    assert!(
+        !o.status.success() && all.contains("48×32") && all.contains("40×30"),
+        "{all}"
+    );
+}
+
+#[test]
+fn render_refuses_bad_input_and_says_what_it_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    // No probe objects: the environment only, and it says so.
+    let scene = write_scene(dir.path(), "");
+    let o = render(&scene, &dir.path().join("x"), &[]);
+    let all = text(&o);
+    assert!(
+        !o.status.success() && all.contains("no light maps") && all.contains("lustre bake"),
+        "{all}"
+    );
+    let baked = dir.path().join("baked");
+    bake(&scene, &baked);
+    let o = render(
+        &baked.join("scene.toml"),
+        &dir.path().join("f"),
+        &["--samples", "4"],
+    );
+    let all = text(&o);
+    assert!(
+        o.status.success()
+            && all.contains("no probe objects: glossy surfaces reflect the environment only"),
+        "{all}"
+    );
+    for samples in ["0", "257"] {
+        let o = render(
+            &baked.join("scene.toml"),
+            &dir.path().join("f"),
+            &["--samples", samples],
+        );
+        let all = text(&o);
+        assert!(
+            !o.status.success() && all.contains("glossy samples"),
+            "{all}"
+        );
+    }
+    let o = render(
+        &baked.join("scene.toml"),
+        &dir.path().join("f"),
+        &["--method", "progressive", "--frames", "0"],
+    );
+    assert!(
+        !o.status.success() && text(&o).contains("0 frames"),
+        "{}",
+        text(&o)
+    );
+    let o = render(
+        &baked.join("scene.toml"),
+        &dir.path().join("f"),
+        &["--camera", "nope"],
+    );
+    assert!(
+        !o.status.success() && text(&o).contains("no camera named"),
+        "{}",
+        text(&o)
+    );
+    // A light-map page of the wrong size.
+    let page = baked.join("lightmap_000.exr");
+    Image::from_data(3, 3, vec![[1.0; 3]; 9])
+        .unwrap()
+        .write_exr(&page)
+        .unwrap();
+    let o = render(&baked.join("scene.toml"), &dir.path().join("f"), &[]);
+    let all = text(&o);
+    assert!(
+        !o.status.success() && all.contains("lightmap_000.exr") && all.contains("3×3"),
+        "{all}"
+    );
+}
