@@ -4,16 +4,15 @@
 //! MERL's gold metallic paint), a brushed-aluminium sphere (anisotropic) and a frosted-glass
 //! sphere (transmissive). What `lustre render` shows with no scene given.
 
-use crate::camera::{Camera, FovAxis};
+use crate::camera::{Camera, CameraPath, FovAxis, Keyframe};
 use crate::environment::{Environment, EnvironmentSource, Sky};
 use crate::material::{
     Distribution, Material, MaterialKind, ResolvedSpec, TexturedRgb, TexturedScalar,
 };
 use crate::mesh::Mesh;
 use crate::{Film, Result, Scene, SceneError};
-use glam::{DMat3, DVec3, Vec2, Vec3, Vec4};
+use glam::{DMat3, DVec3, Vec2, Vec3};
 use lustre_brdf::rgb::Rgb;
-use std::f64::consts::PI;
 
 /// Room width (x), height (y) and depth (z), metres.
 pub const ROOM: [f32; 3] = [6.0, 3.0, 8.0];
@@ -73,38 +72,6 @@ fn block(name: &str, lo: Vec3, hi: Vec3, material: usize) -> Mesh {
     m
 }
 
-/// A UV sphere with normals, uv0 (u along the longitude) and tangents along the longitude
-/// (the brushing direction of an anisotropic material).
-fn sphere(name: &str, centre: Vec3, radius: f32, material: usize) -> Mesh {
-    let (nu, nv) = (48u32, 24u32);
-    let (mut p, mut n, mut uv, mut t) = (vec![], vec![], vec![], vec![]);
-    for j in 0..=nv {
-        let th = PI * f64::from(j) / f64::from(nv);
-        for i in 0..=nu {
-            let ph = 2.0 * PI * f64::from(i) / f64::from(nu);
-            let d = DVec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin());
-            p.push(centre + d.as_vec3() * radius);
-            n.push(d.as_vec3());
-            uv.push(Vec2::new(i as f32 / nu as f32, j as f32 / nv as f32));
-            let tan = DVec3::new(-ph.sin(), 0.0, ph.cos());
-            t.push(Vec4::new(tan.x as f32, 0.0, tan.z as f32, 1.0));
-        }
-    }
-    let at = |i: u32, j: u32| j * (nu + 1) + i;
-    let mut idx = vec![];
-    for j in 0..nv {
-        for i in 0..nu {
-            idx.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
-            idx.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
-        }
-    }
-    let mut m = Mesh::new(name, p, idx, material);
-    m.normals = Some(n);
-    m.uv0 = Some(uv);
-    m.tangents = Some(t);
-    m
-}
-
 /// The built-in scene. Errors only if the built-in fitted material cannot be resolved.
 pub fn room() -> Result<Scene> {
     let [w, h, d] = ROOM;
@@ -147,7 +114,7 @@ pub fn room() -> Result<Scene> {
             MaterialKind::RoughDielectric {
                 int_ior: 1.5,
                 ext_ior: 1.0,
-                alpha: TexturedScalar::constant(0.08),
+                alpha: TexturedScalar::constant(0.2),
                 distribution: Distribution::Ggx,
                 specular_reflectance: Rgb::ONE,
                 specular_transmittance: Rgb::ONE,
@@ -263,7 +230,7 @@ pub fn room() -> Result<Scene> {
             v(x + 0.3, 0.6, z + 0.3),
             pedestal,
         ));
-        let mut s = sphere(name, v(x, 0.6 + r, z), r, m);
+        let mut s = Mesh::uv_sphere(name, v(x, 0.6 + r, z), r, m);
         s.hints.probe = true;
         meshes.push(s);
     }
@@ -292,10 +259,72 @@ pub fn room() -> Result<Scene> {
         path: "built-in room".into(),
         problem: "the camera is degenerate".into(),
     })?;
-    scene.cameras = vec![camera];
+    let close = Camera::look_at(
+        "close",
+        DVec3::new(2.2, 1.2, 2.9),
+        DVec3::new(3.0, 0.9, 5.0),
+        DVec3::Y,
+        55.0,
+        FovAxis::X,
+    )
+    .ok_or_else(|| SceneError::Format {
+        path: "built-in room".into(),
+        problem: "the close camera is degenerate".into(),
+    })?;
+    scene.camera_paths = vec![CameraPath {
+        name: "walk".into(),
+        keyframes: vec![
+            Keyframe {
+                time: 0.0,
+                camera: camera.clone(),
+            },
+            Keyframe {
+                time: 2.0,
+                camera: close.clone(),
+            },
+        ],
+        looped: false,
+    }];
+    scene.cameras = vec![camera, close];
     scene.film = Film {
         width: 960,
         height: 540,
+    };
+    Ok(scene)
+}
+
+/// The material preview: a sphere of radius 1 (tangents along its longitude, for anisotropic
+/// materials) of material `spec` (any lustre material specification) under `environment`, or
+/// the built-in sky when `None`, seen from 4.2 units away with a 30° vertical field of view. No
+/// light maps: the whole material is integrated against the environment.
+pub fn preview(spec: &str, environment: Option<Environment>) -> Result<Scene> {
+    let mut scene = Scene::new(format!("preview of {spec}"));
+    scene.materials = vec![Material::new(
+        spec,
+        MaterialKind::Spec(ResolvedSpec::resolve(spec, spec)?),
+    )];
+    scene.meshes = vec![Mesh::uv_sphere("preview", Vec3::ZERO, 1.0, 0)];
+    scene.environment = Some(environment.unwrap_or(Environment {
+        source: EnvironmentSource::Sky(Sky::default()),
+        to_local: DMat3::IDENTITY,
+        intensity: 1.0,
+    }));
+    let camera = Camera::look_at(
+        "default",
+        DVec3::new(0.0, 1.2, 4.0),
+        DVec3::ZERO,
+        DVec3::Y,
+        30.0,
+        FovAxis::Y,
+    )
+    .ok_or_else(|| SceneError::Format {
+        path: "material preview".into(),
+        problem: "the camera is degenerate".into(),
+    })?;
+    scene.cameras = vec![camera];
+    scene.film = Film {
+        width: 512,
+        height: 512,
     };
     Ok(scene)
 }

@@ -7,9 +7,10 @@
 //! Texture coordinates follow glTF: v = 0 is the top row of an image (OBJ's v is flipped on read).
 
 use crate::error::{Result, SceneError};
-use glam::{DMat4, Vec2, Vec3, Vec4};
+use glam::{DMat4, DVec3, Vec2, Vec3, Vec4};
 use lustre_brdf::Rgb;
 use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
 use std::path::Path;
 
 /// Segments of a tessellated disk (a triangle fan of this many triangles).
@@ -100,6 +101,38 @@ impl Mesh {
             self.positions[b as usize],
             self.positions[c as usize],
         ]
+    }
+
+    /// A UV sphere (48 × 24 quads) with unit normals, uv0 (u along the longitude) and tangents
+    /// along the longitude (the brushing direction of an anisotropic material).
+    pub fn uv_sphere(name: &str, centre: Vec3, radius: f32, material: usize) -> Mesh {
+        let (nu, nv) = (48u32, 24u32);
+        let (mut p, mut n, mut uv, mut t) = (vec![], vec![], vec![], vec![]);
+        for j in 0..=nv {
+            let th = PI * f64::from(j) / f64::from(nv);
+            for i in 0..=nu {
+                let ph = 2.0 * PI * f64::from(i) / f64::from(nu);
+                let d = DVec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin());
+                p.push(centre + d.as_vec3() * radius);
+                n.push(d.as_vec3());
+                uv.push(Vec2::new(i as f32 / nu as f32, j as f32 / nv as f32));
+                let tan = DVec3::new(-ph.sin(), 0.0, ph.cos());
+                t.push(Vec4::new(tan.x as f32, 0.0, tan.z as f32, 1.0));
+            }
+        }
+        let at = |i: u32, j: u32| j * (nu + 1) + i;
+        let mut idx = vec![];
+        for j in 0..nv {
+            for i in 0..nu {
+                idx.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+                idx.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+            }
+        }
+        let mut m = Mesh::new(name, p, idx, material);
+        m.normals = Some(n);
+        m.uv0 = Some(uv);
+        m.tangents = Some(t);
+        m
     }
 
     /// Total surface area.

@@ -20,6 +20,7 @@
 //!
 //! This is the CPU frame the GPU renderer mirrors and the fallback when there is no adapter.
 
+use crate::bake::render::camera_ray;
 use crate::image::Image;
 use crate::kernel::{corrected_direction, BoundingPlane};
 use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
@@ -292,7 +293,13 @@ pub fn render_frame(
             }
             None => surface.with_bsdf(uv, f),
         };
+        let mut view_dependent = true;
         with_bsdf(&mut |bsdf| {
+            // A Lambertian surface the light map covers has no view-dependent part left.
+            if bsdf.flags().diffuse_only() && kd != Rgb::ZERO {
+                view_dependent = false;
+                return;
+            }
             let to_world = |v: DVec3| frame.to_world(v);
             match opts.method {
                 FrameMethod::Regular => {
@@ -352,7 +359,7 @@ pub fn render_frame(
         if glossy.is_finite() {
             l += glossy.map(|c| c.max(0.0));
         }
-        (l, lookups, true)
+        (l, lookups, view_dependent)
     };
     let seed = opts.seed;
     let spp = opts.spp;
@@ -363,12 +370,7 @@ pub fn render_frame(
             let mut sum = Rgb::ZERO;
             let (mut hits, mut lookups) = (0u64, 0u64);
             for k in 0..spp {
-                let mut rng = SplitMix64::new(
-                    seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-                        ^ u64::from(k).wrapping_mul(0xC2B2_AE3D_27D4_EB4F),
-                );
-                let (jx, jy) = (rng.next_f64(), rng.next_f64());
-                let d = camera.direction(x as f64 + jx, y as f64 + jy, w, h);
+                let (d, mut rng) = camera_ray(camera, seed, (x, y), (w, h), k);
                 let (c, n, glossy) = shade(camera.origin, d, &mut rng);
                 if c.is_finite() {
                     sum += c;

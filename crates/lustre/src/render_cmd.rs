@@ -5,18 +5,25 @@
 //! false-colour difference.
 
 use anyhow::{bail, Context};
+use glam::DMat3;
 use indicatif::{ProgressBar, ProgressStyle};
 use lustre_brdf::rgb::Rgb;
 use lustre_env::cube::CubeMap;
 use lustre_env::pyramid::{CubePyramid, MipFilter};
+use lustre_scene::lightmap::{build_atlas, AtlasOptions, AtlasSource, LightmapAtlas};
+use lustre_scene::Scene;
+use lustre_scene::{Environment, EnvironmentSource};
 use lustre_shade::bake::render::{read_pages, Lightmapped};
 use lustre_shade::bake::spec_albedo;
-use lustre_shade::frame::{render_frame, FrameLight, FrameMethod, FrameOptions};
+use lustre_shade::bake::{assemble, bake_tiles, BakeOptions, Transport};
+use lustre_shade::frame::{render_frame, FrameLight, FrameMethod, FrameOptions, FrameStats};
 use lustre_shade::image::Image;
+use lustre_shade::path::PathCamera;
 use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// How the glossy part is integrated.
@@ -33,11 +40,27 @@ pub enum Method {
 /// Arguments of `lustre render`.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// A scene with baked light maps: the scene.toml `lustre bake --out DIR` writes.
-    pub scene: PathBuf,
+    /// A scene with baked light maps: the scene.toml `lustre bake --out DIR` writes. Without
+    /// one, the built-in room (its light maps baked into OUT/bake on the first run, reused
+    /// after).
+    pub scene: Option<PathBuf>,
+    /// Render this material (any material specification, `lustre list`) on a sphere under the
+    /// environment instead of a scene: the material preview.
+    #[arg(long, conflicts_with = "scene")]
+    pub material: Option<String>,
+    /// An equirect `.hdr` / `.exr` environment for the preview or the built-in room (the
+    /// built-in sky by default).
+    #[arg(long, conflicts_with = "scene")]
+    pub env: Option<PathBuf>,
     /// Camera name (the scene's first camera by default).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "path")]
     pub camera: Option<String>,
+    /// Render the frames of this camera path (frame_0000.png …), at --fps.
+    #[arg(long, conflicts_with = "compare_reference")]
+    pub path: Option<String>,
+    /// Frames per second along --path.
+    #[arg(long, default_value_t = 24.0)]
+    pub fps: f64,
     /// Glossy samples per pixel (per camera ray), 1–256.
     #[arg(long, default_value_t = 16)]
     pub samples: usize,
@@ -68,6 +91,93 @@ pub struct RenderArgs {
     /// Output folder (frame.exr, frame.png, times.csv; diff.png with --compare-reference).
     #[arg(long)]
     pub out: PathBuf,
+}
+
+/// A scene with its light-map atlas and baked pages.
+type Baked = (Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>);
+
+/// A scene file with baked light maps: the scene, its atlas and its pages.
+fn load_baked(path: &Path) -> anyhow::Result<Baked> {
+    let scene = Scene::load(path).with_context(|| format!("loading {}", path.display()))?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let Some(lightmap) = &scene.lightmap else {
+        bail!(
+            "{}: no light maps; bake them first (`lustre bake {} --out DIR`) and render DIR/scene.toml",
+            path.display(),
+            path.display()
+        );
+    };
+    let pages = read_pages(lightmap).with_context(|| format!("{}", path.display()))?;
+    let atlas = lightmap.atlas.clone();
+    Ok((scene, atlas, pages))
+}
+
+/// The built-in room with its light maps: an atlas at 16 texels/m and a bake of 64 paths per
+/// texel through the full materials, into `out/bake` (tiles reused on the next run).
+fn builtin(out: &Path, environment: Option<Environment>) -> anyhow::Result<Baked> {
+    let mut scene = lustre_scene::builtin::room()?;
+    if environment.is_some() {
+        scene.environment = environment;
+    }
+    let aopts = AtlasOptions {
+        texels_per_metre: 16.0,
+        ..AtlasOptions::default()
+    };
+    let (atlas, _) = build_atlas(&mut scene, &aopts).context("the built-in room's atlas")?;
+    let dir = out.join("bake");
+    let opts = BakeOptions {
+        spp: 64,
+        bounces: 8,
+        transport: Transport::Full,
+        ..BakeOptions::default()
+    };
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "baking the built-in room: [{bar:30}] {pos}/{len} tiles, {elapsed}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bake_tiles(&scene, &atlas, &opts, &dir, None, &|k, n| {
+        bar.set_length(n as u64);
+        bar.set_position(k as u64);
+    })
+    .context("baking the built-in room")?;
+    bar.finish_and_clear();
+    let assembled = assemble(&scene, &atlas, &opts, &dir).context("assembling its light maps")?;
+    Ok((scene, atlas, assembled.pages))
+}
+
+/// An equirect map as the scene's environment.
+fn read_environment(path: &Path) -> anyhow::Result<Environment> {
+    let loaded = lustre_env::io::read_map(path)?;
+    Ok(Environment {
+        source: EnvironmentSource::Map {
+            path: path.to_path_buf(),
+            map: Arc::new(loaded.map),
+        },
+        to_local: DMat3::IDENTITY,
+        intensity: 1.0,
+    })
+}
+
+/// The material preview: a sphere of `spec` under `environment` (the built-in sky by default),
+/// no light maps (an atlas of one black texel that no mesh uses).
+fn preview(spec: &str, environment: Option<Environment>) -> anyhow::Result<Baked> {
+    let scene = lustre_scene::builtin::preview(spec, environment)
+        .with_context(|| format!("--material {spec}"))?;
+    let atlas = LightmapAtlas {
+        width: 1,
+        height: 1,
+        pages: 1,
+        mesh_page: vec![None; scene.meshes.len()],
+        gutter: 0,
+        texels_per_metre: 0.0,
+        source: AtlasSource::Texcoord1,
+    };
+    Ok((scene, atlas, vec![vec![[0.0; 3]]]))
 }
 
 /// Wall time per stage.
@@ -111,35 +221,39 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         ..ProbeOptions::default()
     };
     probe_opts.validate()?;
-    let scene = lustre_scene::Scene::load(&args.scene)
-        .with_context(|| format!("loading {}", args.scene.display()))?;
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
-    let Some(lightmap) = &scene.lightmap else {
-        bail!(
-            "{}: no light maps; bake them first (`lustre bake {} --out DIR`) and render DIR/scene.toml",
-            args.scene.display(),
-            args.scene.display()
-        );
+    let environment = args.env.as_deref().map(read_environment).transpose()?;
+    let (scene, atlas, pages) = match (&args.scene, &args.material) {
+        (Some(path), _) => load_baked(path)?,
+        (None, Some(spec)) => preview(spec, environment)?,
+        (None, None) => builtin(&args.out, environment)?,
+    };
+    let name = match (&args.scene, &args.material) {
+        (Some(p), _) => p.display().to_string(),
+        (None, Some(spec)) => format!("the preview of {spec}"),
+        (None, None) => "the built-in room".to_string(),
     };
     let (w, h) = match args.size.as_deref() {
         Some(s) => crate::reference_cmd::parse_size(s)?,
         None => (scene.film.width, scene.film.height),
     };
-    let camera = lustre_shade::reference::path_camera(&scene, args.camera.as_deref(), w, h)?;
-    st.lap("load");
-    let pages = read_pages(lightmap).with_context(|| format!("{}", args.scene.display()))?;
+    let cameras = match &args.path {
+        None => vec![(
+            "frame".to_string(),
+            lustre_shade::reference::path_camera(&scene, args.camera.as_deref(), w, h)?,
+        )],
+        Some(p) => path_cameras(&scene, p, args.fps, w, h)?,
+    };
+    st.lap("load, light maps");
     let (ps, warnings) = lustre_shade::reference::path_scene(&scene)?;
     for w in &warnings {
         eprintln!("warning: {w}");
     }
     let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = Lightmapped::new(&scene, &lightmap.atlas, &pages, &ps.geometry, spec)
-        .with_context(|| format!("{}: light maps", args.scene.display()))?;
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec)
+        .with_context(|| format!("{name}: light maps"))?;
     let pt = PathTracer::new(&ps, PathOptions::default())?;
     let lit = LitScene::new(&scene, &ps, &pt, &lm)?;
-    st.lap("light maps and BVH");
+    st.lap("BVH");
 
     let mut probes = vec![];
     for (m, mesh) in scene.meshes.iter().enumerate() {
@@ -162,7 +276,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     }
     let env_pyramid = match (&probes[..], &ps.environment) {
         ([], Some(env)) => {
-            eprintln!("no probe objects: glossy surfaces reflect the environment only");
+            if args.material.is_none() {
+                eprintln!("no probe objects: glossy surfaces reflect the environment only");
+            }
             let cube = CubeMap::from_fn(args.probe_size, |d| env.eval(d).0)?;
             let p = CubePyramid::build(cube, MipFilter::Gauss6)?;
             st.lap("environment pyramid");
@@ -178,33 +294,69 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         probes: &probes,
         environment: env_pyramid.as_ref(),
     };
-    let bar = ProgressBar::new_spinner();
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let bar = ProgressBar::new(cameras.len() as u64);
     bar.set_style(
-        ProgressStyle::with_template("{spinner} {msg} {elapsed}")
-            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    bar.set_message(format!("frame {w}×{h}, {} spp", args.spp));
-    bar.enable_steady_tick(std::time::Duration::from_millis(200));
-    let (img, stats) = render_frame(&lit, &light, &camera, w as usize, h as usize, &opts)?;
+    bar.set_message(format!("{w}×{h}, {} camera rays/pixel", args.spp));
+    for (stem, camera) in &cameras {
+        let (img, stats) = render_frame(&lit, &light, camera, w as usize, h as usize, &opts)?;
+        bar.inc(1);
+        st.lap(stem.clone());
+        if stats.mirrors + stats.see_throughs > 0 {
+            // The mirror and see-through passes run inside the frame; report them apart.
+            let (_, frame_s) = st.times.pop().unwrap_or_default();
+            st.times.push((
+                format!("{stem}: mirror and see-through passes"),
+                stats.mirror_seconds,
+            ));
+            st.times
+                .push((stem.clone(), (frame_s - stats.mirror_seconds).max(0.0)));
+        }
+        img.write_exr(&args.out.join(format!("{stem}.exr")))?;
+        img.write_png_dithered(
+            &args.out.join(format!("{stem}.png")),
+            args.exposure,
+            args.seed,
+        )?;
+        if cameras.len() == 1 {
+            bar.finish_and_clear();
+            report(args, &img, &stats, (w, h))?;
+        }
+        st.lap(format!("{stem}: write"));
+    }
     bar.finish_and_clear();
-    st.lap("frame");
+    eprintln!("rendered on the CPU (lustre_shade::frame; the GPU frame is not assembled yet)");
+    let mut csv = String::from("stage,seconds\n");
+    for (name, s) in &st.times {
+        writeln!(csv, "{},{s:.4}", name.replace(',', " "))?;
+    }
+    writeln!(csv, "total,{:.4}", t0.elapsed().as_secs_f64())?;
+    lustre_brdf::error::write_atomic(&args.out.join("times.csv"), csv.as_bytes())?;
+    println!(
+        "wrote {} ({} frame(s) as EXR and PNG, times.csv)",
+        args.out.display(),
+        cameras.len()
+    );
+    Ok(())
+}
+
+/// Prints a single frame's counts and, with --compare-reference, its comparison.
+fn report(
+    args: &RenderArgs,
+    img: &Image,
+    stats: &FrameStats,
+    (w, h): (u32, u32),
+) -> anyhow::Result<()> {
     if stats.mirrors + stats.see_throughs > 0 {
-        // The mirror and see-through passes run inside the frame; report them as a stage.
-        let (_, frame_s) = st.times.pop().unwrap_or_default();
-        st.times
-            .push(("mirror and see-through passes".into(), stats.mirror_seconds));
-        st.times
-            .push(("frame".into(), (frame_s - stats.mirror_seconds).max(0.0)));
         eprintln!(
             "{} mirror and {} see-through buffer(s) of {w}×{h} in {:.3} s",
             stats.mirrors, stats.see_throughs, stats.mirror_seconds
         );
     }
-
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
-    img.write_exr(&args.out.join("frame.exr"))?;
-    img.write_png_dithered(&args.out.join("frame.png"), args.exposure, args.seed)?;
     let glossy_rays = stats.glossy_hits.max(1);
     println!(
         "{w}×{h}, {} camera rays/pixel, {:?} with {} samples: {} glossy hits, {:.2} lookups per glossy hit",
@@ -226,10 +378,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 img.height
             );
         }
-        let psnr = lustre_shade::metrics::psnr(&img, &r, args.exposure)?;
-        let de = lustre_shade::metrics::delta_e(&img, &r, args.exposure)?;
-        let rel = lustre_shade::metrics::rms(&img, &r)? / r.mean().max(1e-12);
-        let diff = lustre_shade::metrics::false_colour(&img, &r, 0.1 * r.mean().max(1e-6))?;
+        let psnr = lustre_shade::metrics::psnr(img, &r, args.exposure)?;
+        let de = lustre_shade::metrics::delta_e(img, &r, args.exposure)?;
+        let rel = lustre_shade::metrics::rms(img, &r)? / r.mean().max(1e-12);
+        let diff = lustre_shade::metrics::false_colour(img, &r, 0.1 * r.mean().max(1e-6))?;
         diff.write_png(&args.out.join("diff.png"), 1.0)?;
         println!(
             "against {}: PSNR {psnr:.2} dB, mean ΔE {de:.2}, relative RMS {:.2} %, mean ratio {:.4}",
@@ -238,16 +390,48 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             img.mean() / r.mean().max(1e-12)
         );
     }
-    st.lap("write");
-    let mut csv = String::from("stage,seconds\n");
-    for (name, s) in &st.times {
-        writeln!(csv, "{},{s:.4}", name.replace(',', " "))?;
-    }
-    writeln!(csv, "total,{:.4}", t0.elapsed().as_secs_f64())?;
-    lustre_brdf::error::write_atomic(&args.out.join("times.csv"), csv.as_bytes())?;
-    println!(
-        "wrote {} (frame.exr, frame.png, times.csv)",
-        args.out.display()
-    );
     Ok(())
+}
+
+/// The cameras of path `name` at `fps` frames per second, named frame_0000 …
+fn path_cameras(
+    scene: &Scene,
+    name: &str,
+    fps: f64,
+    w: u32,
+    h: u32,
+) -> anyhow::Result<Vec<(String, PathCamera)>> {
+    if !(fps.is_finite() && fps > 0.0 && fps <= 1000.0) {
+        bail!("--fps {fps}: must be in (0, 1000]");
+    }
+    let path = scene
+        .camera_paths
+        .iter()
+        .find(|p| p.name == name)
+        .with_context(|| {
+            let names: Vec<&str> = scene.camera_paths.iter().map(|p| p.name.as_str()).collect();
+            format!(
+                "no camera path named {name:?} (paths: {})",
+                names.join(", ")
+            )
+        })?;
+    let n = (path.duration() * fps).floor() as usize + 1;
+    if n > 100_000 {
+        bail!("camera path {name:?} at {fps} fps is {n} frames: too many");
+    }
+    let aspect = f64::from(w) / f64::from(h);
+    (0..n)
+        .map(|k| {
+            let c = path
+                .at(k as f64 / fps)
+                .with_context(|| format!("camera path {name:?} has no keyframes"))?;
+            let cam = PathCamera::look_at(
+                c.position,
+                c.position + c.forward,
+                c.up,
+                c.fov_y_deg(aspect),
+            )?;
+            Ok((format!("frame_{k:04}"), cam))
+        })
+        .collect()
 }

@@ -162,6 +162,25 @@ impl<'a> Lightmapped<'a> {
     }
 }
 
+/// Camera ray `k` of pixel (x, y) of a w×h image: jittered uniformly in the pixel by a stream
+/// seeded from `seed`, the pixel index and `k` — the sample positions every light-mapped frame
+/// shares. Returns the direction and the stream, for the pixel's further random numbers.
+pub fn camera_ray(
+    camera: &PathCamera,
+    seed: u64,
+    (x, y): (usize, usize),
+    (w, h): (usize, usize),
+    k: u32,
+) -> (DVec3, SplitMix64) {
+    let i = (y * w + x) as u64;
+    let mut rng = SplitMix64::new(
+        seed ^ i.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            ^ u64::from(k).wrapping_mul(0xC2B2_AE3D_27D4_EB4F),
+    );
+    let (jx, jy) = (rng.next_f64(), rng.next_f64());
+    (camera.direction(x as f64 + jx, y as f64 + jy, w, h), rng)
+}
+
 /// Renders `scene` at `camera` (w×h, `spp` jittered samples per pixel, seeded by `seed`)
 /// shaded from the light maps `pages` of `atlas` (as [`super::assemble`] returns them).
 #[allow(clippy::too_many_arguments)]
@@ -195,12 +214,7 @@ pub fn render_lightmapped(
             let (x, y) = (i % w, i / w);
             let mut sum = Rgb::ZERO;
             for k in 0..spp {
-                let mut rng = SplitMix64::new(
-                    seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
-                        ^ u64::from(k).wrapping_mul(0xC2B2_AE3D_27D4_EB4F),
-                );
-                let (jx, jy) = (rng.next_f64(), rng.next_f64());
-                let d = camera.direction(x as f64 + jx, y as f64 + jy, w, h);
+                let (d, _) = camera_ray(camera, seed, (x, y), (w, h), k);
                 let c = shade(camera.origin, d);
                 if c.is_finite() {
                     sum += c;
