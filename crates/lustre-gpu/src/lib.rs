@@ -22,6 +22,8 @@ pub mod context;
 pub mod contract;
 pub mod cube;
 pub mod error;
+pub mod gbuffer;
+pub mod lightmap_shade;
 pub mod packed;
 pub mod pyramid;
 pub mod shade;
@@ -30,6 +32,11 @@ pub mod wgsl;
 pub use context::GpuContext;
 pub use cube::{CubeLevelRef, GpuCube};
 pub use error::{GpuError, Result};
+pub use gbuffer::{GBufferPass, GBufferTarget, GpuGeometry, GBUFFER_WGSL};
+pub use lightmap_shade::{
+    GpuLightmapScene, LightmapFrameScene, LightmapRenderer, LightmapShadePass, ShadeTarget,
+    LIGHTMAP_SHADE_WGSL,
+};
 pub use packed::{
     CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, PackedScene, LOBE_SCHEME_LATTICE,
     LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,

@@ -170,6 +170,21 @@ impl EnvLight {
         Rgb(self.map.lookup_bilinear(self.to_world.transpose() * d)) * self.scale
     }
 
+    /// The equirect map (map directions; see [`EnvLight::to_world`]).
+    pub fn map(&self) -> &EquirectMap {
+        &self.map
+    }
+
+    /// The rotation taking map directions to world directions.
+    pub fn to_world(&self) -> DMat3 {
+        self.to_world
+    }
+
+    /// The radiance scale.
+    pub fn scale(&self) -> f64 {
+        self.scale
+    }
+
     /// A world direction and its solid-angle density.
     pub fn sample(&self, u1: f64, u2: f64) -> (DVec3, f64) {
         let s = self.sampler.sample(u1, u2);

@@ -39,6 +39,7 @@
 
 pub mod denoise;
 pub mod fill;
+pub mod gbuffer;
 pub mod output;
 pub mod raster;
 pub mod render;

@@ -82,6 +82,15 @@ impl<'a> Lightmapped<'a> {
         })
     }
 
+    /// The light-map page of triangle `prim` and its corners' uv1 in texel units (u·W, v·H),
+    /// `None` for triangles without a light map (the data a GPU twin of [`Self::radiance`]
+    /// uploads).
+    pub fn lightmap_triangle(&self, prim: usize) -> Option<(u32, [[f64; 2]; 3])> {
+        let k = *self.mapped.get(prim)?;
+        let t = self.raster.triangles.get(k as usize)?;
+        Some((t.page, t.uv))
+    }
+
     /// Whether triangle `prim` has a light map.
     pub fn has_lightmap(&self, prim: usize) -> bool {
         self.mapped.get(prim).is_some_and(|&k| k != u32::MAX)

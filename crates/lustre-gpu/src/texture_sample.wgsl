@@ -1,0 +1,33 @@
+// Shared by gbuffer.wgsl and lightmap_shade.wgsl (prepended to each): the CPU's texture lookup.
+// The including shader declares `texels: array<vec4<f32>>` (RGBA texels of every uploaded
+// texture) and `tex_info: array<vec4<u32>>` (per texture: first texel, width, height, 0).
+
+fn wrap(i: f32, n: u32) -> u32 {
+    let m = i32(n);
+    return u32(((i32(i) % m) + m) % m);
+}
+
+// `lustre_scene::Texture::sample`: bilinear, repeat, texel centres at ((x + ½)/W, (y + ½)/H).
+fn texture_sample(t: u32, uv: vec2<f32>) -> vec4<f32> {
+    let info = tex_info[t];
+    let w = info.y;
+    let h = info.z;
+    let x = uv.x * f32(w) - 0.5;
+    let y = uv.y * f32(h) - 0.5;
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = x - x0;
+    let fy = y - y0;
+    let xa = wrap(x0, w);
+    let xb = wrap(x0 + 1.0, w);
+    let ya = wrap(y0, h);
+    let yb = wrap(y0 + 1.0, h);
+    let t00 = texels[info.x + ya * w + xa];
+    let t10 = texels[info.x + ya * w + xb];
+    let t01 = texels[info.x + yb * w + xa];
+    let t11 = texels[info.x + yb * w + xb];
+    let top = t00 + (t10 - t00) * fx;
+    let bottom = t01 + (t11 - t01) * fx;
+    return top + (bottom - top) * fy;
+}
+
