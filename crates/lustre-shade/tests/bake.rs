@@ -946,3 +946,49 @@ fn single_texels_bake_to_the_tiles_records() {
     assert!(bake_texels(&scene, &at, &opts, &[(0, at.width, 0)]).is_err());
     assert!(bake_texels(&scene, &at, &opts, &[(1, 0, 0)]).is_err());
 }
+
+#[test]
+fn full_transport_bakes_are_keyed_by_every_material_parameter() {
+    use lustre_scene::material::{Distribution, MaterialKind, TexturedRgb, TexturedScalar};
+    use lustre_shade::bake::{bake_hash, Transport};
+    let metal = |alpha: f64| {
+        Material::new(
+            "metal",
+            MaterialKind::RoughConductor {
+                eta: Rgb([0.2, 0.4, 1.2]),
+                k: Rgb([3.9, 2.4, 1.8]),
+                specular: TexturedRgb::constant(Rgb::ONE),
+                alpha_u: TexturedScalar::constant(alpha),
+                alpha_v: TexturedScalar::constant(alpha),
+                distribution: Distribution::Ggx,
+            },
+        )
+    };
+    let (w, h) = (16, 16);
+    let floor = quad(
+        "floor",
+        DVec3::new(-1.0, 0.0, 1.0),
+        DVec3::new(2.0, 0.0, 0.0),
+        DVec3::new(0.0, 0.0, -2.0),
+        (2, 2, 12, 12),
+        (w, h),
+        0,
+    );
+    let at = atlas(w, h, vec![Some(0)], 2);
+    let scene = |alpha| {
+        scene_with(
+            vec![floor.clone()],
+            vec![metal(alpha)],
+            Some(Rgb::splat(1.0)),
+        )
+    };
+    let (a, b) = (scene(0.1), scene(0.3));
+    for (transport, differ) in [(Transport::Diffuse, false), (Transport::Full, true)] {
+        let opts = BakeOptions {
+            transport,
+            ..raw_opts(4, 2)
+        };
+        let changed = bake_hash(&a, &at, &opts) != bake_hash(&b, &at, &opts);
+        assert_eq!(changed, differ, "{transport:?}");
+    }
+}

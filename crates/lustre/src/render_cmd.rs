@@ -279,7 +279,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             if args.material.is_none() {
                 eprintln!("no probe objects: glossy surfaces reflect the environment only");
             }
-            let cube = CubeMap::from_fn(args.probe_size, |d| env.eval(d).0)?;
+            // The world-oriented map resampled with its texels' areas (not point-sampled);
+            // a rotated or scaled light through its own lookup.
+            let cube = if env.to_world() == DMat3::IDENTITY && env.scale() == 1.0 {
+                CubeMap::from_equirect(env.map(), args.probe_size)?
+            } else {
+                CubeMap::from_fn(args.probe_size, |d| env.eval(d).0)?
+            };
             let p = CubePyramid::build(cube, MipFilter::Gauss6)?;
             st.lap("environment pyramid");
             Some(p)

@@ -417,6 +417,10 @@ pub fn bake_hash(scene: &Scene, atlas: &LightmapAtlas, opts: &BakeOptions) -> u6
             h.u64(t.texture as u64);
             h.u64(u64::from(t.uv_set));
         }
+        if opts.transport == Transport::Full {
+            // Paths cross the materials themselves: every parameter counts.
+            h.bytes(format!("{:?} {}", m.kind, m.two_sided).as_bytes());
+        }
     }
     for t in &scene.textures {
         let m = t.mean();
