@@ -1,8 +1,24 @@
-//! Building blocks the compute passes share: bind-group-layout entries and a compiled
-//! single-bind-group compute pipeline.
+//! Building blocks the passes share: initialised buffers, bind-group-layout entries and a
+//! compiled single-bind-group compute pipeline.
 
 use crate::context::GpuContext;
 use crate::error::{scope_result, Result};
+use wgpu::util::DeviceExt;
+
+/// A buffer holding `contents`, for `usage`.
+pub(crate) fn buffer_init(
+    ctx: &GpuContext,
+    label: &str,
+    contents: &[u8],
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage,
+        })
+}
 
 /// A uniform buffer at `binding`, visible to compute.
 pub(crate) fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {

@@ -15,12 +15,12 @@
 //! coverage (top-left rule) and ray casting (watertight test) may disagree on pixels whose
 //! centre lies on an edge, and depth ties between coplanar triangles resolve differently.
 
+use crate::compute::buffer_init;
 use crate::context::GpuContext;
 use crate::error::{invalid, scope_result, wgpu_error, Result};
 use lustre_scene::Scene;
 use lustre_shade::bake::gbuffer::{GBuffer, SKY};
 use lustre_shade::path::{Geometry, PathCamera};
-use wgpu::util::DeviceExt;
 
 /// The WGSL source of the raster pass (with the shared texture lookup prepended).
 pub const GBUFFER_WGSL: &str = concat!(
@@ -199,12 +199,7 @@ impl GpuGeometry {
         let (texels, info) = pack_textures(scene, &slots, limit)?;
         let near = ((hi - lo).length() * 1e-5).max(1e-6) as f32;
         let storage = |label: &str, contents: &[u8]| {
-            ctx.device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents,
-                    usage: wgpu::BufferUsages::STORAGE,
-                })
+            buffer_init(ctx, label, contents, wgpu::BufferUsages::STORAGE)
         };
         Ok(GpuGeometry {
             triangles: storage("gbuffer triangles", bytemuck::cast_slice(&data)),
@@ -512,13 +507,12 @@ impl GBufferPass {
     ) -> Result<()> {
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let cam = camera_uniform(camera, target.width, target.height, geometry.near);
-        let uniform = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("gbuffer camera"),
-                contents: bytemuck::cast_slice(&cam),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let uniform = buffer_init(
+            ctx,
+            "gbuffer camera",
+            bytemuck::cast_slice(&cam),
+            wgpu::BufferUsages::UNIFORM,
+        );
         let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("gbuffer.wgsl"),
             layout: &self.layout,

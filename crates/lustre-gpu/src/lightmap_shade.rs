@@ -12,6 +12,7 @@
 //!
 //! [`LightmapRenderer`] runs both passes: [`LightmapRenderer::render`].
 
+use crate::compute::buffer_init;
 use crate::context::GpuContext;
 use crate::error::{invalid, scope_result, wgpu_error, Result};
 use crate::gbuffer::{
@@ -25,7 +26,6 @@ use lustre_shade::bake::gbuffer::{gbuffer_size, GBuffer};
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::image::Image;
 use lustre_shade::path::{EnvLight, Geometry, PathCamera};
-use wgpu::util::DeviceExt;
 
 /// The WGSL source of the shading pass.
 pub const LIGHTMAP_SHADE_WGSL: &str = concat!(
@@ -235,12 +235,7 @@ impl GpuLightmapScene {
         }
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let storage = |label: &str, contents: &[u8]| {
-            ctx.device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents,
-                    usage: wgpu::BufferUsages::STORAGE,
-                })
+            buffer_init(ctx, label, contents, wgpu::BufferUsages::STORAGE)
         };
         let n_pages = atlas.pages.max(1);
         let page_tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -434,13 +429,12 @@ impl LightmapShadePass {
             u.push(r.map(f32::to_bits));
         }
         u.push([scale.to_bits(), 0, 0, 0]);
-        let uniform = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("light-map shading uniform"),
-                contents: bytemuck::cast_slice(&u),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let uniform = buffer_init(
+            ctx,
+            "light-map shading uniform",
+            bytemuck::cast_slice(&u),
+            wgpu::BufferUsages::UNIFORM,
+        );
         let view = |t: &wgpu::Texture, dim| {
             t.create_view(&wgpu::TextureViewDescriptor {
                 dimension: Some(dim),

@@ -8,12 +8,11 @@
 //! tap beyond a face edge reads come from [`lustre_env::cube::fetch_sources`], uploaded per
 //! level as a table, so the CPU and the GPU read the same texels by construction.
 
-use crate::compute::{compute_pipeline, storage_entry, uniform_entry};
+use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry};
 use crate::context::GpuContext;
 use crate::error::{invalid, scope_result, wgpu_error, Result};
 use lustre_env::cube::{fetch_sources, solid_angle_table};
 use lustre_env::{CubeMap, CubePyramid, MipFilter};
-use wgpu::util::DeviceExt;
 
 /// The WGSL source of the down-sampling step.
 pub const PYRAMID_WGSL: &str = include_str!("pyramid.wgsl");
@@ -118,12 +117,7 @@ impl GpuPyramidBuilder {
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
-            ctx.device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents,
-                    usage,
-                })
+            buffer_init(ctx, label, contents, usage)
         };
         let texels: Vec<[f32; 4]> = base
             .faces

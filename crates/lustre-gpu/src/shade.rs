@@ -1,7 +1,7 @@
 //! The compute pass of `shade.wgsl`: ray casting and the regular-sampling kernel, one invocation
 //! per pixel, into an Rgba32Float storage texture that is read back row by row.
 
-use crate::compute::{compute_pipeline, storage_entry, uniform_entry};
+use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry};
 use crate::context::GpuContext;
 use crate::cube::{linear_sampler, CubeLevelRef, GpuCube};
 use crate::error::{invalid, scope_result, wgpu_error, Result};
@@ -10,7 +10,6 @@ use crate::packed::{
 };
 use crate::wgsl::{self, compose};
 use bytemuck::{Pod, Zeroable};
-use wgpu::util::DeviceExt;
 
 /// The pass's own WGSL (`shade.wgsl`): the scene, the bindings and the entry point.
 pub const SHADE_PASS_WGSL: &str = include_str!("shade.wgsl");
@@ -77,12 +76,7 @@ impl GpuScene {
             // A binding may not be empty: one zero record stands in for an empty array.
             let zeros = [0u8; 64];
             let contents = if bytes.is_empty() { &zeros[..] } else { bytes };
-            ctx.device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents,
-                    usage: wgpu::BufferUsages::STORAGE,
-                })
+            buffer_init(ctx, label, contents, wgpu::BufferUsages::STORAGE)
         };
         Ok(GpuScene {
             camera: scene.camera,
@@ -409,14 +403,12 @@ impl GpuRenderer {
             ],
             dims: [target.width, target.height, scene.spheres, scene.planes],
         };
-        let uniform = self
-            .ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("globals"),
-                contents: bytemuck::bytes_of(&globals),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let uniform = buffer_init(
+            &self.ctx,
+            "globals",
+            bytemuck::bytes_of(&globals),
+            wgpu::BufferUsages::UNIFORM,
+        );
         let scope = self
             .ctx
             .device
