@@ -288,6 +288,15 @@ fn sky_pixels_match_the_environment_lookup() {
     assert!(db >= 90.0 && db_sky >= 90.0, "{db} {db_sky}");
 }
 
+/// The index of the scene texture whose file name contains `name`.
+fn texture_index(scene: &lustre_scene::Scene, name: &str) -> usize {
+    scene
+        .textures
+        .iter()
+        .position(|t| t.source.to_string_lossy().contains(name))
+        .unwrap_or_else(|| panic!("no texture {name}"))
+}
+
 /// Alpha masks: the Modern Hall with holes cut in its wallpaper (opacity = the tiles texture's
 /// red channel, glTF cutoff 0.5) and in its floor (the wood texture's green channel, no cutoff:
 /// the ray test's ½). The raster pass must discard what `PathTracer::intersect` skips.
@@ -301,13 +310,7 @@ fn alpha_masked_holes_match_ray_casting() {
     let cam = camera(&b, w, h);
     let plain = LightmapFrameScene::upload(&ctx, &b.scene, &b.atlas, &b.pages).unwrap();
     let (_, before) = r.render(&ctx, &plain, &cam, w, h, 1).unwrap();
-    let tex = |name: &str| {
-        b.scene
-            .textures
-            .iter()
-            .position(|t| t.source.to_string_lossy().contains(name))
-            .unwrap_or_else(|| panic!("no texture {name}"))
-    };
+    let tex = |name: &str| texture_index(&b.scene, name);
     let (tiles, wood) = (tex("Tiles"), tex("wood5"));
     for (material, texture, channel, cutoff) in [
         ("Wallpaper", tiles, 0, Some(0.5)),
@@ -356,13 +359,7 @@ fn textured_metallic_and_transmission_match_the_cpu_twin() {
     let cam = camera(&b, w, h);
     let plain = LightmapFrameScene::upload(&ctx, &b.scene, &b.atlas, &b.pages).unwrap();
     let (before, _) = r.render(&ctx, &plain, &cam, w, h, 1).unwrap();
-    let tex = |name: &str| {
-        b.scene
-            .textures
-            .iter()
-            .position(|t| t.source.to_string_lossy().contains(name))
-            .unwrap_or_else(|| panic!("no texture {name}"))
-    };
+    let tex = |name: &str| texture_index(&b.scene, name);
     let (tiles, wood, paper) = (tex("Tiles"), tex("wood5"), tex("Wallpaper"));
     let scalar = |texture, channel, factor| TexturedScalar {
         factor,
