@@ -288,10 +288,7 @@ fn render_view(
             let (x, y) = (i % w, i / w);
             let d = cam.direction(x as f64 + 0.5, y as f64 + 0.5, w, h);
             let o = cam.origin + d * start(d);
-            let hit = lit
-                .tracer
-                .intersect_filtered(o, d, |p| lit.mesh_of[p] == mesh as u32);
-            match hit {
+            match lit.hit(o, d, Some(mesh as u32)) {
                 Some(hh) => {
                     let tri = &g.positions[hh.prim];
                     let ng = (tri[1] - tri[0])

@@ -5,6 +5,7 @@
 //!
 //! This is the CPU definition of the probe; the GPU capture renders the same cube.
 
+use crate::accel::Hit;
 use crate::bake::render::Lightmapped;
 use crate::kernel::BoundingPlane;
 use crate::path::{PathScene, PathTracer};
@@ -63,16 +64,20 @@ impl<'a, 's> LitScene<'a, 's> {
         })
     }
 
-    /// Radiance arriving at `o` from direction `d` (towards −`d`): the light-mapped surface
-    /// first hit, ignoring the triangles of mesh `skip`, or the environment.
-    pub fn radiance(&self, o: DVec3, d: DVec3, skip: Option<u32>) -> Rgb {
-        let hit = match skip {
+    /// The first surface along o + t d, ignoring the triangles of mesh `skip`.
+    pub fn hit(&self, o: DVec3, d: DVec3, skip: Option<u32>) -> Option<Hit> {
+        match skip {
             Some(m) => self
                 .tracer
                 .intersect_filtered(o, d, |p| self.mesh_of[p] == m),
             None => self.tracer.intersect(o, d),
-        };
-        match hit {
+        }
+    }
+
+    /// Radiance arriving at `o` from direction `d` (towards −`d`): the light-mapped surface
+    /// first hit, ignoring the triangles of mesh `skip`, or the environment.
+    pub fn radiance(&self, o: DVec3, d: DVec3, skip: Option<u32>) -> Rgb {
+        match self.hit(o, d, skip) {
             Some(h) => self
                 .lit
                 .radiance(&self.path_scene.geometry, h.prim, h.bary, d),
@@ -86,13 +91,7 @@ impl<'a, 's> LitScene<'a, 's> {
 
     /// Distance from `o` along `d` to the first surface, ignoring mesh `skip`.
     pub fn distance(&self, o: DVec3, d: DVec3, skip: Option<u32>) -> Option<f64> {
-        let hit = match skip {
-            Some(m) => self
-                .tracer
-                .intersect_filtered(o, d, |p| self.mesh_of[p] == m),
-            None => self.tracer.intersect(o, d),
-        };
-        hit.map(|h| h.t)
+        self.hit(o, d, skip).map(|h| h.t)
     }
 
     /// World bounds of mesh `m` (min, max).
@@ -311,11 +310,7 @@ fn inside_fraction(lit: &LitScene, p: DVec3, skip: Option<u32>) -> f64 {
                 }
                 let d = DVec3::new(x as f64, y as f64, z as f64).normalize();
                 total += 1;
-                let hit = match skip {
-                    Some(m) => lit.tracer.intersect_filtered(p, d, |q| lit.mesh_of[q] == m),
-                    None => lit.tracer.intersect(p, d),
-                };
-                if let Some(h) = hit {
+                if let Some(h) = lit.hit(p, d, skip) {
                     let tri = &g.positions[h.prim];
                     let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
                     let m = g.material[h.prim] as usize;

@@ -91,11 +91,6 @@ impl<'a> Lightmapped<'a> {
         Some((t.page, t.uv))
     }
 
-    /// Whether triangle `prim` has a light map.
-    pub fn has_lightmap(&self, prim: usize) -> bool {
-        self.mapped.get(prim).is_some_and(|&k| k != u32::MAX)
-    }
-
     /// Radiance leaving triangle `prim` of `g` at barycentrics `bary` towards −`d` (`d` the
     /// incoming ray's direction): its emission (front side) plus kd·E/π, E read bilinearly from
     /// its page at uv1 (texel centres at ((x+½)/W, (y+½)/H), clamped at the page border). Black
