@@ -35,7 +35,7 @@ def render(args, out, extra):
         sys.exit(f"{' '.join(cmd)} failed:\n{p.stderr}")
     with open(os.path.join(out, "times.csv")) as f:
         frame_s = sum(float(r["seconds"]) for r in csv.DictReader(f)
-                      if r["stage"] in ("frame", "mirror and see-through passes"))
+                      if r["stage"] in ("frame", "frame: mirror and see-through passes"))
     m = re.search(r"PSNR (\S+) dB, mean ΔE (\S+), relative RMS (\S+) %", p.stdout)
     lookups = re.search(r"(\S+) lookups per glossy hit", p.stdout)
     return (m.groups() if m else None), frame_s, (lookups.group(1) if lookups else "?")

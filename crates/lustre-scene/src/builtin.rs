@@ -247,30 +247,32 @@ pub fn room() -> Result<Scene> {
         to_local: DMat3::IDENTITY,
         intensity: 1.0,
     });
-    let camera = Camera::look_at(
-        "default",
-        DVec3::new(3.0, 1.55, 0.9),
-        DVec3::new(3.0, 0.85, 5.6),
-        DVec3::Y,
-        62.0,
-        FovAxis::X,
-    )
-    .ok_or_else(|| SceneError::Format {
-        path: "built-in room".into(),
-        problem: "the camera is degenerate".into(),
-    })?;
-    let close = Camera::look_at(
-        "close",
-        DVec3::new(2.2, 1.2, 2.9),
-        DVec3::new(3.0, 0.9, 5.0),
-        DVec3::Y,
-        55.0,
-        FovAxis::X,
-    )
-    .ok_or_else(|| SceneError::Format {
-        path: "built-in room".into(),
-        problem: "the close camera is degenerate".into(),
-    })?;
+    let look = |name: &str, eye: [f64; 3], target: [f64; 3], fov: f64| {
+        Camera::look_at(
+            name,
+            DVec3::from(eye),
+            DVec3::from(target),
+            DVec3::Y,
+            fov,
+            FovAxis::X,
+        )
+        .ok_or_else(|| SceneError::Format {
+            path: "built-in room".into(),
+            problem: format!("the camera {name:?} is degenerate"),
+        })
+    };
+    let camera = look("default", [3.0, 1.55, 0.9], [3.0, 0.85, 5.6], 62.0)?;
+    let close = look("close", [2.2, 1.2, 2.9], [3.0, 0.9, 5.0], 55.0)?;
+    // The views of 000 Tables 4.1 and 4.2 (`scripts/frame_tables.py`): the screen full of and
+    // about half full of view-dependent pixels, on a curved probe object (the brushed-aluminium
+    // sphere, centre (3, 0.98, 5.4), radius 0.38) and on the planar reflector (the floor).
+    let sphere = [3.0, 0.6 + f64::from(r), 5.4];
+    let benchmark = [
+        look("curved-full", [3.0, sphere[1], 4.92], sphere, 62.0)?,
+        look("curved-half", [3.0, sphere[1], 4.25], sphere, 62.0)?,
+        look("planar-full", [3.0, 1.6, 1.0], [3.0, 0.0, 2.4], 62.0)?,
+        look("planar-half", [3.0, 1.0, 0.3], [3.0, 0.62, 4.0], 62.0)?,
+    ];
     scene.camera_paths = vec![CameraPath {
         name: "walk".into(),
         keyframes: vec![
@@ -285,7 +287,7 @@ pub fn room() -> Result<Scene> {
         ],
         looped: false,
     }];
-    scene.cameras = vec![camera, close];
+    scene.cameras = [camera, close].into_iter().chain(benchmark).collect();
     scene.film = Film {
         width: 960,
         height: 540,

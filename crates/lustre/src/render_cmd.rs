@@ -70,6 +70,10 @@ pub struct RenderArgs {
     /// Still frames accumulated by --method progressive.
     #[arg(long, default_value_t = 64)]
     pub frames: u32,
+    /// Render each frame this many times and report the median, minimum and maximum frame time
+    /// (timing runs: `scripts/frame_tables.py`).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub repeat: u32,
     /// Film size WxH (the scene's film by default).
     #[arg(long)]
     pub size: Option<String>,
@@ -309,18 +313,39 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     );
     bar.set_message(format!("{w}×{h}, {} camera rays/pixel", args.spp));
     for (stem, camera) in &cameras {
-        let (img, stats) = render_frame(&lit, &light, camera, w as usize, h as usize, &opts)?;
+        // Each repetition: (frame without its passes, mirror and see-through passes), seconds.
+        let mut runs = vec![];
+        let mut rendered = None;
+        for _ in 0..args.repeat {
+            let t = Instant::now();
+            let (img, stats) = render_frame(&lit, &light, camera, w as usize, h as usize, &opts)?;
+            let s = t.elapsed().as_secs_f64();
+            runs.push(((s - stats.mirror_seconds).max(0.0), stats.mirror_seconds));
+            rendered = Some((img, stats));
+        }
+        let Some((img, stats)) = rendered else {
+            bail!("--repeat 0 renders nothing");
+        };
         bar.inc(1);
-        st.lap(stem.clone());
+        st.t = Instant::now();
+        let median = |k: fn(&(f64, f64)) -> f64| {
+            let mut v: Vec<f64> = runs.iter().map(k).collect();
+            v.sort_by(f64::total_cmp);
+            (v[v.len() / 2], v[0], v[v.len() - 1])
+        };
         if stats.mirrors + stats.see_throughs > 0 {
             // The mirror and see-through passes run inside the frame; report them apart.
-            let (_, frame_s) = st.times.pop().unwrap_or_default();
-            st.times.push((
-                format!("{stem}: mirror and see-through passes"),
-                stats.mirror_seconds,
-            ));
+            let (m, _, _) = median(|r| r.1);
             st.times
-                .push((stem.clone(), (frame_s - stats.mirror_seconds).max(0.0)));
+                .push((format!("{stem}: mirror and see-through passes"), m));
+        }
+        let (m, lo, hi) = median(|r| r.0);
+        st.times.push((stem.clone(), m));
+        if args.repeat > 1 {
+            st.times
+                .push((format!("{stem}: min of {}", args.repeat), lo));
+            st.times
+                .push((format!("{stem}: max of {}", args.repeat), hi));
         }
         img.write_exr(&args.out.join(format!("{stem}.exr")))?;
         img.write_png_dithered(
