@@ -25,14 +25,17 @@ pub mod error;
 pub mod gbuffer;
 pub mod lightmap_shade;
 pub mod packed;
+pub mod probe_capture;
 pub mod pyramid;
 pub mod shade;
+pub mod timer;
+pub mod view_pass;
 pub mod wgsl;
 
 pub use context::GpuContext;
 pub use cube::{CubeLevelRef, GpuCube};
 pub use error::{GpuError, Result};
-pub use gbuffer::{GBufferPass, GBufferTarget, GpuGeometry, GBUFFER_WGSL};
+pub use gbuffer::{DrawOptions, GBufferPass, GBufferTarget, GpuGeometry, GBUFFER_WGSL};
 pub use lightmap_shade::{
     GpuLightmapScene, LightmapFrameScene, LightmapRenderer, LightmapShadePass, ShadeTarget,
     LIGHTMAP_SHADE_WGSL,
@@ -41,6 +44,9 @@ pub use packed::{
     CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, PackedScene, LOBE_SCHEME_LATTICE,
     LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
 };
-pub use pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_WGSL};
+pub use probe_capture::{face_camera, mesh_triangles, GpuProbe, GpuProbeCapture};
+pub use pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_USAGE, PYRAMID_WGSL};
 pub use shade::shade_wgsl;
 pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_PASS_WGSL};
+pub use timer::{GpuTimer, Timing};
+pub use view_pass::{GpuViewPass, ViewRender};
