@@ -12,6 +12,12 @@
 //! [`RenderTarget::new`]), [`GpuRenderer::bind`] them and time [`GpuRenderer::draw`]
 //! (dispatch + wait) apart from [`RenderTarget::read_back`].
 //!
+//! Probes and view buffers (issue 11 "Rendering" 3 and 5): [`GpuProbeCapture::capture_probe`]
+//! renders a probe's cube with the raster G-buffer and light-map shading passes straight into a
+//! [`GpuPyramid`]'s base level and filters it on the GPU; [`GpuViewPass::render_mirror`] and
+//! [`GpuViewPass::render_see_through`] fill the mirror / see-through view buffers
+//! ([`view_pass::GpuViewBuffer`]); [`GpuTimer`] times GPU work (timestamps where available).
+//!
 //! Measured (lavapipe on the shared 2-core machine, load ≈ 12): parity with the CPU kernel
 //! 122 dB PSNR (7 samples per lobe) and 129 dB (19) at 128×96; 1920×1080 frames of a screen
 //! full of one-lobe specular pixels 3.9 s (n = 3), 6.0 s (n = 11), 9.7 s (n = 19); half

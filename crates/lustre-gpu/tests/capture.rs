@@ -8,8 +8,8 @@ use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
 use lustre_env::{CubeMap, CubePyramid, MipFilter};
 use lustre_gpu::{
-    face_camera, mesh_triangles, DrawOptions, GpuContext, GpuProbeCapture, GpuTimer, GpuViewPass,
-    LightmapFrameScene,
+    face_camera, mesh_triangles, DrawOptions, GpuContext, GpuProbeCapture, GpuPyramidBuilder,
+    GpuTimer, GpuViewPass, LightmapFrameScene, PYRAMID_USAGE,
 };
 use lustre_scene::lightmap::{build_atlas, AtlasOptions, LightmapAtlas};
 use lustre_scene::Scene;
@@ -469,6 +469,18 @@ fn clip_plane_discards_between_eye_and_plane_and_bad_input_errs() {
             .unwrap_err();
         assert!(e.to_string().contains("999"), "{e}");
     });
+    // A base buffer of the wrong size for the pyramid.
+    let builder = GpuPyramidBuilder::new(&ctx).unwrap();
+    let small = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: 6 * 4 * 4 * 16,
+        usage: PYRAMID_USAGE,
+        mapped_at_creation: false,
+    });
+    let e = builder
+        .build_from_buffer(&ctx, small, 8, MipFilter::Gauss6)
+        .unwrap_err();
+    assert!(e.to_string().contains("cube pyramid"), "{e}");
     let e = pass
         .render_view(&ctx, &up, &cam, 0, 8, &DrawOptions::default(), 0, None)
         .unwrap_err();
