@@ -27,7 +27,7 @@ use lustre_scene::Scene;
 use lustre_shade::bake::gbuffer::GBuffer;
 use lustre_shade::kernel::BoundingPlane;
 use lustre_shade::path::PathCamera;
-use lustre_shade::probe::{auto_planes, probe_placement, LitScene, ProbeOptions};
+use lustre_shade::probe::{auto_planes, probe_placement, LitScene, Probe, ProbeOptions};
 use std::ops::Range;
 
 /// The camera of cube face `face` (0..6: +X, −X, +Y, −Y, +Z, −Z) at `centre`: 90° square, its
@@ -65,8 +65,7 @@ pub fn mesh_triangles(scene: &Scene, mesh: usize) -> Result<Range<u32>> {
     Ok(to_u32(start)?..to_u32(end)?)
 }
 
-/// A probe captured on the GPU: what [`lustre_shade::probe::Probe`] holds, with the pyramid on
-/// the GPU.
+/// A probe captured on the GPU: what [`Probe`] holds, with the pyramid on the GPU.
 #[derive(Debug)]
 pub struct GpuProbe {
     /// The object's mesh name.
@@ -79,6 +78,19 @@ pub struct GpuProbe {
     pub planes: Vec<BoundingPlane>,
     /// The captured light, Gaussian 6×6 pyramid.
     pub pyramid: GpuPyramid,
+}
+
+impl GpuProbe {
+    /// The probe on the host, as the CPU's [`Probe`] (the pyramid read back).
+    pub fn read_back(&self, ctx: &GpuContext) -> Result<Probe> {
+        Ok(Probe {
+            name: self.name.clone(),
+            mesh: self.mesh,
+            centre: self.centre,
+            planes: self.planes.clone(),
+            pyramid: self.pyramid.read_back(ctx)?,
+        })
+    }
 }
 
 /// The compiled passes of the probe capture.

@@ -140,7 +140,10 @@ fn check_probe(
         let (_, centre) = probe_placement(lit, mesh).unwrap();
         assert_eq!(probe.centre, centre);
         assert!(!probe.planes.is_empty(), "{label}: no bounding planes");
-        let gpu = probe.pyramid.read_back(ctx).unwrap();
+        let host = probe.read_back(ctx).unwrap();
+        assert_eq!((host.mesh, host.centre), (mesh as u32, centre));
+        assert_eq!(host.planes, probe.planes);
+        let gpu = host.pyramid;
         // The twin: the same G-buffer faces shaded on the CPU, the CPU pyramid.
         let skip = mesh_triangles(&b.scene, mesh).unwrap();
         let faces: Vec<Vec<[f32; 3]>> = (0..6)
