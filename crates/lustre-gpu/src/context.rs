@@ -39,11 +39,15 @@ impl GpuContext {
         let float32_filterable = adapter
             .features()
             .contains(wgpu::Features::FLOAT32_FILTERABLE);
-        let required_features = if float32_filterable {
+        let mut required_features = if float32_filterable {
             wgpu::Features::FLOAT32_FILTERABLE
         } else {
             wgpu::Features::empty()
         };
+        // GPU timestamps for `GpuTimer`, where the adapter has them.
+        if adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
+            required_features |= wgpu::Features::TIMESTAMP_QUERY;
+        }
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("lustre-gpu"),

@@ -18,6 +18,7 @@
 use crate::compute::buffer_init;
 use crate::context::GpuContext;
 use crate::error::{invalid, scope_result, wgpu_error, Result};
+use glam::DVec3;
 use lustre_scene::Scene;
 use lustre_shade::bake::gbuffer::{GBuffer, SKY};
 use lustre_shade::path::{Geometry, PathCamera};
@@ -141,7 +142,7 @@ impl GpuGeometry {
                 ),
             ));
         }
-        let (mut lo, mut hi) = (glam::DVec3::INFINITY, glam::DVec3::NEG_INFINITY);
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         let mut data: Vec<[f32; 4]> = Vec::with_capacity(g.positions.len() * STRIDE);
         for (i, tri) in g.positions.iter().enumerate() {
             if tri.iter().any(|p| !p.is_finite()) {
@@ -216,7 +217,7 @@ impl GpuGeometry {
 /// The camera uniform of `gbuffer.wgsl` and `lightmap_shade.wgsl`: origin, forward, right, up
 /// (xyz), then (tan(fov_y/2), W/H, near, 0).
 pub(crate) fn camera_uniform(camera: &PathCamera, w: u32, h: u32, near: f32) -> [[f32; 4]; 5] {
-    let v = |d: glam::DVec3| [d.x as f32, d.y as f32, d.z as f32, 0.0];
+    let v = |d: DVec3| [d.x as f32, d.y as f32, d.z as f32, 0.0];
     [
         v(camera.origin),
         v(camera.forward),
@@ -400,11 +401,65 @@ pub(crate) fn map_read(
     Ok(out)
 }
 
+/// What a G-buffer draw leaves out: a range of triangles (one mesh of the scene; a probe
+/// object, a see-through object, a reflector) and what lies between the eye and a plane (the
+/// mirror pass, 000 §4.5.1).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DrawOptions {
+    /// Triangles (indices in the geometry) not drawn.
+    pub skip: Option<std::ops::Range<u32>>,
+    /// A clip plane (a point on it, its normal): fragments on the eye's side of it and nearer
+    /// the plane than the eye (those between the eye and the plane along the eye's rays), or
+    /// within 10⁻⁴ of the scene's diagonal of the plane, are discarded, as the CPU mirror pass
+    /// starts its rays on the plane. An eye on the plane clips nothing.
+    pub plane: Option<(DVec3, DVec3)>,
+}
+
+/// The camera uniform of `gbuffer.wgsl`: [`camera_uniform`], the skipped triangle range and the
+/// clip plane with the eye's signed distance to it.
+fn draw_uniform(
+    camera: &PathCamera,
+    w: u32,
+    h: u32,
+    near: f32,
+    opts: &DrawOptions,
+) -> Result<Vec<[u32; 4]>> {
+    let mut u: Vec<[u32; 4]> = camera_uniform(camera, w, h, near)
+        .iter()
+        .map(|v| v.map(f32::to_bits))
+        .collect();
+    let skip = opts.skip.clone().unwrap_or(0..0);
+    u.push([skip.start, skip.end.max(skip.start), 0, 0]);
+    let (plane, eye) = match opts.plane {
+        Some((point, normal)) => {
+            let n = normal
+                .try_normalize()
+                .filter(|_| point.is_finite())
+                .ok_or_else(|| {
+                    invalid(
+                        "clip plane",
+                        format!("point {point}, normal {normal} do not define a plane"),
+                    )
+                })?;
+            let offset = -n.dot(point);
+            (
+                [n.x as f32, n.y as f32, n.z as f32, offset as f32],
+                (n.dot(camera.origin) + offset) as f32,
+            )
+        }
+        None => ([0.0; 4], 0.0),
+    };
+    u.push(plane.map(f32::to_bits));
+    // Surfaces within 10 near planes (10⁻⁴ of the scene's diagonal) of the plane count as in it.
+    u.push([eye.to_bits(), (10.0 * near).to_bits(), 0, 0]);
+    Ok(u)
+}
+
 /// The compiled raster pass.
 #[derive(Debug)]
 pub struct GBufferPass {
-    /// Without alpha masks (`fs_main`), with them (`fs_masked`).
-    pipelines: [wgpu::RenderPipeline; 2],
+    /// Indexed by 2·clip + masked: `fs_main`, `fs_masked`, `fs_clip`, `fs_clip_masked`.
+    pipelines: [wgpu::RenderPipeline; 4],
     layout: wgpu::BindGroupLayout,
 }
 
@@ -492,7 +547,12 @@ impl GBufferPass {
                     cache: None,
                 })
         };
-        let pipelines = [pipeline("fs_main"), pipeline("fs_masked")];
+        let pipelines = [
+            pipeline("fs_main"),
+            pipeline("fs_masked"),
+            pipeline("fs_clip"),
+            pipeline("fs_clip_masked"),
+        ];
         scope_result(scope, "compiling gbuffer.wgsl")?;
         Ok(GBufferPass { pipelines, layout })
     }
@@ -505,8 +565,20 @@ impl GBufferPass {
         camera: &PathCamera,
         target: &GBufferTarget,
     ) -> Result<()> {
+        self.draw_with(ctx, geometry, camera, target, &DrawOptions::default())
+    }
+
+    /// [`GBufferPass::draw`] leaving out what `opts` names. Errors: a degenerate clip plane.
+    pub fn draw_with(
+        &self,
+        ctx: &GpuContext,
+        geometry: &GpuGeometry,
+        camera: &PathCamera,
+        target: &GBufferTarget,
+        opts: &DrawOptions,
+    ) -> Result<()> {
+        let cam = draw_uniform(camera, target.width, target.height, geometry.near, opts)?;
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let cam = camera_uniform(camera, target.width, target.height, geometry.near);
         let uniform = buffer_init(
             ctx,
             "gbuffer camera",
@@ -584,7 +656,8 @@ impl GBufferPass {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            pass.set_pipeline(&self.pipelines[usize::from(geometry.masked)]);
+            let clip = 2 * usize::from(opts.plane.is_some());
+            pass.set_pipeline(&self.pipelines[clip + usize::from(geometry.masked)]);
             pass.set_bind_group(0, &bind, &[]);
             pass.draw(0..geometry.count * 3, 0..1);
         }
@@ -606,9 +679,15 @@ mod tests {
         for (src, entries, uniform, bytes) in [
             (
                 GBUFFER_WGSL,
-                &["vs_main", "fs_main", "fs_masked"][..],
+                &[
+                    "vs_main",
+                    "fs_main",
+                    "fs_masked",
+                    "fs_clip",
+                    "fs_clip_masked",
+                ][..],
                 "Camera",
-                5 * 16,
+                8 * 16,
             ),
             (LIGHTMAP_SHADE_WGSL, &["main"][..], "Shade", 11 * 16),
         ] {

@@ -15,6 +15,16 @@ struct Camera {
     up: vec4<f32>,
     // x: tan(fov_y / 2), y: aspect W / H, z: near plane (view depth), w: unused.
     params: vec4<f32>,
+    // Triangles [x, y) are left out (a probe's or a see-through object's mesh); x = y: none.
+    skip: vec4<u32>,
+    // The clip plane (unit normal xyz, offset w: s(p) = n·p + w) and (s(eye), tolerance, 0, 0):
+    // a fragment with s(p) of the eye's sign but nearer the plane than the eye lies between the
+    // eye and the plane along its ray and is discarded (the CPU mirror pass starts its rays on
+    // the plane), and so is one within the tolerance of the plane (surfaces coplanar with the
+    // reflector, which the CPU's rays starting on the plane do not see either). s(eye) = 0: no
+    // clipping.
+    plane: vec4<f32>,
+    plane_eye: vec4<f32>,
 };
 
 // Per triangle 8 vec4: positions (xyz) of corners 0..2, shading normals of corners 0..2,
@@ -35,13 +45,15 @@ struct VsOut {
     @location(1) bary: vec2<f32>,
     @location(2) normal: vec3<f32>,
     @location(3) depth: f32,
+    @location(4) world: vec3<f32>,
 };
 
 @vertex
 fn vs_main(@builtin(vertex_index) vi: u32) -> VsOut {
     let prim = vi / 3u;
     let corner = vi % 3u;
-    let p = tris[prim * STRIDE + corner].xyz - cam.origin.xyz;
+    let world = tris[prim * STRIDE + corner].xyz;
+    let p = world - cam.origin.xyz;
     let x = dot(p, cam.right.xyz);
     let y = dot(p, cam.up.xyz);
     let z = dot(p, cam.forward.xyz);
@@ -58,6 +70,11 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VsOut {
     out.bary = b;
     out.normal = tris[prim * STRIDE + 3u + corner].xyz;
     out.depth = z;
+    out.world = world;
+    if prim >= cam.skip.x && prim < cam.skip.y {
+        // A left-out triangle: all corners on one point outside the view, nothing rasterised.
+        out.clip = vec4<f32>(-2.0, -2.0, 0.0, 1.0);
+    }
     return out;
 }
 
@@ -107,6 +124,35 @@ fn fs_main(v: VsOut) -> FsOut {
 @fragment
 fn fs_masked(v: VsOut) -> FsOut {
     if !present(v.prim, v.bary) {
+        discard;
+    }
+    return write(v);
+}
+
+// Whether the point lies between the eye and the clip plane (see `Camera::plane`).
+fn clipped(world: vec3<f32>) -> bool {
+    let e = cam.plane_eye.x;
+    if e == 0.0 {
+        return false;
+    }
+    // The distance from the plane towards the eye's side.
+    let s = sign(e) * (dot(cam.plane.xyz, world) + cam.plane.w);
+    return s > -cam.plane_eye.y && s < abs(e);
+}
+
+// With a clip plane (mirror views), without alpha masks.
+@fragment
+fn fs_clip(v: VsOut) -> FsOut {
+    if clipped(v.world) {
+        discard;
+    }
+    return write(v);
+}
+
+// With a clip plane and alpha masks.
+@fragment
+fn fs_clip_masked(v: VsOut) -> FsOut {
+    if clipped(v.world) || !present(v.prim, v.bary) {
         discard;
     }
     return write(v);

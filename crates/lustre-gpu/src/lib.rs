@@ -12,6 +12,12 @@
 //! [`RenderTarget::new`]), [`GpuRenderer::bind`] them and time [`GpuRenderer::draw`]
 //! (dispatch + wait) apart from [`RenderTarget::read_back`].
 //!
+//! Probes and view buffers (issue 11 "Rendering" 3 and 5): [`GpuProbeCapture::capture_probe`]
+//! renders a probe's cube with the raster G-buffer and light-map shading passes straight into a
+//! [`GpuPyramid`]'s base level and filters it on the GPU; [`GpuViewPass::render_mirror`] and
+//! [`GpuViewPass::render_see_through`] fill the mirror / see-through view buffers
+//! ([`view_pass::GpuViewBuffer`]); [`GpuTimer`] times GPU work (timestamps where available).
+//!
 //! Measured (lavapipe on the shared 2-core machine, load ≈ 12): parity with the CPU kernel
 //! 122 dB PSNR (7 samples per lobe) and 129 dB (19) at 128×96; 1920×1080 frames of a screen
 //! full of one-lobe specular pixels 3.9 s (n = 3), 6.0 s (n = 11), 9.7 s (n = 19); half
@@ -25,14 +31,17 @@ pub mod error;
 pub mod gbuffer;
 pub mod lightmap_shade;
 pub mod packed;
+pub mod probe_capture;
 pub mod pyramid;
 pub mod shade;
+pub mod timer;
+pub mod view_pass;
 pub mod wgsl;
 
 pub use context::GpuContext;
 pub use cube::{CubeLevelRef, GpuCube};
 pub use error::{GpuError, Result};
-pub use gbuffer::{GBufferPass, GBufferTarget, GpuGeometry, GBUFFER_WGSL};
+pub use gbuffer::{DrawOptions, GBufferPass, GBufferTarget, GpuGeometry, GBUFFER_WGSL};
 pub use lightmap_shade::{
     GpuLightmapScene, LightmapFrameScene, LightmapRenderer, LightmapShadePass, ShadeTarget,
     LIGHTMAP_SHADE_WGSL,
@@ -41,6 +50,9 @@ pub use packed::{
     CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, PackedScene, LOBE_SCHEME_LATTICE,
     LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
 };
-pub use pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_WGSL};
+pub use probe_capture::{face_camera, mesh_triangles, GpuProbe, GpuProbeCapture};
+pub use pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_USAGE, PYRAMID_WGSL};
 pub use shade::shade_wgsl;
 pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_PASS_WGSL};
+pub use timer::{GpuTimer, Timing};
+pub use view_pass::{GpuViewPass, ViewRender};

@@ -350,7 +350,7 @@ pub struct LightmapShadePass {
     layout: wgpu::BindGroupLayout,
 }
 
-fn texture_entry(
+pub(crate) fn texture_entry(
     binding: u32,
     sample_type: wgpu::TextureSampleType,
     view_dimension: wgpu::TextureViewDimension,
@@ -414,6 +414,44 @@ impl LightmapShadePass {
                 ),
             ));
         }
+        self.shade_into(ctx, scene, gbuffer, camera, k, &out.buffer, 0)
+    }
+
+    /// Shades the (k·w)×(k·h) `gbuffer` as [`LightmapShadePass::shade`] does, into texels
+    /// `offset .. offset + w·h` of the RGBA f32 storage buffer `out` (e.g. one face of a cube
+    /// pyramid's base level, or level 0 of a view buffer; submitted, not waited for). Errors:
+    /// a G-buffer size not a multiple of k, an output beyond the buffer.
+    #[allow(clippy::too_many_arguments)]
+    pub fn shade_into(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuLightmapScene,
+        gbuffer: &GBufferTarget,
+        camera: &PathCamera,
+        k: u32,
+        out: &wgpu::Buffer,
+        offset: u32,
+    ) -> Result<()> {
+        if k == 0 || !gbuffer.width.is_multiple_of(k) || !gbuffer.height.is_multiple_of(k) {
+            return Err(invalid(
+                "supersampling",
+                format!(
+                    "a {}×{} G-buffer is not {k}×{k} supersampled",
+                    gbuffer.width, gbuffer.height
+                ),
+            ));
+        }
+        let (w, h) = (gbuffer.width / k, gbuffer.height / k);
+        let end = u64::from(offset) + u64::from(w) * u64::from(h);
+        if end * 16 > out.size() {
+            return Err(invalid(
+                "shading output",
+                format!(
+                    "texels {offset}..{end} of a {w}×{h} image exceed a buffer of {} texels",
+                    out.size() / 16
+                ),
+            ));
+        }
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let cam = camera_uniform(camera, gbuffer.width, gbuffer.height, 0.0);
         let mut u: Vec<[u32; 4]> = cam.iter().map(|v| v.map(f32::to_bits)).collect();
@@ -423,7 +461,7 @@ impl LightmapShadePass {
             k,
             u32::from(scene.env.is_some()),
         ]);
-        u.push([scene.page_size[0], scene.page_size[1], 0, 0]);
+        u.push([scene.page_size[0], scene.page_size[1], offset, 0]);
         let (rows, scale) = scene.env.unwrap_or(([[0.0; 4]; 3], 0.0));
         for r in rows {
             u.push(r.map(f32::to_bits));
@@ -461,7 +499,7 @@ impl LightmapShadePass {
                 buf(6, &scene.texture_info),
                 tex(7, &views[2]),
                 tex(8, &views[3]),
-                buf(9, &out.buffer),
+                buf(9, out),
             ],
         });
         let mut enc = ctx
@@ -476,21 +514,21 @@ impl LightmapShadePass {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &bind, &[]);
-            pass.dispatch_workgroups(out.width.div_ceil(8), out.height.div_ceil(8), 1);
+            pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
         }
         ctx.queue.submit([enc.finish()]);
         scope_result(scope, "light-map shading")
     }
 }
 
-fn buf(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+pub(crate) fn buf(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry {
         binding,
         resource: b.as_entire_binding(),
     }
 }
 
-fn tex(binding: u32, v: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
+pub(crate) fn tex(binding: u32, v: &wgpu::TextureView) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry {
         binding,
         resource: wgpu::BindingResource::TextureView(v),

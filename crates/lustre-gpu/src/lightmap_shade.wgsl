@@ -13,7 +13,8 @@ struct Shade {
     params: vec4<f32>,
     // G-buffer width, height, k, 1 when there is an environment.
     sizes: vec4<u32>,
-    // Light-map page width, height.
+    // Light-map page width, height; z: the first output texel (the image is written at
+    // out_px[z + y·w + x], e.g. one face of a cube's base level).
     page: vec4<u32>,
     // Rows of the world → map rotation (the transpose of the environment's to_world).
     env_row0: vec4<f32>,
@@ -242,5 +243,5 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
         }
     }
-    out_px[gid.y * w + gid.x] = vec4<f32>(sum / f32(k * k), 1.0);
+    out_px[u.page.z + gid.y * w + gid.x] = vec4<f32>(sum / f32(k * k), 1.0);
 }

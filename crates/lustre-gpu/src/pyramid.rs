@@ -20,6 +20,11 @@ pub const PYRAMID_WGSL: &str = include_str!("pyramid.wgsl");
 /// Texels of the ring kept outside each face edge (the widest kernel's margin, Gauss 6×6).
 const MARGIN: i64 = 2;
 
+/// The usage of every level buffer of a [`GpuPyramid`]: read and written by the shaders,
+/// copied out for readback.
+pub const PYRAMID_USAGE: wgpu::BufferUsages =
+    wgpu::BufferUsages::STORAGE.union(wgpu::BufferUsages::COPY_SRC);
+
 /// The compiled down-sampling pass.
 #[derive(Debug)]
 pub struct GpuPyramidBuilder {
@@ -114,22 +119,51 @@ impl GpuPyramidBuilder {
                 ),
             ));
         }
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
-            buffer_init(ctx, label, contents, usage)
-        };
         let texels: Vec<[f32; 4]> = base
             .faces
             .iter()
             .flat_map(|f| f.iter().map(|v| [v[0], v[1], v[2], 1.0]))
             .collect();
-        let mut levels = vec![init(
+        let level0 = buffer_init(
+            ctx,
             "pyramid level 0",
             bytemuck::cast_slice(&texels),
-            usage,
-        )];
-        let mut sizes = vec![base.size];
+            PYRAMID_USAGE,
+        );
+        self.build_from_buffer(ctx, level0, base.size, filter)
+    }
+
+    /// Builds every level down to 1×1 with `filter` above a base level already on the GPU:
+    /// `level0` holds 6·size² RGBA f32 texels, face-major then row-major (as
+    /// [`GpuPyramid::levels`]; usage [`PYRAMID_USAGE`]), e.g. a probe captured by
+    /// [`crate::probe_capture::GpuProbeCapture`]. One submission, no host round trip; returns
+    /// once the GPU has finished. Errors: a size of 0 or beyond the device's storage buffers,
+    /// a buffer of the wrong size, wgpu validation.
+    pub fn build_from_buffer(
+        &self,
+        ctx: &GpuContext,
+        level0: wgpu::Buffer,
+        size: usize,
+        filter: MipFilter,
+    ) -> Result<GpuPyramid> {
+        let limit = ctx.device.limits().max_storage_buffer_binding_size as usize;
+        let bytes = 6 * size * size * 16;
+        if size == 0 || bytes > limit || level0.size() != bytes as u64 {
+            return Err(invalid(
+                "cube pyramid",
+                format!(
+                    "a {size}² base needs {bytes} bytes (the buffer has {}, the device allows {limit} per storage buffer)",
+                    level0.size()
+                ),
+            ));
+        }
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let usage = PYRAMID_USAGE;
+        let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+            buffer_init(ctx, label, contents, usage)
+        };
+        let mut levels = vec![level0];
+        let mut sizes = vec![size];
         let (kernel, first) = filter.kernel();
         let weights: Vec<f32> = kernel.iter().map(|&w| w as f32).collect();
         let weights = init(

@@ -313,7 +313,23 @@ fn render_view(
             }
         })
         .collect();
-    let mut levels = vec![(w, h, texels.iter().map(|t| t.radiance).collect::<Vec<_>>())];
+    let levels = box_levels(w, h, texels.iter().map(|t| t.radiance).collect());
+    Ok(ViewBuffer {
+        mesh: mesh as u32,
+        camera: *cam,
+        width: w,
+        height: h,
+        texels,
+        levels,
+        front: None,
+    })
+}
+
+/// The radiance MIP pyramid of a view buffer from its w×h level 0 (row-major): 2×2 box means of
+/// the texels that exist (odd sizes keep the last row/column's 2 or 1), level l of size
+/// ⌈w/2^l⌉ × ⌈h/2^l⌉, down to 1×1; finest first.
+pub fn box_levels(w: usize, h: usize, level0: Vec<Rgb>) -> Vec<(usize, usize, Vec<Rgb>)> {
+    let mut levels = vec![(w, h, level0)];
     while let Some((lw, lh, data)) = levels.last() {
         if *lw == 1 && *lh == 1 {
             break;
@@ -336,15 +352,7 @@ fn render_view(
         }
         levels.push((nw, nh, next));
     }
-    Ok(ViewBuffer {
-        mesh: mesh as u32,
-        camera: *cam,
-        width: w,
-        height: h,
-        texels,
-        levels,
-        front: None,
-    })
+    levels
 }
 
 impl ViewBuffer {

@@ -267,6 +267,24 @@ pub fn auto_planes(
 /// out, its Gaussian 6×6 pyramid, and [`auto_planes`]. Errors: no such mesh, or a centre inside
 /// another object's solid (more than half the axis rays hit back faces — a probe inside a wall).
 pub fn capture_probe(lit: &LitScene, mesh: usize, opts: &ProbeOptions) -> Result<Probe> {
+    let (name, centre) = probe_placement(lit, mesh)?;
+    let skip = Some(mesh as u32);
+    let cube = capture_cube(lit, centre, skip, opts)?;
+    let pyramid = CubePyramid::build(cube, MipFilter::Gauss6)?;
+    let planes = auto_planes(lit, centre, skip, opts.plane_rays)?;
+    Ok(Probe {
+        name,
+        mesh: mesh as u32,
+        centre,
+        planes,
+        pyramid,
+    })
+}
+
+/// Where the probe of mesh `mesh` is captured: its name and the centre of its bounds (what
+/// [`capture_probe`] and the GPU capture share). Errors: no such mesh, or a centre inside
+/// another object's solid (more than half the axis rays hit back faces — a probe inside a wall).
+pub fn probe_placement(lit: &LitScene, mesh: usize) -> Result<(String, DVec3)> {
     let (lo, hi) = lit.mesh_bounds(mesh).ok_or_else(|| {
         ShadeError::Parameter(format!(
             "{}: no mesh {mesh} (or it has no finite vertices) to place a probe at",
@@ -284,16 +302,7 @@ pub fn capture_probe(lit: &LitScene, mesh: usize, opts: &ProbeOptions) -> Result
             backs * 100.0
         )));
     }
-    let cube = capture_cube(lit, centre, skip, opts)?;
-    let pyramid = CubePyramid::build(cube, MipFilter::Gauss6)?;
-    let planes = auto_planes(lit, centre, skip, opts.plane_rays)?;
-    Ok(Probe {
-        name,
-        mesh: mesh as u32,
-        centre,
-        planes,
-        pyramid,
-    })
+    Ok((name, centre))
 }
 
 /// The fraction of 26 rays (the cube's face, edge and corner directions) from `p` that hit a

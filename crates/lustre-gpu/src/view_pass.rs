@@ -1,0 +1,363 @@
+//! The mirror and see-through passes on the GPU (000 §4.5.1, issue 11 "Rendering" item 5): the
+//! light-mapped scene rendered with one mesh left out — from the camera mirrored in a planar
+//! reflector's plane, with what lies between the mirrored eye and the plane clipped
+//! ([`GpuViewPass::render_mirror`]), or from the camera itself behind a transmissive object
+//! ([`GpuViewPass::render_see_through`]) — into a view buffer: radiance with its 2×2 box MIP
+//! levels built on the GPU (`view_mip.wgsl`), and the position and geometric normal of every
+//! level-0 texel (`view_geometry.wgsl`), in the layout of [`GpuViewBuffer`].
+//!
+//! The mirrored camera's basis is left-handed (the reflection flips the winding); the raster
+//! pass does not cull, so nothing is lost. The clip is a fragment discard (`gbuffer.wgsl`'s
+//! `fs_clip`): a fragment on the mirrored eye's side of the plane and nearer the plane than the
+//! eye lies between the eye and the plane along its ray, which the CPU's rays starting on the
+//! plane skip. One sample per texel centre, as the CPU twin
+//! [`lustre_shade::mirror::render_mirror`] / [`lustre_shade::mirror::render_see_through`].
+
+use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry};
+use crate::context::GpuContext;
+use crate::error::{invalid, scope_result, wgpu_error, Result};
+use crate::gbuffer::{map_read, DrawOptions, GBufferPass, GBufferTarget};
+use crate::lightmap_shade::{buf, tex, texture_entry, LightmapFrameScene, LightmapShadePass};
+use crate::probe_capture::mesh_triangles;
+use glam::DVec3;
+use lustre_brdf::rgb::Rgb;
+use lustre_shade::mirror::{mirror_camera, MirrorTexel, Reflector, ReflectorPlane, ViewBuffer};
+use lustre_shade::path::PathCamera;
+use lustre_shade::probe::LitScene;
+
+/// The WGSL source of the geometry step.
+pub const VIEW_GEOMETRY_WGSL: &str = include_str!("view_geometry.wgsl");
+/// The WGSL source of one radiance MIP step.
+pub const VIEW_MIP_WGSL: &str = include_str!("view_mip.wgsl");
+
+/// A mirror or see-through buffer on the GPU, the layout of the session's shared interface §3
+/// (`lustre_shade::mirror::ViewBuffer` on the GPU).
+#[derive(Debug)]
+pub struct GpuViewBuffer {
+    /// Every radiance MIP level concatenated, finest first; level l is ⌈w/2^l⌉×⌈h/2^l⌉
+    /// row-major `vec4<f32>` (rgb, 1).
+    pub radiance: wgpu::Buffer,
+    /// Level 0 only, two `vec4<f32>` per texel: (position.xyz, 1 where the texel shows a
+    /// surface, else 0), (geometric normal.xyz, 0).
+    pub geometry: wgpu::Buffer,
+    /// Width in texels.
+    pub width: usize,
+    /// Height in texels.
+    pub height: usize,
+    /// (width, height) of every level, finest first.
+    pub level_sizes: Vec<(usize, usize)>,
+    /// The camera the buffer was rendered from (the mirrored one for a mirror buffer).
+    pub camera: PathCamera,
+    /// The mesh left out.
+    pub mesh: u32,
+    /// For a mirror buffer: the reflector's plane.
+    pub front: Option<ReflectorPlane>,
+}
+
+/// Level sizes ⌈w/2^l⌉×⌈h/2^l⌉ down to 1×1.
+fn level_sizes(w: usize, h: usize) -> Vec<(usize, usize)> {
+    let mut out = vec![(w, h)];
+    while let Some(&(lw, lh)) = out.last() {
+        if lw == 1 && lh == 1 {
+            break;
+        }
+        out.push((lw.div_ceil(2), lh.div_ceil(2)));
+    }
+    out
+}
+
+impl GpuViewBuffer {
+    /// Copies the buffer to the host as the CPU's [`ViewBuffer`].
+    pub fn read_back(&self, ctx: &GpuContext) -> Result<ViewBuffer> {
+        let read = |b: &wgpu::Buffer| -> Result<Vec<[f32; 4]>> {
+            let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+            let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("view buffer readback"),
+                size: b.size(),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let mut enc = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                    label: Some("view buffer readback"),
+                });
+            enc.copy_buffer_to_buffer(b, 0, &staging, 0, b.size());
+            ctx.queue.submit([enc.finish()]);
+            let bytes = map_read(ctx, &staging, "view buffer readback", scope)?;
+            Ok(bytemuck::cast_slice(&bytes).to_vec())
+        };
+        let rad = read(&self.radiance)?;
+        let geo = read(&self.geometry)?;
+        let n = self.width * self.height;
+        let total: usize = self.level_sizes.iter().map(|(w, h)| w * h).sum();
+        if rad.len() != total || geo.len() != 2 * n {
+            return Err(wgpu_error(
+                "view buffer readback",
+                format!(
+                    "{} radiance and {} geometry texels for {total} and {}",
+                    rad.len(),
+                    geo.len(),
+                    2 * n
+                ),
+            ));
+        }
+        let rgb = |t: &[f32; 4]| Rgb([f64::from(t[0]), f64::from(t[1]), f64::from(t[2])]);
+        let mut levels = Vec::with_capacity(self.level_sizes.len());
+        let mut at = 0;
+        for &(w, h) in &self.level_sizes {
+            levels.push((w, h, rad[at..at + w * h].iter().map(rgb).collect()));
+            at += w * h;
+        }
+        let v3 = |t: &[f32; 4]| DVec3::new(f64::from(t[0]), f64::from(t[1]), f64::from(t[2]));
+        let texels = (0..n)
+            .map(|i| {
+                let (p, nn) = (&geo[2 * i], &geo[2 * i + 1]);
+                MirrorTexel {
+                    radiance: rgb(&rad[i]),
+                    position: (p[3] > 0.5).then(|| v3(p)),
+                    normal: v3(nn),
+                }
+            })
+            .collect();
+        Ok(ViewBuffer {
+            mesh: self.mesh,
+            camera: self.camera,
+            width: self.width,
+            height: self.height,
+            texels,
+            levels,
+            front: self.front,
+        })
+    }
+}
+
+/// A view buffer and the G-buffer it was shaded from (kept for the CPU twin; drop it when not
+/// needed).
+#[derive(Debug)]
+pub struct ViewRender {
+    /// The view buffer.
+    pub view: GpuViewBuffer,
+    /// Its w×h G-buffer.
+    pub gbuffer: GBufferTarget,
+}
+
+/// The compiled passes of the mirror and see-through buffers.
+#[derive(Debug)]
+pub struct GpuViewPass {
+    gbuffer: GBufferPass,
+    shade: LightmapShadePass,
+    geometry: (wgpu::ComputePipeline, wgpu::BindGroupLayout),
+    mip: (wgpu::ComputePipeline, wgpu::BindGroupLayout),
+}
+
+impl GpuViewPass {
+    /// Compiles the raster, shading, geometry and MIP passes.
+    pub fn new(ctx: &GpuContext) -> Result<Self> {
+        let d2 = wgpu::TextureViewDimension::D2;
+        let geometry = compute_pipeline(
+            ctx,
+            "view_geometry.wgsl",
+            "compiling view_geometry.wgsl",
+            VIEW_GEOMETRY_WGSL,
+            &[
+                uniform_entry(0),
+                texture_entry(1, wgpu::TextureSampleType::Uint, d2),
+                texture_entry(2, wgpu::TextureSampleType::Float { filterable: false }, d2),
+                storage_entry(3, true),
+                storage_entry(4, false),
+            ],
+        )?;
+        let mip = compute_pipeline(
+            ctx,
+            "view_mip.wgsl",
+            "compiling view_mip.wgsl",
+            VIEW_MIP_WGSL,
+            &[uniform_entry(0), storage_entry(1, false)],
+        )?;
+        Ok(GpuViewPass {
+            gbuffer: GBufferPass::new(ctx)?,
+            shade: LightmapShadePass::new(ctx)?,
+            geometry,
+            mip,
+        })
+    }
+
+    /// The mirror buffer of reflector `mesh` for `camera` at w×h (000 §4.5.1), as
+    /// [`lustre_shade::mirror::render_mirror`]: the reflector's plane from `lit` (the CPU's
+    /// [`ReflectorPlane::of_mesh`]), the mirrored camera, the reflector left out and what lies
+    /// between the mirrored eye and the plane clipped. Returns the reflector and the buffer once
+    /// the GPU has finished. Errors: no such mesh, a reflector that is not planar, sizes.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_mirror(
+        &self,
+        ctx: &GpuContext,
+        scene: &LightmapFrameScene,
+        lit: &LitScene,
+        mesh: usize,
+        camera: &PathCamera,
+        w: usize,
+        h: usize,
+    ) -> Result<(Reflector, ViewRender)> {
+        let reflector = ReflectorPlane::of_mesh(lit, mesh)
+            .map_err(|e| invalid("planar reflector", e.to_string()))?;
+        let plane = reflector.plane;
+        let cam = mirror_camera(camera, &plane);
+        let opts = DrawOptions {
+            skip: Some(mesh_triangles(lit.scene, mesh)?),
+            plane: Some((plane.point, plane.normal)),
+        };
+        let view = self.render_view(ctx, scene, &cam, w, h, &opts, mesh as u32, Some(plane))?;
+        Ok((reflector, view))
+    }
+
+    /// What `camera` sees at w×h with mesh `mesh` of `lit`'s scene left out (a transmissive
+    /// object), as [`lustre_shade::mirror::render_see_through`]. Returns once the GPU has
+    /// finished. Errors: no such mesh, sizes.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_see_through(
+        &self,
+        ctx: &GpuContext,
+        scene: &LightmapFrameScene,
+        lit: &LitScene,
+        mesh: usize,
+        camera: &PathCamera,
+        w: usize,
+        h: usize,
+    ) -> Result<ViewRender> {
+        let opts = DrawOptions {
+            skip: Some(mesh_triangles(lit.scene, mesh)?),
+            plane: None,
+        };
+        self.render_view(ctx, scene, camera, w, h, &opts, mesh as u32, None)
+    }
+
+    /// The view buffer of `camera` at w×h drawn with `opts` (one sample per texel centre):
+    /// G-buffer, light-mapped shading into level 0, geometry, box MIP levels. `mesh` and
+    /// `front` are recorded in the buffer. Returns once the GPU has finished.
+    #[allow(clippy::too_many_arguments)]
+    pub fn render_view(
+        &self,
+        ctx: &GpuContext,
+        scene: &LightmapFrameScene,
+        camera: &PathCamera,
+        w: usize,
+        h: usize,
+        opts: &DrawOptions,
+        mesh: u32,
+        front: Option<ReflectorPlane>,
+    ) -> Result<ViewRender> {
+        let (wu, hu) = match (u32::try_from(w), u32::try_from(h)) {
+            (Ok(a), Ok(b)) if a > 0 && b > 0 => (a, b),
+            _ => return Err(invalid("view buffer size", format!("{w}×{h}"))),
+        };
+        let sizes = level_sizes(w, h);
+        let total: usize = sizes.iter().map(|(a, b)| a * b).sum();
+        let limit = ctx.device.limits().max_storage_buffer_binding_size;
+        if (total as u64) * 16 > limit || (w * h) as u64 * 32 > limit {
+            return Err(invalid(
+                "view buffer size",
+                format!("{w}×{h} exceeds the device's {limit}-byte storage buffers"),
+            ));
+        }
+        let target = GBufferTarget::new(ctx, wu, hu)?;
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let buffer = |label: &str, bytes: u64| {
+            ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let radiance = buffer("view buffer radiance", total as u64 * 16);
+        let geometry = buffer("view buffer geometry", (w * h) as u64 * 32);
+        self.gbuffer
+            .draw_with(ctx, &scene.geometry, camera, &target, opts)?;
+        self.shade
+            .shade_into(ctx, &scene.shading, &target, camera, 1, &radiance, 0)?;
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut enc = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("view buffer"),
+            });
+        let params = buffer_init(
+            ctx,
+            "view geometry params",
+            bytemuck::cast_slice(&[wu, hu, 0, 0]),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let views = [&target.prim, &target.bary_depth].map(|t| t.create_view(&Default::default()));
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("view_geometry.wgsl"),
+            layout: &self.geometry.1,
+            entries: &[
+                buf(0, &params),
+                tex(1, &views[0]),
+                tex(2, &views[1]),
+                buf(3, &scene.geometry.triangles),
+                buf(4, &geometry),
+            ],
+        });
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("view geometry"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.geometry.0);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(wu.div_ceil(8), hu.div_ceil(8), 1);
+        }
+        let mut offset = 0usize;
+        for pair in sizes.windows(2) {
+            let ((pw, ph), (cw, ch)) = (pair[0], pair[1]);
+            let p = [
+                pw as u32,
+                ph as u32,
+                cw as u32,
+                ch as u32,
+                offset as u32,
+                (offset + pw * ph) as u32,
+                0,
+                0,
+            ];
+            let params = buffer_init(
+                ctx,
+                "view mip params",
+                bytemuck::cast_slice(&p),
+                wgpu::BufferUsages::UNIFORM,
+            );
+            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("view_mip.wgsl"),
+                layout: &self.mip.1,
+                entries: &[buf(0, &params), buf(1, &radiance)],
+            });
+            // One pass per level: the next level reads what this one wrote.
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("view mip"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.mip.0);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups((cw as u32).div_ceil(8), (ch as u32).div_ceil(8), 1);
+            offset += pw * ph;
+        }
+        ctx.queue.submit([enc.finish()]);
+        ctx.wait()?;
+        scope_result(scope, "view buffer")?;
+        Ok(ViewRender {
+            view: GpuViewBuffer {
+                radiance,
+                geometry,
+                width: w,
+                height: h,
+                level_sizes: sizes,
+                camera: *camera,
+                mesh,
+                front,
+            },
+            gbuffer: target,
+        })
+    }
+}
