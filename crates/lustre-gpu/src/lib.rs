@@ -22,16 +22,21 @@ pub mod context;
 pub mod contract;
 pub mod cube;
 pub mod error;
+pub mod frame_shade;
 pub mod gbuffer;
 pub mod lightmap_shade;
 pub mod packed;
 pub mod pyramid;
 pub mod shade;
+pub mod view_buffer;
 pub mod wgsl;
 
 pub use context::GpuContext;
 pub use cube::{CubeLevelRef, GpuCube};
 pub use error::{GpuError, Result};
+pub use frame_shade::{
+    FrameShadeOptions, FrameShadePass, FrameShadeScene, FrameShadeTarget, GpuBsdf, GpuProbe,
+};
 pub use gbuffer::{GBufferPass, GBufferTarget, GpuGeometry, GBUFFER_WGSL};
 pub use lightmap_shade::{
     GpuLightmapScene, LightmapFrameScene, LightmapRenderer, LightmapShadePass, ShadeTarget,
@@ -43,4 +48,5 @@ pub use packed::{
 };
 pub use pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_WGSL};
 pub use shade::shade_wgsl;
+pub use view_buffer::GpuViewBuffer;
 pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_PASS_WGSL};

@@ -91,8 +91,66 @@ pub const WARP: Module = Module {
     deps: &[&TYPES, &FRAME, &MIP, &MICROFACET],
 };
 
+/// The record every BSDF model's sampling returns (`BsdfSample`).
+pub const BSDF_SAMPLE: Module = Module {
+    name: "bsdf_sample",
+    source: include_str!("wgsl/bsdf_sample.wgsl"),
+    deps: &[],
+};
+
+/// Dielectric and conductor Fresnel, refraction, `split_uniform`, the cosine lobe.
+pub const FRESNEL: Module = Module {
+    name: "fresnel",
+    source: include_str!("wgsl/fresnel.wgsl"),
+    deps: &[&TYPES],
+};
+
+/// Kind 1: the rough conductor.
+pub const ROUGH_CONDUCTOR: Module = Module {
+    name: "rough_conductor",
+    source: include_str!("wgsl/rough_conductor.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL, &FRAME, &MICROFACET],
+};
+
+/// Kind 2: the rough plastic (its transmittance table read through the pass's `bsdf_table`).
+pub const ROUGH_PLASTIC: Module = Module {
+    name: "rough_plastic",
+    source: include_str!("wgsl/rough_plastic.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL, &FRAME, &MICROFACET],
+};
+
+/// Kind 3: the rough dielectric.
+pub const ROUGH_DIELECTRIC: Module = Module {
+    name: "rough_dielectric",
+    source: include_str!("wgsl/rough_dielectric.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL, &FRAME, &MICROFACET],
+};
+
+/// Kind 4: the smooth conductor.
+pub const CONDUCTOR: Module = Module {
+    name: "conductor",
+    source: include_str!("wgsl/conductor.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL],
+};
+
+/// Kind 5: the thin dielectric sheet.
+pub const THIN_DIELECTRIC: Module = Module {
+    name: "thin_dielectric",
+    source: include_str!("wgsl/thin_dielectric.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL],
+};
+
+/// Every scene model of the view-dependent pass (kinds 1–5).
+pub const SCENE_MODELS: [&Module; 5] = [
+    &ROUGH_CONDUCTOR,
+    &ROUGH_PLASTIC,
+    &ROUGH_DIELECTRIC,
+    &CONDUCTOR,
+    &THIN_DIELECTRIC,
+];
+
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 10] = [
+pub const ALL: [&Module; 17] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -103,6 +161,13 @@ pub const ALL: [&Module; 10] = [
     &QMC,
     &MICROFACET,
     &WARP,
+    &BSDF_SAMPLE,
+    &FRESNEL,
+    &ROUGH_CONDUCTOR,
+    &ROUGH_PLASTIC,
+    &ROUGH_DIELECTRIC,
+    &CONDUCTOR,
+    &THIN_DIELECTRIC,
 ];
 
 /// The source of a pass: every module in `imports` and, transitively, the modules they use,
