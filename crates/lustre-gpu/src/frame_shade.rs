@@ -415,7 +415,12 @@ fn storage<T: bytemuck::Pod + bytemuck::Zeroable>(
 
 /// Concatenates GPU buffers into one (on the GPU), returning it and each part's offset in
 /// elements of `elem` bytes.
-fn concat(ctx: &GpuContext, label: &str, parts: &[&wgpu::Buffer], elem: u64) -> (wgpu::Buffer, Vec<u32>) {
+fn concat(
+    ctx: &GpuContext,
+    label: &str,
+    parts: &[&wgpu::Buffer],
+    elem: u64,
+) -> (wgpu::Buffer, Vec<u32>) {
     let total: u64 = parts.iter().map(|b| b.size()).sum();
     let out = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
@@ -601,8 +606,10 @@ impl FrameShadeScene {
             }
             _ => NONE,
         };
-        let level_buffers: Vec<&wgpu::Buffer> =
-            pyramids.iter().flat_map(|(p, _, _)| p.levels.iter()).collect();
+        let level_buffers: Vec<&wgpu::Buffer> = pyramids
+            .iter()
+            .flat_map(|(p, _, _)| p.levels.iter())
+            .collect();
         let (cube_texels, offsets) = concat(ctx, "frame cube texels", &level_buffers, 16);
         let mut cube_levels: Vec<[u32; 4]> = vec![];
         let mut cubes: Vec<[f32; 4]> = vec![];
@@ -647,12 +654,7 @@ impl FrameShadeScene {
                     bits(v.level_sizes.len() as u32),
                     bits(r_off[i]),
                 ],
-                [
-                    bits(g_off[i] / 2),
-                    bits(u32::from(front.is_some())),
-                    0.0,
-                    0.0,
-                ],
+                [bits(g_off[i]), bits(u32::from(front.is_some())), 0.0, 0.0],
                 v4(front.map_or(DVec3::ZERO, |f| f.point), 0.0),
                 v4(front.map_or(DVec3::ZERO, |f| f.normal), 0.0),
             ]);
@@ -687,14 +689,148 @@ impl GpuBsdf {
 pub fn frame_shade_wgsl() -> &'static str {
     static SRC: OnceLock<String> = OnceLock::new();
     SRC.get_or_init(|| {
-        let mut imports: Vec<&wgsl::Module> = wgsl::SCENE_MODELS.to_vec();
-        imports.extend([&wgsl::MIP, &wgsl::PLANES, &wgsl::QMC, &wgsl::WARP]);
-        wgsl::compose(&imports, include_str!("frame_shade.wgsl"))
+        wgsl::compose(
+            &[
+                &wgsl::BSDF,
+                &wgsl::MIP,
+                &wgsl::PLANES,
+                &wgsl::QMC,
+                &wgsl::WARP,
+            ],
+            include_str!("frame_shade.wgsl"),
+        )
     })
 }
 
+/// One case of [`evaluate_models`]: record `record` at ωo, evaluated at ωi and sampled at u.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModelCase {
+    /// Index into the records.
+    pub record: u32,
+    /// ωo (local frame).
+    pub wo: [f32; 3],
+    /// ωi (local frame) of eval and pdf.
+    pub wi: [f32; 3],
+    /// The sample's (u1, u2).
+    pub u: [f32; 2],
+}
+
+/// What [`evaluate_models`] returns per case.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModelResult {
+    /// f(ωi, ωo).
+    pub eval: [f32; 3],
+    /// pdf(ωi, ωo).
+    pub pdf: f32,
+    /// The sampled direction.
+    pub sample_wi: [f32; 3],
+    /// Its pdf (0: no sample, the CPU's `None`).
+    pub sample_pdf: f32,
+    /// Its value.
+    pub sample_value: [f32; 3],
+    /// Whether it came from a Dirac lobe.
+    pub delta: bool,
+}
+
+/// Runs `bsdf.wgsl`'s sample / eval / pdf of `records` (with their `tables`) on `cases` on
+/// the GPU: the twins the parity tests hold against lustre-brdf.
+pub fn evaluate_models(
+    ctx: &GpuContext,
+    records: &[GpuBsdf],
+    tables: &[f32],
+    cases: &[ModelCase],
+) -> Result<Vec<ModelResult>> {
+    static SRC: OnceLock<String> = OnceLock::new();
+    let src = SRC.get_or_init(|| wgsl::compose(&[&wgsl::BSDF], include_str!("bsdf_models.wgsl")));
+    if let Some(c) = cases.iter().find(|c| c.record as usize >= records.len()) {
+        return Err(invalid(
+            "model case",
+            format!("record {} of {}", c.record, records.len()),
+        ));
+    }
+    let (pipeline, layout) = compute_pipeline(
+        ctx,
+        "bsdf_models.wgsl",
+        "compiling bsdf_models.wgsl",
+        src,
+        &[
+            storage_entry(0, true),
+            storage_entry(1, true),
+            storage_entry(2, true),
+            storage_entry(3, false),
+        ],
+    )?;
+    let input: Vec<[f32; 4]> = cases
+        .iter()
+        .flat_map(|c| {
+            [
+                [c.wo[0], c.wo[1], c.wo[2], f32::from_bits(c.record)],
+                [c.wi[0], c.wi[1], c.wi[2], 0.0],
+                [c.u[0], c.u[1], 0.0, 0.0],
+            ]
+        })
+        .collect();
+    let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let out_bytes = (input.len().max(1) * 16) as u64;
+    let results = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("model results"),
+        size: out_bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("model results readback"),
+        size: out_bytes,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let (r, t, c) = (
+        storage(ctx, "model records", records),
+        storage(ctx, "model tables", tables),
+        storage(ctx, "model cases", &input),
+    );
+    let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("bsdf_models.wgsl"),
+        layout: &layout,
+        entries: &[buf(0, &r), buf(1, &t), buf(2, &c), buf(3, &results)],
+    });
+    let mut enc = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("model cases"),
+        });
+    {
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("model cases"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups((cases.len() as u32).div_ceil(64).max(1), 1, 1);
+    }
+    enc.copy_buffer_to_buffer(&results, 0, &staging, 0, out_bytes);
+    ctx.queue.submit([enc.finish()]);
+    let bytes = map_read(ctx, &staging, "model cases", scope)?;
+    let v: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+    Ok(cases
+        .iter()
+        .enumerate()
+        .map(|(i, _)| {
+            let (a, b, c) = (v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+            ModelResult {
+                eval: [a[0], a[1], a[2]],
+                pdf: a[3],
+                sample_wi: [b[0], b[1], b[2]],
+                sample_pdf: b[3],
+                sample_value: [c[0], c[1], c[2]],
+                delta: c[3] > 0.5,
+            }
+        })
+        .collect())
+}
+
 /// The output of the pass: the frame (light-mapped + view-dependent), the progressive
-/// accumulation and the counts.
+/// accumulation (per G-buffer pixel) and the counts.
 #[derive(Debug)]
 pub struct FrameShadeTarget {
     /// Width in pixels.
@@ -707,14 +843,16 @@ pub struct FrameShadeTarget {
 }
 
 impl FrameShadeTarget {
-    /// An output of `w`×`h` pixels. Errors: a zero size, a buffer beyond the device's limit.
-    pub fn new(ctx: &GpuContext, w: u32, h: u32) -> Result<Self> {
+    /// An output of `w`×`h` pixels of a G-buffer supersampled k×k. Errors: a zero size, a
+    /// buffer beyond the device's limit.
+    pub fn new(ctx: &GpuContext, w: u32, h: u32, k: u32) -> Result<Self> {
         let bytes = u64::from(w) * u64::from(h) * 16;
+        let accum = bytes * u64::from(k) * u64::from(k);
         let limit = ctx.device.limits().max_storage_buffer_binding_size;
-        if w == 0 || h == 0 || bytes > limit {
+        if w == 0 || h == 0 || k == 0 || accum > limit {
             return Err(invalid(
                 "image size",
-                format!("{w}×{h} must be non-empty and fit {limit} bytes of storage"),
+                format!("{w}×{h} at {k}×{k} must be non-empty and fit {limit} bytes of storage"),
             ));
         }
         let buffer = |label: &str, size: u64| {
@@ -731,7 +869,7 @@ impl FrameShadeTarget {
             width: w,
             height: h,
             out: buffer("frame output", bytes),
-            accum: buffer("frame accumulation", bytes),
+            accum: buffer("frame accumulation", accum),
             counts: buffer("frame counts", 8),
         })
     }
@@ -766,7 +904,8 @@ impl FrameShadeTarget {
         .map_err(|e| wgpu_error("frame readback", e))
     }
 
-    /// The counts of the last call: G-buffer pixels with a view-dependent part, lookups.
+    /// The counts of the last call (one progressive frame): G-buffer pixels with a
+    /// view-dependent part, lookups.
     pub fn stats(&self, ctx: &GpuContext) -> Result<FrameStats> {
         let bytes = self.read(ctx, &self.counts)?;
         let c: &[u32] = bytemuck::cast_slice(&bytes);

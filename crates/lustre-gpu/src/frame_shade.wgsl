@@ -7,7 +7,8 @@
 // mirror buffer of an in-plane reflector triangle, the see-through buffer of a transmissive
 // probe object, the probe of the object (else the nearest; through its bounding planes) or
 // the environment's pyramid. One thread per output pixel box-averages its k×k G-buffer
-// pixels and adds the light-mapped image; progressive frames accumulate in `accum`.
+// pixels and adds the light-mapped image; progressive frames accumulate per G-buffer pixel in
+// `accum`.
 
 struct Params {
     origin: vec4<f32>,
@@ -23,14 +24,6 @@ struct Params {
     // seed (low, high word), environment cube (NONE: none), 0.
     seed: vec4<u32>,
 };
-
-struct GpuBsdf {
-    kind: u32,
-    flags: u32,
-    pad0: u32,
-    pad1: u32,
-    p: array<vec4<f32>, 8>,
-}
 
 @group(0) @binding(0) var<uniform> u: Params;
 @group(0) @binding(1) var prim_tex: texture_2d<u32>;
@@ -53,7 +46,7 @@ struct GpuBsdf {
 @group(0) @binding(11) var<storage, read> view_radiance: array<vec4<f32>>;
 @group(0) @binding(12) var<storage, read> view_geometry: array<vec4<f32>>;
 // Per view buffer, 8 vec4: camera origin, forward, right, up (w: tan(fov_y / 2) in origin.w);
-// (width, height, levels, first radiance texel) bits; (first geometry texel, has front, 0, 0)
+// (width, height, levels, first radiance texel) bits; (first geometry vec4, has front, 0, 0)
 // bits; front point; front normal.
 @group(0) @binding(13) var<storage, read> views: array<vec4<f32>>;
 @group(0) @binding(14) var<storage, read> lightmapped: array<vec4<f32>>;
@@ -65,8 +58,6 @@ struct GpuBsdf {
 const SKY: u32 = 0xffffffffu;
 const NONE: u32 = 0xffffffffu;
 const TRI_STRIDE: u32 = 9u;
-const FLAG_DELTA_ONLY: u32 = 1u;
-const FLAG_TWO_SIDED: u32 = 2u;
 const METHOD_REGULAR: u32 = 0u;
 const METHOD_CK: u32 = 1u;
 const METHOD_PROGRESSIVE: u32 = 2u;
@@ -79,31 +70,6 @@ fn bsdf_table(i: u32) -> f32 {
 
 fn finite3(c: vec3<f32>) -> bool {
     return all(abs(c) <= vec3<f32>(BIG));
-}
-
-// ---- the material dispatch: kind codes 1..5 (frame_shade.rs KIND_*); 16..19 are gpu-fits'.
-
-fn bsdf_sample(b: GpuBsdf, wo: vec3<f32>, uv: vec2<f32>) -> BsdfSample {
-    switch b.kind {
-        case 1u: {
-            return rough_conductor_sample(rough_conductor_unpack(b.p), wo, uv);
-        }
-        case 2u: {
-            return rough_plastic_sample(rough_plastic_unpack(b.p), wo, uv);
-        }
-        case 3u: {
-            return rough_dielectric_sample(rough_dielectric_unpack(b.p), wo, uv);
-        }
-        case 4u: {
-            return conductor_sample(conductor_unpack(b.p), wo, uv);
-        }
-        case 5u: {
-            return thin_dielectric_sample(thin_dielectric_unpack(b.p), wo, uv);
-        }
-        default: {
-            return no_sample();
-        }
-    }
 }
 
 // ---- cube maps (lustre_env::CubeMap::{bilinear, fetch}, CubePyramid::sample).
@@ -599,8 +565,8 @@ fn basis_tangent(n: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
 }
 
-// frame::view_dependent at G-buffer pixel (gx, gy) seen along d: (radiance, lookups, 1 if
-// view-dependent).
+// frame::view_dependent at G-buffer pixel (gx, gy) seen along d, before its clamp to ≥ 0 (the
+// progressive average is clamped, not its frames).
 fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> vec3<f32> {
     let base = prim * TRI_STRIDE;
     let r0 = tris[base];
@@ -686,7 +652,7 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
     }
     atomicAdd(&counts[0], 1u);
     atomicAdd(&counts[1], u32(r.w));
-    return max(c, vec3<f32>(0.0));
+    return c;
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -707,6 +673,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             let gy = gid.y * k + j;
             let prim = textureLoad(prim_tex, vec2<i32>(i32(gx), i32(gy)), 0).x;
             if (prim == SKY) {
+                if (u.method.x == METHOD_PROGRESSIVE) {
+                    accum[gy * u.sizes.x + gx] = vec4<f32>(0.0);
+                }
                 continue;
             }
             // PathCamera::direction(gx + ½, gy + ½, gw, gh).
@@ -714,17 +683,19 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             let py = (1.0 - 2.0 * (f32(gy) + 0.5) / gh) * a;
             let d = normalize(u.forward.xyz + px * u.right.xyz + py * u.up.xyz);
             let bd = textureLoad(bary_tex, vec2<i32>(i32(gx), i32(gy)), 0);
-            sum += shade_point(prim, vec3<f32>(1.0 - bd.x - bd.y, bd.x, bd.y), d, gx, gy);
+            var c = shade_point(prim, vec3<f32>(1.0 - bd.x - bd.y, bd.x, bd.y), d, gx, gy);
+            if (u.method.x == METHOD_PROGRESSIVE) {
+                // Frame f joins the running mean of frames 0..f of this G-buffer pixel.
+                let gi = gy * u.sizes.x + gx;
+                let f = f32(u.method.y);
+                if (u.method.y > 0u) {
+                    c = (accum[gi].xyz * f + c) / (f + 1.0);
+                }
+                accum[gi] = vec4<f32>(c, 1.0);
+            }
+            sum += max(c, vec3<f32>(0.0));
         }
     }
     let i = gid.y * w + gid.x;
-    var c = sum / f32(k * k);
-    if (u.method.x == METHOD_PROGRESSIVE) {
-        let f = f32(u.method.y);
-        if (u.method.y > 0u) {
-            c = (accum[i].xyz * f + c) / (f + 1.0);
-        }
-        accum[i] = vec4<f32>(c, 1.0);
-    }
-    out_px[i] = vec4<f32>(lightmapped[i].xyz + c, 1.0);
+    out_px[i] = vec4<f32>(lightmapped[i].xyz + sum / f32(k * k), 1.0);
 }

@@ -48,5 +48,5 @@ pub use packed::{
 };
 pub use pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_WGSL};
 pub use shade::shade_wgsl;
-pub use view_buffer::GpuViewBuffer;
 pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_PASS_WGSL};
+pub use view_buffer::GpuViewBuffer;

@@ -57,8 +57,7 @@ impl GpuViewBuffer {
         let sizes = level_sizes(v.width, v.height);
         let consistent = v.texels.len() == v.width * v.height
             && v.levels.len() == sizes.len()
-            && v
-                .levels
+            && v.levels
                 .iter()
                 .zip(&sizes)
                 .all(|((w, h, d), &(sw, sh))| (*w, *h) == (sw, sh) && d.len() == w * h);
@@ -77,7 +76,10 @@ impl GpuViewBuffer {
         let radiance: Vec<[f32; 4]> = v
             .levels
             .iter()
-            .flat_map(|(_, _, d)| d.iter().map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 1.0]))
+            .flat_map(|(_, _, d)| {
+                d.iter()
+                    .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, 1.0])
+            })
             .collect();
         let geometry: Vec<[f32; 4]> = v
             .texels
@@ -176,7 +178,11 @@ impl GpuViewBuffer {
             .level_sizes
             .iter()
             .map(|&(w, h)| {
-                let l = (w, h, radiance[at..at + w * h].iter().map(|&c| rgb(c)).collect());
+                let l = (
+                    w,
+                    h,
+                    radiance[at..at + w * h].iter().map(|&c| rgb(c)).collect(),
+                );
                 at += w * h;
                 l
             })

@@ -140,17 +140,21 @@ pub const THIN_DIELECTRIC: Module = Module {
     deps: &[&BSDF_SAMPLE, &FRESNEL],
 };
 
-/// Every scene model of the view-dependent pass (kinds 1–5).
-pub const SCENE_MODELS: [&Module; 5] = [
-    &ROUGH_CONDUCTOR,
-    &ROUGH_PLASTIC,
-    &ROUGH_DIELECTRIC,
-    &CONDUCTOR,
-    &THIN_DIELECTRIC,
-];
+/// The `GpuBsdf` record and the dispatch by kind to the models' sample / eval / pdf.
+pub const BSDF: Module = Module {
+    name: "bsdf",
+    source: include_str!("wgsl/bsdf.wgsl"),
+    deps: &[
+        &ROUGH_CONDUCTOR,
+        &ROUGH_PLASTIC,
+        &ROUGH_DIELECTRIC,
+        &CONDUCTOR,
+        &THIN_DIELECTRIC,
+    ],
+};
 
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 17] = [
+pub const ALL: [&Module; 18] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -168,6 +172,7 @@ pub const ALL: [&Module; 17] = [
     &ROUGH_DIELECTRIC,
     &CONDUCTOR,
     &THIN_DIELECTRIC,
+    &BSDF,
 ];
 
 /// The source of a pass: every module in `imports` and, transitively, the modules they use,

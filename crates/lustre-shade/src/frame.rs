@@ -586,10 +586,9 @@ pub fn shade_gbuffer_view_dependent(
                         FrameMethod::Ck => FramePoints::Ck {
                             seed: pixel_seed(gx, gy, opts.seed),
                         },
-                        FrameMethod::Progressive { frames } => FramePoints::Progressive {
-                            first: 0,
-                            frames,
-                        },
+                        FrameMethod::Progressive { frames } => {
+                            FramePoints::Progressive { first: 0, frames }
+                        }
                     };
                     let (c, l, vd) = view_dependent(lit, light, buffers, &hit, n, points);
                     sum += c;

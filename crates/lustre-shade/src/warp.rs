@@ -52,7 +52,10 @@ const INV_GOLDEN_24: u32 = 10_368_890;
 /// GPU twin reproduces it bit for bit (the rough dielectric splits its bits).
 #[inline]
 pub fn fibonacci_point(i: usize, n: usize) -> (f64, f64) {
-    let v = (i as u32).wrapping_mul(INV_GOLDEN_24).wrapping_add(0x80_0000) & 0xff_ffff;
+    let v = (i as u32)
+        .wrapping_mul(INV_GOLDEN_24)
+        .wrapping_add(0x80_0000)
+        & 0xff_ffff;
     (
         (i as f64 + 0.5) / n.max(1) as f64,
         f64::from(v) / 16_777_216.0,

@@ -3,7 +3,7 @@
 // sample}. Equations (Walter et al. 2007): the generalised half vector h = ωo + η ωi (facing
 // +z); reflection F D G / (4 |cos θi cos θo|), transmission (1 − F) D G |ωi·h ωo·h| /
 // (|cos θi cos θo| (ωo·h + η ωi·h)²); pdf = D_v(h) · (F or 1 − F) · Jacobian; sampling: a
-// visible normal from (u1, the even bits of u2), reflect when the odd bits of u2 < F.
+// visible normal from (u1, the odd bits of u2), reflect when the even bits of u2 < F.
 // Parameters (pack_rough_dielectric): p0 = (αu, αv, distribution, η), p1 = (reflectance rgb,
 // 0), p2 = (transmittance rgb, 0).
 
@@ -106,13 +106,13 @@ fn rough_dielectric_sample(m: RoughDielectric, wo: vec3<f32>, u: vec2<f32>) -> B
     }
     let s = sign(wo.z);
     let split = split_uniform(u.y);
-    let mv = microfacet_sample_visible(m.mf, wo * s, u.x, split.y);
+    let mv = microfacet_sample_visible(m.mf, wo * s, u.x, split.x);
     if (mv.z == 0.0) {
         return no_sample();
     }
     let fr = fresnel_dielectric(dot(wo, mv), m.eta);
     var wi: vec3<f32>;
-    let refl = split.x < fr.x;
+    let refl = split.y < fr.x;
     if (refl) {
         wi = reflect_about(wo, mv);
     } else {

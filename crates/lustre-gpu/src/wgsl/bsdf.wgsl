@@ -1,0 +1,87 @@
+// module bsdf: the material record of the view-dependent pass and the dispatch to its models'
+// sample / eval / pdf by kind. CPU twin: lustre_gpu::frame_shade::GpuBsdf and the lustre_brdf
+// model each kind stands for. Kind codes: 0 none, 1 rough conductor, 2 rough plastic, 3 rough
+// dielectric, 4 conductor, 5 thin dielectric; 16–19 the fitted models (gpu-fits; an unknown
+// kind samples nothing and evaluates to 0).
+
+struct GpuBsdf {
+    kind: u32,
+    flags: u32,
+    pad0: u32,
+    pad1: u32,
+    p: array<vec4<f32>, 8>,
+}
+
+// Only Dirac lobes (summed exactly over their branches).
+const FLAG_DELTA_ONLY: u32 = 1u;
+// Two-sided: the shading frame is turned towards the viewer.
+const FLAG_TWO_SIDED: u32 = 2u;
+
+fn bsdf_sample(b: GpuBsdf, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
+    switch b.kind {
+        case 1u: {
+            return rough_conductor_sample(rough_conductor_unpack(b.p), wo, u);
+        }
+        case 2u: {
+            return rough_plastic_sample(rough_plastic_unpack(b.p), wo, u);
+        }
+        case 3u: {
+            return rough_dielectric_sample(rough_dielectric_unpack(b.p), wo, u);
+        }
+        case 4u: {
+            return conductor_sample(conductor_unpack(b.p), wo, u);
+        }
+        case 5u: {
+            return thin_dielectric_sample(thin_dielectric_unpack(b.p), wo, u);
+        }
+        default: {
+            return no_sample();
+        }
+    }
+}
+
+fn bsdf_eval(b: GpuBsdf, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    switch b.kind {
+        case 1u: {
+            return rough_conductor_eval(rough_conductor_unpack(b.p), wi, wo);
+        }
+        case 2u: {
+            return rough_plastic_eval(rough_plastic_unpack(b.p), wi, wo);
+        }
+        case 3u: {
+            return rough_dielectric_eval(rough_dielectric_unpack(b.p), wi, wo);
+        }
+        case 4u: {
+            return conductor_eval(conductor_unpack(b.p), wi, wo);
+        }
+        case 5u: {
+            return thin_dielectric_eval(thin_dielectric_unpack(b.p), wi, wo);
+        }
+        default: {
+            return vec3<f32>(0.0);
+        }
+    }
+}
+
+fn bsdf_pdf(b: GpuBsdf, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
+    switch b.kind {
+        case 1u: {
+            return rough_conductor_pdf(rough_conductor_unpack(b.p), wi, wo);
+        }
+        case 2u: {
+            return rough_plastic_pdf(rough_plastic_unpack(b.p), wi, wo);
+        }
+        case 3u: {
+            return rough_dielectric_pdf(rough_dielectric_unpack(b.p), wi, wo);
+        }
+        case 4u: {
+            return conductor_pdf(conductor_unpack(b.p), wi, wo);
+        }
+        case 5u: {
+            return thin_dielectric_pdf(thin_dielectric_unpack(b.p), wi, wo);
+        }
+        default: {
+            return 0.0;
+        }
+    }
+}
