@@ -10,9 +10,11 @@
 //! model's parameters), one binding-free WGSL module per model under `src/wgsl/`. Kind codes:
 //! 0 none (no view-dependent part: a light-mapped Lambertian), [`KIND_ROUGH_CONDUCTOR`] 1,
 //! [`KIND_ROUGH_PLASTIC`] 2, [`KIND_ROUGH_DIELECTRIC`] 3, [`KIND_CONDUCTOR`] 4,
-//! [`KIND_THIN_DIELECTRIC`] 5 (also smooth glass, shaded as a thin sheet as the CPU frame does);
+//! [`KIND_THIN_DIELECTRIC`] 5 (also smooth glass, shaded as a thin sheet as the CPU frame does),
+//! [`KIND_PBR_METALLIC_ROUGHNESS`] 6 (a transmissive rough one as kind 3, as the CPU builds it);
 //! 16–19 belong to the fitted models (gpu-fits). Materials the pass cannot shade (textured or
-//! normal-mapped glossy materials, plastic, glTF metallic-roughness, fitted specs in this build)
+//! normal-mapped glossy materials, smooth plastic, smooth transmissive glTF materials, fitted
+//! specs in this build)
 //! are refused with a named error, so the caller falls back to the CPU frame.
 //!
 //! Incident light: every probe's pyramid and the environment's are concatenated into one
@@ -35,6 +37,7 @@ use crate::wgsl;
 use glam::DVec3;
 use lustre_brdf::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
 use lustre_brdf::models::conductor::{ComplexIor, Conductor};
+use lustre_brdf::models::pbr_metallic_roughness::{PbrMetallicRoughness, PBR_ALPHA_MIN};
 use lustre_brdf::models::rough_conductor::RoughConductor;
 use lustre_brdf::models::rough_dielectric::RoughDielectric;
 use lustre_brdf::models::rough_plastic::RoughPlastic;
@@ -62,6 +65,8 @@ pub const KIND_ROUGH_DIELECTRIC: u32 = 3;
 pub const KIND_CONDUCTOR: u32 = 4;
 /// `thin_dielectric.wgsl`.
 pub const KIND_THIN_DIELECTRIC: u32 = 5;
+/// `pbr_metallic_roughness.wgsl`.
+pub const KIND_PBR_METALLIC_ROUGHNESS: u32 = 6;
 /// [`GpuBsdf::flags`]: only Dirac lobes (summed exactly over their branches).
 pub const FLAG_DELTA_ONLY: u32 = 1;
 /// [`GpuBsdf::flags`]: a two-sided material (the frame is turned towards the viewer).
@@ -202,6 +207,14 @@ pub fn pack_thin_dielectric(m: &ThinDielectric) -> Result<[[f32; 4]; 8]> {
     p.set(0, [m.eta, 0.0, 0.0, 0.0])?;
     p.rgb(1, m.specular_reflectance, 0.0)?;
     p.rgb(2, m.specular_transmittance, 0.0)?;
+    Ok(p.p)
+}
+
+/// `pbr_metallic_roughness.wgsl`'s parameters.
+pub fn pack_pbr_metallic_roughness(m: &PbrMetallicRoughness) -> Result<[[f32; 4]; 8]> {
+    let mut p = Params::new("glTF metallic-roughness");
+    p.rgb(0, m.base_color, m.metallic)?;
+    p.set(1, [m.alpha(), 0.0, 0.0, 0.0])?;
     Ok(p.p)
 }
 
@@ -354,7 +367,40 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             ))
         }
         MaterialKind::Plastic { .. } => Err(refuse("the smooth plastic")),
-        MaterialKind::PbrMetallicRoughness { .. } => Err(refuse("glTF metallic-roughness")),
+        MaterialKind::PbrMetallicRoughness {
+            base_color,
+            metallic,
+            roughness,
+            transmission,
+            ior,
+            ..
+        } => {
+            let c = constant_rgb(base_color)?;
+            let scalar = |t: &lustre_scene::TexturedScalar| {
+                t.texture
+                    .is_none()
+                    .then(|| t.factor)
+                    .ok_or_else(|| refuse("a textured glTF parameter"))
+            };
+            let r = unit(scalar(roughness)?);
+            if scalar(transmission)? >= 0.5 {
+                let a = r * r;
+                if a < PBR_ALPHA_MIN {
+                    return Err(refuse("smooth transmissive glTF glass"));
+                }
+                let d = MicrofacetDistribution::isotropic(MicrofacetType::Ggx, a).map_err(brdf)?;
+                let g = RoughDielectric::new(d, *ior, 1.0)
+                    .and_then(|g| g.with_tints(Rgb::ONE, c))
+                    .map_err(brdf)?;
+                return Ok(record(KIND_ROUGH_DIELECTRIC, 0, pack_rough_dielectric(&g)?));
+            }
+            let b = PbrMetallicRoughness::new(c, unit(scalar(metallic)?), r).map_err(brdf)?;
+            Ok(record(
+                KIND_PBR_METALLIC_ROUGHNESS,
+                0,
+                pack_pbr_metallic_roughness(&b)?,
+            ))
+        }
         MaterialKind::Dielectric { .. } => Err(refuse("smooth glass without its thin sheet")),
         // The fitted models (SGD, Cook–Torrance, Kurt: kinds 16–19) are gpu-fits' `pack_*`;
         // the lead wires them in here.

@@ -140,6 +140,13 @@ pub const THIN_DIELECTRIC: Module = Module {
     deps: &[&BSDF_SAMPLE, &FRESNEL],
 };
 
+/// Kind 6: glTF 2.0 metallic-roughness.
+pub const PBR_METALLIC_ROUGHNESS: Module = Module {
+    name: "pbr_metallic_roughness",
+    source: include_str!("wgsl/pbr_metallic_roughness.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL, &FRAME, &MICROFACET],
+};
+
 /// The `GpuBsdf` record and the dispatch by kind to the models' sample / eval / pdf.
 pub const BSDF: Module = Module {
     name: "bsdf",
@@ -150,11 +157,12 @@ pub const BSDF: Module = Module {
         &ROUGH_DIELECTRIC,
         &CONDUCTOR,
         &THIN_DIELECTRIC,
+        &PBR_METALLIC_ROUGHNESS,
     ],
 };
 
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 18] = [
+pub const ALL: [&Module; 19] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -172,6 +180,7 @@ pub const ALL: [&Module; 18] = [
     &ROUGH_DIELECTRIC,
     &CONDUCTOR,
     &THIN_DIELECTRIC,
+    &PBR_METALLIC_ROUGHNESS,
     &BSDF,
 ];
 

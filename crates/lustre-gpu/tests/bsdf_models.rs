@@ -1,5 +1,5 @@
 //! The WGSL scene models of the view-dependent pass (`src/wgsl/{rough_conductor, rough_plastic,
-//! rough_dielectric, conductor, thin_dielectric}.wgsl`, dispatched by `bsdf.wgsl`) against
+//! rough_dielectric, conductor, thin_dielectric, pbr_metallic_roughness}.wgsl`, dispatched by `bsdf.wgsl`) against
 //! their lustre-brdf twins: eval, pdf and sample over a grid of ωo, ωi and u, in f32 against
 //! f64. Fails (does not skip) without an adapter.
 
@@ -7,16 +7,17 @@ use glam::DVec3;
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
 use lustre_brdf::models::conductor::{ComplexIor, Conductor};
+use lustre_brdf::models::pbr_metallic_roughness::PbrMetallicRoughness;
 use lustre_brdf::models::rough_conductor::RoughConductor;
 use lustre_brdf::models::rough_dielectric::RoughDielectric;
 use lustre_brdf::models::rough_plastic::RoughPlastic;
 use lustre_brdf::models::thin_dielectric::ThinDielectric;
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::frame_shade::{
-    evaluate_models, pack_conductor, pack_rough_conductor, pack_rough_dielectric,
-    pack_rough_plastic, pack_thin_dielectric, rough_plastic_table, GpuBsdf, ModelCase,
-    FLAG_DELTA_ONLY, KIND_CONDUCTOR, KIND_ROUGH_CONDUCTOR, KIND_ROUGH_DIELECTRIC,
-    KIND_ROUGH_PLASTIC, KIND_THIN_DIELECTRIC,
+    evaluate_models, pack_conductor, pack_pbr_metallic_roughness, pack_rough_conductor,
+    pack_rough_dielectric, pack_rough_plastic, pack_thin_dielectric, rough_plastic_table, GpuBsdf,
+    ModelCase, FLAG_DELTA_ONLY, KIND_CONDUCTOR, KIND_PBR_METALLIC_ROUGHNESS, KIND_ROUGH_CONDUCTOR,
+    KIND_ROUGH_DIELECTRIC, KIND_ROUGH_PLASTIC, KIND_THIN_DIELECTRIC,
 };
 use lustre_gpu::GpuContext;
 
@@ -126,6 +127,17 @@ fn gpu_models_match_lustre_brdf() {
             KIND_ROUGH_DIELECTRIC,
             0,
             pack_rough_dielectric(&m).expect("pack"),
+        );
+        models.push((name, Box::new(m), r));
+    }
+    for (name, metallic, roughness) in [("glTF dielectric-ish", 0.3, 0.5), ("glTF metal", 1.0, 0.2)]
+    {
+        let m =
+            PbrMetallicRoughness::new(Rgb::new(0.8, 0.5, 0.2), metallic, roughness).expect("pbr");
+        let r = record(
+            KIND_PBR_METALLIC_ROUGHNESS,
+            0,
+            pack_pbr_metallic_roughness(&m).expect("pack"),
         );
         models.push((name, Box::new(m), r));
     }
