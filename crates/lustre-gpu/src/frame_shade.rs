@@ -379,7 +379,7 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             let scalar = |t: &lustre_scene::TexturedScalar| {
                 t.texture
                     .is_none()
-                    .then(|| t.factor)
+                    .then_some(t.factor)
                     .ok_or_else(|| refuse("a textured glTF parameter"))
             };
             let r = unit(scalar(roughness)?);
