@@ -11,7 +11,9 @@
 //! 0 none (no view-dependent part: a light-mapped Lambertian), [`KIND_ROUGH_CONDUCTOR`] 1,
 //! [`KIND_ROUGH_PLASTIC`] 2, [`KIND_ROUGH_DIELECTRIC`] 3, [`KIND_CONDUCTOR`] 4,
 //! [`KIND_THIN_DIELECTRIC`] 5 (also smooth glass, shaded as a thin sheet as the CPU frame does),
-//! [`KIND_PBR_METALLIC_ROUGHNESS`] 6 (a transmissive rough one as kind 3, as the CPU builds it);
+//! [`KIND_PBR_METALLIC_ROUGHNESS`] 6 (a transmissive rough one as kind 3, as the CPU builds it),
+//! [`KIND_LAMBERT`] 7 (read only where the light map does not cover the pixel; a textured
+//! Lambertian is kind 0);
 //! 16–19 belong to the fitted models (gpu-fits). Materials the pass cannot shade (textured or
 //! normal-mapped glossy materials, smooth plastic, smooth transmissive glTF materials, fitted
 //! specs in this build)
@@ -37,6 +39,7 @@ use crate::wgsl;
 use glam::DVec3;
 use lustre_brdf::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
 use lustre_brdf::models::conductor::{ComplexIor, Conductor};
+use lustre_brdf::models::lambert::Lambert;
 use lustre_brdf::models::pbr_metallic_roughness::{PbrMetallicRoughness, PBR_ALPHA_MIN};
 use lustre_brdf::models::rough_conductor::RoughConductor;
 use lustre_brdf::models::rough_dielectric::RoughDielectric;
@@ -67,6 +70,10 @@ pub const KIND_CONDUCTOR: u32 = 4;
 pub const KIND_THIN_DIELECTRIC: u32 = 5;
 /// `pbr_metallic_roughness.wgsl`.
 pub const KIND_PBR_METALLIC_ROUGHNESS: u32 = 6;
+/// `lambert.wgsl`.
+pub const KIND_LAMBERT: u32 = 7;
+/// [`GpuBsdf::flags`]: only diffuse lobes (no view-dependent part where kd ≠ 0).
+pub const FLAG_DIFFUSE_ONLY: u32 = 4;
 /// [`GpuBsdf::flags`]: only Dirac lobes (summed exactly over their branches).
 pub const FLAG_DELTA_ONLY: u32 = 1;
 /// [`GpuBsdf::flags`]: a two-sided material (the frame is turned towards the viewer).
@@ -218,6 +225,13 @@ pub fn pack_pbr_metallic_roughness(m: &PbrMetallicRoughness) -> Result<[[f32; 4]
     Ok(p.p)
 }
 
+/// `lambert.wgsl`'s parameters.
+pub fn pack_lambert(m: &Lambert) -> Result<[[f32; 4]; 8]> {
+    let mut p = Params::new("Lambert");
+    p.rgb(0, m.kd, 0.0)?;
+    Ok(p.p)
+}
+
 /// lustre-scene's clamps of colours and roughness (`Material::bsdf_at`).
 fn unit(x: f64) -> f64 {
     if x.is_nan() {
@@ -258,8 +272,17 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
         pad1: 0,
         p,
     };
-    if let MaterialKind::Diffuse { .. } = m.kind {
-        return Ok(record(KIND_NONE, 0, [[0.0; 4]; 8]));
+    if let MaterialKind::Diffuse { reflectance } = &m.kind {
+        if reflectance.texture.is_some() {
+            return Ok(record(KIND_NONE, 0, [[0.0; 4]; 8]));
+        }
+        let c = Rgb::new(
+            reflectance.factor[0],
+            reflectance.factor[1],
+            reflectance.factor[2],
+        );
+        let l = Lambert::new(c.map(unit)).map_err(brdf)?;
+        return Ok(record(KIND_LAMBERT, FLAG_DIFFUSE_ONLY, pack_lambert(&l)?));
     }
     if m.normal_map.is_some() {
         return Err(refuse("a normal-mapped glossy material"));
@@ -279,7 +302,7 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             .ok_or_else(|| refuse("a textured roughness"))
     };
     match kind {
-        MaterialKind::Diffuse { .. } => Ok(record(KIND_NONE, 0, [[0.0; 4]; 8])),
+        MaterialKind::Diffuse { .. } => Err(refuse("a Lambertian thin sheet")),
         MaterialKind::RoughConductor {
             eta,
             k,
@@ -1136,5 +1159,59 @@ impl FrameShadePass {
         }
         ctx.queue.submit([enc.finish()]);
         scope_result(scope, "frame shading")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use wgpu::naga;
+
+    /// The pass and the model-evaluation kernel parse and validate without an adapter; the
+    /// uniform block and the material record have the sizes the Rust side writes.
+    #[test]
+    fn wgsl_parses_and_validates_with_naga() {
+        let models = wgsl::compose(&[&wgsl::BSDF], include_str!("bsdf_models.wgsl"));
+        for (src, types) in [
+            (
+                frame_shade_wgsl(),
+                &[("Params", 8 * 16), ("GpuBsdf", 144)][..],
+            ),
+            (models.as_str(), &[("GpuBsdf", 144)][..]),
+        ] {
+            let m = naga::front::wgsl::parse_str(src)
+                .unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
+            let mut v = naga::valid::Validator::new(
+                naga::valid::ValidationFlags::all(),
+                naga::valid::Capabilities::empty(),
+            );
+            if let Err(e) = v.validate(&m) {
+                panic!("{}", e.emit_to_string(src));
+            }
+            assert!(m.entry_points.iter().any(|p| p.name == "main"));
+            for (name, bytes) in types {
+                let size = m
+                    .types
+                    .iter()
+                    .find(|(_, t)| t.name.as_deref() == Some(*name))
+                    .map(|(_, t)| t.inner.size(m.to_ctx()))
+                    .unwrap_or_else(|| panic!("no struct {name}"));
+                assert_eq!(size, *bytes, "{name}");
+            }
+        }
+        assert_eq!(std::mem::size_of::<GpuBsdf>(), 144);
+    }
+
+    /// Every parameter must fit an f32: a named error otherwise.
+    #[test]
+    fn parameters_beyond_f32_are_named() {
+        let t = ThinDielectric::new(1.5, 1.0).expect("thin");
+        assert!(pack_thin_dielectric(&t).is_ok());
+        let huge = ThinDielectric { eta: 1e300, ..t };
+        let err = pack_thin_dielectric(&huge).unwrap_err().to_string();
+        assert!(
+            err.contains("thin dielectric") && err.contains("f32"),
+            "{err}"
+        );
     }
 }

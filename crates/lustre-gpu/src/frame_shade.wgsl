@@ -52,8 +52,9 @@ struct Params {
 @group(0) @binding(14) var<storage, read> lightmapped: array<vec4<f32>>;
 @group(0) @binding(15) var<storage, read_write> accum: array<vec4<f32>>;
 @group(0) @binding(16) var<storage, read_write> out_px: array<vec4<f32>>;
-// (glossy hits, lookups).
+// (glossy hits, lookups), summed per workgroup first.
 @group(0) @binding(17) var<storage, read_write> counts: array<atomic<u32>, 2>;
+var<workgroup> wg_counts: array<atomic<u32>, 2>;
 
 const SKY: u32 = 0xffffffffu;
 const NONE: u32 = 0xffffffffu;
@@ -603,6 +604,10 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
     if (!(dot(ns_raw, -d) > 0.0)) {
         kd = tris[base + 8u].xyz;
     }
+    // A Lambertian surface the light map covers has no view-dependent part left.
+    if ((b.flags & FLAG_DIFFUSE_ONLY) != 0u && any(kd != vec3<f32>(0.0))) {
+        return vec3<f32>(0.0);
+    }
     // ShadingFrame::new(ns, ∂p/∂u).
     let dpdu = tris[base + 6u].xyz;
     var n = ns;
@@ -650,27 +655,21 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
     if (!finite3(c)) {
         c = vec3<f32>(0.0);
     }
-    atomicAdd(&counts[0], 1u);
-    atomicAdd(&counts[1], u32(r.w));
+    atomicAdd(&wg_counts[0], 1u);
+    atomicAdd(&wg_counts[1], u32(r.w));
     return c;
 }
 
-@compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let k = u.sizes.z;
-    let w = u.sizes.x / k;
-    let h = u.sizes.y / k;
-    if (gid.x >= w || gid.y >= h) {
-        return;
-    }
+// Output pixel (x, y): its k×k G-buffer pixels.
+fn shade_pixel(x: u32, y: u32, w: u32, k: u32) {
     let gw = f32(u.sizes.x);
     let gh = f32(u.sizes.y);
     let a = u.cam.x;
     var sum = vec3<f32>(0.0);
     for (var j = 0u; j < k; j++) {
         for (var s = 0u; s < k; s++) {
-            let gx = gid.x * k + s;
-            let gy = gid.y * k + j;
+            let gx = x * k + s;
+            let gy = y * k + j;
             let prim = textureLoad(prim_tex, vec2<i32>(i32(gx), i32(gy)), 0).x;
             if (prim == SKY) {
                 if (u.method.x == METHOD_PROGRESSIVE) {
@@ -696,6 +695,22 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             sum += max(c, vec3<f32>(0.0));
         }
     }
-    let i = gid.y * w + gid.x;
+    let i = y * w + x;
     out_px[i] = vec4<f32>(lightmapped[i].xyz + sum / f32(k * k), 1.0);
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>,
+        @builtin(local_invocation_index) li: u32) {
+    let k = u.sizes.z;
+    let w = u.sizes.x / k;
+    let h = u.sizes.y / k;
+    if (gid.x < w && gid.y < h) {
+        shade_pixel(gid.x, gid.y, w, k);
+    }
+    workgroupBarrier();
+    if (li == 0u) {
+        atomicAdd(&counts[0], atomicLoad(&wg_counts[0]));
+        atomicAdd(&counts[1], atomicLoad(&wg_counts[1]));
+    }
 }

@@ -147,6 +147,13 @@ pub const PBR_METALLIC_ROUGHNESS: Module = Module {
     deps: &[&BSDF_SAMPLE, &FRESNEL, &FRAME, &MICROFACET],
 };
 
+/// Kind 7: the Lambertian reflector.
+pub const LAMBERT: Module = Module {
+    name: "lambert",
+    source: include_str!("wgsl/lambert.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL],
+};
+
 /// The `GpuBsdf` record and the dispatch by kind to the models' sample / eval / pdf.
 pub const BSDF: Module = Module {
     name: "bsdf",
@@ -158,11 +165,12 @@ pub const BSDF: Module = Module {
         &CONDUCTOR,
         &THIN_DIELECTRIC,
         &PBR_METALLIC_ROUGHNESS,
+        &LAMBERT,
     ],
 };
 
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 19] = [
+pub const ALL: [&Module; 20] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -181,6 +189,7 @@ pub const ALL: [&Module; 19] = [
     &CONDUCTOR,
     &THIN_DIELECTRIC,
     &PBR_METALLIC_ROUGHNESS,
+    &LAMBERT,
     &BSDF,
 ];
 

@@ -1,5 +1,5 @@
 //! The WGSL scene models of the view-dependent pass (`src/wgsl/{rough_conductor, rough_plastic,
-//! rough_dielectric, conductor, thin_dielectric, pbr_metallic_roughness}.wgsl`, dispatched by `bsdf.wgsl`) against
+//! rough_dielectric, conductor, thin_dielectric, pbr_metallic_roughness, lambert}.wgsl`, dispatched by `bsdf.wgsl`) against
 //! their lustre-brdf twins: eval, pdf and sample over a grid of ωo, ωi and u, in f32 against
 //! f64. Fails (does not skip) without an adapter.
 
@@ -7,6 +7,7 @@ use glam::DVec3;
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
 use lustre_brdf::models::conductor::{ComplexIor, Conductor};
+use lustre_brdf::models::lambert::Lambert;
 use lustre_brdf::models::pbr_metallic_roughness::PbrMetallicRoughness;
 use lustre_brdf::models::rough_conductor::RoughConductor;
 use lustre_brdf::models::rough_dielectric::RoughDielectric;
@@ -14,10 +15,11 @@ use lustre_brdf::models::rough_plastic::RoughPlastic;
 use lustre_brdf::models::thin_dielectric::ThinDielectric;
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::frame_shade::{
-    evaluate_models, pack_conductor, pack_pbr_metallic_roughness, pack_rough_conductor,
-    pack_rough_dielectric, pack_rough_plastic, pack_thin_dielectric, rough_plastic_table, GpuBsdf,
-    ModelCase, FLAG_DELTA_ONLY, KIND_CONDUCTOR, KIND_PBR_METALLIC_ROUGHNESS, KIND_ROUGH_CONDUCTOR,
-    KIND_ROUGH_DIELECTRIC, KIND_ROUGH_PLASTIC, KIND_THIN_DIELECTRIC,
+    evaluate_models, pack_conductor, pack_lambert, pack_pbr_metallic_roughness,
+    pack_rough_conductor, pack_rough_dielectric, pack_rough_plastic, pack_thin_dielectric,
+    rough_plastic_table, GpuBsdf, ModelCase, FLAG_DELTA_ONLY, FLAG_DIFFUSE_ONLY, KIND_CONDUCTOR,
+    KIND_LAMBERT, KIND_PBR_METALLIC_ROUGHNESS, KIND_ROUGH_CONDUCTOR, KIND_ROUGH_DIELECTRIC,
+    KIND_ROUGH_PLASTIC, KIND_THIN_DIELECTRIC,
 };
 use lustre_gpu::GpuContext;
 
@@ -141,6 +143,13 @@ fn gpu_models_match_lustre_brdf() {
         );
         models.push((name, Box::new(m), r));
     }
+    let l = Lambert::new(Rgb::new(0.7, 0.5, 0.3)).expect("lambert");
+    let r = record(
+        KIND_LAMBERT,
+        FLAG_DIFFUSE_ONLY,
+        pack_lambert(&l).expect("pack"),
+    );
+    models.push(("Lambert", Box::new(l), r));
     let c = Conductor::new(gold.eta, gold.k, Rgb::ONE).expect("conductor");
     let r = record(
         KIND_CONDUCTOR,

@@ -1,7 +1,7 @@
 // module bsdf: the material record of the view-dependent pass and the dispatch to its models'
 // sample / eval / pdf by kind. CPU twin: lustre_gpu::frame_shade::GpuBsdf and the lustre_brdf
 // model each kind stands for. Kind codes: 0 none, 1 rough conductor, 2 rough plastic, 3 rough
-// dielectric, 4 conductor, 5 thin dielectric, 6 glTF metallic-roughness; 16–19 the fitted models (gpu-fits; an unknown
+// dielectric, 4 conductor, 5 thin dielectric, 6 glTF metallic-roughness, 7 Lambert; 16–19 the fitted models (gpu-fits; an unknown
 // kind samples nothing and evaluates to 0).
 
 struct GpuBsdf {
@@ -16,6 +16,8 @@ struct GpuBsdf {
 const FLAG_DELTA_ONLY: u32 = 1u;
 // Two-sided: the shading frame is turned towards the viewer.
 const FLAG_TWO_SIDED: u32 = 2u;
+// Only diffuse lobes: no view-dependent part where the light map covers the pixel (kd ≠ 0).
+const FLAG_DIFFUSE_ONLY: u32 = 4u;
 
 fn bsdf_sample(b: GpuBsdf, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
     switch b.kind {
@@ -36,6 +38,9 @@ fn bsdf_sample(b: GpuBsdf, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
         }
         case 6u: {
             return pbr_metallic_roughness_sample(pbr_metallic_roughness_unpack(b.p), wo, u);
+        }
+        case 7u: {
+            return lambert_sample(lambert_unpack(b.p), wo, u);
         }
         default: {
             return no_sample();
@@ -63,6 +68,9 @@ fn bsdf_eval(b: GpuBsdf, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
         case 6u: {
             return pbr_metallic_roughness_eval(pbr_metallic_roughness_unpack(b.p), wi, wo);
         }
+        case 7u: {
+            return lambert_eval(lambert_unpack(b.p), wi, wo);
+        }
         default: {
             return vec3<f32>(0.0);
         }
@@ -88,6 +96,9 @@ fn bsdf_pdf(b: GpuBsdf, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
         }
         case 6u: {
             return pbr_metallic_roughness_pdf(pbr_metallic_roughness_unpack(b.p), wi, wo);
+        }
+        case 7u: {
+            return lambert_pdf(lambert_unpack(b.p), wi, wo);
         }
         default: {
             return 0.0;
