@@ -13,10 +13,10 @@
 //! [`KIND_THIN_DIELECTRIC`] 5 (also smooth glass, shaded as a thin sheet as the CPU frame does),
 //! [`KIND_PBR_METALLIC_ROUGHNESS`] 6 (a transmissive rough one as kind 3, as the CPU builds it),
 //! [`KIND_LAMBERT`] 7 (read only where the light map does not cover the pixel; a textured
-//! Lambertian is kind 0);
+//! Lambertian is kind 0), [`KIND_PLASTIC`] 8;
 //! 16–19 belong to the fitted models (gpu-fits). Materials the pass cannot shade (textured or
-//! normal-mapped glossy materials, smooth plastic, smooth transmissive glTF materials, fitted
-//! specs in this build)
+//! normal-mapped glossy materials, smooth transmissive glTF materials, fitted specs in this
+//! build)
 //! are refused with a named error, so the caller falls back to the CPU frame.
 //!
 //! Incident light: every probe's pyramid and the environment's are concatenated into one
@@ -41,6 +41,7 @@ use lustre_brdf::microfacet::distribution::{MicrofacetDistribution, MicrofacetTy
 use lustre_brdf::models::conductor::{ComplexIor, Conductor};
 use lustre_brdf::models::lambert::Lambert;
 use lustre_brdf::models::pbr_metallic_roughness::{PbrMetallicRoughness, PBR_ALPHA_MIN};
+use lustre_brdf::models::plastic::Plastic;
 use lustre_brdf::models::rough_conductor::RoughConductor;
 use lustre_brdf::models::rough_dielectric::RoughDielectric;
 use lustre_brdf::models::rough_plastic::RoughPlastic;
@@ -72,6 +73,8 @@ pub const KIND_THIN_DIELECTRIC: u32 = 5;
 pub const KIND_PBR_METALLIC_ROUGHNESS: u32 = 6;
 /// `lambert.wgsl`.
 pub const KIND_LAMBERT: u32 = 7;
+/// `plastic.wgsl`.
+pub const KIND_PLASTIC: u32 = 8;
 /// [`GpuBsdf::flags`]: only diffuse lobes (no view-dependent part where kd ≠ 0).
 pub const FLAG_DIFFUSE_ONLY: u32 = 4;
 /// [`GpuBsdf::flags`]: only Dirac lobes (summed exactly over their branches).
@@ -232,6 +235,17 @@ pub fn pack_lambert(m: &Lambert) -> Result<[[f32; 4]; 8]> {
     Ok(p.p)
 }
 
+/// `plastic.wgsl`'s parameters.
+pub fn pack_plastic(m: &Plastic) -> Result<[[f32; 4]; 8]> {
+    let mut p = Params::new("plastic");
+    let (dm, sm) = (m.diffuse_reflectance.mean(), m.specular_reflectance.mean());
+    let weight = if dm + sm > 0.0 { sm / (dm + sm) } else { 0.5 };
+    p.rgb(0, m.diffuse_reflectance, weight)?;
+    p.rgb(1, m.specular_reflectance, f64::from(u8::from(m.nonlinear)))?;
+    p.set(2, [m.eta, m.internal_reflectance(), 0.0, 0.0])?;
+    Ok(p.p)
+}
+
 /// lustre-scene's clamps of colours and roughness (`Material::bsdf_at`).
 fn unit(x: f64) -> f64 {
     if x.is_nan() {
@@ -389,7 +403,23 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
                 pack_thin_dielectric(&c)?,
             ))
         }
-        MaterialKind::Plastic { .. } => Err(refuse("the smooth plastic")),
+        MaterialKind::Plastic {
+            diffuse,
+            specular,
+            int_ior,
+            ext_ior,
+            nonlinear,
+        } => {
+            let c = Plastic::new(
+                constant_rgb(diffuse)?,
+                specular.map(unit),
+                *int_ior,
+                *ext_ior,
+                *nonlinear,
+            )
+            .map_err(brdf)?;
+            Ok(record(KIND_PLASTIC, 0, pack_plastic(&c)?))
+        }
         MaterialKind::PbrMetallicRoughness {
             base_color,
             metallic,

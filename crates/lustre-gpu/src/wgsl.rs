@@ -154,6 +154,13 @@ pub const LAMBERT: Module = Module {
     deps: &[&BSDF_SAMPLE, &FRESNEL],
 };
 
+/// Kind 8: the smooth plastic.
+pub const PLASTIC: Module = Module {
+    name: "plastic",
+    source: include_str!("wgsl/plastic.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL],
+};
+
 /// The `GpuBsdf` record and the dispatch by kind to the models' sample / eval / pdf.
 pub const BSDF: Module = Module {
     name: "bsdf",
@@ -166,11 +173,12 @@ pub const BSDF: Module = Module {
         &THIN_DIELECTRIC,
         &PBR_METALLIC_ROUGHNESS,
         &LAMBERT,
+        &PLASTIC,
     ],
 };
 
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 20] = [
+pub const ALL: [&Module; 21] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -190,6 +198,7 @@ pub const ALL: [&Module; 20] = [
     &THIN_DIELECTRIC,
     &PBR_METALLIC_ROUGHNESS,
     &LAMBERT,
+    &PLASTIC,
     &BSDF,
 ];
 

@@ -1,5 +1,5 @@
 //! The WGSL scene models of the view-dependent pass (`src/wgsl/{rough_conductor, rough_plastic,
-//! rough_dielectric, conductor, thin_dielectric, pbr_metallic_roughness, lambert}.wgsl`, dispatched by `bsdf.wgsl`) against
+//! rough_dielectric, conductor, thin_dielectric, pbr_metallic_roughness, lambert, plastic}.wgsl`, dispatched by `bsdf.wgsl`) against
 //! their lustre-brdf twins: eval, pdf and sample over a grid of ωo, ωi and u, in f32 against
 //! f64. Fails (does not skip) without an adapter.
 
@@ -9,17 +9,18 @@ use lustre_brdf::microfacet::distribution::{MicrofacetDistribution, MicrofacetTy
 use lustre_brdf::models::conductor::{ComplexIor, Conductor};
 use lustre_brdf::models::lambert::Lambert;
 use lustre_brdf::models::pbr_metallic_roughness::PbrMetallicRoughness;
+use lustre_brdf::models::plastic::Plastic;
 use lustre_brdf::models::rough_conductor::RoughConductor;
 use lustre_brdf::models::rough_dielectric::RoughDielectric;
 use lustre_brdf::models::rough_plastic::RoughPlastic;
 use lustre_brdf::models::thin_dielectric::ThinDielectric;
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::frame_shade::{
-    evaluate_models, pack_conductor, pack_lambert, pack_pbr_metallic_roughness,
+    evaluate_models, pack_conductor, pack_lambert, pack_pbr_metallic_roughness, pack_plastic,
     pack_rough_conductor, pack_rough_dielectric, pack_rough_plastic, pack_thin_dielectric,
     rough_plastic_table, GpuBsdf, ModelCase, FLAG_DELTA_ONLY, FLAG_DIFFUSE_ONLY, KIND_CONDUCTOR,
-    KIND_LAMBERT, KIND_PBR_METALLIC_ROUGHNESS, KIND_ROUGH_CONDUCTOR, KIND_ROUGH_DIELECTRIC,
-    KIND_ROUGH_PLASTIC, KIND_THIN_DIELECTRIC,
+    KIND_LAMBERT, KIND_PBR_METALLIC_ROUGHNESS, KIND_PLASTIC, KIND_ROUGH_CONDUCTOR,
+    KIND_ROUGH_DIELECTRIC, KIND_ROUGH_PLASTIC, KIND_THIN_DIELECTRIC,
 };
 use lustre_gpu::GpuContext;
 
@@ -141,6 +142,12 @@ fn gpu_models_match_lustre_brdf() {
             0,
             pack_pbr_metallic_roughness(&m).expect("pack"),
         );
+        models.push((name, Box::new(m), r));
+    }
+    for (name, nonlinear) in [("plastic", false), ("plastic nonlinear", true)] {
+        let m =
+            Plastic::new(Rgb::new(0.5, 0.3, 0.2), Rgb::ONE, 1.5, 1.0, nonlinear).expect("plastic");
+        let r = record(KIND_PLASTIC, 0, pack_plastic(&m).expect("pack"));
         models.push((name, Box::new(m), r));
     }
     let l = Lambert::new(Rgb::new(0.7, 0.5, 0.3)).expect("lambert");

@@ -195,18 +195,17 @@ fn materials_the_gpu_cannot_shade_are_named() {
         err.contains("gold-paint") && err.contains("not on the GPU"),
         "{err}"
     );
-    let plastic = Material::new(
-        "shiny",
-        MaterialKind::Plastic {
-            diffuse: TexturedRgb::constant(Rgb::splat(0.5)),
-            specular: Rgb::ONE,
-            int_ior: 1.5,
-            ext_ior: 1.0,
-            nonlinear: false,
+    let mut bumpy = scene.materials[6].clone();
+    bumpy.normal_map = Some(lustre_scene::material::NormalMap {
+        texture: lustre_scene::material::TextureRef {
+            texture: 0,
+            uv_set: 0,
         },
+        scale: 1.0,
+    });
+    let err = pack_material(&bumpy, &mut vec![]).unwrap_err().to_string();
+    assert!(
+        err.contains("brushed-aluminium") && err.contains("normal-mapped"),
+        "{err}"
     );
-    let err = pack_material(&plastic, &mut vec![])
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("shiny"), "{err}");
 }
