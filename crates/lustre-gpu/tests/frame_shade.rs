@@ -180,6 +180,56 @@ fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
             "{name}: glossy pixels"
         );
     }
+    // 2×2 supersampling: the same G-buffer size, a quarter of the output pixels.
+    let (w2, h2, k2) = (w as u32 / 2, h as u32 / 2, 2u32);
+    let base2 = ShadeTarget::new(&ctx, w2, h2).expect("target");
+    renderer
+        .draw(&ctx, &up, &camera, k2, &target, &base2)
+        .expect("draw k = 2");
+    let out2 = FrameShadeTarget::new(&ctx, w2, h2, k2).expect("output");
+    let opts = FrameShadeOptions {
+        samples,
+        method: FrameMethod::Regular,
+        frame: 0,
+        seed,
+    };
+    pass.shade(&ctx, &gpu_scene, &target, &base2, &camera, k2, &opts, &out2)
+        .expect("shade k = 2");
+    let gpu = out2.read_back(&ctx).expect("readback");
+    let (cpu, _) = shade_gbuffer_view_dependent(
+        &lit,
+        &light,
+        &buffers,
+        &camera,
+        &gb,
+        k2,
+        &GBufferViewOptions {
+            samples: samples as usize,
+            method: FrameMethod::Regular,
+            seed,
+        },
+    )
+    .expect("cpu twin");
+    let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
+    eprintln!("regular, 2×2 supersampled: GPU vs CPU twin {db:.1} dB ({w2}×{h2})");
+    assert!(db >= 90.0, "k = 2: {db} dB");
+    // Bad input: a sample count of 0 or above the limit, sizes that do not agree.
+    for bad in [0, 257] {
+        let o = FrameShadeOptions {
+            samples: bad,
+            ..opts
+        };
+        let err = pass
+            .shade(&ctx, &gpu_scene, &target, &base, &camera, k, &o, &out)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("samples"), "{err}");
+    }
+    let err = pass
+        .shade(&ctx, &gpu_scene, &target, &base, &camera, k2, &opts, &out)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("do not agree"), "{err}");
 }
 
 #[test]
