@@ -13,10 +13,10 @@
 //! [`KIND_THIN_DIELECTRIC`] 5 (also smooth glass, shaded as a thin sheet as the CPU frame does),
 //! [`KIND_PBR_METALLIC_ROUGHNESS`] 6 (a transmissive rough one as kind 3, as the CPU builds it),
 //! [`KIND_LAMBERT`] 7 (read only where the light map does not cover the pixel; a textured
-//! Lambertian is kind 0), [`KIND_PLASTIC`] 8;
+//! Lambertian is kind 0), [`KIND_PLASTIC`] 8, [`KIND_DIELECTRIC`] 9 (smooth transmissive glTF
+//! glass, built by the CPU as this interface);
 //! 16–19 belong to the fitted models (gpu-fits). Materials the pass cannot shade (textured or
-//! normal-mapped glossy materials, smooth transmissive glTF materials, fitted specs in this
-//! build)
+//! normal-mapped glossy materials, fitted specs in this build)
 //! are refused with a named error, so the caller falls back to the CPU frame.
 //!
 //! Incident light: every probe's pyramid and the environment's are concatenated into one
@@ -39,6 +39,7 @@ use crate::wgsl;
 use glam::DVec3;
 use lustre_brdf::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
 use lustre_brdf::models::conductor::{ComplexIor, Conductor};
+use lustre_brdf::models::dielectric::Dielectric;
 use lustre_brdf::models::lambert::Lambert;
 use lustre_brdf::models::pbr_metallic_roughness::{PbrMetallicRoughness, PBR_ALPHA_MIN};
 use lustre_brdf::models::plastic::Plastic;
@@ -75,6 +76,8 @@ pub const KIND_PBR_METALLIC_ROUGHNESS: u32 = 6;
 pub const KIND_LAMBERT: u32 = 7;
 /// `plastic.wgsl`.
 pub const KIND_PLASTIC: u32 = 8;
+/// `dielectric.wgsl`.
+pub const KIND_DIELECTRIC: u32 = 9;
 /// [`GpuBsdf::flags`]: only diffuse lobes (no view-dependent part where kd ≠ 0).
 pub const FLAG_DIFFUSE_ONLY: u32 = 4;
 /// [`GpuBsdf::flags`]: only Dirac lobes (summed exactly over their branches).
@@ -243,6 +246,15 @@ pub fn pack_plastic(m: &Plastic) -> Result<[[f32; 4]; 8]> {
     p.rgb(0, m.diffuse_reflectance, weight)?;
     p.rgb(1, m.specular_reflectance, f64::from(u8::from(m.nonlinear)))?;
     p.set(2, [m.eta, m.internal_reflectance(), 0.0, 0.0])?;
+    Ok(p.p)
+}
+
+/// `dielectric.wgsl`'s parameters.
+pub fn pack_dielectric(m: &Dielectric) -> Result<[[f32; 4]; 8]> {
+    let mut p = Params::new("dielectric");
+    p.set(0, [m.eta, 0.0, 0.0, 0.0])?;
+    p.rgb(1, m.specular_reflectance, 0.0)?;
+    p.rgb(2, m.specular_transmittance, 0.0)?;
     Ok(p.p)
 }
 
@@ -439,7 +451,14 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             if scalar(transmission)? >= 0.5 {
                 let a = r * r;
                 if a < PBR_ALPHA_MIN {
-                    return Err(refuse("smooth transmissive glTF glass"));
+                    let g = Dielectric::new(*ior, 1.0)
+                        .and_then(|g| g.with_tints(Rgb::ONE, c))
+                        .map_err(brdf)?;
+                    return Ok(record(
+                        KIND_DIELECTRIC,
+                        FLAG_DELTA_ONLY,
+                        pack_dielectric(&g)?,
+                    ));
                 }
                 let d = MicrofacetDistribution::isotropic(MicrofacetType::Ggx, a).map_err(brdf)?;
                 let g = RoughDielectric::new(d, *ior, 1.0)

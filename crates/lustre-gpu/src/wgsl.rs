@@ -161,6 +161,13 @@ pub const PLASTIC: Module = Module {
     deps: &[&BSDF_SAMPLE, &FRESNEL],
 };
 
+/// Kind 9: the smooth dielectric interface.
+pub const DIELECTRIC: Module = Module {
+    name: "dielectric",
+    source: include_str!("wgsl/dielectric.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL],
+};
+
 /// The `GpuBsdf` record and the dispatch by kind to the models' sample / eval / pdf.
 pub const BSDF: Module = Module {
     name: "bsdf",
@@ -174,11 +181,12 @@ pub const BSDF: Module = Module {
         &PBR_METALLIC_ROUGHNESS,
         &LAMBERT,
         &PLASTIC,
+        &DIELECTRIC,
     ],
 };
 
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 21] = [
+pub const ALL: [&Module; 22] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -199,6 +207,7 @@ pub const ALL: [&Module; 21] = [
     &PBR_METALLIC_ROUGHNESS,
     &LAMBERT,
     &PLASTIC,
+    &DIELECTRIC,
     &BSDF,
 ];
 

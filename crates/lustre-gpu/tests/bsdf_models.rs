@@ -1,5 +1,5 @@
 //! The WGSL scene models of the view-dependent pass (`src/wgsl/{rough_conductor, rough_plastic,
-//! rough_dielectric, conductor, thin_dielectric, pbr_metallic_roughness, lambert, plastic}.wgsl`, dispatched by `bsdf.wgsl`) against
+//! rough_dielectric, conductor, thin_dielectric, pbr_metallic_roughness, lambert, plastic, dielectric}.wgsl`, dispatched by `bsdf.wgsl`) against
 //! their lustre-brdf twins: eval, pdf and sample over a grid of ωo, ωi and u, in f32 against
 //! f64. Fails (does not skip) without an adapter.
 
@@ -7,6 +7,7 @@ use glam::DVec3;
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
 use lustre_brdf::models::conductor::{ComplexIor, Conductor};
+use lustre_brdf::models::dielectric::Dielectric;
 use lustre_brdf::models::lambert::Lambert;
 use lustre_brdf::models::pbr_metallic_roughness::PbrMetallicRoughness;
 use lustre_brdf::models::plastic::Plastic;
@@ -16,11 +17,12 @@ use lustre_brdf::models::rough_plastic::RoughPlastic;
 use lustre_brdf::models::thin_dielectric::ThinDielectric;
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::frame_shade::{
-    evaluate_models, pack_conductor, pack_lambert, pack_pbr_metallic_roughness, pack_plastic,
-    pack_rough_conductor, pack_rough_dielectric, pack_rough_plastic, pack_thin_dielectric,
-    rough_plastic_table, GpuBsdf, ModelCase, FLAG_DELTA_ONLY, FLAG_DIFFUSE_ONLY, KIND_CONDUCTOR,
-    KIND_LAMBERT, KIND_PBR_METALLIC_ROUGHNESS, KIND_PLASTIC, KIND_ROUGH_CONDUCTOR,
-    KIND_ROUGH_DIELECTRIC, KIND_ROUGH_PLASTIC, KIND_THIN_DIELECTRIC,
+    evaluate_models, pack_conductor, pack_dielectric, pack_lambert, pack_pbr_metallic_roughness,
+    pack_plastic, pack_rough_conductor, pack_rough_dielectric, pack_rough_plastic,
+    pack_thin_dielectric, rough_plastic_table, GpuBsdf, ModelCase, FLAG_DELTA_ONLY,
+    FLAG_DIFFUSE_ONLY, KIND_CONDUCTOR, KIND_DIELECTRIC, KIND_LAMBERT, KIND_PBR_METALLIC_ROUGHNESS,
+    KIND_PLASTIC, KIND_ROUGH_CONDUCTOR, KIND_ROUGH_DIELECTRIC, KIND_ROUGH_PLASTIC,
+    KIND_THIN_DIELECTRIC,
 };
 use lustre_gpu::GpuContext;
 
@@ -157,6 +159,15 @@ fn gpu_models_match_lustre_brdf() {
         pack_lambert(&l).expect("pack"),
     );
     models.push(("Lambert", Box::new(l), r));
+    let g = Dielectric::new(1.5, 1.0)
+        .and_then(|g| g.with_tints(Rgb::new(0.9, 1.0, 0.95), Rgb::new(0.8, 0.9, 1.0)))
+        .expect("dielectric");
+    let r = record(
+        KIND_DIELECTRIC,
+        FLAG_DELTA_ONLY,
+        pack_dielectric(&g).expect("pack"),
+    );
+    models.push(("dielectric", Box::new(g), r));
     let c = Conductor::new(gold.eta, gold.k, Rgb::ONE).expect("conductor");
     let r = record(
         KIND_CONDUCTOR,

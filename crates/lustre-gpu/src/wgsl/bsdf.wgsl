@@ -1,7 +1,7 @@
 // module bsdf: the material record of the view-dependent pass and the dispatch to its models'
 // sample / eval / pdf by kind. CPU twin: lustre_gpu::frame_shade::GpuBsdf and the lustre_brdf
 // model each kind stands for. Kind codes: 0 none, 1 rough conductor, 2 rough plastic, 3 rough
-// dielectric, 4 conductor, 5 thin dielectric, 6 glTF metallic-roughness, 7 Lambert, 8 plastic; 16–19 the fitted models (gpu-fits; an unknown
+// dielectric, 4 conductor, 5 thin dielectric, 6 glTF metallic-roughness, 7 Lambert, 8 plastic, 9 dielectric; 16–19 the fitted models (gpu-fits; an unknown
 // kind samples nothing and evaluates to 0).
 
 struct GpuBsdf {
@@ -45,6 +45,9 @@ fn bsdf_sample(b: GpuBsdf, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
         case 8u: {
             return plastic_sample(plastic_unpack(b.p), wo, u);
         }
+        case 9u: {
+            return dielectric_sample(dielectric_unpack(b.p), wo, u);
+        }
         default: {
             return no_sample();
         }
@@ -77,6 +80,9 @@ fn bsdf_eval(b: GpuBsdf, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
         case 8u: {
             return plastic_eval(plastic_unpack(b.p), wi, wo);
         }
+        case 9u: {
+            return dielectric_eval(dielectric_unpack(b.p), wi, wo);
+        }
         default: {
             return vec3<f32>(0.0);
         }
@@ -108,6 +114,9 @@ fn bsdf_pdf(b: GpuBsdf, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
         }
         case 8u: {
             return plastic_pdf(plastic_unpack(b.p), wi, wo);
+        }
+        case 9u: {
+            return dielectric_pdf(dielectric_unpack(b.p), wi, wo);
         }
         default: {
             return 0.0;
