@@ -16,7 +16,7 @@
 //! renders a probe's cube with the raster G-buffer and light-map shading passes straight into a
 //! [`GpuPyramid`]'s base level and filters it on the GPU; [`GpuViewPass::render_mirror`] and
 //! [`GpuViewPass::render_see_through`] fill the mirror / see-through view buffers
-//! ([`view_pass::GpuViewBuffer`]); [`GpuTimer`] times GPU work (timestamps where available).
+//! ([`GpuViewBuffer`]); [`GpuTimer`] times GPU work (timestamps where available).
 //!
 //! Measured (lavapipe on the shared 2-core machine, load ≈ 12): parity with the CPU kernel
 //! 122 dB PSNR (7 samples per lobe) and 129 dB (19) at 128×96; 1920×1080 frames of a screen
@@ -28,6 +28,7 @@ pub mod context;
 pub mod contract;
 pub mod cube;
 pub mod error;
+pub mod frame_shade;
 pub mod gbuffer;
 pub mod lightmap_shade;
 pub mod packed;
@@ -36,12 +37,17 @@ pub mod pyramid;
 pub mod shade;
 pub mod timer;
 pub mod view_pass;
+pub mod view_buffer;
 pub mod wgsl;
 
 pub use context::GpuContext;
 pub use cube::{CubeLevelRef, GpuCube};
 pub use error::{GpuError, Result};
 pub use gbuffer::{DrawOptions, GBufferPass, GBufferTarget, GpuGeometry, GBUFFER_WGSL};
+pub use frame_shade::{
+    FrameShadeOptions, FrameShadePass, FrameShadeScene, FrameShadeTarget, GpuBsdf,
+};
+pub use gbuffer::{GBufferPass, GBufferTarget, GpuGeometry, GBUFFER_WGSL};
 pub use lightmap_shade::{
     GpuLightmapScene, LightmapFrameScene, LightmapRenderer, LightmapShadePass, ShadeTarget,
     LIGHTMAP_SHADE_WGSL,
@@ -56,3 +62,4 @@ pub use shade::shade_wgsl;
 pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_PASS_WGSL};
 pub use timer::{GpuTimer, Timing};
 pub use view_pass::{GpuViewPass, ViewRender};
+pub use view_buffer::GpuViewBuffer;

@@ -577,6 +577,11 @@ impl ShadeTarget {
         })
     }
 
+    /// The w·h RGBA f32 texels (the view-dependent pass reads them).
+    pub(crate) fn buffer(&self) -> &wgpu::Buffer {
+        &self.buffer
+    }
+
     /// Copies the image to the host.
     pub fn read_back(&self, ctx: &GpuContext) -> Result<Image> {
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);

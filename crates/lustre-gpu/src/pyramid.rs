@@ -251,6 +251,42 @@ fn entry(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
 }
 
 impl GpuPyramid {
+    /// Uploads a pyramid built on the CPU (a captured probe, the environment), level by level
+    /// in the layout [`GpuPyramidBuilder::build`] writes. Errors: a level beyond the device's
+    /// storage buffers.
+    pub fn upload(ctx: &GpuContext, pyramid: &CubePyramid) -> Result<Self> {
+        let limit = ctx.device.limits().max_storage_buffer_binding_size as usize;
+        let mut levels = Vec::with_capacity(pyramid.levels.len());
+        for level in &pyramid.levels {
+            let bytes = 6 * level.size * level.size * 16;
+            if bytes > limit {
+                return Err(invalid(
+                    "cube pyramid",
+                    format!(
+                        "a {0}² level needs {bytes} bytes; the device allows {limit}",
+                        level.size
+                    ),
+                ));
+            }
+            let texels: Vec<[f32; 4]> = level
+                .faces
+                .iter()
+                .flat_map(|f| f.iter().map(|v| [v[0], v[1], v[2], 1.0]))
+                .collect();
+            levels.push(buffer_init(
+                ctx,
+                "pyramid level",
+                bytemuck::cast_slice(&texels),
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            ));
+        }
+        Ok(GpuPyramid {
+            sizes: pyramid.levels.iter().map(|l| l.size).collect(),
+            levels,
+            filter: pyramid.filter,
+        })
+    }
+
     /// Copies every level to the host.
     pub fn read_back(&self, ctx: &GpuContext) -> Result<CubePyramid> {
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);

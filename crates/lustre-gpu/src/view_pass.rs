@@ -19,6 +19,7 @@ use crate::error::{invalid, scope_result, wgpu_error, Result};
 use crate::gbuffer::{map_read, DrawOptions, GBufferPass, GBufferTarget};
 use crate::lightmap_shade::{buf, tex, texture_entry, LightmapFrameScene, LightmapShadePass};
 use crate::probe_capture::mesh_triangles;
+use crate::view_buffer::{level_sizes, GpuViewBuffer};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
 use lustre_shade::mirror::{mirror_camera, MirrorTexel, Reflector, ReflectorPlane, ViewBuffer};
@@ -30,107 +31,6 @@ pub const VIEW_GEOMETRY_WGSL: &str = include_str!("view_geometry.wgsl");
 /// The WGSL source of one radiance MIP step.
 pub const VIEW_MIP_WGSL: &str = include_str!("view_mip.wgsl");
 
-/// A mirror or see-through buffer on the GPU, the layout of the session's shared interface §3
-/// (`lustre_shade::mirror::ViewBuffer` on the GPU).
-#[derive(Debug)]
-pub struct GpuViewBuffer {
-    /// Every radiance MIP level concatenated, finest first; level l is ⌈w/2^l⌉×⌈h/2^l⌉
-    /// row-major `vec4<f32>` (rgb, 1).
-    pub radiance: wgpu::Buffer,
-    /// Level 0 only, two `vec4<f32>` per texel: (position.xyz, 1 where the texel shows a
-    /// surface, else 0), (geometric normal.xyz, 0).
-    pub geometry: wgpu::Buffer,
-    /// Width in texels.
-    pub width: usize,
-    /// Height in texels.
-    pub height: usize,
-    /// (width, height) of every level, finest first.
-    pub level_sizes: Vec<(usize, usize)>,
-    /// The camera the buffer was rendered from (the mirrored one for a mirror buffer).
-    pub camera: PathCamera,
-    /// The mesh left out.
-    pub mesh: u32,
-    /// For a mirror buffer: the reflector's plane.
-    pub front: Option<ReflectorPlane>,
-}
-
-/// Level sizes ⌈w/2^l⌉×⌈h/2^l⌉ down to 1×1.
-fn level_sizes(w: usize, h: usize) -> Vec<(usize, usize)> {
-    let mut out = vec![(w, h)];
-    while let Some(&(lw, lh)) = out.last() {
-        if lw == 1 && lh == 1 {
-            break;
-        }
-        out.push((lw.div_ceil(2), lh.div_ceil(2)));
-    }
-    out
-}
-
-impl GpuViewBuffer {
-    /// Copies the buffer to the host as the CPU's [`ViewBuffer`].
-    pub fn read_back(&self, ctx: &GpuContext) -> Result<ViewBuffer> {
-        let read = |b: &wgpu::Buffer| -> Result<Vec<[f32; 4]>> {
-            let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-            let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("view buffer readback"),
-                size: b.size(),
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let mut enc = ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("view buffer readback"),
-                });
-            enc.copy_buffer_to_buffer(b, 0, &staging, 0, b.size());
-            ctx.queue.submit([enc.finish()]);
-            let bytes = map_read(ctx, &staging, "view buffer readback", scope)?;
-            Ok(bytemuck::cast_slice(&bytes).to_vec())
-        };
-        let rad = read(&self.radiance)?;
-        let geo = read(&self.geometry)?;
-        let n = self.width * self.height;
-        let total: usize = self.level_sizes.iter().map(|(w, h)| w * h).sum();
-        if rad.len() != total || geo.len() != 2 * n {
-            return Err(wgpu_error(
-                "view buffer readback",
-                format!(
-                    "{} radiance and {} geometry texels for {total} and {}",
-                    rad.len(),
-                    geo.len(),
-                    2 * n
-                ),
-            ));
-        }
-        let rgb = |t: &[f32; 4]| Rgb([f64::from(t[0]), f64::from(t[1]), f64::from(t[2])]);
-        let mut levels = Vec::with_capacity(self.level_sizes.len());
-        let mut at = 0;
-        for &(w, h) in &self.level_sizes {
-            levels.push((w, h, rad[at..at + w * h].iter().map(rgb).collect()));
-            at += w * h;
-        }
-        let v3 = |t: &[f32; 4]| DVec3::new(f64::from(t[0]), f64::from(t[1]), f64::from(t[2]));
-        let texels = (0..n)
-            .map(|i| {
-                let (p, nn) = (&geo[2 * i], &geo[2 * i + 1]);
-                MirrorTexel {
-                    radiance: rgb(&rad[i]),
-                    position: (p[3] > 0.5).then(|| v3(p)),
-                    normal: v3(nn),
-                }
-            })
-            .collect();
-        Ok(ViewBuffer {
-            mesh: self.mesh,
-            camera: self.camera,
-            width: self.width,
-            height: self.height,
-            texels,
-            levels,
-            front: self.front,
-        })
-    }
-}
 
 /// A view buffer and the G-buffer it was shaded from (kept for the CPU twin; drop it when not
 /// needed).

@@ -91,8 +91,102 @@ pub const WARP: Module = Module {
     deps: &[&TYPES, &FRAME, &MIP, &MICROFACET],
 };
 
+/// The record every BSDF model's sampling returns (`BsdfSample`).
+pub const BSDF_SAMPLE: Module = Module {
+    name: "bsdf_sample",
+    source: include_str!("wgsl/bsdf_sample.wgsl"),
+    deps: &[],
+};
+
+/// Dielectric and conductor Fresnel, refraction, `split_uniform`, the cosine lobe.
+pub const FRESNEL: Module = Module {
+    name: "fresnel",
+    source: include_str!("wgsl/fresnel.wgsl"),
+    deps: &[&TYPES],
+};
+
+/// Kind 1: the rough conductor.
+pub const ROUGH_CONDUCTOR: Module = Module {
+    name: "rough_conductor",
+    source: include_str!("wgsl/rough_conductor.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL, &FRAME, &MICROFACET],
+};
+
+/// Kind 2: the rough plastic (its transmittance table read through the pass's `bsdf_table`).
+pub const ROUGH_PLASTIC: Module = Module {
+    name: "rough_plastic",
+    source: include_str!("wgsl/rough_plastic.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL, &FRAME, &MICROFACET],
+};
+
+/// Kind 3: the rough dielectric.
+pub const ROUGH_DIELECTRIC: Module = Module {
+    name: "rough_dielectric",
+    source: include_str!("wgsl/rough_dielectric.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL, &FRAME, &MICROFACET],
+};
+
+/// Kind 4: the smooth conductor.
+pub const CONDUCTOR: Module = Module {
+    name: "conductor",
+    source: include_str!("wgsl/conductor.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL],
+};
+
+/// Kind 5: the thin dielectric sheet.
+pub const THIN_DIELECTRIC: Module = Module {
+    name: "thin_dielectric",
+    source: include_str!("wgsl/thin_dielectric.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL],
+};
+
+/// Kind 6: glTF 2.0 metallic-roughness.
+pub const PBR_METALLIC_ROUGHNESS: Module = Module {
+    name: "pbr_metallic_roughness",
+    source: include_str!("wgsl/pbr_metallic_roughness.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL, &FRAME, &MICROFACET],
+};
+
+/// Kind 7: the Lambertian reflector.
+pub const LAMBERT: Module = Module {
+    name: "lambert",
+    source: include_str!("wgsl/lambert.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL],
+};
+
+/// Kind 8: the smooth plastic.
+pub const PLASTIC: Module = Module {
+    name: "plastic",
+    source: include_str!("wgsl/plastic.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL],
+};
+
+/// Kind 9: the smooth dielectric interface.
+pub const DIELECTRIC: Module = Module {
+    name: "dielectric",
+    source: include_str!("wgsl/dielectric.wgsl"),
+    deps: &[&BSDF_SAMPLE, &FRESNEL],
+};
+
+/// The `GpuBsdf` record and the dispatch by kind to the models' sample / eval / pdf.
+pub const BSDF: Module = Module {
+    name: "bsdf",
+    source: include_str!("wgsl/bsdf.wgsl"),
+    deps: &[
+        &ROUGH_CONDUCTOR,
+        &ROUGH_PLASTIC,
+        &ROUGH_DIELECTRIC,
+        &CONDUCTOR,
+        &THIN_DIELECTRIC,
+        &PBR_METALLIC_ROUGHNESS,
+        &LAMBERT,
+        &PLASTIC,
+        &DIELECTRIC,
+    ],
+};
+
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 10] = [
+pub const ALL: [&Module; 22] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -103,6 +197,18 @@ pub const ALL: [&Module; 10] = [
     &QMC,
     &MICROFACET,
     &WARP,
+    &BSDF_SAMPLE,
+    &FRESNEL,
+    &ROUGH_CONDUCTOR,
+    &ROUGH_PLASTIC,
+    &ROUGH_DIELECTRIC,
+    &CONDUCTOR,
+    &THIN_DIELECTRIC,
+    &PBR_METALLIC_ROUGHNESS,
+    &LAMBERT,
+    &PLASTIC,
+    &DIELECTRIC,
+    &BSDF,
 ];
 
 /// The source of a pass: every module in `imports` and, transitively, the modules they use,

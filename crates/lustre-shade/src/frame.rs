@@ -20,11 +20,13 @@
 //!
 //! This is the CPU frame the GPU renderer mirrors and the fallback when there is no adapter.
 
+use crate::accel::Hit;
+use crate::bake::gbuffer::{shade_gbuffer, GBuffer, SKY};
 use crate::bake::render::camera_ray;
 use crate::image::Image;
-use crate::kernel::{corrected_direction, BoundingPlane};
+use crate::kernel::{corrected_direction, pixel_seed, BoundingPlane};
 use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
-use crate::mirror::{render_mirror, render_see_through, ViewBuffer};
+use crate::mirror::{render_mirror, render_see_through, MirrorBuffer, ViewBuffer};
 use crate::path::PathCamera;
 use crate::probe::{LitScene, Probe};
 use crate::warp::{fibonacci_point, integrate_warp};
@@ -113,6 +115,345 @@ pub struct FrameStats {
     pub mirror_seconds: f64,
 }
 
+/// The per-frame view buffers and per-mesh tables the view-dependent shading reads: the mirror
+/// buffer of every planar reflector and the see-through buffer of every transmissive probe
+/// object (rendered for one camera), which probe each mesh reads, and the thin-sheet stand-ins
+/// of smooth glass.
+pub struct FrameBuffers {
+    /// Mirror buffers, one per planar reflector.
+    pub mirrors: Vec<MirrorBuffer>,
+    /// Per mesh: its mirror buffer.
+    pub mirror_of_mesh: Vec<Option<usize>>,
+    /// See-through buffers, one per transmissive probe object.
+    pub see_throughs: Vec<ViewBuffer>,
+    /// Per mesh: its see-through buffer.
+    pub see_through_of_mesh: Vec<Option<usize>>,
+    /// Per mesh: the probe captured for it.
+    pub probe_of_mesh: Vec<Option<usize>>,
+    /// Per scene material: the thin sheet a smooth dielectric is shaded as.
+    pub thin: Vec<Option<Material>>,
+    /// Per mesh: the index of its first triangle in the path scene.
+    pub first_prim: Vec<usize>,
+    /// Time of the mirror and see-through passes, seconds.
+    pub seconds: f64,
+}
+
+impl FrameBuffers {
+    /// Renders the mirror and see-through buffers of `lit` for `camera` at w×h (000 §4.5.1) and
+    /// builds the per-mesh tables for the probes of `light`.
+    pub fn render(
+        lit: &LitScene,
+        light: &FrameLight,
+        camera: &PathCamera,
+        w: usize,
+        h: usize,
+    ) -> Result<Self> {
+        let meshes = &lit.scene.meshes;
+        let probe_of_mesh: Vec<Option<usize>> = (0..meshes.len())
+            .map(|m| light.probes.iter().position(|p| p.mesh as usize == m))
+            .collect();
+        let t_mirror = std::time::Instant::now();
+        let mut mirrors = vec![];
+        let mut mirror_of_mesh = vec![None; meshes.len()];
+        for (m, mesh) in meshes.iter().enumerate() {
+            if mesh.hints.planar_reflector {
+                mirror_of_mesh[m] = Some(mirrors.len());
+                mirrors.push(render_mirror(lit, m, camera, w, h)?);
+            }
+        }
+        // The see-through pass: the camera's view without each transmissive probe object.
+        let mut see_throughs = vec![];
+        let mut see_through_of_mesh = vec![None; meshes.len()];
+        for (m, mesh) in meshes.iter().enumerate() {
+            let transmits = lit.scene.materials.get(mesh.material).is_some_and(|mat| {
+                mat.bsdf_at(&lit.scene.textures, &[Vec2::ZERO; 2])
+                    .is_ok_and(|b| b.flags().transmission)
+            });
+            if mesh.hints.probe && transmits {
+                see_through_of_mesh[m] = Some(see_throughs.len());
+                see_throughs.push(render_see_through(lit, m, camera, w, h)?);
+            }
+        }
+        let seconds = t_mirror.elapsed().as_secs_f64();
+        let first_prim: Vec<usize> = meshes
+            .iter()
+            .scan(0, |acc, m| {
+                let first = *acc;
+                *acc += m.indices.len();
+                Some(first)
+            })
+            .collect();
+        Ok(FrameBuffers {
+            mirrors,
+            mirror_of_mesh,
+            see_throughs,
+            see_through_of_mesh,
+            probe_of_mesh,
+            thin: lit.scene.materials.iter().map(thin_sheet).collect(),
+            first_prim,
+            seconds,
+        })
+    }
+
+    /// The mirror buffer that answers triangle `prim` of mesh `mesh` (an in-plane triangle of a
+    /// planar reflector).
+    pub fn mirror_at(&self, mesh: usize, prim: usize) -> Option<&MirrorBuffer> {
+        self.mirror_of_mesh[mesh]
+            .map(|i| &self.mirrors[i])
+            .filter(|m| m.reflector.in_plane[prim - self.first_prim[mesh]])
+    }
+}
+
+/// Smooth glass is shaded as a thin sheet (straight through, both interfaces' Fresnel): a pane
+/// or a rail seen through, as the thin BTDF lobes of 000 §3.3.1.
+pub fn thin_sheet(m: &Material) -> Option<Material> {
+    match &m.kind {
+        MaterialKind::Dielectric {
+            int_ior,
+            ext_ior,
+            specular_reflectance,
+            specular_transmittance,
+        } => Some(Material::new(
+            m.name.clone(),
+            MaterialKind::ThinDielectric {
+                int_ior: *int_ior,
+                ext_ior: *ext_ior,
+                specular_reflectance: *specular_reflectance,
+                specular_transmittance: *specular_transmittance,
+            },
+        )),
+        _ => None,
+    }
+}
+
+/// A camera hit as the view-dependent shading sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceHit {
+    /// Triangle (path-scene index).
+    pub prim: usize,
+    /// Barycentric weights.
+    pub bary: [f64; 3],
+    /// Direction of the camera ray (unit).
+    pub d: DVec3,
+}
+
+/// The points of one pixel's glossy integral.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FramePoints {
+    /// The regular set ([`fibonacci_point`]).
+    Regular,
+    /// Colbert–Křivánek: n random points drawn from `SplitMix64::new(seed)` ([`ck_point`]).
+    Ck {
+        /// The pixel's seed.
+        seed: u64,
+    },
+    /// Progressive refinement: frames `0..frames` of the R2-rotated regular set, averaged.
+    Progressive {
+        /// The first frame.
+        first: u32,
+        /// Frames averaged.
+        frames: u32,
+    },
+}
+
+/// Point i of the Colbert–Křivánek set: two [`SplitMix64`] draws, each the top 24 bits of its
+/// 64 (so that an f32 GPU twin draws the same points exactly).
+pub fn ck_point(rng: &mut SplitMix64) -> (f64, f64) {
+    let scale = 1.0 / 16_777_216.0;
+    let a = (rng.next_u64() >> 40) as f64 * scale;
+    let b = (rng.next_u64() >> 40) as f64 * scale;
+    (a, b)
+}
+
+/// Point i of frame f of progressive refinement: the [`fibonacci_point`] shifted by frame f's
+/// R2 offset modulo 1 (the second coordinate on the 2⁻²⁴ grid, so an f32 twin matches bits).
+pub fn progressive_point(i: usize, n: usize, f: usize) -> (f64, f64) {
+    let (u, v) = fibonacci_point(i, n);
+    let (ou, ov) = r2_bits(f);
+    let v24 = (v * 16_777_216.0) as u32;
+    (
+        (u + f64::from(ou) / 16_777_216.0).fract(),
+        f64::from(v24.wrapping_add(ov) & 0xff_ffff) / 16_777_216.0,
+    )
+}
+
+/// The view-dependent radiance at camera hit `hit` of `lit` (000 Eq. 4.4): the material's rest
+/// f − kd/π (kd the light-mapped albedo) integrated with `n` samples of `points`, each read from
+/// the mirror buffer of an in-plane reflector triangle, the see-through buffer of a
+/// transmissive probe object, the probe of the object (else the nearest probe, through its
+/// bounding planes) or the environment's pyramid. Returns the radiance (zero where nothing is
+/// view-dependent), the lookups made and whether the hit has a view-dependent part.
+pub fn view_dependent(
+    lit: &LitScene,
+    light: &FrameLight,
+    buffers: &FrameBuffers,
+    hit: &SurfaceHit,
+    n: usize,
+    points: FramePoints,
+) -> (Rgb, u64, bool) {
+    let ps = lit.path_scene;
+    let g = &ps.geometry;
+    let d = hit.d;
+    let mesh = lit.mesh_of[hit.prim] as usize;
+    if lit.scene.meshes[mesh].hints.diffuse_only {
+        return (Rgb::ZERO, 0, false);
+    }
+    let k = g.material[hit.prim] as usize;
+    let surface = &ps.materials[k];
+    let kd = lit.lit.albedo(g, hit.prim, hit.bary, d);
+    let h = Hit {
+        prim: hit.prim,
+        bary: hit.bary,
+        t: 1.0,
+    };
+    let (p, frame, uv) = lit.tracer.shading_point(DVec3::ZERO, d, &h);
+    let wo = -d;
+    let frame = if surface.two_sided() && wo.dot(frame.n) < 0.0 {
+        frame.flipped()
+    } else {
+        frame
+    };
+    let wo_local = frame.to_local(wo);
+    // The incident light: this object's probe, else the nearest, else the environment.
+    let probe = buffers.probe_of_mesh[mesh]
+        .map(|i| &light.probes[i])
+        .or_else(|| {
+            light.probes.iter().min_by(|a, b| {
+                a.centre
+                    .distance_squared(p)
+                    .total_cmp(&b.centre.distance_squared(p))
+            })
+        });
+    let env_light: Option<(&CubePyramid, &[BoundingPlane], DVec3)> = match probe {
+        Some(pr) => Some((&pr.pyramid, &pr.planes, p - pr.centre)),
+        None => light.environment.map(|env| (env, &[][..], DVec3::ZERO)),
+    };
+    // The mirror buffer, for the reflector's in-plane triangles.
+    let mirror = buffers.mirror_at(mesh, hit.prim);
+    let see_through = buffers.see_through_of_mesh[mesh].map(|i| &buffers.see_throughs[i]);
+    if env_light.is_none() && mirror.is_none() && see_through.is_none() {
+        return (Rgb::ZERO, 0, false);
+    }
+    // A view buffer's filtered radiance for a sample along `wi` (None when it leaves it).
+    let read_view = |v: &ViewBuffer, wi: DVec3, pdf: Option<f64>, total: usize, ck: bool| {
+        let ((x, y), found) = v.locate(p, wi)?;
+        let lod = pdf.map_or(0.0, |pd| {
+            let bias = if ck { 1.0 } else { FOOTPRINT_LEVEL_BIAS };
+            v.level(p, wi, found, 1.0 / (total as f64 * pd), bias)
+        });
+        Some(v.sample(x, y, lod))
+    };
+    // The filtered radiance of a sample along `wi` drawn with density `pdf` (None: Dirac) out
+    // of `total`; `ck` picks Colbert–Křivánek's level instead of the footprint's.
+    let fetch = |wi: DVec3, pdf: Option<f64>, total: usize, ck: bool| -> Rgb {
+        if let Some(m) = mirror {
+            if let Some(c) = read_view(&m.view, wi, pdf, total, ck) {
+                return c;
+            }
+        }
+        if let Some(v) = see_through {
+            if wi.dot(frame.n) * wo.dot(frame.n) < 0.0 {
+                if let Some(c) = read_view(v, wi, pdf, total, ck) {
+                    return c;
+                }
+            }
+        }
+        match env_light {
+            Some((pyramid, planes, rel)) => {
+                let face = pyramid.base_size();
+                let lod = pdf.map_or(0.0, |pd| {
+                    if ck {
+                        ck_level_at(pd, total, face, wi)
+                    } else {
+                        footprint_level(1.0 / (total as f64 * pd), wi, face)
+                    }
+                });
+                let dir = if planes.is_empty() {
+                    wi
+                } else {
+                    corrected_direction(planes, rel, wi)
+                };
+                Rgb(pyramid.sample(dir, lod))
+            }
+            None => ps.environment.as_ref().map_or(Rgb::ZERO, |e| e.eval(wi)),
+        }
+    };
+    let mut glossy = Rgb::ZERO;
+    let mut lookups = 0u64;
+    let with_bsdf = |f: &mut dyn FnMut(&dyn Bsdf)| match &buffers.thin[k] {
+        Some(m) => {
+            let uv2 = [Vec2::new(uv[0] as f32, uv[1] as f32); 2];
+            if m.with_bsdf_at(&lit.scene.textures, &uv2, &mut *f).is_err() {
+                surface.with_bsdf(uv, f);
+            }
+        }
+        None => surface.with_bsdf(uv, f),
+    };
+    let mut is_view_dependent = true;
+    with_bsdf(&mut |bsdf| {
+        // A Lambertian surface the light map covers has no view-dependent part left.
+        if bsdf.flags().diffuse_only() && kd != Rgb::ZERO {
+            is_view_dependent = false;
+            return;
+        }
+        let to_world = |v: DVec3| frame.to_world(v);
+        match points {
+            FramePoints::Regular => {
+                let (c, k) = integrate_warp(
+                    bsdf,
+                    kd,
+                    to_world,
+                    wo_local,
+                    n,
+                    |i| fibonacci_point(i, n),
+                    |wi, pdf| fetch(wi, pdf, n, false),
+                );
+                glossy = c;
+                lookups = k as u64;
+            }
+            FramePoints::Ck { seed } => {
+                let mut rng = SplitMix64::new(seed);
+                let pts: Vec<(f64, f64)> = (0..n).map(|_| ck_point(&mut rng)).collect();
+                let (c, k) = integrate_warp(
+                    bsdf,
+                    kd,
+                    to_world,
+                    wo_local,
+                    n,
+                    |i| pts[i],
+                    |wi, pdf| fetch(wi, pdf, n, true),
+                );
+                glossy = c;
+                lookups = k as u64;
+            }
+            FramePoints::Progressive { first, frames } => {
+                // Frame f: the set rotated by an R2 offset; the level of the accumulated count
+                // (f + 1)·n, so the filtering shrinks as frames accumulate.
+                let mut acc = Rgb::ZERO;
+                for f in first as usize..(first + frames) as usize {
+                    let total = n * (f + 1);
+                    let (c, k) = integrate_warp(
+                        bsdf,
+                        kd,
+                        to_world,
+                        wo_local,
+                        n,
+                        |i| progressive_point(i, n, f),
+                        |wi, pdf| fetch(wi, pdf, total, false),
+                    );
+                    acc += c;
+                    lookups += k as u64;
+                }
+                glossy = acc * (1.0 / f64::from(frames.max(1)));
+            }
+        }
+    });
+    if !glossy.is_finite() {
+        glossy = Rgb::ZERO;
+    }
+    (glossy.map(|c| c.max(0.0)), lookups, is_view_dependent)
+}
+
 /// Renders a w×h frame of `lit` at `camera` with the incident light `light`.
 pub fn render_frame(
     lit: &LitScene,
@@ -126,73 +467,10 @@ pub fn render_frame(
     if w == 0 || h == 0 {
         return Err(ShadeError::Parameter(format!("image {w}×{h} is empty")));
     }
-    let probe_of_mesh: Vec<Option<usize>> = (0..lit.scene.meshes.len())
-        .map(|m| light.probes.iter().position(|p| p.mesh as usize == m))
-        .collect();
-    // The mirror pass: one buffer per planar reflector, for this camera (000 §4.5.1).
-    let t_mirror = std::time::Instant::now();
-    let mut mirrors = vec![];
-    let mut mirror_of_mesh = vec![None; lit.scene.meshes.len()];
-    for (m, mesh) in lit.scene.meshes.iter().enumerate() {
-        if mesh.hints.planar_reflector {
-            mirror_of_mesh[m] = Some(mirrors.len());
-            mirrors.push(render_mirror(lit, m, camera, w, h)?);
-        }
-    }
-    // The see-through pass: the camera's view without each transmissive probe object.
-    let mut see_throughs = vec![];
-    let mut see_through_of_mesh = vec![None; lit.scene.meshes.len()];
-    for (m, mesh) in lit.scene.meshes.iter().enumerate() {
-        let transmits = lit.scene.materials.get(mesh.material).is_some_and(|mat| {
-            mat.bsdf_at(&lit.scene.textures, &[Vec2::ZERO; 2])
-                .is_ok_and(|b| b.flags().transmission)
-        });
-        if mesh.hints.probe && transmits {
-            see_through_of_mesh[m] = Some(see_throughs.len());
-            see_throughs.push(render_see_through(lit, m, camera, w, h)?);
-        }
-    }
-    let mirror_seconds = t_mirror.elapsed().as_secs_f64();
-    // Smooth glass is shaded as a thin sheet (straight through, both interfaces' Fresnel):
-    // a pane or a rail seen through, as the thin BTDF lobes of 000 §3.3.1.
-    let thin: Vec<Option<Material>> = lit
-        .scene
-        .materials
-        .iter()
-        .map(|m| match &m.kind {
-            MaterialKind::Dielectric {
-                int_ior,
-                ext_ior,
-                specular_reflectance,
-                specular_transmittance,
-            } => Some(Material::new(
-                m.name.clone(),
-                MaterialKind::ThinDielectric {
-                    int_ior: *int_ior,
-                    ext_ior: *ext_ior,
-                    specular_reflectance: *specular_reflectance,
-                    specular_transmittance: *specular_transmittance,
-                },
-            )),
-            _ => None,
-        })
-        .collect();
-    let first_prim: Vec<usize> = lit
-        .scene
-        .meshes
-        .iter()
-        .scan(0, |acc, m| {
-            let first = *acc;
-            *acc += m.indices.len();
-            Some(first)
-        })
-        .collect();
+    let buffers = FrameBuffers::render(lit, light, camera, w, h)?;
     let ps = lit.path_scene;
     let g = &ps.geometry;
-    let frames = match opts.method {
-        FrameMethod::Progressive { frames } => frames as usize,
-        _ => 1,
-    };
+    let n = opts.samples;
     let shade = |o: DVec3, d: DVec3, rng: &mut SplitMix64| -> (Rgb, u64, bool) {
         let Some(hit) = lit.tracer.intersect(o, d) else {
             return (
@@ -201,165 +479,21 @@ pub fn render_frame(
                 false,
             );
         };
-        let mut l = lit.lit.radiance(g, hit.prim, hit.bary, d);
-        let mesh = lit.mesh_of[hit.prim] as usize;
-        if lit.scene.meshes[mesh].hints.diffuse_only {
-            return (l, 0, false);
-        }
-        let k = g.material[hit.prim] as usize;
-        let surface = &ps.materials[k];
-        let kd = lit.lit.albedo(g, hit.prim, hit.bary, d);
-        let (p, frame, uv) = lit.tracer.shading_point(o, d, &hit);
-        let wo = -d;
-        let frame = if surface.two_sided() && wo.dot(frame.n) < 0.0 {
-            frame.flipped()
-        } else {
-            frame
+        let l = lit.lit.radiance(g, hit.prim, hit.bary, d);
+        let points = match opts.method {
+            FrameMethod::Regular => FramePoints::Regular,
+            FrameMethod::Ck => FramePoints::Ck {
+                seed: rng.next_u64(),
+            },
+            FrameMethod::Progressive { frames } => FramePoints::Progressive { first: 0, frames },
         };
-        let wo_local = frame.to_local(wo);
-        // The incident light: this object's probe, else the nearest, else the environment.
-        let probe = probe_of_mesh[mesh].map(|i| &light.probes[i]).or_else(|| {
-            light.probes.iter().min_by(|a, b| {
-                a.centre
-                    .distance_squared(p)
-                    .total_cmp(&b.centre.distance_squared(p))
-            })
-        });
-        let env_light: Option<(&CubePyramid, &[BoundingPlane], DVec3)> = match probe {
-            Some(pr) => Some((&pr.pyramid, &pr.planes, p - pr.centre)),
-            None => light.environment.map(|env| (env, &[][..], DVec3::ZERO)),
+        let surface = SurfaceHit {
+            prim: hit.prim,
+            bary: hit.bary,
+            d,
         };
-        // The mirror buffer, for the reflector's in-plane triangles.
-        let mirror = mirror_of_mesh[mesh]
-            .map(|i| &mirrors[i])
-            .filter(|m| m.reflector.in_plane[hit.prim - first_prim[mesh]]);
-        if env_light.is_none() && mirror.is_none() && see_through_of_mesh[mesh].is_none() {
-            return (l, 0, false);
-        }
-        let see_through = see_through_of_mesh[mesh].map(|i| &see_throughs[i]);
-        // A view buffer's filtered radiance for a sample along `wi` (None when it leaves it).
-        let read_view = |v: &ViewBuffer, wi: DVec3, pdf: Option<f64>, total: usize, ck: bool| {
-            let ((x, y), found) = v.locate(p, wi)?;
-            let lod = pdf.map_or(0.0, |pd| {
-                let bias = if ck { 1.0 } else { FOOTPRINT_LEVEL_BIAS };
-                v.level(p, wi, found, 1.0 / (total as f64 * pd), bias)
-            });
-            Some(v.sample(x, y, lod))
-        };
-        // The filtered radiance of a sample along `wi` drawn with density `pdf` (None: Dirac)
-        // out of `total`; `ck` picks Colbert–Křivánek's level instead of the footprint's.
-        let fetch = |wi: DVec3, pdf: Option<f64>, total: usize, ck: bool| -> Rgb {
-            if let Some(m) = mirror {
-                if let Some(c) = read_view(&m.view, wi, pdf, total, ck) {
-                    return c;
-                }
-            }
-            if let Some(v) = see_through {
-                if wi.dot(frame.n) * wo.dot(frame.n) < 0.0 {
-                    if let Some(c) = read_view(v, wi, pdf, total, ck) {
-                        return c;
-                    }
-                }
-            }
-            match env_light {
-                Some((pyramid, planes, rel)) => {
-                    let face = pyramid.base_size();
-                    let lod = pdf.map_or(0.0, |pd| {
-                        if ck {
-                            ck_level_at(pd, total, face, wi)
-                        } else {
-                            footprint_level(1.0 / (total as f64 * pd), wi, face)
-                        }
-                    });
-                    let dir = if planes.is_empty() {
-                        wi
-                    } else {
-                        corrected_direction(planes, rel, wi)
-                    };
-                    Rgb(pyramid.sample(dir, lod))
-                }
-                None => ps.environment.as_ref().map_or(Rgb::ZERO, |e| e.eval(wi)),
-            }
-        };
-        let n = opts.samples;
-        let mut glossy = Rgb::ZERO;
-        let mut lookups = 0u64;
-        let with_bsdf = |f: &mut dyn FnMut(&dyn Bsdf)| match &thin[k] {
-            Some(m) => {
-                let uv2 = [Vec2::new(uv[0] as f32, uv[1] as f32); 2];
-                if m.with_bsdf_at(&lit.scene.textures, &uv2, &mut *f).is_err() {
-                    surface.with_bsdf(uv, f);
-                }
-            }
-            None => surface.with_bsdf(uv, f),
-        };
-        let mut view_dependent = true;
-        with_bsdf(&mut |bsdf| {
-            // A Lambertian surface the light map covers has no view-dependent part left.
-            if bsdf.flags().diffuse_only() && kd != Rgb::ZERO {
-                view_dependent = false;
-                return;
-            }
-            let to_world = |v: DVec3| frame.to_world(v);
-            match opts.method {
-                FrameMethod::Regular => {
-                    let (c, k) = integrate_warp(
-                        bsdf,
-                        kd,
-                        to_world,
-                        wo_local,
-                        n,
-                        |i| fibonacci_point(i, n),
-                        |wi, pdf| fetch(wi, pdf, n, false),
-                    );
-                    glossy = c;
-                    lookups = k as u64;
-                }
-                FrameMethod::Ck => {
-                    let pts: Vec<(f64, f64)> =
-                        (0..n).map(|_| (rng.next_f64(), rng.next_f64())).collect();
-                    let (c, k) = integrate_warp(
-                        bsdf,
-                        kd,
-                        to_world,
-                        wo_local,
-                        n,
-                        |i| pts[i],
-                        |wi, pdf| fetch(wi, pdf, n, true),
-                    );
-                    glossy = c;
-                    lookups = k as u64;
-                }
-                FrameMethod::Progressive { .. } => {
-                    // Frame f of `frames`: the set rotated by an R2 offset; the level of the
-                    // accumulated count f·n, so the filtering shrinks as frames accumulate.
-                    let mut acc = Rgb::ZERO;
-                    for f in 0..frames {
-                        let off = r2(f);
-                        let total = n * (f + 1);
-                        let (c, k) = integrate_warp(
-                            bsdf,
-                            kd,
-                            to_world,
-                            wo_local,
-                            n,
-                            |i| {
-                                let (u, v) = fibonacci_point(i, n);
-                                ((u + off.0).fract(), (v + off.1).fract())
-                            },
-                            |wi, pdf| fetch(wi, pdf, total, false),
-                        );
-                        acc += c;
-                        lookups += k as u64;
-                    }
-                    glossy = acc * (1.0 / frames as f64);
-                }
-            }
-        });
-        if glossy.is_finite() {
-            l += glossy.map(|c| c.max(0.0));
-        }
-        (l, lookups, view_dependent)
+        let (glossy, lookups, vd) = view_dependent(lit, light, &buffers, &surface, n, points);
+        (l + glossy, lookups, vd)
     };
     let seed = opts.seed;
     let spp = opts.spp;
@@ -382,9 +516,9 @@ pub fn render_frame(
         })
         .collect();
     let mut stats = FrameStats {
-        mirrors: mirrors.len(),
-        see_throughs: see_throughs.len(),
-        mirror_seconds,
+        mirrors: buffers.mirrors.len(),
+        see_throughs: buffers.see_throughs.len(),
+        mirror_seconds: buffers.seconds,
         ..FrameStats::default()
     };
     let data = rows
@@ -398,10 +532,112 @@ pub fn render_frame(
     Ok((Image::from_data(w, h, data)?, stats))
 }
 
-/// The f-th point of the R2 sequence (Roberts 2018): the per-frame rotation of the set.
-fn r2(f: usize) -> (f64, f64) {
-    const A1: f64 = 0.754_877_666_246_692_7;
-    const A2: f64 = 0.569_840_290_998_053_3;
-    let (u, v) = (f as f64 * A1, f as f64 * A2);
-    (u - u.floor(), v - v.floor())
+/// The light-mapped G-buffer shading ([`shade_gbuffer`]) plus the view-dependent part
+/// ([`view_dependent`]) of every G-buffer pixel, k×k G-buffer pixels box-averaged into each of
+/// the w×h output pixels: the CPU twin of lustre-gpu's view-dependent pass. The rays are the
+/// G-buffer pixel centres' (as [`shade_gbuffer`]); CK seeds pixel (x, y) of the G-buffer with
+/// [`pixel_seed`]`(x, y, seed)`; `frame` is the progressive frame shaded (frames `0..=frame`
+/// averaged when `accumulate`, else frame `frame` alone). Errors as [`shade_gbuffer`], and on
+/// a sample count outside 1..=[`MAX_SAMPLES`].
+#[allow(clippy::too_many_arguments)]
+pub fn shade_gbuffer_view_dependent(
+    lit: &LitScene,
+    light: &FrameLight,
+    buffers: &FrameBuffers,
+    camera: &PathCamera,
+    gb: &GBuffer,
+    k: u32,
+    opts: &GBufferViewOptions,
+) -> Result<(Image, FrameStats)> {
+    let ps = lit.path_scene;
+    let g = &ps.geometry;
+    let base = shade_gbuffer(lit.lit, g, ps.environment.as_ref(), camera, gb, k)?;
+    let n = opts.samples;
+    if n == 0 || n > MAX_SAMPLES {
+        return Err(ShadeError::Parameter(format!(
+            "{n} glossy samples per pixel is outside 1..={MAX_SAMPLES}"
+        )));
+    }
+    let ku = k as usize;
+    let (w, h) = (base.width, base.height);
+    let rows: Vec<([f32; 3], u64, u64)> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let mut sum = Rgb::ZERO;
+            let (mut hits, mut lookups) = (0u64, 0u64);
+            for j in 0..ku {
+                for s in 0..ku {
+                    let (gx, gy) = (x * ku + s, y * ku + j);
+                    let gi = gy * gb.width + gx;
+                    let prim = gb.prim[gi];
+                    if prim == SKY {
+                        continue;
+                    }
+                    let d = camera.direction(gx as f64 + 0.5, gy as f64 + 0.5, gb.width, gb.height);
+                    let [b1, b2] = gb.bary[gi].map(f64::from);
+                    let hit = SurfaceHit {
+                        prim: prim as usize,
+                        bary: [1.0 - b1 - b2, b1, b2],
+                        d,
+                    };
+                    let points = match opts.method {
+                        FrameMethod::Regular => FramePoints::Regular,
+                        FrameMethod::Ck => FramePoints::Ck {
+                            seed: pixel_seed(gx, gy, opts.seed),
+                        },
+                        FrameMethod::Progressive { frames } => {
+                            FramePoints::Progressive { first: 0, frames }
+                        }
+                    };
+                    let (c, l, vd) = view_dependent(lit, light, buffers, &hit, n, points);
+                    sum += c;
+                    hits += u64::from(vd);
+                    lookups += l;
+                }
+            }
+            let c = (sum / (ku * ku) as f64).0.map(|c| c as f32);
+            (c, hits, lookups)
+        })
+        .collect();
+    let mut stats = FrameStats {
+        mirrors: buffers.mirrors.len(),
+        see_throughs: buffers.see_throughs.len(),
+        mirror_seconds: buffers.seconds,
+        ..FrameStats::default()
+    };
+    let data = rows
+        .into_iter()
+        .zip(&base.data)
+        .map(|((c, hits, n), b)| {
+            stats.glossy_hits += hits;
+            stats.lookups += n;
+            std::array::from_fn(|ch| b[ch] + c[ch])
+        })
+        .collect();
+    Ok((Image::from_data(w, h, data)?, stats))
+}
+
+/// Options of [`shade_gbuffer_view_dependent`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GBufferViewOptions {
+    /// Glossy samples per G-buffer pixel.
+    pub samples: usize,
+    /// Integration method (`Progressive { frames }`: frames 0..frames averaged).
+    pub method: FrameMethod,
+    /// Seed of the random method.
+    pub seed: u64,
+}
+
+/// The f-th point of the R2 sequence (Roberts 2018), the per-frame rotation of the set, on the
+/// 2⁻²⁴ grid: (f·a1, f·a2) mod 1 with a1, a2 = 1/g, 1/g² (g the plastic number) rounded to
+/// 24 bits.
+pub fn r2_bits(f: usize) -> (u32, u32) {
+    const A1: u32 = 12_664_746;
+    const A2: u32 = 9_560_334;
+    let f = f as u32;
+    (
+        f.wrapping_mul(A1) & 0xff_ffff,
+        f.wrapping_mul(A2) & 0xff_ffff,
+    )
 }

@@ -43,15 +43,22 @@ use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::{hammersley, SplitMix64};
 use std::f64::consts::PI;
 
-/// 1/φ = (√5 − 1)/2, the golden-ratio step of [`fibonacci_point`].
-const INV_GOLDEN: f64 = 0.618_033_988_749_894_9;
+/// 1/φ = (√5 − 1)/2, the golden-ratio step of [`fibonacci_point`], rounded to 24 bits
+/// (round(2²⁴/φ)).
+const INV_GOLDEN_24: u32 = 10_368_890;
 
-/// Point i of the n-point Fibonacci lattice in [0, 1)²: ((i + ½)/n, frac(½ + i/φ)).
+/// Point i of the n-point Fibonacci lattice in [0, 1)²: ((i + ½)/n, frac(½ + i/φ)), the second
+/// coordinate computed on the 2⁻²⁴ grid ((2²³ + i·round(2²⁴/φ)) mod 2²⁴ / 2²⁴), so that an f32
+/// GPU twin reproduces it bit for bit (the rough dielectric splits its bits).
 #[inline]
 pub fn fibonacci_point(i: usize, n: usize) -> (f64, f64) {
+    let v = (i as u32)
+        .wrapping_mul(INV_GOLDEN_24)
+        .wrapping_add(0x80_0000)
+        & 0xff_ffff;
     (
         (i as f64 + 0.5) / n.max(1) as f64,
-        (0.5 + i as f64 * INV_GOLDEN).fract(),
+        f64::from(v) / 16_777_216.0,
     )
 }
 

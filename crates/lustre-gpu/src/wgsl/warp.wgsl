@@ -1,15 +1,17 @@
 // module warp: regular sampling through a model's own sampling warp, here the rough
 // conductor's (microfacet.wgsl, unit Fresnel). CPU twins: lustre_shade::warp::{fibonacci_point,
-// shade_regular_warp}. Equations: the Fibonacci lattice u_i = ((i + ½)/n, frac(½ + i/φ));
+// shade_regular_warp}. Equations: the Fibonacci lattice u_i = ((i + ½)/n, frac(½ + i/φ)) (the
+// second coordinate on the 2⁻²⁴ grid, as the CPU computes it);
 // ωi = warp(u_i) with density p; Ω = 1/(n p) read at the footprint level ½ log2(Ω/Ωp(ωi)) − ½
 // (mip.wgsl); estimate (1/n) Σ L(ωi) f cos θi / p (000 Eq. 4.4).
 
-// 1/φ, the golden-ratio step.
-const INV_GOLDEN: f32 = 0.6180339887498949;
+// 1/φ, the golden-ratio step, on the 2⁻²⁴ grid: round(2²⁴/φ).
+const INV_GOLDEN_24: u32 = 10368890u;
 
 // warp::fibonacci_point: point i of the n-point Fibonacci lattice in [0, 1)².
 fn fibonacci_point(i: u32, n: u32) -> vec2<f32> {
-    return vec2<f32>((f32(i) + 0.5) / f32(max(n, 1u)), fract(0.5 + f32(i) * INV_GOLDEN));
+    let v = (i * INV_GOLDEN_24 + 0x800000u) & 0xffffffu;
+    return vec2<f32>((f32(i) + 0.5) / f32(max(n, 1u)), f32(v) * (1.0 / 16777216.0));
 }
 
 // warp::shade_regular_warp for the rough conductor with unit Fresnel and reflectance: `budget`

@@ -1,0 +1,105 @@
+// module rough_plastic: kind 2, a rough dielectric coating over a diffuse base. CPU twin:
+// lustre_brdf::models::rough_plastic::RoughPlastic::{eval, pdf, sample}. Equations (Mitsuba's
+// roughplastic): f = R_s F(ωo·h) D G / (4 cos θi cos θo) + ρ' T(cos θi) T(cos θo) / (π η²),
+// ρ' = ρ/(1 − Fdr) (or ρ/(1 − ρ Fdr) when nonlinear); sampling picks the glossy lobe with
+// p_s = (1 − T(cos θo)) w_s / ((1 − T) w_s + T (1 − w_s)) (w_s the specular weight), else the
+// cosine lobe (microfacet sample_with_diffuse / pdf_with_diffuse).
+// The 64-entry external transmittance table T(μ) (μ = i/63, linearly interpolated) does not fit
+// the record: it lives in the pass's table buffer, read through `bsdf_table(i)`, which every
+// pass that imports this module defines.
+// Parameters (pack_rough_plastic): p0 = (α, distribution, η, Fdr), p1 = (ρ rgb, w_s),
+// p2 = (R_s rgb, nonlinear 0/1), p3 = (first table entry (exact as f32), 0, 0, 0).
+
+struct RoughPlastic {
+    mf: Microfacet,
+    eta: f32,
+    fdr: f32,
+    diffuse: vec3<f32>,
+    specular_weight: f32,
+    specular: vec3<f32>,
+    nonlinear: bool,
+    table: u32,
+}
+
+const ROUGH_PLASTIC_TABLE: u32 = 64u;
+
+fn rough_plastic_unpack(p: array<vec4<f32>, 8>) -> RoughPlastic {
+    return RoughPlastic(Microfacet(p[0].x, p[0].x, u32(p[0].y)), p[0].z, p[0].w, p[1].xyz, p[1].w,
+                        p[2].xyz, p[2].w > 0.5, u32(p[3].x));
+}
+
+// RoughPlastic::transmittance.
+fn rough_plastic_transmittance(m: RoughPlastic, mu: f32) -> f32 {
+    let x = clamp(mu, 0.0, 1.0) * f32(ROUGH_PLASTIC_TABLE - 1u);
+    let i = min(u32(x), ROUGH_PLASTIC_TABLE - 2u);
+    let t = x - f32(i);
+    return bsdf_table(m.table + i) * (1.0 - t) + bsdf_table(m.table + i + 1u) * t;
+}
+
+fn rough_plastic_prob_specular(m: RoughPlastic, wo: vec3<f32>) -> f32 {
+    let t = rough_plastic_transmittance(m, wo.z);
+    let ps = (1.0 - t) * m.specular_weight;
+    let pd = t * (1.0 - m.specular_weight);
+    if (ps + pd > 0.0) {
+        return ps / (ps + pd);
+    }
+    return 0.0;
+}
+
+fn rough_plastic_eval(m: RoughPlastic, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    if (!(wi.z > 0.0 && wo.z > 0.0)) {
+        return vec3<f32>(0.0);
+    }
+    let h = normalize(wi + wo);
+    let d = microfacet_d(m.mf, h);
+    var spec = 0.0;
+    if (d > 0.0) {
+        let f = fresnel_dielectric(dot(wo, h), m.eta).x;
+        spec = f * d * microfacet_g1(m.mf, wi, h) * microfacet_g1(m.mf, wo, h) / (4.0 * wi.z * wo.z);
+    }
+    var base: vec3<f32>;
+    if (m.nonlinear) {
+        base = m.diffuse / (vec3<f32>(1.0) - m.diffuse * m.fdr);
+    } else {
+        base = m.diffuse / (1.0 - m.fdr);
+    }
+    let t = rough_plastic_transmittance(m, wi.z) * rough_plastic_transmittance(m, wo.z);
+    return m.specular * spec + base * (1.0 / (PI * m.eta * m.eta) * t);
+}
+
+fn rough_plastic_pdf(m: RoughPlastic, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
+    if (!(wi.z > 0.0 && wo.z > 0.0)) {
+        return 0.0;
+    }
+    let ps = rough_plastic_prob_specular(m, wo);
+    let h = normalize(wi + wo);
+    let spec = microfacet_d(m.mf, h) * microfacet_g1(m.mf, wo, h) / (4.0 * wo.z);
+    return ps * spec + (1.0 - ps) * wi.z / PI;
+}
+
+fn rough_plastic_sample(m: RoughPlastic, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
+    if (!(wo.z > 0.0)) {
+        return no_sample();
+    }
+    let ps = rough_plastic_prob_specular(m, wo);
+    var wi: vec3<f32>;
+    if (u.x < ps) {
+        let u1 = clamp(u.x / ps, 0.0, ONE_MINUS_EPS);
+        let mv = microfacet_sample_visible(m.mf, wo, u1, u.y);
+        if (mv.z == 0.0) {
+            return no_sample();
+        }
+        wi = reflect_about(wo, mv);
+    } else {
+        let u1 = clamp((u.x - ps) / (1.0 - ps), 0.0, ONE_MINUS_EPS);
+        wi = cosine_hemisphere(u1, u.y);
+    }
+    if (!(wi.z > 0.0)) {
+        return no_sample();
+    }
+    let pdf = rough_plastic_pdf(m, wi, wo);
+    if (!(pdf > 0.0 && pdf <= 3.4e38)) {
+        return no_sample();
+    }
+    return BsdfSample(wi, pdf, rough_plastic_eval(m, wi, wo), 0u);
+}

@@ -1,0 +1,261 @@
+//! The view-dependent pass of the walkthrough frame on the GPU (`frame_shade.wgsl`) against its
+//! CPU twin `shade_gbuffer_view_dependent`, on the same read-back G-buffer of the built-in room
+//! (light maps baked small and fast, probes captured on the CPU at 32² and uploaded, the floor's
+//! mirror buffer and the frosted glass's see-through buffer uploaded): regular, CK and 4
+//! progressive frames at ≥ 90 dB on lavapipe (issue 11 §7). The room's fitted gold sphere
+//! (`MaterialKind::Spec`, gpu-fits' models) is given a GPU-shadable stand-in: a rough gold
+//! conductor. Fails (does not skip) without an adapter.
+
+use lustre_brdf::rgb::Rgb;
+use lustre_gpu::frame_shade::{pack_material, FrameShadeOptions, KIND_ROUGH_PLASTIC};
+use lustre_gpu::{
+    FrameShadePass, FrameShadeScene, FrameShadeTarget, GBufferTarget, GpuContext, GpuViewBuffer,
+    LightmapFrameScene, LightmapRenderer, ShadeTarget,
+};
+use lustre_scene::lightmap::{build_atlas, AtlasOptions};
+use lustre_scene::material::{Distribution, TexturedRgb, TexturedScalar};
+use lustre_scene::{Material, MaterialKind};
+use lustre_shade::bake::render::Lightmapped;
+use lustre_shade::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Denoiser};
+use lustre_shade::frame::{
+    shade_gbuffer_view_dependent, FrameBuffers, FrameLight, FrameMethod, GBufferViewOptions,
+};
+use lustre_shade::metrics::psnr;
+use lustre_shade::path::{PathOptions, PathTracer};
+use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
+use lustre_shade::reference::{path_camera, path_scene};
+
+fn ctx() -> GpuContext {
+    GpuContext::new().unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The built-in room, its gold sphere as a rough gold conductor.
+fn room() -> lustre_scene::Scene {
+    let mut scene = lustre_scene::builtin::room().expect("room");
+    for m in &mut scene.materials {
+        if let MaterialKind::Spec(_) = m.kind {
+            *m = Material::new(
+                m.name.clone(),
+                MaterialKind::RoughConductor {
+                    eta: Rgb::new(0.143, 0.374, 1.442),
+                    k: Rgb::new(3.983, 2.385, 1.603),
+                    specular: TexturedRgb::constant(Rgb::ONE),
+                    alpha_u: TexturedScalar::constant(0.15),
+                    alpha_v: TexturedScalar::constant(0.15),
+                    distribution: Distribution::Ggx,
+                },
+            );
+        }
+    }
+    scene
+}
+
+#[test]
+fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
+    let ctx = ctx();
+    let mut scene = room();
+    let (atlas, _) = build_atlas(
+        &mut scene,
+        &AtlasOptions {
+            texels_per_metre: 4.0,
+            ..AtlasOptions::default()
+        },
+    )
+    .expect("atlas");
+    let bake = BakeOptions {
+        spp: 1,
+        bounces: 2,
+        seed: 5,
+        denoiser: Denoiser::None,
+        ..BakeOptions::default()
+    };
+    let dir = tempfile::tempdir().expect("tempdir");
+    bake_tiles(&scene, &atlas, &bake, dir.path(), None, &|_, _| {}).expect("bake");
+    let pages = assemble(&scene, &atlas, &bake, dir.path())
+        .expect("assemble")
+        .pages;
+    let (ps, _) = path_scene(&scene).expect("path scene");
+    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
+    let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
+    let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit");
+    let popts = ProbeOptions {
+        face_size: 32,
+        supersample: 1,
+        plane_rays: 16,
+    };
+    let probes: Vec<_> = (0..scene.meshes.len())
+        .filter(|&m| scene.meshes[m].hints.probe)
+        .map(|m| capture_probe(&lit, m, &popts).expect("probe"))
+        .collect();
+    assert!(probes.len() >= 2, "the room has its probe objects");
+    let light = FrameLight {
+        probes: &probes,
+        environment: None,
+    };
+    let (w, h, k) = (96usize, 64usize, 1u32);
+    let camera = path_camera(&scene, None, w as u32, h as u32).expect("camera");
+    // The GPU G-buffer and light-map shading, kept on the GPU.
+    let renderer = LightmapRenderer::new(&ctx).expect("passes");
+    let up = LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages).expect("upload");
+    let target = GBufferTarget::new(&ctx, w as u32, h as u32).expect("gbuffer");
+    let base = ShadeTarget::new(&ctx, w as u32, h as u32).expect("target");
+    renderer
+        .draw(&ctx, &up, &camera, k, &target, &base)
+        .expect("draw");
+    let gb = target.read_back(&ctx).expect("gbuffer readback");
+    // The view buffers, through the GPU layout and back (so both sides read the same f32s).
+    let mut buffers = FrameBuffers::render(&lit, &light, &camera, w, h).expect("buffers");
+    assert_eq!(buffers.mirrors.len(), 1, "the floor");
+    assert_eq!(buffers.see_throughs.len(), 1, "the frosted glass");
+
+    for m in &mut buffers.mirrors {
+        m.view = GpuViewBuffer::upload(&ctx, &m.view)
+            .and_then(|g| g.read_back(&ctx))
+            .expect("mirror round trip");
+    }
+    for v in &mut buffers.see_throughs {
+        *v = GpuViewBuffer::upload(&ctx, v)
+            .and_then(|g| g.read_back(&ctx))
+            .expect("see-through round trip");
+    }
+    let gpu_scene = FrameShadeScene::upload(&ctx, &lit, &light, &buffers).expect("frame scene");
+    assert!(gpu_scene
+        .materials
+        .iter()
+        .any(|m| m.kind == KIND_ROUGH_PLASTIC));
+    let pass = FrameShadePass::new(&ctx).expect("compile");
+    let out = FrameShadeTarget::new(&ctx, w as u32, h as u32, k).expect("output");
+    let samples = 8;
+    let seed = 11;
+    for (name, method) in [
+        ("regular", FrameMethod::Regular),
+        ("CK", FrameMethod::Ck),
+        (
+            "progressive (4 frames)",
+            FrameMethod::Progressive { frames: 4 },
+        ),
+    ] {
+        let frames = match method {
+            FrameMethod::Progressive { frames } => frames,
+            _ => 1,
+        };
+        for frame in 0..frames {
+            let opts = FrameShadeOptions {
+                samples,
+                method,
+                frame,
+                seed,
+            };
+            pass.shade(&ctx, &gpu_scene, &target, &base, &camera, k, &opts, &out)
+                .expect("shade");
+        }
+        let gpu = out.read_back(&ctx).expect("readback");
+        let stats = out.stats(&ctx).expect("stats");
+        let (cpu, cpu_stats) = shade_gbuffer_view_dependent(
+            &lit,
+            &light,
+            &buffers,
+            &camera,
+            &gb,
+            k,
+            &GBufferViewOptions {
+                samples: samples as usize,
+                method,
+                seed,
+            },
+        )
+        .expect("cpu twin");
+        let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
+        let peak = cpu.data.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
+        eprintln!(
+            "{name}: GPU vs CPU twin {db:.1} dB ({w}×{h}, n = {samples}, peak {peak:.2}); \
+             glossy pixels GPU {} CPU {}, lookups GPU {} CPU {}",
+            stats.glossy_hits, cpu_stats.glossy_hits, stats.lookups, cpu_stats.lookups
+        );
+        assert!(db >= 90.0, "{name}: {db} dB");
+        assert_eq!(stats.glossy_hits, cpu_stats.glossy_hits, "{name}");
+        assert!(
+            cpu_stats.glossy_hits > (w * h / 4) as u64,
+            "{name}: glossy pixels"
+        );
+    }
+    // 2×2 supersampling: the same G-buffer size, a quarter of the output pixels.
+    let (w2, h2, k2) = (w as u32 / 2, h as u32 / 2, 2u32);
+    let base2 = ShadeTarget::new(&ctx, w2, h2).expect("target");
+    renderer
+        .draw(&ctx, &up, &camera, k2, &target, &base2)
+        .expect("draw k = 2");
+    let out2 = FrameShadeTarget::new(&ctx, w2, h2, k2).expect("output");
+    let opts = FrameShadeOptions {
+        samples,
+        method: FrameMethod::Regular,
+        frame: 0,
+        seed,
+    };
+    pass.shade(&ctx, &gpu_scene, &target, &base2, &camera, k2, &opts, &out2)
+        .expect("shade k = 2");
+    let gpu = out2.read_back(&ctx).expect("readback");
+    let (cpu, _) = shade_gbuffer_view_dependent(
+        &lit,
+        &light,
+        &buffers,
+        &camera,
+        &gb,
+        k2,
+        &GBufferViewOptions {
+            samples: samples as usize,
+            method: FrameMethod::Regular,
+            seed,
+        },
+    )
+    .expect("cpu twin");
+    let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
+    eprintln!("regular, 2×2 supersampled: GPU vs CPU twin {db:.1} dB ({w2}×{h2})");
+    assert!(db >= 90.0, "k = 2: {db} dB");
+    // Bad input: a sample count of 0 or above the limit, sizes that do not agree.
+    for bad in [0, 257] {
+        let o = FrameShadeOptions {
+            samples: bad,
+            ..opts
+        };
+        let err = pass
+            .shade(&ctx, &gpu_scene, &target, &base, &camera, k, &o, &out)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("samples"), "{err}");
+    }
+    let err = pass
+        .shade(&ctx, &gpu_scene, &target, &base, &camera, k2, &opts, &out)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("do not agree"), "{err}");
+}
+
+#[test]
+fn materials_the_gpu_cannot_shade_are_named() {
+    let scene = lustre_scene::builtin::room().expect("room");
+    let gold = scene
+        .materials
+        .iter()
+        .find(|m| matches!(m.kind, MaterialKind::Spec(_)))
+        .expect("the fitted gold");
+    let err = pack_material(gold, &mut vec![]).unwrap_err().to_string();
+    assert!(
+        err.contains("gold-paint") && err.contains("not on the GPU"),
+        "{err}"
+    );
+    let mut bumpy = scene.materials[6].clone();
+    bumpy.normal_map = Some(lustre_scene::material::NormalMap {
+        texture: lustre_scene::material::TextureRef {
+            texture: 0,
+            uv_set: 0,
+        },
+        scale: 1.0,
+    });
+    let err = pack_material(&bumpy, &mut vec![]).unwrap_err().to_string();
+    assert!(
+        err.contains("brushed-aluminium") && err.contains("normal-mapped"),
+        "{err}"
+    );
+}
