@@ -47,7 +47,6 @@ pub use gbuffer::{DrawOptions, GBufferPass, GBufferTarget, GpuGeometry, GBUFFER_
 pub use frame_shade::{
     FrameShadeOptions, FrameShadePass, FrameShadeScene, FrameShadeTarget, GpuBsdf,
 };
-pub use gbuffer::{GBufferPass, GBufferTarget, GpuGeometry, GBUFFER_WGSL};
 pub use lightmap_shade::{
     GpuLightmapScene, LightmapFrameScene, LightmapRenderer, LightmapShadePass, ShadeTarget,
     LIGHTMAP_SHADE_WGSL,
