@@ -22,6 +22,7 @@ pub mod context;
 pub mod contract;
 pub mod cube;
 pub mod error;
+pub mod fit_models;
 pub mod gbuffer;
 pub mod lightmap_shade;
 pub mod packed;

@@ -91,8 +91,47 @@ pub const WARP: Module = Module {
     deps: &[&TYPES, &FRAME, &MIP, &MICROFACET],
 };
 
+/// `BsdfSample`, the result of every fitted model's `<model>_sample` (`lustre_brdf::bsdf::
+/// BsdfSample`).
+pub const BSDF_SAMPLE: Module = Module {
+    name: "bsdf_sample",
+    source: include_str!("wgsl/bsdf_sample.wgsl"),
+    deps: &[],
+};
+
+/// Component selection, cosine sampling and luminance of the fitted models' mixtures.
+pub const MIXTURE: Module = Module {
+    name: "mixture",
+    source: include_str!("wgsl/mixture.wgsl"),
+    deps: &[&TYPES, &BSDF_SAMPLE],
+};
+
+/// The Beckmann and GGX Cook-Torrance fits (kinds 17, 18): `cook_torrance_{unpack, eval, pdf,
+/// sample}` (`fit_models::pack_cook_torrance`).
+pub const COOK_TORRANCE: Module = Module {
+    name: "cook_torrance",
+    source: include_str!("wgsl/cook_torrance.wgsl"),
+    deps: &[&TYPES, &FRAME, &MICROFACET, &MIXTURE, &BSDF_SAMPLE],
+};
+
+/// The SGD Cook-Torrance fits (kind 16): `sgd_{unpack, eval, pdf, sample}`, the f32 upper
+/// incomplete gamma (`fit_models::pack_sgd`).
+pub const SGD: Module = Module {
+    name: "sgd",
+    source: include_str!("wgsl/sgd.wgsl"),
+    deps: &[&COOK_TORRANCE],
+};
+
+/// The Kurt model with reflection and transmission lobes as a whole BSDF (kind 19):
+/// `kurt_{unpack, eval, pdf, sample}` (`fit_models::pack_kurt`).
+pub const KURT: Module = Module {
+    name: "kurt",
+    source: include_str!("wgsl/kurt.wgsl"),
+    deps: &[&TYPES, &FRAME, &LOBE, &MIXTURE, &BSDF_SAMPLE],
+};
+
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 10] = [
+pub const ALL: [&Module; 15] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -103,6 +142,11 @@ pub const ALL: [&Module; 10] = [
     &QMC,
     &MICROFACET,
     &WARP,
+    &BSDF_SAMPLE,
+    &MIXTURE,
+    &COOK_TORRANCE,
+    &SGD,
+    &KURT,
 ];
 
 /// The source of a pass: every module in `imports` and, transitively, the modules they use,
