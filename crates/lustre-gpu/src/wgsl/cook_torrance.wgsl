@@ -100,13 +100,13 @@ fn ct_normal_from_x(x: f32, u1: f32) -> vec3<f32> {
 
 // Ndf::sample_h for Beckmann and GGX (u2 clamped below 1).
 fn ct_sample_h(dist: u32, alpha: f32, u1: f32, u2_in: f32) -> vec3<f32> {
-    let u2 = clamp(u2_in, 0.0, ONE_MINUS_EPSILON);
+    let u2 = clamp(u2_in, 0.0, MIX_ONE_MINUS_EPSILON);
     let a2 = alpha * alpha;
     var x: f32;
     if (dist == MICROFACET_GGX) {
         x = a2 * u2 / (1.0 - u2);
     } else {
-        x = -a2 * ln_one_minus(u2);
+        x = -a2 * mix_ln_one_minus(u2);
     }
     return ct_normal_from_x(x, u1);
 }
@@ -230,9 +230,9 @@ fn ct_sample_direction(lobes: CtLobes, dist: u32, wo: vec3<f32>, u: vec2<f32>) -
     var w: array<f32, 8>;
     w[0] = 1.0 - lobes.p_spec;
     w[1] = lobes.p_spec;
-    let s = select_component(w, 2u, u.x);
+    let s = mix_select(w, 2u, u.x);
     if (s.index == 0u) {
-        return vec4<f32>(cosine_hemisphere(s.u, u.y), 1.0);
+        return vec4<f32>(mix_cosine_hemisphere(s.u, u.y), 1.0);
     }
     if (s.index != 1u) {
         return vec4<f32>(0.0);
@@ -241,7 +241,7 @@ fn ct_sample_direction(lobes: CtLobes, dist: u32, wo: vec3<f32>, u: vec2<f32>) -
     for (var l = 0u; l < 3u; l++) {
         lw[l] = lobes.w[l];
     }
-    let k = select_component(lw, lobes.count, s.u);
+    let k = mix_select(lw, lobes.count, s.u);
     if (k.index >= lobes.count) {
         return vec4<f32>(0.0);
     }
@@ -251,16 +251,16 @@ fn ct_sample_direction(lobes: CtLobes, dist: u32, wo: vec3<f32>, u: vec2<f32>) -
 
 fn cook_torrance_sample(m: CookTorrance, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
     if (!(wo.z > 0.0)) {
-        return no_sample();
+        return mix_no_sample();
     }
     let d = ct_sample_direction(m.lobes, m.dist, wo, u);
     let wi = d.xyz;
-    if (d.w == 0.0 || !(wi.z > 0.0) || !finite3(wi)) {
-        return no_sample();
+    if (d.w == 0.0 || !(wi.z > 0.0) || !mix_finite3(wi)) {
+        return mix_no_sample();
     }
     let pdf = cook_torrance_pdf(m, wi, wo);
     if (!(pdf > 0.0 && pdf <= 3.4028235e38)) {
-        return no_sample();
+        return mix_no_sample();
     }
     return BsdfSample(wi, pdf, cook_torrance_eval(m, wi, wo), 0u);
 }

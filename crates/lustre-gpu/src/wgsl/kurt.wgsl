@@ -68,7 +68,7 @@ fn kurt_lobe_sample_h(l: Lobe, u1: f32, u2: f32) -> vec3<f32> {
     let cp = cos(phi);
     let a = cp * cp / (l.mx * l.mx) + sp * sp / (l.my * l.my);
     // −ln ξ1 with ξ1 = 1 − u1, accurate for small u1.
-    let t2 = -max(ln_one_minus(u1), -87.3) / a;
+    let t2 = -max(mix_ln_one_minus(u1), -87.3) / a;
     let ct = 1.0 / sqrt(1.0 + t2);
     let st = sqrt(t2 / (1.0 + t2));
     return vec3<f32>(st * cp, st * sp, ct);
@@ -104,9 +104,9 @@ fn kurt_eval(m: Kurt, wi_in: vec3<f32>, wo_in: vec3<f32>) -> vec3<f32> {
 fn kurt_weights(m: Kurt) -> array<f32, 8> {
     var lobes = m.lobes;
     var w: array<f32, 8>;
-    w[0] = luminance(m.kd);
+    w[0] = mix_luminance(m.kd);
     for (var i = 0u; i < m.nr + m.nt; i++) {
-        w[i + 1u] = luminance(lobes[i].ks);
+        w[i + 1u] = mix_luminance(lobes[i].ks);
     }
     return w;
 }
@@ -153,33 +153,33 @@ fn kurt_sample(m: Kurt, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
     let flip = wo.z < 0.0;
     let wo_u = select(wo, mirror_z(wo), flip);
     if (!(wo_u.z > 0.0)) {
-        return no_sample();
+        return mix_no_sample();
     }
     let n = 1u + m.nr + m.nt;
-    let s = select_component(kurt_weights(m), n, u.x);
+    let s = mix_select(kurt_weights(m), n, u.x);
     if (s.index >= n) {
-        return no_sample();
+        return mix_no_sample();
     }
     var wi_u: vec3<f32>;
     if (s.index == 0u) {
-        wi_u = cosine_hemisphere(s.u, u.y);
+        wi_u = mix_cosine_hemisphere(s.u, u.y);
     } else {
         var lobes = m.lobes;
         let l = lobes[s.index - 1u];
         let h = kurt_lobe_sample_h(l, s.u, u.y);
         if (!(dot(wo_u, h) > 0.0)) {
-            return no_sample();
+            return mix_no_sample();
         }
         let r = reflect_about(wo_u, h);
         if (!(r.z > 0.0)) {
-            return no_sample();
+            return mix_no_sample();
         }
         wi_u = select(r, mirror_z(r), s.index > m.nr);
     }
     let wi = select(wi_u, mirror_z(wi_u), flip);
     let pdf = kurt_pdf(m, wi, wo);
     if (!(pdf > 0.0 && pdf <= 3.4028235e38)) {
-        return no_sample();
+        return mix_no_sample();
     }
     return BsdfSample(wi, pdf, kurt_eval(m, wi, wo), 0u);
 }

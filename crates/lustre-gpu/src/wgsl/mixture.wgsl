@@ -5,24 +5,24 @@
 // the component's warp (pbrt-v4's trick); cosine sampling r = √u1, φ = 2πu2, z = √(1 − u1).
 
 // The largest f32 below 1 (the CPU clamps to 1 − f64::EPSILON).
-const ONE_MINUS_EPSILON: f32 = 0.99999994;
+const MIX_ONE_MINUS_EPSILON: f32 = 0.99999994;
 
 // The component picked and the rescaled uniform number; index = the count when no weight is
 // positive (the CPU's None).
-struct Selected {
+struct MixSelected {
     index: u32,
     u: f32,
 }
 
 // select_component over w[0 .. n] (n ≤ 8).
-fn select_component(w_in: array<f32, 8>, n: u32, u: f32) -> Selected {
+fn mix_select(w_in: array<f32, 8>, n: u32, u: f32) -> MixSelected {
     var w = w_in;
     var total = 0.0;
     for (var i = 0u; i < n; i++) {
         total += w[i];
     }
     if (!(total > 0.0)) {
-        return Selected(n, 0.0);
+        return MixSelected(n, 0.0);
     }
     let goal = u * total;
     var acc = 0.0;
@@ -34,16 +34,16 @@ fn select_component(w_in: array<f32, 8>, n: u32, u: f32) -> Selected {
         }
         last = i;
         if (goal < acc + wi || i == n - 1u) {
-            return Selected(i, clamp((goal - acc) / wi, 0.0, ONE_MINUS_EPSILON));
+            return MixSelected(i, clamp((goal - acc) / wi, 0.0, MIX_ONE_MINUS_EPSILON));
         }
         acc += wi;
     }
     // Rounding left the goal past the last positive weight.
-    return Selected(last, ONE_MINUS_EPSILON);
+    return MixSelected(last, MIX_ONE_MINUS_EPSILON);
 }
 
 // sampling::cosine_hemisphere: density cos θ / π.
-fn cosine_hemisphere(u1: f32, u2: f32) -> vec3<f32> {
+fn mix_cosine_hemisphere(u1: f32, u2: f32) -> vec3<f32> {
     let r = sqrt(u1);
     let phi = 2.0 * PI * u2;
     return vec3<f32>(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u1, 0.0)));
@@ -51,7 +51,7 @@ fn cosine_hemisphere(u1: f32, u2: f32) -> vec3<f32> {
 
 // ln(1 − u) for u in [0, 1): below 0.1 its series −Σ uᵏ/k to k = 9 (relative error < 1e-10;
 // the f32 log near 1 has an absolute, not a relative, error), else log(1 − u).
-fn ln_one_minus(u: f32) -> f32 {
+fn mix_ln_one_minus(u: f32) -> f32 {
     if (u < 0.1) {
         return -u * (1.0 + u * (1.0 / 2.0 + u * (1.0 / 3.0 + u * (1.0 / 4.0 + u * (1.0 / 5.0
             + u * (1.0 / 6.0 + u * (1.0 / 7.0 + u * (1.0 / 8.0 + u / 9.0))))))));
@@ -60,16 +60,16 @@ fn ln_one_minus(u: f32) -> f32 {
 }
 
 // Rgb::luminance (Rec. 709 weights).
-fn luminance(c: vec3<f32>) -> f32 {
+fn mix_luminance(c: vec3<f32>) -> f32 {
     return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
 }
 
 // A failed sample (the CPU's None).
-fn no_sample() -> BsdfSample {
+fn mix_no_sample() -> BsdfSample {
     return BsdfSample(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0u);
 }
 
 // Whether every component is finite (neither NaN nor ±∞).
-fn finite3(v: vec3<f32>) -> bool {
+fn mix_finite3(v: vec3<f32>) -> bool {
     return all(abs(v) <= vec3<f32>(3.4028235e38));
 }

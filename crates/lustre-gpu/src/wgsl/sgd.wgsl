@@ -13,7 +13,8 @@
 //
 // Layout of the 32 floats (fit_models::pack_sgd): channel c = 0, 1, 2 at 10c: ρd, ρs, α, p,
 // F0, F1, λ, ln c, k, θ0 (λ = 0 and θ0 = 4: no shadowing); [30] the bits of
-// pack2x16float(α_proxy r, α_proxy g), [31] of pack2x16float(α_proxy b, 1). kap is not stored:
+// pack2x16float(α_proxy r, α_proxy g), [31] of pack2x16float(α_proxy b, 1), decoded by
+// half_to_f32. kap is not stored:
 // the packer checks that the model's kap is 1/(αΓ(1−p, α)) (every `lustre fit` SGD fit; the
 // published table to its six printed digits except chrome) and sgd_unpack computes it with
 // upper_gamma_f32.
@@ -176,6 +177,17 @@ fn sgd_d(q: SgdChannel, h: vec3<f32>) -> f32 {
     return exp(q.ln_kap - a - q.p * log(a) - log(PI) - 4.0 * log(c));
 }
 
+// A non-negative IEEE half-precision value from its 16 bits, exactly (unpack2x16float by
+// hand: the builtin needs a capability some backends lack).
+fn half_to_f32(h: u32) -> f32 {
+    let e = (h >> 10u) & 0x1fu;
+    let m = f32(h & 0x3ffu);
+    if (e == 0u) {
+        return ldexp(m, -24);
+    }
+    return ldexp(1.0 + m / 1024.0, i32(e) - 15);
+}
+
 fn sgd_unpack(p: array<vec4<f32>, 8>) -> Sgd {
     var f: array<f32, 32>;
     for (var i = 0u; i < 8u; i++) {
@@ -192,9 +204,9 @@ fn sgd_unpack(p: array<vec4<f32>, 8>) -> Sgd {
         m.ch[c] = SgdChannel(f[b], f[b + 1u], alpha, sp, ln_kap, f[b + 4u], f[b + 5u],
                              f[b + 6u], f[b + 7u], f[b + 8u], f[b + 9u]);
     }
-    let rg = unpack2x16float(bitcast<u32>(f[30]));
-    let b1 = unpack2x16float(bitcast<u32>(f[31]));
-    let proxy = vec3<f32>(rg.x, rg.y, b1.x);
+    let rg = bitcast<u32>(f[30]);
+    let proxy = vec3<f32>(half_to_f32(rg & 0xffffu), half_to_f32(rg >> 16u),
+                          half_to_f32(bitcast<u32>(f[31]) & 0xffffu));
     m.lobes = ct_lobes(proxy, vec3<f32>(f[0], f[10], f[20]), vec3<f32>(f[1], f[11], f[21]),
                        ct_same(vec3<f32>(f[2], f[12], f[22]), vec3<f32>(f[3], f[13], f[23])));
     return m;
@@ -229,16 +241,16 @@ fn sgd_pdf(m: Sgd, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
 
 fn sgd_sample(m: Sgd, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
     if (!(wo.z > 0.0)) {
-        return no_sample();
+        return mix_no_sample();
     }
     let d = ct_sample_direction(m.lobes, MICROFACET_GGX, wo, u);
     let wi = d.xyz;
-    if (d.w == 0.0 || !(wi.z > 0.0) || !finite3(wi)) {
-        return no_sample();
+    if (d.w == 0.0 || !(wi.z > 0.0) || !mix_finite3(wi)) {
+        return mix_no_sample();
     }
     let pdf = sgd_pdf(m, wi, wo);
     if (!(pdf > 0.0 && pdf <= 3.4028235e38)) {
-        return no_sample();
+        return mix_no_sample();
     }
     return BsdfSample(wi, pdf, sgd_eval(m, wi, wo), 0u);
 }
