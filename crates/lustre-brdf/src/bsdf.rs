@@ -317,6 +317,13 @@ pub trait Bsdf: Send + Sync + std::fmt::Debug {
     /// The model's promises (reciprocity, energy conservation, transmission, anisotropy).
     fn flags(&self) -> BsdfFlags;
 
+    /// The concrete model behind a `dyn Bsdf`, for code that handles particular models (the
+    /// GPU's fitted-model layouts downcast the Cook-Torrance and Kurt models); `None` for a
+    /// model that does not offer it.
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        None
+    }
+
     /// Directional albedo a(wo) = ∫ f(wi, wo) |cos θi| dωi (000 Eq. 2.6), estimated with `n`
     /// Hammersley points pushed through the model's own importance sampler. Deterministic.
     fn albedo(&self, wo: DVec3, n: usize) -> Rgb {
@@ -351,6 +358,9 @@ macro_rules! forward_bsdf {
             }
             fn flags(&self) -> BsdfFlags {
                 (**self).flags()
+            }
+            fn as_any(&self) -> Option<&dyn std::any::Any> {
+                (**self).as_any()
             }
             fn albedo(&self, wo: DVec3, n: usize) -> Rgb {
                 (**self).albedo(wo, n)

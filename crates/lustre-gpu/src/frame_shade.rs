@@ -31,6 +31,7 @@
 use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry};
 use crate::context::GpuContext;
 use crate::error::{invalid, scope_result, wgpu_error, Result};
+use crate::fit_models::pack_fit;
 use crate::gbuffer::{camera_uniform, map_read, GBufferTarget};
 use crate::lightmap_shade::ShadeTarget;
 use crate::probe_capture::GpuProbe;
@@ -475,9 +476,20 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             ))
         }
         MaterialKind::Dielectric { .. } => Err(refuse("smooth glass without its thin sheet")),
-        // The fitted models (SGD, Cook–Torrance, Kurt: kinds 16–19) are gpu-fits' `pack_*`;
-        // the lead wires them in here.
-        MaterialKind::Spec(s) => Err(refuse(&format!("the fitted spec {:?}", s.spec))),
+        // The fitted models (SGD, Cook–Torrance, Kurt: kinds 16–19).
+        MaterialKind::Spec(s) => {
+            let (kind, p) = pack_fit(s.bsdf.as_ref())
+                .map_err(|e| refuse(&format!("the spec {:?} ({e})", s.spec)))?;
+            let f = s.bsdf.flags();
+            let flags = if f.diffuse_only() {
+                FLAG_DIFFUSE_ONLY
+            } else if f.delta_only() {
+                FLAG_DELTA_ONLY
+            } else {
+                0
+            };
+            Ok(record(kind, flags, p))
+        }
     }
 }
 

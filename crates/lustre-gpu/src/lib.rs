@@ -28,6 +28,7 @@ pub mod context;
 pub mod contract;
 pub mod cube;
 pub mod error;
+pub mod fit_models;
 pub mod frame_shade;
 pub mod gbuffer;
 pub mod lightmap_shade;
@@ -36,17 +37,17 @@ pub mod probe_capture;
 pub mod pyramid;
 pub mod shade;
 pub mod timer;
-pub mod view_pass;
 pub mod view_buffer;
+pub mod view_pass;
 pub mod wgsl;
 
 pub use context::GpuContext;
 pub use cube::{CubeLevelRef, GpuCube};
 pub use error::{GpuError, Result};
-pub use gbuffer::{DrawOptions, GBufferPass, GBufferTarget, GpuGeometry, GBUFFER_WGSL};
 pub use frame_shade::{
     FrameShadeOptions, FrameShadePass, FrameShadeScene, FrameShadeTarget, GpuBsdf,
 };
+pub use gbuffer::{DrawOptions, GBufferPass, GBufferTarget, GpuGeometry, GBUFFER_WGSL};
 pub use lightmap_shade::{
     GpuLightmapScene, LightmapFrameScene, LightmapRenderer, LightmapShadePass, ShadeTarget,
     LIGHTMAP_SHADE_WGSL,
@@ -60,5 +61,5 @@ pub use pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_USAGE, PYRAMID_WGSL};
 pub use shade::shade_wgsl;
 pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHADE_PASS_WGSL};
 pub use timer::{GpuTimer, Timing};
-pub use view_pass::{GpuViewPass, ViewRender};
 pub use view_buffer::GpuViewBuffer;
+pub use view_pass::{GpuViewPass, ViewRender};

@@ -15,14 +15,12 @@
 
 use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry};
 use crate::context::GpuContext;
-use crate::error::{invalid, scope_result, wgpu_error, Result};
-use crate::gbuffer::{map_read, DrawOptions, GBufferPass, GBufferTarget};
+use crate::error::{invalid, scope_result, Result};
+use crate::gbuffer::{DrawOptions, GBufferPass, GBufferTarget};
 use crate::lightmap_shade::{buf, tex, texture_entry, LightmapFrameScene, LightmapShadePass};
 use crate::probe_capture::mesh_triangles;
 use crate::view_buffer::{level_sizes, GpuViewBuffer};
-use glam::DVec3;
-use lustre_brdf::rgb::Rgb;
-use lustre_shade::mirror::{mirror_camera, MirrorTexel, Reflector, ReflectorPlane, ViewBuffer};
+use lustre_shade::mirror::{mirror_camera, Reflector, ReflectorPlane};
 use lustre_shade::path::PathCamera;
 use lustre_shade::probe::LitScene;
 
@@ -30,7 +28,6 @@ use lustre_shade::probe::LitScene;
 pub const VIEW_GEOMETRY_WGSL: &str = include_str!("view_geometry.wgsl");
 /// The WGSL source of one radiance MIP step.
 pub const VIEW_MIP_WGSL: &str = include_str!("view_mip.wgsl");
-
 
 /// A view buffer and the G-buffer it was shaded from (kept for the CPU twin; drop it when not
 /// needed).

@@ -168,6 +168,37 @@ pub const DIELECTRIC: Module = Module {
     deps: &[&BSDF_SAMPLE, &FRESNEL],
 };
 
+/// Component selection, cosine sampling and luminance of the fitted models' mixtures.
+pub const MIXTURE: Module = Module {
+    name: "mixture",
+    source: include_str!("wgsl/mixture.wgsl"),
+    deps: &[&TYPES, &BSDF_SAMPLE],
+};
+
+/// The Beckmann and GGX Cook-Torrance fits (kinds 17, 18): `cook_torrance_{unpack, eval, pdf,
+/// sample}` (`fit_models::pack_cook_torrance`).
+pub const COOK_TORRANCE: Module = Module {
+    name: "cook_torrance",
+    source: include_str!("wgsl/cook_torrance.wgsl"),
+    deps: &[&TYPES, &FRAME, &MICROFACET, &MIXTURE, &BSDF_SAMPLE],
+};
+
+/// The SGD Cook-Torrance fits (kind 16): `sgd_{unpack, eval, pdf, sample}`, the f32 upper
+/// incomplete gamma (`fit_models::pack_sgd`).
+pub const SGD: Module = Module {
+    name: "sgd",
+    source: include_str!("wgsl/sgd.wgsl"),
+    deps: &[&COOK_TORRANCE],
+};
+
+/// The Kurt model with reflection and transmission lobes as a whole BSDF (kind 19):
+/// `kurt_{unpack, eval, pdf, sample}` (`fit_models::pack_kurt`).
+pub const KURT: Module = Module {
+    name: "kurt",
+    source: include_str!("wgsl/kurt.wgsl"),
+    deps: &[&TYPES, &FRAME, &LOBE, &MIXTURE, &BSDF_SAMPLE],
+};
+
 /// The `GpuBsdf` record and the dispatch by kind to the models' sample / eval / pdf.
 pub const BSDF: Module = Module {
     name: "bsdf",
@@ -182,11 +213,14 @@ pub const BSDF: Module = Module {
         &LAMBERT,
         &PLASTIC,
         &DIELECTRIC,
+        &SGD,
+        &COOK_TORRANCE,
+        &KURT,
     ],
 };
 
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 22] = [
+pub const ALL: [&Module; 26] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -208,6 +242,10 @@ pub const ALL: [&Module; 22] = [
     &LAMBERT,
     &PLASTIC,
     &DIELECTRIC,
+    &MIXTURE,
+    &COOK_TORRANCE,
+    &SGD,
+    &KURT,
     &BSDF,
 ];
 

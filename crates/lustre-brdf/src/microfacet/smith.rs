@@ -308,6 +308,11 @@ impl SgdG1Approx {
         Self::new(lambda, c, k, theta0)
     }
 
+    /// ln c, the form evaluation uses (finite where `c` underflows to 0).
+    pub fn ln_c(&self) -> f64 {
+        self.ln_c
+    }
+
     /// G1(θ), clamped to [0, 1].
     #[inline]
     pub fn eval(&self, theta: f64) -> f64 {

@@ -274,6 +274,10 @@ impl Bsdf for CookTorrance {
         BsdfFlags::isotropic_reflection(true, self.energy_conserving)
             .with_lobes(LobeFlags::DIFFUSE_REFLECTION | LobeFlags::GLOSSY_REFLECTION)
     }
+
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
 }
 
 #[cfg(test)]

@@ -353,6 +353,10 @@ impl Bsdf for Kurt {
             },
         }
     }
+
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
 }
 
 #[cfg(test)]

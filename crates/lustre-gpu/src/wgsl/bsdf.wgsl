@@ -1,8 +1,9 @@
 // module bsdf: the material record of the view-dependent pass and the dispatch to its models'
 // sample / eval / pdf by kind. CPU twin: lustre_gpu::frame_shade::GpuBsdf and the lustre_brdf
 // model each kind stands for. Kind codes: 0 none, 1 rough conductor, 2 rough plastic, 3 rough
-// dielectric, 4 conductor, 5 thin dielectric, 6 glTF metallic-roughness, 7 Lambert, 8 plastic, 9 dielectric; 16–19 the fitted models (gpu-fits; an unknown
-// kind samples nothing and evaluates to 0).
+// dielectric, 4 conductor, 5 thin dielectric, 6 glTF metallic-roughness, 7 Lambert, 8 plastic, 9 dielectric,
+// 16 SGD, 17/18 Beckmann/GGX Cook-Torrance, 19 Kurt (lustre_gpu::fit_models; an unknown kind
+// samples nothing and evaluates to 0).
 
 struct GpuBsdf {
     kind: u32,
@@ -48,6 +49,15 @@ fn bsdf_sample(b: GpuBsdf, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
         case 9u: {
             return dielectric_sample(dielectric_unpack(b.p), wo, u);
         }
+        case 16u: {
+            return sgd_sample(sgd_unpack(b.p), wo, u);
+        }
+        case 17u, 18u: {
+            return cook_torrance_sample(cook_torrance_unpack(b.p), wo, u);
+        }
+        case 19u: {
+            return kurt_sample(kurt_unpack(b.p), wo, u);
+        }
         default: {
             return no_sample();
         }
@@ -83,6 +93,15 @@ fn bsdf_eval(b: GpuBsdf, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
         case 9u: {
             return dielectric_eval(dielectric_unpack(b.p), wi, wo);
         }
+        case 16u: {
+            return sgd_eval(sgd_unpack(b.p), wi, wo);
+        }
+        case 17u, 18u: {
+            return cook_torrance_eval(cook_torrance_unpack(b.p), wi, wo);
+        }
+        case 19u: {
+            return kurt_eval(kurt_unpack(b.p), wi, wo);
+        }
         default: {
             return vec3<f32>(0.0);
         }
@@ -117,6 +136,15 @@ fn bsdf_pdf(b: GpuBsdf, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
         }
         case 9u: {
             return dielectric_pdf(dielectric_unpack(b.p), wi, wo);
+        }
+        case 16u: {
+            return sgd_pdf(sgd_unpack(b.p), wi, wo);
+        }
+        case 17u, 18u: {
+            return cook_torrance_pdf(cook_torrance_unpack(b.p), wi, wo);
+        }
+        case 19u: {
+            return kurt_pdf(kurt_unpack(b.p), wi, wo);
         }
         default: {
             return 0.0;

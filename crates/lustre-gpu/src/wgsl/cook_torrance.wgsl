@@ -1,0 +1,266 @@
+// module cook_torrance: the per-channel Cook-Torrance of `lustre fit` with the Beckmann or GGX
+// distribution and the closed-form Smith G1 (GPU kinds 17 and 18).
+// CPU twins: lustre_brdf::models::cook_torrance::CookTorrance::{eval, pdf, sample},
+// lustre_brdf::microfacet::ndf::Ndf::{d, sample_h, pdf_h}, lustre_brdf::microfacet::smith::
+// {g1_beckmann, g1_ggx}, lustre_brdf::microfacet::fresnel::Fresnel::eval (generalized Schlick).
+// Equations (004 Eq. III.1, III.2, V.5):
+// f = ρd/π + (ρs/π) F(ωi·h) D(θh) G1(θi) G1(θo) / (cos θi cos θo) per channel;
+// D = P22(tan²θh)/(π cos⁴θh), Beckmann P22 = e^{−x/α²}/α², GGX P22 = α²/(α² + x)²;
+// F = F0 + (1 − F0)(1 − cos θd)⁵ − F1 cos θd; G1 = 1/(1 + Λ) (microfacet.wgsl's Λ).
+// Sampling (004 §V.3.5): the diffuse lobe (cosine) with probability 1 − p_spec,
+// p_spec = ρ̄s/(ρ̄d + ρ̄s) (channel means), else a channel's distribution picked ∝ ρs (channels
+// with the same distribution share one), h with φ = 2πu1 and tan²θh from u2 (Beckmann
+// −α² ln(1 − u2), GGX α² u2/(1 − u2)), ωi = ωo reflected about h; pdf = the whole mixture,
+// (1 − p_spec) cos θi/π + p_spec Σ wₗ D_l(h) cos θh / (4 ωo·h).
+//
+// Layout of the 32 floats (fit_models::pack_cook_torrance): channel c = 0, 1, 2 at 5c:
+// ρd, ρs, α, F0, F1; [15] flags as an exact small integer: bit c set = channel c has the
+// closed-form Smith G1 (clear: G1 = 1), bit 3 set = GGX (clear: Beckmann); [16 ..] zero.
+
+struct CtChannel {
+    rho_d: f32,
+    rho_s: f32,
+    alpha: f32,
+    f0: f32,
+    f1: f32,
+    smith: u32,
+}
+
+// The sampling lobes (distinct distributions with ρs > 0) and their weights, shared with sgd.
+struct CtLobes {
+    alpha: vec3<f32>,
+    w: vec3<f32>,
+    count: u32,
+    p_spec: f32,
+}
+
+struct CookTorrance {
+    ch: array<CtChannel, 3>,
+    // MICROFACET_BECKMANN or MICROFACET_GGX.
+    dist: u32,
+    lobes: CtLobes,
+}
+
+// Fresnel::GeneralizedSchlick::eval (004 Eq. V.5); the argument clamped to [0, 1].
+fn ct_fresnel(f0: f32, f1: f32, cos_d: f32) -> f32 {
+    let c = select(0.0, min(cos_d, 1.0), cos_d > 0.0);
+    let m = 1.0 - c;
+    let m5 = (m * m) * (m * m) * m;
+    return f0 + (1.0 - f0) * m5 - f1 * c;
+}
+
+// Ndf::d for GGX: α²/(π(α² cos²θ + sin²θ)²), finite at grazing; h a unit vector.
+fn ct_ggx_d(alpha: f32, h: vec3<f32>) -> f32 {
+    if (!(h.z > 0.0)) {
+        return 0.0;
+    }
+    let c = min(h.z, 1.0);
+    let a2 = alpha * alpha;
+    let d = a2 * c * c + (h.x * h.x + h.y * h.y);
+    return a2 / (PI * d * d);
+}
+
+// Ndf::d for Beckmann: e^{−tan²θ/α²}/(π α² cos⁴θ), in logarithms (cos⁴θ underflows in f32).
+fn ct_beckmann_d(alpha: f32, h: vec3<f32>) -> f32 {
+    if (!(h.z > 0.0)) {
+        return 0.0;
+    }
+    let c = min(h.z, 1.0);
+    let a2 = alpha * alpha;
+    let x = (h.x * h.x + h.y * h.y) / (c * c);
+    return exp(-x / a2 - log(PI * a2) - 4.0 * log(c));
+}
+
+fn ct_d(dist: u32, alpha: f32, h: vec3<f32>) -> f32 {
+    if (dist == MICROFACET_GGX) {
+        return ct_ggx_d(alpha, h);
+    }
+    return ct_beckmann_d(alpha, h);
+}
+
+// g1_beckmann / g1_ggx of the direction w (cos θ = w.z > 0): 1/(1 + Λ).
+fn ct_smith_g1(dist: u32, alpha: f32, w: vec3<f32>) -> f32 {
+    if (!(w.z > 0.0)) {
+        return 0.0;
+    }
+    let l = microfacet_lambda(Microfacet(alpha, alpha, dist), w);
+    if (l < 0.0) {
+        return 0.0;
+    }
+    return 1.0 / (1.0 + l);
+}
+
+// Ndf::sample_h's last step: the unit normal with tan²θ = x and φ = 2πu1.
+fn ct_normal_from_x(x: f32, u1: f32) -> vec3<f32> {
+    let cos_t = 1.0 / sqrt(1.0 + x);
+    let sin_t = sqrt(x / (1.0 + x));
+    let phi = 2.0 * PI * u1;
+    return vec3<f32>(sin_t * cos(phi), sin_t * sin(phi), cos_t);
+}
+
+// Ndf::sample_h for Beckmann and GGX (u2 clamped below 1).
+fn ct_sample_h(dist: u32, alpha: f32, u1: f32, u2_in: f32) -> vec3<f32> {
+    let u2 = clamp(u2_in, 0.0, MIX_ONE_MINUS_EPSILON);
+    let a2 = alpha * alpha;
+    var x: f32;
+    if (dist == MICROFACET_GGX) {
+        x = a2 * u2 / (1.0 - u2);
+    } else {
+        x = -a2 * mix_ln_one_minus(u2);
+    }
+    return ct_normal_from_x(x, u1);
+}
+
+// CookTorrance::new's sampling lobes: channels whose distribution equals an earlier channel's
+// (same[c] = that channel, else c) share its lobe; lobes of zero weight dropped; p_spec from
+// the channel means.
+fn ct_lobes(alpha: vec3<f32>, rho_d: vec3<f32>, rho_s: vec3<f32>, same: vec3<u32>) -> CtLobes {
+    var out = CtLobes(vec3<f32>(0.0), vec3<f32>(0.0), 0u, 0.0);
+    var w = vec3<f32>(0.0);
+    for (var c = 0u; c < 3u; c++) {
+        w[same[c]] += rho_s[c];
+    }
+    let total = w.x + w.y + w.z;
+    if (total > 0.0) {
+        for (var c = 0u; c < 3u; c++) {
+            if (same[c] == c && w[c] > 0.0) {
+                out.alpha[out.count] = alpha[c];
+                out.w[out.count] = w[c] / total;
+                out.count += 1u;
+            }
+        }
+    }
+    let rd = (rho_d.x + rho_d.y + rho_d.z) / 3.0;
+    let rs = (rho_s.x + rho_s.y + rho_s.z) / 3.0;
+    if (rd + rs > 0.0) {
+        out.p_spec = rs / (rd + rs);
+    }
+    return out;
+}
+
+// same[c] for distributions given by their parameters (equal parameters, equal distribution).
+fn ct_same(a: vec3<f32>, b: vec3<f32>) -> vec3<u32> {
+    var same = vec3<u32>(0u, 1u, 2u);
+    if (a.y == a.x && b.y == b.x) {
+        same.y = 0u;
+    }
+    if (a.z == a.x && b.z == b.x) {
+        same.z = 0u;
+    } else if (a.z == a.y && b.z == b.y) {
+        same.z = same.y;
+    }
+    return same;
+}
+
+fn cook_torrance_unpack(p: array<vec4<f32>, 8>) -> CookTorrance {
+    var f: array<f32, 32>;
+    for (var i = 0u; i < 8u; i++) {
+        for (var j = 0u; j < 4u; j++) {
+            f[4u * i + j] = p[i][j];
+        }
+    }
+    let flags = u32(f[15]);
+    var m: CookTorrance;
+    m.dist = select(MICROFACET_BECKMANN, MICROFACET_GGX, (flags & 8u) != 0u);
+    for (var c = 0u; c < 3u; c++) {
+        let b = 5u * c;
+        m.ch[c] = CtChannel(f[b], f[b + 1u], f[b + 2u], f[b + 3u], f[b + 4u], (flags >> c) & 1u);
+    }
+    let alpha = vec3<f32>(f[2], f[7], f[12]);
+    m.lobes = ct_lobes(alpha, vec3<f32>(f[0], f[5], f[10]), vec3<f32>(f[1], f[6], f[11]),
+                       ct_same(alpha, alpha));
+    return m;
+}
+
+fn cook_torrance_eval(m: CookTorrance, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    let ci = wi.z;
+    let co = wo.z;
+    if (!(ci > 0.0 && co > 0.0)) {
+        return vec3<f32>(0.0);
+    }
+    let hv = wi + wo;
+    let h = hv / length(hv);
+    let cd = dot(wi, h);
+    var f = vec3<f32>(0.0);
+    var chs = m.ch;
+    for (var c = 0u; c < 3u; c++) {
+        let q = chs[c];
+        var spec = 0.0;
+        if (q.rho_s != 0.0) {
+            var g = 1.0;
+            if (q.smith == 1u) {
+                g = ct_smith_g1(m.dist, q.alpha, wi) * ct_smith_g1(m.dist, q.alpha, wo);
+            }
+            spec = q.rho_s * ct_fresnel(q.f0, q.f1, cd) * ct_d(m.dist, q.alpha, h) * g / (ci * co);
+        }
+        f[c] = (q.rho_d + spec) / PI;
+    }
+    return f;
+}
+
+// CookTorrance::pdf, shared with sgd: lobe l draws h with density D_l(h) cos θh of `dist`
+// with α = lobes.alpha[l] (sgd passes its GGX proxies).
+fn ct_mixture_pdf(lobes: CtLobes, dist: u32, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
+    if (!(wi.z > 0.0 && wo.z > 0.0)) {
+        return 0.0;
+    }
+    var p = (1.0 - lobes.p_spec) * wi.z / PI;
+    if (lobes.p_spec > 0.0) {
+        let h = normalize(wi + wo);
+        let od = dot(wo, h);
+        if (od > 0.0) {
+            var ph = 0.0;
+            for (var l = 0u; l < lobes.count; l++) {
+                ph += lobes.w[l] * ct_d(dist, lobes.alpha[l], h) * h.z;
+            }
+            p += lobes.p_spec * ph / (4.0 * od);
+        }
+    }
+    return p;
+}
+
+fn cook_torrance_pdf(m: CookTorrance, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
+    return ct_mixture_pdf(m.lobes, m.dist, wi, wo);
+}
+
+// The direction of CookTorrance::sample before its checks, shared with sgd: the
+// diffuse/specular choice with u.x, the lobe with the rescaled u.x, then the lobe's h (of
+// `dist` with α = lobes.alpha[l]). Returns vec4(ωi, 1), or vec4(0) for none.
+fn ct_sample_direction(lobes: CtLobes, dist: u32, wo: vec3<f32>, u: vec2<f32>) -> vec4<f32> {
+    var w: array<f32, 8>;
+    w[0] = 1.0 - lobes.p_spec;
+    w[1] = lobes.p_spec;
+    let s = mix_select(w, 2u, u.x);
+    if (s.index == 0u) {
+        return vec4<f32>(mix_cosine_hemisphere(s.u, u.y), 1.0);
+    }
+    if (s.index != 1u) {
+        return vec4<f32>(0.0);
+    }
+    var lw: array<f32, 8>;
+    for (var l = 0u; l < 3u; l++) {
+        lw[l] = lobes.w[l];
+    }
+    let k = mix_select(lw, lobes.count, s.u);
+    if (k.index >= lobes.count) {
+        return vec4<f32>(0.0);
+    }
+    let h = ct_sample_h(dist, lobes.alpha[k.index], k.u, u.y);
+    return vec4<f32>(reflect_about(wo, h), 1.0);
+}
+
+fn cook_torrance_sample(m: CookTorrance, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
+    if (!(wo.z > 0.0)) {
+        return mix_no_sample();
+    }
+    let d = ct_sample_direction(m.lobes, m.dist, wo, u);
+    let wi = d.xyz;
+    if (d.w == 0.0 || !(wi.z > 0.0) || !mix_finite3(wi)) {
+        return mix_no_sample();
+    }
+    let pdf = cook_torrance_pdf(m, wi, wo);
+    if (!(pdf > 0.0 && pdf <= 3.4028235e38)) {
+        return mix_no_sample();
+    }
+    return BsdfSample(wi, pdf, cook_torrance_eval(m, wi, wo), 0u);
+}
