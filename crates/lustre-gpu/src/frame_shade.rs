@@ -53,7 +53,9 @@ use lustre_brdf::rgb::Rgb;
 use lustre_env::cube::fetch_sources;
 use lustre_scene::material::Distribution;
 use lustre_scene::{Material, MaterialKind};
-use lustre_shade::frame::{thin_sheet, FrameBuffers, FrameLight, FrameMethod, FrameStats};
+use lustre_shade::frame::{
+    thin_sheet, FrameBuffers, FrameLight, FrameMethod, FrameStats, FrameTables,
+};
 use lustre_shade::image::Image;
 use lustre_shade::kernel::BoundingPlane;
 use lustre_shade::path::PathCamera;
@@ -618,31 +620,38 @@ impl FrameShadeScene {
             .chain(&buffers.see_throughs)
             .map(|v| GpuViewBuffer::upload(ctx, v))
             .collect::<Result<Vec<_>>>()?;
-        Self::new(ctx, lit, buffers, &probes, environment.as_ref(), &views)
+        Self::new(
+            ctx,
+            lit,
+            &buffers.tables(),
+            &probes,
+            environment.as_ref(),
+            &views,
+        )
     }
 
     /// The pass's inputs from GPU-resident probes (one per `lit` probe object, in the order of
-    /// `buffers.probe_of_mesh`), the environment's pyramid (read when there is no probe) and
-    /// view buffers (`buffers`' mirrors then see-throughs, in order). Errors: a material the
+    /// `links.probe_of_mesh`), the environment's pyramid (read when there is no probe) and
+    /// view buffers (`links`' mirrors then see-throughs, in order). Errors: a material the
     /// pass cannot shade ([`pack_material`]), too many probes or views.
     pub fn new(
         ctx: &GpuContext,
         lit: &LitScene,
-        buffers: &FrameBuffers,
+        links: &FrameTables,
         probes: &[GpuProbe],
         environment: Option<&GpuPyramid>,
         views: &[GpuViewBuffer],
     ) -> Result<Self> {
         let scene = lit.scene;
         let g = &lit.path_scene.geometry;
-        if views.len() != buffers.mirrors.len() + buffers.see_throughs.len() {
+        if views.len() != links.mirrors() + links.see_throughs {
             return Err(invalid(
                 "view buffers",
                 format!(
                     "{} given, the frame has {} mirrors and {} see-through buffers",
                     views.len(),
-                    buffers.mirrors.len(),
-                    buffers.see_throughs.len()
+                    links.mirrors(),
+                    links.see_throughs
                 ),
             ));
         }
@@ -696,13 +705,10 @@ impl FrameShadeScene {
             let ns = normals.map_or(e1.cross(e2), |n| (n[0] + n[1] + n[2]) / 3.0);
             let kd_front = lit.lit.albedo(g, prim, centroid, -ns);
             let kd_back = lit.lit.albedo(g, prim, centroid, ns);
-            let probe = buffers.probe_of_mesh[mesh].map_or(NONE, |i| i as u32);
-            let mirror = buffers
-                .mirror_at(mesh, prim)
-                .and_then(|_| buffers.mirror_of_mesh[mesh])
-                .map_or(NONE, |i| i as u32);
-            let see = buffers.see_through_of_mesh[mesh]
-                .map_or(NONE, |i| (buffers.mirrors.len() + i) as u32);
+            let probe = links.probe_of_mesh[mesh].map_or(NONE, |i| i as u32);
+            let mirror = links.mirror_at(mesh, prim).map_or(NONE, |i| i as u32);
+            let see =
+                links.see_through_of_mesh[mesh].map_or(NONE, |i| (links.mirrors() + i) as u32);
             tris.extend([
                 v4(t[0], bits(material)),
                 v4(t[1], 0.0),

@@ -39,6 +39,7 @@ pub mod shade;
 pub mod timer;
 pub mod view_buffer;
 pub mod view_pass;
+pub mod walkthrough;
 pub mod wgsl;
 
 pub use context::GpuContext;
@@ -63,3 +64,4 @@ pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHAD
 pub use timer::{GpuTimer, Timing};
 pub use view_buffer::GpuViewBuffer;
 pub use view_pass::{GpuViewPass, ViewRender};
+pub use walkthrough::{GpuFrame, GpuFrameOptions, GpuFrameTimes, GpuWalkthrough};

@@ -152,37 +152,22 @@ impl FrameBuffers {
         let probe_of_mesh: Vec<Option<usize>> = (0..meshes.len())
             .map(|m| light.probes.iter().position(|p| p.mesh as usize == m))
             .collect();
+        let (reflectors, transmissive) = view_meshes(lit);
         let t_mirror = std::time::Instant::now();
-        let mut mirrors = vec![];
         let mut mirror_of_mesh = vec![None; meshes.len()];
-        for (m, mesh) in meshes.iter().enumerate() {
-            if mesh.hints.planar_reflector {
-                mirror_of_mesh[m] = Some(mirrors.len());
-                mirrors.push(render_mirror(lit, m, camera, w, h)?);
-            }
+        let mut mirrors = vec![];
+        for &m in &reflectors {
+            mirror_of_mesh[m] = Some(mirrors.len());
+            mirrors.push(render_mirror(lit, m, camera, w, h)?);
         }
         // The see-through pass: the camera's view without each transmissive probe object.
-        let mut see_throughs = vec![];
         let mut see_through_of_mesh = vec![None; meshes.len()];
-        for (m, mesh) in meshes.iter().enumerate() {
-            let transmits = lit.scene.materials.get(mesh.material).is_some_and(|mat| {
-                mat.bsdf_at(&lit.scene.textures, &[Vec2::ZERO; 2])
-                    .is_ok_and(|b| b.flags().transmission)
-            });
-            if mesh.hints.probe && transmits {
-                see_through_of_mesh[m] = Some(see_throughs.len());
-                see_throughs.push(render_see_through(lit, m, camera, w, h)?);
-            }
+        let mut see_throughs = vec![];
+        for &m in &transmissive {
+            see_through_of_mesh[m] = Some(see_throughs.len());
+            see_throughs.push(render_see_through(lit, m, camera, w, h)?);
         }
         let seconds = t_mirror.elapsed().as_secs_f64();
-        let first_prim: Vec<usize> = meshes
-            .iter()
-            .scan(0, |acc, m| {
-                let first = *acc;
-                *acc += m.indices.len();
-                Some(first)
-            })
-            .collect();
         Ok(FrameBuffers {
             mirrors,
             mirror_of_mesh,
@@ -190,9 +175,25 @@ impl FrameBuffers {
             see_through_of_mesh,
             probe_of_mesh,
             thin: lit.scene.materials.iter().map(thin_sheet).collect(),
-            first_prim,
+            first_prim: first_prims(lit),
             seconds,
         })
+    }
+
+    /// The per-mesh tables of these buffers (what a GPU pass needs besides the buffers).
+    pub fn tables(&self) -> FrameTables {
+        FrameTables {
+            probe_of_mesh: self.probe_of_mesh.clone(),
+            mirror_of_mesh: self.mirror_of_mesh.clone(),
+            in_plane: self
+                .mirrors
+                .iter()
+                .map(|m| m.reflector.in_plane.clone())
+                .collect(),
+            see_through_of_mesh: self.see_through_of_mesh.clone(),
+            see_throughs: self.see_throughs.len(),
+            first_prim: self.first_prim.clone(),
+        }
     }
 
     /// The mirror buffer that answers triangle `prim` of mesh `mesh` (an in-plane triangle of a
@@ -202,6 +203,97 @@ impl FrameBuffers {
             .map(|i| &self.mirrors[i])
             .filter(|m| m.reflector.in_plane[prim - self.first_prim[mesh]])
     }
+}
+
+/// Which buffer and probe each mesh reads, without the buffers themselves: the tables of
+/// [`FrameBuffers`] ([`FrameBuffers::tables`]) or of view buffers rendered elsewhere (the GPU).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameTables {
+    /// Per mesh: the probe captured for it.
+    pub probe_of_mesh: Vec<Option<usize>>,
+    /// Per mesh: its mirror buffer.
+    pub mirror_of_mesh: Vec<Option<usize>>,
+    /// Per mirror buffer: which of its reflector's triangles lie in the plane.
+    pub in_plane: Vec<Vec<bool>>,
+    /// Per mesh: its see-through buffer.
+    pub see_through_of_mesh: Vec<Option<usize>>,
+    /// See-through buffers.
+    pub see_throughs: usize,
+    /// Per mesh: the index of its first triangle in the path scene.
+    pub first_prim: Vec<usize>,
+}
+
+impl FrameTables {
+    /// The tables of `lit` for probes of meshes `probe_meshes` and mirrors of the reflectors
+    /// `in_plane` ((mesh, in-plane triangles), in [`view_meshes`]' order).
+    pub fn new(lit: &LitScene, probe_meshes: &[u32], in_plane: Vec<(usize, Vec<bool>)>) -> Self {
+        let n = lit.scene.meshes.len();
+        let mut mirror_of_mesh = vec![None; n];
+        for (i, (m, _)) in in_plane.iter().enumerate() {
+            mirror_of_mesh[*m] = Some(i);
+        }
+        let mut see_through_of_mesh = vec![None; n];
+        let (_, transmissive) = view_meshes(lit);
+        for (i, &m) in transmissive.iter().enumerate() {
+            see_through_of_mesh[m] = Some(i);
+        }
+        FrameTables {
+            probe_of_mesh: (0..n)
+                .map(|m| probe_meshes.iter().position(|&p| p as usize == m))
+                .collect(),
+            mirror_of_mesh,
+            in_plane: in_plane.into_iter().map(|(_, v)| v).collect(),
+            see_through_of_mesh,
+            see_throughs: transmissive.len(),
+            first_prim: first_prims(lit),
+        }
+    }
+
+    /// Mirror buffers.
+    pub fn mirrors(&self) -> usize {
+        self.in_plane.len()
+    }
+
+    /// The mirror buffer that answers triangle `prim` of mesh `mesh`.
+    pub fn mirror_at(&self, mesh: usize, prim: usize) -> Option<usize> {
+        self.mirror_of_mesh[mesh].filter(|&i| self.in_plane[i][prim - self.first_prim[mesh]])
+    }
+}
+
+/// The meshes that get view buffers, in buffer order: the planar reflectors (a mirror buffer
+/// each) and the transmissive probe objects (a see-through buffer each).
+pub fn view_meshes(lit: &LitScene) -> (Vec<usize>, Vec<usize>) {
+    let meshes = &lit.scene.meshes;
+    let reflectors = (0..meshes.len())
+        .filter(|&m| meshes[m].hints.planar_reflector)
+        .collect();
+    let transmissive = (0..meshes.len())
+        .filter(|&m| {
+            meshes[m].hints.probe
+                && lit
+                    .scene
+                    .materials
+                    .get(meshes[m].material)
+                    .is_some_and(|mat| {
+                        mat.bsdf_at(&lit.scene.textures, &[Vec2::ZERO; 2])
+                            .is_ok_and(|b| b.flags().transmission)
+                    })
+        })
+        .collect();
+    (reflectors, transmissive)
+}
+
+/// Per mesh: the index of its first triangle in the path scene.
+fn first_prims(lit: &LitScene) -> Vec<usize> {
+    lit.scene
+        .meshes
+        .iter()
+        .scan(0, |acc, m| {
+            let first = *acc;
+            *acc += m.indices.len();
+            Some(first)
+        })
+        .collect()
 }
 
 /// Smooth glass is shaded as a thin sheet (straight through, both interfaces' Fresnel): a pane

@@ -10,6 +10,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use lustre_brdf::rgb::Rgb;
 use lustre_env::cube::CubeMap;
 use lustre_env::pyramid::{CubePyramid, MipFilter};
+use lustre_gpu::{GpuContext, GpuFrameOptions, GpuWalkthrough, LightmapFrameScene};
 use lustre_scene::lightmap::{build_atlas, AtlasOptions, AtlasSource, LightmapAtlas};
 use lustre_scene::Scene;
 use lustre_scene::{Environment, EnvironmentSource};
@@ -35,6 +36,17 @@ pub enum Method {
     Ck,
     /// Progressive refinement: --frames rotated regular sets, averaged.
     Progressive,
+}
+
+/// Where the frame is rendered.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Device {
+    /// The GPU when an adapter is found and every pass can run there, else the CPU (said so).
+    Auto,
+    /// The GPU (lustre-gpu); an error without an adapter or for a material it cannot shade.
+    Gpu,
+    /// The CPU (lustre-shade's ray-cast twin of the same frame).
+    Cpu,
 }
 
 /// Arguments of `lustre render`.
@@ -70,6 +82,9 @@ pub struct RenderArgs {
     /// Still frames accumulated by --method progressive.
     #[arg(long, default_value_t = 64)]
     pub frames: u32,
+    /// Where to render: the GPU when it can, else the CPU (auto), or one of them.
+    #[arg(long, value_enum, default_value_t = Device::Auto)]
+    pub device: Device,
     /// Render each frame this many times and report the median, minimum and maximum frame time
     /// (timing runs: `scripts/frame_tables.py`).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
@@ -259,27 +274,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let lit = LitScene::new(&scene, &ps, &pt, &lm)?;
     st.lap("BVH");
 
-    let mut probes = vec![];
-    for (m, mesh) in scene.meshes.iter().enumerate() {
-        if !mesh.hints.probe {
-            continue;
-        }
-        let probe = capture_probe(&lit, m, &probe_opts)
-            .with_context(|| format!("probe of {:?}", mesh.name))?;
-        eprintln!(
-            "probe {:?} at ({:.2}, {:.2}, {:.2}): {} bounding planes, {}² faces",
-            probe.name,
-            probe.centre.x,
-            probe.centre.y,
-            probe.centre.z,
-            probe.planes.len(),
-            args.probe_size
-        );
-        st.lap(format!("probe {}", probe.name));
-        probes.push(probe);
-    }
-    let env_pyramid = match (&probes[..], &ps.environment) {
-        ([], Some(env)) => {
+    let has_probes = scene.meshes.iter().any(|m| m.hints.probe);
+    let env_pyramid = match (has_probes, &ps.environment) {
+        (false, Some(env)) => {
             if args.material.is_none() {
                 eprintln!("no probe objects: glossy surfaces reflect the environment only");
             }
@@ -294,16 +291,63 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             st.lap("environment pyramid");
             Some(p)
         }
-        ([], None) => {
+        (false, None) => {
             eprintln!("no probe objects and no environment: diffuse (light-mapped) shading only");
             None
         }
         _ => None,
     };
+    let gpu = match args.device {
+        Device::Cpu => None,
+        device => match gpu_renderer(
+            &scene,
+            &atlas,
+            &pages,
+            &lit,
+            &probe_opts,
+            env_pyramid.as_ref(),
+        ) {
+            Ok(r) => Some(r),
+            Err(e) if device == Device::Auto => {
+                eprintln!("GPU: {e:#}; rendering on the CPU");
+                None
+            }
+            Err(e) => return Err(e),
+        },
+    };
+    let mut probes = vec![];
+    if let Some((_, walk)) = &gpu {
+        for (name, ms) in &walk.capture_ms {
+            eprintln!("probe {name:?} captured on the GPU in {ms:.1} ms");
+            st.times.push((format!("probe {name}"), ms * 1e-3));
+        }
+        st.t = Instant::now();
+    } else {
+        for (m, mesh) in scene.meshes.iter().enumerate() {
+            if !mesh.hints.probe {
+                continue;
+            }
+            let probe = capture_probe(&lit, m, &probe_opts)
+                .with_context(|| format!("probe of {:?}", mesh.name))?;
+            eprintln!(
+                "probe {:?} at ({:.2}, {:.2}, {:.2}): {} bounding planes, {}² faces",
+                probe.name,
+                probe.centre.x,
+                probe.centre.y,
+                probe.centre.z,
+                probe.planes.len(),
+                args.probe_size
+            );
+            st.lap(format!("probe {}", probe.name));
+            probes.push(probe);
+        }
+    }
     let light = FrameLight {
         probes: &probes,
         environment: env_pyramid.as_ref(),
     };
+    // The GPU's anti-aliasing: a k×k supersampled G-buffer, k² nearest to the camera rays asked.
+    let k = ((f64::from(args.spp)).sqrt().round() as u32).max(1);
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let bar = ProgressBar::new(cameras.len() as u64);
@@ -311,16 +355,48 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} frames, {elapsed}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    bar.set_message(format!("{w}×{h}, {} camera rays/pixel", args.spp));
+    match &gpu {
+        Some(_) => bar.set_message(format!("{w}×{h}, {k}×{k} G-buffer samples/pixel, GPU")),
+        None => bar.set_message(format!("{w}×{h}, {} camera rays/pixel", args.spp)),
+    }
     for (stem, camera) in &cameras {
-        // Each repetition: (frame without its passes, mirror and see-through passes), seconds.
+        // Each repetition: (frame without its passes, mirror and see-through passes), seconds,
+        // and for the GPU the time of each of its passes.
         let mut runs = vec![];
         let mut rendered = None;
+        let mut gpu_times = vec![];
         for _ in 0..args.repeat {
             let t = Instant::now();
-            let (img, stats) = render_frame(&lit, &light, camera, w as usize, h as usize, &opts)?;
-            let s = t.elapsed().as_secs_f64();
-            runs.push(((s - stats.mirror_seconds).max(0.0), stats.mirror_seconds));
+            let (img, stats) = match &gpu {
+                Some((ctx, walk)) => {
+                    let f = walk.render(
+                        ctx,
+                        &lit,
+                        camera,
+                        (w as usize, h as usize),
+                        &GpuFrameOptions {
+                            samples: args.samples as u32,
+                            method,
+                            supersampling: k,
+                            seed: args.seed,
+                        },
+                    )?;
+                    let t = f.times;
+                    runs.push((
+                        (t.gbuffer_ms + t.lightmap_ms + t.shade_ms) * 1e-3,
+                        t.views_ms * 1e-3,
+                    ));
+                    gpu_times.push(t);
+                    (f.image, f.stats)
+                }
+                None => {
+                    let (img, stats) =
+                        render_frame(&lit, &light, camera, w as usize, h as usize, &opts)?;
+                    let s = t.elapsed().as_secs_f64();
+                    runs.push(((s - stats.mirror_seconds).max(0.0), stats.mirror_seconds));
+                    (img, stats)
+                }
+            };
             rendered = Some((img, stats));
         }
         let Some((img, stats)) = rendered else {
@@ -328,24 +404,35 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         };
         bar.inc(1);
         st.t = Instant::now();
-        let median = |k: fn(&(f64, f64)) -> f64| {
-            let mut v: Vec<f64> = runs.iter().map(k).collect();
+        let median = |v: &mut Vec<f64>| {
             v.sort_by(f64::total_cmp);
             (v[v.len() / 2], v[0], v[v.len() - 1])
         };
         if stats.mirrors + stats.see_throughs > 0 {
             // The mirror and see-through passes run inside the frame; report them apart.
-            let (m, _, _) = median(|r| r.1);
+            let (m, _, _) = median(&mut runs.iter().map(|r| r.1).collect());
             st.times
                 .push((format!("{stem}: mirror and see-through passes"), m));
         }
-        let (m, lo, hi) = median(|r| r.0);
+        let (m, lo, hi) = median(&mut runs.iter().map(|r| r.0).collect());
         st.times.push((stem.clone(), m));
         if args.repeat > 1 {
             st.times
                 .push((format!("{stem}: min of {}", args.repeat), lo));
             st.times
                 .push((format!("{stem}: max of {}", args.repeat), hi));
+        }
+        type Stage = fn(&lustre_gpu::GpuFrameTimes) -> f64;
+        let stages: [(&str, Stage); 3] = [
+            ("G-buffer", |t| t.gbuffer_ms),
+            ("light-map shading", |t| t.lightmap_ms),
+            ("view-dependent pass", |t| t.shade_ms),
+        ];
+        if !gpu_times.is_empty() {
+            for (name, f) in stages {
+                let (m, _, _) = median(&mut gpu_times.iter().map(f).collect());
+                st.times.push((format!("{stem}: GPU {name}"), m * 1e-3));
+            }
         }
         img.write_exr(&args.out.join(format!("{stem}.exr")))?;
         img.write_png_dithered(
@@ -355,12 +442,27 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         )?;
         if cameras.len() == 1 {
             bar.finish_and_clear();
-            report(args, &img, &stats, (w, h))?;
+            report(args, &img, &stats, (w, h), gpu.is_some().then_some(k))?;
         }
         st.lap(format!("{stem}: write"));
     }
     bar.finish_and_clear();
-    eprintln!("rendered on the CPU (lustre_shade::frame; the GPU frame is not assembled yet)");
+    match &gpu {
+        Some((ctx, walk)) => {
+            let clock = if walk.timestamps {
+                "GPU timestamps"
+            } else {
+                "wall clock until the GPU finished"
+            };
+            eprintln!(
+                "rendered on the GPU ({}; pass times: {clock})",
+                ctx.describe()
+            );
+        }
+        None => {
+            eprintln!("rendered on the CPU (lustre_shade::frame, the GPU frame's ray-cast twin)")
+        }
+    }
     let mut csv = String::from("stage,seconds\n");
     for (name, s) in &st.times {
         writeln!(csv, "{},{s:.4}", name.replace(',', " "))?;
@@ -375,13 +477,34 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// The GPU renderer of a light-mapped scene: an adapter, the scene uploaded, the passes
+/// compiled and the probes captured. Errors: no adapter, a scene the GPU cannot hold.
+fn gpu_renderer(
+    scene: &Scene,
+    atlas: &LightmapAtlas,
+    pages: &[Vec<[f32; 3]>],
+    lit: &LitScene,
+    probe_opts: &ProbeOptions,
+    environment: Option<&CubePyramid>,
+) -> anyhow::Result<(GpuContext, GpuWalkthrough)> {
+    let ctx = GpuContext::new().context("no GPU adapter")?;
+    let uploaded = LightmapFrameScene::upload(&ctx, scene, atlas, pages)
+        .context("uploading the scene to the GPU")?;
+    let walk = GpuWalkthrough::new(&ctx, lit, uploaded, probe_opts, environment)
+        .context("capturing the probes on the GPU")?;
+    Ok((ctx, walk))
+}
+
 /// Prints a single frame's counts and, with --compare-reference, its comparison.
 fn report(
     args: &RenderArgs,
     img: &Image,
     stats: &FrameStats,
     (w, h): (u32, u32),
+    supersampling: Option<u32>,
 ) -> anyhow::Result<()> {
+    // The GPU's camera rays are its k×k G-buffer samples per pixel.
+    let rays = supersampling.map_or(args.spp, |k| k * k);
     if stats.mirrors + stats.see_throughs > 0 {
         eprintln!(
             "{} mirror and {} see-through buffer(s) of {w}×{h} in {:.3} s",
@@ -390,8 +513,7 @@ fn report(
     }
     let glossy_rays = stats.glossy_hits.max(1);
     println!(
-        "{w}×{h}, {} camera rays/pixel, {:?} with {} samples: {} glossy hits, {:.2} lookups per glossy hit",
-        args.spp,
+        "{w}×{h}, {rays} camera rays/pixel, {:?} with {} samples: {} glossy hits, {:.2} lookups per glossy hit",
         args.method,
         args.samples,
         stats.glossy_hits,
