@@ -4,6 +4,8 @@
 //! (raster vs ray-cast edges may differ), on the built-in room and the Modern Hall (light maps
 //! baked small and fast). Fails (does not skip) without an adapter.
 
+mod common;
+use common::{ctx, quick_bake, Baked};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
 use lustre_env::{CubeMap, CubePyramid, MipFilter};
@@ -11,11 +13,10 @@ use lustre_gpu::{
     face_camera, mesh_triangles, DrawOptions, GpuContext, GpuProbeCapture, GpuPyramidBuilder,
     GpuTimer, GpuViewPass, LightmapFrameScene, PYRAMID_USAGE,
 };
-use lustre_scene::lightmap::{build_atlas, AtlasOptions, LightmapAtlas};
 use lustre_scene::Scene;
+use lustre_shade::bake::diffuse_path_scene;
 use lustre_shade::bake::gbuffer::{shade_gbuffer, GBuffer, SKY};
 use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::bake::{assemble, bake_tiles, diffuse_path_scene, BakeOptions, Denoiser};
 use lustre_shade::image::Image;
 use lustre_shade::metrics::psnr;
 use lustre_shade::mirror::{box_levels, render_mirror, render_see_through, ViewBuffer};
@@ -23,54 +24,15 @@ use lustre_shade::path::{PathCamera, PathOptions, PathScene, PathTracer};
 use lustre_shade::probe::{capture_cube, probe_placement, LitScene, ProbeOptions};
 use lustre_shade::reference::path_camera;
 
-fn ctx() -> GpuContext {
-    GpuContext::new().unwrap_or_else(|e| panic!("{e}"))
-}
-
-struct Baked {
-    scene: Scene,
-    atlas: LightmapAtlas,
-    pages: Vec<Vec<[f32; 3]>>,
-}
-
-/// `scene` with a quick bake (1 path per texel, 2 bounces, no denoiser).
-fn bake(mut scene: Scene, texels_per_metre: f32) -> Baked {
-    let (atlas, _) = build_atlas(
-        &mut scene,
-        &AtlasOptions {
-            texels_per_metre,
-            ..AtlasOptions::default()
-        },
-    )
-    .expect("atlas");
-    let opts = BakeOptions {
-        spp: 1,
-        bounces: 2,
-        seed: 5,
-        denoiser: Denoiser::None,
-        ..BakeOptions::default()
-    };
-    let dir = tempfile::tempdir().expect("tempdir");
-    bake_tiles(&scene, &atlas, &opts, dir.path(), None, &|_, _| {}).expect("bake");
-    let pages = assemble(&scene, &atlas, &opts, dir.path())
-        .expect("assemble")
-        .pages;
-    Baked {
-        scene,
-        atlas,
-        pages,
-    }
-}
-
 fn room() -> Baked {
-    bake(lustre_scene::builtin::room().expect("built-in room"), 4.0)
+    quick_bake(lustre_scene::builtin::room().expect("built-in room"), 4.0)
 }
 
 fn hall() -> Baked {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/modern_hall.toml");
     let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    bake(scene, 4.0)
+    quick_bake(scene, 4.0)
 }
 
 fn mesh_named(scene: &Scene, name: &str) -> usize {

@@ -6,17 +6,18 @@
 //! (`MaterialKind::Spec`, gpu-fits' models) is given a GPU-shadable stand-in: a rough gold
 //! conductor. Fails (does not skip) without an adapter.
 
+mod common;
+use common::{ctx, quick_bake};
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::frame_shade::{pack_material, FrameShadeOptions, KIND_ROUGH_PLASTIC};
 use lustre_gpu::{
-    FrameShadePass, FrameShadeScene, FrameShadeTarget, GBufferTarget, GpuContext, GpuViewBuffer,
+    FrameShadePass, FrameShadeScene, FrameShadeTarget, GBufferTarget, GpuViewBuffer,
     LightmapFrameScene, LightmapRenderer, ShadeTarget,
 };
-use lustre_scene::lightmap::{build_atlas, AtlasOptions};
 use lustre_scene::material::{Distribution, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind};
 use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Denoiser};
+use lustre_shade::bake::spec_albedo;
 use lustre_shade::frame::{
     shade_gbuffer_view_dependent, FrameBuffers, FrameLight, FrameMethod, GBufferViewOptions,
 };
@@ -24,10 +25,6 @@ use lustre_shade::metrics::psnr;
 use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
-
-fn ctx() -> GpuContext {
-    GpuContext::new().unwrap_or_else(|e| panic!("{e}"))
-}
 
 /// The built-in room, its gold sphere as a rough gold conductor.
 fn room() -> lustre_scene::Scene {
@@ -53,27 +50,11 @@ fn room() -> lustre_scene::Scene {
 #[test]
 fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
     let ctx = ctx();
-    let mut scene = room();
-    let (atlas, _) = build_atlas(
-        &mut scene,
-        &AtlasOptions {
-            texels_per_metre: 4.0,
-            ..AtlasOptions::default()
-        },
-    )
-    .expect("atlas");
-    let bake = BakeOptions {
-        spp: 1,
-        bounces: 2,
-        seed: 5,
-        denoiser: Denoiser::None,
-        ..BakeOptions::default()
-    };
-    let dir = tempfile::tempdir().expect("tempdir");
-    bake_tiles(&scene, &atlas, &bake, dir.path(), None, &|_, _| {}).expect("bake");
-    let pages = assemble(&scene, &atlas, &bake, dir.path())
-        .expect("assemble")
-        .pages;
+    let common::Baked {
+        scene,
+        atlas,
+        pages,
+    } = quick_bake(room(), 4.0);
     let (ps, _) = path_scene(&scene).expect("path scene");
     let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
     let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");

@@ -8,55 +8,22 @@
 //! - k×k supersampling against the jittered, converged CPU image;
 //! - bad input. Fails (does not skip) without an adapter.
 
-use lustre_gpu::{GpuContext, LightmapFrameScene, LightmapRenderer};
-use lustre_scene::lightmap::{build_atlas, AtlasOptions, LightmapAtlas};
+mod common;
+use common::{ctx, quick_bake, Baked};
+use lustre_gpu::{LightmapFrameScene, LightmapRenderer};
 use lustre_scene::Scene;
+use lustre_shade::bake::diffuse_path_scene;
 use lustre_shade::bake::gbuffer::{render_lightmapped_gbuffer, shade_gbuffer, GBuffer, SKY};
 use lustre_shade::bake::render::{render_lightmapped, Lightmapped};
-use lustre_shade::bake::{assemble, bake_tiles, diffuse_path_scene, BakeOptions, Denoiser};
 use lustre_shade::metrics::psnr;
 use lustre_shade::path::PathCamera;
 use lustre_shade::reference::path_camera;
 
-fn ctx() -> GpuContext {
-    GpuContext::new().unwrap_or_else(|e| panic!("{e}"))
-}
-
-struct Baked {
-    scene: Scene,
-    atlas: LightmapAtlas,
-    pages: Vec<Vec<[f32; 3]>>,
-}
-
 /// A real scene with a small, quick bake (1 path per texel, 2 bounces, no denoiser).
 fn baked(rel: &str, texels_per_metre: f32) -> Baked {
     let path = lustre_env::shared_data_dir().join(rel);
-    let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let (atlas, _) = build_atlas(
-        &mut scene,
-        &AtlasOptions {
-            texels_per_metre,
-            ..AtlasOptions::default()
-        },
-    )
-    .expect("atlas");
-    let opts = BakeOptions {
-        spp: 1,
-        bounces: 2,
-        seed: 5,
-        denoiser: Denoiser::None,
-        ..BakeOptions::default()
-    };
-    let dir = tempfile::tempdir().expect("tempdir");
-    bake_tiles(&scene, &atlas, &opts, dir.path(), None, &|_, _| {}).expect("bake");
-    let pages = assemble(&scene, &atlas, &opts, dir.path())
-        .expect("assemble")
-        .pages;
-    Baked {
-        scene,
-        atlas,
-        pages,
-    }
+    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    quick_bake(scene, texels_per_metre)
 }
 
 fn cornell() -> Baked {
