@@ -15,9 +15,12 @@
 //! [`KIND_LAMBERT`] 7 (read only where the light map does not cover the pixel; a textured
 //! Lambertian is kind 0), [`KIND_PLASTIC`] 8, [`KIND_DIELECTRIC`] 9 (smooth transmissive glTF
 //! glass, built by the CPU as this interface);
-//! 16–19 belong to the fitted models (gpu-fits). Materials the pass cannot shade (textured or
-//! normal-mapped glossy materials, fitted specs in this build)
-//! are refused with a named error, so the caller falls back to the CPU frame.
+//! 16–19 belong to the fitted models (gpu-fits). Per pixel the pass reads the diffuse albedo kd
+//! as `Lightmapped::albedo` does (textures included) from the light-map pass's records
+//! (`material_albedo.wgsl`), and a (rough) plastic's textured diffuse reflectance at uv0
+//! ([`FLAG_TEXTURED_DIFFUSE`]). Materials the pass cannot shade (other textured parameters of
+//! glossy materials, normal-mapped glossy materials, fitted specs not on the GPU) are refused
+//! with a named error, so the caller falls back to the CPU frame.
 //!
 //! Incident light: every probe's pyramid and the environment's are concatenated into one
 //! storage buffer with an offset table and read trilinearly and seamlessly as
@@ -33,7 +36,7 @@ use crate::context::GpuContext;
 use crate::error::{invalid, scope_result, wgpu_error, Result};
 use crate::fit_models::pack_fit;
 use crate::gbuffer::{camera_uniform, map_read, GBufferTarget};
-use crate::lightmap_shade::ShadeTarget;
+use crate::lightmap_shade::{shading_records, ShadeTarget};
 use crate::probe_capture::GpuProbe;
 use crate::pyramid::GpuPyramid;
 use crate::view_buffer::GpuViewBuffer;
@@ -88,6 +91,11 @@ pub const FLAG_DIFFUSE_ONLY: u32 = 4;
 pub const FLAG_DELTA_ONLY: u32 = 1;
 /// [`GpuBsdf::flags`]: a two-sided material (the frame is turned towards the viewer).
 pub const FLAG_TWO_SIDED: u32 = 2;
+/// [`GpuBsdf::flags`]: a (rough) plastic whose diffuse reflectance is textured: ρ (and the
+/// specular sampling weight from it) is read per pixel at uv0 from the material's albedo record
+/// (`material_albedo.wgsl`), as `Material::with_bsdf_at` builds it; the record holds the
+/// clamped factor.
+pub const FLAG_TEXTURED_DIFFUSE: u32 = 8;
 /// Entries of a rough plastic's transmittance table (`RoughPlastic::transmittance` at μ = i/63).
 pub const ROUGH_PLASTIC_TABLE: usize = 64;
 
@@ -97,7 +105,8 @@ pub const ROUGH_PLASTIC_TABLE: usize = 64;
 pub struct GpuBsdf {
     /// Model code (module docs).
     pub kind: u32,
-    /// [`FLAG_DELTA_ONLY`] | [`FLAG_TWO_SIDED`].
+    /// [`FLAG_DELTA_ONLY`] | [`FLAG_TWO_SIDED`] | [`FLAG_DIFFUSE_ONLY`] |
+    /// [`FLAG_TEXTURED_DIFFUSE`].
     pub flags: u32,
     /// Zero.
     pub pad0: u32,
@@ -288,8 +297,9 @@ fn microfacet(d: Distribution) -> MicrofacetType {
 
 /// The record of a scene material, built as `Material::bsdf_at` builds the CPU model (smooth
 /// glass as the thin sheet the CPU frame shades). A rough plastic appends its transmittance
-/// table to `tables`. Errors (naming the material): textured or normal-mapped glossy
-/// materials, and models not on the GPU in this build.
+/// table to `tables`. A (rough) plastic's textured diffuse reflectance is read per pixel
+/// ([`FLAG_TEXTURED_DIFFUSE`]). Errors (naming the material): other textured parameters of
+/// glossy materials, normal-mapped glossy materials, and models not on the GPU in this build.
 pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
     let name = format!("material {:?}", m.name);
     let brdf = |e: lustre_brdf::Error| invalid(name.clone(), e.to_string());
@@ -324,6 +334,16 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             .is_none()
             .then(|| Rgb::new(t.factor[0], t.factor[1], t.factor[2]).map(unit))
             .ok_or_else(|| refuse("a textured colour"))
+    };
+    // A plastic's diffuse reflectance: the clamped factor, flagged when textured.
+    let diffuse_rgb = |t: &lustre_scene::TexturedRgb| {
+        let c = Rgb::new(t.factor[0], t.factor[1], t.factor[2]).map(unit);
+        let flag = if t.texture.is_some() {
+            FLAG_TEXTURED_DIFFUSE
+        } else {
+            0
+        };
+        (c, flag)
     };
     let constant = |t: &lustre_scene::TexturedScalar| {
         t.texture
@@ -360,10 +380,11 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             ext_ior,
             nonlinear,
         } => {
+            let (rho, textured) = diffuse_rgb(diffuse);
             let c = RoughPlastic::new(
                 microfacet(*distribution),
                 constant(alpha)?,
-                constant_rgb(diffuse)?,
+                rho,
                 specular.map(unit),
                 *int_ior,
                 *ext_ior,
@@ -373,7 +394,7 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             let offset = u32::try_from(tables.len()).unwrap_or(u32::MAX);
             let p = pack_rough_plastic(&c, offset)?;
             tables.extend(rough_plastic_table(&c));
-            Ok(record(KIND_ROUGH_PLASTIC, 0, p))
+            Ok(record(KIND_ROUGH_PLASTIC, textured, p))
         }
         MaterialKind::RoughDielectric {
             int_ior,
@@ -426,15 +447,10 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             ext_ior,
             nonlinear,
         } => {
-            let c = Plastic::new(
-                constant_rgb(diffuse)?,
-                specular.map(unit),
-                *int_ior,
-                *ext_ior,
-                *nonlinear,
-            )
-            .map_err(brdf)?;
-            Ok(record(KIND_PLASTIC, 0, pack_plastic(&c)?))
+            let (rho, textured) = diffuse_rgb(diffuse);
+            let c = Plastic::new(rho, specular.map(unit), *int_ior, *ext_ior, *nonlinear)
+                .map_err(brdf)?;
+            Ok(record(KIND_PLASTIC, textured, pack_plastic(&c)?))
         }
         MaterialKind::PbrMetallicRoughness {
             base_color,
@@ -496,7 +512,8 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
 }
 
 /// Everything the pass reads besides the G-buffer: per-triangle records, materials, the cube
-/// maps, the view buffers.
+/// maps, the view buffers, and what the per-pixel diffuse albedo kd is read from (the light-map
+/// pass's triangle and material records and textures, [`crate::lightmap_shade`]).
 #[derive(Debug)]
 pub struct FrameShadeScene {
     tris: wgpu::Buffer,
@@ -510,6 +527,11 @@ pub struct FrameShadeScene {
     view_radiance: wgpu::Buffer,
     view_geometry: wgpu::Buffer,
     views: wgpu::Buffer,
+    albedo_tris: wgpu::Buffer,
+    albedo_mats: wgpu::Buffer,
+    texels: wgpu::Buffer,
+    texture_info: wgpu::Buffer,
+    page: [u32; 2],
     probes: u32,
     environment: u32,
     /// The scene's view-dependent materials, as packed.
@@ -671,11 +693,14 @@ impl FrameShadeScene {
                 materials[k] = pack_material(m, &mut tables)?;
             }
         }
-        // Per triangle: 9 vec4 (frame_shade.wgsl `shade_point`).
+        // kd per pixel (`Lightmapped::albedo`): the light-map pass's records.
+        let limit = ctx.device.limits().max_storage_buffer_binding_size as usize;
+        let albedo = shading_records(scene, lit.lit, g, lit.lit.spec(), limit)?;
+        let atlas = lit.lit.atlas();
+        // Per triangle: 7 vec4 (frame_shade.wgsl `shade_point`).
         let bits = |u: u32| f32::from_bits(u);
         let v4 = |v: DVec3, w: f32| [v.x as f32, v.y as f32, v.z as f32, w];
-        let mut tris: Vec<[f32; 4]> = Vec::with_capacity(g.positions.len() * 9);
-        let centroid = [1.0 / 3.0; 3];
+        let mut tris: Vec<[f32; 4]> = Vec::with_capacity(g.positions.len() * 7);
         for (prim, t) in g.positions.iter().enumerate() {
             let mesh = lit.mesh_of[prim] as usize;
             let k = g.material[prim];
@@ -702,9 +727,6 @@ impl FrameShadeScene {
                 }
                 None => e1,
             };
-            let ns = normals.map_or(e1.cross(e2), |n| (n[0] + n[1] + n[2]) / 3.0);
-            let kd_front = lit.lit.albedo(g, prim, centroid, -ns);
-            let kd_back = lit.lit.albedo(g, prim, centroid, ns);
             let probe = links.probe_of_mesh[mesh].map_or(NONE, |i| i as u32);
             let mirror = links.mirror_at(mesh, prim).map_or(NONE, |i| i as u32);
             let see =
@@ -717,8 +739,6 @@ impl FrameShadeScene {
                 v4(n[1], bits(mirror)),
                 v4(n[2], bits(see)),
                 v4(dpdu, 0.0),
-                v4(DVec3::from_array(kd_front.0), 0.0),
-                v4(DVec3::from_array(kd_back.0), 0.0),
             ]);
         }
         // Cube maps: the probes, then the environment when there is no probe.
@@ -798,6 +818,11 @@ impl FrameShadeScene {
             view_radiance,
             view_geometry,
             views: storage(ctx, "frame views", &view_records),
+            albedo_tris: storage(ctx, "frame albedo triangles", &albedo.tris),
+            albedo_mats: storage(ctx, "frame albedo materials", &albedo.mats),
+            texels: storage(ctx, "frame texels", &albedo.texels),
+            texture_info: storage(ctx, "frame textures", &albedo.info),
+            page: [atlas.width, atlas.height],
             probes: probes.len() as u32,
             environment: env_index,
             materials,
@@ -824,7 +849,12 @@ pub fn frame_shade_wgsl() -> &'static str {
                 &wgsl::QMC,
                 &wgsl::WARP,
             ],
-            include_str!("frame_shade.wgsl"),
+            &[
+                include_str!("texture_sample.wgsl"),
+                include_str!("material_albedo.wgsl"),
+                include_str!("frame_shade.wgsl"),
+            ]
+            .concat(),
         )
     })
 }
@@ -1095,6 +1125,7 @@ impl FrameShadePass {
         ];
         entries.extend((3..15).map(|b| storage_entry(b, true)));
         entries.extend((15..18).map(|b| storage_entry(b, false)));
+        entries.extend((18..22).map(|b| storage_entry(b, true)));
         let (pipeline, layout) = compute_pipeline(
             ctx,
             "frame_shade.wgsl",
@@ -1155,12 +1186,12 @@ impl FrameShadePass {
             FrameMethod::Progressive { .. } => 2,
         };
         u.push([gbuffer.width, gbuffer.height, k, opts.samples]);
-        u.push([method, opts.frame, scene.probes, 0]);
+        u.push([method, opts.frame, scene.probes, scene.page[0]]);
         u.push([
             opts.seed as u32,
             (opts.seed >> 32) as u32,
             scene.environment,
-            0,
+            scene.page[1],
         ]);
         let uniform = buffer_init(
             ctx,
@@ -1198,6 +1229,10 @@ impl FrameShadePass {
                 buf(15, &out.accum),
                 buf(16, &out.out),
                 buf(17, &out.counts),
+                buf(18, &scene.albedo_tris),
+                buf(19, &scene.albedo_mats),
+                buf(20, &scene.texels),
+                buf(21, &scene.texture_info),
             ],
         });
         let mut enc = ctx

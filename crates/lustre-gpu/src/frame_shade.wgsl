@@ -19,16 +19,16 @@ struct Params {
     cam: vec4<f32>,
     // G-buffer width, height, k, samples n.
     sizes: vec4<u32>,
-    // method (0 regular, 1 CK, 2 progressive), progressive frame f, probes, views.
+    // method (0 regular, 1 CK, 2 progressive), progressive frame f, probes, light-map page width.
     method: vec4<u32>,
-    // seed (low, high word), environment cube (NONE: none), 0.
+    // seed (low, high word), environment cube (NONE: none), light-map page height.
     seed: vec4<u32>,
 };
 
 @group(0) @binding(0) var<uniform> u: Params;
 @group(0) @binding(1) var prim_tex: texture_2d<u32>;
 @group(0) @binding(2) var bary_tex: texture_2d<f32>;
-// 9 vec4 per triangle (frame_shade.rs `triangle_records`).
+// 7 vec4 per triangle (frame_shade.rs `FrameShadeScene::new`).
 @group(0) @binding(3) var<storage, read> tris: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read> bsdfs: array<GpuBsdf>;
 @group(0) @binding(5) var<storage, read> tables: array<f32>;
@@ -54,11 +54,19 @@ struct Params {
 @group(0) @binding(16) var<storage, read_write> out_px: array<vec4<f32>>;
 // (glossy hits, lookups), summed per workgroup first.
 @group(0) @binding(17) var<storage, read_write> counts: array<atomic<u32>, 2>;
+// The light-map pass's records (lightmap_shade.rs `shading_records`), read for the diffuse
+// albedo kd at each pixel (`Lightmapped::albedo`) and a plastic's textured ρ: 8 vec4 per
+// triangle, 4 per material (material_albedo.wgsl), the textures (texture_sample.wgsl).
+@group(0) @binding(18) var<storage, read> albedo_tris: array<vec4<f32>>;
+@group(0) @binding(19) var<storage, read> mats: array<vec4<f32>>;
+@group(0) @binding(20) var<storage, read> texels: array<vec4<f32>>;
+@group(0) @binding(21) var<storage, read> tex_info: array<vec4<u32>>;
 var<workgroup> wg_counts: array<atomic<u32>, 2>;
 
 const SKY: u32 = 0xffffffffu;
 const NONE: u32 = 0xffffffffu;
-const TRI_STRIDE: u32 = 9u;
+const TRI_STRIDE: u32 = 7u;
+const NO_PAGE: u32 = 0xffffffffu;
 const METHOD_REGULAR: u32 = 0u;
 const METHOD_CK: u32 = 1u;
 const METHOD_PROGRESSIVE: u32 = 2u;
@@ -580,7 +588,7 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
     if (material == NONE) {
         return vec3<f32>(0.0);
     }
-    let b = bsdfs[material];
+    var b = bsdfs[material];
     if (b.kind == 0u) {
         return vec3<f32>(0.0);
     }
@@ -595,14 +603,40 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
             ns = ni / l;
         }
     }
-    // Lightmapped::albedo: kd on the side the interpolated normal faces.
-    var kd = tris[base + 7u].xyz;
-    var ns_raw = ng;
-    if (bitcast<u32>(r2.w) == 1u) {
-        ns_raw = ni;
+    // Lightmapped::albedo at the pixel: zero off the light map or on the back of a one-sided
+    // material, else diffuse_albedo at (uv0, uv1 / page size).
+    let ab = prim * 8u;
+    let q3 = albedo_tris[ab + 3u];
+    let q4 = albedo_tris[ab + 4u];
+    let q5 = albedo_tris[ab + 5u];
+    let uv0 = q3.xy * bary.x + q3.zw * bary.y + q4.xy * bary.z;
+    let n_lm = albedo_tris[ab].xyz * bary.x + albedo_tris[ab + 1u].xyz * bary.y
+        + albedo_tris[ab + 2u].xyz * bary.z;
+    let front = dot(n_lm, -d) > 0.0;
+    var kd = vec3<f32>(0.0);
+    if (bitcast<u32>(albedo_tris[ab + 6u].w) != NO_PAGE
+        && (front || mats[4u * material + 1u].z > 0.5)) {
+        let uv1 = (q4.zw * bary.x + q5.xy * bary.y + q5.zw * bary.z)
+            / vec2<f32>(f32(u.method.w), f32(u.seed.w));
+        kd = albedo(material, uv0, uv1);
     }
-    if (!(dot(ns_raw, -d) > 0.0)) {
-        kd = tris[base + 8u].xyz;
+    // A plastic's textured diffuse reflectance at uv0 (Material::with_bsdf_at reads both uv sets
+    // at uv0 here) and the specular sampling weight from it (RoughPlastic::with_reflectances).
+    if ((b.flags & FLAG_TEXTURED_DIFFUSE) != 0u) {
+        // ρ's row: rough_plastic.wgsl (kind 2) p[1], plastic.wgsl p[0]; the specular after it.
+        var row = 0u;
+        if (b.kind == 2u) {
+            row = 1u;
+        }
+        let rho = albedo(material, uv0, uv0);
+        let dm = (rho.x + rho.y + rho.z) / 3.0;
+        let sc = b.p[row + 1u].xyz;
+        let sm = (sc.x + sc.y + sc.z) / 3.0;
+        var w = 0.5;
+        if (dm + sm > 0.0) {
+            w = sm / (dm + sm);
+        }
+        b.p[row] = vec4<f32>(rho, w);
     }
     // A Lambertian surface the light map covers has no view-dependent part left.
     if ((b.flags & FLAG_DIFFUSE_ONLY) != 0u && any(kd != vec3<f32>(0.0))) {

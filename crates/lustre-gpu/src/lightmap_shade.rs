@@ -30,6 +30,7 @@ use lustre_shade::path::{EnvLight, Geometry, PathCamera};
 /// The WGSL source of the shading pass.
 pub const LIGHTMAP_SHADE_WGSL: &str = concat!(
     include_str!("texture_sample.wgsl"),
+    include_str!("material_albedo.wgsl"),
     include_str!("lightmap_shade.wgsl")
 );
 
@@ -148,6 +149,77 @@ fn gpu_material(
     ])
 }
 
+/// What `lightmap_shade.wgsl` (and `frame_shade.wgsl`'s per-pixel albedo) read of a scene:
+/// per triangle 8 vec4 (corner normals, uv0, uv1 in texels, emission and light-map page,
+/// material), per material 4 vec4 ([`gpu_material`]), the textures' texels and their table.
+pub(crate) struct ShadingRecords {
+    pub tris: Vec<[f32; 4]>,
+    pub mats: Vec<[f32; 4]>,
+    pub texels: Vec<[f32; 4]>,
+    pub info: Vec<[u32; 4]>,
+}
+
+/// The [`ShadingRecords`] of the triangles `g` of `scene` mapped by `lit`, with the spec
+/// materials' albedo `spec`. Errors (named): a triangle's material or a texture beyond the
+/// scene's, records beyond `max_buffer` bytes.
+pub(crate) fn shading_records(
+    scene: &Scene,
+    lit: &Lightmapped,
+    g: &Geometry,
+    spec: &[Rgb],
+    max_buffer: usize,
+) -> Result<ShadingRecords> {
+    let mut slots = Vec::new();
+    let mut mats = Vec::with_capacity(4 * scene.materials.len());
+    for m in 0..scene.materials.len() {
+        let s = spec.get(m).copied().unwrap_or(Rgb::ZERO);
+        mats.extend(gpu_material(scene, m, s, &mut slots)?);
+    }
+    if mats.is_empty() {
+        mats.push([0.0; 4]);
+    }
+    let (texels, info) = pack_textures(scene, &slots, max_buffer)?;
+    let mut tris: Vec<[f32; 4]> = Vec::with_capacity(8 * g.positions.len());
+    let v4 = |p: [f64; 2], q: [f64; 2]| [p[0] as f32, p[1] as f32, q[0] as f32, q[1] as f32];
+    for (i, tri) in g.positions.iter().enumerate() {
+        let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+        for n in g.normals.get(i).copied().unwrap_or([ng; 3]) {
+            tris.push([n.x as f32, n.y as f32, n.z as f32, 0.0]);
+        }
+        let uv0 = g.uvs.get(i).copied().unwrap_or([[0.0; 2]; 3]);
+        let (page, uv1) = lit.lightmap_triangle(i).unwrap_or((NO_PAGE, [[0.0; 2]; 3]));
+        tris.push(v4(uv0[0], uv0[1]));
+        tris.push(v4(uv0[2], uv1[0]));
+        tris.push(v4(uv1[1], uv1[2]));
+        let e = g.emission.get(i).copied().unwrap_or(Rgb::ZERO);
+        tris.push([e[0] as f32, e[1] as f32, e[2] as f32, f32::from_bits(page)]);
+        let m = g.material.get(i).copied().unwrap_or(0);
+        if m as usize >= scene.materials.len() {
+            return Err(invalid(
+                "scene",
+                format!("triangle {i} has material {m} of {}", scene.materials.len()),
+            ));
+        }
+        tris.push([f32::from_bits(m), 0.0, 0.0, 0.0]);
+    }
+    if tris.len() * 16 > max_buffer {
+        return Err(invalid(
+            "scene",
+            format!(
+                "{} triangles need {} bytes of shading data; the device's storage buffers hold {max_buffer}",
+                g.positions.len(),
+                tris.len() * 16
+            ),
+        ));
+    }
+    Ok(ShadingRecords {
+        tris,
+        mats,
+        texels,
+        info,
+    })
+}
+
 impl GpuLightmapScene {
     /// Uploads what shading needs: per triangle of `g` (the geometry `lit` was built for) its
     /// normals, uv0, light-map page and uv1, emission and material; the materials' diffuse
@@ -169,50 +241,18 @@ impl GpuLightmapScene {
         if g.positions.is_empty() {
             return Err(invalid("scene", "the scene has no triangles to shade"));
         }
-        let mut slots = Vec::new();
-        let mut mats = Vec::with_capacity(4 * scene.materials.len());
-        for m in 0..scene.materials.len() {
-            let s = spec.get(m).copied().unwrap_or(Rgb::ZERO);
-            mats.extend(gpu_material(scene, m, s, &mut slots)?);
-        }
-        if mats.is_empty() {
-            mats.push([0.0; 4]);
-        }
-        let max_buffer = limits.max_storage_buffer_binding_size as usize;
-        let (texels, info) = pack_textures(scene, &slots, max_buffer)?;
-        let mut tris: Vec<[f32; 4]> = Vec::with_capacity(8 * g.positions.len());
-        let v4 = |p: [f64; 2], q: [f64; 2]| [p[0] as f32, p[1] as f32, q[0] as f32, q[1] as f32];
-        for (i, tri) in g.positions.iter().enumerate() {
-            let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-            for n in g.normals.get(i).copied().unwrap_or([ng; 3]) {
-                tris.push([n.x as f32, n.y as f32, n.z as f32, 0.0]);
-            }
-            let uv0 = g.uvs.get(i).copied().unwrap_or([[0.0; 2]; 3]);
-            let (page, uv1) = lit.lightmap_triangle(i).unwrap_or((NO_PAGE, [[0.0; 2]; 3]));
-            tris.push(v4(uv0[0], uv0[1]));
-            tris.push(v4(uv0[2], uv1[0]));
-            tris.push(v4(uv1[1], uv1[2]));
-            let e = g.emission.get(i).copied().unwrap_or(Rgb::ZERO);
-            tris.push([e[0] as f32, e[1] as f32, e[2] as f32, f32::from_bits(page)]);
-            let m = g.material.get(i).copied().unwrap_or(0);
-            if m as usize >= scene.materials.len() {
-                return Err(invalid(
-                    "scene",
-                    format!("triangle {i} has material {m} of {}", scene.materials.len()),
-                ));
-            }
-            tris.push([f32::from_bits(m), 0.0, 0.0, 0.0]);
-        }
-        if tris.len() * 16 > max_buffer {
-            return Err(invalid(
-                "scene",
-                format!(
-                    "{} triangles need {} bytes of shading data; the device's storage buffers hold {max_buffer}",
-                    g.positions.len(),
-                    tris.len() * 16
-                ),
-            ));
-        }
+        let ShadingRecords {
+            tris,
+            mats,
+            texels,
+            info,
+        } = shading_records(
+            scene,
+            lit,
+            g,
+            spec,
+            limits.max_storage_buffer_binding_size as usize,
+        )?;
         let max2d = limits.max_texture_dimension_2d;
         if atlas.width == 0
             || atlas.height == 0

@@ -69,46 +69,6 @@ fn finite3(c: vec3<f32>) -> bool {
     return all(abs(c) <= vec3<f32>(3.0e38));
 }
 
-// `TexturedScalar::at`: factor × the texture's channel at the uv set it names.
-fn scalar_at(q: vec4<f32>, uv0: vec2<f32>, uv1: vec2<f32>) -> f32 {
-    let t = bitcast<i32>(q.y);
-    if t < 0 {
-        return q.x;
-    }
-    var uv = uv0;
-    if bitcast<u32>(q.z) == 1u {
-        uv = uv1;
-    }
-    return q.x * texture_sample(u32(t), uv)[bitcast<u32>(q.w)];
-}
-
-// `lustre_shade::bake::diffuse_albedo` as uploaded: clamp(base factor · texture, 0, 1) · k, with
-// k = 1 − clamp(metallic, 0, 1), or 0 where transmission ≥ ½, per pixel when those are textured.
-fn albedo(m: u32, uv0: vec2<f32>, uv1: vec2<f32>) -> vec3<f32> {
-    let a = mats[4u * m];
-    let b = mats[4u * m + 1u];
-    var k = a.w;
-    if b.w > 0.5 {
-        if scalar_at(mats[4u * m + 3u], uv0, uv1) >= 0.5 {
-            return vec3<f32>(0.0);
-        }
-        k = 1.0 - clamp(scalar_at(mats[4u * m + 2u], uv0, uv1), 0.0, 1.0);
-    }
-    let t = bitcast<i32>(b.x);
-    if t < 0 {
-        return a.xyz * k;
-    }
-    var uv = uv0;
-    if bitcast<u32>(b.y) == 1u {
-        uv = uv1;
-    }
-    var c = a.xyz * texture_sample(u32(t), uv).xyz;
-    if !finite3(c) {
-        c = vec3<f32>(0.0);
-    }
-    return clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)) * k;
-}
-
 // `Lightmapped::radiance`.
 fn radiance(prim: u32, b: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
     let base = prim * 8u;

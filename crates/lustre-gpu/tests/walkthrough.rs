@@ -5,10 +5,14 @@
 //! room with its real materials (the SGD fit of MERL gold-metallic-paint, anisotropic brushed
 //! aluminium, frosted glass, the glossy floor as the planar reflector). Also the agreement of
 //! the GPU frame with the CPU's ray-cast frame, and the named refusal of a material the GPU
-//! cannot shade. Fails without an adapter.
+//! cannot shade; and a 64×36 frame of the Modern Hall, whose floor and wooden steps are rough
+//! plastics with textured diffuse reflectance (kd and ρ read per pixel): the same glossy pixels
+//! as the twin and ≥ 75 dB (an open floor-strip discrepancy, present without textures too).
+//! Fails without an adapter.
 
 use lustre_brdf::rgb::Rgb;
-use lustre_gpu::{GpuContext, GpuFrameOptions, GpuWalkthrough, LightmapFrameScene};
+use lustre_gpu::frame_shade::{pack_material, FLAG_TEXTURED_DIFFUSE};
+use lustre_gpu::{GpuContext, GpuFrame, GpuFrameOptions, GpuWalkthrough, LightmapFrameScene};
 use lustre_scene::lightmap::{build_atlas, AtlasOptions, LightmapAtlas};
 use lustre_scene::{Material, MaterialKind, ResolvedSpec, Scene};
 use lustre_shade::bake::render::Lightmapped;
@@ -19,7 +23,7 @@ use lustre_shade::frame::{
 };
 use lustre_shade::metrics::psnr;
 use lustre_shade::mirror::MirrorBuffer;
-use lustre_shade::path::{PathOptions, PathTracer};
+use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
 
@@ -29,10 +33,15 @@ fn ctx() -> GpuContext {
 
 /// The room's light maps from a quick bake (4 texels/m, 1 path per texel, 2 bounces).
 fn baked(scene: &mut Scene) -> (LightmapAtlas, Vec<Vec<[f32; 3]>>) {
+    baked_at(scene, 4.0)
+}
+
+/// Light maps from a quick bake (1 path per texel, 2 bounces) at `texels_per_metre`.
+fn baked_at(scene: &mut Scene, texels_per_metre: f32) -> (LightmapAtlas, Vec<Vec<[f32; 3]>>) {
     let (atlas, _) = build_atlas(
         scene,
         &AtlasOptions {
-            texels_per_metre: 4.0,
+            texels_per_metre,
             ..AtlasOptions::default()
         },
     )
@@ -57,6 +66,86 @@ const PROBES: ProbeOptions = ProbeOptions {
     supersample: 1,
     plane_rays: 16,
 };
+
+/// Renders a w×h frame on the GPU (8 samples, seed 3) and the chain of its CPU twins on the
+/// GPU's read-back intermediates; returns the frame, the twin's glossy-hit count and the PSNR
+/// of the GPU frame against the twin.
+#[allow(clippy::too_many_arguments)]
+fn gpu_and_twin(
+    ctx: &GpuContext,
+    walk: &GpuWalkthrough,
+    lit: &LitScene,
+    light: &FrameLight,
+    camera: &PathCamera,
+    (w, h): (usize, usize),
+    method: FrameMethod,
+    k: u32,
+) -> (GpuFrame, u64, f64) {
+    let samples = 8;
+    let frame = walk
+        .render(
+            ctx,
+            lit,
+            camera,
+            (w, h),
+            &GpuFrameOptions {
+                samples,
+                method,
+                supersampling: k,
+                seed: 3,
+            },
+        )
+        .expect("GPU frame");
+    // The CPU twins on the GPU's intermediates.
+    let gb = frame.gbuffer.read_back(ctx).expect("G-buffer read-back");
+    let views: Vec<_> = frame
+        .views
+        .iter()
+        .map(|v| v.read_back(ctx).expect("view read-back"))
+        .collect();
+    let (mirror_views, see_throughs) = views.split_at(frame.reflectors.len());
+    let t = &frame.tables;
+    let buffers = FrameBuffers {
+        mirrors: frame
+            .reflectors
+            .iter()
+            .zip(mirror_views)
+            .map(|(r, v)| MirrorBuffer {
+                reflector: r.clone(),
+                plane: r.plane,
+                view: v.clone(),
+            })
+            .collect(),
+        mirror_of_mesh: t.mirror_of_mesh.clone(),
+        see_throughs: see_throughs.to_vec(),
+        see_through_of_mesh: t.see_through_of_mesh.clone(),
+        probe_of_mesh: t.probe_of_mesh.clone(),
+        thin: lit
+            .scene
+            .materials
+            .iter()
+            .map(lustre_shade::frame::thin_sheet)
+            .collect(),
+        first_prim: t.first_prim.clone(),
+        seconds: 0.0,
+    };
+    let (twin, twin_stats) = shade_gbuffer_view_dependent(
+        lit,
+        light,
+        &buffers,
+        camera,
+        &gb,
+        k,
+        &GBufferViewOptions {
+            samples: samples as usize,
+            method,
+            seed: 3,
+        },
+    )
+    .expect("CPU twin");
+    let db = psnr(&frame.image, &twin, 1.0).expect("psnr");
+    (frame, twin_stats.glossy_hits, db)
+}
 
 #[test]
 fn the_gpu_frame_matches_its_cpu_twins_and_the_ray_cast_frame() {
@@ -94,77 +183,17 @@ fn the_gpu_frame_matches_its_cpu_twins_and_the_ray_cast_frame() {
             1,
         ),
     ] {
-        let samples = 8;
-        let frame = walk
-            .render(
-                &ctx,
-                &lit,
-                &camera,
-                (w, h),
-                &GpuFrameOptions {
-                    samples,
-                    method,
-                    supersampling: k,
-                    seed: 3,
-                },
-            )
-            .expect("GPU frame");
+        let (frame, twin_hits, db) =
+            gpu_and_twin(&ctx, &walk, &lit, &light, &camera, (w, h), method, k);
         assert_eq!((frame.stats.mirrors, frame.stats.see_throughs), (1, 1));
-        // The CPU twins on the GPU's intermediates.
-        let gb = frame.gbuffer.read_back(&ctx).expect("G-buffer read-back");
-        let views: Vec<_> = frame
-            .views
-            .iter()
-            .map(|v| v.read_back(&ctx).expect("view read-back"))
-            .collect();
-        let (mirror_views, see_throughs) = views.split_at(frame.reflectors.len());
-        let t = &frame.tables;
-        let buffers = FrameBuffers {
-            mirrors: frame
-                .reflectors
-                .iter()
-                .zip(mirror_views)
-                .map(|(r, v)| MirrorBuffer {
-                    reflector: r.clone(),
-                    plane: r.plane,
-                    view: v.clone(),
-                })
-                .collect(),
-            mirror_of_mesh: t.mirror_of_mesh.clone(),
-            see_throughs: see_throughs.to_vec(),
-            see_through_of_mesh: t.see_through_of_mesh.clone(),
-            probe_of_mesh: t.probe_of_mesh.clone(),
-            thin: scene
-                .materials
-                .iter()
-                .map(lustre_shade::frame::thin_sheet)
-                .collect(),
-            first_prim: t.first_prim.clone(),
-            seconds: 0.0,
-        };
-        let (twin, twin_stats) = shade_gbuffer_view_dependent(
-            &lit,
-            &light,
-            &buffers,
-            &camera,
-            &gb,
-            k,
-            &GBufferViewOptions {
-                samples: samples as usize,
-                method,
-                seed: 3,
-            },
-        )
-        .expect("CPU twin");
-        let db = psnr(&frame.image, &twin, 1.0).expect("psnr");
         println!(
-            "{name}: GPU frame vs its CPU twins {db:.1} dB; glossy pixels {} / {}; GPU times \
-             {:?}",
-            frame.stats.glossy_hits, twin_stats.glossy_hits, frame.times
+            "{name}: GPU frame vs its CPU twins {db:.1} dB; glossy pixels {} / {twin_hits}; GPU \
+             times {:?}",
+            frame.stats.glossy_hits, frame.times
         );
         assert!(db >= 90.0, "{name}: {db:.1} dB");
         if !matches!(method, FrameMethod::Progressive { .. }) {
-            assert_eq!(frame.stats.glossy_hits, twin_stats.glossy_hits, "{name}");
+            assert_eq!(frame.stats.glossy_hits, twin_hits, "{name}");
         }
     }
     // The same frame ray-cast on the CPU (its own probes and buffers, jittered camera rays):
@@ -238,4 +267,67 @@ fn a_material_the_gpu_cannot_shade_is_refused_by_name() {
         err.contains("chrome") && err.contains("gold-paint") && err.contains("not on the GPU"),
         "{err}"
     );
+}
+
+/// The Modern Hall (`scenes/modern_hall.toml`: four probe objects, the tiled floor as the planar
+/// reflector; floor and wood are rough plastics with textured diffuse reflectance): a 64×36
+/// frame from the scene's camera on the GPU against its CPU twins: the same glossy pixels,
+/// regular and CK, and ≥ 75 dB (see the open discrepancy below).
+#[test]
+fn the_gpu_frame_of_the_modern_hall_matches_its_cpu_twins() {
+    let ctx = ctx();
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/modern_hall.toml");
+    let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let (atlas, pages) = baked_at(&mut scene, 4.0);
+    let (ps, _) = path_scene(&scene).expect("path scene");
+    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
+    let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
+    let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit");
+    // The textured rough plastics are on the GPU, flagged to read ρ per pixel.
+    let mut tables = vec![];
+    let textured = scene
+        .materials
+        .iter()
+        .filter_map(|m| pack_material(m, &mut tables).ok())
+        .filter(|b| b.flags & FLAG_TEXTURED_DIFFUSE != 0)
+        .count();
+    assert!(textured >= 2, "{textured} textured plastics");
+    let up = LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages).expect("upload");
+    let walk = GpuWalkthrough::new(&ctx, &lit, up, &PROBES, None).expect("walkthrough");
+    assert_eq!(walk.probes.len(), 4, "the hall's four probe objects");
+    let probes: Vec<_> = walk
+        .probes
+        .iter()
+        .map(|p| p.read_back(&ctx).expect("probe read-back"))
+        .collect();
+    let light = FrameLight {
+        probes: &probes,
+        environment: None,
+    };
+    let (w, h) = (64usize, 36usize);
+    let camera = path_camera(&scene, None, w as u32, h as u32).expect("camera");
+    for (name, method) in [("regular", FrameMethod::Regular), ("CK", FrameMethod::Ck)] {
+        let (frame, twin_hits, db) =
+            gpu_and_twin(&ctx, &walk, &lit, &light, &camera, (w, h), method, 1);
+        println!(
+            "Modern Hall, {name}: GPU frame vs its CPU twins {db:.1} dB; glossy pixels {} / \
+             {twin_hits} of {}",
+            frame.stats.glossy_hits,
+            w * h
+        );
+        assert_eq!(frame.stats.mirrors, 1, "the floor");
+        assert!(frame.stats.glossy_hits > (w * h / 4) as u64, "{name}");
+        assert_eq!(frame.stats.glossy_hits, twin_hits, "{name}");
+        // Not yet the room's ≥ 90 dB: a strip of floor pixels (rows 22–23, two large floor
+        // triangles) is ≈ 1 % darker on the GPU than in the twin. The strip's samples that
+        // leave the mirror buffer fall back to the nearest probe, and there the GPU and the
+        // twin disagree (33 dB with the mirror hint removed); the same holds with every texture
+        // removed from the scene (75.5 dB), so it does not come from the textured kd / ρ read
+        // here. The light-mapped parts agree there to 1e-6; the view-dependent part differs
+        // per sample (CK agrees at strip pixels where regular does not). Open: found, not
+        // fixed (gpu-textures report).
+        assert!(db >= 75.0, "{name}: {db:.1} dB");
+    }
 }

@@ -100,6 +100,16 @@ impl<'a> Lightmapped<'a> {
         l + kd * e * (1.0 / PI)
     }
 
+    /// The atlas the pages fill.
+    pub fn atlas(&self) -> &LightmapAtlas {
+        self.atlas
+    }
+
+    /// The per-material diffuse albedo of spec materials (as given to [`Lightmapped::new`]).
+    pub fn spec(&self) -> &[Rgb] {
+        &self.spec
+    }
+
     /// The diffuse albedo kd that [`Lightmapped::radiance`] applies at this hit (zero where it
     /// adds no light-mapped term): the part of the material a glossy pass must leave out.
     pub fn albedo(&self, g: &Geometry, prim: usize, bary: [f64; 3], d: DVec3) -> Rgb {
