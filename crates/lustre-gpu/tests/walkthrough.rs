@@ -10,13 +10,14 @@
 //! as the twin and ≥ 75 dB (an open floor-strip discrepancy, present without textures too).
 //! Fails without an adapter.
 
+mod common;
+use common::{ctx, quick_bake};
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::frame_shade::{pack_material, FLAG_TEXTURED_DIFFUSE};
 use lustre_gpu::{GpuContext, GpuFrame, GpuFrameOptions, GpuWalkthrough, LightmapFrameScene};
-use lustre_scene::lightmap::{build_atlas, AtlasOptions, LightmapAtlas};
 use lustre_scene::{Material, MaterialKind, ResolvedSpec, Scene};
 use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Denoiser};
+use lustre_shade::bake::spec_albedo;
 use lustre_shade::frame::{
     render_frame, shade_gbuffer_view_dependent, FrameBuffers, FrameLight, FrameMethod,
     FrameOptions, GBufferViewOptions,
@@ -26,40 +27,6 @@ use lustre_shade::mirror::MirrorBuffer;
 use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
-
-fn ctx() -> GpuContext {
-    GpuContext::new().unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// The room's light maps from a quick bake (4 texels/m, 1 path per texel, 2 bounces).
-fn baked(scene: &mut Scene) -> (LightmapAtlas, Vec<Vec<[f32; 3]>>) {
-    baked_at(scene, 4.0)
-}
-
-/// Light maps from a quick bake (1 path per texel, 2 bounces) at `texels_per_metre`.
-fn baked_at(scene: &mut Scene, texels_per_metre: f32) -> (LightmapAtlas, Vec<Vec<[f32; 3]>>) {
-    let (atlas, _) = build_atlas(
-        scene,
-        &AtlasOptions {
-            texels_per_metre,
-            ..AtlasOptions::default()
-        },
-    )
-    .expect("atlas");
-    let bake = BakeOptions {
-        spp: 1,
-        bounces: 2,
-        seed: 5,
-        denoiser: Denoiser::None,
-        ..BakeOptions::default()
-    };
-    let dir = tempfile::tempdir().expect("tempdir");
-    bake_tiles(scene, &atlas, &bake, dir.path(), None, &|_, _| {}).expect("bake");
-    let pages = assemble(scene, &atlas, &bake, dir.path())
-        .expect("assemble")
-        .pages;
-    (atlas, pages)
-}
 
 const PROBES: ProbeOptions = ProbeOptions {
     face_size: 32,
@@ -150,8 +117,12 @@ fn gpu_and_twin(
 #[test]
 fn the_gpu_frame_matches_its_cpu_twins_and_the_ray_cast_frame() {
     let ctx = ctx();
-    let mut scene = lustre_scene::builtin::room().expect("room");
-    let (atlas, pages) = baked(&mut scene);
+    let scene = lustre_scene::builtin::room().expect("room");
+    let common::Baked {
+        scene,
+        atlas,
+        pages,
+    } = quick_bake(scene, 4.0);
     let (ps, _) = path_scene(&scene).expect("path scene");
     let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
     let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
@@ -253,7 +224,11 @@ fn a_material_the_gpu_cannot_shade_is_refused_by_name() {
         "chrome",
         MaterialKind::Spec(ResolvedSpec::resolve("chrome", "sgd:chrome").expect("spec")),
     );
-    let (atlas, pages) = baked(&mut scene);
+    let common::Baked {
+        scene,
+        atlas,
+        pages,
+    } = quick_bake(scene, 4.0);
     let (ps, _) = path_scene(&scene).expect("path scene");
     let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
     let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
@@ -278,8 +253,12 @@ fn the_gpu_frame_of_the_modern_hall_matches_its_cpu_twins() {
     let ctx = ctx();
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/modern_hall.toml");
-    let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let (atlas, pages) = baked_at(&mut scene, 4.0);
+    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let common::Baked {
+        scene,
+        atlas,
+        pages,
+    } = quick_bake(scene, 4.0);
     let (ps, _) = path_scene(&scene).expect("path scene");
     let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
     let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
