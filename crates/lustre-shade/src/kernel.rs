@@ -147,13 +147,22 @@ impl BoundingPlane {
     }
 
     /// The ray parameter s > 0 where `pos + s·dir` meets the plane, or `None` when the ray is
-    /// parallel to the plane or points away from it.
+    /// parallel to the plane or points away from it, or when `pos` does not lie strictly on
+    /// the projection centre's side of the plane: the planes bound the space around the centre
+    /// and a secondary ray leaves it through them, so a point on a plane (a floor shaded
+    /// through a probe whose floor plane is that floor) or beyond it is not bounded by it —
+    /// else the sign of a rounding error in (q − p)·m would decide whether the lookup turns
+    /// back towards the point itself.
     pub fn intersect(&self, pos: DVec3, dir: DVec3) -> Option<f64> {
         let denom = dir.dot(self.normal);
         if denom.is_nan() || denom.abs() <= 1e-12 {
             return None;
         }
-        let s = (self.point - pos).dot(self.normal) / denom;
+        let gap = (self.point - pos).dot(self.normal);
+        if !(gap * self.point.dot(self.normal) > 0.0) {
+            return None;
+        }
+        let s = gap / denom;
         (s > 0.0 && s.is_finite()).then_some(s)
     }
 
@@ -1200,6 +1209,21 @@ mod tests {
         assert!((up - DVec3::new(1.0, 2.0, 0.0).normalize()).length() < 1e-12);
         let dn = corrected_direction(&planes, pos, -DVec3::Y);
         assert!((dn - d).length() < 1e-12);
+        // A point on the floor plane or below it is not bounded by it: upwards it reads the
+        // ceiling, downwards (leaving the room) it is not corrected by the floor.
+        for y in [-1.0, -1.0 - 1e-9, -1.5] {
+            let on = DVec3::new(1.0, y, 0.0);
+            let up = corrected_direction(&planes, on, DVec3::Y);
+            assert!(
+                (up - DVec3::new(1.0, 2.0, 0.0).normalize()).length() < 1e-12,
+                "{y}: {up}"
+            );
+            assert_eq!(
+                corrected_direction(&planes, on, -DVec3::Y),
+                -DVec3::Y,
+                "{y}"
+            );
+        }
         // At the projection centre the correction is the identity.
         let w = DVec3::new(0.3, -0.8, 0.1).normalize();
         assert!((corrected_direction(&planes, DVec3::ZERO, w) - w).length() < 1e-12);

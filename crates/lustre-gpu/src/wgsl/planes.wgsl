@@ -1,10 +1,11 @@
 // module planes: bounding-plane (parallax) correction of cube-map lookups (000 §4.4.1,
 // Fig. 4.5–4.6). CPU twins: lustre_shade::kernel::{BoundingPlane::intersect,
 // BoundingPlane::corrected_direction, corrected_direction}. Equations: the secondary ray
-// p + s·ω meets the plane (q, m) at s = ((q − p)·m) / (ω·m), accepted when |ω·m| > 1e-12 and
-// s > 0 is finite; over several planes the nearest hit wins; the cube map, whose projection
-// centre is the origin, is then read towards the hit, ω' = (p + s ω)/‖p + s ω‖, and along ω
-// itself when no plane is hit (or the hit is the centre).
+// p + s·ω meets the plane (q, m) at s = ((q − p)·m) / (ω·m), accepted when |ω·m| > 1e-12, s > 0
+// is finite and p lies strictly on the centre's side of the plane; over several planes the
+// nearest hit wins; the cube map, whose projection centre is the origin, is then read towards
+// the hit, ω' = (p + s ω)/‖p + s ω‖, and along ω itself
+// when no plane is hit (or the hit is the centre).
 //
 // Positions are relative to the projection centre. The planes live in the pass's buffers: a
 // pass folds them with `nearer_plane` and finishes with `corrected_lookup`.
@@ -17,13 +18,18 @@ struct BoundingPlane {
 }
 
 // BoundingPlane::intersect: the ray parameter s > 0 where p + s·ω meets the plane, −1 for none
-// (parallel, behind, or not finite).
+// (parallel, behind, not finite, or p not strictly on the projection centre's side: a point on
+// the plane or beyond it is not bounded by it).
 fn plane_distance(plane: BoundingPlane, p: vec3<f32>, w: vec3<f32>) -> f32 {
     let denom = dot(w, plane.normal);
     if (!(abs(denom) > 1e-12)) {
         return -1.0;
     }
-    let s = dot(plane.point - p, plane.normal) / denom;
+    let gap = dot(plane.point - p, plane.normal);
+    if (!(gap * dot(plane.point, plane.normal) > 0.0)) {
+        return -1.0;
+    }
+    let s = gap / denom;
     if (!(s > 0.0 && s <= 3.4e38)) {
         return -1.0;
     }
