@@ -14,128 +14,14 @@ use lustre_brdf::fits::sgd::SgdFits;
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::{uniform_sphere, SplitMix64};
 use lustre_gpu::fit_models::{fit_kd, pack_fit, FitParams, KIND_SGD, KURT_MAX_LOBES};
-use lustre_gpu::wgsl::{self, compose, Module};
-use lustre_gpu::GpuContext;
+use lustre_gpu::wgsl;
 use lustre_shade::warp::{fibonacci_point, integrate_warp};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
-use wgpu::util::DeviceExt;
 
-/// Runs `body` once per invocation i < `count` after `imports` (`input`, `output`: u32
-/// storage arrays) and reads `output` back.
-fn run_kernel(
-    ctx: &GpuContext,
-    imports: &[&Module],
-    body: &str,
-    input: &[u32],
-    output_words: usize,
-    count: u32,
-) -> Vec<u32> {
-    let pass = format!(
-        "@group(0) @binding(0) var<storage, read> input: array<u32>;\n\
-         @group(0) @binding(1) var<storage, read_write> output: array<u32>;\n\
-         @compute @workgroup_size(64)\n\
-         fn main(@builtin(global_invocation_id) gid: vec3<u32>) {{\n\
-         let i = gid.x;\n\
-         if (i >= {count}u) {{ return; }}\n\
-         {body}\n}}\n"
-    );
-    let src = compose(imports, &pass);
-    let dev = &ctx.device;
-    let scope = dev.push_error_scope(wgpu::ErrorFilter::Validation);
-    let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("fit_models test kernel"),
-        source: wgpu::ShaderSource::Wgsl(src.into()),
-    });
-    let pipeline = dev.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("fit_models test kernel"),
-        layout: None,
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let input_buf = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("input"),
-        contents: bytemuck::cast_slice(input),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    let size = (output_words * 4) as u64;
-    let output_buf = dev.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("output"),
-        size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let readback = dev.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let bind_group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("fit_models test kernel"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: input_buf.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: output_buf.as_entire_binding(),
-            },
-        ],
-    });
-    let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-    {
-        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: None,
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.dispatch_workgroups(count.div_ceil(64), 1, 1);
-    }
-    enc.copy_buffer_to_buffer(&output_buf, 0, &readback, 0, size);
-    ctx.queue.submit([enc.finish()]);
-    let slice = readback.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    ctx.wait().unwrap_or_else(|e| panic!("{e}"));
-    if let Some(e) = pollster::block_on(scope.pop()) {
-        panic!("test kernel: {e}");
-    }
-    rx.recv()
-        .unwrap_or_else(|e| panic!("{e}"))
-        .unwrap_or_else(|e| panic!("{e}"));
-    let out = bytemuck::cast_slice::<u8, u32>(
-        &slice.get_mapped_range().unwrap_or_else(|e| panic!("{e}")),
-    )
-    .to_vec();
-    readback.unmap();
-    out
-}
-
-fn ctx() -> GpuContext {
-    GpuContext::new().unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// The f32 the GPU receives, back in f64.
-fn f32_round(v: DVec3) -> DVec3 {
-    DVec3::new(
-        f64::from(v.x as f32),
-        f64::from(v.y as f32),
-        f64::from(v.z as f32),
-    )
-}
-
-/// Angle between two directions, accurate near 0.
-fn angle(a: DVec3, b: DVec3) -> f64 {
-    a.cross(b).length().atan2(a.dot(b))
-}
+mod common;
+use common::ctx;
+use common::kernel::{angle, f32_round, run_kernel};
 
 /// A material under test: its group (the model reported), name and BSDF.
 struct Case {
@@ -367,6 +253,7 @@ fn fitted_models_match_their_cpu_twins() {
         &input,
         n * Q_OUT,
         n as u32,
+        None,
     );
     let gpu_time = start.elapsed();
     let rel = |a: f64, b: f64| (a - b).abs() / b.abs().max(1e-3);
@@ -526,6 +413,7 @@ fn regular_warp_albedo_matches_integrate_warp() {
         &input,
         n * I_OUT,
         n as u32,
+        None,
     );
     // Per model: squared error, count, peak, worst relative.
     let mut acc: BTreeMap<&str, (f64, usize, f64, f64)> = BTreeMap::new();
@@ -636,7 +524,7 @@ fn upper_gamma_matches_the_cpu() {
     let n = pts.len();
     let body = "output[i] = bitcast<u32>(upper_gamma_f32(bitcast<f32>(input[2u * i]), \
                 bitcast<f32>(input[2u * i + 1u])));";
-    let out = run_kernel(&ctx, &[&wgsl::SGD], body, &input, n, n as u32);
+    let out = run_kernel(&ctx, &[&wgsl::SGD], body, &input, n, n as u32, None);
     let mut worst = (0.0f64, 0.0, 0.0);
     for (k, &(s, x, want)) in pts.iter().enumerate() {
         let gpu = f64::from(f32::from_bits(out[k]));

@@ -159,7 +159,8 @@ impl BoundingPlane {
             return None;
         }
         let gap = (self.point - pos).dot(self.normal);
-        if !(gap * self.point.dot(self.normal) > 0.0) {
+        // A NaN gap (a non-finite position) is refused too.
+        if gap * self.point.dot(self.normal) <= 0.0 || gap.is_nan() {
             return None;
         }
         let s = gap / denom;

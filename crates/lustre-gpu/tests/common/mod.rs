@@ -3,6 +3,8 @@
 
 #![allow(dead_code)] // Each test binary uses a subset.
 
+pub mod kernel;
+
 use lustre_gpu::GpuContext;
 use lustre_scene::lightmap::{build_atlas, AtlasOptions, LightmapAtlas};
 use lustre_scene::Scene;
