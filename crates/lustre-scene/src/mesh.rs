@@ -28,6 +28,12 @@ pub struct ObjectHints {
     /// Place a reflection probe at this object.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub probe: bool,
+    /// Where the probe is captured (world space), as artists place reflection probes: at a
+    /// point from which the object's surroundings are seen as its glossy surfaces see them
+    /// (above a flight of stairs rather than in the space under it). `None`: the centre of the
+    /// object's bounds (000 §4.4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub probe_centre: Option<[f64; 3]>,
     /// The object is a plane that should get a planar reflection.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub planar_reflector: bool,

@@ -39,6 +39,10 @@
 //! planar_reflector = true
 //! lightmap_texels_per_metre = 64.0
 //!
+//! [objects.Mesh014]
+//! probe = true                              # a reflection probe for this object,
+//! probe_centre = [-1.8, 5.2, -1.5]          # optional: captured here (else its bounds' centre)
+//!
 //! [lightmap]                                # light-map UVs and baked pages (`lustre bake`)
 //! atlas = "lightmap.glb"                    # the atlas: light-mapped meshes with TEXCOORD_1
 //! pages = ["lightmap_000.exr"]              # one per atlas page; [] before baking
@@ -398,6 +402,14 @@ impl SceneFile {
             for c in colours {
                 if !c.iter().all(|v| v.is_finite() && *v >= 0.0) {
                     return Err(format!("environment colour {c:?} must be finite and ≥ 0"));
+                }
+            }
+        }
+        for (name, hints) in &self.objects {
+            if let Some(c) = &hints.probe_centre {
+                finite(&format!("objects.{name}.probe_centre"), c)?;
+                if !hints.probe {
+                    return Err(format!("objects.{name}: probe_centre without probe = true"));
                 }
             }
         }

@@ -244,6 +244,7 @@ fn full_file() -> SceneFile {
         "Mesh018".into(),
         ObjectHints {
             probe: true,
+            probe_centre: Some([0.5, 2.25, -1.0]),
             diffuse_only: true,
             ..Default::default()
         },
@@ -262,6 +263,22 @@ fn scene_file_round_trip() {
     assert_eq!(back, f);
     // And again: the written text is stable.
     assert_eq!(back.to_toml().unwrap(), text);
+    // A probe centre that is not finite, or without a probe, is refused by name.
+    for (probe, centre, says) in [
+        (
+            true,
+            [0.0, f64::INFINITY, 0.0],
+            "objects.Mesh018.probe_centre",
+        ),
+        (false, [0.0, 1.0, 0.0], "probe_centre without probe"),
+    ] {
+        let mut bad = f.clone();
+        let h = bad.objects.get_mut("Mesh018").unwrap();
+        h.probe = probe;
+        h.probe_centre = Some(centre);
+        let e = bad.validate().unwrap_err();
+        assert!(e.contains(says), "{e}");
+    }
     // An invalid file is not written.
     let mut bad = f.clone();
     bad.cameras[0].fov_deg = f64::NAN;

@@ -281,9 +281,10 @@ pub fn capture_probe(lit: &LitScene, mesh: usize, opts: &ProbeOptions) -> Result
     })
 }
 
-/// Where the probe of mesh `mesh` is captured: its name and the centre of its bounds (what
-/// [`capture_probe`] and the GPU capture share). Errors: no such mesh, or a centre inside
-/// another object's solid (more than half the axis rays hit back faces — a probe inside a wall).
+/// Where the probe of mesh `mesh` is captured: its name and the mesh's `probe_centre` hint, else
+/// the centre of its bounds (what [`capture_probe`] and the GPU capture share). Errors: no such
+/// mesh, or a centre inside another object's solid (more than half the axis rays hit back faces
+/// — a probe inside a wall).
 pub fn probe_placement(lit: &LitScene, mesh: usize) -> Result<(String, DVec3)> {
     let (lo, hi) = lit.mesh_bounds(mesh).ok_or_else(|| {
         ShadeError::Parameter(format!(
@@ -292,7 +293,10 @@ pub fn probe_placement(lit: &LitScene, mesh: usize) -> Result<(String, DVec3)> {
         ))
     })?;
     let name = lit.scene.meshes[mesh].name.clone();
-    let centre = 0.5 * (lo + hi);
+    let centre = match lit.scene.meshes[mesh].hints.probe_centre {
+        Some([x, y, z]) => DVec3::new(x, y, z),
+        None => 0.5 * (lo + hi),
+    };
     let skip = Some(mesh as u32);
     let backs = inside_fraction(lit, centre, skip);
     if backs > 0.5 {

@@ -261,6 +261,22 @@ fn a_probe_inside_a_solid_is_refused() {
         };
         assert!(capture_probe(lit, 6, &bad).is_err());
     });
+    // A `probe_centre` hint outside the pillar places the probe there (the planes found from
+    // it); one inside the pillar is refused.
+    for (centre, inside) in [([2.0, 2.6, 0.8], false), ([2.0, 1.0, 2.0], true)] {
+        let mut scene = scene.clone();
+        scene.meshes[6].hints.probe_centre = Some(centre);
+        with_lit(&scene, &atlas, &pages, |lit| {
+            match capture_probe(lit, 6, &probe_opts()) {
+                Ok(probe) => {
+                    assert!(!inside, "{centre:?}");
+                    assert_eq!(probe.centre, DVec3::from_array(centre));
+                    assert_eq!(probe.planes.len(), 6, "{:?}", probe.planes);
+                }
+                Err(e) => assert!(inside && e.to_string().contains("inside a solid"), "{e}"),
+            }
+        });
+    }
 }
 
 fn camera() -> PathCamera {
