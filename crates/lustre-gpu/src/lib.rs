@@ -64,4 +64,7 @@ pub use shade::{Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SHAD
 pub use timer::{GpuTimer, Timing};
 pub use view_buffer::GpuViewBuffer;
 pub use view_pass::{GpuViewPass, ViewRender};
-pub use walkthrough::{GpuFrame, GpuFrameOptions, GpuFrameTimes, GpuWalkthrough};
+pub use walkthrough::{
+    GpuFrame, GpuFrameOptions, GpuFrameSession, GpuFrameTimes, GpuStep, GpuWalkthrough,
+    SessionIntermediates, StepWork,
+};

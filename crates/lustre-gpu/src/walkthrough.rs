@@ -4,14 +4,20 @@
 //! When the scene loads ([`GpuWalkthrough::new`]): every probe object's cube map captured from
 //! the light-mapped scene with the object left out and filtered into its Gaussian 6×6 pyramid
 //! ([`GpuProbeCapture`]; bounding planes on the CPU), or the environment's pyramid uploaded for
-//! scenes without probes. Per frame ([`GpuWalkthrough::render`]): the mirror buffer of every
-//! planar reflector and the see-through buffer of every transmissive probe object
-//! ([`GpuViewPass`], 000 §4.5), the k×k supersampled raster G-buffer ([`GBufferPass`]), the
-//! light-mapped diffuse shading ([`LightmapShadePass`], 000 Eq. 4.1) and the view-dependent pass
-//! ([`FrameShadePass`]: regular, CK or progressive sampling through each material's warp).
+//! scenes without probes. Per camera: the mirror buffer of every planar reflector and the
+//! see-through buffer of every transmissive probe object ([`GpuViewPass`], 000 §4.5), the k×k
+//! supersampled raster G-buffer ([`GBufferPass`]) and the light-mapped diffuse shading
+//! ([`LightmapShadePass`], 000 Eq. 4.1); per frame, the view-dependent pass ([`FrameShadePass`]:
+//! regular, CK or progressive sampling through each material's warp).
+//!
+//! [`GpuFrameSession`] keeps the targets and the per-camera buffers between displayed frames:
+//! at a still camera a progressive refinement adds one QMC frame per step (000 §4.4.2, issue 11
+//! §6) and a regular or CK frame is not re-rendered; motion resets. [`GpuWalkthrough::render`]
+//! is one fresh session stepped through its frames.
 //!
 //! The CPU frame ([`lustre_shade::frame::render_frame`]) is the same frame from ray casts; each
-//! pass's CPU twin reads the GPU's intermediates ([`GpuFrame`] keeps them) for the parity tests.
+//! pass's CPU twin reads the GPU's intermediates ([`GpuFrame`], [`SessionIntermediates`]) for
+//! the parity tests.
 
 use crate::context::GpuContext;
 use crate::error::{invalid, Result};
@@ -26,7 +32,7 @@ use crate::timer::GpuTimer;
 use crate::view_buffer::GpuViewBuffer;
 use crate::view_pass::GpuViewPass;
 use lustre_env::pyramid::CubePyramid;
-use lustre_shade::frame::{view_meshes, FrameMethod, FrameStats, FrameTables};
+use lustre_shade::frame::{view_meshes, FrameMethod, FrameStats, FrameTables, MAX_SAMPLES};
 use lustre_shade::image::Image;
 use lustre_shade::mirror::Reflector;
 use lustre_shade::path::PathCamera;
@@ -50,8 +56,9 @@ pub struct GpuWalkthrough {
     pub timestamps: bool,
 }
 
-/// Time of each stage of one frame, ms: GPU timestamps where the adapter has them, else the
-/// wall time until the GPU had finished.
+/// Time of each stage of one frame (or of one [`GpuFrameSession::step`]: 0 for a pass it did
+/// not run), ms: GPU timestamps where the adapter has them, else the wall time until the GPU
+/// had finished.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GpuFrameTimes {
     /// Mirror and see-through buffers.
@@ -60,7 +67,8 @@ pub struct GpuFrameTimes {
     pub gbuffer_ms: f64,
     /// Light-mapped diffuse shading.
     pub lightmap_ms: f64,
-    /// The view-dependent pass (all frames of a progressive refinement).
+    /// The view-dependent pass (in a [`GpuFrame`] all frames of a progressive refinement, in a
+    /// [`GpuStep`] the frame of that call).
     pub shade_ms: f64,
     /// True when the times are the GPU's own timestamps.
     pub timestamps: bool,
@@ -169,113 +177,440 @@ impl GpuWalkthrough {
         })
     }
 
-    /// Renders a w×h frame of `lit` from `camera`. Errors: an empty image, a sample count
-    /// outside 1..=`MAX_SAMPLES`, no supersampling, a material the GPU cannot shade (named).
+    /// Renders a w×h frame of `lit` from `camera`: a fresh [`GpuFrameSession`] stepped once,
+    /// or `frames` times for `Progressive { frames }` (still frames accumulated), its image
+    /// read back with its intermediates. Errors: an empty image, a sample count outside
+    /// 1..=`MAX_SAMPLES`, a progressive refinement of 0 frames, no supersampling, a material
+    /// the GPU cannot shade (named).
     pub fn render(
         &self,
         ctx: &GpuContext,
         lit: &LitScene,
         camera: &PathCamera,
-        (w, h): (usize, usize),
+        size: (usize, usize),
         opts: &GpuFrameOptions,
     ) -> Result<GpuFrame> {
-        let k = opts.supersampling;
-        if w == 0 || h == 0 || k == 0 {
-            return Err(invalid(
-                "frame",
-                format!("a {w}×{h} frame with {k}×{k} supersampling is empty"),
-            ));
-        }
-        let mut timer = GpuTimer::new(ctx);
-        let mut times = GpuFrameTimes {
-            timestamps: ctx
-                .device
-                .features()
-                .contains(wgpu::Features::TIMESTAMP_QUERY),
-            ..GpuFrameTimes::default()
-        };
-        // The mirror and see-through passes (000 §4.5.1), at the frame's resolution.
-        timer.start(ctx)?;
-        let (reflector_meshes, transmissive) = view_meshes(lit);
-        let mut views = vec![];
-        let mut reflectors = vec![];
-        let mut in_plane = vec![];
-        for &m in &reflector_meshes {
-            let (reflector, render) =
-                self.views
-                    .render_mirror(ctx, &self.scene, lit, m, camera, w, h)?;
-            in_plane.push((m, reflector.in_plane.clone()));
-            reflectors.push(reflector);
-            views.push(render.view);
-        }
-        for &m in &transmissive {
-            let render = self
-                .views
-                .render_see_through(ctx, &self.scene, lit, m, camera, w, h)?;
-            views.push(render.view);
-        }
-        times.views_ms = ms(timer.stop(ctx)?);
-        let probe_meshes: Vec<u32> = self.probes.iter().map(|p| p.mesh).collect();
-        let tables = FrameTables::new(lit, &probe_meshes, in_plane);
-        let shade_scene = FrameShadeScene::new(
-            ctx,
-            lit,
-            &tables,
-            &self.probes,
-            self.environment.as_ref(),
-            &views,
-        )?;
-        // The G-buffer and its light-mapped shading.
-        let (gw, gh) = (w as u32 * k, h as u32 * k);
-        let gbuffer = GBufferTarget::new(ctx, gw, gh)?;
-        timer.start(ctx)?;
-        self.gbuffer
-            .draw(ctx, &self.scene.geometry, camera, &gbuffer)?;
-        times.gbuffer_ms = ms(timer.stop(ctx)?);
-        let lightmapped = ShadeTarget::new(ctx, w as u32, h as u32)?;
-        timer.start(ctx)?;
-        self.lightmap
-            .shade(ctx, &self.scene.shading, &gbuffer, camera, k, &lightmapped)?;
-        times.lightmap_ms = ms(timer.stop(ctx)?);
-        // The view-dependent pass; progressive refinement accumulates its frames in `out`.
-        let out = FrameShadeTarget::new(ctx, w as u32, h as u32, k)?;
+        let mut session = GpuFrameSession::new();
         let frames = match opts.method {
             FrameMethod::Progressive { frames } => frames,
             _ => 1,
         };
-        timer.start(ctx)?;
-        for frame in 0..frames {
-            let shade_opts = FrameShadeOptions {
-                samples: opts.samples,
-                method: opts.method,
-                frame,
-                seed: opts.seed,
-            };
-            self.shade.shade(
-                ctx,
-                &shade_scene,
-                &gbuffer,
-                &lightmapped,
-                camera,
-                k,
-                &shade_opts,
-                &out,
-            )?;
+        // The first step validates the options (0 frames included).
+        let mut step = session.step(ctx, self, lit, camera, size, opts)?;
+        let mut times = step.times;
+        for _ in 1..frames {
+            step = session.step(ctx, self, lit, camera, size, opts)?;
+            times.shade_ms += step.times.shade_ms;
         }
-        times.shade_ms = ms(timer.stop(ctx)?);
-        let mut stats = out.stats(ctx)?;
-        stats.mirrors = reflectors.len();
-        stats.see_throughs = transmissive.len();
+        let mut stats = step.stats;
         stats.mirror_seconds = times.views_ms * 1e-3;
-        Ok(GpuFrame {
-            image: out.read_back(ctx)?,
+        session.into_frame(ctx, stats, times)
+    }
+}
+
+/// What one [`GpuFrameSession::step`] ran.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StepWork {
+    /// The targets were allocated (the first step, or a new size or supersampling) and every
+    /// pass ran.
+    Allocated,
+    /// The camera moved (or [`GpuFrameSession::reset`] was called): the view buffers, the
+    /// G-buffer, the light-map shading and frame 0 of the view-dependent pass re-rendered into
+    /// the kept targets.
+    Moved,
+    /// Samples, method or seed changed at a still camera: frame 0 of the view-dependent pass
+    /// alone, over the kept G-buffer and view buffers.
+    Reshaded,
+    /// The next progressive frame, accumulated (the view-dependent pass alone).
+    Accumulated,
+    /// Nothing changed and nothing is left to add (a still regular or CK frame, or a progressive
+    /// refinement that holds its `frames`): no pass ran, the image is the previous one.
+    Unchanged,
+}
+
+/// The record of one [`GpuFrameSession::step`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GpuStep {
+    /// What ran.
+    pub work: StepWork,
+    /// Frames the image now holds: 1 for regular and CK, the progressive frames accumulated
+    /// since the last reset (the last one shaded is frame `frames − 1`).
+    pub frames: u32,
+    /// Counts of the view-dependent pass's latest run (the image's last frame), the mirror and
+    /// see-through buffers the image reads, and the time of this call's view passes (0 when
+    /// they did not run).
+    pub stats: FrameStats,
+    /// Times of the passes this call ran (0 for those it did not).
+    pub times: GpuFrameTimes,
+}
+
+/// The read-only intermediates of a session's current frame (what the CPU twins read).
+#[derive(Clone, Copy, Debug)]
+pub struct SessionIntermediates<'a> {
+    /// The (k·w)×(k·h) G-buffer.
+    pub gbuffer: &'a GBufferTarget,
+    /// The mirror buffers, then the see-through buffers.
+    pub views: &'a [GpuViewBuffer],
+    /// The reflector of each mirror buffer.
+    pub reflectors: &'a [Reflector],
+    /// The per-mesh tables the view-dependent pass reads.
+    pub tables: &'a FrameTables,
+}
+
+/// The targets of one size and supersampling.
+#[derive(Debug)]
+struct Targets {
+    size: (usize, usize),
+    k: u32,
+    gbuffer: GBufferTarget,
+    lightmapped: ShadeTarget,
+    out: FrameShadeTarget,
+}
+
+/// What was rendered for one camera: its view buffers and the view-dependent pass's inputs
+/// built on them.
+#[derive(Debug)]
+struct CameraFrame {
+    camera: PathCamera,
+    views: Vec<GpuViewBuffer>,
+    reflectors: Vec<Reflector>,
+    see_throughs: usize,
+    tables: FrameTables,
+    scene: FrameShadeScene,
+}
+
+/// What the image in the output target holds.
+#[derive(Clone, Copy, Debug)]
+struct Shaded {
+    samples: u32,
+    method: std::mem::Discriminant<FrameMethod>,
+    seed: u64,
+    frames: u32,
+    stats: FrameStats,
+}
+
+/// A persistent GPU frame of one [`GpuWalkthrough`] (issue 11 §6; 000 §4.4.2): the targets
+/// for a size w×h and supersampling k (G-buffer, light-mapped image, the view-dependent pass's
+/// output and progressive accumulation), the view buffers and the pass inputs built for the
+/// current camera, and what the image holds (samples, method, seed, frames accumulated).
+/// A walkthrough (or a viewer) calls [`GpuFrameSession::step`] once per displayed frame:
+///
+/// - size or k changed (or the first step): the targets are reallocated, every pass runs;
+/// - the camera changed: view buffers, G-buffer, light-map shading and progressive frame 0
+///   (the accumulation is reset) re-rendered into the kept targets;
+/// - samples, method or seed changed: frame 0 of the view-dependent pass alone;
+/// - nothing changed, progressive with fewer than `frames` accumulated: the next QMC frame
+///   (frame f's R2 rotation, read at the level of the accumulated count) is averaged in, so a
+///   still camera converges frame by frame to the integral of the same incident light;
+/// - nothing changed otherwise (regular, CK, or `frames` reached): no pass runs.
+///
+/// `Progressive { frames }` is the number of frames to accumulate at a still camera; a step
+/// with fewer `frames` than the image already holds resets it. Cameras are compared exactly:
+/// every [`PathCamera`] field (origin, forward, right, up, tan ½fov) bit for bit, so any
+/// change, however small, resets the accumulation, and a viewer keeps passing the same value
+/// while the user is still. On a camera move the view buffers and the pass's scene inputs
+/// ([`FrameShadeScene`], which concatenates the view buffers) are built anew; only size or k
+/// reallocate the frame targets. The image stays on the GPU ([`GpuFrameSession::target`])
+/// until [`GpuFrameSession::image`] reads it back. A session belongs to one walkthrough and
+/// scene: pass the same ones to every step. After an error the next step re-renders
+/// everything.
+#[derive(Debug, Default)]
+pub struct GpuFrameSession {
+    targets: Option<Targets>,
+    frame: Option<CameraFrame>,
+    shaded: Option<Shaded>,
+}
+
+/// Every field of a camera, bit for bit (origin, forward, right, up, tan ½fov).
+fn camera_bits(c: &PathCamera) -> [u64; 13] {
+    let v = [c.origin, c.forward, c.right, c.up];
+    std::array::from_fn(|i| match v.get(i / 3) {
+        Some(x) => x[i % 3].to_bits(),
+        None => c.tan_half_fov_y.to_bits(),
+    })
+}
+
+impl GpuFrameSession {
+    /// A session with nothing allocated; the first [`GpuFrameSession::step`] allocates.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Renders, refines or keeps the w×h frame of `lit` from `camera` (type docs) and returns
+    /// what it did. Errors (the session is left as it was): an empty image, no
+    /// supersampling, a sample count outside 1..=`MAX_SAMPLES`, a progressive refinement of
+    /// 0 frames; and the passes' own errors (the next step then re-renders everything).
+    pub fn step(
+        &mut self,
+        ctx: &GpuContext,
+        walk: &GpuWalkthrough,
+        lit: &LitScene,
+        camera: &PathCamera,
+        (w, h): (usize, usize),
+        opts: &GpuFrameOptions,
+    ) -> Result<GpuStep> {
+        let k = opts.supersampling;
+        let (gw, gh) = match (u32::try_from(w), u32::try_from(h)) {
+            (Ok(a), Ok(b)) if a > 0 && b > 0 && k > 0 => {
+                match (a.checked_mul(k), b.checked_mul(k)) {
+                    (Some(gw), Some(gh)) => (gw, gh),
+                    _ => {
+                        return Err(invalid(
+                            "frame",
+                            format!("a {w}×{h} frame at {k}×{k} supersampling is too large"),
+                        ))
+                    }
+                }
+            }
+            _ => {
+                return Err(invalid(
+                    "frame",
+                    format!("a {w}×{h} frame with {k}×{k} supersampling is empty"),
+                ))
+            }
+        };
+        let max = MAX_SAMPLES as u32;
+        if opts.samples == 0 || opts.samples > max {
+            return Err(invalid(
+                "samples",
+                format!("{} is outside 1..={max}", opts.samples),
+            ));
+        }
+        let wanted = match opts.method {
+            FrameMethod::Progressive { frames: 0 } => {
+                return Err(invalid(
+                    "frames",
+                    "a progressive refinement of 0 frames accumulates nothing",
+                ))
+            }
+            FrameMethod::Progressive { frames } => frames,
+            _ => 1,
+        };
+        let mut timer = GpuTimer::new(ctx);
+        let mut times = GpuFrameTimes {
+            timestamps: walk.timestamps,
+            ..GpuFrameTimes::default()
+        };
+        let mut work = StepWork::Unchanged;
+        // The targets: kept unless the size or the supersampling changed.
+        let targets = match &mut self.targets {
+            Some(t) if t.size == (w, h) && t.k == k => t,
+            slot => {
+                // Free the old targets before allocating the new ones.
+                *slot = None;
+                self.frame = None;
+                self.shaded = None;
+                work = StepWork::Allocated;
+                slot.insert(Targets {
+                    size: (w, h),
+                    k,
+                    gbuffer: GBufferTarget::new(ctx, gw, gh)?,
+                    lightmapped: ShadeTarget::new(ctx, gw / k, gh / k)?,
+                    out: FrameShadeTarget::new(ctx, gw / k, gh / k, k)?,
+                })
+            }
+        };
+        // What the camera sees: kept while it is still.
+        let frame = match &mut self.frame {
+            Some(f) if camera_bits(&f.camera) == camera_bits(camera) => f,
+            slot => {
+                *slot = None;
+                self.shaded = None;
+                if work == StepWork::Unchanged {
+                    work = StepWork::Moved;
+                }
+                slot.insert(render_camera(
+                    ctx, walk, lit, camera, targets, &mut timer, &mut times,
+                )?)
+            }
+        };
+        // The view-dependent pass: frame 0 after any change, the next frame of a still
+        // progressive refinement, nothing otherwise.
+        let method = std::mem::discriminant(&opts.method);
+        let same = |s: &Shaded| (s.samples, s.method, s.seed) == (opts.samples, method, opts.seed);
+        let shaded = match self.shaded {
+            Some(s) if same(&s) && s.frames == wanted => s,
+            previous => {
+                let f = match previous {
+                    Some(s) if same(&s) && s.frames < wanted => s.frames,
+                    _ => 0,
+                };
+                if work == StepWork::Unchanged {
+                    work = if f == 0 {
+                        StepWork::Reshaded
+                    } else {
+                        StepWork::Accumulated
+                    };
+                }
+                // The accumulation is being rewritten: no image until the pass has finished.
+                self.shaded = None;
+                timer.start(ctx)?;
+                walk.shade.shade(
+                    ctx,
+                    &frame.scene,
+                    &targets.gbuffer,
+                    &targets.lightmapped,
+                    camera,
+                    k,
+                    &FrameShadeOptions {
+                        samples: opts.samples,
+                        method: opts.method,
+                        frame: f,
+                        seed: opts.seed,
+                    },
+                    &targets.out,
+                )?;
+                times.shade_ms = ms(timer.stop(ctx)?);
+                let mut stats = targets.out.stats(ctx)?;
+                stats.mirrors = frame.reflectors.len();
+                stats.see_throughs = frame.see_throughs;
+                Shaded {
+                    samples: opts.samples,
+                    method,
+                    seed: opts.seed,
+                    frames: f + 1,
+                    stats,
+                }
+            }
+        };
+        self.shaded = Some(shaded);
+        let mut stats = shaded.stats;
+        stats.mirror_seconds = times.views_ms * 1e-3;
+        Ok(GpuStep {
+            work,
+            frames: shaded.frames,
             stats,
             times,
-            gbuffer,
-            lightmapped,
-            views,
-            reflectors,
-            tables,
         })
     }
+
+    /// Forgets the current frame (the targets are kept): the next step re-renders every pass
+    /// as after a camera move.
+    pub fn reset(&mut self) {
+        self.frame = None;
+        self.shaded = None;
+    }
+
+    /// Frames the current image holds (0 before the first step and after a reset or an
+    /// error).
+    pub fn frames(&self) -> u32 {
+        self.shaded.map_or(0, |s| s.frames)
+    }
+
+    /// The GPU output of the current frame (w×h pixels and the progressive accumulation),
+    /// for display without a host round trip; `None` before the first step.
+    pub fn target(&self) -> Option<&FrameShadeTarget> {
+        self.targets.as_ref().map(|t| &t.out)
+    }
+
+    /// The current frame's intermediates; `None` when there is no frame.
+    pub fn intermediates(&self) -> Option<SessionIntermediates<'_>> {
+        match (&self.targets, &self.frame, &self.shaded) {
+            (Some(t), Some(f), Some(_)) => Some(SessionIntermediates {
+                gbuffer: &t.gbuffer,
+                views: &f.views,
+                reflectors: &f.reflectors,
+                tables: &f.tables,
+            }),
+            _ => None,
+        }
+    }
+
+    /// Reads the current frame back. Errors: no frame yet (or since a reset or an error).
+    pub fn image(&self, ctx: &GpuContext) -> Result<Image> {
+        match (&self.targets, &self.shaded) {
+            (Some(t), Some(_)) => t.out.read_back(ctx),
+            _ => Err(invalid("frame session", "no frame has been rendered")),
+        }
+    }
+
+    /// The current frame with its intermediates, consuming the session.
+    fn into_frame(
+        self,
+        ctx: &GpuContext,
+        stats: FrameStats,
+        times: GpuFrameTimes,
+    ) -> Result<GpuFrame> {
+        let image = self.image(ctx)?;
+        match (self.targets, self.frame) {
+            (Some(t), Some(f)) => Ok(GpuFrame {
+                image,
+                stats,
+                times,
+                gbuffer: t.gbuffer,
+                lightmapped: t.lightmapped,
+                views: f.views,
+                reflectors: f.reflectors,
+                tables: f.tables,
+            }),
+            _ => Err(invalid("frame session", "no frame has been rendered")),
+        }
+    }
+}
+
+/// The per-camera passes of a frame into `targets`: the mirror and see-through buffers
+/// (000 §4.5.1) at the frame's resolution, the view-dependent pass's inputs built on them, the
+/// G-buffer and its light-mapped shading. Their times go to `times`.
+fn render_camera(
+    ctx: &GpuContext,
+    walk: &GpuWalkthrough,
+    lit: &LitScene,
+    camera: &PathCamera,
+    targets: &Targets,
+    timer: &mut GpuTimer,
+    times: &mut GpuFrameTimes,
+) -> Result<CameraFrame> {
+    let (w, h) = targets.size;
+    timer.start(ctx)?;
+    let (reflector_meshes, transmissive) = view_meshes(lit);
+    let mut views = vec![];
+    let mut reflectors = vec![];
+    let mut in_plane = vec![];
+    for &m in &reflector_meshes {
+        let (reflector, render) =
+            walk.views
+                .render_mirror(ctx, &walk.scene, lit, m, camera, w, h)?;
+        in_plane.push((m, reflector.in_plane.clone()));
+        reflectors.push(reflector);
+        views.push(render.view);
+    }
+    for &m in &transmissive {
+        let render = walk
+            .views
+            .render_see_through(ctx, &walk.scene, lit, m, camera, w, h)?;
+        views.push(render.view);
+    }
+    times.views_ms = ms(timer.stop(ctx)?);
+    let probe_meshes: Vec<u32> = walk.probes.iter().map(|p| p.mesh).collect();
+    let tables = FrameTables::new(lit, &probe_meshes, in_plane);
+    let scene = FrameShadeScene::new(
+        ctx,
+        lit,
+        &tables,
+        &walk.probes,
+        walk.environment.as_ref(),
+        &views,
+    )?;
+    timer.start(ctx)?;
+    walk.gbuffer
+        .draw(ctx, &walk.scene.geometry, camera, &targets.gbuffer)?;
+    times.gbuffer_ms = ms(timer.stop(ctx)?);
+    timer.start(ctx)?;
+    walk.lightmap.shade(
+        ctx,
+        &walk.scene.shading,
+        &targets.gbuffer,
+        camera,
+        targets.k,
+        &targets.lightmapped,
+    )?;
+    times.lightmap_ms = ms(timer.stop(ctx)?);
+    Ok(CameraFrame {
+        camera: *camera,
+        views,
+        reflectors,
+        see_throughs: transmissive.len(),
+        tables,
+        scene,
+    })
 }

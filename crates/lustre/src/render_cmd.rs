@@ -1,8 +1,9 @@
 //! `lustre render`: a walkthrough frame of a light-mapped scene (000 §4): light maps for the
 //! diffuse light, a probe per probe object for the glossy light, regular sampling through every
-//! material's warp. This is the CPU frame (`lustre_shade::frame`); it writes PNG and EXR, a CSV
-//! of the time per stage, and, against a `lustre reference` image, PSNR / ΔE / relative RMS and a
-//! false-colour difference.
+//! material's warp. On the GPU (`lustre_gpu::GpuFrameSession`, progressive refinement stepped
+//! one still frame at a time) when it can, else the CPU frame (`lustre_shade::frame`); it writes
+//! PNG and EXR, a CSV of the time per stage, and, against a `lustre reference` image, PSNR / ΔE /
+//! relative RMS and a false-colour difference.
 
 use anyhow::{bail, Context};
 use glam::DMat3;
@@ -10,7 +11,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use lustre_brdf::rgb::Rgb;
 use lustre_env::cube::CubeMap;
 use lustre_env::pyramid::{CubePyramid, MipFilter};
-use lustre_gpu::{GpuContext, GpuFrameOptions, GpuWalkthrough, LightmapFrameScene};
+use lustre_gpu::{
+    GpuContext, GpuFrameOptions, GpuFrameSession, GpuFrameTimes, GpuWalkthrough, LightmapFrameScene,
+};
 use lustre_scene::lightmap::{build_atlas, AtlasOptions, AtlasSource, LightmapAtlas};
 use lustre_scene::Scene;
 use lustre_scene::{Environment, EnvironmentSource};
@@ -359,35 +362,48 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         Some(_) => bar.set_message(format!("{w}×{h}, {k}×{k} G-buffer samples/pixel, GPU")),
         None => bar.set_message(format!("{w}×{h}, {} camera rays/pixel", args.spp)),
     }
+    let mut session = GpuFrameSession::new();
+    let progressive_frames = match method {
+        FrameMethod::Progressive { frames } => frames,
+        _ => 1,
+    };
     for (stem, camera) in &cameras {
         // Each repetition: (frame without its passes, mirror and see-through passes), seconds,
-        // and for the GPU the time of each of its passes.
+        // and for the GPU the time of each of its passes, and of its first and still frames.
         let mut runs = vec![];
         let mut rendered = None;
         let mut gpu_times = vec![];
+        let (mut first_frames, mut still_frames) = (vec![], vec![]);
         for _ in 0..args.repeat {
             let t = Instant::now();
             let (img, stats) = match &gpu {
                 Some((ctx, walk)) => {
-                    let f = walk.render(
-                        ctx,
-                        &lit,
-                        camera,
-                        (w as usize, h as usize),
-                        &GpuFrameOptions {
-                            samples: args.samples as u32,
-                            method,
-                            supersampling: k,
-                            seed: args.seed,
-                        },
-                    )?;
-                    let t = f.times;
-                    runs.push((
-                        (t.gbuffer_ms + t.lightmap_ms + t.shade_ms) * 1e-3,
-                        t.views_ms * 1e-3,
-                    ));
-                    gpu_times.push(t);
-                    (f.image, f.stats)
+                    // Every camera and repetition starts afresh (as on the CPU); progressive
+                    // refinement then steps the session --frames times at the still camera,
+                    // one QMC frame accumulated per step.
+                    session.reset();
+                    let gopts = GpuFrameOptions {
+                        samples: args.samples as u32,
+                        method,
+                        supersampling: k,
+                        seed: args.seed,
+                    };
+                    let size = (w as usize, h as usize);
+                    let passes =
+                        |t: &GpuFrameTimes| (t.gbuffer_ms + t.lightmap_ms + t.shade_ms) * 1e-3;
+                    let mut step = session.step(ctx, walk, &lit, camera, size, &gopts)?;
+                    first_frames.push(passes(&step.times));
+                    let mut times = step.times;
+                    for _ in 1..progressive_frames {
+                        step = session.step(ctx, walk, &lit, camera, size, &gopts)?;
+                        still_frames.push(passes(&step.times));
+                        times.shade_ms += step.times.shade_ms;
+                    }
+                    runs.push((passes(&times), times.views_ms * 1e-3));
+                    gpu_times.push(times);
+                    let mut stats = step.stats;
+                    stats.mirror_seconds = times.views_ms * 1e-3;
+                    (session.image(ctx)?, stats)
                 }
                 None => {
                     let (img, stats) =
@@ -422,7 +438,38 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             st.times
                 .push((format!("{stem}: max of {}", args.repeat), hi));
         }
-        type Stage = fn(&lustre_gpu::GpuFrameTimes) -> f64;
+        // Progressive refinement: the frame above holds all --frames frames; on the GPU also
+        // its first frame and the median still (accumulating) frame, the view buffers apart.
+        let progress = match method {
+            FrameMethod::Progressive { frames } if gpu.is_some() => {
+                let (first, _, _) = median(&mut first_frames);
+                st.times.push((format!("{stem}: first frame"), first));
+                let mut line = format!(
+                    "progressive refinement on the GPU: {frames} frame(s) in {:.1} ms, the first \
+                     {:.1} ms",
+                    m * 1e3,
+                    first * 1e3
+                );
+                if !still_frames.is_empty() {
+                    let (still, _, _) = median(&mut still_frames);
+                    st.times.push((format!("{stem}: still frame"), still));
+                    write!(
+                        line,
+                        ", a still frame {:.1} ms (median of {})",
+                        still * 1e3,
+                        still_frames.len()
+                    )?;
+                }
+                Some(line)
+            }
+            FrameMethod::Progressive { frames } => Some(format!(
+                "progressive refinement on the CPU: {frames} frame(s) in one pass over the \
+                 pixels, {:.1} ms",
+                m * 1e3
+            )),
+            _ => None,
+        };
+        type Stage = fn(&GpuFrameTimes) -> f64;
         let stages: [(&str, Stage); 3] = [
             ("G-buffer", |t| t.gbuffer_ms),
             ("light-map shading", |t| t.lightmap_ms),
@@ -443,6 +490,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         if cameras.len() == 1 {
             bar.finish_and_clear();
             report(args, &img, &stats, (w, h), gpu.is_some().then_some(k))?;
+            if let Some(line) = &progress {
+                println!("{line}");
+            }
         }
         st.lap(format!("{stem}: write"));
     }

@@ -139,6 +139,25 @@ fn render_writes_a_frame_times_and_a_comparison() {
         assert!(o.status.success(), "{method}: {all}");
         let psnr = psnr_of(&all);
         assert!(psnr.is_finite() && psnr > 20.0, "{method}: {psnr} dB");
+        if method == "progressive" {
+            // On the GPU the session steps 4 still frames: the first frame's time and the
+            // median of the 3 still frames; on the CPU the 4 frames in one pass.
+            let times = std::fs::read_to_string(dir.path().join(method).join("times.csv")).unwrap();
+            if all.contains("rendered on the GPU") {
+                assert!(
+                    all.contains("a still frame") && all.contains("(median of 3)"),
+                    "{all}"
+                );
+                for stage in ["frame,", "frame: first frame,", "frame: still frame,"] {
+                    assert!(times.contains(stage), "{stage} missing: {times}");
+                }
+            } else {
+                assert!(
+                    all.contains("progressive refinement on the CPU: 4 frame(s)"),
+                    "{all}"
+                );
+            }
+        }
     }
     // A reference of another size is refused, naming both sizes.
     let other = dir.path().join("other.exr");

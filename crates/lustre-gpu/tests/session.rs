@@ -1,0 +1,389 @@
+//! The persistent GPU frame (`GpuFrameSession`, issue 11 §6) on the built-in room: F still steps
+//! of a progressive refinement give the image of one `GpuWalkthrough::render` with F frames; a
+//! moved camera resets to a fresh first frame; a new size or supersampling reallocates and
+//! renders that size; a still regular frame runs no pass and keeps its image; bad options are
+//! refused without losing the frame. And the accumulation converges: after 1, 16 and 64 still
+//! frames the PSNR against the CPU twin's converged integral of the same incident light
+//! (`shade_gbuffer_view_dependent` with many progressive frames on the GPU's read-back
+//! intermediates) rises. Fails without an adapter.
+
+mod common;
+use common::{ctx, quick_bake};
+use glam::DVec3;
+use lustre_brdf::rgb::Rgb;
+use lustre_gpu::{
+    GpuContext, GpuFrameOptions, GpuFrameSession, GpuWalkthrough, LightmapFrameScene,
+    SessionIntermediates, StepWork,
+};
+use lustre_scene::Scene;
+use lustre_shade::bake::render::Lightmapped;
+use lustre_shade::bake::spec_albedo;
+use lustre_shade::frame::{
+    shade_gbuffer_view_dependent, FrameBuffers, FrameLight, FrameMethod, GBufferViewOptions,
+};
+use lustre_shade::image::Image;
+use lustre_shade::metrics::psnr;
+use lustre_shade::mirror::MirrorBuffer;
+use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
+use lustre_shade::probe::{LitScene, Probe, ProbeOptions};
+use lustre_shade::reference::{path_camera, path_scene};
+
+const PROBES: ProbeOptions = ProbeOptions {
+    face_size: 32,
+    supersample: 1,
+    plane_rays: 16,
+};
+
+/// Runs `f` on the built-in room (quick bake) with its GPU walkthrough.
+fn with_room(f: impl FnOnce(&GpuContext, &Scene, &LitScene, &GpuWalkthrough)) {
+    let ctx = ctx();
+    let scene = lustre_scene::builtin::room().expect("room");
+    let common::Baked {
+        scene,
+        atlas,
+        pages,
+    } = quick_bake(scene, 4.0);
+    let (ps, _) = path_scene(&scene).expect("path scene");
+    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
+    let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
+    let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit");
+    let up = LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages).expect("upload");
+    let walk = GpuWalkthrough::new(&ctx, &lit, up, &PROBES, None).expect("walkthrough");
+    f(&ctx, &scene, &lit, &walk);
+}
+
+fn options(method: FrameMethod, supersampling: u32) -> GpuFrameOptions {
+    GpuFrameOptions {
+        samples: 8,
+        method,
+        supersampling,
+        seed: 3,
+    }
+}
+
+const fn progressive(frames: u32) -> FrameMethod {
+    FrameMethod::Progressive { frames }
+}
+
+/// Bit-for-bit equality of two images.
+fn same(a: &Image, b: &Image) -> bool {
+    (a.width, a.height) == (b.width, b.height)
+        && a.data
+            .iter()
+            .flatten()
+            .zip(b.data.iter().flatten())
+            .all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
+#[test]
+fn the_session_accumulates_still_frames_and_resets_on_change() {
+    with_room(|ctx, scene, lit, walk| {
+        let (w, h) = (48usize, 32usize);
+        let camera = path_camera(scene, None, w as u32, h as u32).expect("camera");
+        let render = |camera: &PathCamera, size, opts: GpuFrameOptions| {
+            walk.render(ctx, lit, camera, size, &opts)
+                .expect("GPU frame")
+                .image
+        };
+        let mut s = GpuFrameSession::new();
+        assert!(s.image(ctx).is_err(), "no frame before the first step");
+        assert!(s.intermediates().is_none());
+
+        // Four still steps of a progressive refinement: one frame each, the view buffers,
+        // G-buffer and light-map shading rendered by the first only.
+        let prog4 = options(progressive(4), 1);
+        let mut first = None;
+        for i in 0..4u32 {
+            let step = s
+                .step(ctx, walk, lit, &camera, (w, h), &prog4)
+                .expect("step");
+            let t = step.times;
+            assert_eq!(step.frames, i + 1);
+            assert!(t.shade_ms > 0.0, "{t:?}");
+            assert_eq!((step.stats.mirrors, step.stats.see_throughs), (1, 1));
+            assert!(step.stats.glossy_hits > 0);
+            if i == 0 {
+                assert_eq!(step.work, StepWork::Allocated);
+                assert!(t.views_ms > 0.0 && t.gbuffer_ms > 0.0 && t.lightmap_ms > 0.0);
+                first = Some(s.image(ctx).expect("frame 1"));
+            } else {
+                assert_eq!(step.work, StepWork::Accumulated);
+                assert_eq!((t.views_ms, t.gbuffer_ms, t.lightmap_ms), (0.0, 0.0, 0.0));
+                assert_eq!(step.stats.mirror_seconds, 0.0);
+            }
+        }
+        let still = s.image(ctx).expect("image");
+        let once = render(&camera, (w, h), prog4);
+        let db = psnr(&still, &once, 1.0).expect("psnr");
+        let first = first.expect("frame 1");
+        println!(
+            "4 still steps vs one render of 4 progressive frames: bit for bit {}, {db:.1} dB; \
+             against the first frame alone {:.1} dB",
+            same(&still, &once),
+            psnr(&still, &first, 1.0).expect("psnr")
+        );
+        assert!(same(&still, &once), "{db:.1} dB");
+        assert!(!same(&still, &first), "frames 2–4 changed the image");
+
+        // At its frame count the refinement holds: no pass, the same image.
+        let step = s
+            .step(ctx, walk, lit, &camera, (w, h), &prog4)
+            .expect("step");
+        assert_eq!((step.work, step.frames), (StepWork::Unchanged, 4));
+        assert_eq!(step.times.total_ms(), 0.0);
+        assert!(same(&s.image(ctx).expect("image"), &still));
+        // A larger frame count continues; a smaller one than the image holds starts over.
+        let step = s
+            .step(ctx, walk, lit, &camera, (w, h), &options(progressive(6), 1))
+            .expect("step");
+        assert_eq!((step.work, step.frames), (StepWork::Accumulated, 5));
+        let step = s
+            .step(ctx, walk, lit, &camera, (w, h), &prog4)
+            .expect("step");
+        assert_eq!((step.work, step.frames), (StepWork::Reshaded, 1));
+        assert_eq!(step.times.views_ms + step.times.gbuffer_ms, 0.0);
+        assert!(same(&s.image(ctx).expect("image"), &first));
+
+        // Bad options are refused by name and leave the frame as it was.
+        let err = s
+            .step(ctx, walk, lit, &camera, (w, h), &options(progressive(0), 1))
+            .expect_err("0 frames")
+            .to_string();
+        assert!(err.contains("0 frames"), "{err}");
+        let bad = GpuFrameOptions {
+            samples: 0,
+            ..prog4
+        };
+        let err = s
+            .step(ctx, walk, lit, &camera, (w, h), &bad)
+            .expect_err("0 samples")
+            .to_string();
+        assert!(err.contains("samples"), "{err}");
+        assert!(s
+            .step(ctx, walk, lit, &camera, (0, h), &prog4)
+            .expect_err("empty")
+            .to_string()
+            .contains("empty"));
+        assert_eq!(s.frames(), 1);
+        assert!(same(&s.image(ctx).expect("image"), &first));
+
+        // A moved camera: the accumulation restarts at frame 0 of the new view.
+        for _ in 0..3 {
+            s.step(ctx, walk, lit, &camera, (w, h), &prog4)
+                .expect("step");
+        }
+        let moved = PathCamera {
+            origin: camera.origin + DVec3::new(0.05, 0.02, 0.0),
+            ..camera
+        };
+        let step = s
+            .step(ctx, walk, lit, &moved, (w, h), &prog4)
+            .expect("step");
+        assert_eq!((step.work, step.frames), (StepWork::Moved, 1));
+        assert!(step.times.views_ms > 0.0 && step.times.gbuffer_ms > 0.0);
+        let reset = s.image(ctx).expect("image");
+        let fresh = render(&moved, (w, h), options(progressive(1), 1));
+        let moved4 = render(&moved, (w, h), prog4);
+        let (vs_old, vs_more) = (
+            psnr(&reset, &still, 1.0).expect("psnr"),
+            psnr(&reset, &moved4, 1.0).expect("psnr"),
+        );
+        println!(
+            "moved camera: bit for bit a fresh 1-frame render {}; against the old camera's 4 \
+             frames {vs_old:.1} dB, against 4 frames of the new camera {vs_more:.1} dB",
+            same(&reset, &fresh)
+        );
+        assert!(same(&reset, &fresh));
+        assert!(
+            vs_old < 60.0 && vs_more < 90.0,
+            "{vs_old:.1} / {vs_more:.1} dB"
+        );
+        // Camera equality is exact: the smallest change of one field resets.
+        let nudged = PathCamera {
+            tan_half_fov_y: f64::from_bits(moved.tan_half_fov_y.to_bits() + 1),
+            ..moved
+        };
+        let step = s
+            .step(ctx, walk, lit, &nudged, (w, h), &prog4)
+            .expect("step");
+        assert_eq!((step.work, step.frames), (StepWork::Moved, 1));
+
+        // A new size, then a new supersampling: the targets reallocated, that frame rendered.
+        let small = (40usize, 24usize);
+        for k in [1, 2] {
+            let opts = options(progressive(1), k);
+            let step = s.step(ctx, walk, lit, &moved, small, &opts).expect("step");
+            assert_eq!((step.work, step.frames), (StepWork::Allocated, 1));
+            let img = s.image(ctx).expect("image");
+            assert_eq!((img.width, img.height), small);
+            assert!(same(&img, &render(&moved, small, opts)), "k = {k}");
+            let gb = s.intermediates().expect("intermediates").gbuffer;
+            assert_eq!((gb.width, gb.height), (40 * k, 24 * k));
+        }
+
+        // Regular sampling at the still camera: the view-dependent pass alone, once; then
+        // nothing runs and the image stays.
+        let regular = options(FrameMethod::Regular, 2);
+        let step = s
+            .step(ctx, walk, lit, &moved, small, &regular)
+            .expect("step");
+        assert_eq!((step.work, step.frames), (StepWork::Reshaded, 1));
+        let img = s.image(ctx).expect("image");
+        assert!(same(&img, &render(&moved, small, regular)));
+        for _ in 0..2 {
+            let step = s
+                .step(ctx, walk, lit, &moved, small, &regular)
+                .expect("step");
+            assert_eq!((step.work, step.frames), (StepWork::Unchanged, 1));
+            assert_eq!(step.times.total_ms(), 0.0);
+            assert!(step.stats.glossy_hits > 0, "the image's counts are kept");
+            assert!(same(&s.image(ctx).expect("image"), &img));
+        }
+        // Other samples, CK, another seed: shaded again over the same G-buffer.
+        for opts in [
+            GpuFrameOptions {
+                samples: 5,
+                ..regular
+            },
+            options(FrameMethod::Ck, 2),
+            GpuFrameOptions {
+                seed: 4,
+                ..options(FrameMethod::Ck, 2)
+            },
+        ] {
+            let step = s.step(ctx, walk, lit, &moved, small, &opts).expect("step");
+            assert_eq!(step.work, StepWork::Reshaded, "{opts:?}");
+            assert!(same(
+                &s.image(ctx).expect("image"),
+                &render(&moved, small, opts)
+            ));
+        }
+        // A reset keeps the targets and re-renders every pass.
+        s.reset();
+        assert_eq!(s.frames(), 0);
+        assert!(s.image(ctx).is_err());
+        let step = s
+            .step(ctx, walk, lit, &moved, small, &regular)
+            .expect("step");
+        assert_eq!(step.work, StepWork::Moved);
+        assert!(same(&s.image(ctx).expect("image"), &img));
+    });
+}
+
+/// The CPU twin of the session's current frame after `frames` progressive frames, on its
+/// read-back intermediates.
+fn twin(
+    ctx: &GpuContext,
+    lit: &LitScene,
+    probes: &[Probe],
+    camera: &PathCamera,
+    inter: SessionIntermediates,
+    frames: u32,
+) -> Image {
+    let gb = inter.gbuffer.read_back(ctx).expect("G-buffer read-back");
+    let views: Vec<_> = inter
+        .views
+        .iter()
+        .map(|v| v.read_back(ctx).expect("view read-back"))
+        .collect();
+    let (mirror_views, see_throughs) = views.split_at(inter.reflectors.len());
+    let t = inter.tables;
+    let buffers = FrameBuffers {
+        mirrors: inter
+            .reflectors
+            .iter()
+            .zip(mirror_views)
+            .map(|(r, v)| MirrorBuffer {
+                reflector: r.clone(),
+                plane: r.plane,
+                view: v.clone(),
+            })
+            .collect(),
+        mirror_of_mesh: t.mirror_of_mesh.clone(),
+        see_throughs: see_throughs.to_vec(),
+        see_through_of_mesh: t.see_through_of_mesh.clone(),
+        probe_of_mesh: t.probe_of_mesh.clone(),
+        thin: lit
+            .scene
+            .materials
+            .iter()
+            .map(lustre_shade::frame::thin_sheet)
+            .collect(),
+        first_prim: t.first_prim.clone(),
+        seconds: 0.0,
+    };
+    let light = FrameLight {
+        probes,
+        environment: None,
+    };
+    shade_gbuffer_view_dependent(
+        lit,
+        &light,
+        &buffers,
+        camera,
+        &gb,
+        1,
+        &GBufferViewOptions {
+            samples: 8,
+            method: progressive(frames),
+            seed: 3,
+        },
+    )
+    .expect("CPU twin")
+    .0
+}
+
+/// Frames of the CPU twin's converged integral of the same incident light.
+const CONVERGED: u32 = 256;
+
+#[test]
+fn still_frames_converge_to_the_integral_of_the_same_incident_light() {
+    with_room(|ctx, scene, lit, walk| {
+        let (w, h) = (80usize, 48usize);
+        let camera = path_camera(scene, None, w as u32, h as u32).expect("camera");
+        let probes: Vec<_> = walk
+            .probes
+            .iter()
+            .map(|p| p.read_back(ctx).expect("probe read-back"))
+            .collect();
+        let opts = options(progressive(64), 1);
+        let mut s = GpuFrameSession::new();
+        let mut images = vec![];
+        let mut still_ms = vec![];
+        for f in 1..=64u32 {
+            let step = s
+                .step(ctx, walk, lit, &camera, (w, h), &opts)
+                .expect("step");
+            assert_eq!(step.frames, f);
+            if f > 1 {
+                still_ms.push(step.times.total_ms());
+            }
+            if [1, 16, 64].contains(&f) {
+                images.push((f, s.image(ctx).expect("image")));
+            }
+        }
+        let inter = s.intermediates().expect("intermediates");
+        let t0 = std::time::Instant::now();
+        let truth = twin(ctx, lit, &probes, &camera, inter, CONVERGED);
+        let twin_s = t0.elapsed().as_secs_f64();
+        let same64 = twin(ctx, lit, &probes, &camera, inter, 64);
+        let parity = psnr(&images[2].1, &same64, 1.0).expect("psnr");
+        still_ms.sort_by(f64::total_cmp);
+        println!(
+            "GPU after 64 still frames vs its CPU twin of 64 frames: {parity:.1} dB; still frame \
+             {:.1} ms (median of 63, 80×48, 8 samples); CPU twin of {CONVERGED} frames {twin_s:.1} s",
+            still_ms[still_ms.len() / 2]
+        );
+        assert!(parity >= 90.0, "{parity:.1} dB");
+        let dbs: Vec<f64> = images
+            .iter()
+            .map(|(f, img)| {
+                let db = psnr(img, &truth, 1.0).expect("psnr");
+                println!("after {f} still frame(s): {db:.2} dB against {CONVERGED} CPU frames");
+                db
+            })
+            .collect();
+        assert!(dbs[0] < dbs[1] && dbs[1] < dbs[2], "{dbs:?}");
+    });
+}
