@@ -541,7 +541,7 @@ fn gpu_renderer(
     let uploaded = LightmapFrameScene::upload(&ctx, scene, atlas, pages)
         .context("uploading the scene to the GPU")?;
     let walk = GpuWalkthrough::new(&ctx, lit, uploaded, probe_opts, environment)
-        .context("capturing the probes on the GPU")?;
+        .context("preparing the scene for the GPU (its materials, then its probes)")?;
     Ok((ctx, walk))
 }
 
