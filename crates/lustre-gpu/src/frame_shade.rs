@@ -17,10 +17,13 @@
 //! glass, built by the CPU as this interface);
 //! 16–19 belong to the fitted models (gpu-fits). Per pixel the pass reads the diffuse albedo kd
 //! as `Lightmapped::albedo` does (textures included) from the light-map pass's records
-//! (`material_albedo.wgsl`), and a (rough) plastic's textured diffuse reflectance at uv0
-//! ([`FLAG_TEXTURED_DIFFUSE`]). Materials the pass cannot shade (other textured parameters of
-//! glossy materials, normal-mapped glossy materials, fitted specs not on the GPU) are refused
-//! with a named error, so the caller falls back to the CPU frame.
+//! (`material_albedo.wgsl`); a material's textured parameters at uv0 from its
+//! [`pack_material_params`] record, resolved into the model's by `wgsl/textured.wgsl`
+//! ([`FLAG_TEXTURED`]: diffuse and specular colours, roughness, the glTF base colour, metallic,
+//! roughness and transmission); and tilts the shading frame by a normal map as the CPU's
+//! `PathTracer::shading_point` does ([`FLAG_NORMAL_MAPPED`]; tangents from the mesh or ∂p/∂u).
+//! Materials the pass cannot shade (a rough plastic's textured roughness, fitted specs not on
+//! the GPU) are refused with a named error, so the caller falls back to the CPU frame.
 //!
 //! Incident light: every probe's pyramid and the environment's are concatenated into one
 //! storage buffer with an offset table and read trilinearly and seamlessly as
@@ -35,8 +38,8 @@ use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry
 use crate::context::GpuContext;
 use crate::error::{invalid, scope_result, wgpu_error, Result};
 use crate::fit_models::pack_fit;
-use crate::gbuffer::{camera_uniform, map_read, GBufferTarget};
-use crate::lightmap_shade::{shading_records, ShadeTarget};
+use crate::gbuffer::{camera_uniform, map_read, texture_slot, GBufferTarget};
+use crate::lightmap_shade::{gpu_scalar, shading_records, ShadeTarget};
 use crate::probe_capture::GpuProbe;
 use crate::pyramid::GpuPyramid;
 use crate::view_buffer::GpuViewBuffer;
@@ -54,8 +57,8 @@ use lustre_brdf::models::rough_plastic::RoughPlastic;
 use lustre_brdf::models::thin_dielectric::ThinDielectric;
 use lustre_brdf::rgb::Rgb;
 use lustre_env::cube::fetch_sources;
-use lustre_scene::material::Distribution;
-use lustre_scene::{Material, MaterialKind};
+use lustre_scene::material::{Distribution, TextureRef};
+use lustre_scene::{Material, MaterialKind, Scene, TexturedRgb, TexturedScalar};
 use lustre_shade::frame::{
     thin_sheet, FrameBuffers, FrameLight, FrameMethod, FrameStats, FrameTables,
 };
@@ -91,11 +94,15 @@ pub const FLAG_DIFFUSE_ONLY: u32 = 4;
 pub const FLAG_DELTA_ONLY: u32 = 1;
 /// [`GpuBsdf::flags`]: a two-sided material (the frame is turned towards the viewer).
 pub const FLAG_TWO_SIDED: u32 = 2;
-/// [`GpuBsdf::flags`]: a (rough) plastic whose diffuse reflectance is textured: ρ (and the
-/// specular sampling weight from it) is read per pixel at uv0 from the material's albedo record
-/// (`material_albedo.wgsl`), as `Material::with_bsdf_at` builds it; the record holds the
-/// clamped factor.
-pub const FLAG_TEXTURED_DIFFUSE: u32 = 8;
+/// [`GpuBsdf::flags`]: a BSDF parameter is textured: the pass reads the material's parameters
+/// at the pixel's uv0 from its [`pack_material_params`] record and rewrites the model's
+/// (`wgsl/textured.wgsl` `textured_bsdf`), as `Material::with_bsdf_at` builds the CPU model;
+/// the record holds the clamped factors. Kinds 1–4 and 6–8 (a glTF record may turn into kind 3
+/// or 9 per pixel: its transmission decides).
+pub const FLAG_TEXTURED: u32 = 8;
+/// [`GpuBsdf::flags`]: a normal-mapped material: the shading frame is tilted per pixel as the
+/// CPU's `PathTracer::shading_point` tilts it (`wgsl/textured.wgsl` `mapped_normal`).
+pub const FLAG_NORMAL_MAPPED: u32 = 16;
 /// Entries of a rough plastic's transmittance table (`RoughPlastic::transmittance` at μ = i/63).
 pub const ROUGH_PLASTIC_TABLE: usize = 64;
 
@@ -105,8 +112,8 @@ pub const ROUGH_PLASTIC_TABLE: usize = 64;
 pub struct GpuBsdf {
     /// Model code (module docs).
     pub kind: u32,
-    /// [`FLAG_DELTA_ONLY`] | [`FLAG_TWO_SIDED`] | [`FLAG_DIFFUSE_ONLY`] |
-    /// [`FLAG_TEXTURED_DIFFUSE`].
+    /// [`FLAG_DELTA_ONLY`] | [`FLAG_TWO_SIDED`] | [`FLAG_DIFFUSE_ONLY`] | [`FLAG_TEXTURED`] |
+    /// [`FLAG_NORMAL_MAPPED`].
     pub flags: u32,
     /// Zero.
     pub pad0: u32,
@@ -297,62 +304,45 @@ fn microfacet(d: Distribution) -> MicrofacetType {
 
 /// The record of a scene material, built as `Material::bsdf_at` builds the CPU model (smooth
 /// glass as the thin sheet the CPU frame shades). A rough plastic appends its transmittance
-/// table to `tables`. A (rough) plastic's textured diffuse reflectance is read per pixel
-/// ([`FLAG_TEXTURED_DIFFUSE`]). Errors (naming the material): other textured parameters of
-/// glossy materials, normal-mapped glossy materials, and models not on the GPU in this build.
+/// table to `tables`. Textured parameters are packed as their clamped factors and flagged
+/// ([`FLAG_TEXTURED`]: read per pixel from the [`pack_material_params`] record), a normal map
+/// is flagged ([`FLAG_NORMAL_MAPPED`]); a textured glTF material is packed as its BRDF with the
+/// relative ior in p1.y, whatever its transmission factor (the pixel's transmission picks the
+/// model). Errors (naming the material): a rough plastic's textured roughness (its coating's
+/// tables are built per roughness, ≈ 6000 microfacet integrals), models not on the GPU in this
+/// build.
 pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
     let name = format!("material {:?}", m.name);
     let brdf = |e: lustre_brdf::Error| invalid(name.clone(), e.to_string());
     let refuse = |why: &str| invalid(name.clone(), format!("{why}: not on the GPU in this build"));
-    let two_sided = if m.two_sided { FLAG_TWO_SIDED } else { 0 };
+    let mut common = if m.two_sided { FLAG_TWO_SIDED } else { 0 };
+    if m.normal_map.is_some() {
+        common |= FLAG_NORMAL_MAPPED;
+    }
     let record = |kind: u32, flags: u32, p: [[f32; 4]; 8]| GpuBsdf {
         kind,
-        flags: flags | two_sided,
+        flags: flags | common,
         pad0: 0,
         pad1: 0,
         p,
     };
-    if let MaterialKind::Diffuse { reflectance } = &m.kind {
-        if reflectance.texture.is_some() {
-            return Ok(record(KIND_NONE, 0, [[0.0; 4]; 8]));
-        }
-        let c = Rgb::new(
-            reflectance.factor[0],
-            reflectance.factor[1],
-            reflectance.factor[2],
-        );
-        let l = Lambert::new(c.map(unit)).map_err(brdf)?;
-        return Ok(record(KIND_LAMBERT, FLAG_DIFFUSE_ONLY, pack_lambert(&l)?));
-    }
-    if m.normal_map.is_some() {
-        return Err(refuse("a normal-mapped glossy material"));
-    }
     let thin = thin_sheet(m);
     let kind = thin.as_ref().map_or(&m.kind, |t| &t.kind);
-    let constant_rgb = |t: &lustre_scene::TexturedRgb| {
-        t.texture
-            .is_none()
-            .then(|| Rgb::new(t.factor[0], t.factor[1], t.factor[2]).map(unit))
-            .ok_or_else(|| refuse("a textured colour"))
-    };
-    // A plastic's diffuse reflectance: the clamped factor, flagged when textured.
-    let diffuse_rgb = |t: &lustre_scene::TexturedRgb| {
-        let c = Rgb::new(t.factor[0], t.factor[1], t.factor[2]).map(unit);
-        let flag = if t.texture.is_some() {
-            FLAG_TEXTURED_DIFFUSE
-        } else {
-            0
-        };
-        (c, flag)
-    };
-    let constant = |t: &lustre_scene::TexturedScalar| {
-        t.texture
-            .is_none()
-            .then(|| clamp_alpha(t.factor))
-            .ok_or_else(|| refuse("a textured roughness"))
-    };
+    // A parameter's clamped factor (the value everywhere when untextured) and whether it is
+    // textured.
+    let rgb = |t: &TexturedRgb| (t.factor.map(unit), t.texture.is_some());
+    let alpha = |t: &TexturedScalar| (clamp_alpha(t.factor), t.texture.is_some());
+    let flag = |textured: bool| if textured { FLAG_TEXTURED } else { 0 };
     match kind {
-        MaterialKind::Diffuse { .. } => Err(refuse("a Lambertian thin sheet")),
+        MaterialKind::Diffuse { reflectance } => {
+            let (c, tex) = rgb(reflectance);
+            let l = Lambert::new(c).map_err(brdf)?;
+            Ok(record(
+                KIND_LAMBERT,
+                FLAG_DIFFUSE_ONLY | flag(tex),
+                pack_lambert(&l)?,
+            ))
+        }
         MaterialKind::RoughConductor {
             eta,
             k,
@@ -361,15 +351,15 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             alpha_v,
             distribution,
         } => {
-            let d = MicrofacetDistribution::new(
-                microfacet(*distribution),
-                constant(alpha_u)?,
-                constant(alpha_v)?,
-            )
-            .map_err(brdf)?;
+            let ((au, tu), (av, tv), (c, tc)) = (alpha(alpha_u), alpha(alpha_v), rgb(specular));
+            let d = MicrofacetDistribution::new(microfacet(*distribution), au, av).map_err(brdf)?;
             let ior = ComplexIor::new(*eta, *k).map_err(brdf)?;
-            let c = RoughConductor::new(d, ior, constant_rgb(specular)?).map_err(brdf)?;
-            Ok(record(KIND_ROUGH_CONDUCTOR, 0, pack_rough_conductor(&c)?))
+            let c = RoughConductor::new(d, ior, c).map_err(brdf)?;
+            Ok(record(
+                KIND_ROUGH_CONDUCTOR,
+                flag(tu || tv || tc),
+                pack_rough_conductor(&c)?,
+            ))
         }
         MaterialKind::RoughPlastic {
             diffuse,
@@ -380,10 +370,16 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             ext_ior,
             nonlinear,
         } => {
-            let (rho, textured) = diffuse_rgb(diffuse);
+            if alpha.texture.is_some() {
+                return Err(refuse(
+                    "a rough plastic's textured roughness (its coating's tables are built per \
+                     roughness)",
+                ));
+            }
+            let (rho, tex) = rgb(diffuse);
             let c = RoughPlastic::new(
                 microfacet(*distribution),
-                constant(alpha)?,
+                clamp_alpha(alpha.factor),
                 rho,
                 specular.map(unit),
                 *int_ior,
@@ -394,18 +390,19 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             let offset = u32::try_from(tables.len()).unwrap_or(u32::MAX);
             let p = pack_rough_plastic(&c, offset)?;
             tables.extend(rough_plastic_table(&c));
-            Ok(record(KIND_ROUGH_PLASTIC, textured, p))
+            Ok(record(KIND_ROUGH_PLASTIC, flag(tex), p))
         }
         MaterialKind::RoughDielectric {
             int_ior,
             ext_ior,
-            alpha,
+            alpha: a,
             distribution,
             specular_reflectance,
             specular_transmittance,
         } => {
-            let d = MicrofacetDistribution::isotropic(microfacet(*distribution), constant(alpha)?)
-                .map_err(brdf)?;
+            let (av, tex) = alpha(a);
+            let d =
+                MicrofacetDistribution::isotropic(microfacet(*distribution), av).map_err(brdf)?;
             let c = RoughDielectric::new(d, *int_ior, *ext_ior)
                 .and_then(|c| {
                     c.with_tints(
@@ -414,11 +411,20 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
                     )
                 })
                 .map_err(brdf)?;
-            Ok(record(KIND_ROUGH_DIELECTRIC, 0, pack_rough_dielectric(&c)?))
+            Ok(record(
+                KIND_ROUGH_DIELECTRIC,
+                flag(tex),
+                pack_rough_dielectric(&c)?,
+            ))
         }
         MaterialKind::Conductor { eta, k, specular } => {
-            let c = Conductor::new(*eta, *k, constant_rgb(specular)?).map_err(brdf)?;
-            Ok(record(KIND_CONDUCTOR, FLAG_DELTA_ONLY, pack_conductor(&c)?))
+            let (c, tex) = rgb(specular);
+            let c = Conductor::new(*eta, *k, c).map_err(brdf)?;
+            Ok(record(
+                KIND_CONDUCTOR,
+                FLAG_DELTA_ONLY | flag(tex),
+                pack_conductor(&c)?,
+            ))
         }
         MaterialKind::ThinDielectric {
             int_ior,
@@ -447,10 +453,10 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             ext_ior,
             nonlinear,
         } => {
-            let (rho, textured) = diffuse_rgb(diffuse);
+            let (rho, tex) = rgb(diffuse);
             let c = Plastic::new(rho, specular.map(unit), *int_ior, *ext_ior, *nonlinear)
                 .map_err(brdf)?;
-            Ok(record(KIND_PLASTIC, textured, pack_plastic(&c)?))
+            Ok(record(KIND_PLASTIC, flag(tex), pack_plastic(&c)?))
         }
         MaterialKind::PbrMetallicRoughness {
             base_color,
@@ -460,20 +466,40 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             ior,
             ..
         } => {
-            let c = constant_rgb(base_color)?;
-            let scalar = |t: &lustre_scene::TexturedScalar| {
-                t.texture
-                    .is_none()
-                    .then_some(t.factor)
-                    .ok_or_else(|| refuse("a textured glTF parameter"))
+            let (c, tc) = rgb(base_color);
+            let r = unit(roughness.factor);
+            // The glass the CPU builds where the transmission is ≥ ½ (its relative ior also
+            // rides in a textured record).
+            let glass = || {
+                Dielectric::new(*ior, 1.0)
+                    .and_then(|g| g.with_tints(Rgb::ONE, c))
+                    .map_err(brdf)
             };
-            let r = unit(scalar(roughness)?);
-            if scalar(transmission)? >= 0.5 {
+            let textured = tc
+                || metallic.texture.is_some()
+                || roughness.texture.is_some()
+                || transmission.texture.is_some();
+            if textured {
+                let b = PbrMetallicRoughness::new(c, unit(metallic.factor), r).map_err(brdf)?;
+                let mut p = pack_pbr_metallic_roughness(&b)?;
+                let eta = if transmission.texture.is_some() || transmission.factor >= 0.5 {
+                    glass()?.eta as f32
+                } else {
+                    0.0
+                };
+                if !eta.is_finite() {
+                    return Err(invalid(
+                        name.clone(),
+                        format!("ior {ior} does not fit an f32"),
+                    ));
+                }
+                p[1][1] = eta;
+                return Ok(record(KIND_PBR_METALLIC_ROUGHNESS, FLAG_TEXTURED, p));
+            }
+            if transmission.factor >= 0.5 {
+                let g = glass()?;
                 let a = r * r;
                 if a < PBR_ALPHA_MIN {
-                    let g = Dielectric::new(*ior, 1.0)
-                        .and_then(|g| g.with_tints(Rgb::ONE, c))
-                        .map_err(brdf)?;
                     return Ok(record(
                         KIND_DIELECTRIC,
                         FLAG_DELTA_ONLY,
@@ -486,7 +512,7 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
                     .map_err(brdf)?;
                 return Ok(record(KIND_ROUGH_DIELECTRIC, 0, pack_rough_dielectric(&g)?));
             }
-            let b = PbrMetallicRoughness::new(c, unit(scalar(metallic)?), r).map_err(brdf)?;
+            let b = PbrMetallicRoughness::new(c, unit(metallic.factor), r).map_err(brdf)?;
             Ok(record(
                 KIND_PBR_METALLIC_ROUGHNESS,
                 0,
@@ -511,9 +537,80 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
     }
 }
 
-/// Everything the pass reads besides the G-buffer: per-triangle records, materials, the cube
-/// maps, the view buffers, and what the per-pixel diffuse albedo kd is read from (the light-map
-/// pass's triangle and material records and textures, [`crate::lightmap_shade`]).
+/// Vec4s per material of the [`pack_material_params`] records.
+pub const MATERIAL_PARAMS: usize = 5;
+
+/// The per-pixel inputs of a material's record (`frame_shade.wgsl` reads them where the record
+/// is flagged [`FLAG_TEXTURED`] or [`FLAG_NORMAL_MAPPED`]): its textured parameters as
+/// `material_albedo.wgsl` reads them — rgb: (factor rgb, texture slot bits, −1 none), then
+/// three scalars as `scalar_at` reads them (factor, slot bits, uv set bits, channel bits) —
+/// and the normal map (scale, slot bits, 0, 0). Which parameter is which follows the kind
+/// (`wgsl/textured.wgsl`): rgb = a Lambert's or plastic's diffuse reflectance, a conductor's
+/// specular colour, the glTF base colour; scalars = a rough conductor's αu, αv, a rough
+/// dielectric's α, the glTF metallic, roughness, transmission. Every texture is read at uv0
+/// (the CPU's view-dependent shading reads both uv sets at uv0). Textures get slots in
+/// `slots`. Errors: a texture beyond the scene's (named).
+pub fn pack_material_params(
+    scene: &Scene,
+    m: &Material,
+    slots: &mut Vec<usize>,
+) -> Result<[[f32; 4]; MATERIAL_PARAMS]> {
+    let slot = |t: Option<TextureRef>, slots: &mut Vec<usize>| -> Result<u32> {
+        Ok(match t {
+            Some(r) => texture_slot(scene, &m.name, r.texture, slots)? as u32,
+            None => NONE,
+        })
+    };
+    let mut out = [[0.0f32; 4]; MATERIAL_PARAMS];
+    let none = TexturedScalar::constant(0.0);
+    let (rgb, scalars): (Option<&TexturedRgb>, [&TexturedScalar; 3]) = match &m.kind {
+        MaterialKind::Diffuse { reflectance } => (Some(reflectance), [&none; 3]),
+        MaterialKind::Plastic { diffuse, .. } => (Some(diffuse), [&none; 3]),
+        MaterialKind::RoughPlastic { diffuse, alpha, .. } => (Some(diffuse), [alpha, &none, &none]),
+        MaterialKind::Conductor { specular, .. } => (Some(specular), [&none; 3]),
+        MaterialKind::RoughConductor {
+            specular,
+            alpha_u,
+            alpha_v,
+            ..
+        } => (Some(specular), [alpha_u, alpha_v, &none]),
+        MaterialKind::RoughDielectric { alpha, .. } => (None, [alpha, &none, &none]),
+        MaterialKind::PbrMetallicRoughness {
+            base_color,
+            metallic,
+            roughness,
+            transmission,
+            ..
+        } => (Some(base_color), [metallic, roughness, transmission]),
+        MaterialKind::Dielectric { .. }
+        | MaterialKind::ThinDielectric { .. }
+        | MaterialKind::Spec(_) => (None, [&none; 3]),
+    };
+    if let Some(c) = rgb {
+        let f = c.factor.0.map(|v| v as f32);
+        out[0] = [f[0], f[1], f[2], f32::from_bits(slot(c.texture, slots)?)];
+    } else {
+        out[0][3] = f32::from_bits(NONE);
+    }
+    for (row, s) in out[1..4].iter_mut().zip(scalars) {
+        *row = gpu_scalar(scene, &m.name, s, slots)?;
+    }
+    out[4] = match m.normal_map {
+        Some(n) => [
+            n.scale,
+            f32::from_bits(slot(Some(n.texture), slots)?),
+            0.0,
+            0.0,
+        ],
+        None => [0.0, f32::from_bits(NONE), 0.0, 0.0],
+    };
+    Ok(out)
+}
+
+/// Everything the pass reads besides the G-buffer: per-triangle records, materials with their
+/// per-pixel parameter records ([`pack_material_params`]) and tangents, the cube maps, the view
+/// buffers, and what the per-pixel diffuse albedo kd is read from (the light-map pass's
+/// triangle and material records and textures, [`crate::lightmap_shade`]).
 #[derive(Debug)]
 pub struct FrameShadeScene {
     tris: wgpu::Buffer,
@@ -527,6 +624,8 @@ pub struct FrameShadeScene {
     view_radiance: wgpu::Buffer,
     view_geometry: wgpu::Buffer,
     views: wgpu::Buffer,
+    params: wgpu::Buffer,
+    tangents: wgpu::Buffer,
     albedo_tris: wgpu::Buffer,
     albedo_mats: wgpu::Buffer,
     texels: wgpu::Buffer,
@@ -539,6 +638,26 @@ pub struct FrameShadeScene {
 }
 
 const NONE: u32 = u32::MAX;
+
+/// ∂p/∂u and ∂p/∂v of triangle `t` with texture coordinates `uv` (pbrt-v4 Eq. 6.7), as the CPU's
+/// `PathTracer::shading_point` takes them: (e1, 0) where the uvs are missing or degenerate.
+fn surface_derivatives(t: &[DVec3; 3], uv: Option<&[[f64; 2]; 3]>) -> (DVec3, DVec3) {
+    let e1 = t[1] - t[0];
+    let e2 = t[2] - t[0];
+    match uv {
+        Some(uvt) => {
+            let (du1, dv1) = (uvt[1][0] - uvt[0][0], uvt[1][1] - uvt[0][1]);
+            let (du2, dv2) = (uvt[2][0] - uvt[0][0], uvt[2][1] - uvt[0][1]);
+            let det = du1 * dv2 - dv1 * du2;
+            if det.abs() > 1e-12 {
+                ((e1 * dv2 - e2 * dv1) / det, (e2 * du1 - e1 * du2) / det)
+            } else {
+                (e1, DVec3::ZERO)
+            }
+        }
+        None => (e1, DVec3::ZERO),
+    }
+}
 
 /// A storage buffer of `data`, one zero element when it is empty (bindings are never empty).
 fn storage<T: bytemuck::Pod + bytemuck::Zeroable>(
@@ -688,19 +807,26 @@ impl FrameShadeScene {
         }
         let mut tables = vec![];
         let mut materials = vec![GpuBsdf::zeroed_record(); scene.materials.len()];
+        let mut params = vec![[0.0f32; 4]; MATERIAL_PARAMS * scene.materials.len().max(1)];
+        let mut slots = vec![];
         for (k, m) in scene.materials.iter().enumerate() {
             if used[k] {
                 materials[k] = pack_material(m, &mut tables)?;
+                params[MATERIAL_PARAMS * k..MATERIAL_PARAMS * (k + 1)]
+                    .copy_from_slice(&pack_material_params(scene, m, &mut slots)?);
             }
         }
-        // kd per pixel (`Lightmapped::albedo`): the light-map pass's records.
+        // kd per pixel (`Lightmapped::albedo`): the light-map pass's records, their textures
+        // after the parameters'.
         let limit = ctx.device.limits().max_storage_buffer_binding_size as usize;
-        let albedo = shading_records(scene, lit.lit, g, lit.lit.spec(), limit)?;
+        let albedo = shading_records(scene, lit.lit, g, lit.lit.spec(), slots, limit)?;
         let atlas = lit.lit.atlas();
-        // Per triangle: 7 vec4 (frame_shade.wgsl `shade_point`).
+        // Per triangle: 7 vec4 (frame_shade.wgsl `shade_point`); per triangle of a
+        // normal-mapped material, 4 vec4 in `tangents`.
         let bits = |u: u32| f32::from_bits(u);
         let v4 = |v: DVec3, w: f32| [v.x as f32, v.y as f32, v.z as f32, w];
         let mut tris: Vec<[f32; 4]> = Vec::with_capacity(g.positions.len() * 7);
+        let mut tangents: Vec<[f32; 4]> = vec![];
         for (prim, t) in g.positions.iter().enumerate() {
             let mesh = lit.mesh_of[prim] as usize;
             let k = g.material[prim];
@@ -712,20 +838,28 @@ impl FrameShadeScene {
             let normals = g.normals.get(prim);
             let nz = [DVec3::ZERO; 3];
             let n = normals.unwrap_or(&nz);
-            let e1 = t[1] - t[0];
-            let e2 = t[2] - t[0];
-            let dpdu = match g.uvs.get(prim) {
-                Some(uvt) => {
-                    let (du1, dv1) = (uvt[1][0] - uvt[0][0], uvt[1][1] - uvt[0][1]);
-                    let (du2, dv2) = (uvt[2][0] - uvt[0][0], uvt[2][1] - uvt[0][1]);
-                    let det = du1 * dv2 - dv1 * du2;
-                    if det.abs() > 1e-12 {
-                        (e1 * dv2 - e2 * dv1) / det
-                    } else {
-                        e1
-                    }
+            let (dpdu, dpdv) = surface_derivatives(t, g.uvs.get(prim));
+            // A normal-mapped material's tangent block (`mapped_normal`'s inputs): the corners'
+            // tangents (xyz, w: the bitangent's sign; w = 0: derive T from ∂p/∂u), ∂p/∂v.
+            let mapped = material != NONE
+                && materials
+                    .get(k as usize)
+                    .is_some_and(|b| b.flags & FLAG_NORMAL_MAPPED != 0);
+            let tangent_block = if mapped {
+                let at = u32::try_from(tangents.len()).unwrap_or(NONE);
+                let tc = g.tangents.get(prim).copied().unwrap_or([[0.0; 4]; 3]);
+                let sign = if tc[0][3] != 0.0 {
+                    tc[0][3].signum()
+                } else {
+                    0.0
+                };
+                for c in tc {
+                    tangents.push([c[0] as f32, c[1] as f32, c[2] as f32, sign as f32]);
                 }
-                None => e1,
+                tangents.push(v4(dpdv, 0.0));
+                at
+            } else {
+                NONE
             };
             let probe = links.probe_of_mesh[mesh].map_or(NONE, |i| i as u32);
             let mirror = links.mirror_at(mesh, prim).map_or(NONE, |i| i as u32);
@@ -738,7 +872,7 @@ impl FrameShadeScene {
                 v4(n[0], bits(probe)),
                 v4(n[1], bits(mirror)),
                 v4(n[2], bits(see)),
-                v4(dpdu, 0.0),
+                v4(dpdu, bits(tangent_block)),
             ]);
         }
         // Cube maps: the probes, then the environment when there is no probe.
@@ -818,6 +952,8 @@ impl FrameShadeScene {
             view_radiance,
             view_geometry,
             views: storage(ctx, "frame views", &view_records),
+            params: storage(ctx, "frame material parameters", &params),
+            tangents: storage(ctx, "frame tangents", &tangents),
             albedo_tris: storage(ctx, "frame albedo triangles", &albedo.tris),
             albedo_mats: storage(ctx, "frame albedo materials", &albedo.mats),
             texels: storage(ctx, "frame texels", &albedo.texels),
@@ -848,6 +984,7 @@ pub fn frame_shade_wgsl() -> &'static str {
                 &wgsl::PLANES,
                 &wgsl::QMC,
                 &wgsl::WARP,
+                &wgsl::TEXTURED,
             ],
             &[
                 include_str!("texture_sample.wgsl"),
@@ -1125,7 +1262,7 @@ impl FrameShadePass {
         ];
         entries.extend((3..15).map(|b| storage_entry(b, true)));
         entries.extend((15..18).map(|b| storage_entry(b, false)));
-        entries.extend((18..22).map(|b| storage_entry(b, true)));
+        entries.extend((18..24).map(|b| storage_entry(b, true)));
         let (pipeline, layout) = compute_pipeline(
             ctx,
             "frame_shade.wgsl",
@@ -1233,6 +1370,8 @@ impl FrameShadePass {
                 buf(19, &scene.albedo_mats),
                 buf(20, &scene.texels),
                 buf(21, &scene.texture_info),
+                buf(22, &scene.params),
+                buf(23, &scene.tangents),
             ],
         });
         let mut enc = ctx

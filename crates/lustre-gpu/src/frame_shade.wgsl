@@ -55,12 +55,18 @@ struct Params {
 // (glossy hits, lookups), summed per workgroup first.
 @group(0) @binding(17) var<storage, read_write> counts: array<atomic<u32>, 2>;
 // The light-map pass's records (lightmap_shade.rs `shading_records`), read for the diffuse
-// albedo kd at each pixel (`Lightmapped::albedo`) and a plastic's textured ρ: 8 vec4 per
-// triangle, 4 per material (material_albedo.wgsl), the textures (texture_sample.wgsl).
+// albedo kd at each pixel (`Lightmapped::albedo`): 8 vec4 per triangle, 4 per material
+// (material_albedo.wgsl), the textures (texture_sample.wgsl; the material parameters' too).
 @group(0) @binding(18) var<storage, read> albedo_tris: array<vec4<f32>>;
 @group(0) @binding(19) var<storage, read> mats: array<vec4<f32>>;
 @group(0) @binding(20) var<storage, read> texels: array<vec4<f32>>;
 @group(0) @binding(21) var<storage, read> tex_info: array<vec4<u32>>;
+// Per material, 5 vec4 (frame_shade.rs `pack_material_params`): the textured parameters (rgb,
+// three scalars) and the normal map, read where the record is flagged.
+@group(0) @binding(22) var<storage, read> params: array<vec4<f32>>;
+// Per triangle of a normal-mapped material (its record's r6.w): the corners' tangents (xyz,
+// w: the bitangent's sign, 0: derive T from ∂p/∂u) and (∂p/∂v, 0).
+@group(0) @binding(23) var<storage, read> tangents: array<vec4<f32>>;
 var<workgroup> wg_counts: array<atomic<u32>, 2>;
 
 const SKY: u32 = 0xffffffffu;
@@ -620,34 +626,50 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
             / vec2<f32>(f32(u.method.w), f32(u.seed.w));
         kd = albedo(material, uv0, uv1);
     }
-    // A plastic's textured diffuse reflectance at uv0 (Material::with_bsdf_at reads both uv sets
-    // at uv0 here) and the specular sampling weight from it (RoughPlastic::with_reflectances).
-    if ((b.flags & FLAG_TEXTURED_DIFFUSE) != 0u) {
-        // ρ's row: rough_plastic.wgsl (kind 2) p[1], plastic.wgsl p[0]; the specular after it.
-        var row = 0u;
-        if (b.kind == 2u) {
-            row = 1u;
-        }
-        let rho = albedo(material, uv0, uv0);
-        let dm = (rho.x + rho.y + rho.z) / 3.0;
-        let sc = b.p[row + 1u].xyz;
-        let sm = (sc.x + sc.y + sc.z) / 3.0;
-        var w = 0.5;
-        if (dm + sm > 0.0) {
-            w = sm / (dm + sm);
-        }
-        b.p[row] = vec4<f32>(rho, w);
-    }
     // A Lambertian surface the light map covers has no view-dependent part left.
     if ((b.flags & FLAG_DIFFUSE_ONLY) != 0u && any(kd != vec3<f32>(0.0))) {
         return vec3<f32>(0.0);
     }
-    // ShadingFrame::new(ns, ∂p/∂u).
-    let dpdu = tris[base + 6u].xyz;
+    // The textured parameters at uv0 (the CPU's view-dependent shading reads both uv sets at
+    // uv0: Material::with_bsdf_at with [uv0; 2]).
+    let q = 5u * material;
+    if ((b.flags & FLAG_TEXTURED) != 0u) {
+        let c = params[q];
+        var rgb = c.xyz;
+        let ct = bitcast<i32>(c.w);
+        if (ct >= 0) {
+            rgb = c.xyz * texture_sample(u32(ct), uv0).xyz;
+        }
+        let s = vec3<f32>(scalar_at(params[q + 1u], uv0, uv0), scalar_at(params[q + 2u], uv0, uv0),
+                          scalar_at(params[q + 3u], uv0, uv0));
+        b = textured_bsdf(b, rgb, s);
+    }
+    // ShadingFrame::new(ns, ∂p/∂u), or with the normal map (PathTracer::shading_point): the
+    // mapped normal, its tangent from the mesh's tangents, else ∂p/∂u with glTF's handedness.
+    let r6 = tris[base + 6u];
+    let dpdu = r6.xyz;
     var n = ns;
-    let tp = dpdu - n * dot(n, dpdu);
+    var t_hint = dpdu;
+    if ((b.flags & FLAG_NORMAL_MAPPED) != 0u) {
+        let nm = params[q + 4u];
+        let n_ts = tangent_space_normal(texture_sample(bitcast<u32>(nm.y), uv0), nm.x);
+        let tb = bitcast<u32>(r6.w);
+        let t0 = tangents[tb];
+        var tg = dpdu;
+        var hand = 1.0;
+        if (t0.w != 0.0) {
+            tg = t0.xyz * bary.x + tangents[tb + 1u].xyz * bary.y + tangents[tb + 2u].xyz * bary.z;
+            hand = t0.w;
+        } else if (dot(cross(ns, dpdu), tangents[tb + 3u].xyz) > 0.0) {
+            hand = -1.0;
+        }
+        let m = mapped_normal(ns, tg, hand, n_ts);
+        n = m[0];
+        t_hint = m[1];
+    }
+    let tp = t_hint - n * dot(n, t_hint);
     var t: vec3<f32>;
-    if (length(tp) > 1e-9 * length(dpdu)) {
+    if (length(tp) > 1e-9 * length(t_hint)) {
         t = normalize(tp);
     } else {
         t = basis_tangent(n);

@@ -54,7 +54,7 @@ pub struct GpuLightmapScene {
 
 /// A textured scalar as `lightmap_shade.wgsl`'s `scalar_at` reads it: (factor, texture slot
 /// bits (−1 none), uv set bits, channel bits).
-fn gpu_scalar(
+pub(crate) fn gpu_scalar(
     scene: &Scene,
     material: &str,
     v: &TexturedScalar,
@@ -160,16 +160,17 @@ pub(crate) struct ShadingRecords {
 }
 
 /// The [`ShadingRecords`] of the triangles `g` of `scene` mapped by `lit`, with the spec
-/// materials' albedo `spec`. Errors (named): a triangle's material or a texture beyond the
-/// scene's, records beyond `max_buffer` bytes.
+/// materials' albedo `spec`; the textures are those of `slots` (textures other records already
+/// refer to by slot), then those the records add. Errors (named): a triangle's material or a
+/// texture beyond the scene's, records beyond `max_buffer` bytes.
 pub(crate) fn shading_records(
     scene: &Scene,
     lit: &Lightmapped,
     g: &Geometry,
     spec: &[Rgb],
+    mut slots: Vec<usize>,
     max_buffer: usize,
 ) -> Result<ShadingRecords> {
-    let mut slots = Vec::new();
     let mut mats = Vec::with_capacity(4 * scene.materials.len());
     for m in 0..scene.materials.len() {
         let s = spec.get(m).copied().unwrap_or(Rgb::ZERO);
@@ -251,6 +252,7 @@ impl GpuLightmapScene {
             lit,
             g,
             spec,
+            Vec::new(),
             limits.max_storage_buffer_binding_size as usize,
         )?;
         let max2d = limits.max_texture_dimension_2d;

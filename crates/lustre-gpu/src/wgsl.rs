@@ -219,8 +219,16 @@ pub const BSDF: Module = Module {
     ],
 };
 
+/// A material's textured parameters and normal map at a pixel: `textured_bsdf` (the record with
+/// its parameters at the pixel), `tangent_space_normal`, `mapped_normal`.
+pub const TEXTURED: Module = Module {
+    name: "textured",
+    source: include_str!("wgsl/textured.wgsl"),
+    deps: &[&BSDF],
+};
+
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 26] = [
+pub const ALL: [&Module; 27] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -247,6 +255,7 @@ pub const ALL: [&Module; 26] = [
     &SGD,
     &KURT,
     &BSDF,
+    &TEXTURED,
 ];
 
 /// The source of a pass: every module in `imports` and, transitively, the modules they use,

@@ -9,7 +9,9 @@
 mod common;
 use common::{ctx, quick_bake};
 use lustre_brdf::rgb::Rgb;
-use lustre_gpu::frame_shade::{pack_material, FrameShadeOptions, KIND_ROUGH_PLASTIC};
+use lustre_gpu::frame_shade::{
+    pack_material, FrameShadeOptions, FLAG_NORMAL_MAPPED, FLAG_TEXTURED, KIND_ROUGH_PLASTIC,
+};
 use lustre_gpu::{
     FrameShadePass, FrameShadeScene, FrameShadeTarget, GBufferTarget, GpuViewBuffer,
     LightmapFrameScene, LightmapRenderer, ShadeTarget,
@@ -236,17 +238,32 @@ fn materials_the_gpu_cannot_shade_are_named() {
         err.contains("chrome") && err.contains("not on the GPU"),
         "{err}"
     );
+    // A rough plastic's textured roughness stays on the CPU (its coating's tables are built
+    // per roughness); a normal map or a textured roughness elsewhere is on the GPU, flagged.
+    let tex = lustre_scene::material::TextureRef {
+        texture: 0,
+        uv_set: 0,
+    };
+    let mut rough = scene.materials[2].clone();
+    if let MaterialKind::RoughPlastic { alpha, .. } = &mut rough.kind {
+        alpha.texture = Some(tex);
+    }
+    let err = pack_material(&rough, &mut vec![]).unwrap_err().to_string();
+    assert!(
+        err.contains("floor") && err.contains("textured roughness"),
+        "{err}"
+    );
     let mut bumpy = scene.materials[6].clone();
     bumpy.normal_map = Some(lustre_scene::material::NormalMap {
-        texture: lustre_scene::material::TextureRef {
-            texture: 0,
-            uv_set: 0,
-        },
+        texture: tex,
         scale: 1.0,
     });
-    let err = pack_material(&bumpy, &mut vec![]).unwrap_err().to_string();
-    assert!(
-        err.contains("brushed-aluminium") && err.contains("normal-mapped"),
-        "{err}"
+    if let MaterialKind::RoughConductor { alpha_u, .. } = &mut bumpy.kind {
+        alpha_u.texture = Some(tex);
+    }
+    let b = pack_material(&bumpy, &mut vec![]).expect("a normal-mapped textured conductor");
+    assert_eq!(
+        b.flags & (FLAG_TEXTURED | FLAG_NORMAL_MAPPED),
+        FLAG_TEXTURED | FLAG_NORMAL_MAPPED
     );
 }

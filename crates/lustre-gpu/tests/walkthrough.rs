@@ -13,7 +13,7 @@
 mod common;
 use common::{ctx, quick_bake};
 use lustre_brdf::rgb::Rgb;
-use lustre_gpu::frame_shade::{pack_material, FLAG_TEXTURED_DIFFUSE};
+use lustre_gpu::frame_shade::{pack_material, FLAG_TEXTURED};
 use lustre_gpu::{GpuContext, GpuFrame, GpuFrameOptions, GpuWalkthrough, LightmapFrameScene};
 use lustre_scene::{Material, MaterialKind, ResolvedSpec, Scene};
 use lustre_shade::bake::render::Lightmapped;
@@ -270,7 +270,7 @@ fn the_gpu_frame_of_the_modern_hall_matches_its_cpu_twins() {
         .materials
         .iter()
         .filter_map(|m| pack_material(m, &mut tables).ok())
-        .filter(|b| b.flags & FLAG_TEXTURED_DIFFUSE != 0)
+        .filter(|b| b.flags & FLAG_TEXTURED != 0)
         .count();
     assert!(textured >= 2, "{textured} textured plastics");
     let up = LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages).expect("upload");

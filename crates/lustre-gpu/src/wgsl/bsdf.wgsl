@@ -19,9 +19,6 @@ const FLAG_DELTA_ONLY: u32 = 1u;
 const FLAG_TWO_SIDED: u32 = 2u;
 // Only diffuse lobes: no view-dependent part where the light map covers the pixel (kd ≠ 0).
 const FLAG_DIFFUSE_ONLY: u32 = 4u;
-// A (rough) plastic whose diffuse reflectance ρ is textured: the pass replaces ρ and the
-// specular sampling weight per pixel (frame_shade.wgsl `shade_point`).
-const FLAG_TEXTURED_DIFFUSE: u32 = 8u;
 
 fn bsdf_sample(b: GpuBsdf, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
     switch b.kind {

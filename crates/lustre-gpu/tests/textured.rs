@@ -1,0 +1,418 @@
+//! Textured and normal-mapped glossy materials in the GPU view-dependent pass
+//! (`frame_shade.wgsl` with `wgsl/textured.wgsl`) against the CPU twin
+//! `shade_gbuffer_view_dependent` on the GPU's own G-buffer: the built-in room with
+//! (a) the first sphere a rough gold conductor whose αu and αv come from a roughness texture,
+//! (b) the second a glTF metallic-roughness material with base colour and metallic-roughness
+//! textures (G roughness, B metallic) and a normal map (the mesh's tangents),
+//! (c) the floor a rough plastic with a textured diffuse reflectance and a normal map (tangents
+//! from ∂p/∂u: the quad has none), and (d) the third a glTF material with textured
+//! transmission and roughness, so that its pixels are the glTF BRDF, a rough dielectric or a
+//! smooth one. ≥ 90 dB for regular sampling and CK, and each textured material must matter: the
+//! same frame with its textures replaced by their means (normal maps removed) differs clearly.
+//! Also the named refusal of what stays on the CPU. Fails (does not skip) without an adapter.
+
+mod common;
+use common::{ctx, quick_bake};
+use lustre_brdf::rgb::Rgb;
+use lustre_gpu::frame_shade::{
+    pack_material, FrameShadeOptions, FLAG_NORMAL_MAPPED, FLAG_TEXTURED,
+};
+use lustre_gpu::{
+    FrameShadePass, FrameShadeScene, FrameShadeTarget, GBufferTarget, GpuViewBuffer,
+    LightmapFrameScene, LightmapRenderer, ShadeTarget,
+};
+use lustre_scene::material::{Distribution, NormalMap, TextureRef, TexturedRgb, TexturedScalar};
+use lustre_scene::texture::{ColorSpace, Texture};
+use lustre_scene::{Material, MaterialKind, Scene};
+use lustre_shade::bake::gbuffer::GBuffer;
+use lustre_shade::bake::render::Lightmapped;
+use lustre_shade::bake::spec_albedo;
+use lustre_shade::frame::{
+    shade_gbuffer_view_dependent, FrameBuffers, FrameLight, FrameMethod, GBufferViewOptions,
+};
+use lustre_shade::image::Image;
+use lustre_shade::metrics::psnr;
+use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
+use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
+use lustre_shade::reference::{path_camera, path_scene};
+use std::f32::consts::TAU;
+
+const SIDE: u32 = 16;
+
+/// A SIDE² texture of `channels` channels, texel (x, y) from `f(u, v)` at its centre.
+fn texture(name: &str, channels: u8, f: impl Fn(f32, f32) -> [f32; 4]) -> Texture {
+    let mut data = vec![];
+    for y in 0..SIDE {
+        for x in 0..SIDE {
+            let (u, v) = (
+                (x as f32 + 0.5) / SIDE as f32,
+                (y as f32 + 0.5) / SIDE as f32,
+            );
+            data.extend_from_slice(&f(u, v)[..usize::from(channels)]);
+        }
+    }
+    Texture::new(name, SIDE, SIDE, channels, ColorSpace::Linear, data).expect("texture")
+}
+
+fn tref(texture: usize) -> Option<TextureRef> {
+    Some(TextureRef { texture, uv_set: 0 })
+}
+
+fn scalar(texture: usize, channel: u8) -> TexturedScalar {
+    TexturedScalar {
+        factor: 1.0,
+        texture: tref(texture),
+        channel,
+    }
+}
+
+/// The textures: 0 roughness (G), 1 base colour, 2 metallic-roughness (G, B), 3 normal map,
+/// 4 wood colour, 5 transmission (R) and roughness (G).
+fn textures() -> Vec<Texture> {
+    let wave = |x: f32, k: f32| 0.5 + 0.5 * (TAU * k * x).sin();
+    vec![
+        texture("roughness", 3, |u, v| {
+            [0.0, 0.03 + 0.45 * wave(u, 3.0) * wave(v, 2.0), 0.0, 1.0]
+        }),
+        texture("base colour", 3, |u, v| {
+            [0.9 * wave(u, 2.0), 0.3 + 0.5 * wave(v, 3.0), 0.2, 1.0]
+        }),
+        texture("metallic-roughness", 3, |u, v| {
+            [1.0, 0.15 + 0.6 * wave(v, 2.0), wave(u, 4.0), 1.0]
+        }),
+        texture("normal map", 3, |u, v| {
+            let (x, y) = (0.5 * (TAU * 4.0 * u).sin(), 0.5 * (TAU * 3.0 * v).cos());
+            let l = (x * x + y * y + 1.0).sqrt();
+            [0.5 + 0.5 * x / l, 0.5 + 0.5 * y / l, 0.5 + 0.5 / l, 1.0]
+        }),
+        texture("wood", 3, |u, v| {
+            let w = wave(u + 0.1 * v, 5.0);
+            [0.15 + 0.3 * w, 0.1 + 0.15 * w, 0.05 + 0.06 * w, 1.0]
+        }),
+        texture("transmission", 3, |u, v| {
+            let t = if (u * 4.0).fract() < 0.5 { 1.0 } else { 0.0 };
+            [t, if v < 0.5 { 0.02 } else { 0.4 }, 0.0, 1.0]
+        }),
+    ]
+}
+
+/// The room with the four textured materials (module docs).
+fn textured_room() -> Scene {
+    let mut scene = lustre_scene::builtin::room().expect("room");
+    scene.textures = textures();
+    let name = |k: usize, scene: &Scene| scene.materials[k].name.clone();
+    // (a) The fitted sphere: a rough gold conductor, roughness textured.
+    let gold = scene
+        .materials
+        .iter()
+        .position(|m| matches!(m.kind, MaterialKind::Spec(_)))
+        .expect("the fitted sphere");
+    scene.materials[gold] = Material::new(
+        name(gold, &scene),
+        MaterialKind::RoughConductor {
+            eta: Rgb::new(0.143, 0.374, 1.442),
+            k: Rgb::new(3.983, 2.385, 1.603),
+            specular: TexturedRgb::constant(Rgb::ONE),
+            alpha_u: scalar(0, 1),
+            alpha_v: scalar(0, 1),
+            distribution: Distribution::Ggx,
+        },
+    );
+    // (b) The anisotropic sphere: glTF metallic-roughness, textured and normal-mapped.
+    let alu = material(&scene, "brushed-aluminium");
+    let mut pbr = Material::new(
+        name(alu, &scene),
+        MaterialKind::PbrMetallicRoughness {
+            base_color: TexturedRgb::texture(TextureRef {
+                texture: 1,
+                uv_set: 0,
+            }),
+            metallic: scalar(2, 2),
+            roughness: scalar(2, 1),
+            transmission: TexturedScalar::constant(0.0),
+            ior: 1.5,
+            anisotropy: 0.0,
+            anisotropy_rotation: 0.0,
+        },
+    );
+    pbr.normal_map = Some(NormalMap {
+        texture: TextureRef {
+            texture: 3,
+            uv_set: 0,
+        },
+        scale: 1.0,
+    });
+    scene.materials[alu] = pbr;
+    // (c) The floor: rough plastic, wood-textured diffuse reflectance, normal-mapped.
+    let floor = material(&scene, "floor");
+    if let MaterialKind::RoughPlastic { diffuse, .. } = &mut scene.materials[floor].kind {
+        *diffuse = TexturedRgb::texture(TextureRef {
+            texture: 4,
+            uv_set: 0,
+        });
+    }
+    scene.materials[floor].normal_map = Some(NormalMap {
+        texture: TextureRef {
+            texture: 3,
+            uv_set: 0,
+        },
+        scale: 0.5,
+    });
+    // (d) The glass sphere: glTF with textured transmission and roughness.
+    let glass = material(&scene, "frosted-glass");
+    scene.materials[glass] = Material::new(
+        name(glass, &scene),
+        MaterialKind::PbrMetallicRoughness {
+            base_color: TexturedRgb::constant(Rgb::new(0.9, 0.95, 1.0)),
+            metallic: TexturedScalar::constant(0.0),
+            roughness: scalar(5, 1),
+            transmission: scalar(5, 0),
+            ior: 1.5,
+            anisotropy: 0.0,
+            anisotropy_rotation: 0.0,
+        },
+    );
+    scene
+}
+
+fn material(scene: &Scene, name: &str) -> usize {
+    scene
+        .materials
+        .iter()
+        .position(|m| m.name == name)
+        .unwrap_or_else(|| panic!("no material {name}"))
+}
+
+/// `m` with every texture of its BSDF parameters replaced by the texture's mean (the factor
+/// times the mean of the channel read) and without its normal map.
+fn untextured(m: &Material, textures: &[Texture]) -> Material {
+    let mean = |t: Option<TextureRef>| t.map_or([1.0; 4], |r| textures[r.texture].mean());
+    let rgb = |c: &TexturedRgb| {
+        let m = mean(c.texture);
+        TexturedRgb::constant(Rgb::new(
+            c.factor[0] * m[0],
+            c.factor[1] * m[1],
+            c.factor[2] * m[2],
+        ))
+    };
+    let sc = |s: &TexturedScalar| {
+        TexturedScalar::constant(s.factor * mean(s.texture)[usize::from(s.channel)])
+    };
+    let kind = match &m.kind {
+        MaterialKind::RoughConductor {
+            eta,
+            k,
+            specular,
+            alpha_u,
+            alpha_v,
+            distribution,
+        } => MaterialKind::RoughConductor {
+            eta: *eta,
+            k: *k,
+            specular: rgb(specular),
+            alpha_u: sc(alpha_u),
+            alpha_v: sc(alpha_v),
+            distribution: *distribution,
+        },
+        MaterialKind::RoughPlastic {
+            diffuse,
+            specular,
+            alpha,
+            distribution,
+            int_ior,
+            ext_ior,
+            nonlinear,
+        } => MaterialKind::RoughPlastic {
+            diffuse: rgb(diffuse),
+            specular: *specular,
+            alpha: sc(alpha),
+            distribution: *distribution,
+            int_ior: *int_ior,
+            ext_ior: *ext_ior,
+            nonlinear: *nonlinear,
+        },
+        MaterialKind::PbrMetallicRoughness {
+            base_color,
+            metallic,
+            roughness,
+            transmission,
+            ior,
+            anisotropy,
+            anisotropy_rotation,
+        } => MaterialKind::PbrMetallicRoughness {
+            base_color: rgb(base_color),
+            metallic: sc(metallic),
+            roughness: sc(roughness),
+            transmission: sc(transmission),
+            ior: *ior,
+            anisotropy: *anisotropy,
+            anisotropy_rotation: *anisotropy_rotation,
+        },
+        other => panic!("{} is not one of the textured materials", other.name()),
+    };
+    let mut out = Material::new(m.name.clone(), kind);
+    out.two_sided = m.two_sided;
+    out
+}
+
+/// The CPU twin of the view-dependent pass on `gb` for `scene` (its light maps `baked`'s).
+#[allow(clippy::too_many_arguments)]
+fn twin(
+    scene: &Scene,
+    baked: &common::Baked,
+    light: &FrameLight,
+    buffers: &FrameBuffers,
+    camera: &PathCamera,
+    gb: &GBuffer,
+    opts: &GBufferViewOptions,
+) -> (Image, u64) {
+    let (ps, _) = path_scene(scene).expect("path scene");
+    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
+    let lm = Lightmapped::new(scene, &baked.atlas, &baked.pages, &ps.geometry, spec)
+        .expect("light maps");
+    let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
+    let lit = LitScene::new(scene, &ps, &pt, &lm).expect("lit");
+    let (img, stats) =
+        shade_gbuffer_view_dependent(&lit, light, buffers, camera, gb, 1, opts).expect("twin");
+    (img, stats.glossy_hits)
+}
+
+#[test]
+fn textured_and_normal_mapped_glossy_materials_match_their_cpu_twin() {
+    let ctx = ctx();
+    let baked = quick_bake(textured_room(), 4.0);
+    let scene = &baked.scene;
+    // Every textured material is on the GPU, flagged.
+    let mut tables = vec![];
+    for (name, flags) in [
+        ("gold-paint", FLAG_TEXTURED),
+        ("brushed-aluminium", FLAG_TEXTURED | FLAG_NORMAL_MAPPED),
+        ("floor", FLAG_TEXTURED | FLAG_NORMAL_MAPPED),
+        ("frosted-glass", FLAG_TEXTURED),
+    ] {
+        let b = pack_material(&scene.materials[material(scene, name)], &mut tables)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(b.flags & flags, flags, "{name}");
+    }
+    let (ps, _) = path_scene(scene).expect("path scene");
+    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
+    let lm = Lightmapped::new(scene, &baked.atlas, &baked.pages, &ps.geometry, spec)
+        .expect("light maps");
+    let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
+    let lit = LitScene::new(scene, &ps, &pt, &lm).expect("lit");
+    let popts = ProbeOptions {
+        face_size: 32,
+        supersample: 1,
+        plane_rays: 16,
+    };
+    let probes: Vec<_> = (0..scene.meshes.len())
+        .filter(|&m| scene.meshes[m].hints.probe)
+        .map(|m| capture_probe(&lit, m, &popts).expect("probe"))
+        .collect();
+    let light = FrameLight {
+        probes: &probes,
+        environment: None,
+    };
+    let (w, h) = (128usize, 80usize);
+    let camera = path_camera(scene, None, w as u32, h as u32).expect("camera");
+    let renderer = LightmapRenderer::new(&ctx).expect("passes");
+    let up = LightmapFrameScene::upload(&ctx, scene, &baked.atlas, &baked.pages).expect("upload");
+    let target = GBufferTarget::new(&ctx, w as u32, h as u32).expect("gbuffer");
+    let base = ShadeTarget::new(&ctx, w as u32, h as u32).expect("target");
+    renderer
+        .draw(&ctx, &up, &camera, 1, &target, &base)
+        .expect("draw");
+    let gb = target.read_back(&ctx).expect("gbuffer readback");
+    let mut buffers = FrameBuffers::render(&lit, &light, &camera, w, h).expect("buffers");
+    for m in &mut buffers.mirrors {
+        m.view = GpuViewBuffer::upload(&ctx, &m.view)
+            .and_then(|g| g.read_back(&ctx))
+            .expect("mirror round trip");
+    }
+    for v in &mut buffers.see_throughs {
+        *v = GpuViewBuffer::upload(&ctx, v)
+            .and_then(|g| g.read_back(&ctx))
+            .expect("see-through round trip");
+    }
+    let gpu_scene = FrameShadeScene::upload(&ctx, &lit, &light, &buffers).expect("frame scene");
+    let pass = FrameShadePass::new(&ctx).expect("compile");
+    let out = FrameShadeTarget::new(&ctx, w as u32, h as u32, 1).expect("output");
+    let samples = 8;
+    let seed = 5;
+    let mut regular = None;
+    for (name, method) in [("regular", FrameMethod::Regular), ("CK", FrameMethod::Ck)] {
+        let opts = FrameShadeOptions {
+            samples,
+            method,
+            frame: 0,
+            seed,
+        };
+        let t0 = std::time::Instant::now();
+        pass.shade(&ctx, &gpu_scene, &target, &base, &camera, 1, &opts, &out)
+            .expect("shade");
+        let gpu = out.read_back(&ctx).expect("readback");
+        let seconds = t0.elapsed().as_secs_f64();
+        let stats = out.stats(&ctx).expect("stats");
+        let (cpu, cpu_stats) = shade_gbuffer_view_dependent(
+            &lit,
+            &light,
+            &buffers,
+            &camera,
+            &gb,
+            1,
+            &GBufferViewOptions {
+                samples: samples as usize,
+                method,
+                seed,
+            },
+        )
+        .expect("cpu twin");
+        let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
+        eprintln!(
+            "textured room, {name}: GPU vs CPU twin {db:.1} dB ({w}×{h}, n = {samples}, \
+             {seconds:.2} s with read-back); glossy pixels GPU {} CPU {}",
+            stats.glossy_hits, cpu_stats.glossy_hits
+        );
+        assert!(db >= 90.0, "{name}: {db:.1} dB");
+        assert_eq!(stats.glossy_hits, cpu_stats.glossy_hits, "{name}");
+        assert!(cpu_stats.glossy_hits > (w * h / 4) as u64, "{name}");
+        if method == FrameMethod::Regular {
+            regular = Some(gpu);
+        }
+    }
+    // Each material's textures matter: its means instead (no normal map) change the frame.
+    let gpu = regular.expect("the regular frame");
+    let opts = GBufferViewOptions {
+        samples: samples as usize,
+        method: FrameMethod::Regular,
+        seed,
+    };
+    for name in ["gold-paint", "brushed-aluminium", "floor", "frosted-glass"] {
+        let mut flat = scene.clone();
+        let k = material(scene, name);
+        flat.materials[k] = untextured(&scene.materials[k], &scene.textures);
+        let (cpu, _) = twin(&flat, &baked, &light, &buffers, &camera, &gb, &opts);
+        let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
+        eprintln!("{name} with its textures' means: {db:.1} dB from the textured GPU frame");
+        assert!(
+            db < 60.0,
+            "{name}: the textures change nothing ({db:.1} dB)"
+        );
+    }
+}
+
+#[test]
+fn a_rough_plastic_with_textured_roughness_is_refused_by_name() {
+    let scene = textured_room();
+    let mut floor = scene.materials[material(&scene, "floor")].clone();
+    if let MaterialKind::RoughPlastic { alpha, .. } = &mut floor.kind {
+        *alpha = scalar(0, 1);
+    }
+    let err = pack_material(&floor, &mut vec![]).unwrap_err().to_string();
+    assert!(
+        err.contains("floor")
+            && err.contains("textured roughness")
+            && err.contains("not on the GPU"),
+        "{err}"
+    );
+}
