@@ -54,6 +54,11 @@ pub struct GpuWalkthrough {
     pub capture_ms: Vec<(String, f64)>,
     /// True when times are the GPU's own timestamps (else the wall clock until it finished).
     pub timestamps: bool,
+    /// The probe capture pass, kept for captures on request.
+    capture: GpuProbeCapture,
+    /// Counts captures on request: a session's per-camera inputs hold copies of the probes
+    /// and are rebuilt when it changed.
+    probe_generation: u64,
 }
 
 /// Time of each stage of one frame (or of one [`GpuFrameSession::step`]: 0 for a pass it did
@@ -174,7 +179,44 @@ impl GpuWalkthrough {
                 .device
                 .features()
                 .contains(wgpu::Features::TIMESTAMP_QUERY),
+            capture,
+            probe_generation: 0,
         })
+    }
+
+    /// Captures the probe of mesh `mesh` again, on request (issue 11: probes are captured when
+    /// the scene loads and on request, not every frame): after its surroundings changed (light
+    /// maps, materials) or with other `probe_opts`. A [`GpuFrameSession`] reads the new probe
+    /// from its next step on (re-rendering its per-camera inputs, as after a camera move).
+    /// Returns the capture time, ms. Errors: `mesh` has no probe (named), or the capture's.
+    pub fn recapture_probe(
+        &mut self,
+        ctx: &GpuContext,
+        lit: &LitScene,
+        mesh: usize,
+        probe_opts: &ProbeOptions,
+    ) -> Result<f64> {
+        let i = self
+            .probes
+            .iter()
+            .position(|p| p.mesh as usize == mesh)
+            .ok_or_else(|| {
+                let name = lit.scene.meshes.get(mesh).map_or("", |m| m.name.as_str());
+                invalid(
+                    format!("mesh {name:?} (#{mesh})"),
+                    "has no probe to capture again (hint it `probe = true`)",
+                )
+            })?;
+        let mut timer = GpuTimer::new(ctx);
+        timer.start(ctx)?;
+        let probe = self
+            .capture
+            .capture_probe(ctx, &self.scene, lit, mesh, probe_opts)?;
+        let t = ms(timer.stop(ctx)?);
+        self.probes[i] = probe;
+        self.capture_ms[i].1 = t;
+        self.probe_generation += 1;
+        Ok(t)
     }
 
     /// Renders a w×h frame of `lit` from `camera`: a fresh [`GpuFrameSession`] stepped once,
@@ -214,7 +256,8 @@ pub enum StepWork {
     /// The targets were allocated (the first step, or a new size or supersampling) and every
     /// pass ran.
     Allocated,
-    /// The camera moved (or [`GpuFrameSession::reset`] was called): the view buffers, the
+    /// The camera moved (or [`GpuFrameSession::reset`] was called, or a probe was captured
+    /// again): the view buffers, the
     /// G-buffer, the light-map shading and frame 0 of the view-dependent pass re-rendered into
     /// the kept targets.
     Moved,
@@ -272,6 +315,8 @@ struct Targets {
 #[derive(Debug)]
 struct CameraFrame {
     camera: PathCamera,
+    /// The walkthrough's probe generation the inputs were built with.
+    probes: u64,
     views: Vec<GpuViewBuffer>,
     reflectors: Vec<Reflector>,
     see_throughs: usize,
@@ -296,8 +341,9 @@ struct Shaded {
 /// A walkthrough (or a viewer) calls [`GpuFrameSession::step`] once per displayed frame:
 ///
 /// - size or k changed (or the first step): the targets are reallocated, every pass runs;
-/// - the camera changed: view buffers, G-buffer, light-map shading and progressive frame 0
-///   (the accumulation is reset) re-rendered into the kept targets;
+/// - the camera changed (or a probe was captured again,
+///   [`GpuWalkthrough::recapture_probe`]): view buffers, G-buffer, light-map shading and
+///   progressive frame 0 (the accumulation is reset) re-rendered into the kept targets;
 /// - samples, method or seed changed: frame 0 of the view-dependent pass alone;
 /// - nothing changed, progressive with fewer than `frames` accumulated: the next QMC frame
 ///   (frame f's R2 rotation, read at the level of the accumulated count) is averaged in, so a
@@ -412,7 +458,12 @@ impl GpuFrameSession {
         };
         // What the camera sees: kept while it is still.
         let frame = match &mut self.frame {
-            Some(f) if camera_bits(&f.camera) == camera_bits(camera) => f,
+            Some(f)
+                if camera_bits(&f.camera) == camera_bits(camera)
+                    && f.probes == walk.probe_generation =>
+            {
+                f
+            }
             slot => {
                 *slot = None;
                 self.shaded = None;
@@ -607,6 +658,7 @@ fn render_camera(
     times.lightmap_ms = ms(timer.stop(ctx)?);
     Ok(CameraFrame {
         camera: *camera,
+        probes: walk.probe_generation,
         views,
         reflectors,
         see_throughs: transmissive.len(),

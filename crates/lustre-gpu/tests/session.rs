@@ -35,7 +35,7 @@ const PROBES: ProbeOptions = ProbeOptions {
 };
 
 /// Runs `f` on the built-in room (quick bake) with its GPU walkthrough.
-fn with_room(f: impl FnOnce(&GpuContext, &Scene, &LitScene, &GpuWalkthrough)) {
+fn with_room(f: impl FnOnce(&GpuContext, &Scene, &LitScene, &mut GpuWalkthrough)) {
     let ctx = ctx();
     let scene = lustre_scene::builtin::room().expect("room");
     let common::Baked {
@@ -49,8 +49,8 @@ fn with_room(f: impl FnOnce(&GpuContext, &Scene, &LitScene, &GpuWalkthrough)) {
     let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit");
     let up = LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages).expect("upload");
-    let walk = GpuWalkthrough::new(&ctx, &lit, up, &PROBES, None).expect("walkthrough");
-    f(&ctx, &scene, &lit, &walk);
+    let mut walk = GpuWalkthrough::new(&ctx, &lit, up, &PROBES, None).expect("walkthrough");
+    f(&ctx, &scene, &lit, &mut walk);
 }
 
 fn options(method: FrameMethod, supersampling: u32) -> GpuFrameOptions {
@@ -79,6 +79,7 @@ fn same(a: &Image, b: &Image) -> bool {
 #[test]
 fn the_session_accumulates_still_frames_and_resets_on_change() {
     with_room(|ctx, scene, lit, walk| {
+        let walk = &*walk;
         let (w, h) = (48usize, 32usize);
         let camera = path_camera(scene, None, w as u32, h as u32).expect("camera");
         let render = |camera: &PathCamera, size, opts: GpuFrameOptions| {
@@ -271,6 +272,64 @@ fn the_session_accumulates_still_frames_and_resets_on_change() {
     });
 }
 
+/// A probe captured again on request (`GpuWalkthrough::recapture_probe`) is read from the
+/// session's next step: with the same options the same probe and image, bit for bit; with
+/// smaller faces another image; a mesh without a probe is refused by name.
+#[test]
+fn a_probe_captured_again_is_read_from_the_next_step() {
+    with_room(|ctx, scene, lit, walk| {
+        let (w, h) = (40usize, 24usize);
+        let camera = path_camera(scene, None, w as u32, h as u32).expect("camera");
+        let regular = options(FrameMethod::Regular, 1);
+        let mut s = GpuFrameSession::new();
+        s.step(ctx, walk, lit, &camera, (w, h), &regular)
+            .expect("step");
+        let before = s.image(ctx).expect("image");
+        let mesh = walk.probes[0].mesh as usize;
+        let ms = walk
+            .recapture_probe(ctx, lit, mesh, &PROBES)
+            .expect("captured again");
+        assert!(ms > 0.0, "{ms}");
+        let step = s
+            .step(ctx, walk, lit, &camera, (w, h), &regular)
+            .expect("step");
+        assert_eq!(step.work, StepWork::Moved);
+        assert!(same(&s.image(ctx).expect("image"), &before));
+        let small = ProbeOptions {
+            face_size: 16,
+            ..PROBES
+        };
+        walk.recapture_probe(ctx, lit, mesh, &small)
+            .expect("captured again");
+        let probe = walk.probes[0].read_back(ctx).expect("probe read-back");
+        assert_eq!(probe.pyramid.base_size(), 16);
+        let step = s
+            .step(ctx, walk, lit, &camera, (w, h), &regular)
+            .expect("step");
+        assert_eq!(step.work, StepWork::Moved);
+        let after = s.image(ctx).expect("image");
+        let db = psnr(&after, &before, 1.0).expect("psnr");
+        println!("probe captured again at 16² faces instead of 32²: {db:.1} dB from before");
+        assert!(db < 90.0, "{db:.1} dB: the new probe is not read");
+        // The next step at the still camera runs nothing.
+        let step = s
+            .step(ctx, walk, lit, &camera, (w, h), &regular)
+            .expect("step");
+        assert_eq!(step.work, StepWork::Unchanged);
+        let plain = (0..scene.meshes.len())
+            .find(|m| !walk.probes.iter().any(|p| p.mesh as usize == *m))
+            .expect("a mesh without a probe");
+        let err = walk
+            .recapture_probe(ctx, lit, plain, &PROBES)
+            .expect_err("no probe")
+            .to_string();
+        assert!(
+            err.contains("no probe") && err.contains(&scene.meshes[plain].name),
+            "{err}"
+        );
+    });
+}
+
 /// The CPU twin of the session's current frame after `frames` progressive frames, on its
 /// read-back intermediates.
 fn twin(
@@ -340,6 +399,7 @@ const CONVERGED: u32 = 256;
 #[test]
 fn still_frames_converge_to_the_integral_of_the_same_incident_light() {
     with_room(|ctx, scene, lit, walk| {
+        let walk = &*walk;
         let (w, h) = (80usize, 48usize);
         let camera = path_camera(scene, None, w as u32, h as u32).expect("camera");
         let probes: Vec<_> = walk
