@@ -8,7 +8,7 @@
 //! intermediates) rises. Fails without an adapter.
 
 mod common;
-use common::{ctx, quick_bake};
+use common::{ctx, frame_buffers, quick_bake};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::{
@@ -19,11 +19,10 @@ use lustre_scene::Scene;
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::spec_albedo;
 use lustre_shade::frame::{
-    shade_gbuffer_view_dependent, FrameBuffers, FrameLight, FrameMethod, GBufferViewOptions,
+    shade_gbuffer_view_dependent, FrameLight, FrameMethod, GBufferViewOptions,
 };
 use lustre_shade::image::Image;
 use lustre_shade::metrics::psnr;
-use lustre_shade::mirror::MirrorBuffer;
 use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{LitScene, Probe, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
@@ -341,37 +340,7 @@ fn twin(
     frames: u32,
 ) -> Image {
     let gb = inter.gbuffer.read_back(ctx).expect("G-buffer read-back");
-    let views: Vec<_> = inter
-        .views
-        .iter()
-        .map(|v| v.read_back(ctx).expect("view read-back"))
-        .collect();
-    let (mirror_views, see_throughs) = views.split_at(inter.reflectors.len());
-    let t = inter.tables;
-    let buffers = FrameBuffers {
-        mirrors: inter
-            .reflectors
-            .iter()
-            .zip(mirror_views)
-            .map(|(r, v)| MirrorBuffer {
-                reflector: r.clone(),
-                plane: r.plane,
-                view: v.clone(),
-            })
-            .collect(),
-        mirror_of_mesh: t.mirror_of_mesh.clone(),
-        see_throughs: see_throughs.to_vec(),
-        see_through_of_mesh: t.see_through_of_mesh.clone(),
-        probe_of_mesh: t.probe_of_mesh.clone(),
-        thin: lit
-            .scene
-            .materials
-            .iter()
-            .map(lustre_shade::frame::thin_sheet)
-            .collect(),
-        first_prim: t.first_prim.clone(),
-        seconds: 0.0,
-    };
+    let buffers = frame_buffers(ctx, lit, inter.views, inter.reflectors, inter.tables);
     let light = FrameLight {
         probes,
         environment: None,

@@ -11,7 +11,7 @@
 //! Fails without an adapter.
 
 mod common;
-use common::{ctx, quick_bake};
+use common::{ctx, frame_buffers, quick_bake};
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::frame_shade::{pack_material, FLAG_TEXTURED};
 use lustre_gpu::{GpuContext, GpuFrame, GpuFrameOptions, GpuWalkthrough, LightmapFrameScene};
@@ -19,11 +19,10 @@ use lustre_scene::{Material, MaterialKind, ResolvedSpec, Scene};
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::spec_albedo;
 use lustre_shade::frame::{
-    render_frame, shade_gbuffer_view_dependent, FrameBuffers, FrameLight, FrameMethod,
-    FrameOptions, GBufferViewOptions,
+    render_frame, shade_gbuffer_view_dependent, FrameLight, FrameMethod, FrameOptions,
+    GBufferViewOptions,
 };
 use lustre_shade::metrics::psnr;
-use lustre_shade::mirror::MirrorBuffer;
 use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
@@ -65,37 +64,7 @@ fn gpu_and_twin(
         .expect("GPU frame");
     // The CPU twins on the GPU's intermediates.
     let gb = frame.gbuffer.read_back(ctx).expect("G-buffer read-back");
-    let views: Vec<_> = frame
-        .views
-        .iter()
-        .map(|v| v.read_back(ctx).expect("view read-back"))
-        .collect();
-    let (mirror_views, see_throughs) = views.split_at(frame.reflectors.len());
-    let t = &frame.tables;
-    let buffers = FrameBuffers {
-        mirrors: frame
-            .reflectors
-            .iter()
-            .zip(mirror_views)
-            .map(|(r, v)| MirrorBuffer {
-                reflector: r.clone(),
-                plane: r.plane,
-                view: v.clone(),
-            })
-            .collect(),
-        mirror_of_mesh: t.mirror_of_mesh.clone(),
-        see_throughs: see_throughs.to_vec(),
-        see_through_of_mesh: t.see_through_of_mesh.clone(),
-        probe_of_mesh: t.probe_of_mesh.clone(),
-        thin: lit
-            .scene
-            .materials
-            .iter()
-            .map(lustre_shade::frame::thin_sheet)
-            .collect(),
-        first_prim: t.first_prim.clone(),
-        seconds: 0.0,
-    };
+    let buffers = frame_buffers(ctx, lit, &frame.views, &frame.reflectors, &frame.tables);
     let (twin, twin_stats) = shade_gbuffer_view_dependent(
         lit,
         light,

@@ -5,10 +5,13 @@
 
 pub mod kernel;
 
-use lustre_gpu::GpuContext;
+use lustre_gpu::{GpuContext, GpuViewBuffer};
 use lustre_scene::lightmap::{build_atlas, AtlasOptions, LightmapAtlas};
 use lustre_scene::Scene;
 use lustre_shade::bake::{assemble, bake_tiles, BakeOptions, Denoiser};
+use lustre_shade::frame::{thin_sheet, FrameBuffers, FrameTables};
+use lustre_shade::mirror::{MirrorBuffer, Reflector};
+use lustre_shade::probe::LitScene;
 
 /// The adapter; panics (the test fails) without one.
 pub fn ctx() -> GpuContext {
@@ -51,5 +54,39 @@ pub fn quick_bake(mut scene: Scene, texels_per_metre: f32) -> Baked {
         scene,
         atlas,
         pages,
+    }
+}
+
+/// The CPU twins' view of a GPU frame's view buffers, read back: `views` holds the mirror
+/// buffers (of `reflectors`, in order) then the see-through buffers, `tables` the per-mesh links.
+pub fn frame_buffers(
+    ctx: &GpuContext,
+    lit: &LitScene,
+    views: &[GpuViewBuffer],
+    reflectors: &[Reflector],
+    tables: &FrameTables,
+) -> FrameBuffers {
+    let views: Vec<_> = views
+        .iter()
+        .map(|v| v.read_back(ctx).expect("view read-back"))
+        .collect();
+    let (mirror_views, see_throughs) = views.split_at(reflectors.len());
+    FrameBuffers {
+        mirrors: reflectors
+            .iter()
+            .zip(mirror_views)
+            .map(|(r, v)| MirrorBuffer {
+                reflector: r.clone(),
+                plane: r.plane,
+                view: v.clone(),
+            })
+            .collect(),
+        mirror_of_mesh: tables.mirror_of_mesh.clone(),
+        see_throughs: see_throughs.to_vec(),
+        see_through_of_mesh: tables.see_through_of_mesh.clone(),
+        probe_of_mesh: tables.probe_of_mesh.clone(),
+        thin: lit.scene.materials.iter().map(thin_sheet).collect(),
+        first_prim: tables.first_prim.clone(),
+        seconds: 0.0,
     }
 }
