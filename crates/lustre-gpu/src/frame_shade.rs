@@ -630,6 +630,8 @@ pub struct FrameShadeScene {
     albedo_mats: wgpu::Buffer,
     texels: wgpu::Buffer,
     texture_info: wgpu::Buffer,
+    /// Per view buffer: its first texel in `view_radiance`.
+    view_offsets: Vec<u32>,
     page: [u32; 2],
     probes: u32,
     environment: u32,
@@ -958,11 +960,49 @@ impl FrameShadeScene {
             albedo_mats: storage(ctx, "frame albedo materials", &albedo.mats),
             texels: storage(ctx, "frame texels", &albedo.texels),
             texture_info: storage(ctx, "frame textures", &albedo.info),
+            view_offsets: r_off,
             page: [atlas.width, atlas.height],
             probes: probes.len() as u32,
             environment: env_index,
             materials,
         })
+    }
+}
+
+impl FrameShadeScene {
+    /// Copies view buffer `index`'s radiance (every level) into the pass's concatenation,
+    /// after `view` was shaded again (a see-through layer). Submitted, not waited for.
+    /// Errors: no such view, a buffer of another size.
+    pub fn refresh_view(&self, ctx: &GpuContext, index: usize, view: &GpuViewBuffer) -> Result<()> {
+        let at = self.view_offsets.get(index).copied().ok_or_else(|| {
+            invalid(
+                "view buffer",
+                format!("no view {index} among {}", self.view_offsets.len()),
+            )
+        })?;
+        let start = u64::from(at) * 16;
+        let end = self
+            .view_offsets
+            .get(index + 1)
+            .map_or(self.view_radiance.size(), |&o| u64::from(o) * 16);
+        if view.radiance.size() != end - start {
+            return Err(invalid(
+                "view buffer",
+                format!(
+                    "view {index} holds {} bytes, the frame's copy {}",
+                    view.radiance.size(),
+                    end - start
+                ),
+            ));
+        }
+        let mut enc = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("view refresh"),
+            });
+        enc.copy_buffer_to_buffer(&view.radiance, 0, &self.view_radiance, start, end - start);
+        ctx.queue.submit([enc.finish()]);
+        Ok(())
     }
 }
 
@@ -1225,6 +1265,13 @@ pub struct FrameShadeOptions {
     pub seed: u64,
 }
 
+/// The light-mapped image a run adds to: the first w·h RGBA f32 texels of a buffer.
+struct Lit<'a> {
+    buffer: &'a wgpu::Buffer,
+    width: u32,
+    height: u32,
+}
+
 /// The compiled pass.
 #[derive(Debug)]
 pub struct FrameShadePass {
@@ -1288,6 +1335,90 @@ impl FrameShadePass {
         opts: &FrameShadeOptions,
         out: &FrameShadeTarget,
     ) -> Result<()> {
+        let lit = Lit {
+            buffer: lightmapped.buffer(),
+            width: lightmapped.width,
+            height: lightmapped.height,
+        };
+        let all = [0, 0, out.width, out.height];
+        self.dispatch(ctx, scene, gbuffer, lit, camera, k, opts, (all, true), out)
+    }
+
+    /// The see-through layer of view buffer `view` (index `index` of `scene`'s views, a
+    /// see-through buffer), as `lustre_shade::frame::shade_see_through_layer`: its light-mapped
+    /// level 0 plus the view-dependent part of the pixels in `rect` (`[x0, y0, x1, y1)`) of its
+    /// w×h G-buffer `gbuffer` with `SEE_THROUGH_SAMPLES` regular samples, see-through buffers
+    /// not read, written into `out` (w×h at k = 1) and copied over the view's level 0; the
+    /// caller rebuilds its MIP levels ([`crate::GpuViewPass::build_levels`]) and the scene's
+    /// copy ([`FrameShadeScene::refresh_view`]). Submitted, not waited for. Errors: sizes.
+    #[allow(clippy::too_many_arguments)]
+    pub fn shade_see_through_layer(
+        &self,
+        ctx: &GpuContext,
+        scene: &FrameShadeScene,
+        gbuffer: &GBufferTarget,
+        view: &GpuViewBuffer,
+        camera: &PathCamera,
+        rect: [usize; 4],
+        out: &FrameShadeTarget,
+    ) -> Result<()> {
+        let (w, h) = (view.width as u32, view.height as u32);
+        if (out.width, out.height) != (w, h) {
+            return Err(invalid(
+                "see-through layer",
+                format!(
+                    "a {}×{} output for a {w}×{h} view buffer",
+                    out.width, out.height
+                ),
+            ));
+        }
+        let rect = rect.map(|v| u32::try_from(v).unwrap_or(u32::MAX));
+        let lit = Lit {
+            buffer: &view.radiance,
+            width: w,
+            height: h,
+        };
+        let opts = FrameShadeOptions {
+            samples: lustre_shade::frame::SEE_THROUGH_SAMPLES as u32,
+            method: FrameMethod::Regular,
+            frame: 0,
+            seed: 0,
+        };
+        self.dispatch(
+            ctx,
+            scene,
+            gbuffer,
+            lit,
+            camera,
+            1,
+            &opts,
+            (rect, false),
+            out,
+        )?;
+        let mut enc = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("see-through layer"),
+            });
+        enc.copy_buffer_to_buffer(&out.out, 0, &view.radiance, 0, out.out.size());
+        ctx.queue.submit([enc.finish()]);
+        Ok(())
+    }
+
+    /// One run of the pass: `rect` and whether see-through buffers are read.
+    #[allow(clippy::too_many_arguments)]
+    fn dispatch(
+        &self,
+        ctx: &GpuContext,
+        scene: &FrameShadeScene,
+        gbuffer: &GBufferTarget,
+        lightmapped: Lit,
+        camera: &PathCamera,
+        k: u32,
+        opts: &FrameShadeOptions,
+        (rect, see_through): ([u32; 4], bool),
+        out: &FrameShadeTarget,
+    ) -> Result<()> {
         let max = lustre_shade::frame::MAX_SAMPLES as u32;
         if opts.samples == 0 || opts.samples > max {
             return Err(invalid(
@@ -1330,6 +1461,8 @@ impl FrameShadePass {
             scene.environment,
             scene.page[1],
         ]);
+        u.push(rect);
+        u.push([u32::from(!see_through), 0, 0, 0]);
         let uniform = buffer_init(
             ctx,
             "frame uniform",
@@ -1362,7 +1495,16 @@ impl FrameShadePass {
                 buf(11, &scene.view_radiance),
                 buf(12, &scene.view_geometry),
                 buf(13, &scene.views),
-                buf(14, lightmapped.buffer()),
+                wgpu::BindGroupEntry {
+                    binding: 14,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: lightmapped.buffer,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(
+                            u64::from(lightmapped.width) * u64::from(lightmapped.height) * 16,
+                        ),
+                    }),
+                },
                 buf(15, &out.accum),
                 buf(16, &out.out),
                 buf(17, &out.counts),
@@ -1407,7 +1549,7 @@ mod tests {
         for (src, types) in [
             (
                 frame_shade_wgsl(),
-                &[("Params", 8 * 16), ("GpuBsdf", 144)][..],
+                &[("Params", 10 * 16), ("GpuBsdf", 144)][..],
             ),
             (models.as_str(), &[("GpuBsdf", 144)][..]),
         ] {

@@ -23,6 +23,12 @@ struct Params {
     method: vec4<u32>,
     // seed (low, high word), environment cube (NONE: none), light-map page height.
     seed: vec4<u32>,
+    // The output pixels [x0, x1) × [y0, y1) with a view-dependent part (the rest: the
+    // light-mapped image alone; a see-through layer's rectangle, mirror::screen_rect).
+    rect: vec4<u32>,
+    // x: 1 when see-through buffers are not read (a see-through layer's own shading,
+    // frame::shade_see_through_layer), 0 otherwise.
+    flags: vec4<u32>,
 };
 
 @group(0) @binding(0) var<uniform> u: Params;
@@ -701,7 +707,8 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
     if (cube != NONE && cube < u.method.z) {
         rel = p - cubes[2u * cube].xyz;
     }
-    let pt = Point(p, n, wo, bitcast<u32>(r4.w), bitcast<u32>(r5.w), cube, rel);
+    let see_through = select(bitcast<u32>(r5.w), NONE, u.flags.x != 0u);
+    let pt = Point(p, n, wo, bitcast<u32>(r4.w), see_through, cube, rel);
     if (pt.cube == NONE && pt.mirror == NONE && pt.see_through == NONE) {
         return vec3<f32>(0.0);
     }
@@ -718,6 +725,11 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
 
 // Output pixel (x, y): its k×k G-buffer pixels.
 fn shade_pixel(x: u32, y: u32, w: u32, k: u32) {
+    if (x < u.rect.x || y < u.rect.y || x >= u.rect.z || y >= u.rect.w) {
+        let i = y * w + x;
+        out_px[i] = vec4<f32>(lightmapped[i].xyz, 1.0);
+        return;
+    }
     let gw = f32(u.sizes.x);
     let gh = f32(u.sizes.y);
     let a = u.cam.x;

@@ -158,7 +158,10 @@ impl GpuViewPass {
             ));
         }
         let target = GBufferTarget::new(ctx, wu, hu)?;
-        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        // COPY_DST: a see-through layer is copied over level 0.
+        let usage = wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST;
         let buffer = |label: &str, bytes: u64| {
             ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -206,6 +209,47 @@ impl GpuViewPass {
             pass.set_bind_group(0, &group, &[]);
             pass.dispatch_workgroups(wu.div_ceil(8), hu.div_ceil(8), 1);
         }
+        self.encode_levels(ctx, &mut enc, &radiance, &sizes);
+        ctx.queue.submit([enc.finish()]);
+        ctx.wait()?;
+        scope_result(scope, "view buffer")?;
+        Ok(ViewRender {
+            view: GpuViewBuffer {
+                radiance,
+                geometry,
+                width: w,
+                height: h,
+                level_sizes: sizes,
+                camera: *camera,
+                mesh,
+                front,
+            },
+            gbuffer: target,
+        })
+    }
+
+    /// Rebuilds `view`'s MIP levels from its level 0 (after a see-through layer was copied
+    /// over it). Submitted, not waited for.
+    pub fn build_levels(&self, ctx: &GpuContext, view: &GpuViewBuffer) -> Result<()> {
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut enc = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("view buffer levels"),
+            });
+        self.encode_levels(ctx, &mut enc, &view.radiance, &view.level_sizes);
+        ctx.queue.submit([enc.finish()]);
+        scope_result(scope, "view buffer levels")
+    }
+
+    /// The 2×2 box MIP steps of `radiance` (levels of `sizes`, finest first), one pass each.
+    fn encode_levels(
+        &self,
+        ctx: &GpuContext,
+        enc: &mut wgpu::CommandEncoder,
+        radiance: &wgpu::Buffer,
+        sizes: &[(usize, usize)],
+    ) {
         let mut offset = 0usize;
         for pair in sizes.windows(2) {
             let ((pw, ph), (cw, ch)) = (pair[0], pair[1]);
@@ -228,7 +272,7 @@ impl GpuViewPass {
             let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("view_mip.wgsl"),
                 layout: &self.mip.1,
-                entries: &[buf(0, &params), buf(1, &radiance)],
+                entries: &[buf(0, &params), buf(1, radiance)],
             });
             // One pass per level: the next level reads what this one wrote.
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -240,21 +284,5 @@ impl GpuViewPass {
             pass.dispatch_workgroups((cw as u32).div_ceil(8), (ch as u32).div_ceil(8), 1);
             offset += pw * ph;
         }
-        ctx.queue.submit([enc.finish()]);
-        ctx.wait()?;
-        scope_result(scope, "view buffer")?;
-        Ok(ViewRender {
-            view: GpuViewBuffer {
-                radiance,
-                geometry,
-                width: w,
-                height: h,
-                level_sizes: sizes,
-                camera: *camera,
-                mesh,
-                front,
-            },
-            gbuffer: target,
-        })
     }
 }

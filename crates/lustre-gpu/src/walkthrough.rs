@@ -34,7 +34,7 @@ use crate::view_pass::GpuViewPass;
 use lustre_env::pyramid::CubePyramid;
 use lustre_shade::frame::{view_meshes, FrameMethod, FrameStats, FrameTables, MAX_SAMPLES};
 use lustre_shade::image::Image;
-use lustre_shade::mirror::Reflector;
+use lustre_shade::mirror::{screen_rect, Reflector};
 use lustre_shade::path::PathCamera;
 use lustre_shade::probe::{LitScene, ProbeOptions};
 
@@ -99,8 +99,11 @@ pub struct GpuFrame {
     pub gbuffer: GBufferTarget,
     /// The w×h light-mapped shading of it.
     pub lightmapped: ShadeTarget,
-    /// The mirror buffers (with their reflectors), then the see-through buffers.
+    /// The mirror buffers (with their reflectors), then the see-through buffers (their
+    /// layers shaded).
     pub views: Vec<GpuViewBuffer>,
+    /// The w×h G-buffer of each see-through buffer (its layer's input).
+    pub see_through_gbuffers: Vec<GBufferTarget>,
     /// The reflector of each mirror buffer.
     pub reflectors: Vec<Reflector>,
     /// The per-mesh tables the view-dependent pass read.
@@ -320,6 +323,8 @@ struct CameraFrame {
     views: Vec<GpuViewBuffer>,
     reflectors: Vec<Reflector>,
     see_throughs: usize,
+    /// The G-buffer of each see-through buffer (its layer's input).
+    see_through_gbuffers: Vec<GBufferTarget>,
     tables: FrameTables,
     scene: FrameShadeScene,
 }
@@ -591,6 +596,7 @@ impl GpuFrameSession {
                 gbuffer: t.gbuffer,
                 lightmapped: t.lightmapped,
                 views: f.views,
+                see_through_gbuffers: f.see_through_gbuffers,
                 reflectors: f.reflectors,
                 tables: f.tables,
             }),
@@ -625,11 +631,13 @@ fn render_camera(
         reflectors.push(reflector);
         views.push(render.view);
     }
+    let mut see_through_gbuffers = vec![];
     for &m in &transmissive {
         let render = walk
             .views
             .render_see_through(ctx, &walk.scene, lit, m, camera, w, h)?;
         views.push(render.view);
+        see_through_gbuffers.push(render.gbuffer);
     }
     times.views_ms = ms(timer.stop(ctx)?);
     let probe_meshes: Vec<u32> = walk.probes.iter().map(|p| p.mesh).collect();
@@ -642,6 +650,26 @@ fn render_camera(
         walk.environment.as_ref(),
         &views,
     )?;
+    // The see-through layers (lustre_shade::frame::shade_see_through_layer): what each
+    // see-through buffer shows gains its view-dependent part, read from the mirror buffers and
+    // probes; then its levels and the pass's copy are rebuilt.
+    if !transmissive.is_empty() {
+        timer.start(ctx)?;
+        let (wu, hu) = (w as u32, h as u32);
+        let out = FrameShadeTarget::new(ctx, wu, hu, 1)?;
+        let first = reflectors.len();
+        for (i, (&m, gb)) in transmissive.iter().zip(&see_through_gbuffers).enumerate() {
+            let view = &views[first + i];
+            let rect = screen_rect(lit, m, camera, w, h);
+            walk.shade
+                .shade_see_through_layer(ctx, &scene, gb, view, camera, rect, &out)?;
+            walk.views.build_levels(ctx, view)?;
+        }
+        for i in 0..transmissive.len() {
+            scene.refresh_view(ctx, first + i, &views[first + i])?;
+        }
+        times.views_ms += ms(timer.stop(ctx)?);
+    }
     timer.start(ctx)?;
     walk.gbuffer
         .draw(ctx, &walk.scene.geometry, camera, &targets.gbuffer)?;
@@ -662,6 +690,7 @@ fn render_camera(
         views,
         reflectors,
         see_throughs: transmissive.len(),
+        see_through_gbuffers,
         tables,
         scene,
     })

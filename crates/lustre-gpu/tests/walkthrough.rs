@@ -19,10 +19,12 @@ use lustre_scene::{Material, MaterialKind, ResolvedSpec, Scene};
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::spec_albedo;
 use lustre_shade::frame::{
-    render_frame, shade_gbuffer_view_dependent, FrameLight, FrameMethod, FrameOptions,
-    GBufferViewOptions,
+    render_frame, shade_gbuffer_view_dependent, shade_see_through_layer, view_meshes, FrameLight,
+    FrameMethod, FrameOptions, GBufferViewOptions,
 };
+use lustre_shade::image::Image;
 use lustre_shade::metrics::psnr;
+use lustre_shade::mirror::screen_rect;
 use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
@@ -83,6 +85,46 @@ fn gpu_and_twin(
     (frame, twin_stats.glossy_hits, db)
 }
 
+/// The see-through layers of a GPU frame against their CPU twin
+/// ([`shade_see_through_layer`] on the read-back see-through G-buffers and mirror buffers):
+/// the lowest PSNR over the layers, and the layers' glossy pixels.
+fn layer_parity(
+    ctx: &GpuContext,
+    lit: &LitScene,
+    light: &FrameLight,
+    frame: &GpuFrame,
+    camera: &PathCamera,
+    (w, h): (usize, usize),
+) -> (f64, u64) {
+    let (_, transmissive) = view_meshes(lit);
+    assert_eq!(transmissive.len(), frame.see_through_gbuffers.len());
+    let buffers = frame_buffers(ctx, lit, &frame.views, &frame.reflectors, &frame.tables);
+    let (mut worst, mut glossy) = (f64::INFINITY, 0);
+    for (i, (&m, gb)) in transmissive
+        .iter()
+        .zip(&frame.see_through_gbuffers)
+        .enumerate()
+    {
+        let gb = gb.read_back(ctx).expect("see-through G-buffer read-back");
+        let rect = screen_rect(lit, m, camera, w, h);
+        let (twin, stats) =
+            shade_see_through_layer(lit, light, &buffers, camera, &gb, rect).expect("CPU layer");
+        let view = &buffers.see_throughs[i];
+        let gpu = Image::from_data(
+            w,
+            h,
+            view.texels
+                .iter()
+                .map(|t| t.radiance.0.map(|c| c as f32))
+                .collect(),
+        )
+        .expect("image");
+        worst = worst.min(psnr(&gpu, &twin, 1.0).expect("psnr"));
+        glossy += stats.glossy_hits;
+    }
+    (worst, glossy)
+}
+
 #[test]
 fn the_gpu_frame_matches_its_cpu_twins_and_the_ray_cast_frame() {
     let ctx = ctx();
@@ -134,6 +176,15 @@ fn the_gpu_frame_matches_its_cpu_twins_and_the_ray_cast_frame() {
         assert!(db >= 90.0, "{name}: {db:.1} dB");
         if !matches!(method, FrameMethod::Progressive { .. }) {
             assert_eq!(frame.stats.glossy_hits, twin_hits, "{name}");
+        }
+        if k == 1 {
+            // The glass's see-through layer (the floor's reflections behind the frosted glass).
+            let (db, glossy) = layer_parity(&ctx, &lit, &light, &frame, &camera, (w, h));
+            println!(
+                "{name}: see-through layer vs its CPU twin {db:.1} dB, {glossy} glossy texels"
+            );
+            assert!(glossy > 0, "{name}: the layer shades nothing");
+            assert!(db >= 90.0, "{name}: layer {db:.1} dB");
         }
     }
     // The same frame ray-cast on the CPU (its own probes and buffers, jittered camera rays):
@@ -273,5 +324,10 @@ fn the_gpu_frame_of_the_modern_hall_matches_its_cpu_twins() {
         // rounding error decided whether a floor sample turned back towards the floor point,
         // and a strip of floor pixels differed by ≈ 1 % (82.6 / 84.0 dB).
         assert!(db >= 90.0, "{name}: {db:.1} dB");
+        // The glass balustrade's see-through layer: the floor and the steps behind it.
+        let (db, glossy) = layer_parity(&ctx, &lit, &light, &frame, &camera, (w, h));
+        println!("Modern Hall, {name}: see-through layer vs its CPU twin {db:.1} dB, {glossy} glossy texels");
+        assert!(glossy > 0, "{name}: the layer shades nothing");
+        assert!(db >= 90.0, "{name}: layer {db:.1} dB");
     }
 }

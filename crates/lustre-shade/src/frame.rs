@@ -26,7 +26,9 @@ use crate::bake::render::camera_ray;
 use crate::image::Image;
 use crate::kernel::{corrected_direction, pixel_seed, BoundingPlane};
 use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
-use crate::mirror::{render_mirror, render_see_through, MirrorBuffer, ViewBuffer};
+use crate::mirror::{
+    render_mirror, render_see_through_with_gbuffer, screen_rect, MirrorBuffer, ViewBuffer,
+};
 use crate::path::PathCamera;
 use crate::probe::{LitScene, Probe};
 use crate::warp::{fibonacci_point, integrate_warp};
@@ -160,24 +162,32 @@ impl FrameBuffers {
             mirror_of_mesh[m] = Some(mirrors.len());
             mirrors.push(render_mirror(lit, m, camera, w, h)?);
         }
-        // The see-through pass: the camera's view without each transmissive probe object.
-        let mut see_through_of_mesh = vec![None; meshes.len()];
-        let mut see_throughs = vec![];
-        for &m in &transmissive {
-            see_through_of_mesh[m] = Some(see_throughs.len());
-            see_throughs.push(render_see_through(lit, m, camera, w, h)?);
-        }
-        let seconds = t_mirror.elapsed().as_secs_f64();
-        Ok(FrameBuffers {
+        let mut buffers = FrameBuffers {
             mirrors,
             mirror_of_mesh,
-            see_throughs,
-            see_through_of_mesh,
+            see_throughs: vec![],
+            see_through_of_mesh: vec![None; meshes.len()],
             probe_of_mesh,
             thin: lit.scene.materials.iter().map(thin_sheet).collect(),
             first_prim: first_prims(lit),
-            seconds,
-        })
+            seconds: 0.0,
+        };
+        // The see-through pass: the camera's view without each transmissive probe object, its
+        // layer's view-dependent part shaded over the mirror buffers and probes.
+        let mut see_throughs = vec![];
+        for &m in &transmissive {
+            let (mut view, gb) = render_see_through_with_gbuffer(lit, m, camera, w, h)?;
+            let rect = screen_rect(lit, m, camera, w, h);
+            let (layer, _) = shade_see_through_layer(lit, light, &buffers, camera, &gb, rect)?;
+            view.set_radiance(&layer.data);
+            see_throughs.push(view);
+        }
+        for (i, &m) in transmissive.iter().enumerate() {
+            buffers.see_through_of_mesh[m] = Some(i);
+        }
+        buffers.see_throughs = see_throughs;
+        buffers.seconds = t_mirror.elapsed().as_secs_f64();
+        Ok(buffers)
     }
 
     /// The per-mesh tables of these buffers (what a GPU pass needs besides the buffers).
@@ -372,9 +382,10 @@ pub fn progressive_point(i: usize, n: usize, f: usize) -> (f64, f64) {
 /// The view-dependent radiance at camera hit `hit` of `lit` (000 Eq. 4.4): the material's rest
 /// f − kd/π (kd the light-mapped albedo) integrated with `n` samples of `points`, each read from
 /// the mirror buffer of an in-plane reflector triangle, the see-through buffer of a
-/// transmissive probe object, the probe of the object (else the nearest probe, through its
-/// bounding planes) or the environment's pyramid. Returns the radiance (zero where nothing is
-/// view-dependent), the lookups made and whether the hit has a view-dependent part.
+/// transmissive probe object (unless `see_through` is false: a see-through layer's own
+/// shading), the probe of the object (else the nearest probe, through its bounding planes) or
+/// the environment's pyramid. Returns the radiance (zero where nothing is view-dependent), the
+/// lookups made and whether the hit has a view-dependent part.
 pub fn view_dependent(
     lit: &LitScene,
     light: &FrameLight,
@@ -382,6 +393,7 @@ pub fn view_dependent(
     hit: &SurfaceHit,
     n: usize,
     points: FramePoints,
+    see_through: bool,
 ) -> (Rgb, u64, bool) {
     let ps = lit.path_scene;
     let g = &ps.geometry;
@@ -422,7 +434,9 @@ pub fn view_dependent(
     };
     // The mirror buffer, for the reflector's in-plane triangles.
     let mirror = buffers.mirror_at(mesh, hit.prim);
-    let see_through = buffers.see_through_of_mesh[mesh].map(|i| &buffers.see_throughs[i]);
+    let see_through = buffers.see_through_of_mesh[mesh]
+        .filter(|_| see_through)
+        .map(|i| &buffers.see_throughs[i]);
     if env_light.is_none() && mirror.is_none() && see_through.is_none() {
         return (Rgb::ZERO, 0, false);
     }
@@ -584,7 +598,7 @@ pub fn render_frame(
             bary: hit.bary,
             d,
         };
-        let (glossy, lookups, vd) = view_dependent(lit, light, &buffers, &surface, n, points);
+        let (glossy, lookups, vd) = view_dependent(lit, light, &buffers, &surface, n, points, true);
         (l + glossy, lookups, vd)
     };
     let seed = opts.seed;
@@ -631,7 +645,6 @@ pub fn render_frame(
 /// [`pixel_seed`]`(x, y, seed)`; `frame` is the progressive frame shaded (frames `0..=frame`
 /// averaged when `accumulate`, else frame `frame` alone). Errors as [`shade_gbuffer`], and on
 /// a sample count outside 1..=[`MAX_SAMPLES`].
-#[allow(clippy::too_many_arguments)]
 pub fn shade_gbuffer_view_dependent(
     lit: &LitScene,
     light: &FrameLight,
@@ -640,6 +653,53 @@ pub fn shade_gbuffer_view_dependent(
     gb: &GBuffer,
     k: u32,
     opts: &GBufferViewOptions,
+) -> Result<(Image, FrameStats)> {
+    let all = [0, 0, gb.width, gb.height];
+    shade_gbuffer_region(lit, light, buffers, camera, gb, k, opts, all, true)
+}
+
+/// Glossy samples per texel of a see-through layer ([`shade_see_through_layer`]).
+pub const SEE_THROUGH_SAMPLES: usize = 8;
+
+/// The see-through layer (issue 11, the Modern Hall's glass rail): what a transmissive probe
+/// object's see-through buffer shows, light-mapped plus its own view-dependent part. A surface
+/// seen through glass is seen from the same camera, so the frame's mirror buffers and probes
+/// answer its samples as they answer the surfaces seen directly; see-through buffers are not
+/// read (no glass behind glass: what shows there is light-mapped). The light-mapped shading of
+/// the w×h G-buffer `gb` (k = 1, the see-through buffer's rays) plus the view-dependent part
+/// with [`SEE_THROUGH_SAMPLES`] regular samples, only for the pixels in `rect` (`[x0, y0, x1,
+/// y1)`, [`crate::mirror::screen_rect`]: where the object's samples read; light-mapped only
+/// elsewhere). The layer belongs to the camera, like the mirror buffers: the same for every
+/// method and progressive frame. The CPU twin of lustre-gpu's see-through layer pass.
+pub fn shade_see_through_layer(
+    lit: &LitScene,
+    light: &FrameLight,
+    buffers: &FrameBuffers,
+    camera: &PathCamera,
+    gb: &GBuffer,
+    rect: [usize; 4],
+) -> Result<(Image, FrameStats)> {
+    let opts = GBufferViewOptions {
+        samples: SEE_THROUGH_SAMPLES,
+        method: FrameMethod::Regular,
+        seed: 0,
+    };
+    shade_gbuffer_region(lit, light, buffers, camera, gb, 1, &opts, rect, false)
+}
+
+/// [`shade_gbuffer_view_dependent`] with the view-dependent part only in the output pixels of
+/// `rect` (`[x0, y0, x1, y1)`) and see-through buffers read only when `see_through`.
+#[allow(clippy::too_many_arguments)]
+fn shade_gbuffer_region(
+    lit: &LitScene,
+    light: &FrameLight,
+    buffers: &FrameBuffers,
+    camera: &PathCamera,
+    gb: &GBuffer,
+    k: u32,
+    opts: &GBufferViewOptions,
+    rect: [usize; 4],
+    see_through: bool,
 ) -> Result<(Image, FrameStats)> {
     let ps = lit.path_scene;
     let g = &ps.geometry;
@@ -658,6 +718,9 @@ pub fn shade_gbuffer_view_dependent(
             let (x, y) = (i % w, i / w);
             let mut sum = Rgb::ZERO;
             let (mut hits, mut lookups) = (0u64, 0u64);
+            if x < rect[0] || y < rect[1] || x >= rect[2] || y >= rect[3] {
+                return ([0.0; 3], 0, 0);
+            }
             for j in 0..ku {
                 for s in 0..ku {
                     let (gx, gy) = (x * ku + s, y * ku + j);
@@ -682,7 +745,8 @@ pub fn shade_gbuffer_view_dependent(
                             FramePoints::Progressive { first: 0, frames }
                         }
                     };
-                    let (c, l, vd) = view_dependent(lit, light, buffers, &hit, n, points);
+                    let (c, l, vd) =
+                        view_dependent(lit, light, buffers, &hit, n, points, see_through);
                     sum += c;
                     hits += u64::from(vd);
                     lookups += l;

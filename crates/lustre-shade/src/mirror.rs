@@ -8,6 +8,7 @@
 //!
 //! This is the CPU definition of the mirror pass; the GPU pass renders the same buffer.
 
+use crate::bake::gbuffer::{GBuffer, SKY};
 use crate::path::PathCamera;
 use crate::probe::LitScene;
 use crate::{Result, ShadeError};
@@ -206,6 +207,18 @@ pub struct ViewBuffer {
     pub front: Option<ReflectorPlane>,
 }
 
+impl ViewBuffer {
+    /// Replaces the level-0 radiance (row-major, w·h values) and rebuilds the MIP levels.
+    /// Values beyond the texels are ignored; missing ones leave their texels as they were.
+    pub fn set_radiance(&mut self, level0: &[[f32; 3]]) {
+        for (t, c) in self.texels.iter_mut().zip(level0) {
+            t.radiance = Rgb(c.map(f64::from));
+        }
+        let radiance = self.texels.iter().map(|t| t.radiance).collect();
+        self.levels = box_levels(self.width, self.height, radiance);
+    }
+}
+
 /// The mirror buffer of one reflector for one view (000 §4.5.1): the frame's resolution.
 #[derive(Clone, Debug)]
 pub struct MirrorBuffer {
@@ -230,7 +243,7 @@ pub fn render_mirror(
     let reflector = ReflectorPlane::of_mesh(lit, mesh)?;
     let plane = reflector.plane;
     let cam = mirror_camera(camera, &plane);
-    let mut view = render_view(lit, mesh, &cam, w, h, |d| {
+    let (mut view, _) = render_view(lit, mesh, &cam, w, h, |d| {
         // Start on the plane: what lies between the mirrored eye and the plane is behind the
         // reflector in the real view.
         let denom = d.dot(plane.normal);
@@ -258,6 +271,19 @@ pub fn render_see_through(
     w: usize,
     h: usize,
 ) -> Result<ViewBuffer> {
+    render_see_through_with_gbuffer(lit, mesh, camera, w, h).map(|(v, _)| v)
+}
+
+/// [`render_see_through`] and the G-buffer of its rays (the triangle and barycentrics each
+/// texel shows; the geometric normal in `normal`), which the see-through layer's
+/// view-dependent shading reads ([`crate::frame::shade_see_through_layer`]).
+pub fn render_see_through_with_gbuffer(
+    lit: &LitScene,
+    mesh: usize,
+    camera: &PathCamera,
+    w: usize,
+    h: usize,
+) -> Result<(ViewBuffer, GBuffer)> {
     if mesh >= lit.scene.meshes.len() {
         return Err(ShadeError::Parameter(format!(
             "{}: no mesh {mesh} to see through",
@@ -267,7 +293,64 @@ pub fn render_see_through(
     render_view(lit, mesh, camera, w, h, |_| 0.0)
 }
 
-/// One ray per texel centre of `cam`, from `start(d)` along it, mesh `mesh` left out.
+/// The pixel rectangle [x0, x1) × [y0, y1) (as `[x0, y0, x1, y1]`) of a w×h view from `camera`
+/// that covers mesh `mesh`'s projected vertices, widened by [`SCREEN_RECT_MARGIN`] of the larger
+/// side on every side and clamped to the view; the whole view when a vertex lies on or behind
+/// the camera's plane (or the mesh is missing or empty).
+pub fn screen_rect(
+    lit: &LitScene,
+    mesh: usize,
+    camera: &PathCamera,
+    w: usize,
+    h: usize,
+) -> [usize; 4] {
+    let full = [0, 0, w, h];
+    let Some(m) = lit.scene.meshes.get(mesh) else {
+        return full;
+    };
+    if m.positions.is_empty() || w == 0 || h == 0 {
+        return full;
+    }
+    let (wf, hf) = (w as f64, h as f64);
+    let a = camera.tan_half_fov_y;
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for v in &m.positions {
+        let rel = v.as_dvec3() - camera.origin;
+        let z = rel.dot(camera.forward);
+        if z.is_nan() || z <= 1e-9 * rel.length().max(1e-300) {
+            return full;
+        }
+        // The inverse of PathCamera::direction.
+        let x = (rel.dot(camera.right) / z / (a * wf / hf) + 1.0) * 0.5 * wf;
+        let y = (1.0 - rel.dot(camera.up) / z / a) * 0.5 * hf;
+        let p = DVec3::new(x, y, 0.0);
+        lo = lo.min(p);
+        hi = hi.max(p);
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return full;
+    }
+    let margin = (wf.max(hf) * SCREEN_RECT_MARGIN).ceil();
+    let clamp = |v: f64, max: f64| v.clamp(0.0, max) as usize;
+    let r = [
+        clamp((lo.x - margin).floor(), wf),
+        clamp((lo.y - margin).floor(), hf),
+        clamp((hi.x + margin).ceil(), wf),
+        clamp((hi.y + margin).ceil(), hf),
+    ];
+    if r[0] >= r[2] || r[1] >= r[3] {
+        // Entirely off screen: an empty rectangle.
+        return [0, 0, 0, 0];
+    }
+    r
+}
+
+/// The widening of [`screen_rect`], as a share of the view's larger side: room for the MIP
+/// footprints of rough transmission around the object's own pixels.
+pub const SCREEN_RECT_MARGIN: f64 = 1.0 / 16.0;
+
+/// One ray per texel centre of `cam`, from `start(d)` along it, mesh `mesh` left out; the view
+/// buffer and the G-buffer of the rays.
 fn render_view(
     lit: &LitScene,
     mesh: usize,
@@ -275,14 +358,14 @@ fn render_view(
     w: usize,
     h: usize,
     start: impl Fn(DVec3) -> f64 + Sync,
-) -> Result<ViewBuffer> {
+) -> Result<(ViewBuffer, GBuffer)> {
     if w == 0 || h == 0 {
         return Err(ShadeError::Parameter(format!(
             "view buffer {w}×{h} is empty"
         )));
     }
     let g = &lit.path_scene.geometry;
-    let texels: Vec<MirrorTexel> = (0..w * h)
+    let rays: Vec<(MirrorTexel, u32, [f32; 2], f32)> = (0..w * h)
         .into_par_iter()
         .map(|i| {
             let (x, y) = (i % w, i / w);
@@ -295,34 +378,60 @@ fn render_view(
                         .cross(tri[2] - tri[0])
                         .try_normalize()
                         .unwrap_or(DVec3::ZERO);
-                    MirrorTexel {
-                        radiance: lit.lit.radiance(g, hh.prim, hh.bary, d),
-                        position: Some(o + d * hh.t),
-                        normal: ng,
-                    }
+                    let q = o + d * hh.t;
+                    (
+                        MirrorTexel {
+                            radiance: lit.lit.radiance(g, hh.prim, hh.bary, d),
+                            position: Some(q),
+                            normal: ng,
+                        },
+                        hh.prim as u32,
+                        [hh.bary[1] as f32, hh.bary[2] as f32],
+                        (q - cam.origin).dot(cam.forward) as f32,
+                    )
                 }
-                None => MirrorTexel {
-                    radiance: lit
-                        .path_scene
-                        .environment
-                        .as_ref()
-                        .map_or(Rgb::ZERO, |e| e.eval(d)),
-                    position: None,
-                    normal: DVec3::ZERO,
-                },
+                None => (
+                    MirrorTexel {
+                        radiance: lit
+                            .path_scene
+                            .environment
+                            .as_ref()
+                            .map_or(Rgb::ZERO, |e| e.eval(d)),
+                        position: None,
+                        normal: DVec3::ZERO,
+                    },
+                    SKY,
+                    [0.0; 2],
+                    0.0,
+                ),
             }
         })
         .collect();
-    let levels = box_levels(w, h, texels.iter().map(|t| t.radiance).collect());
-    Ok(ViewBuffer {
-        mesh: mesh as u32,
-        camera: *cam,
+    let gb = GBuffer {
         width: w,
         height: h,
-        texels,
-        levels,
-        front: None,
-    })
+        prim: rays.iter().map(|r| r.1).collect(),
+        bary: rays.iter().map(|r| r.2).collect(),
+        depth: rays.iter().map(|r| r.3).collect(),
+        normal: rays
+            .iter()
+            .map(|r| r.0.normal.as_vec3().to_array())
+            .collect(),
+    };
+    let texels: Vec<MirrorTexel> = rays.into_iter().map(|r| r.0).collect();
+    let levels = box_levels(w, h, texels.iter().map(|t| t.radiance).collect());
+    Ok((
+        ViewBuffer {
+            mesh: mesh as u32,
+            camera: *cam,
+            width: w,
+            height: h,
+            texels,
+            levels,
+            front: None,
+        },
+        gb,
+    ))
 }
 
 /// The radiance MIP pyramid of a view buffer from its w×h level 0 (row-major): 2×2 box means of

@@ -529,14 +529,15 @@ fn a_glass_pane_transmits_what_lies_behind_it() {
     )
     .unwrap();
     let (w, h) = (32, 32);
+    // The pane's probe, captured once and read by both frames: the post (no light map) takes
+    // its diffuse light from the nearest probe, seen directly or through the pane's layer.
+    let (scene, atlas, pages) = room_with_pane(true);
+    let probes = [with_lit(&scene, &atlas, &pages, |lit| {
+        capture_probe(lit, 8, &probe_opts()).unwrap()
+    })];
     let render = |with_pane: bool| {
         let (scene, atlas, pages) = room_with_pane(with_pane);
         with_lit(&scene, &atlas, &pages, |lit| {
-            let probes: Vec<_> = if with_pane {
-                vec![capture_probe(lit, 8, &probe_opts()).unwrap()]
-            } else {
-                vec![]
-            };
             let light = FrameLight {
                 probes: &probes,
                 environment: None,
@@ -586,4 +587,124 @@ fn a_glass_pane_transmits_what_lies_behind_it() {
     eprintln!("{good} of {total} pixels off the post's edges within 0.03 of T = {t:.4}, {post} on the post");
     assert!(post > 20, "the post behind the pane: {post} pixels");
     assert!(good as f64 >= 0.97 * total as f64, "{good} of {total}");
+}
+
+/// The room with a glass pane (reflection tinted black) between the camera and the ball, a
+/// probe object; or without it. Mesh 7 is the pane.
+fn room_with_pane_before_ball(with_pane: bool) -> (Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>) {
+    let (mut scene, mut atlas, pages) = room(rough_metal(0.2));
+    if with_pane {
+        scene.materials.push(Material::new(
+            "glass",
+            MaterialKind::Dielectric {
+                int_ior: 1.5,
+                ext_ior: 1.0,
+                specular_reflectance: Rgb::ZERO,
+                specular_transmittance: Rgb::ONE,
+            },
+        ));
+        let v = |x: f32, y: f32| Vec3::new(x, y, 1.0);
+        let mut pane = Mesh::new(
+            "pane",
+            vec![v(1.7, 0.9), v(2.3, 0.9), v(2.3, 1.5), v(1.7, 1.5)],
+            vec![[0, 2, 1], [0, 3, 2]],
+            2,
+        );
+        pane.hints.probe = true;
+        scene.meshes.push(pane);
+        atlas.mesh_page.push(None);
+    }
+    (scene, atlas, pages)
+}
+
+/// What shows through glass keeps its view-dependent part (the see-through layer): the rough
+/// metal ball (no diffuse part, so nothing without its glossy integral) seen through a pane is
+/// the ball seen directly, dimmed by the sheet's transmittance T, reading the same probe.
+/// Before the layer the ball behind the pane came out black.
+#[test]
+fn a_glossy_object_behind_glass_keeps_its_reflections() {
+    use lustre_shade::mirror::screen_rect;
+    let cam = PathCamera::look_at(
+        DVec3::new(2.0, 1.2, 0.1),
+        DVec3::from_array(CENTRE),
+        DVec3::Y,
+        50.0,
+    )
+    .unwrap();
+    let (w, h) = (48, 48);
+    // The ball's probe, captured once (with the pane in the room) and read by both frames.
+    let (scene, atlas, pages) = room_with_pane_before_ball(true);
+    let probe = with_lit(&scene, &atlas, &pages, |lit| {
+        // The pane's rectangle: its vertices' pixels widened by the margin.
+        let rect = screen_rect(lit, 7, &cam, w, h);
+        let m = (w.max(h) as f64 / 16.0).ceil() as usize;
+        assert!(rect[0] > 0 && rect[2] < w, "{rect:?}");
+        assert!(
+            rect[2] - rect[0] > 2 * m && rect[3] - rect[1] > 2 * m,
+            "{rect:?}"
+        );
+        // Centred pane, centred camera: symmetric to a pixel.
+        assert!(
+            (rect[0] as i64 + rect[2] as i64 - w as i64).abs() <= 1,
+            "{rect:?}"
+        );
+        for p in &lit.scene.meshes[7].positions {
+            let d = (p.as_dvec3() - cam.origin).normalize();
+            // The vertex's ray passes between the rectangle's pixel edges.
+            let inside = (rect[0] + m..=rect[2] - m).any(|x| {
+                let lo = cam.direction(x as f64, h as f64 / 2.0, w, h);
+                let hi = cam.direction(x as f64 + 1.0, h as f64 / 2.0, w, h);
+                d.dot(cam.right) / d.dot(cam.forward) >= lo.dot(cam.right) / lo.dot(cam.forward)
+                    && d.dot(cam.right) / d.dot(cam.forward)
+                        <= hi.dot(cam.right) / hi.dot(cam.forward)
+            });
+            assert!(inside, "vertex {p} outside {rect:?}");
+        }
+        // A camera facing away: the whole view.
+        let back =
+            PathCamera::look_at(cam.origin, cam.origin - cam.forward, DVec3::Y, 50.0).unwrap();
+        let r = screen_rect(lit, 7, &back, w, h);
+        assert!(r == [0, 0, 0, 0] || r == [0, 0, w, h], "{r:?}");
+        capture_probe(lit, 6, &probe_opts()).unwrap()
+    });
+    let probes = [probe];
+    let render = |with_pane: bool| {
+        let (scene, atlas, pages) = room_with_pane_before_ball(with_pane);
+        with_lit(&scene, &atlas, &pages, |lit| {
+            frame(lit, &probes, &cam, (w, h), FrameMethod::Regular, 8)
+        })
+    };
+    let ((with, stats), (without, _)) = (render(true), render(false));
+    assert_eq!(stats.see_throughs, 1);
+    let r = (0.5f64 / 2.5).powi(2);
+    let t = 1.0 - 2.0 * r / (1.0 + r);
+    // Ball pixels away from its silhouette (the jittered rays and the buffer's texel centres
+    // see the same smooth reflection).
+    let on_ball = |x: usize, y: usize| {
+        let d = cam.direction(x as f64 + 0.5, y as f64 + 0.5, w, h);
+        let to = DVec3::from_array(CENTRE) - cam.origin;
+        (to - d * to.dot(d)).length() < 0.35
+    };
+    let (mut sum, mut good, mut total) = (0.0, 0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            if !on_ball(x, y) {
+                continue;
+            }
+            let a: f64 = (0..3).map(|c| f64::from(with.data[y * w + x][c])).sum();
+            let b: f64 = (0..3).map(|c| f64::from(without.data[y * w + x][c])).sum();
+            assert!(b > 0.05, "the ball seen directly is lit: {b}");
+            let ratio = a / b;
+            sum += ratio;
+            total += 1;
+            good += usize::from((ratio - t).abs() < 0.05);
+        }
+    }
+    let mean = sum / total as f64;
+    eprintln!(
+        "ball behind glass: mean ratio {mean:.4} (T = {t:.4}), {good} of {total} within 0.05"
+    );
+    assert!(total > 150, "{total} ball pixels");
+    assert!((mean - t).abs() < 0.02, "mean ratio {mean} vs T {t}");
+    assert!(good as f64 >= 0.9 * total as f64, "{good} of {total}");
 }
