@@ -22,8 +22,7 @@
 //! ([`FLAG_TEXTURED`]: diffuse and specular colours, roughness, the glTF base colour, metallic,
 //! roughness and transmission); and tilts the shading frame by a normal map as the CPU's
 //! `PathTracer::shading_point` does ([`FLAG_NORMAL_MAPPED`]; tangents from the mesh or ∂p/∂u).
-//! Materials the pass cannot shade (a rough plastic's textured roughness, fitted specs not on
-//! the GPU) are refused with a named error, so the caller falls back to the CPU frame.
+//! Materials the pass cannot shade (fitted specs not on the GPU) are refused with a named error, so the caller falls back to the CPU frame.
 //!
 //! Incident light: every probe's pyramid and the environment's are concatenated into one
 //! storage buffer with an offset table and read trilinearly and seamlessly as
@@ -53,7 +52,7 @@ use lustre_brdf::models::pbr_metallic_roughness::{PbrMetallicRoughness, PBR_ALPH
 use lustre_brdf::models::plastic::Plastic;
 use lustre_brdf::models::rough_conductor::RoughConductor;
 use lustre_brdf::models::rough_dielectric::RoughDielectric;
-use lustre_brdf::models::rough_plastic::RoughPlastic;
+use lustre_brdf::models::rough_plastic::{RoughPlastic, RoughPlasticCoating};
 use lustre_brdf::models::thin_dielectric::ThinDielectric;
 use lustre_brdf::rgb::Rgb;
 use lustre_env::cube::fetch_sources;
@@ -175,7 +174,9 @@ pub fn pack_rough_conductor(m: &RoughConductor) -> Result<[[f32; 4]; 8]> {
 }
 
 /// `rough_plastic.wgsl`'s parameters; its transmittance table ([`rough_plastic_table`])
-/// starts at entry `table` of the pass's table buffer. Errors: an anisotropic coating, a table
+/// starts at entry `table` of the pass's table buffer (p3 = (table, table, 0, 0): one row, no
+/// blend; a textured roughness sets p3.w = 1 and the pixel picks two rows of the coating's
+/// grid, `wgsl/textured.wgsl`). Errors: an anisotropic coating, a table
 /// offset beyond f32's exact integers.
 pub fn pack_rough_plastic(m: &RoughPlastic, table: u32) -> Result<[[f32; 4]; 8]> {
     let mut p = Params::new("rough plastic");
@@ -205,7 +206,7 @@ pub fn pack_rough_plastic(m: &RoughPlastic, table: u32) -> Result<[[f32; 4]; 8]>
     )?;
     p.rgb(1, m.diffuse_reflectance, weight)?;
     p.rgb(2, m.specular_reflectance, f64::from(u8::from(m.nonlinear)))?;
-    p.set(3, [f64::from(table), 0.0, 0.0, 0.0])?;
+    p.set(3, [f64::from(table), f64::from(table), 0.0, 0.0])?;
     Ok(p.p)
 }
 
@@ -308,9 +309,9 @@ fn microfacet(d: Distribution) -> MicrofacetType {
 /// ([`FLAG_TEXTURED`]: read per pixel from the [`pack_material_params`] record), a normal map
 /// is flagged ([`FLAG_NORMAL_MAPPED`]); a textured glTF material is packed as its BRDF with the
 /// relative ior in p1.y, whatever its transmission factor (the pixel's transmission picks the
-/// model). Errors (naming the material): a rough plastic's textured roughness (its coating's
-/// tables are built per roughness, ≈ 6000 microfacet integrals), models not on the GPU in this
-/// build.
+/// model); a rough plastic with a textured roughness appends its coating's grid
+/// ([`RoughPlasticCoating`]: `COATING_ALPHAS` tables, then their Fdr). Errors (naming the
+/// material): models not on the GPU in this build.
 pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
     let name = format!("material {:?}", m.name);
     let brdf = |e: lustre_brdf::Error| invalid(name.clone(), e.to_string());
@@ -370,13 +371,29 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             ext_ior,
             nonlinear,
         } => {
-            if alpha.texture.is_some() {
-                return Err(refuse(
-                    "a rough plastic's textured roughness (its coating's tables are built per \
-                     roughness)",
-                ));
-            }
             let (rho, tex) = rgb(diffuse);
+            if alpha.texture.is_some() {
+                // The coating's grid (RoughPlasticCoating): per roughness its T table, then
+                // the Fdr of every roughness; the pixel's α picks two rows (textured.wgsl).
+                let coating = RoughPlasticCoating::new(
+                    microfacet(*distribution),
+                    *int_ior,
+                    *ext_ior,
+                    *nonlinear,
+                )
+                .map_err(brdf)?;
+                let c = coating
+                    .at(clamp_alpha(alpha.factor), rho, specular.map(unit))
+                    .map_err(brdf)?;
+                let offset = u32::try_from(tables.len()).unwrap_or(u32::MAX);
+                let mut p = pack_rough_plastic(&c, offset)?;
+                p[3][3] = 1.0;
+                for g in &coating.grid {
+                    tables.extend(rough_plastic_table(g));
+                }
+                tables.extend(coating.grid.iter().map(|g| g.internal_reflectance() as f32));
+                return Ok(record(KIND_ROUGH_PLASTIC, FLAG_TEXTURED, p));
+            }
             let c = RoughPlastic::new(
                 microfacet(*distribution),
                 clamp_alpha(alpha.factor),
@@ -1574,6 +1591,16 @@ mod tests {
             }
         }
         assert_eq!(std::mem::size_of::<GpuBsdf>(), 144);
+    }
+
+    /// The WGSL's copies of the coating grid's constants are lustre-brdf's.
+    #[test]
+    fn coating_constants_match() {
+        use lustre_brdf::models::rough_plastic::{COATING_ALPHAS, COATING_ALPHA_MIN};
+        let src = frame_shade_wgsl();
+        assert!(src.contains(&format!("const COATING_ALPHAS: u32 = {COATING_ALPHAS}u;")));
+        assert_eq!(COATING_ALPHA_MIN, 1e-4);
+        assert!(src.contains("const COATING_ALPHA_MIN: f32 = 1e-4;"));
     }
 
     /// Every parameter must fit an f32: a named error otherwise.

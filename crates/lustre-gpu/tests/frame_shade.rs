@@ -238,8 +238,8 @@ fn materials_the_gpu_cannot_shade_are_named() {
         err.contains("chrome") && err.contains("not on the GPU"),
         "{err}"
     );
-    // A rough plastic's textured roughness stays on the CPU (its coating's tables are built
-    // per roughness); a normal map or a textured roughness elsewhere is on the GPU, flagged.
+    // A rough plastic's textured roughness packs its coating's grid (65 T tables of 64, then
+    // their Fdr), flagged; a normal map or a textured roughness elsewhere is flagged too.
     let tex = lustre_scene::material::TextureRef {
         texture: 0,
         uv_set: 0,
@@ -248,11 +248,16 @@ fn materials_the_gpu_cannot_shade_are_named() {
     if let MaterialKind::RoughPlastic { alpha, .. } = &mut rough.kind {
         alpha.texture = Some(tex);
     }
-    let err = pack_material(&rough, &mut vec![]).unwrap_err().to_string();
-    assert!(
-        err.contains("floor") && err.contains("textured roughness"),
-        "{err}"
+    let mut grid = vec![1.0f32; 3];
+    let r = pack_material(&rough, &mut grid).expect("a textured-roughness rough plastic");
+    assert_ne!(r.flags & lustre_gpu::frame_shade::FLAG_TEXTURED, 0);
+    assert_eq!(
+        (r.p[3][0], r.p[3][3]),
+        (3.0, 1.0),
+        "its grid starts after the tables"
     );
+    use lustre_brdf::models::rough_plastic::COATING_ALPHAS;
+    assert_eq!(grid.len(), 3 + COATING_ALPHAS * 65);
     let mut bumpy = scene.materials[6].clone();
     bumpy.normal_map = Some(lustre_scene::material::NormalMap {
         texture: tex,

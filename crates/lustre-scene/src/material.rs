@@ -17,7 +17,7 @@ use lustre_brdf::models::pbr_metallic_roughness::{PbrMetallicRoughness, PBR_ALPH
 use lustre_brdf::models::plastic::Plastic;
 use lustre_brdf::models::rough_conductor::RoughConductor;
 use lustre_brdf::models::rough_dielectric::RoughDielectric;
-use lustre_brdf::models::rough_plastic::RoughPlastic;
+use lustre_brdf::models::rough_plastic::{RoughPlastic, RoughPlasticCoating};
 use lustre_brdf::models::thin_dielectric::ThinDielectric;
 use lustre_brdf::models::two_sided::TwoSided;
 use lustre_brdf::{Bsdf, DVec3, Rgb};
@@ -633,6 +633,40 @@ impl Material {
         })
     }
 
+    /// A rough plastic's coating grid (its roughness is textured), built once per material.
+    fn coating(&self) -> lustre_brdf::Result<Cow<'_, Prepared>> {
+        if let Some(p @ Prepared::Coating(key, _)) = self.cache.0.get() {
+            if *key == self.kind {
+                return Ok(Cow::Borrowed(p));
+            }
+        }
+        let MaterialKind::RoughPlastic {
+            distribution,
+            int_ior,
+            ext_ior,
+            nonlinear,
+            ..
+        } = &self.kind
+        else {
+            return Err(lustre_brdf::Error::NotFound(
+                "not a rough plastic material".to_string(),
+            ));
+        };
+        let p = Prepared::Coating(
+            self.kind.clone(),
+            Box::new(RoughPlasticCoating::new(
+                microfacet_type(*distribution),
+                *int_ior,
+                *ext_ior,
+                *nonlinear,
+            )?),
+        );
+        Ok(match self.cache.0.set(p) {
+            Ok(()) => Cow::Borrowed(self.cache.0.get().ok_or_else(mismatch)?),
+            Err(p) => Cow::Owned(p),
+        })
+    }
+
     /// Builds the BSDF at a hit and hands it to `sink` (two-sided wrapping included).
     fn build<S: BsdfSink>(
         &self,
@@ -669,22 +703,13 @@ impl Material {
                 diffuse,
                 specular,
                 alpha: a,
-                distribution,
-                int_ior,
-                ext_ior,
-                nonlinear,
-            } => self.emit(
-                sink,
-                RoughPlastic::new(
-                    microfacet_type(*distribution),
-                    alpha(a),
-                    rgb(diffuse),
-                    specular.map(unit),
-                    *int_ior,
-                    *ext_ior,
-                    *nonlinear,
-                )?,
-            ),
+                ..
+            } => match &*self.coating()? {
+                Prepared::Coating(_, c) => {
+                    self.emit(sink, c.at(alpha(a), rgb(diffuse), specular.map(unit))?)
+                }
+                _ => Err(mismatch()),
+            },
             MaterialKind::Conductor { eta, k, specular } => {
                 self.emit(sink, Conductor::new(*eta, *k, rgb(specular))?)
             }
@@ -830,6 +855,8 @@ enum Prepared {
     Whole(MaterialKind, bool, Arc<dyn Bsdf>),
     Plastic(MaterialKind, Plastic),
     RoughPlastic(MaterialKind, Box<RoughPlastic>),
+    /// A rough plastic with a textured roughness: its coating's grid.
+    Coating(MaterialKind, Box<RoughPlasticCoating>),
 }
 
 /// The per-material cache of prepared models.

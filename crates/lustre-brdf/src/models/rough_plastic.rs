@@ -26,6 +26,7 @@ use crate::microfacet::fresnel::fresnel_dielectric;
 use crate::models::dielectric::{refract, relative_ior};
 use crate::rgb::Rgb;
 use glam::DVec3;
+use rayon::prelude::*;
 use std::f64::consts::FRAC_1_PI;
 
 /// Cosines at which the external transmittance is tabulated (Mitsuba's
@@ -149,6 +150,11 @@ impl RoughPlastic {
         })
     }
 
+    /// The coating's transmittance table T(i/63), i = 0..64.
+    pub fn transmittance_table(&self) -> &[f64; TABLE_RES] {
+        &self.external_transmittance
+    }
+
     /// The same coating (tables kept) with other colours in [0, 1]: what a texture lookup
     /// produces per shading point.
     pub fn with_reflectances(self, diffuse: Rgb, specular: Rgb) -> Result<Self> {
@@ -242,5 +248,93 @@ impl Bsdf for RoughPlastic {
     fn flags(&self) -> BsdfFlags {
         BsdfFlags::isotropic_reflection(true, true)
             .with_lobes(LobeFlags::GLOSSY_REFLECTION | LobeFlags::DIFFUSE_REFLECTION)
+    }
+}
+
+/// Roughnesses of a [`RoughPlasticCoating`]: `COATING_ALPHAS` values from
+/// [`COATING_ALPHA_MIN`] to 1, evenly spaced in log α.
+pub const COATING_ALPHAS: usize = 65;
+/// The smallest roughness of a [`RoughPlasticCoating`] (lustre-scene's clamp of α).
+pub const COATING_ALPHA_MIN: f64 = 1e-4;
+
+/// The coating of a rough plastic whose roughness varies over its surface (a textured α): the
+/// transmittance table T(μ) and internal reflectance Fdr of [`RoughPlastic::new`] at
+/// [`COATING_ALPHAS`] roughnesses log-spaced over [[`COATING_ALPHA_MIN`], 1], built once per
+/// material; a shading point's coating is interpolated linearly in log α
+/// ([`RoughPlasticCoating::at`]). T and Fdr vary slowly with α (tests/coating.rs: T within
+/// 1.4·10⁻³ of the exact table between grid points, Fdr within 4·10⁻⁴, the BRDF within 0.2 %),
+/// and a per-point table would cost ≈ 0.3 M microfacet integrals per hit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoughPlasticCoating {
+    /// The coatings at the grid's roughnesses (colours: ρ = 0.5, R_s = 1).
+    pub grid: Vec<RoughPlastic>,
+}
+
+impl RoughPlasticCoating {
+    /// The grid of coatings of an isotropic `kind` distribution and indices as for
+    /// [`relative_ior`]. Errors as [`RoughPlastic::new`].
+    pub fn new(kind: MicrofacetType, int_ior: f64, ext_ior: f64, nonlinear: bool) -> Result<Self> {
+        let grid = (0..COATING_ALPHAS)
+            .into_par_iter()
+            .map(|i| {
+                RoughPlastic::new(
+                    kind,
+                    Self::alpha_of(i),
+                    Rgb::splat(0.5),
+                    Rgb::ONE,
+                    int_ior,
+                    ext_ior,
+                    nonlinear,
+                )
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(RoughPlasticCoating { grid })
+    }
+
+    /// Roughness i of the grid.
+    pub fn alpha_of(i: usize) -> f64 {
+        let step = -COATING_ALPHA_MIN.log2() / (COATING_ALPHAS - 1) as f64;
+        (COATING_ALPHA_MIN.log2() + step * i as f64).exp2()
+    }
+
+    /// Where roughness `alpha` falls in the grid: (i, t), the coating (1 − t)·grid[i] +
+    /// t·grid[i + 1]; α clamped to the grid's range (NaN: 1).
+    pub fn position(alpha: f64) -> (usize, f64) {
+        let a = Self::clamp(alpha);
+        let x = (a / COATING_ALPHA_MIN).log2() * (COATING_ALPHAS - 1) as f64
+            / -COATING_ALPHA_MIN.log2();
+        let i = (x.max(0.0) as usize).min(COATING_ALPHAS - 2);
+        (i, (x - i as f64).clamp(0.0, 1.0))
+    }
+
+    /// α clamped to the grid's range; NaN: 1.
+    pub fn clamp(alpha: f64) -> f64 {
+        if alpha.is_nan() {
+            1.0
+        } else {
+            alpha.clamp(COATING_ALPHA_MIN, 1.0)
+        }
+    }
+
+    /// The rough plastic of roughness `alpha` ([`RoughPlasticCoating::clamp`]ed; its
+    /// distribution exact, its T table and Fdr interpolated between the two nearest grid
+    /// roughnesses) with colours in [0, 1].
+    pub fn at(&self, alpha: f64, diffuse: Rgb, specular: Rgb) -> Result<RoughPlastic> {
+        let (i, t) = Self::position(alpha);
+        let (a, b) = (&self.grid[i], &self.grid[i + 1]);
+        let distribution =
+            MicrofacetDistribution::isotropic(a.distribution.kind(), Self::clamp(alpha))?;
+        let mut table = [0.0; TABLE_RES];
+        for (k, v) in table.iter_mut().enumerate() {
+            *v = a.external_transmittance[k] * (1.0 - t) + b.external_transmittance[k] * t;
+        }
+        let internal_reflectance = a.internal_reflectance * (1.0 - t) + b.internal_reflectance * t;
+        RoughPlastic {
+            distribution,
+            external_transmittance: table,
+            internal_reflectance,
+            ..*a
+        }
+        .with_reflectances(diffuse, specular)
     }
 }

@@ -8,7 +8,9 @@
 // the record: it lives in the pass's table buffer, read through `bsdf_table(i)`, which every
 // pass that imports this module defines.
 // Parameters (pack_rough_plastic): p0 = (α, distribution, η, Fdr), p1 = (ρ rgb, w_s),
-// p2 = (R_s rgb, nonlinear 0/1), p3 = (first table entry (exact as f32), 0, 0, 0).
+// p2 = (R_s rgb, nonlinear 0/1), p3 = (first table entry, second table entry (both exact as
+// f32), blend, 1: a textured roughness's grid, resolved per pixel by textured.wgsl). T is the
+// blend of the two tables (RoughPlasticCoating::at; one table, blend 0, when α is constant).
 
 struct RoughPlastic {
     mf: Microfacet,
@@ -19,13 +21,15 @@ struct RoughPlastic {
     specular: vec3<f32>,
     nonlinear: bool,
     table: u32,
+    table2: u32,
+    blend: f32,
 }
 
 const ROUGH_PLASTIC_TABLE: u32 = 64u;
 
 fn rough_plastic_unpack(p: array<vec4<f32>, 8>) -> RoughPlastic {
     return RoughPlastic(Microfacet(p[0].x, p[0].x, u32(p[0].y)), p[0].z, p[0].w, p[1].xyz, p[1].w,
-                        p[2].xyz, p[2].w > 0.5, u32(p[3].x));
+                        p[2].xyz, p[2].w > 0.5, u32(p[3].x), u32(p[3].y), p[3].z);
 }
 
 // RoughPlastic::transmittance.
@@ -33,7 +37,12 @@ fn rough_plastic_transmittance(m: RoughPlastic, mu: f32) -> f32 {
     let x = clamp(mu, 0.0, 1.0) * f32(ROUGH_PLASTIC_TABLE - 1u);
     let i = min(u32(x), ROUGH_PLASTIC_TABLE - 2u);
     let t = x - f32(i);
-    return bsdf_table(m.table + i) * (1.0 - t) + bsdf_table(m.table + i + 1u) * t;
+    let a = bsdf_table(m.table + i) * (1.0 - t) + bsdf_table(m.table + i + 1u) * t;
+    if (m.blend == 0.0) {
+        return a;
+    }
+    let b = bsdf_table(m.table2 + i) * (1.0 - t) + bsdf_table(m.table2 + i + 1u) * t;
+    return a * (1.0 - m.blend) + b * m.blend;
 }
 
 fn rough_plastic_prob_specular(m: RoughPlastic, wo: vec3<f32>) -> f32 {

@@ -6,12 +6,17 @@
 // the values; which parameter each value is depends on the kind (frame_shade.rs
 // `pack_material_params`): rgb = the Lambert / plastic diffuse reflectance, the conductor's
 // specular colour or the glTF base colour; s = (αu, αv, −) of a rough conductor, (α, −, −) of a
-// rough dielectric, (metallic, roughness, transmission) of the glTF model.
+// rough dielectric, (α, −, −) of a rough plastic whose roughness is textured (its coating's grid
+// in the table buffer, read through `bsdf_table`), (metallic, roughness, transmission) of the
+// glTF model.
 
 // Only the kinds below carry textured parameters (pack_material sets FLAG_TEXTURED on them).
 const FLAG_TEXTURED: u32 = 8u;
 // The shading normal is tilted by a tangent-space normal map.
 const FLAG_NORMAL_MAPPED: u32 = 16u;
+// lustre_brdf::models::rough_plastic::{COATING_ALPHAS, COATING_ALPHA_MIN}.
+const COATING_ALPHAS: u32 = 65u;
+const COATING_ALPHA_MIN: f32 = 1e-4;
 // lustre_brdf::models::pbr_metallic_roughness::PBR_ALPHA_MIN.
 const TEXTURED_PBR_ALPHA_MIN: f32 = 1e-3;
 
@@ -54,6 +59,21 @@ fn textured_bsdf(b_in: GpuBsdf, rgb: vec3<f32>, s: vec3<f32>) -> GpuBsdf {
         }
         case 2u: {
             b.p[1] = vec4<f32>(c, textured_coat_weight(c, b.p[2].xyz));
+            if (b.p[3].w > 0.5) {
+                // RoughPlasticCoating::at: the grid's rows i and i + 1 around α (log-spaced),
+                // their Fdr after the COATING_ALPHAS tables.
+                let a = textured_alpha(s.x);
+                let x = log2(a / COATING_ALPHA_MIN) * f32(COATING_ALPHAS - 1u)
+                    / -log2(COATING_ALPHA_MIN);
+                let i = min(u32(max(x, 0.0)), COATING_ALPHAS - 2u);
+                let t = clamp(x - f32(i), 0.0, 1.0);
+                let start = u32(b.p[3].x);
+                let fdr = start + COATING_ALPHAS * ROUGH_PLASTIC_TABLE;
+                b.p[0].x = a;
+                b.p[0].w = bsdf_table(fdr + i) * (1.0 - t) + bsdf_table(fdr + i + 1u) * t;
+                b.p[3] = vec4<f32>(f32(start + i * ROUGH_PLASTIC_TABLE),
+                                   f32(start + (i + 1u) * ROUGH_PLASTIC_TABLE), t, 0.0);
+            }
         }
         case 3u: {
             let a = textured_alpha(s.x);
