@@ -66,8 +66,10 @@ pub struct GpuWalkthrough {
 /// had finished.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GpuFrameTimes {
-    /// Mirror and see-through buffers.
+    /// Mirror and see-through buffers (their see-through layers included).
     pub views_ms: f64,
+    /// Of `views_ms`: the see-through layers' view-dependent shading and MIP rebuild.
+    pub layers_ms: f64,
     /// The raster G-buffer.
     pub gbuffer_ms: f64,
     /// Light-mapped diffuse shading.
@@ -668,7 +670,8 @@ fn render_camera(
         for i in 0..transmissive.len() {
             scene.refresh_view(ctx, first + i, &views[first + i])?;
         }
-        times.views_ms += ms(timer.stop(ctx)?);
+        times.layers_ms = ms(timer.stop(ctx)?);
+        times.views_ms += times.layers_ms;
     }
     timer.start(ctx)?;
     walk.gbuffer

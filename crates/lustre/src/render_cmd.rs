@@ -470,7 +470,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             _ => None,
         };
         type Stage = fn(&GpuFrameTimes) -> f64;
-        let stages: [(&str, Stage); 3] = [
+        let stages: [(&str, Stage); 4] = [
+            (
+                "see-through layers (in the mirror and see-through passes)",
+                |t| t.layers_ms,
+            ),
             ("G-buffer", |t| t.gbuffer_ms),
             ("light-map shading", |t| t.lightmap_ms),
             ("view-dependent pass", |t| t.shade_ms),
