@@ -63,6 +63,7 @@ use lustre_shade::frame::{
 };
 use lustre_shade::image::Image;
 use lustre_shade::kernel::BoundingPlane;
+use lustre_shade::mirror::ScreenTiles;
 use lustre_shade::path::PathCamera;
 use lustre_shade::probe::LitScene;
 use std::sync::OnceLock;
@@ -1326,7 +1327,7 @@ impl FrameShadePass {
         ];
         entries.extend((3..15).map(|b| storage_entry(b, true)));
         entries.extend((15..18).map(|b| storage_entry(b, false)));
-        entries.extend((18..24).map(|b| storage_entry(b, true)));
+        entries.extend((18..25).map(|b| storage_entry(b, true)));
         let (pipeline, layout) = compute_pipeline(
             ctx,
             "frame_shade.wgsl",
@@ -1357,13 +1358,12 @@ impl FrameShadePass {
             width: lightmapped.width,
             height: lightmapped.height,
         };
-        let all = [0, 0, out.width, out.height];
-        self.dispatch(ctx, scene, gbuffer, lit, camera, k, opts, (all, true), out)
+        self.dispatch(ctx, scene, gbuffer, lit, camera, k, opts, (None, true), out)
     }
 
     /// The see-through layer of view buffer `view` (index `index` of `scene`'s views, a
     /// see-through buffer), as `lustre_shade::frame::shade_see_through_layer`: its light-mapped
-    /// level 0 plus the view-dependent part of the pixels in `rect` (`[x0, y0, x1, y1)`) of its
+    /// level 0 plus the view-dependent part of the pixels in the covered `tiles` of its
     /// w×h G-buffer `gbuffer` with `SEE_THROUGH_SAMPLES` regular samples, see-through buffers
     /// not read, written into `out` (w×h at k = 1) and copied over the view's level 0; the
     /// caller rebuilds its MIP levels ([`crate::GpuViewPass::build_levels`]) and the scene's
@@ -1376,7 +1376,7 @@ impl FrameShadePass {
         gbuffer: &GBufferTarget,
         view: &GpuViewBuffer,
         camera: &PathCamera,
-        rect: [usize; 4],
+        tiles: &ScreenTiles,
         out: &FrameShadeTarget,
     ) -> Result<()> {
         let (w, h) = (view.width as u32, view.height as u32);
@@ -1389,7 +1389,6 @@ impl FrameShadePass {
                 ),
             ));
         }
-        let rect = rect.map(|v| u32::try_from(v).unwrap_or(u32::MAX));
         let lit = Lit {
             buffer: &view.radiance,
             width: w,
@@ -1409,7 +1408,7 @@ impl FrameShadePass {
             camera,
             1,
             &opts,
-            (rect, false),
+            (Some(tiles), false),
             out,
         )?;
         let mut enc = ctx
@@ -1422,7 +1421,8 @@ impl FrameShadePass {
         Ok(())
     }
 
-    /// One run of the pass: `rect` and whether see-through buffers are read.
+    /// One run of the pass: the tiles shaded (all: `None`) and whether see-through buffers are
+    /// read.
     #[allow(clippy::too_many_arguments)]
     fn dispatch(
         &self,
@@ -1433,7 +1433,7 @@ impl FrameShadePass {
         camera: &PathCamera,
         k: u32,
         opts: &FrameShadeOptions,
-        (rect, see_through): ([u32; 4], bool),
+        (tiles, see_through): (Option<&ScreenTiles>, bool),
         out: &FrameShadeTarget,
     ) -> Result<()> {
         let max = lustre_shade::frame::MAX_SAMPLES as u32;
@@ -1478,7 +1478,18 @@ impl FrameShadePass {
             scene.environment,
             scene.page[1],
         ]);
-        u.push(rect);
+        let (mask, tile_u) = match tiles {
+            Some(t) => {
+                let (cols, rows) = (u32::try_from(t.cols), u32::try_from(t.rows));
+                let (Ok(cols), Ok(rows)) = (cols, rows) else {
+                    return Err(invalid("screen tiles", format!("{}×{}", t.cols, t.rows)));
+                };
+                let bits: Vec<u32> = t.covered.iter().map(|&c| u32::from(c)).collect();
+                (storage(ctx, "frame tile mask", &bits), [cols, rows, 1, 0])
+            }
+            None => (storage(ctx, "frame tile mask", &[0u32]), [0, 0, 0, 0]),
+        };
+        u.push(tile_u);
         u.push([u32::from(!see_through), 0, 0, 0]);
         let uniform = buffer_init(
             ctx,
@@ -1531,6 +1542,7 @@ impl FrameShadePass {
                 buf(21, &scene.texture_info),
                 buf(22, &scene.params),
                 buf(23, &scene.tangents),
+                buf(24, &mask),
             ],
         });
         let mut enc = ctx
@@ -1593,7 +1605,8 @@ mod tests {
         assert_eq!(std::mem::size_of::<GpuBsdf>(), 144);
     }
 
-    /// The WGSL's copies of the coating grid's constants are lustre-brdf's.
+    /// The WGSL's copies of the coating grid's and the screen tiles' constants are lustre-brdf's
+    /// and lustre-shade's.
     #[test]
     fn coating_constants_match() {
         use lustre_brdf::models::rough_plastic::{COATING_ALPHAS, COATING_ALPHA_MIN};
@@ -1601,6 +1614,8 @@ mod tests {
         assert!(src.contains(&format!("const COATING_ALPHAS: u32 = {COATING_ALPHAS}u;")));
         assert_eq!(COATING_ALPHA_MIN, 1e-4);
         assert!(src.contains("const COATING_ALPHA_MIN: f32 = 1e-4;"));
+        let tile = lustre_shade::mirror::SCREEN_TILE;
+        assert!(src.contains(&format!("const SCREEN_TILE: u32 = {tile}u;")));
     }
 
     /// Every parameter must fit an f32: a named error otherwise.

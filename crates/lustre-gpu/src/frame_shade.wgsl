@@ -23,9 +23,9 @@ struct Params {
     method: vec4<u32>,
     // seed (low, high word), environment cube (NONE: none), light-map page height.
     seed: vec4<u32>,
-    // The output pixels [x0, x1) × [y0, y1) with a view-dependent part (the rest: the
-    // light-mapped image alone; a see-through layer's rectangle, mirror::screen_rect).
-    rect: vec4<u32>,
+    // (columns, rows, 1: only the pixels of covered tiles have a view-dependent part (the rest:
+    // the light-mapped image alone; a see-through layer's tiles, mirror::ScreenTiles), 0).
+    tiles: vec4<u32>,
     // x: 1 when see-through buffers are not read (a see-through layer's own shading,
     // frame::shade_see_through_layer), 0 otherwise.
     flags: vec4<u32>,
@@ -73,7 +73,12 @@ struct Params {
 // Per triangle of a normal-mapped material (its record's r6.w): the corners' tangents (xyz,
 // w: the bitangent's sign, 0: derive T from ∂p/∂u) and (∂p/∂v, 0).
 @group(0) @binding(23) var<storage, read> tangents: array<vec4<f32>>;
+// Per SCREEN_TILE² tile of the output (row-major): 1 where covered (read when u.tiles.z = 1).
+@group(0) @binding(24) var<storage, read> tile_mask: array<u32>;
 var<workgroup> wg_counts: array<atomic<u32>, 2>;
+
+// lustre_shade::mirror::SCREEN_TILE.
+const SCREEN_TILE: u32 = 8u;
 
 const SKY: u32 = 0xffffffffu;
 const NONE: u32 = 0xffffffffu;
@@ -725,10 +730,14 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
 
 // Output pixel (x, y): its k×k G-buffer pixels.
 fn shade_pixel(x: u32, y: u32, w: u32, k: u32) {
-    if (x < u.rect.x || y < u.rect.y || x >= u.rect.z || y >= u.rect.w) {
-        let i = y * w + x;
-        out_px[i] = vec4<f32>(lightmapped[i].xyz, 1.0);
-        return;
+    if (u.tiles.z != 0u) {
+        let c = x / SCREEN_TILE;
+        let r = y / SCREEN_TILE;
+        if (c >= u.tiles.x || r >= u.tiles.y || tile_mask[r * u.tiles.x + c] == 0u) {
+            let i = y * w + x;
+            out_px[i] = vec4<f32>(lightmapped[i].xyz, 1.0);
+            return;
+        }
     }
     let gw = f32(u.sizes.x);
     let gh = f32(u.sizes.y);

@@ -34,7 +34,7 @@ use crate::view_pass::GpuViewPass;
 use lustre_env::pyramid::CubePyramid;
 use lustre_shade::frame::{view_meshes, FrameMethod, FrameStats, FrameTables, MAX_SAMPLES};
 use lustre_shade::image::Image;
-use lustre_shade::mirror::{screen_rect, Reflector};
+use lustre_shade::mirror::{Reflector, ScreenTiles};
 use lustre_shade::path::PathCamera;
 use lustre_shade::probe::{LitScene, ProbeOptions};
 
@@ -662,9 +662,9 @@ fn render_camera(
         let first = reflectors.len();
         for (i, (&m, gb)) in transmissive.iter().zip(&see_through_gbuffers).enumerate() {
             let view = &views[first + i];
-            let rect = screen_rect(lit, m, camera, w, h);
+            let tiles = ScreenTiles::of_mesh(lit, m, camera, w, h);
             walk.shade
-                .shade_see_through_layer(ctx, &scene, gb, view, camera, rect, &out)?;
+                .shade_see_through_layer(ctx, &scene, gb, view, camera, &tiles, &out)?;
             walk.views.build_levels(ctx, view)?;
         }
         for i in 0..transmissive.len() {

@@ -24,7 +24,7 @@ use lustre_shade::frame::{
 };
 use lustre_shade::image::Image;
 use lustre_shade::metrics::psnr;
-use lustre_shade::mirror::screen_rect;
+use lustre_shade::mirror::ScreenTiles;
 use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
@@ -106,9 +106,9 @@ fn layer_parity(
         .enumerate()
     {
         let gb = gb.read_back(ctx).expect("see-through G-buffer read-back");
-        let rect = screen_rect(lit, m, camera, w, h);
+        let tiles = ScreenTiles::of_mesh(lit, m, camera, w, h);
         let (twin, stats) =
-            shade_see_through_layer(lit, light, &buffers, camera, &gb, rect).expect("CPU layer");
+            shade_see_through_layer(lit, light, &buffers, camera, &gb, &tiles).expect("CPU layer");
         let view = &buffers.see_throughs[i];
         let gpu = Image::from_data(
             w,

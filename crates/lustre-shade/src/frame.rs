@@ -27,7 +27,7 @@ use crate::image::Image;
 use crate::kernel::{corrected_direction, pixel_seed, BoundingPlane};
 use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
 use crate::mirror::{
-    render_mirror, render_see_through_with_gbuffer, screen_rect, MirrorBuffer, ViewBuffer,
+    render_mirror, render_see_through_with_gbuffer, MirrorBuffer, ScreenTiles, ViewBuffer,
 };
 use crate::path::PathCamera;
 use crate::probe::{LitScene, Probe};
@@ -177,8 +177,8 @@ impl FrameBuffers {
         let mut see_throughs = vec![];
         for &m in &transmissive {
             let (mut view, gb) = render_see_through_with_gbuffer(lit, m, camera, w, h)?;
-            let rect = screen_rect(lit, m, camera, w, h);
-            let (layer, _) = shade_see_through_layer(lit, light, &buffers, camera, &gb, rect)?;
+            let tiles = ScreenTiles::of_mesh(lit, m, camera, w, h);
+            let (layer, _) = shade_see_through_layer(lit, light, &buffers, camera, &gb, &tiles)?;
             view.set_radiance(&layer.data);
             see_throughs.push(view);
         }
@@ -654,8 +654,7 @@ pub fn shade_gbuffer_view_dependent(
     k: u32,
     opts: &GBufferViewOptions,
 ) -> Result<(Image, FrameStats)> {
-    let all = [0, 0, gb.width, gb.height];
-    shade_gbuffer_region(lit, light, buffers, camera, gb, k, opts, all, true)
+    shade_gbuffer_region(lit, light, buffers, camera, gb, k, opts, None, true)
 }
 
 /// Glossy samples per texel of a see-through layer ([`shade_see_through_layer`]).
@@ -667,8 +666,8 @@ pub const SEE_THROUGH_SAMPLES: usize = 8;
 /// answer its samples as they answer the surfaces seen directly; see-through buffers are not
 /// read (no glass behind glass: what shows there is light-mapped). The light-mapped shading of
 /// the w×h G-buffer `gb` (k = 1, the see-through buffer's rays) plus the view-dependent part
-/// with [`SEE_THROUGH_SAMPLES`] regular samples, only for the pixels in `rect` (`[x0, y0, x1,
-/// y1)`, [`crate::mirror::screen_rect`]: where the object's samples read; light-mapped only
+/// with [`SEE_THROUGH_SAMPLES`] regular samples, only for the pixels in the covered `tiles`
+/// ([`ScreenTiles::of_mesh`]: where the object's samples read; light-mapped only
 /// elsewhere). The layer belongs to the camera, like the mirror buffers: the same for every
 /// method and progressive frame. The CPU twin of lustre-gpu's see-through layer pass.
 pub fn shade_see_through_layer(
@@ -677,18 +676,28 @@ pub fn shade_see_through_layer(
     buffers: &FrameBuffers,
     camera: &PathCamera,
     gb: &GBuffer,
-    rect: [usize; 4],
+    tiles: &ScreenTiles,
 ) -> Result<(Image, FrameStats)> {
     let opts = GBufferViewOptions {
         samples: SEE_THROUGH_SAMPLES,
         method: FrameMethod::Regular,
         seed: 0,
     };
-    shade_gbuffer_region(lit, light, buffers, camera, gb, 1, &opts, rect, false)
+    shade_gbuffer_region(
+        lit,
+        light,
+        buffers,
+        camera,
+        gb,
+        1,
+        &opts,
+        Some(tiles),
+        false,
+    )
 }
 
 /// [`shade_gbuffer_view_dependent`] with the view-dependent part only in the output pixels of
-/// `rect` (`[x0, y0, x1, y1)`) and see-through buffers read only when `see_through`.
+/// the covered `tiles` (all when `None`) and see-through buffers read only when `see_through`.
 #[allow(clippy::too_many_arguments)]
 fn shade_gbuffer_region(
     lit: &LitScene,
@@ -698,7 +707,7 @@ fn shade_gbuffer_region(
     gb: &GBuffer,
     k: u32,
     opts: &GBufferViewOptions,
-    rect: [usize; 4],
+    tiles: Option<&ScreenTiles>,
     see_through: bool,
 ) -> Result<(Image, FrameStats)> {
     let ps = lit.path_scene;
@@ -718,7 +727,7 @@ fn shade_gbuffer_region(
             let (x, y) = (i % w, i / w);
             let mut sum = Rgb::ZERO;
             let (mut hits, mut lookups) = (0u64, 0u64);
-            if x < rect[0] || y < rect[1] || x >= rect[2] || y >= rect[3] {
+            if tiles.is_some_and(|t| !t.covers(x, y)) {
                 return ([0.0; 3], 0, 0);
             }
             for j in 0..ku {

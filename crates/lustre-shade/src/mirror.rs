@@ -293,61 +293,141 @@ pub fn render_see_through_with_gbuffer(
     render_view(lit, mesh, camera, w, h, |_| 0.0)
 }
 
-/// The pixel rectangle [x0, x1) × [y0, y1) (as `[x0, y0, x1, y1]`) of a w×h view from `camera`
-/// that covers mesh `mesh`'s projected vertices, widened by [`SCREEN_RECT_MARGIN`] of the larger
-/// side on every side and clamped to the view; the whole view when a vertex lies on or behind
-/// the camera's plane (or the mesh is missing or empty).
-pub fn screen_rect(
-    lit: &LitScene,
-    mesh: usize,
-    camera: &PathCamera,
-    w: usize,
-    h: usize,
-) -> [usize; 4] {
-    let full = [0, 0, w, h];
-    let Some(m) = lit.scene.meshes.get(mesh) else {
-        return full;
-    };
-    if m.positions.is_empty() || w == 0 || h == 0 {
-        return full;
-    }
-    let (wf, hf) = (w as f64, h as f64);
-    let a = camera.tan_half_fov_y;
-    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    for v in &m.positions {
-        let rel = v.as_dvec3() - camera.origin;
-        let z = rel.dot(camera.forward);
-        if z.is_nan() || z <= 1e-9 * rel.length().max(1e-300) {
-            return full;
-        }
-        // The inverse of PathCamera::direction.
-        let x = (rel.dot(camera.right) / z / (a * wf / hf) + 1.0) * 0.5 * wf;
-        let y = (1.0 - rel.dot(camera.up) / z / a) * 0.5 * hf;
-        let p = DVec3::new(x, y, 0.0);
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    if !(lo.is_finite() && hi.is_finite()) {
-        return full;
-    }
-    let margin = (wf.max(hf) * SCREEN_RECT_MARGIN).ceil();
-    let clamp = |v: f64, max: f64| v.clamp(0.0, max) as usize;
-    let r = [
-        clamp((lo.x - margin).floor(), wf),
-        clamp((lo.y - margin).floor(), hf),
-        clamp((hi.x + margin).ceil(), wf),
-        clamp((hi.y + margin).ceil(), hf),
-    ];
-    if r[0] >= r[2] || r[1] >= r[3] {
-        // Entirely off screen: an empty rectangle.
-        return [0, 0, 0, 0];
-    }
-    r
+/// Which tiles of a w×h view a mesh covers, widened by a margin (where a see-through layer is
+/// shaded, [`crate::frame::shade_see_through_layer`]): the view in tiles of
+/// [`SCREEN_TILE`]² pixels, a tile covered when a triangle of the mesh, projected, comes within
+/// [`SCREEN_TILE_MARGIN`] of the larger side of the tile (a conservative 2-D overlap test: the
+/// box axes and the triangle's edge normals). Every tile is covered when a vertex lies on or
+/// behind the camera's plane, none when the mesh is missing.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ScreenTiles {
+    /// Tiles per row.
+    pub cols: usize,
+    /// Tile rows.
+    pub rows: usize,
+    /// Per tile (row-major): covered.
+    pub covered: Vec<bool>,
 }
 
-/// The widening of [`screen_rect`], as a share of the view's larger side: room for the MIP
+/// Side of a [`ScreenTiles`] tile, pixels.
+pub const SCREEN_TILE: usize = 8;
+
+/// The widening of [`ScreenTiles`], as a share of the view's larger side: room for the MIP
 /// footprints of rough transmission around the object's own pixels.
-pub const SCREEN_RECT_MARGIN: f64 = 1.0 / 16.0;
+pub const SCREEN_TILE_MARGIN: f64 = 1.0 / 32.0;
+
+impl ScreenTiles {
+    /// Every tile of a w×h view covered.
+    pub fn all(w: usize, h: usize) -> Self {
+        let (cols, rows) = (w.div_ceil(SCREEN_TILE), h.div_ceil(SCREEN_TILE));
+        ScreenTiles {
+            cols,
+            rows,
+            covered: vec![true; cols * rows],
+        }
+    }
+
+    /// The tiles of a w×h view from `camera` that mesh `mesh` of `lit` covers (type docs).
+    pub fn of_mesh(lit: &LitScene, mesh: usize, camera: &PathCamera, w: usize, h: usize) -> Self {
+        let mut t = Self::all(w, h);
+        t.covered.fill(false);
+        let Some(m) = lit.scene.meshes.get(mesh) else {
+            return t;
+        };
+        let (wf, hf) = (w as f64, h as f64);
+        let a = camera.tan_half_fov_y;
+        let mut px = Vec::with_capacity(m.positions.len());
+        for v in &m.positions {
+            let rel = v.as_dvec3() - camera.origin;
+            let z = rel.dot(camera.forward);
+            if z.is_nan() || z <= 1e-9 * rel.length() {
+                return Self::all(w, h);
+            }
+            // The inverse of PathCamera::direction.
+            let x = (rel.dot(camera.right) / z / (a * wf / hf) + 1.0) * 0.5 * wf;
+            let y = (1.0 - rel.dot(camera.up) / z / a) * 0.5 * hf;
+            if !(x.is_finite() && y.is_finite()) {
+                return Self::all(w, h);
+            }
+            px.push([x, y]);
+        }
+        let margin = wf.max(hf) * SCREEN_TILE_MARGIN;
+        let size = SCREEN_TILE as f64;
+        for tri in &m.indices {
+            let Some(p) = tri
+                .iter()
+                .map(|&i| px.get(i as usize).copied())
+                .collect::<Option<Vec<[f64; 2]>>>()
+            else {
+                continue;
+            };
+            let lo = [0, 1].map(|k| p.iter().map(|q| q[k]).fold(f64::INFINITY, f64::min));
+            let hi = [0, 1].map(|k| p.iter().map(|q| q[k]).fold(f64::NEG_INFINITY, f64::max));
+            let tile = |v: f64, n: usize| ((v / size).floor().max(0.0) as usize).min(n - 1);
+            if hi[0] + margin < 0.0
+                || hi[1] + margin < 0.0
+                || lo[0] - margin > wf
+                || lo[1] - margin > hf
+            {
+                continue;
+            }
+            let (c0, c1) = (tile(lo[0] - margin, t.cols), tile(hi[0] + margin, t.cols));
+            let (r0, r1) = (tile(lo[1] - margin, t.rows), tile(hi[1] + margin, t.rows));
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    let bx = [c as f64 * size - margin, (c + 1) as f64 * size + margin];
+                    let by = [r as f64 * size - margin, (r + 1) as f64 * size + margin];
+                    if !t.covered[r * t.cols + c] && triangle_meets_box(&p, bx, by) {
+                        t.covered[r * t.cols + c] = true;
+                    }
+                }
+            }
+        }
+        t
+    }
+
+    /// Whether pixel (x, y) lies in a covered tile.
+    pub fn covers(&self, x: usize, y: usize) -> bool {
+        let (c, r) = (x / SCREEN_TILE, y / SCREEN_TILE);
+        c < self.cols && r < self.rows && self.covered[r * self.cols + c]
+    }
+}
+
+/// Whether 2-D triangle `p` overlaps the box [bx0, bx1] × [by0, by1] (separating axes: the box's
+/// and the triangle's edge normals; the caller has checked the box axes' bounds).
+fn triangle_meets_box(p: &[[f64; 2]], bx: [f64; 2], by: [f64; 2]) -> bool {
+    let corners = [
+        [bx[0], by[0]],
+        [bx[1], by[0]],
+        [bx[1], by[1]],
+        [bx[0], by[1]],
+    ];
+    let lo = [0, 1].map(|k| p.iter().map(|q| q[k]).fold(f64::INFINITY, f64::min));
+    let hi = [0, 1].map(|k| p.iter().map(|q| q[k]).fold(f64::NEG_INFINITY, f64::max));
+    if hi[0] < bx[0] || lo[0] > bx[1] || hi[1] < by[0] || lo[1] > by[1] {
+        return false;
+    }
+    for i in 0..3 {
+        let (a, b) = (p[i], p[(i + 1) % 3]);
+        let n = [b[1] - a[1], a[0] - b[0]];
+        let dot = |q: [f64; 2]| n[0] * q[0] + n[1] * q[1];
+        let tri: Vec<f64> = p.iter().map(|&q| dot(q)).collect();
+        let (tlo, thi) = tri
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                (l.min(v), h.max(v))
+            });
+        let (blo, bhi) = corners
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &c| {
+                (l.min(dot(c)), h.max(dot(c)))
+            });
+        if thi < blo || tlo > bhi {
+            return false;
+        }
+    }
+    true
+}
 
 /// One ray per texel centre of `cam`, from `start(d)` along it, mesh `mesh` left out; the view
 /// buffer and the G-buffer of the rays.

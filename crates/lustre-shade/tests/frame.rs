@@ -606,7 +606,7 @@ fn room_with_pane_before_ball(with_pane: bool) -> (Scene, LightmapAtlas, Vec<Vec
         let v = |x: f32, y: f32| Vec3::new(x, y, 1.0);
         let mut pane = Mesh::new(
             "pane",
-            vec![v(1.7, 0.9), v(2.3, 0.9), v(2.3, 1.5), v(1.7, 1.5)],
+            vec![v(1.8, 1.0), v(2.2, 1.0), v(2.2, 1.4), v(1.8, 1.4)],
             vec![[0, 2, 1], [0, 3, 2]],
             2,
         );
@@ -623,7 +623,7 @@ fn room_with_pane_before_ball(with_pane: bool) -> (Scene, LightmapAtlas, Vec<Vec
 /// Before the layer the ball behind the pane came out black.
 #[test]
 fn a_glossy_object_behind_glass_keeps_its_reflections() {
-    use lustre_shade::mirror::screen_rect;
+    use lustre_shade::mirror::{ScreenTiles, SCREEN_TILE, SCREEN_TILE_MARGIN};
     let cam = PathCamera::look_at(
         DVec3::new(2.0, 1.2, 0.1),
         DVec3::from_array(CENTRE),
@@ -635,36 +635,84 @@ fn a_glossy_object_behind_glass_keeps_its_reflections() {
     // The ball's probe, captured once (with the pane in the room) and read by both frames.
     let (scene, atlas, pages) = room_with_pane_before_ball(true);
     let probe = with_lit(&scene, &atlas, &pages, |lit| {
-        // The pane's rectangle: its vertices' pixels widened by the margin.
-        let rect = screen_rect(lit, 7, &cam, w, h);
-        let m = (w.max(h) as f64 / 16.0).ceil() as usize;
-        assert!(rect[0] > 0 && rect[2] < w, "{rect:?}");
-        assert!(
-            rect[2] - rect[0] > 2 * m && rect[3] - rect[1] > 2 * m,
-            "{rect:?}"
-        );
-        // Centred pane, centred camera: symmetric to a pixel.
-        assert!(
-            (rect[0] as i64 + rect[2] as i64 - w as i64).abs() <= 1,
-            "{rect:?}"
-        );
-        for p in &lit.scene.meshes[7].positions {
-            let d = (p.as_dvec3() - cam.origin).normalize();
-            // The vertex's ray passes between the rectangle's pixel edges.
-            let inside = (rect[0] + m..=rect[2] - m).any(|x| {
-                let lo = cam.direction(x as f64, h as f64 / 2.0, w, h);
-                let hi = cam.direction(x as f64 + 1.0, h as f64 / 2.0, w, h);
-                d.dot(cam.right) / d.dot(cam.forward) >= lo.dot(cam.right) / lo.dot(cam.forward)
-                    && d.dot(cam.right) / d.dot(cam.forward)
-                        <= hi.dot(cam.right) / hi.dot(cam.forward)
-            });
-            assert!(inside, "vertex {p} outside {rect:?}");
+        // The pane's tiles: those of its pixels, widened by the margin; no other.
+        // (At 192² the pane spans about half the view.)
+        let (w, h) = (192, 192);
+        let tiles = ScreenTiles::of_mesh(lit, 7, &cam, w, h);
+        let margin = w.max(h) as f64 * SCREEN_TILE_MARGIN;
+        let pane_px: Vec<[f64; 2]> = lit.scene.meshes[7]
+            .positions
+            .iter()
+            .map(|p| {
+                // The pixel of the vertex, found by the camera's own rays (a fine scan).
+                let d = (p.as_dvec3() - cam.origin).normalize();
+                let (mut best, mut at) = (f64::INFINITY, [0.0, 0.0]);
+                for j in 0..=4 * h {
+                    for i in 0..=4 * w {
+                        let (x, y) = (i as f64 / 4.0, j as f64 / 4.0);
+                        let e = (cam.direction(x, y, w, h) - d).length();
+                        if e < best {
+                            (best, at) = (e, [x, y]);
+                        }
+                    }
+                }
+                at
+            })
+            .collect();
+        let lo = [0, 1].map(|k| pane_px.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min));
+        let hi = [0, 1].map(|k| {
+            pane_px
+                .iter()
+                .map(|p| p[k])
+                .fold(f64::NEG_INFINITY, f64::max)
+        });
+        let (mut inside, mut covered_far) = (0, 0);
+        for y in 0..h {
+            for x in 0..w {
+                let (cx, cy) = (x as f64 + 0.5, y as f64 + 0.5);
+                let dist = (lo[0] - cx).max(cx - hi[0]).max(lo[1] - cy).max(cy - hi[1]);
+                if dist <= 0.0 {
+                    // Every pixel of the (axis-aligned) pane is in a covered tile.
+                    assert!(tiles.covers(x, y), "pane pixel ({x}, {y}) not covered");
+                    inside += 1;
+                }
+                // No tile reaches beyond the margin plus a tile's diagonal.
+                if dist > margin + SCREEN_TILE as f64 * 1.5 && tiles.covers(x, y) {
+                    covered_far += 1;
+                }
+            }
         }
-        // A camera facing away: the whole view.
+        assert!(inside > 100, "{inside} pane pixels");
+        if covered_far > 0 {
+            for r in 0..tiles.rows {
+                let row: String = (0..tiles.cols)
+                    .map(|c| {
+                        if tiles.covered[r * tiles.cols + c] {
+                            '#'
+                        } else {
+                            '.'
+                        }
+                    })
+                    .collect();
+                eprintln!("{row}");
+            }
+            eprintln!("pane pixels {lo:?} .. {hi:?}, margin {margin}");
+        }
+        assert_eq!(covered_far, 0);
+        let share =
+            tiles.covered.iter().filter(|&&c| c).count() as f64 / tiles.covered.len() as f64;
+        eprintln!(
+            "pane tiles: {:.1} % of the 192² view's, {inside} pane pixels",
+            share * 100.0
+        );
+        assert!(share < 0.6, "{share}");
+        // A camera facing away: every tile.
         let back =
             PathCamera::look_at(cam.origin, cam.origin - cam.forward, DVec3::Y, 50.0).unwrap();
-        let r = screen_rect(lit, 7, &back, w, h);
-        assert!(r == [0, 0, 0, 0] || r == [0, 0, w, h], "{r:?}");
+        assert_eq!(
+            ScreenTiles::of_mesh(lit, 7, &back, w, h),
+            ScreenTiles::all(w, h)
+        );
         capture_probe(lit, 6, &probe_opts()).unwrap()
     });
     let probes = [probe];
