@@ -496,27 +496,33 @@ fn room_with_pane(with_pane: bool) -> (Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>)
     scene.meshes.push(post);
     atlas.mesh_page.push(None);
     if with_pane {
-        scene.materials.push(Material::new(
-            "glass",
-            MaterialKind::Dielectric {
-                int_ior: 1.5,
-                ext_ior: 1.0,
-                specular_reflectance: Rgb::ZERO,
-                specular_transmittance: Rgb::ONE,
-            },
-        ));
-        let v = |x: f32, y: f32| Vec3::new(x, y, 3.5);
-        let mut pane = Mesh::new(
-            "pane",
-            vec![v(1.8, 1.4), v(3.4, 1.4), v(3.4, 3.0), v(1.8, 3.0)],
-            vec![[0, 2, 1], [0, 3, 2]],
-            2,
-        );
-        pane.hints.probe = true;
-        scene.meshes.push(pane);
-        atlas.mesh_page.push(None);
+        push_pane(&mut scene, &mut atlas, [1.8, 1.4, 3.4, 3.0], 3.5);
     }
     (scene, atlas, pages)
+}
+
+/// Appends a glass pane (smooth dielectric, reflection tinted black, material 2), a probe
+/// object, over [x0, x1] × [y0, y1] at depth z.
+fn push_pane(scene: &mut Scene, atlas: &mut LightmapAtlas, [x0, y0, x1, y1]: [f32; 4], z: f32) {
+    scene.materials.push(Material::new(
+        "glass",
+        MaterialKind::Dielectric {
+            int_ior: 1.5,
+            ext_ior: 1.0,
+            specular_reflectance: Rgb::ZERO,
+            specular_transmittance: Rgb::ONE,
+        },
+    ));
+    let v = |x: f32, y: f32| Vec3::new(x, y, z);
+    let mut pane = Mesh::new(
+        "pane",
+        vec![v(x0, y0), v(x1, y0), v(x1, y1), v(x0, y1)],
+        vec![[0, 2, 1], [0, 3, 2]],
+        2,
+    );
+    pane.hints.probe = true;
+    scene.meshes.push(pane);
+    atlas.mesh_page.push(None);
 }
 
 #[test]
@@ -594,25 +600,7 @@ fn a_glass_pane_transmits_what_lies_behind_it() {
 fn room_with_pane_before_ball(with_pane: bool) -> (Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>) {
     let (mut scene, mut atlas, pages) = room(rough_metal(0.2));
     if with_pane {
-        scene.materials.push(Material::new(
-            "glass",
-            MaterialKind::Dielectric {
-                int_ior: 1.5,
-                ext_ior: 1.0,
-                specular_reflectance: Rgb::ZERO,
-                specular_transmittance: Rgb::ONE,
-            },
-        ));
-        let v = |x: f32, y: f32| Vec3::new(x, y, 1.0);
-        let mut pane = Mesh::new(
-            "pane",
-            vec![v(1.8, 1.0), v(2.2, 1.0), v(2.2, 1.4), v(1.8, 1.4)],
-            vec![[0, 2, 1], [0, 3, 2]],
-            2,
-        );
-        pane.hints.probe = true;
-        scene.meshes.push(pane);
-        atlas.mesh_page.push(None);
+        push_pane(&mut scene, &mut atlas, [1.8, 1.0, 2.2, 1.4], 1.0);
     }
     (scene, atlas, pages)
 }
