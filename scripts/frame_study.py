@@ -10,7 +10,8 @@ progressive refinement after 1, 16 and 256 still frames, judged two ways:
       frame), when one is given.
 
 Every render uses the same camera rays (same seed and camera rays per pixel), so (a) isolates
-the glossy integration. Each row's time is the frame stage of `times.csv` (CPU, this machine).
+the glossy integration. Each row's time is the frame stage of `times.csv` (`--device cpu` by
+default, this machine).
 
 Usage (from the repository root, after `cargo build --release -p lustre`):
   python3 scripts/frame_study.py BAKED/scene.toml --size 160x90 --spp 16 \
@@ -29,7 +30,7 @@ LUSTRE = os.path.join(os.path.dirname(__file__), "..", "target", "release", "lus
 
 def render(args, out, extra):
     cmd = [LUSTRE, "render", args.scene, "--size", args.size, "--spp", str(args.spp),
-           "--seed", "1", "--out", out] + extra
+           "--seed", "1", "--device", args.device, "--out", out] + extra
     p = subprocess.run(cmd, capture_output=True, text=True)
     if p.returncode != 0:
         sys.exit(f"{' '.join(cmd)} failed:\n{p.stderr}")
@@ -49,6 +50,8 @@ def main():
     ap.add_argument("--samples", default="3,5,8,12,16,19")
     ap.add_argument("--truth-frames", type=int, default=64)
     ap.add_argument("--reference")
+    ap.add_argument("--device", default="cpu", choices=["cpu", "gpu", "auto"],
+                    help="lustre render --device (the CPU frame by default)")
     ap.add_argument("--out", required=True)
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)

@@ -44,7 +44,8 @@ enum Command {
     /// Path-traced reference of a scene (lustre TOML, glTF, OBJ, Mitsuba XML), resumable.
     Reference(reference_cmd::ReferenceArgs),
     /// A walkthrough frame of a light-mapped scene: light maps, probes with bounding planes,
-    /// regular sampling of every material (CPU), PNG/EXR, stage times, reference comparison.
+    /// mirror and see-through buffers, regular sampling of every material, on the GPU or the
+    /// CPU, PNG/EXR, stage times, reference comparison.
     Render(render_cmd::RenderArgs),
     /// Light maps: atlas, multi-bounce irradiance in resumable tiles, denoised EXR pages and an
     /// updated scene file.
