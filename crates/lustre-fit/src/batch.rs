@@ -188,6 +188,22 @@ pub struct Fitted {
     pub albedo_model: [f64; 3],
 }
 
+impl Fitted {
+    /// The record of this fit of `source` with `settings`, `time_s` seconds in all.
+    pub fn record(&self, source: &str, settings: &FitSettings, time_s: f64) -> FitRecord {
+        FitRecord {
+            source: source.to_string(),
+            errors: Some(self.errors),
+            albedo_data: Some(self.albedo_data),
+            albedo_model: Some(self.albedo_model),
+            time_s,
+            status: status_str(self.status).into(),
+            message: self.message.clone(),
+            options: settings.to_json(),
+        }
+    }
+}
+
 /// The fitting behind a batch.
 pub trait Fitter: Sync {
     /// Expands one command-line input into the inputs to fit (e.g. `nbrdf:FILE#*`).
@@ -1087,11 +1103,7 @@ fn run_one(
     let mut kept = None;
     let written = match result {
         Ok(f) => {
-            record.errors = Some(f.errors);
-            record.albedo_data = Some(f.albedo_data);
-            record.albedo_model = Some(f.albedo_model);
-            record.status = status_str(f.status).into();
-            record.message = f.message;
+            record = f.record(&job.input, settings, time_s);
             let file = MaterialFile::new(job.name.clone(), f.model.clone(), Some(record.clone()));
             match file.and_then(|m| material::write(&path, &m)) {
                 Ok(()) => Ok(f.status),

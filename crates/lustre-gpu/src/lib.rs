@@ -66,5 +66,5 @@ pub use view_buffer::GpuViewBuffer;
 pub use view_pass::{GpuViewPass, ViewRender};
 pub use walkthrough::{
     GpuFrame, GpuFrameOptions, GpuFrameSession, GpuFrameTimes, GpuStep, GpuWalkthrough,
-    SessionIntermediates, StepWork,
+    SessionIntermediates, StepWork, WalkthroughPasses,
 };

@@ -38,6 +38,30 @@ use lustre_shade::mirror::{Reflector, ScreenTiles};
 use lustre_shade::path::PathCamera;
 use lustre_shade::probe::{LitScene, ProbeOptions};
 
+/// The compiled passes of a walkthrough, kept when the scene is uploaded again (a viewer's
+/// material edit): compiling them is most of a walkthrough's set-up on a software adapter.
+#[derive(Debug)]
+pub struct WalkthroughPasses {
+    gbuffer: GBufferPass,
+    lightmap: LightmapShadePass,
+    views: GpuViewPass,
+    shade: FrameShadePass,
+    capture: GpuProbeCapture,
+}
+
+impl WalkthroughPasses {
+    /// Compiles every pass of the walkthrough frame.
+    pub fn new(ctx: &GpuContext) -> Result<Self> {
+        Ok(WalkthroughPasses {
+            gbuffer: GBufferPass::new(ctx)?,
+            lightmap: LightmapShadePass::new(ctx)?,
+            views: GpuViewPass::new(ctx)?,
+            shade: FrameShadePass::new(ctx)?,
+            capture: GpuProbeCapture::new(ctx)?,
+        })
+    }
+}
+
 /// The compiled passes and the scene's GPU data, probes included.
 #[derive(Debug)]
 pub struct GpuWalkthrough {
@@ -141,6 +165,20 @@ impl GpuWalkthrough {
         probe_opts: &ProbeOptions,
         environment: Option<&CubePyramid>,
     ) -> Result<Self> {
+        let passes = WalkthroughPasses::new(ctx)?;
+        Self::with_passes(ctx, passes, lit, scene, probe_opts, environment)
+    }
+
+    /// [`GpuWalkthrough::new`] with passes compiled before (kept from
+    /// [`GpuWalkthrough::into_passes`] of an earlier upload).
+    pub fn with_passes(
+        ctx: &GpuContext,
+        passes: WalkthroughPasses,
+        lit: &LitScene,
+        scene: LightmapFrameScene,
+        probe_opts: &ProbeOptions,
+        environment: Option<&CubePyramid>,
+    ) -> Result<Self> {
         // Every material a shaded mesh uses must have a GPU model: refuse the scene now (named)
         // rather than at its first frame.
         for (m, mesh) in lit.scene.meshes.iter().enumerate() {
@@ -154,7 +192,13 @@ impl GpuWalkthrough {
                 })?;
             }
         }
-        let capture = GpuProbeCapture::new(ctx)?;
+        let WalkthroughPasses {
+            gbuffer,
+            lightmap,
+            views,
+            shade,
+            capture,
+        } = passes;
         let mut timer = GpuTimer::new(ctx);
         let mut probes = vec![];
         let mut capture_ms = vec![];
@@ -173,10 +217,10 @@ impl GpuWalkthrough {
         };
         Ok(GpuWalkthrough {
             scene,
-            gbuffer: GBufferPass::new(ctx)?,
-            lightmap: LightmapShadePass::new(ctx)?,
-            views: GpuViewPass::new(ctx)?,
-            shade: FrameShadePass::new(ctx)?,
+            gbuffer,
+            lightmap,
+            views,
+            shade,
             probes,
             environment,
             capture_ms,
@@ -187,6 +231,17 @@ impl GpuWalkthrough {
             capture,
             probe_generation: 0,
         })
+    }
+
+    /// The compiled passes, for [`GpuWalkthrough::with_passes`] (the scene's data is dropped).
+    pub fn into_passes(self) -> WalkthroughPasses {
+        WalkthroughPasses {
+            gbuffer: self.gbuffer,
+            lightmap: self.lightmap,
+            views: self.views,
+            shade: self.shade,
+            capture: self.capture,
+        }
     }
 
     /// Captures the probe of mesh `mesh` again, on request (issue 11: probes are captured when

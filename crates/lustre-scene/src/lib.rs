@@ -38,11 +38,13 @@
 
 pub mod builtin;
 pub mod camera;
+pub mod camera_path_file;
 pub mod environment;
 pub mod error;
 pub mod gltf_io;
 pub mod lightmap;
 pub mod material;
+pub mod material_edit;
 pub mod mesh;
 pub mod mitsuba;
 pub mod obj;

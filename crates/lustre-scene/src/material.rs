@@ -339,6 +339,12 @@ impl Material {
         }
     }
 
+    /// Replaces the scattering model (an edit), dropping the models prepared for the old one.
+    pub fn set_kind(&mut self, kind: MaterialKind) {
+        self.kind = kind;
+        self.cache = BsdfCache::default();
+    }
+
     /// A Lambertian material of constant albedo.
     pub fn diffuse(name: impl Into<String>, reflectance: Rgb) -> Self {
         Material::new(

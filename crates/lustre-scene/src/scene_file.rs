@@ -72,7 +72,7 @@ use glam::{DMat3, DMat4, DVec3};
 use lustre_brdf::Rgb;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
 /// The `schema` field of every lustre scene file.
@@ -106,6 +106,10 @@ pub struct SceneFile {
     /// Material overrides: material name → lustre material spec.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub materials: BTreeMap<String, String>,
+    /// Material parameters set after the overrides: `"MATERIAL.PARAMETER" = "VALUE"`
+    /// (`crate::material_edit`; what `lustre view` saves).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub material_params: BTreeMap<String, String>,
     /// Extra emitters.
     #[serde(default, rename = "emitter", skip_serializing_if = "Vec::is_empty")]
     pub emitters: Vec<EmitterEntry>,
@@ -282,6 +286,7 @@ impl SceneFile {
             cameras: Vec::new(),
             camera_paths: Vec::new(),
             materials: BTreeMap::new(),
+            material_params: BTreeMap::new(),
             emitters: Vec::new(),
             objects: BTreeMap::new(),
             lightmap: None,
@@ -578,30 +583,17 @@ pub fn parse(path: &Path, text: &str) -> Result<SceneFile> {
 
 /// Validates `file` and writes it to `path` atomically.
 pub fn write(path: &Path, file: &SceneFile) -> Result<()> {
-    use std::io::Write;
     let text = file
         .to_toml()
         .map_err(|e| SceneError::format(path, format!("not written: {e}")))?;
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let io = |e: std::io::Error| SceneError::Io {
-        path: path.to_path_buf(),
-        source: e,
-    };
-    let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(io)?;
-    tmp.write_all(text.as_bytes()).map_err(io)?;
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        tmp.as_file()
-            .set_permissions(std::fs::Permissions::from_mode(0o644))
-            .map_err(io)?;
-    }
-    tmp.as_file().sync_all().map_err(io)?;
-    tmp.persist(path).map_err(|e| io(e.error))?;
-    Ok(())
+    write_atomic(path, text.as_bytes())
+}
+
+/// Writes `bytes` to `path` atomically (`lustre_brdf::error::write_atomic`: a temporary file
+/// in the same folder, synced, then renamed over it).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    lustre_brdf::error::write_atomic(path, bytes)
+        .map_err(|e| SceneError::format(path, format!("not written: {e}")))
 }
 
 /// Resolves a material spec: a relative file path (`.json`, `.bsdf`, `.binary`, `.dat`,
@@ -743,6 +735,11 @@ pub fn build(path: &Path, file: &SceneFile) -> Result<Scene> {
                 "materials: no material named {name:?} in the geometry"
             )));
         }
+    }
+    for (key, value) in &file.material_params {
+        let (name, field) = key.split_once('.').unwrap_or((key.as_str(), ""));
+        crate::material_edit::set_named(&mut scene.materials, name, field, value)
+            .map_err(|e| fmt(format!("material_params: {e}")))?;
     }
     for (i, e) in file.emitters.iter().enumerate() {
         let radiance = Rgb(e.radiance);

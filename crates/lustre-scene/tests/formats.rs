@@ -218,6 +218,8 @@ fn full_file() -> SceneFile {
     });
     f.materials.insert("Wood".into(), "sgd:pink-fabric".into());
     f.materials.insert("Wall".into(), "lambert(kd=0.7)".into());
+    f.material_params
+        .insert("Wall.spec.kd".into(), "0.6".into());
     f.emitters.push(EmitterEntry {
         object: None,
         shape: Some(ShapeKind::Rectangle),
@@ -311,6 +313,17 @@ fn scene_file_builds_the_modern_hall() {
         wood.two_sided,
         "the override keeps the Mitsuba twosided flag"
     );
+    // [material_params] apply after the overrides: the Wall's lambert(kd=0.7) at kd 0.6.
+    let wall = &s.materials[s.material_index("Wall").unwrap()];
+    match &wall.kind {
+        MaterialKind::Spec(r) => assert_eq!(r.spec, "lambert(kd=0.6)"),
+        k => panic!("{k:?}"),
+    }
+    let mut bad = f.clone();
+    bad.material_params
+        .insert("Nope.alpha".into(), "0.1".into());
+    let e = scene_file::build(&p, &bad).unwrap_err().to_string();
+    assert!(e.contains("material_params") && e.contains("Nope"), "{e}");
     let brdf = wood.bsdf_at(&s.textures, &[glam::Vec2::ZERO; 2]).unwrap();
     assert!(brdf.eval(DVec3::Z, DVec3::Z).max_component() > 0.0);
     let m011 = s.meshes.iter().find(|m| m.name == "Mesh011").unwrap();

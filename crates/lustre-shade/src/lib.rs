@@ -11,6 +11,7 @@
 
 pub mod accel;
 pub mod bake;
+pub mod baked;
 pub mod error;
 pub mod frame;
 pub mod harness;

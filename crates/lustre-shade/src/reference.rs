@@ -17,7 +17,7 @@ use glam::{DMat3, DVec3, Vec2};
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::models::lambert::Lambert;
 use lustre_brdf::rgb::Rgb;
-use lustre_scene::{EnvironmentSource, Material, Scene, Texture};
+use lustre_scene::{Camera, EnvironmentSource, Material, Scene, Texture};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -220,6 +220,12 @@ pub fn path_camera(
             None => format!("{}: the scene has no camera", scene.source.display()),
         })
     })?;
+    film_camera(cam, width, height)
+}
+
+/// The path camera of scene camera `cam` on a W×H film (its field of view along its axis).
+pub fn film_camera(cam: &Camera, width: u32, height: u32) -> Result<PathCamera> {
+    let aspect = f64::from(width) / f64::from(height);
     let fov_y = cam.fov_y_deg(aspect);
     PathCamera::look_at(cam.position, cam.position + cam.forward, cam.up, fov_y)
 }

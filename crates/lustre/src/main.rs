@@ -47,6 +47,10 @@ enum Command {
     /// mirror and see-through buffers, regular sampling of every material, on the GPU or the
     /// CPU, PNG/EXR, stage times, reference comparison.
     Render(render_cmd::RenderArgs),
+    /// The interactive walkthrough and material editor: a window on the GPU renderer, walking,
+    /// frame times, the material editor with live fitting and lobe plots, camera paths,
+    /// screenshots, input scripts.
+    View(lustre_view::ViewArgs),
     /// Light maps: atlas, multi-bounce irradiance in resumable tiles, denoised EXR pages and an
     /// updated scene file.
     Bake(bake_cmd::BakeArgs),
@@ -152,6 +156,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Compare(args) => compare_cmd::run(&args),
         Command::Reference(args) => reference_cmd::run(&args),
         Command::Render(args) => render_cmd::run(&args),
+        Command::View(args) => lustre_view::run(&args),
         Command::Bake(args) => bake_cmd::run(&args),
         Command::Scene(args) => scene_cmd::run(&args),
         Command::Score(args) => score_cmd::run(&args),

@@ -6,28 +6,28 @@
 //! relative RMS and a false-colour difference.
 
 use anyhow::{bail, Context};
-use glam::DMat3;
 use indicatif::{ProgressBar, ProgressStyle};
 use lustre_brdf::rgb::Rgb;
-use lustre_env::cube::CubeMap;
-use lustre_env::pyramid::{CubePyramid, MipFilter};
+use lustre_env::pyramid::CubePyramid;
 use lustre_gpu::{
     GpuContext, GpuFrameOptions, GpuFrameSession, GpuFrameTimes, GpuWalkthrough, LightmapFrameScene,
 };
-use lustre_scene::lightmap::{build_atlas, AtlasOptions, AtlasSource, LightmapAtlas};
+use lustre_scene::camera_path_file::CameraPathFile;
+use lustre_scene::lightmap::LightmapAtlas;
+use lustre_scene::material_edit::{parse_assignment, set_named};
+use lustre_scene::Environment;
 use lustre_scene::Scene;
-use lustre_scene::{Environment, EnvironmentSource};
-use lustre_shade::bake::render::{read_pages, Lightmapped};
+use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::spec_albedo;
-use lustre_shade::bake::{assemble, bake_tiles, BakeOptions, Transport};
+use lustre_shade::baked::{environment_pyramid, read_environment, BakedScene};
 use lustre_shade::frame::{render_frame, FrameLight, FrameMethod, FrameOptions, FrameStats};
 use lustre_shade::image::Image;
 use lustre_shade::path::PathCamera;
 use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
+use lustre_shade::reference::film_camera;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::Instant;
 
 /// How the glossy part is integrated.
@@ -67,6 +67,11 @@ pub struct RenderArgs {
     /// built-in sky by default).
     #[arg(long, conflicts_with = "scene")]
     pub env: Option<PathBuf>,
+    /// Set a material parameter first, MATERIAL.PARAMETER=VALUE (repeatable): the parameters
+    /// `lustre view`'s material editor shows, e.g. `floor.alpha=0.1`, `floor.diffuse=0.3,0.2,0.1`,
+    /// `gold-paint.spec=sgd:gold-metallic-paint`.
+    #[arg(long = "set", value_name = "MATERIAL.PARAMETER=VALUE")]
+    pub set: Vec<String>,
     /// Camera name (the scene's first camera by default).
     #[arg(long, conflicts_with = "path")]
     pub camera: Option<String>,
@@ -120,41 +125,15 @@ type Baked = (Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>);
 
 /// A scene file with baked light maps: the scene, its atlas and its pages.
 fn load_baked(path: &Path) -> anyhow::Result<Baked> {
-    let scene = Scene::load(path).with_context(|| format!("loading {}", path.display()))?;
-    for w in &scene.warnings {
+    let b = BakedScene::load(path)?;
+    for w in &b.warnings {
         eprintln!("warning: {w}");
     }
-    let Some(lightmap) = &scene.lightmap else {
-        bail!(
-            "{}: no light maps; bake them first (`lustre bake {} --out DIR`) and render DIR/scene.toml",
-            path.display(),
-            path.display()
-        );
-    };
-    let pages = read_pages(lightmap).with_context(|| format!("{}", path.display()))?;
-    let atlas = lightmap.atlas.clone();
-    Ok((scene, atlas, pages))
+    Ok((b.scene, b.atlas, b.pages))
 }
 
-/// The built-in room with its light maps: an atlas at 16 texels/m and a bake of 64 paths per
-/// texel through the full materials, into `out/bake` (tiles reused on the next run).
+/// The built-in room with its light maps, baked into `out/bake` (tiles reused on the next run).
 fn builtin(out: &Path, environment: Option<Environment>) -> anyhow::Result<Baked> {
-    let mut scene = lustre_scene::builtin::room()?;
-    if environment.is_some() {
-        scene.environment = environment;
-    }
-    let aopts = AtlasOptions {
-        texels_per_metre: 16.0,
-        ..AtlasOptions::default()
-    };
-    let (atlas, _) = build_atlas(&mut scene, &aopts).context("the built-in room's atlas")?;
-    let dir = out.join("bake");
-    let opts = BakeOptions {
-        spp: 64,
-        bounces: 8,
-        transport: Transport::Full,
-        ..BakeOptions::default()
-    };
     let bar = ProgressBar::new(0);
     bar.set_style(
         ProgressStyle::with_template(
@@ -162,44 +141,19 @@ fn builtin(out: &Path, environment: Option<Environment>) -> anyhow::Result<Baked
         )
         .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
-    bake_tiles(&scene, &atlas, &opts, &dir, None, &|k, n| {
+    let b = BakedScene::builtin_room(&out.join("bake"), environment, &|k, n| {
         bar.set_length(n as u64);
         bar.set_position(k as u64);
     })
     .context("baking the built-in room")?;
     bar.finish_and_clear();
-    let assembled = assemble(&scene, &atlas, &opts, &dir).context("assembling its light maps")?;
-    Ok((scene, atlas, assembled.pages))
+    Ok((b.scene, b.atlas, b.pages))
 }
 
-/// An equirect map as the scene's environment.
-fn read_environment(path: &Path) -> anyhow::Result<Environment> {
-    let loaded = lustre_env::io::read_map(path)?;
-    Ok(Environment {
-        source: EnvironmentSource::Map {
-            path: path.to_path_buf(),
-            map: Arc::new(loaded.map),
-        },
-        to_local: DMat3::IDENTITY,
-        intensity: 1.0,
-    })
-}
-
-/// The material preview: a sphere of `spec` under `environment` (the built-in sky by default),
-/// no light maps (an atlas of one black texel that no mesh uses).
+/// The material preview: a sphere of `spec` under `environment`, no light maps.
 fn preview(spec: &str, environment: Option<Environment>) -> anyhow::Result<Baked> {
-    let scene = lustre_scene::builtin::preview(spec, environment)
-        .with_context(|| format!("--material {spec}"))?;
-    let atlas = LightmapAtlas {
-        width: 1,
-        height: 1,
-        pages: 1,
-        mesh_page: vec![None; scene.meshes.len()],
-        gutter: 0,
-        texels_per_metre: 0.0,
-        source: AtlasSource::Texcoord1,
-    };
-    Ok((scene, atlas, vec![vec![[0.0; 3]]]))
+    let b = BakedScene::preview(spec, environment).with_context(|| format!("--material {spec}"))?;
+    Ok((b.scene, b.atlas, b.pages))
 }
 
 /// Wall time per stage.
@@ -244,11 +198,17 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     };
     probe_opts.validate()?;
     let environment = args.env.as_deref().map(read_environment).transpose()?;
-    let (scene, atlas, pages) = match (&args.scene, &args.material) {
+    let (mut scene, atlas, pages) = match (&args.scene, &args.material) {
         (Some(path), _) => load_baked(path)?,
         (None, Some(spec)) => preview(spec, environment)?,
         (None, None) => builtin(&args.out, environment)?,
     };
+    for a in &args.set {
+        let (material, field, value) =
+            parse_assignment(a).map_err(|e| anyhow::anyhow!("--set {e}"))?;
+        set_named(&mut scene.materials, &material, &field, &value)
+            .with_context(|| format!("--set {a}"))?;
+    }
     let name = match (&args.scene, &args.material) {
         (Some(p), _) => p.display().to_string(),
         (None, Some(spec)) => format!("the preview of {spec}"),
@@ -283,14 +243,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             if args.material.is_none() {
                 eprintln!("no probe objects: glossy surfaces reflect the environment only");
             }
-            // The world-oriented map resampled with its texels' areas (not point-sampled);
-            // a rotated or scaled light through its own lookup.
-            let cube = if env.to_world() == DMat3::IDENTITY && env.scale() == 1.0 {
-                CubeMap::from_equirect(env.map(), args.probe_size)?
-            } else {
-                CubeMap::from_fn(args.probe_size, |d| env.eval(d).0)?
-            };
-            let p = CubePyramid::build(cube, MipFilter::Gauss6)?;
+            let p = environment_pyramid(env, args.probe_size)?;
             st.lap("environment pyramid");
             Some(p)
         }
@@ -600,7 +553,9 @@ fn report(
     Ok(())
 }
 
-/// The cameras of path `name` at `fps` frames per second, named frame_0000 …
+/// The cameras of path `name` at `fps` frames per second, named frame_0000 …: a camera path
+/// file (`.json`, `lustre_scene::camera_path_file`, as `lustre view` records) or the name of
+/// one of the scene's paths.
 fn path_cameras(
     scene: &Scene,
     name: &str,
@@ -611,34 +566,33 @@ fn path_cameras(
     if !(fps.is_finite() && fps > 0.0 && fps <= 1000.0) {
         bail!("--fps {fps}: must be in (0, 1000]");
     }
-    let path = scene
-        .camera_paths
-        .iter()
-        .find(|p| p.name == name)
-        .with_context(|| {
-            let names: Vec<&str> = scene.camera_paths.iter().map(|p| p.name.as_str()).collect();
-            format!(
-                "no camera path named {name:?} (paths: {})",
-                names.join(", ")
-            )
-        })?;
+    let from_file;
+    let path = if name.to_ascii_lowercase().ends_with(".json") {
+        from_file = CameraPathFile::read(Path::new(name))?;
+        &from_file
+    } else {
+        scene
+            .camera_paths
+            .iter()
+            .find(|p| p.name == name)
+            .with_context(|| {
+                let names: Vec<&str> = scene.camera_paths.iter().map(|p| p.name.as_str()).collect();
+                format!(
+                    "no camera path named {name:?} (paths: {}; or a camera path .json file)",
+                    names.join(", ")
+                )
+            })?
+    };
     let n = (path.duration() * fps).floor() as usize + 1;
     if n > 100_000 {
         bail!("camera path {name:?} at {fps} fps is {n} frames: too many");
     }
-    let aspect = f64::from(w) / f64::from(h);
     (0..n)
         .map(|k| {
             let c = path
                 .at(k as f64 / fps)
                 .with_context(|| format!("camera path {name:?} has no keyframes"))?;
-            let cam = PathCamera::look_at(
-                c.position,
-                c.position + c.forward,
-                c.up,
-                c.fov_y_deg(aspect),
-            )?;
-            Ok((format!("frame_{k:04}"), cam))
+            Ok((format!("frame_{k:04}"), film_camera(&c, w, h)?))
         })
         .collect()
 }

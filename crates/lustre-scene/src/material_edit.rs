@@ -1,0 +1,724 @@
+//! A material's parameters by name, and setting one from text: what `lustre view`'s material
+//! editor shows as controls, what its input scripts and `lustre render --set NAME.FIELD=VALUE`
+//! set, and what a scene file's `[material_params]` records (one code path for all of them).
+//!
+//! Every kind lists its parameters ([`fields`]) with their valid range; a value is set from
+//! text ([`set`]: `0.2`, `0.1,0.2,0.3`, `ggx`, `true`, or a material specification), checked
+//! against that range, and the material is rebuilt through its constructor checks so that an
+//! edit never leaves an invalid material behind. A textured parameter edits its factor (the
+//! texture is kept and multiplied in). `spec` swaps the material for any lustre material
+//! specification (a catalog entry, a fitted material JSON, a measured file); the parameters of
+//! an analytic specification `MODEL(key=value, …)` are fields too (`spec.KEY`).
+
+use crate::error::{Result, SceneError};
+use crate::material::{Distribution, Material, MaterialKind, ResolvedSpec};
+use lustre_brdf::Rgb;
+
+/// A parameter's value.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FieldValue {
+    /// A number.
+    Scalar(f64),
+    /// A linear RGB triple.
+    Rgb([f64; 3]),
+    /// One of [`Field::choices`].
+    Choice(String),
+    /// On or off.
+    Flag(bool),
+    /// Text (a material specification).
+    Text(String),
+}
+
+impl FieldValue {
+    /// The value as [`set`] reads it back.
+    pub fn to_text(&self) -> String {
+        match self {
+            FieldValue::Scalar(v) => format!("{v}"),
+            FieldValue::Rgb(c) => format!("{},{},{}", c[0], c[1], c[2]),
+            FieldValue::Choice(s) | FieldValue::Text(s) => s.clone(),
+            FieldValue::Flag(b) => format!("{b}"),
+        }
+    }
+}
+
+/// One editable parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Field {
+    /// Its name ([`set`]'s key).
+    pub name: String,
+    /// Its current value.
+    pub value: FieldValue,
+    /// Valid range of a number or of each RGB channel.
+    pub range: (f64, f64),
+    /// Best shown on a logarithmic scale (roughness, exponents).
+    pub log: bool,
+    /// A texture multiplies the value (the factor is what is edited).
+    pub textured: bool,
+    /// The words a [`FieldValue::Choice`] takes.
+    pub choices: &'static [&'static str],
+}
+
+const UNIT: (f64, f64) = (0.0, 1.0);
+const ALPHA: (f64, f64) = (1e-4, 1.0);
+const IOR: (f64, f64) = (1.0, 4.0);
+const METAL: (f64, f64) = (0.0, 20.0);
+const DISTRIBUTIONS: &[&str] = &["beckmann", "ggx"];
+
+fn scalar(name: &str, v: f64, range: (f64, f64), log: bool) -> Field {
+    Field {
+        name: name.to_string(),
+        value: FieldValue::Scalar(v),
+        range,
+        log,
+        textured: false,
+        choices: &[],
+    }
+}
+
+fn rgb(name: &str, c: Rgb, range: (f64, f64), textured: bool) -> Field {
+    Field {
+        name: name.to_string(),
+        value: FieldValue::Rgb(c.0),
+        range,
+        log: false,
+        textured,
+        choices: &[],
+    }
+}
+
+fn distribution(d: Distribution) -> Field {
+    Field {
+        name: "distribution".to_string(),
+        value: FieldValue::Choice(
+            match d {
+                Distribution::Beckmann => "beckmann",
+                Distribution::Ggx => "ggx",
+            }
+            .to_string(),
+        ),
+        range: UNIT,
+        log: false,
+        textured: false,
+        choices: DISTRIBUTIONS,
+    }
+}
+
+/// The editable parameters of `m`, in a fixed order per kind (`two_sided` last).
+pub fn fields(m: &Material) -> Vec<Field> {
+    use MaterialKind as K;
+    let tex_s = |name: &str, t: &crate::material::TexturedScalar, range, log| Field {
+        textured: t.texture.is_some(),
+        ..scalar(name, t.factor, range, log)
+    };
+    let mut out = match &m.kind {
+        K::Diffuse { reflectance } => vec![rgb(
+            "reflectance",
+            reflectance.factor,
+            UNIT,
+            reflectance.texture.is_some(),
+        )],
+        K::Plastic {
+            diffuse,
+            specular,
+            int_ior,
+            ext_ior,
+            nonlinear,
+        } => vec![
+            rgb("diffuse", diffuse.factor, UNIT, diffuse.texture.is_some()),
+            rgb("specular", *specular, UNIT, false),
+            scalar("int_ior", *int_ior, IOR, false),
+            scalar("ext_ior", *ext_ior, IOR, false),
+            flag("nonlinear", *nonlinear),
+        ],
+        K::RoughPlastic {
+            diffuse,
+            specular,
+            alpha,
+            distribution: d,
+            int_ior,
+            ext_ior,
+            nonlinear,
+        } => vec![
+            rgb("diffuse", diffuse.factor, UNIT, diffuse.texture.is_some()),
+            rgb("specular", *specular, UNIT, false),
+            tex_s("alpha", alpha, ALPHA, true),
+            distribution(*d),
+            scalar("int_ior", *int_ior, IOR, false),
+            scalar("ext_ior", *ext_ior, IOR, false),
+            flag("nonlinear", *nonlinear),
+        ],
+        K::Conductor { eta, k, specular } => vec![
+            rgb("eta", *eta, METAL, false),
+            rgb("k", *k, METAL, false),
+            rgb(
+                "specular",
+                specular.factor,
+                UNIT,
+                specular.texture.is_some(),
+            ),
+        ],
+        K::RoughConductor {
+            eta,
+            k,
+            specular,
+            alpha_u,
+            alpha_v,
+            distribution: d,
+        } => vec![
+            rgb("eta", *eta, METAL, false),
+            rgb("k", *k, METAL, false),
+            rgb(
+                "specular",
+                specular.factor,
+                UNIT,
+                specular.texture.is_some(),
+            ),
+            tex_s("alpha_u", alpha_u, ALPHA, true),
+            tex_s("alpha_v", alpha_v, ALPHA, true),
+            distribution(*d),
+        ],
+        K::Dielectric {
+            int_ior,
+            ext_ior,
+            specular_reflectance,
+            specular_transmittance,
+        }
+        | K::ThinDielectric {
+            int_ior,
+            ext_ior,
+            specular_reflectance,
+            specular_transmittance,
+        } => vec![
+            scalar("int_ior", *int_ior, IOR, false),
+            scalar("ext_ior", *ext_ior, IOR, false),
+            rgb("specular_reflectance", *specular_reflectance, UNIT, false),
+            rgb(
+                "specular_transmittance",
+                *specular_transmittance,
+                UNIT,
+                false,
+            ),
+        ],
+        K::RoughDielectric {
+            int_ior,
+            ext_ior,
+            alpha,
+            distribution: d,
+            specular_reflectance,
+            specular_transmittance,
+        } => vec![
+            scalar("int_ior", *int_ior, IOR, false),
+            scalar("ext_ior", *ext_ior, IOR, false),
+            tex_s("alpha", alpha, ALPHA, true),
+            distribution(*d),
+            rgb("specular_reflectance", *specular_reflectance, UNIT, false),
+            rgb(
+                "specular_transmittance",
+                *specular_transmittance,
+                UNIT,
+                false,
+            ),
+        ],
+        K::PbrMetallicRoughness {
+            base_color,
+            metallic,
+            roughness,
+            transmission,
+            ior,
+            anisotropy,
+            anisotropy_rotation,
+        } => vec![
+            rgb(
+                "base_color",
+                base_color.factor,
+                UNIT,
+                base_color.texture.is_some(),
+            ),
+            tex_s("metallic", metallic, UNIT, false),
+            tex_s("roughness", roughness, UNIT, false),
+            tex_s("transmission", transmission, UNIT, false),
+            scalar("ior", *ior, IOR, false),
+            scalar("anisotropy", *anisotropy, UNIT, false),
+            scalar(
+                "anisotropy_rotation",
+                *anisotropy_rotation,
+                (-std::f64::consts::PI, std::f64::consts::PI),
+                false,
+            ),
+        ],
+        K::Spec(s) => {
+            let mut v = vec![Field {
+                name: "spec".to_string(),
+                value: FieldValue::Text(s.spec.clone()),
+                range: UNIT,
+                log: false,
+                textured: false,
+                choices: &[],
+            }];
+            if let Some((_, params)) = analytic_spec(&s.spec) {
+                v.extend(params.iter().filter_map(|(k, val)| {
+                    let x: f64 = val.parse().ok()?;
+                    Some(scalar(&format!("spec.{k}"), x, SPEC_RANGE, false))
+                }));
+            }
+            v
+        }
+    };
+    out.push(flag("two_sided", m.two_sided));
+    out
+}
+
+fn flag(name: &str, b: bool) -> Field {
+    Field {
+        name: name.to_string(),
+        value: FieldValue::Flag(b),
+        range: UNIT,
+        log: false,
+        textured: false,
+        choices: &[],
+    }
+}
+
+/// `MODEL(key=value, …)` split into the model and its (key, value) pairs, in order; `None` for
+/// any other specification.
+pub fn analytic_spec(spec: &str) -> Option<(String, Vec<(String, String)>)> {
+    let s = spec.trim();
+    let open = s.find('(')?;
+    let inner = s.strip_suffix(')')?.get(open + 1..)?;
+    let model = s[..open].trim();
+    if model.is_empty() || model.contains(':') {
+        return None;
+    }
+    let mut params = vec![];
+    for part in inner.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        let (k, v) = part.split_once('=')?;
+        params.push((k.trim().to_string(), v.trim().to_string()));
+    }
+    Some((model.to_string(), params))
+}
+
+/// The suggested slider range of an analytic model's key, and whether it is logarithmic. The
+/// catalog checks the value itself, so a spec field's valid range ([`Field::range`]) is wide.
+pub fn spec_slider(key: &str) -> ((f64, f64), bool) {
+    if key == "n" || key == "nu" || key == "nv" {
+        ((1.0, 1e4), true)
+    } else if key.starts_with("alpha") || key.starts_with('m') || key == "ax" || key == "ay" {
+        ((1e-3, 1.0), true)
+    } else if key.contains("ior") || key == "eta" {
+        (IOR, false)
+    } else {
+        (UNIT, false)
+    }
+}
+
+/// The valid range of a spec field (the catalog checks the value).
+const SPEC_RANGE: (f64, f64) = (-1e9, 1e9);
+
+fn parse_scalar(field: &str, text: &str, (lo, hi): (f64, f64)) -> std::result::Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("{field}: {text:?} is not a number"))?;
+    if !v.is_finite() || v < lo || v > hi {
+        return Err(format!("{field}: {v} is outside [{lo}, {hi}]"));
+    }
+    Ok(v)
+}
+
+fn parse_rgb(field: &str, text: &str, range: (f64, f64)) -> std::result::Result<Rgb, String> {
+    let parts: Vec<&str> = text.split(',').collect();
+    let c = match parts.as_slice() {
+        [g] => {
+            let v = parse_scalar(field, g, range)?;
+            [v; 3]
+        }
+        [r, g, b] => [
+            parse_scalar(field, r, range)?,
+            parse_scalar(field, g, range)?,
+            parse_scalar(field, b, range)?,
+        ],
+        _ => return Err(format!("{field}: {text:?} is not one or three numbers")),
+    };
+    Ok(Rgb(c))
+}
+
+/// Sets parameter `field` of `m` to `value` (text, as [`FieldValue::to_text`] writes it).
+/// Errors (naming the material and the field; `m` is left as it was): an unknown field, a
+/// value that does not parse or lies outside the field's range, a specification that does
+/// not resolve, or a combination the model's constructor refuses.
+pub fn set(m: &mut Material, field: &str, value: &str) -> Result<()> {
+    let err = |why: String| SceneError::material(&m.name, why);
+    if field == "spec" && !matches!(m.kind, MaterialKind::Spec(_)) {
+        // A swap: any kind becomes the specification's model.
+        let r = ResolvedSpec::resolve(&m.name, value.trim())?;
+        let mut trial = m.clone();
+        trial.set_kind(MaterialKind::Spec(r));
+        trial
+            .bsdf_at(&[], &[glam::Vec2::ZERO; 2])
+            .map_err(|e| SceneError::material(&m.name, format!("spec = {value}: {e}")))?;
+        *m = trial;
+        return Ok(());
+    }
+    let known = fields(m);
+    let Some(f) = known.iter().find(|f| f.name == field) else {
+        let names: Vec<&str> = known.iter().map(|f| f.name.as_str()).collect();
+        return Err(err(format!(
+            "no parameter {field:?} in a {} material (parameters: {})",
+            m.kind.name(),
+            names.join(", ")
+        )));
+    };
+    let mut kind = m.kind.clone();
+    let mut two_sided = m.two_sided;
+    let parsed = match &f.value {
+        FieldValue::Scalar(_) => parse_scalar(field, value, f.range).map(FieldValue::Scalar),
+        FieldValue::Rgb(_) => parse_rgb(field, value, f.range).map(|c| FieldValue::Rgb(c.0)),
+        FieldValue::Choice(_) => {
+            let w = value.trim().to_ascii_lowercase();
+            if f.choices.contains(&w.as_str()) {
+                Ok(FieldValue::Choice(w))
+            } else {
+                Err(format!("{field}: {value:?} is not one of {:?}", f.choices))
+            }
+        }
+        FieldValue::Flag(_) => match value.trim() {
+            "true" | "1" | "on" => Ok(FieldValue::Flag(true)),
+            "false" | "0" | "off" => Ok(FieldValue::Flag(false)),
+            _ => Err(format!("{field}: {value:?} is not true or false")),
+        },
+        FieldValue::Text(_) => Ok(FieldValue::Text(value.trim().to_string())),
+    }
+    .map_err(err)?;
+    if field == "two_sided" {
+        if let FieldValue::Flag(b) = parsed {
+            two_sided = b;
+        }
+    } else {
+        assign(&mut kind, field, &parsed, &m.name).map_err(err)?;
+    }
+    // Build the model once so that an invalid combination is refused here.
+    let mut trial = m.clone();
+    trial.set_kind(kind);
+    trial.two_sided = two_sided;
+    trial
+        .bsdf_at(&[], &[glam::Vec2::ZERO; 2])
+        .map_err(|e| SceneError::material(&m.name, format!("{field} = {value}: {e}")))?;
+    *m = trial;
+    Ok(())
+}
+
+/// Writes `v` into field `field` of `kind`.
+fn assign(
+    kind: &mut MaterialKind,
+    field: &str,
+    v: &FieldValue,
+    material: &str,
+) -> std::result::Result<(), String> {
+    use MaterialKind as K;
+    let num = || match v {
+        FieldValue::Scalar(x) => *x,
+        _ => 0.0,
+    };
+    let col = || match v {
+        FieldValue::Rgb(c) => Rgb(*c),
+        _ => Rgb::ZERO,
+    };
+    let dist = || match v {
+        FieldValue::Choice(s) if s == "ggx" => Distribution::Ggx,
+        _ => Distribution::Beckmann,
+    };
+    if let K::Spec(s) = kind {
+        let spec = match (field, v) {
+            ("spec", FieldValue::Text(t)) => t.clone(),
+            (_, FieldValue::Scalar(x)) => {
+                let key = field.strip_prefix("spec.").unwrap_or(field);
+                let (model, params) = analytic_spec(&s.spec).unwrap_or_default();
+                let body: Vec<String> = params
+                    .iter()
+                    .map(|(k, old)| {
+                        if k == key {
+                            format!("{k}={x}")
+                        } else {
+                            format!("{k}={old}")
+                        }
+                    })
+                    .collect();
+                format!("{model}({})", body.join(", "))
+            }
+            _ => return Err(format!("{field}: not settable")),
+        };
+        *s = ResolvedSpec::resolve(material, &spec).map_err(|e| e.to_string())?;
+        return Ok(());
+    }
+    match (kind, field) {
+        (K::Diffuse { reflectance: t }, "reflectance")
+        | (K::Plastic { diffuse: t, .. }, "diffuse")
+        | (K::RoughPlastic { diffuse: t, .. }, "diffuse")
+        | (K::Conductor { specular: t, .. }, "specular")
+        | (K::RoughConductor { specular: t, .. }, "specular")
+        | (K::PbrMetallicRoughness { base_color: t, .. }, "base_color") => t.factor = col(),
+        (K::Plastic { specular: c, .. }, "specular")
+        | (K::RoughPlastic { specular: c, .. }, "specular")
+        | (K::Conductor { eta: c, .. }, "eta")
+        | (K::RoughConductor { eta: c, .. }, "eta")
+        | (K::Conductor { k: c, .. }, "k")
+        | (K::RoughConductor { k: c, .. }, "k")
+        | (
+            K::Dielectric {
+                specular_reflectance: c,
+                ..
+            },
+            "specular_reflectance",
+        )
+        | (
+            K::ThinDielectric {
+                specular_reflectance: c,
+                ..
+            },
+            "specular_reflectance",
+        )
+        | (
+            K::RoughDielectric {
+                specular_reflectance: c,
+                ..
+            },
+            "specular_reflectance",
+        )
+        | (
+            K::Dielectric {
+                specular_transmittance: c,
+                ..
+            },
+            "specular_transmittance",
+        )
+        | (
+            K::ThinDielectric {
+                specular_transmittance: c,
+                ..
+            },
+            "specular_transmittance",
+        )
+        | (
+            K::RoughDielectric {
+                specular_transmittance: c,
+                ..
+            },
+            "specular_transmittance",
+        ) => *c = col(),
+        (K::RoughPlastic { alpha: t, .. }, "alpha")
+        | (K::RoughDielectric { alpha: t, .. }, "alpha")
+        | (K::RoughConductor { alpha_u: t, .. }, "alpha_u")
+        | (K::RoughConductor { alpha_v: t, .. }, "alpha_v")
+        | (K::PbrMetallicRoughness { metallic: t, .. }, "metallic")
+        | (K::PbrMetallicRoughness { roughness: t, .. }, "roughness")
+        | (
+            K::PbrMetallicRoughness {
+                transmission: t, ..
+            },
+            "transmission",
+        ) => t.factor = num(),
+        (K::Plastic { int_ior: x, .. }, "int_ior")
+        | (K::RoughPlastic { int_ior: x, .. }, "int_ior")
+        | (K::Dielectric { int_ior: x, .. }, "int_ior")
+        | (K::ThinDielectric { int_ior: x, .. }, "int_ior")
+        | (K::RoughDielectric { int_ior: x, .. }, "int_ior")
+        | (K::Plastic { ext_ior: x, .. }, "ext_ior")
+        | (K::RoughPlastic { ext_ior: x, .. }, "ext_ior")
+        | (K::Dielectric { ext_ior: x, .. }, "ext_ior")
+        | (K::ThinDielectric { ext_ior: x, .. }, "ext_ior")
+        | (K::RoughDielectric { ext_ior: x, .. }, "ext_ior")
+        | (K::PbrMetallicRoughness { ior: x, .. }, "ior")
+        | (K::PbrMetallicRoughness { anisotropy: x, .. }, "anisotropy")
+        | (
+            K::PbrMetallicRoughness {
+                anisotropy_rotation: x,
+                ..
+            },
+            "anisotropy_rotation",
+        ) => *x = num(),
+        (
+            K::RoughPlastic {
+                distribution: d, ..
+            },
+            "distribution",
+        )
+        | (
+            K::RoughConductor {
+                distribution: d, ..
+            },
+            "distribution",
+        )
+        | (
+            K::RoughDielectric {
+                distribution: d, ..
+            },
+            "distribution",
+        ) => *d = dist(),
+        (K::Plastic { nonlinear: b, .. }, "nonlinear")
+        | (K::RoughPlastic { nonlinear: b, .. }, "nonlinear") => {
+            *b = matches!(v, FieldValue::Flag(true))
+        }
+        (_, f) => return Err(format!("{f}: not settable")),
+    }
+    Ok(())
+}
+
+/// Parses `NAME.FIELD=VALUE` (`lustre render --set`, a scene file's `[material_params]` key
+/// and value joined) into its three parts.
+pub fn parse_assignment(text: &str) -> std::result::Result<(String, String, String), String> {
+    let (lhs, value) = text
+        .split_once('=')
+        .ok_or_else(|| format!("{text:?} is not MATERIAL.PARAMETER=VALUE"))?;
+    let (name, field) = lhs
+        .trim()
+        .split_once('.')
+        .ok_or_else(|| format!("{lhs:?} is not MATERIAL.PARAMETER"))?;
+    if name.is_empty() || field.is_empty() {
+        return Err(format!("{lhs:?} is not MATERIAL.PARAMETER"));
+    }
+    Ok((
+        name.to_string(),
+        field.to_string(),
+        value.trim().to_string(),
+    ))
+}
+
+/// Sets `field` to `value` in every material of `materials` named `name`. Errors: no material
+/// of that name (listing the names), or [`set`]'s.
+pub fn set_named(materials: &mut [Material], name: &str, field: &str, value: &str) -> Result<()> {
+    let mut found = false;
+    for m in materials.iter_mut().filter(|m| m.name == name) {
+        set(m, field, value)?;
+        found = true;
+    }
+    if found {
+        Ok(())
+    } else {
+        let names: Vec<&str> = materials.iter().map(|m| m.name.as_str()).collect();
+        Err(SceneError::material(
+            name,
+            format!("no material of that name (materials: {})", names.join(", ")),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::{TexturedRgb, TexturedScalar};
+
+    fn plastic() -> Material {
+        Material::new(
+            "floor",
+            MaterialKind::RoughPlastic {
+                diffuse: TexturedRgb::constant(Rgb([0.2, 0.1, 0.1])),
+                specular: Rgb::ONE,
+                alpha: TexturedScalar::constant(0.04),
+                distribution: Distribution::Ggx,
+                int_ior: 1.5,
+                ext_ior: 1.0,
+                nonlinear: false,
+            },
+        )
+    }
+
+    #[test]
+    fn every_listed_field_can_be_set_to_its_own_value() {
+        let kinds = [
+            plastic(),
+            Material::diffuse("d", Rgb([0.5, 0.5, 0.5])),
+            Material::new(
+                "s",
+                MaterialKind::Spec(
+                    ResolvedSpec::resolve("s", "kurt(kd=0.1, ks=0.5, mx=0.1, my=0.2, r0=0.9)")
+                        .unwrap(),
+                ),
+            ),
+        ];
+        for m in kinds {
+            for f in fields(&m) {
+                let mut n = m.clone();
+                set(&mut n, &f.name, &f.value.to_text()).unwrap();
+                assert_eq!(fields(&n), fields(&m), "{} {}", m.name, f.name);
+            }
+        }
+    }
+
+    #[test]
+    fn set_changes_the_model_and_refuses_bad_values() {
+        let mut m = plastic();
+        set(&mut m, "alpha", "0.3").unwrap();
+        match &m.kind {
+            MaterialKind::RoughPlastic { alpha, .. } => assert_eq!(alpha.factor, 0.3),
+            k => panic!("{k:?}"),
+        }
+        set(&mut m, "diffuse", "0.5,0.25,0").unwrap();
+        set(&mut m, "distribution", "beckmann").unwrap();
+        set(&mut m, "two_sided", "true").unwrap();
+        assert!(m.two_sided);
+        // Any kind can be swapped for a specification.
+        let mut swapped = m.clone();
+        set(&mut swapped, "spec", "kurt-demo").unwrap();
+        assert!(matches!(&swapped.kind, MaterialKind::Spec(s) if s.spec == "kurt-demo"));
+        assert!(swapped.two_sided);
+        let before = m.clone();
+        for (f, v, says) in [
+            ("alpha", "NaN", "outside"),
+            ("alpha", "2", "outside"),
+            ("diffuse", "0.1,0.2", "three"),
+            ("distribution", "phong", "one of"),
+            ("roughness", "0.1", "no parameter"),
+            ("alpha", "rough", "not a number"),
+        ] {
+            let e = set(&mut m, f, v).unwrap_err().to_string();
+            assert!(e.contains(says) && e.contains("floor"), "{f}={v}: {e}");
+            assert_eq!(m, before);
+        }
+    }
+
+    #[test]
+    fn spec_fields_rewrite_the_spec_and_swap_it() {
+        let mut m = Material::new(
+            "s",
+            MaterialKind::Spec(
+                ResolvedSpec::resolve("s", "ggx(rho_d=0.1, rho_s=0.5, alpha=0.2)").unwrap(),
+            ),
+        );
+        let names: Vec<String> = fields(&m).into_iter().map(|f| f.name).collect();
+        assert_eq!(
+            names,
+            [
+                "spec",
+                "spec.rho_d",
+                "spec.rho_s",
+                "spec.alpha",
+                "two_sided"
+            ]
+        );
+        set(&mut m, "spec.alpha", "0.05").unwrap();
+        match &m.kind {
+            MaterialKind::Spec(s) => assert_eq!(s.spec, "ggx(rho_d=0.1, rho_s=0.5, alpha=0.05)"),
+            k => panic!("{k:?}"),
+        }
+        set(&mut m, "spec", "kurt-demo").unwrap();
+        assert_eq!(fields(&m).len(), 2);
+        let e = set(&mut m, "spec", "nope:thing").unwrap_err().to_string();
+        assert!(e.contains("nope:thing"), "{e}");
+    }
+
+    #[test]
+    fn assignments_parse_and_name_materials() {
+        assert_eq!(
+            parse_assignment("floor.alpha=0.2").unwrap(),
+            ("floor".into(), "alpha".into(), "0.2".into())
+        );
+        assert!(parse_assignment("floor=0.2").is_err());
+        assert!(parse_assignment(".alpha=0.2").is_err());
+        let mut ms = vec![plastic()];
+        set_named(&mut ms, "floor", "alpha", "0.1").unwrap();
+        let e = set_named(&mut ms, "wall", "alpha", "0.1")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("materials: floor"), "{e}");
+    }
+}

@@ -1,0 +1,102 @@
+//! `lustre view`: the interactive walkthrough and material editor (000's walkthrough
+//! application; issue 12). A winit window with egui panels over the walkthrough renderer of
+//! `lustre render` (lustre-gpu's [`lustre_gpu::GpuFrameSession`]), which runs in its own
+//! thread ([`render`]) so that the window never waits for a frame, a material rebuild or a fit.
+//!
+//! - Walking: WASD / arrows (Q / E down and up), drag the view to look, the wheel sets the
+//!   speed, shift runs; the scene's cameras as bookmarks; a camera path recorded to a
+//!   `lustre-camera-path` JSON that `lustre render --path FILE.json` replays.
+//! - Overlays: frames per second, a frame-time graph with the GPU's per-pass times, the sample
+//!   budget, the method (regular, Colbert–Křivánek, progressive refinement while still, or a CPU
+//!   path-traced reference filling in), exposure.
+//! - Material editor: click an object to select it; its material's parameters as controls
+//!   ([`lustre_scene::material_edit`]); swap it for any material specification (a catalog
+//!   entry, a fitted material JSON, a measured file); **Fit** a measured file in a background
+//!   thread and apply the result; the polar lobe plot of measurement and fit; save the material
+//!   JSON and the scene file.
+//! - Unattended runs: `--script FILE` ([`script`]), `--frames N --screenshot FILE`.
+
+pub mod app;
+pub mod camera;
+pub mod fit;
+pub mod plot;
+pub mod render;
+pub mod script;
+
+use std::path::PathBuf;
+
+/// How the glossy part is integrated in the view.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewMethod {
+    /// Regular samples through the material's warp (one frame, then still).
+    Regular,
+    /// Colbert–Křivánek random samples.
+    Ck,
+    /// Progressive refinement: rotated regular sets accumulated while the camera is still.
+    Progressive,
+    /// A CPU path-traced reference filling in (1 sample per pixel per pass).
+    Reference,
+}
+
+impl ViewMethod {
+    /// Its name in scripts and the panel.
+    pub fn name(self) -> &'static str {
+        match self {
+            ViewMethod::Regular => "regular",
+            ViewMethod::Ck => "ck",
+            ViewMethod::Progressive => "progressive",
+            ViewMethod::Reference => "reference",
+        }
+    }
+}
+
+/// Arguments of `lustre view`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ViewArgs {
+    /// A scene with baked light maps (the scene.toml `lustre bake --out DIR` writes); the
+    /// built-in room when absent (its light maps baked once into --bake-dir).
+    pub scene: Option<PathBuf>,
+    /// Where the built-in room's light maps are baked and reused.
+    #[arg(long, default_value = "lustre-view/bake")]
+    pub bake_dir: PathBuf,
+    /// Where fits, screenshots, camera paths and saved files go (relative names in the panels
+    /// and scripts are taken from here).
+    #[arg(long, default_value = "lustre-view")]
+    pub out: PathBuf,
+    /// Window size WxH in pixels.
+    #[arg(long, default_value = "1280x800")]
+    pub size: String,
+    /// The 3D view's resolution as a fraction of its size on screen (0.1–1).
+    #[arg(long, default_value_t = 0.5)]
+    pub scale: f64,
+    /// Glossy samples per pixel.
+    #[arg(long, default_value_t = 8)]
+    pub samples: u32,
+    /// k: a k×k supersampled G-buffer per pixel (anti-aliasing).
+    #[arg(long, default_value_t = 1)]
+    pub supersampling: u32,
+    /// Probe cube face size in texels (as `lustre render --probe-size`).
+    #[arg(long, default_value_t = 128)]
+    pub probe_size: usize,
+    /// Present without waiting for the display's refresh.
+    #[arg(long)]
+    pub no_vsync: bool,
+    /// Run this input script (see `lustre_view::script`), then stay open (or `quit`).
+    #[arg(long)]
+    pub script: Option<PathBuf>,
+    /// Close after this many rendered frames (after the script, if any).
+    #[arg(long)]
+    pub frames: Option<u32>,
+    /// With --frames: save a screenshot of the window here before closing.
+    #[arg(long, requires = "frames")]
+    pub screenshot: Option<PathBuf>,
+    /// Unattended runs (--script, --frames) fail after this many seconds.
+    #[arg(long, default_value_t = 900.0)]
+    pub timeout: f64,
+}
+
+/// Runs `lustre view`. Errors: bad arguments or script, no window, no GPU adapter, a device
+/// lost, or an unattended run that failed or timed out.
+pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
+    app::run(args)
+}

@@ -1,0 +1,516 @@
+//! The viewer's render thread: it loads the scene (baking the built-in room's light maps on
+//! first use), opens its own headless GPU device and steps a [`GpuFrameSession`] of the
+//! walkthrough renderer (`lustre render`'s frame) for the camera the window asks for, sending
+//! every new image back. The window thread never waits for it: requests and replies are
+//! channel messages, frame requests coalesce (only the newest is rendered), and a still camera
+//! keeps refining (progressive refinement, or the CPU path-traced reference filling in).
+//!
+//! Material edits (`lustre_scene::material_edit::set`) are checked against the GPU's models
+//! first; a refused edit is answered with its error and the scene keeps running with the old
+//! material. An accepted one rebuilds the light-mapped scene, the GPU upload and the probes.
+
+use crate::ViewMethod;
+use lustre_gpu::frame_shade::pack_material;
+use lustre_gpu::{
+    GpuContext, GpuFrameOptions, GpuFrameSession, GpuFrameTimes, GpuWalkthrough,
+    LightmapFrameScene, StepWork, WalkthroughPasses,
+};
+use lustre_scene::material_edit;
+use lustre_scene::{Camera, Material, Scene};
+use lustre_shade::bake::render::Lightmapped;
+use lustre_shade::bake::spec_albedo;
+use lustre_shade::baked::{environment_pyramid, BakedScene};
+use lustre_shade::frame::{FrameMethod, FrameStats};
+use lustre_shade::image::Image;
+use lustre_shade::path::{Accumulator, PathCamera, PathOptions, PathTracer};
+use lustre_shade::probe::{LitScene, ProbeOptions};
+use std::path::PathBuf;
+use std::sync::mpsc::{Receiver, Sender, TryRecvError};
+use std::time::Instant;
+
+/// What to show.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SceneSource {
+    /// A scene file with baked light maps.
+    File(PathBuf),
+    /// The built-in room, its light maps baked into (and reused from) this folder.
+    BuiltinRoom(PathBuf),
+}
+
+/// How a frame is rendered.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameSettings {
+    /// The glossy integration.
+    pub method: ViewMethod,
+    /// Glossy samples per G-buffer pixel, 1–256.
+    pub samples: u32,
+    /// k: a k×k supersampled G-buffer per pixel.
+    pub supersampling: u32,
+    /// Frames a still camera accumulates (progressive refinement), or samples per pixel the
+    /// reference stops at.
+    pub refine_frames: u32,
+    /// Seed of the CK points and of the reference's paths.
+    pub seed: u64,
+    /// The window's count of accepted material edits, echoed in the reply: a frame asked
+    /// for after an edit is told apart from the one before it.
+    pub generation: u64,
+}
+
+/// A message to the render thread.
+#[derive(Clone, Debug)]
+pub enum Request {
+    /// Render (or keep refining) this view; newer requests replace older ones.
+    Frame {
+        /// The camera.
+        camera: PathCamera,
+        /// Frame size in pixels.
+        size: (usize, usize),
+        /// How.
+        settings: FrameSettings,
+    },
+    /// Which mesh pixel (x, y) of a `size` frame from `camera` shows.
+    Pick {
+        /// The camera.
+        camera: PathCamera,
+        /// Frame size in pixels.
+        size: (usize, usize),
+        /// Pixel (x right, y down), centre at +0.5.
+        pixel: (f64, f64),
+    },
+    /// Set parameter `field` of material `material` to `value` (material_edit::set).
+    SetMaterial {
+        /// Material index.
+        material: usize,
+        /// Parameter name.
+        field: String,
+        /// Its value as text.
+        value: String,
+    },
+    /// Stop.
+    Quit,
+}
+
+/// What the scene holds, for the window.
+#[derive(Clone, Debug)]
+pub struct SceneInfo {
+    /// Its name for the title.
+    pub name: String,
+    /// Materials.
+    pub materials: Vec<Material>,
+    /// Mesh names and their material index.
+    pub meshes: Vec<(String, usize)>,
+    /// Named cameras.
+    pub cameras: Vec<Camera>,
+    /// The scene's film size.
+    pub film: (u32, u32),
+    /// The camera to start from: the scene's first (or the automatic one for scenes without).
+    pub start: Camera,
+    /// The adapter the frames are rendered on.
+    pub adapter: String,
+    /// Scene extent (diagonal of the bounds), for the walking speed.
+    pub extent: f64,
+}
+
+/// A rendered frame.
+#[derive(Clone, Debug)]
+pub struct FrameReply {
+    /// The linear image.
+    pub image: Image,
+    /// The camera it was rendered from.
+    pub camera: PathCamera,
+    /// Settings it was rendered with.
+    pub settings: FrameSettings,
+    /// GPU pass times of the step that made it (zero for the reference).
+    pub times: GpuFrameTimes,
+    /// Frames (progressive) or samples per pixel (reference) the image holds.
+    pub frames: u32,
+    /// What the step ran.
+    pub work: Option<StepWork>,
+    /// Counts of the view-dependent pass.
+    pub stats: FrameStats,
+    /// Wall time of the step and read-back, ms.
+    pub wall_ms: f64,
+}
+
+/// A message from the render thread.
+#[derive(Debug)]
+pub enum Reply {
+    /// What the thread is doing (loading, baking n of m tiles, …).
+    Status(String),
+    /// The scene is ready.
+    Ready(Box<SceneInfo>),
+    /// A new image.
+    Frame(Box<FrameReply>),
+    /// The answer to a pick: the mesh index, if any.
+    Picked(Option<usize>),
+    /// The answer to a material edit: the material as it is now, or why it was refused (the
+    /// scene keeps the old one), and the time until the new material was ready to render.
+    MaterialSet {
+        /// Material index.
+        material: usize,
+        /// The edit's `field=value`.
+        edit: String,
+        /// The material after the edit, or the error.
+        result: Result<Material, String>,
+        /// Seconds from the request to the rebuilt scene.
+        seconds: f64,
+    },
+    /// The thread cannot go on (no adapter, an unreadable scene); the message says why.
+    Fatal(String),
+}
+
+/// Why [`serve`] returned.
+enum Exit {
+    Quit,
+    Edit {
+        material: usize,
+        field: String,
+        value: String,
+        asked: Instant,
+    },
+}
+
+/// Runs the render thread until [`Request::Quit`] or the window's end of the channel closes;
+/// probes are captured at `probe_size`² texels per face.
+pub fn run(source: SceneSource, probe_size: usize, rx: Receiver<Request>, tx: Sender<Reply>) {
+    if let Err(e) = run_inner(source, probe_size, &rx, &tx) {
+        let _ = tx.send(Reply::Fatal(format!("{e:#}")));
+    }
+}
+
+fn run_inner(
+    source: SceneSource,
+    probe_size: usize,
+    rx: &Receiver<Request>,
+    tx: &Sender<Reply>,
+) -> anyhow::Result<()> {
+    let probe_opts = ProbeOptions {
+        face_size: probe_size,
+        ..ProbeOptions::default()
+    };
+    probe_opts.validate()?;
+    let (name, baked) = match &source {
+        SceneSource::File(p) => {
+            let _ = tx.send(Reply::Status(format!("loading {}", p.display())));
+            (p.display().to_string(), BakedScene::load(p)?)
+        }
+        SceneSource::BuiltinRoom(dir) => {
+            let _ = tx.send(Reply::Status(format!(
+                "baking the built-in room's light maps into {} (reused next time)",
+                dir.display()
+            )));
+            let report = |k: usize, n: usize| {
+                let _ = tx.send(Reply::Status(format!(
+                    "baking the built-in room's light maps: tile {k} of {n}"
+                )));
+            };
+            (
+                "the built-in room".to_string(),
+                BakedScene::builtin_room(dir, None, &report)?,
+            )
+        }
+    };
+    let BakedScene {
+        mut scene,
+        atlas,
+        pages,
+        ..
+    } = baked;
+    let _ = tx.send(Reply::Status("opening the GPU".into()));
+    let ctx = GpuContext::new().map_err(|e| anyhow::anyhow!("no GPU adapter: {e}"))?;
+    let mut first = true;
+    let mut passes: Option<WalkthroughPasses> = None;
+    let mut edit: Option<(usize, String, String, Instant)> = None;
+    loop {
+        let mut answer = None;
+        if let Some((m, field, value, asked)) = edit.take() {
+            answer = Some((m, format!("{field}={value}"), asked));
+            if let Some(mat) = scene.materials.get_mut(m) {
+                // Checked by `serve` before it returned: this cannot fail differently.
+                material_edit::set(mat, &field, &value)?;
+            }
+        }
+        let _ = tx.send(Reply::Status(if first {
+            "preparing the scene for the GPU (upload, probes)".into()
+        } else {
+            "applying the material (light-mapped scene, upload, probes)".into()
+        }));
+        let (ps, warnings) = lustre_shade::reference::path_scene(&scene)?;
+        if first {
+            for w in warnings {
+                let _ = tx.send(Reply::Status(format!("warning: {w}")));
+            }
+        }
+        let spec = scene.materials.iter().map(spec_albedo).collect();
+        let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec)?;
+        let pt = PathTracer::new(&ps, PathOptions::default())?;
+        let lit = LitScene::new(&scene, &ps, &pt, &lm)?;
+        let has_probes = scene.meshes.iter().any(|m| m.hints.probe);
+        let env = match (&ps.environment, has_probes) {
+            (Some(e), false) => Some(environment_pyramid(e, probe_size)?),
+            _ => None,
+        };
+        let uploaded = LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages)?;
+        // The passes are compiled once (a material edit only uploads the scene again).
+        let compiled = match passes.take() {
+            Some(p) => p,
+            None => WalkthroughPasses::new(&ctx)?,
+        };
+        let walk =
+            GpuWalkthrough::with_passes(&ctx, compiled, &lit, uploaded, &probe_opts, env.as_ref())?;
+        if first {
+            let _ = tx.send(Reply::Ready(Box::new(info(&scene, &name, &ctx))));
+            first = false;
+        }
+        if let Some((material, edit, asked)) = answer {
+            let _ = tx.send(Reply::MaterialSet {
+                material,
+                edit,
+                result: scene
+                    .materials
+                    .get(material)
+                    .cloned()
+                    .ok_or_else(|| "no such material".to_string()),
+                seconds: asked.elapsed().as_secs_f64(),
+            });
+        }
+        let exit = serve(&ctx, &walk, &lit, &pt, rx, tx)?;
+        passes = Some(walk.into_passes());
+        match exit {
+            Exit::Quit => return Ok(()),
+            Exit::Edit {
+                material,
+                field,
+                value,
+                asked,
+            } => edit = Some((material, field, value, asked)),
+        }
+    }
+}
+
+/// The window's view of the scene.
+fn info(scene: &Scene, name: &str, ctx: &GpuContext) -> SceneInfo {
+    let extent = scene
+        .bounds()
+        .map_or(1.0, |(lo, hi)| f64::from((hi - lo).length()).max(1e-3));
+    SceneInfo {
+        name: name.to_string(),
+        materials: scene.materials.clone(),
+        meshes: scene
+            .meshes
+            .iter()
+            .map(|m| (m.name.clone(), m.material))
+            .collect(),
+        cameras: scene.cameras.clone(),
+        film: (scene.film.width, scene.film.height),
+        start: start_camera(scene),
+        adapter: ctx.describe(),
+        extent,
+    }
+}
+
+/// The scene's first camera, or the automatic one `lustre render` uses for scenes without.
+fn start_camera(scene: &Scene) -> Camera {
+    if let Some(c) = scene.cameras.first() {
+        return c.clone();
+    }
+    let (w, h) = (scene.film.width.max(1), scene.film.height.max(1));
+    match lustre_shade::reference::path_camera(scene, None, w, h) {
+        Ok(p) => Camera {
+            name: "automatic".into(),
+            position: p.origin,
+            forward: p.forward,
+            up: p.up,
+            fov_deg: 2.0 * p.tan_half_fov_y.atan().to_degrees(),
+            fov_axis: lustre_scene::FovAxis::Y,
+            aspect: None,
+        },
+        Err(_) => Camera {
+            name: "automatic".into(),
+            position: glam::DVec3::new(0.0, 1.0, 3.0),
+            forward: glam::DVec3::NEG_Z,
+            up: glam::DVec3::Y,
+            fov_deg: 50.0,
+            fov_axis: lustre_scene::FovAxis::Y,
+            aspect: None,
+        },
+    }
+}
+
+/// The reference's running accumulation.
+struct Reference {
+    camera: PathCamera,
+    size: (usize, usize),
+    acc: Accumulator,
+}
+
+/// Answers requests over one built scene until a quit or an accepted material edit.
+fn serve(
+    ctx: &GpuContext,
+    walk: &GpuWalkthrough,
+    lit: &LitScene,
+    pt: &PathTracer,
+    rx: &Receiver<Request>,
+    tx: &Sender<Reply>,
+) -> anyhow::Result<Exit> {
+    let mut session = GpuFrameSession::new();
+    let mut wanted: Option<(PathCamera, (usize, usize), FrameSettings)> = None;
+    let mut busy = false;
+    let mut reference: Option<Reference> = None;
+    loop {
+        // Block while there is nothing to refine; otherwise take what has arrived.
+        let mut requests = vec![];
+        if busy {
+            loop {
+                match rx.try_recv() {
+                    Ok(r) => requests.push(r),
+                    Err(TryRecvError::Empty) => break,
+                    Err(TryRecvError::Disconnected) => return Ok(Exit::Quit),
+                }
+            }
+        } else {
+            match rx.recv() {
+                Ok(r) => requests.push(r),
+                Err(_) => return Ok(Exit::Quit),
+            }
+            while let Ok(r) = rx.try_recv() {
+                requests.push(r);
+            }
+        }
+        for r in requests {
+            match r {
+                Request::Quit => return Ok(Exit::Quit),
+                Request::Frame {
+                    camera,
+                    size,
+                    settings,
+                } => {
+                    wanted = Some((camera, size, settings));
+                    busy = true;
+                }
+                Request::Pick {
+                    camera,
+                    size,
+                    pixel,
+                } => {
+                    let d = camera.direction(pixel.0, pixel.1, size.0, size.1);
+                    let mesh = pt
+                        .intersect(camera.origin, d)
+                        .and_then(|h| lit.mesh_of.get(h.prim).map(|&m| m as usize));
+                    let _ = tx.send(Reply::Picked(mesh));
+                }
+                Request::SetMaterial {
+                    material,
+                    field,
+                    value,
+                } => {
+                    let asked = Instant::now();
+                    let checked = lit
+                        .scene
+                        .materials
+                        .get(material)
+                        .ok_or_else(|| format!("no material #{material}"))
+                        .and_then(|m| {
+                            let mut trial = m.clone();
+                            material_edit::set(&mut trial, &field, &value)
+                                .map_err(|e| e.to_string())?;
+                            pack_material(&trial, &mut vec![])
+                                .map_err(|e| format!("{e} (the GPU keeps the old material)"))?;
+                            Ok(())
+                        });
+                    match checked {
+                        Ok(()) => {
+                            return Ok(Exit::Edit {
+                                material,
+                                field,
+                                value,
+                                asked,
+                            })
+                        }
+                        Err(e) => {
+                            let _ = tx.send(Reply::MaterialSet {
+                                material,
+                                edit: format!("{field}={value}"),
+                                result: Err(e),
+                                seconds: asked.elapsed().as_secs_f64(),
+                            });
+                        }
+                    }
+                }
+            }
+        }
+        let Some((camera, size, settings)) = wanted else {
+            busy = false;
+            continue;
+        };
+        let t = Instant::now();
+        if settings.method == ViewMethod::Reference {
+            let r = match reference.take() {
+                Some(r) if r.camera == camera && r.size == size => r,
+                _ => Reference {
+                    camera,
+                    size,
+                    acc: Accumulator::new(size.0, size.1)?,
+                },
+            };
+            let mut r = r;
+            if r.acc.spp >= settings.refine_frames.max(1) {
+                busy = false;
+                reference = Some(r);
+                continue;
+            }
+            pt.render(&camera, &mut r.acc, 1, settings.seed, &|_, _| {});
+            let _ = tx.send(Reply::Frame(Box::new(FrameReply {
+                image: r.acc.image(),
+                camera,
+                settings,
+                times: GpuFrameTimes::default(),
+                frames: r.acc.spp,
+                work: None,
+                stats: FrameStats::default(),
+                wall_ms: t.elapsed().as_secs_f64() * 1e3,
+            })));
+            reference = Some(r);
+            continue;
+        }
+        let method = match settings.method {
+            ViewMethod::Regular => FrameMethod::Regular,
+            ViewMethod::Ck => FrameMethod::Ck,
+            _ => FrameMethod::Progressive {
+                frames: settings.refine_frames.max(1),
+            },
+        };
+        let opts = GpuFrameOptions {
+            samples: settings.samples,
+            method,
+            supersampling: settings.supersampling,
+            seed: settings.seed,
+        };
+        let step = match session.step(ctx, walk, lit, &camera, size, &opts) {
+            Ok(s) => s,
+            Err(e) => {
+                // Bad settings (or a failed pass): said, and nothing is asked again until the
+                // window sends a new request.
+                let _ = tx.send(Reply::Status(format!("render error: {e}")));
+                wanted = None;
+                busy = false;
+                continue;
+            }
+        };
+        if step.work == StepWork::Unchanged {
+            busy = false;
+            continue;
+        }
+        let image = session.image(ctx)?;
+        let _ = tx.send(Reply::Frame(Box::new(FrameReply {
+            image,
+            camera,
+            settings,
+            times: step.times,
+            frames: step.frames,
+            work: Some(step.work),
+            stats: step.stats,
+            wall_ms: t.elapsed().as_secs_f64() * 1e3,
+        })));
+    }
+}

@@ -1,0 +1,260 @@
+//! Input scripts for unattended runs (`lustre view --script FILE`): one command per line, run
+//! in order through the same actions the keyboard, the mouse and the panels use. `#` starts a
+//! comment.
+//!
+//! ```text
+//! wait 3                 # 3 rendered frames
+//! walk forward 0.5       # hold W for 0.5 s (forward | back | left | right | up | down)
+//! look 40 -10            # a mouse motion of (40, −10) pixels
+//! camera default         # a scene camera (bookmark)
+//! select 160 120         # click the 3D view at pixel (160, 120) of the rendered frame
+//! set alpha 0.2          # a parameter of the selected object's material
+//! material kurt-demo     # swap it for a material specification
+//! method progressive     # regular | ck | progressive | reference
+//! samples 8
+//! exposure 1.5
+//! fit data:measured/merl/…binary sgd   # fit a measured file (sgd | kurt | beckmann | ggx)
+//! record start           # record the camera path …
+//! record stop walk.json  # … and write it (lustre render --path walk.json)
+//! screenshot shot.png    # the window (and shot.json: camera, settings, edits, the view's rect)
+//! save-material m.json
+//! save-scene s.toml
+//! quit
+//! ```
+//!
+//! Every command that changes what is rendered is followed by a wait for the frame that shows
+//! it, so a `screenshot` captures the result of the commands before it.
+
+use crate::ViewMethod;
+
+/// Which way `walk` moves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Direction {
+    /// W.
+    Forward,
+    /// S.
+    Back,
+    /// A.
+    Left,
+    /// D.
+    Right,
+    /// E.
+    Up,
+    /// Q.
+    Down,
+}
+
+/// One command.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Command {
+    /// Wait for this many rendered frames.
+    Wait(u32),
+    /// Hold a movement key for this many seconds.
+    Walk(Direction, f64),
+    /// A mouse motion, pixels.
+    Look(f64, f64),
+    /// Jump to a named scene camera.
+    Camera(String),
+    /// Click the 3D view at a pixel of the rendered frame.
+    Select(f64, f64),
+    /// Set a parameter of the selected material.
+    Set(String, String),
+    /// Swap the selected material for a specification.
+    Material(String),
+    /// The glossy integration.
+    Method(ViewMethod),
+    /// Glossy samples per pixel.
+    Samples(u32),
+    /// Display exposure.
+    Exposure(f64),
+    /// Fit a measured file with a model, apply it to the selected material.
+    Fit(String, String),
+    /// Start recording the camera path.
+    RecordStart,
+    /// Stop recording and write the path to a file.
+    RecordStop(String),
+    /// Save a screenshot of the window.
+    Screenshot(String),
+    /// Save the selected material as a material JSON.
+    SaveMaterial(String),
+    /// Save the scene file with the edits.
+    SaveScene(String),
+    /// Close the window.
+    Quit,
+}
+
+/// Parses a script; errors name the line and what is wrong with it.
+pub fn parse(text: &str) -> Result<Vec<Command>, String> {
+    let mut out = vec![];
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
+            continue;
+        }
+        let n = i + 1;
+        let (word, rest) = match line.split_once(char::is_whitespace) {
+            Some((w, r)) => (w, r.trim()),
+            None => (line, ""),
+        };
+        let err = |why: &str| format!("line {n}: {line:?}: {why}");
+        let num = |s: &str| -> Result<f64, String> {
+            s.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| err(&format!("{s:?} is not a finite number")))
+        };
+        let args: Vec<&str> = rest.split_whitespace().collect();
+        let need = |k: usize| -> Result<(), String> {
+            if args.len() == k {
+                Ok(())
+            } else {
+                Err(err(&format!("takes {k} argument(s)")))
+            }
+        };
+        let text_arg = || -> Result<String, String> {
+            if rest.is_empty() {
+                Err(err("takes an argument"))
+            } else {
+                Ok(rest.to_string())
+            }
+        };
+        let cmd = match word {
+            "wait" => {
+                need(1)?;
+                let k = args[0]
+                    .parse::<u32>()
+                    .ok()
+                    .filter(|k| *k <= 100_000)
+                    .ok_or_else(|| err("frames must be 0 … 100000"))?;
+                Command::Wait(k)
+            }
+            "walk" => {
+                need(2)?;
+                let d = match args[0] {
+                    "forward" => Direction::Forward,
+                    "back" => Direction::Back,
+                    "left" => Direction::Left,
+                    "right" => Direction::Right,
+                    "up" => Direction::Up,
+                    "down" => Direction::Down,
+                    _ => return Err(err("direction: forward | back | left | right | up | down")),
+                };
+                let s = num(args[1])?;
+                if !(0.0..=600.0).contains(&s) {
+                    return Err(err("seconds must be 0 … 600"));
+                }
+                Command::Walk(d, s)
+            }
+            "look" => {
+                need(2)?;
+                Command::Look(num(args[0])?, num(args[1])?)
+            }
+            "camera" => Command::Camera(text_arg()?),
+            "select" => {
+                need(2)?;
+                Command::Select(num(args[0])?, num(args[1])?)
+            }
+            "set" => {
+                let (f, v) = rest
+                    .split_once(char::is_whitespace)
+                    .ok_or_else(|| err("set PARAMETER VALUE"))?;
+                Command::Set(f.to_string(), v.trim().to_string())
+            }
+            "material" => Command::Material(text_arg()?),
+            "method" => {
+                need(1)?;
+                Command::Method(match args[0] {
+                    "regular" => ViewMethod::Regular,
+                    "ck" => ViewMethod::Ck,
+                    "progressive" => ViewMethod::Progressive,
+                    "reference" => ViewMethod::Reference,
+                    _ => return Err(err("method: regular | ck | progressive | reference")),
+                })
+            }
+            "samples" => {
+                need(1)?;
+                let k = args[0]
+                    .parse::<u32>()
+                    .ok()
+                    .filter(|k| (1..=256).contains(k))
+                    .ok_or_else(|| err("samples must be 1 … 256"))?;
+                Command::Samples(k)
+            }
+            "exposure" => {
+                need(1)?;
+                let e = num(args[0])?;
+                if e <= 0.0 {
+                    return Err(err("exposure must be positive"));
+                }
+                Command::Exposure(e)
+            }
+            "fit" => {
+                let (file, model) = match args.as_slice() {
+                    [f] => (f.to_string(), "sgd".to_string()),
+                    [f, m] if ["sgd", "kurt", "beckmann", "ggx"].contains(m) => {
+                        (f.to_string(), m.to_string())
+                    }
+                    _ => return Err(err("fit FILE [sgd | kurt | beckmann | ggx]")),
+                };
+                Command::Fit(file, model)
+            }
+            "record" => match args.as_slice() {
+                ["start"] => Command::RecordStart,
+                ["stop", f] => Command::RecordStop(f.to_string()),
+                _ => return Err(err("record start | record stop FILE")),
+            },
+            "screenshot" => Command::Screenshot(text_arg()?),
+            "save-material" => Command::SaveMaterial(text_arg()?),
+            "save-scene" => Command::SaveScene(text_arg()?),
+            "quit" => {
+                need(0)?;
+                Command::Quit
+            }
+            _ => return Err(err("unknown command")),
+        };
+        out.push(cmd);
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_every_command() {
+        let s = "wait 2\nwalk forward 0.5 # go\nlook 10 -5\ncamera default\nselect 1 2\n\
+                 set alpha 0.2\nmaterial kurt(kd=0.1, ks=0.5, mx=0.1, my=0.1, r0=0.9)\n\
+                 method ck\nsamples 8\nexposure 1.5\nfit a.binary kurt\nrecord start\n\
+                 record stop w.json\nscreenshot s.png\nsave-material m.json\nsave-scene s.toml\n\
+                 \n# only a comment\nquit\n";
+        let c = parse(s).unwrap();
+        assert_eq!(c.len(), 17);
+        assert_eq!(c[1], Command::Walk(Direction::Forward, 0.5));
+        assert_eq!(c[5], Command::Set("alpha".into(), "0.2".into()));
+        assert_eq!(
+            c[6],
+            Command::Material("kurt(kd=0.1, ks=0.5, mx=0.1, my=0.1, r0=0.9)".into())
+        );
+        assert_eq!(c[10], Command::Fit("a.binary".into(), "kurt".into()));
+        assert_eq!(c[16], Command::Quit);
+    }
+
+    #[test]
+    fn bad_lines_are_named() {
+        for (s, says) in [
+            ("wait x", "line 1"),
+            ("\nwalk sideways 1", "line 2"),
+            ("look 1", "2 argument"),
+            ("samples 0", "1 … 256"),
+            ("exposure -1", "positive"),
+            ("look NaN 1", "finite"),
+            ("fly 1", "unknown command"),
+            ("record stop", "record start"),
+            ("set alpha", "PARAMETER VALUE"),
+        ] {
+            let e = parse(s).unwrap_err();
+            assert!(e.contains(says), "{s:?}: {e}");
+        }
+    }
+}
