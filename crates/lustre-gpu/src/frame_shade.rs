@@ -885,9 +885,14 @@ impl FrameShadeScene {
             let mirror = links.mirror_at(mesh, prim).map_or(NONE, |i| i as u32);
             let see =
                 links.see_through_of_mesh[mesh].map_or(NONE, |i| (links.mirrors() + i) as u32);
+            // The object's own sample budget (0: the frame's).
+            let samples = scene.meshes[mesh]
+                .hints
+                .samples
+                .map_or(0, |s| s.clamp(1, lustre_shade::frame::MAX_SAMPLES as u32));
             tris.extend([
                 v4(t[0], bits(material)),
-                v4(t[1], 0.0),
+                v4(t[1], bits(samples)),
                 v4(t[2], bits(u32::from(normals.is_some()))),
                 v4(n[0], bits(probe)),
                 v4(n[1], bits(mirror)),

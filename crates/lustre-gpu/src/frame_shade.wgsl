@@ -718,7 +718,9 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
         return vec3<f32>(0.0);
     }
     let seed = pixel_seed(gx, gy, u.seed.xy);
-    let r = integrate(b, kd, t, bt, pt, wo_l, u.sizes.w, seed);
+    // The object's own sample budget (r1.w, 0: the frame's; frame::object_samples).
+    let own = bitcast<u32>(r1.w);
+    let r = integrate(b, kd, t, bt, pt, wo_l, select(u.sizes.w, own, own > 0u), seed);
     var c = r.xyz;
     if (!finite3(c)) {
         c = vec3<f32>(0.0);

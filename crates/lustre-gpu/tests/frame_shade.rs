@@ -28,9 +28,18 @@ use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
 
-/// The built-in room, its gold sphere as a rough gold conductor.
+/// The built-in room, its gold sphere as a rough gold conductor, the brushed-aluminium sphere
+/// with its own sample budget of 3 (the frame asks 8: both sides must honour it).
 fn room() -> lustre_scene::Scene {
     let mut scene = lustre_scene::builtin::room().expect("room");
+    let mut hinted = 0;
+    for m in &mut scene.meshes {
+        if m.name == "brushed-aluminium" {
+            m.hints.samples = Some(3);
+            hinted += 1;
+        }
+    }
+    assert_eq!(hinted, 1, "the room's brushed-aluminium sphere");
     for m in &mut scene.materials {
         if let MaterialKind::Spec(_) = m.kind {
             *m = Material::new(

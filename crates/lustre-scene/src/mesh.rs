@@ -43,7 +43,14 @@ pub struct ObjectHints {
     /// Light-map density in texels per metre (world unit); `None`: the renderer's default.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lightmap_texels_per_metre: Option<f32>,
+    /// The object's own glossy sample budget per pixel in the walkthrough frame (1 … 256);
+    /// `None`: the frame's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub samples: Option<u32>,
 }
+
+/// The largest per-object sample budget ([`ObjectHints::samples`]).
+pub const MAX_OBJECT_SAMPLES: u32 = 256;
 
 /// A triangle mesh in world space with one material.
 #[derive(Clone, Debug, PartialEq)]

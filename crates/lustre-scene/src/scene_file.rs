@@ -411,6 +411,14 @@ impl SceneFile {
             }
         }
         for (name, hints) in &self.objects {
+            if let Some(n) = hints.samples {
+                if !(1..=crate::mesh::MAX_OBJECT_SAMPLES).contains(&n) {
+                    return Err(format!(
+                        "objects.{name}.samples = {n} is outside 1..={}",
+                        crate::mesh::MAX_OBJECT_SAMPLES
+                    ));
+                }
+            }
             if let Some(c) = &hints.probe_centre {
                 finite(&format!("objects.{name}.probe_centre"), c)?;
                 if !hints.probe {

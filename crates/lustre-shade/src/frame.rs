@@ -560,6 +560,16 @@ pub fn view_dependent(
     (glossy.map(|c| c.max(0.0)), lookups, is_view_dependent)
 }
 
+/// The glossy samples of triangle `prim`: its object's own budget
+/// (`ObjectHints::samples`, clamped to 1..=`MAX_SAMPLES`) or the frame's `n`.
+pub fn object_samples(lit: &LitScene, prim: usize, n: usize) -> usize {
+    lit.mesh_of
+        .get(prim)
+        .and_then(|&m| lit.scene.meshes.get(m as usize))
+        .and_then(|m| m.hints.samples)
+        .map_or(n, |s| (s as usize).clamp(1, MAX_SAMPLES))
+}
+
 /// Renders a w×h frame of `lit` at `camera` with the incident light `light`.
 pub fn render_frame(
     lit: &LitScene,
@@ -598,6 +608,7 @@ pub fn render_frame(
             bary: hit.bary,
             d,
         };
+        let n = object_samples(lit, hit.prim, n);
         let (glossy, lookups, vd) = view_dependent(lit, light, &buffers, &surface, n, points, true);
         (l + glossy, lookups, vd)
     };
@@ -754,8 +765,15 @@ fn shade_gbuffer_region(
                             FramePoints::Progressive { first: 0, frames }
                         }
                     };
-                    let (c, l, vd) =
-                        view_dependent(lit, light, buffers, &hit, n, points, see_through);
+                    let (c, l, vd) = view_dependent(
+                        lit,
+                        light,
+                        buffers,
+                        &hit,
+                        object_samples(lit, prim as usize, n),
+                        points,
+                        see_through,
+                    );
                     sum += c;
                     hits += u64::from(vd);
                     lookups += l;

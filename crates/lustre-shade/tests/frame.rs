@@ -744,3 +744,27 @@ fn a_glossy_object_behind_glass_keeps_its_reflections() {
     assert!((mean - t).abs() < 0.02, "mean ratio {mean} vs T {t}");
     assert!(good as f64 >= 0.9 * total as f64, "{good} of {total}");
 }
+
+/// An object's own sample budget (`ObjectHints::samples`) replaces the frame's for its pixels:
+/// the ball (mesh 6, the only glossy object) at 3 samples makes at most 3 lookups per glossy
+/// hit while the frame asks 16, and the image equals the frame rendered at 3 throughout.
+#[test]
+fn an_objects_own_sample_budget_replaces_the_frames() {
+    let (scene, atlas, pages) = room(rough_metal(0.2));
+    let mut hinted = scene.clone();
+    hinted.meshes[6].hints.samples = Some(3);
+    let probe = with_lit(&scene, &atlas, &pages, |lit| {
+        capture_probe(lit, 6, &probe_opts()).unwrap()
+    });
+    let probes = [probe];
+    let at3 = with_lit(&scene, &atlas, &pages, |lit| {
+        frame(lit, &probes, &camera(), (32, 32), FrameMethod::Regular, 3)
+    });
+    let (img, stats) = with_lit(&hinted, &atlas, &pages, |lit| {
+        frame(lit, &probes, &camera(), (32, 32), FrameMethod::Regular, 16)
+    });
+    assert!(stats.glossy_hits > 50, "{stats:?}");
+    assert!(stats.lookups <= 3 * stats.glossy_hits, "{stats:?}");
+    assert_eq!(img.data, at3.0.data);
+    assert_eq!(stats.lookups, at3.1.lookups);
+}

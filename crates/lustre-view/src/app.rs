@@ -96,15 +96,26 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
     let (rep_tx, rep_rx) = channel();
     let src = source.clone();
     let probe_size = args.probe_size;
-    std::thread::Builder::new()
+    let render_thread = std::thread::Builder::new()
         .name("lustre-view render".into())
         .spawn(move || render::run(src, probe_size, req_rx, rep_tx))
         .context("starting the render thread")?;
     let mut app = App::new(args.clone(), size, source, commands, req_tx, rep_rx);
-    event_loop
+    let looped = event_loop
         .run_app(&mut app)
-        .map_err(|e| anyhow!("the window's event loop: {e}"))?;
+        .map_err(|e| anyhow!("the window's event loop: {e}"));
+    // An orderly end: the window's GPU objects first, then the render thread's (it ends at
+    // its next request; one busy baking or rendering is given a while, then left to the exit).
+    app.gfx = None;
     let _ = app.to_render.send(Request::Quit);
+    let t = Instant::now();
+    while !render_thread.is_finished() && t.elapsed() < Duration::from_secs(20) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    if render_thread.is_finished() {
+        let _ = render_thread.join();
+    }
+    looped?;
     app.outcome.unwrap_or(Ok(())).map_err(|e| anyhow!(e))
 }
 
@@ -573,6 +584,21 @@ impl App {
         });
     }
 
+    /// Gives mesh `mesh` its own sample budget (`None`: the global one).
+    fn set_object_samples(&mut self, mesh: usize, samples: Option<u32>) {
+        if let Some(slot) = self
+            .info
+            .as_mut()
+            .and_then(|i| i.object_samples.get_mut(mesh))
+        {
+            *slot = samples;
+        }
+        self.pending_edits += 1;
+        let _ = self
+            .to_render
+            .send(Request::SetObjectSamples { mesh, samples });
+    }
+
     fn pick(&mut self, pixel: (f64, f64)) {
         let Some((camera, size, _)) = self.sent else {
             return;
@@ -776,6 +802,13 @@ impl App {
             }
             Command::Samples(n) => {
                 self.settings.samples = n;
+                self.wait = settle;
+            }
+            Command::Budget(n) => {
+                match self.selected {
+                    Some(mesh) => self.set_object_samples(mesh, n),
+                    None => self.note("script: budget needs a selected object", true),
+                }
                 self.wait = settle;
             }
             Command::Exposure(e) => {
@@ -1075,6 +1108,17 @@ impl App {
             return;
         };
         ui.label(format!("object {mesh_name:?}"));
+        // The object's own sample budget (else the global one).
+        let mesh = self.selected.unwrap_or(0);
+        let own = info.object_samples.get(mesh).copied().flatten();
+        let mut on = own.is_some();
+        let mut n = own.unwrap_or(self.settings.samples);
+        let mut budget = None;
+        let c = ui.checkbox(&mut on, "its own sample budget");
+        let r = ui.add_enabled(on, egui::Slider::new(&mut n, 1..=64));
+        if c.changed() || r.drag_stopped() || (r.changed() && !r.dragged()) {
+            budget = Some(on.then_some(n));
+        }
         let mut commits: Vec<(String, String)> = vec![];
         if let Some(d) = &mut self.draft {
             let mat = &info.materials[d.material];
@@ -1112,6 +1156,9 @@ impl App {
         }
         for (f, v) in commits {
             self.set_material(&f, &v);
+        }
+        if let Some(samples) = budget {
+            self.set_object_samples(mesh, samples);
         }
         ui.separator();
         ui.label("Fit a measured file (MERL .binary, RGL .bsdf, nbrdf:NAME, data:…)");
@@ -1405,6 +1452,13 @@ impl App {
                 "exposure": self.exposure,
                 "frames": f.map(|f| f.frames),
                 "set": set,
+                "object_samples": self.info.as_ref().map(|i| {
+                    i.meshes
+                        .iter()
+                        .zip(&i.object_samples)
+                        .filter_map(|((name, _), n)| n.map(|n| (name.clone(), n)))
+                        .collect::<std::collections::BTreeMap<String, u32>>()
+                }),
                 "selected": selected,
                 "scene": self.info.as_ref().map(|i| i.name.clone()),
                 "adapter": self.info.as_ref().map(|i| i.adapter.clone()),

@@ -16,6 +16,7 @@ use lustre_gpu::{
     LightmapFrameScene, StepWork, WalkthroughPasses,
 };
 use lustre_scene::material_edit;
+use lustre_scene::mesh::MAX_OBJECT_SAMPLES;
 use lustre_scene::{Camera, Material, Scene};
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::spec_albedo;
@@ -86,6 +87,13 @@ pub enum Request {
         /// Its value as text.
         value: String,
     },
+    /// Give mesh `mesh` its own glossy sample budget (`None`: the frame's).
+    SetObjectSamples {
+        /// Mesh index.
+        mesh: usize,
+        /// Samples per pixel, 1–256.
+        samples: Option<u32>,
+    },
     /// Stop.
     Quit,
 }
@@ -99,6 +107,8 @@ pub struct SceneInfo {
     pub materials: Vec<Material>,
     /// Mesh names and their material index.
     pub meshes: Vec<(String, usize)>,
+    /// Each mesh's own sample budget.
+    pub object_samples: Vec<Option<u32>>,
     /// Named cameras.
     pub cameras: Vec<Camera>,
     /// The scene's film size.
@@ -162,10 +172,23 @@ pub enum Reply {
 /// Why [`serve`] returned.
 enum Exit {
     Quit,
-    Edit {
+    Edit(Edit),
+}
+
+/// A change of the scene that needs it built again.
+#[derive(Clone, Debug)]
+enum Edit {
+    /// material_edit::set of a material.
+    Material {
         material: usize,
         field: String,
         value: String,
+        asked: Instant,
+    },
+    /// An object's own sample budget.
+    ObjectSamples {
+        mesh: usize,
+        samples: Option<u32>,
         asked: Instant,
     },
 }
@@ -220,15 +243,38 @@ fn run_inner(
     let ctx = GpuContext::new().map_err(|e| anyhow::anyhow!("no GPU adapter: {e}"))?;
     let mut first = true;
     let mut passes: Option<WalkthroughPasses> = None;
-    let mut edit: Option<(usize, String, String, Instant)> = None;
+    let mut edit: Option<Edit> = None;
     loop {
         let mut answer = None;
-        if let Some((m, field, value, asked)) = edit.take() {
-            answer = Some((m, format!("{field}={value}"), asked));
-            if let Some(mat) = scene.materials.get_mut(m) {
-                // Checked by `serve` before it returned: this cannot fail differently.
-                material_edit::set(mat, &field, &value)?;
+        match edit.take() {
+            Some(Edit::Material {
+                material,
+                field,
+                value,
+                asked,
+            }) => {
+                answer = Some((material, format!("{field}={value}"), asked));
+                if let Some(mat) = scene.materials.get_mut(material) {
+                    // Checked by `serve` before it returned: this cannot fail differently.
+                    material_edit::set(mat, &field, &value)?;
+                }
             }
+            Some(Edit::ObjectSamples {
+                mesh,
+                samples,
+                asked,
+            }) => {
+                if let Some(m) = scene.meshes.get_mut(mesh) {
+                    m.hints.samples = samples;
+                    let what = samples.map_or("the frame's".to_string(), |n| n.to_string());
+                    answer = Some((
+                        m.material,
+                        format!("samples of {:?}: {what}", m.name),
+                        asked,
+                    ));
+                }
+            }
+            None => {}
         }
         let _ = tx.send(Reply::Status(if first {
             "preparing the scene for the GPU (upload, probes)".into()
@@ -278,12 +324,7 @@ fn run_inner(
         passes = Some(walk.into_passes());
         match exit {
             Exit::Quit => return Ok(()),
-            Exit::Edit {
-                material,
-                field,
-                value,
-                asked,
-            } => edit = Some((material, field, value, asked)),
+            Exit::Edit(e) => edit = Some(e),
         }
     }
 }
@@ -301,6 +342,7 @@ fn info(scene: &Scene, name: &str, ctx: &GpuContext) -> SceneInfo {
             .iter()
             .map(|m| (m.name.clone(), m.material))
             .collect(),
+        object_samples: scene.meshes.iter().map(|m| m.hints.samples).collect(),
         cameras: scene.cameras.clone(),
         film: (scene.film.width, scene.film.height),
         start: start_camera(scene),
@@ -399,6 +441,20 @@ fn serve(
                         .and_then(|h| lit.mesh_of.get(h.prim).map(|&m| m as usize));
                     let _ = tx.send(Reply::Picked(mesh));
                 }
+                Request::SetObjectSamples { mesh, samples } => {
+                    let ok = mesh < lit.scene.meshes.len()
+                        && samples.is_none_or(|n| (1..=MAX_OBJECT_SAMPLES).contains(&n));
+                    if ok {
+                        return Ok(Exit::Edit(Edit::ObjectSamples {
+                            mesh,
+                            samples,
+                            asked: Instant::now(),
+                        }));
+                    }
+                    let _ = tx.send(Reply::Status(format!(
+                        "render error: object #{mesh} samples {samples:?} (1..={MAX_OBJECT_SAMPLES})"
+                    )));
+                }
                 Request::SetMaterial {
                     material,
                     field,
@@ -420,12 +476,12 @@ fn serve(
                         });
                     match checked {
                         Ok(()) => {
-                            return Ok(Exit::Edit {
+                            return Ok(Exit::Edit(Edit::Material {
                                 material,
                                 field,
                                 value,
                                 asked,
-                            })
+                            }))
                         }
                         Err(e) => {
                             let _ = tx.send(Reply::MaterialSet {

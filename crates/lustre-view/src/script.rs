@@ -11,7 +11,8 @@
 //! set alpha 0.2          # a parameter of the selected object's material
 //! material kurt-demo     # swap it for a material specification
 //! method progressive     # regular | ck | progressive | reference
-//! samples 8
+//! samples 8            # the global sample budget
+//! budget 3               # the selected object's own (budget global: back to the global one)
 //! exposure 1.5
 //! fit data:measured/merl/…binary sgd   # fit a measured file (sgd | kurt | beckmann | ggx)
 //! record start           # record the camera path …
@@ -65,6 +66,8 @@ pub enum Command {
     Method(ViewMethod),
     /// Glossy samples per pixel.
     Samples(u32),
+    /// The selected object's own sample budget (`None`: the global one).
+    Budget(Option<u32>),
     /// Display exposure.
     Exposure(f64),
     /// Fit a measured file with a model, apply it to the selected material.
@@ -180,6 +183,19 @@ pub fn parse(text: &str) -> Result<Vec<Command>, String> {
                     .ok_or_else(|| err("samples must be 1 … 256"))?;
                 Command::Samples(k)
             }
+            "budget" => {
+                need(1)?;
+                if args[0] == "global" {
+                    Command::Budget(None)
+                } else {
+                    let k = args[0]
+                        .parse::<u32>()
+                        .ok()
+                        .filter(|k| (1..=256).contains(k))
+                        .ok_or_else(|| err("budget: 1 … 256 or global"))?;
+                    Command::Budget(Some(k))
+                }
+            }
             "exposure" => {
                 need(1)?;
                 let e = num(args[0])?;
@@ -225,19 +241,20 @@ mod tests {
     fn parses_every_command() {
         let s = "wait 2\nwalk forward 0.5 # go\nlook 10 -5\ncamera default\nselect 1 2\n\
                  set alpha 0.2\nmaterial kurt(kd=0.1, ks=0.5, mx=0.1, my=0.1, r0=0.9)\n\
-                 method ck\nsamples 8\nexposure 1.5\nfit a.binary kurt\nrecord start\n\
+                 method ck\nsamples 8\nbudget 3\nexposure 1.5\nfit a.binary kurt\nrecord start\n\
                  record stop w.json\nscreenshot s.png\nsave-material m.json\nsave-scene s.toml\n\
                  \n# only a comment\nquit\n";
         let c = parse(s).unwrap();
-        assert_eq!(c.len(), 17);
+        assert_eq!(c.len(), 18);
         assert_eq!(c[1], Command::Walk(Direction::Forward, 0.5));
         assert_eq!(c[5], Command::Set("alpha".into(), "0.2".into()));
         assert_eq!(
             c[6],
             Command::Material("kurt(kd=0.1, ks=0.5, mx=0.1, my=0.1, r0=0.9)".into())
         );
-        assert_eq!(c[10], Command::Fit("a.binary".into(), "kurt".into()));
-        assert_eq!(c[16], Command::Quit);
+        assert_eq!(c[9], Command::Budget(Some(3)));
+        assert_eq!(c[11], Command::Fit("a.binary".into(), "kurt".into()));
+        assert_eq!(c[17], Command::Quit);
     }
 
     #[test]
@@ -248,6 +265,7 @@ mod tests {
             ("look 1", "2 argument"),
             ("samples 0", "1 … 256"),
             ("exposure -1", "positive"),
+            ("budget 0", "global"),
             ("look NaN 1", "finite"),
             ("fly 1", "unknown command"),
             ("record stop", "record start"),
