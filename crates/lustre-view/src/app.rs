@@ -495,7 +495,7 @@ impl App {
                             }
                             if let Some(info) = &mut self.info {
                                 if let Some(slot) = info.materials.get_mut(material) {
-                                    *slot = m;
+                                    *slot = *m;
                                 }
                             }
                             self.note(format!("{name}: {edit} (rebuilt in {seconds:.2} s)"), false);

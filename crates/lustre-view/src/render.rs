@@ -161,7 +161,7 @@ pub enum Reply {
         /// The edit's `field=value`.
         edit: String,
         /// The material after the edit, or the error.
-        result: Result<Material, String>,
+        result: Result<Box<Material>, String>,
         /// Seconds from the request to the rebuilt scene.
         seconds: f64,
     },
@@ -315,7 +315,7 @@ fn run_inner(
                 result: scene
                     .materials
                     .get(material)
-                    .cloned()
+                    .map(|m| Box::new(m.clone()))
                     .ok_or_else(|| "no such material".to_string()),
                 seconds: asked.elapsed().as_secs_f64(),
             });
