@@ -578,7 +578,7 @@ fn path_cameras(
             .with_context(|| {
                 let names: Vec<&str> = scene.camera_paths.iter().map(|p| p.name.as_str()).collect();
                 format!(
-                    "no camera path named {name:?} (paths: {}; or a camera path .json file)",
+                    "no camera path named {name:?} (paths: {}); or give a camera path .json file",
                     names.join(", ")
                 )
             })?
