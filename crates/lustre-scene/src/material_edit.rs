@@ -297,20 +297,6 @@ pub fn analytic_spec(spec: &str) -> Option<(String, Vec<(String, String)>)> {
     Some((model.to_string(), params))
 }
 
-/// The suggested slider range of an analytic model's key, and whether it is logarithmic. The
-/// catalog checks the value itself, so a spec field's valid range ([`Field::range`]) is wide.
-pub fn spec_slider(key: &str) -> ((f64, f64), bool) {
-    if key == "n" || key == "nu" || key == "nv" {
-        ((1.0, 1e4), true)
-    } else if key.starts_with("alpha") || key.starts_with('m') || key == "ax" || key == "ay" {
-        ((1e-3, 1.0), true)
-    } else if key.contains("ior") || key == "eta" {
-        (IOR, false)
-    } else {
-        (UNIT, false)
-    }
-}
-
 /// The valid range of a spec field (the catalog checks the value).
 const SPEC_RANGE: (f64, f64) = (-1e9, 1e9);
 

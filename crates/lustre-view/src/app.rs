@@ -902,7 +902,7 @@ impl App {
                     .and_then(|f| lustre_brdf::material::write(&file, &f))
                     .map_err(|e| e.to_string())
             }
-            MaterialKind::Spec(s) => match model_of(s.bsdf.as_ref(), &m.name) {
+            MaterialKind::Spec(s) => match model_of(s.bsdf.as_ref()) {
                 Some(model) => lustre_brdf::material::MaterialFile::new(m.name.clone(), model, None)
                     .and_then(|f| lustre_brdf::material::write(&file, &f))
                     .map_err(|e| e.to_string()),
@@ -1485,16 +1485,12 @@ impl App {
 }
 
 /// The material JSON model of a fitted BSDF (Kurt or per-channel Cook–Torrance).
-fn model_of(
-    bsdf: &dyn lustre_brdf::Bsdf,
-    name: &str,
-) -> Option<lustre_brdf::material::MaterialModel> {
+fn model_of(bsdf: &dyn lustre_brdf::Bsdf) -> Option<lustre_brdf::material::MaterialModel> {
     use lustre_brdf::material::MaterialModel;
     let any = bsdf.as_any()?;
     if let Some(k) = any.downcast_ref::<lustre_brdf::models::kurt::Kurt>() {
         return Some(MaterialModel::from_kurt(k));
     }
-    let _ = name;
     None
 }
 
