@@ -181,6 +181,56 @@ impl CtChannelParams {
     }
 }
 
+impl CtChannelParams {
+    /// The parameters of a BSDF library channel. Errors: an exponential distribution, a
+    /// Lazányi Fresnel, Beckmann or GGX without the closed-form Smith G1, SGD without shadowing
+    /// or with an Eq. V.3 approximation whose c underflowed (none of which a material file
+    /// holds).
+    pub fn from_channel(c: &CtChannel) -> Result<Self> {
+        let (f0, f1) = match c.fresnel {
+            Fresnel::GeneralizedSchlick { f0, f1 } => (f0, f1),
+            Fresnel::Schlick { f0 } => (f0, 0.0),
+            Fresnel::One => (1.0, 0.0),
+            Fresnel::Lazanyi { .. } => {
+                return Err(Error::NotFound(
+                    "a Lazányi Fresnel has no material-file form (generalized Schlick has)".into(),
+                ))
+            }
+        };
+        let (alpha, p, kap, g1) = match (&c.ndf, &c.g1) {
+            (Ndf::Sgd(s), G1Model::SgdApprox(a)) if a.c > 0.0 => {
+                (s.alpha(), s.p(), s.kap(), Some([a.lambda, a.c, a.k]))
+            }
+            (Ndf::Sgd(s), G1Model::Numeric(_)) => (s.alpha(), s.p(), s.kap(), None),
+            (Ndf::Beckmann { alpha } | Ndf::Ggx { alpha }, G1Model::Closed) => {
+                (*alpha, 0.0, 1.0, None)
+            }
+            (ndf, g1) => {
+                let g1 = match g1 {
+                    G1Model::None => "no shadowing",
+                    G1Model::Numeric(_) => "the numeric Smith G1",
+                    G1Model::SgdApprox(_) => "an Eq. V.3 approximation with c = 0",
+                    G1Model::Closed => "the closed-form Smith G1",
+                };
+                return Err(Error::NotFound(format!(
+                    "{} with {g1} has no material-file form",
+                    ndf.name()
+                )));
+            }
+        };
+        Ok(CtChannelParams {
+            rho_d: c.rho_d,
+            rho_s: c.rho_s,
+            alpha,
+            p,
+            kap,
+            f0,
+            f1,
+            g1,
+        })
+    }
+}
+
 /// The model of a material file; the JSON carries the variant as `"type": "kurt"` or
 /// `"type": "cook-torrance"`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -213,6 +263,55 @@ impl MaterialModel {
             reflection: k.reflection.iter().map(LobeParams::from_lobe).collect(),
             transmission: k.transmission.iter().map(LobeParams::from_lobe).collect(),
         }
+    }
+
+    /// The parameters of a fitted model's BSDF: a [`Kurt`] model or a [`CookTorrance`] with
+    /// one distribution (SGD, Beckmann or GGX) in all channels (see
+    /// [`CtChannelParams::from_channel`] for what else it needs). Errors say why any other BSDF
+    /// has no material-file form. A Beckmann or GGX channel gets p = 0, kap = 1 (unused).
+    pub fn from_bsdf(bsdf: &dyn Bsdf) -> Result<Self> {
+        let any = bsdf.as_any();
+        if let Some(k) = any.and_then(|a| a.downcast_ref::<Kurt>()) {
+            return Ok(Self::from_kurt(k));
+        }
+        let Some(ct) = any.and_then(|a| a.downcast_ref::<CookTorrance>()) else {
+            return Err(Error::NotFound(format!(
+                "{} is not a fitted model (Kurt, SGD, Beckmann or GGX Cook-Torrance)",
+                bsdf.name()
+            )));
+        };
+        let ch = ct.channels();
+        let distribution = match ch[0].ndf {
+            Ndf::Sgd(_) => CtDistribution::Sgd,
+            Ndf::Beckmann { .. } => CtDistribution::Beckmann,
+            Ndf::Ggx { .. } => CtDistribution::Ggx,
+            Ndf::Exponential { .. } => {
+                return Err(Error::NotFound(format!(
+                    "{}: the exponential distribution has no material-file form",
+                    bsdf.name()
+                )))
+            }
+        };
+        let mut channels = Vec::with_capacity(3);
+        for (i, c) in ch.iter().enumerate() {
+            if std::mem::discriminant(&c.ndf) != std::mem::discriminant(&ch[0].ndf) {
+                return Err(Error::NotFound(format!(
+                    "{}: channel {i} has {} where channel 0 has {} (a material file has one \
+                     distribution)",
+                    bsdf.name(),
+                    c.ndf.name(),
+                    ch[0].ndf.name()
+                )));
+            }
+            channels.push(
+                CtChannelParams::from_channel(c)
+                    .map_err(|e| Error::NotFound(format!("{} channel {i}: {e}", bsdf.name())))?,
+            );
+        }
+        let channels: [CtChannelParams; 3] = channels
+            .try_into()
+            .map_err(|_| Error::NotFound("three channels expected".into()))?;
+        Self::cook_torrance(distribution, channels)
     }
 
     /// A Cook-Torrance model from per-channel parameters, validated.

@@ -312,3 +312,81 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn fitted_bsdfs_give_back_their_material_model() {
+    // A model from a file comes back unchanged from its BSDF (Kurt, SGD with the Eq. V.3
+    // shadowing, GGX).
+    let kurt = MaterialModel::from_kurt(&kurt_with_transmission());
+    let ps = lustre_brdf::fits::sgd::SgdFits::load_default()
+        .expect("table")
+        .params("gold-metallic-paint")
+        .expect("gold");
+    let sgd = MaterialModel::cook_torrance(
+        CtDistribution::Sgd,
+        ps.map(|q| CtChannelParams {
+            rho_d: q.rho_d,
+            rho_s: q.rho_s,
+            alpha: q.alpha,
+            p: q.p,
+            kap: q.kap,
+            f0: q.f0,
+            f1: q.f1,
+            g1: Some([q.lambda, q.c, q.k]),
+        }),
+    )
+    .expect("sgd");
+    let ggx = MaterialModel::cook_torrance(
+        CtDistribution::Ggx,
+        [CtChannelParams {
+            rho_d: 0.2,
+            rho_s: 0.6,
+            alpha: 0.15,
+            p: 0.0,
+            kap: 1.0,
+            f0: 0.3,
+            f1: 0.1,
+            g1: None,
+        }; 3],
+    )
+    .expect("ggx");
+    for m in &[kurt, ggx, sgd] {
+        let b = m.to_bsdf("x").expect("bsdf");
+        assert_eq!(&MaterialModel::from_bsdf(b.as_ref()).expect("model"), m);
+    }
+    // Every published SGD fit of the catalog has a material-file form whose BSDF agrees with
+    // it up to θ0 of the shadowing approximation (recomputed from λ, c, k by Eq. V.3): at a
+    // pair where G1 = 1 in both, f is equal.
+    let (wi, wo) = (frame::spherical(0.2, 0.0), frame::spherical(0.1, PI));
+    let mut n = 0;
+    for name in lustre_brdf::fits::sgd::list_materials().expect("names") {
+        let published = catalog::resolve(&format!("sgd:{name}")).expect("published");
+        let m = MaterialModel::from_bsdf(published.as_ref())
+            .unwrap_or_else(|e| panic!("sgd:{name}: {e}"));
+        assert_eq!(m.kind(), "sgd");
+        let back = m.to_bsdf(&name).expect("bsdf");
+        let (x, y) = (published.eval(wi, wo), back.eval(wi, wo));
+        for c in 0..3 {
+            assert!(
+                (x[c] - y[c]).abs() <= 1e-9 * x[c].abs(),
+                "{name}: {x:?} vs {y:?}"
+            );
+        }
+        n += 1;
+    }
+    assert_eq!(n, 100);
+    // Anything else is refused with its reason.
+    for (spec, says) in [
+        ("lambert(kd=0.5)", "not a fitted model"),
+        (
+            "exponential(rho_d=0.1, rho_s=0.5, alpha=0.2)",
+            "exponential",
+        ),
+    ] {
+        let b = catalog::resolve(spec).expect(spec);
+        let e = MaterialModel::from_bsdf(b.as_ref())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(says), "{spec}: {e}");
+    }
+}

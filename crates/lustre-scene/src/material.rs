@@ -245,8 +245,12 @@ pub enum MaterialKind {
 pub struct ResolvedSpec {
     /// The specification as written (relative paths resolved against the scene file's folder).
     pub spec: String,
-    /// The resolved BSDF.
+    /// The resolved BSDF, with [`ResolvedSpec::edits`] applied.
     pub bsdf: Arc<dyn Bsdf>,
+    /// Edits of a fitted model's parameters (`model.…` fields of
+    /// [`crate::material_edit`]) made since the specification resolved, in order: (field,
+    /// value).
+    pub edits: Vec<(String, String)>,
 }
 
 impl ResolvedSpec {
@@ -257,14 +261,15 @@ impl ResolvedSpec {
         Ok(ResolvedSpec {
             spec: spec.to_string(),
             bsdf: Arc::from(bsdf),
+            edits: vec![],
         })
     }
 }
 
-/// Two resolved specs are equal when their specifications are.
+/// Two resolved specs are equal when their specifications and edits are.
 impl PartialEq for ResolvedSpec {
     fn eq(&self, other: &Self) -> bool {
-        self.spec == other.spec
+        self.spec == other.spec && self.edits == other.edits
     }
 }
 

@@ -12,7 +12,13 @@
 
 use crate::error::{Result, SceneError};
 use crate::material::{Distribution, Material, MaterialKind, ResolvedSpec};
-use lustre_brdf::Rgb;
+use lustre_brdf::microfacet::fresnel::Fresnel;
+use lustre_brdf::microfacet::ndf::Ndf;
+use lustre_brdf::microfacet::smith::{G1Table, SgdG1Approx};
+use lustre_brdf::models::cook_torrance::{CookTorrance, CtChannel, G1Model};
+use lustre_brdf::models::kurt::Kurt;
+use lustre_brdf::{Bsdf, Rgb};
+use std::sync::Arc;
 
 /// A parameter's value.
 #[derive(Clone, Debug, PartialEq)]
@@ -260,6 +266,8 @@ pub fn fields(m: &Material) -> Vec<Field> {
                     let x: f64 = val.parse().ok()?;
                     Some(scalar(&format!("spec.{k}"), x, SPEC_RANGE, false))
                 }));
+            } else {
+                v.extend(model_fields(s.bsdf.as_ref()));
             }
             v
         }
@@ -414,6 +422,11 @@ fn assign(
         _ => Distribution::Beckmann,
     };
     if let K::Spec(s) = kind {
+        if let Some(key) = field.strip_prefix("model.") {
+            s.bsdf = Arc::from(set_model(s.bsdf.as_ref(), key, v)?);
+            s.edits.push((field.to_string(), v.to_text()));
+            return Ok(());
+        }
         let spec = match (field, v) {
             ("spec", FieldValue::Text(t)) => t.clone(),
             (_, FieldValue::Scalar(x)) => {
@@ -549,6 +562,251 @@ fn assign(
     Ok(())
 }
 
+/// The distributions of a fitted Cook–Torrance model's `model.distribution`.
+const CT_DISTRIBUTIONS: &[&str] = &["sgd", "beckmann", "ggx"];
+/// SGD shape p given to a Beckmann or GGX channel switched to SGD (within the published fits'
+/// range).
+const SWITCHED_SGD_P: f64 = 0.5;
+/// Usual range of a Kurt lobe's or a Cook–Torrance channel's specular weight.
+const WEIGHT: (f64, f64) = (0.0, 10.0);
+/// Usual range of a Kurt lobe's roughness mx, my.
+const KURT_ROUGHNESS: (f64, f64) = (1e-3, 2.0);
+/// The SGD shape p over which `lustre fit` searches (−1.9 + 4.8 sigmoid q).
+const SGD_P: (f64, f64) = (-1.9, 2.9);
+
+/// `range` widened to hold `values` (a fitted value may lie outside the usual range; the
+/// model's constructor is the final check).
+fn widened((lo, hi): (f64, f64), values: &[f64]) -> (f64, f64) {
+    values
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold((lo, hi), |(a, b), &v| (a.min(v), b.max(v)))
+}
+
+/// The width α of a Beckmann, GGX or SGD distribution, its name and SGD's p.
+fn ndf_shape(n: &Ndf) -> Option<(&'static str, f64, Option<f64>)> {
+    match n {
+        Ndf::Sgd(s) => Some(("sgd", s.alpha(), Some(s.p()))),
+        Ndf::Beckmann { alpha } => Some(("beckmann", *alpha, None)),
+        Ndf::Ggx { alpha } => Some(("ggx", *alpha, None)),
+        Ndf::Exponential { .. } => None,
+    }
+}
+
+/// (F0, F1) of a Fresnel in the generalized Schlick form (004 Eq. V.5); `None` for Lazányi.
+fn schlick_form(f: &Fresnel) -> Option<(f64, f64)> {
+    match *f {
+        Fresnel::GeneralizedSchlick { f0, f1 } => Some((f0, f1)),
+        Fresnel::Schlick { f0 } => Some((f0, 0.0)),
+        Fresnel::One => Some((1.0, 0.0)),
+        Fresnel::Lazanyi { .. } => None,
+    }
+}
+
+/// The parameters of a fitted model, `model.…`: a Kurt model's kd and, per lobe,
+/// `reflection[i].{ks, mx, my, r0, alpha}` (and `transmission[i]`), 000 Eq. 3.3–3.6; a
+/// Cook–Torrance model's (004 Eq. III.1, V.1, V.5) distribution and its per-channel ρd, ρs,
+/// α, SGD's p, F0 and F1 as RGB triples. Nothing for any other BSDF.
+fn model_fields(b: &dyn Bsdf) -> Vec<Field> {
+    let any = b.as_any();
+    if let Some(k) = any.and_then(|a| a.downcast_ref::<Kurt>()) {
+        let mut v = vec![rgb("model.kd", k.kd, widened(UNIT, &k.kd.0), false)];
+        for (what, lobes) in [
+            ("reflection", &k.reflection),
+            ("transmission", &k.transmission),
+        ] {
+            for (i, l) in lobes.iter().enumerate() {
+                let name = |p: &str| format!("model.{what}[{i}].{p}");
+                v.push(rgb(&name("ks"), l.ks, widened(WEIGHT, &l.ks.0), false));
+                v.push(scalar(
+                    &name("mx"),
+                    l.mx,
+                    widened(KURT_ROUGHNESS, &[l.mx]),
+                    true,
+                ));
+                v.push(scalar(
+                    &name("my"),
+                    l.my,
+                    widened(KURT_ROUGHNESS, &[l.my]),
+                    true,
+                ));
+                v.push(scalar(&name("r0"), l.r0, UNIT, false));
+                v.push(scalar(&name("alpha"), l.alpha, UNIT, false));
+            }
+        }
+        return v;
+    }
+    let Some(ct) = any.and_then(|a| a.downcast_ref::<CookTorrance>()) else {
+        return vec![];
+    };
+    let ch = ct.channels();
+    let per = |f: &dyn Fn(&CtChannel) -> Option<f64>| -> Option<[f64; 3]> {
+        Some([f(&ch[0])?, f(&ch[1])?, f(&ch[2])?])
+    };
+    let triple = |name: &str, c: [f64; 3], range| rgb(name, Rgb(c), widened(range, &c), false);
+    let mut v = vec![];
+    let shapes = per(&|c| ndf_shape(&c.ndf).map(|s| s.1));
+    let same_kind = ch
+        .iter()
+        .all(|c| std::mem::discriminant(&c.ndf) == std::mem::discriminant(&ch[0].ndf));
+    if let (Some(alpha), true, Some((dist, ..))) = (shapes, same_kind, ndf_shape(&ch[0].ndf)) {
+        v.push(Field {
+            name: "model.distribution".to_string(),
+            value: FieldValue::Choice(dist.to_string()),
+            range: UNIT,
+            log: false,
+            textured: false,
+            choices: CT_DISTRIBUTIONS,
+        });
+        v.push(Field {
+            log: true,
+            ..triple("model.alpha", alpha, (1e-3, 1.0))
+        });
+        if let Some(p) = per(&|c| ndf_shape(&c.ndf).and_then(|s| s.2)) {
+            v.push(triple("model.p", p, SGD_P));
+        }
+    }
+    if let Some(x) = per(&|c| Some(c.rho_d)) {
+        v.push(triple("model.rho_d", x, UNIT));
+    }
+    if let Some(x) = per(&|c| Some(c.rho_s)) {
+        v.push(triple("model.rho_s", x, WEIGHT));
+    }
+    if let Some(f0) = per(&|c| schlick_form(&c.fresnel).map(|f| f.0)) {
+        v.push(triple("model.f0", f0, UNIT));
+    }
+    if let Some(f1) = per(&|c| schlick_form(&c.fresnel).map(|f| f.1)) {
+        v.push(triple("model.f1", f1, (-1.0, 1.0)));
+    }
+    v
+}
+
+/// A channel's distribution after an edit: SGD normalized (kap = 1/(αΓ(1−p, α)), 004
+/// Eq. V.2) with its shadowing kept in kind — an Eq. V.3 approximation is fitted anew to the
+/// new distribution (§V.3.3, as `lustre fit` does; also for a channel switched from Beckmann
+/// or GGX, so that the GPU layout holds it), a numeric Smith G1 recomputed, none kept;
+/// Beckmann and GGX with the closed-form Smith G1 (or none, if the channel had none).
+fn reshaped(dist: &str, alpha: f64, p: f64, old: &G1Model) -> lustre_brdf::Result<(Ndf, G1Model)> {
+    Ok(match dist {
+        "sgd" => {
+            let ndf = Ndf::sgd(alpha, p)?;
+            let g1 = match old {
+                G1Model::None => G1Model::None,
+                G1Model::Numeric(_) => G1Model::numeric(&ndf),
+                G1Model::SgdApprox(_) | G1Model::Closed => {
+                    G1Model::SgdApprox(SgdG1Approx::fit(&G1Table::new(&ndf)).0)
+                }
+            };
+            (ndf, g1)
+        }
+        d => {
+            let ndf = if d == "ggx" {
+                Ndf::ggx(alpha)?
+            } else {
+                Ndf::beckmann(alpha)?
+            };
+            let g1 = match old {
+                G1Model::None => G1Model::None,
+                _ => G1Model::Closed,
+            };
+            (ndf, g1)
+        }
+    })
+}
+
+/// The fitted model `b` with `model.KEY` set to `v` (see [`model_fields`]); parameters the
+/// edit does not touch keep their exact values (a published fit's θ0 included).
+fn set_model(
+    b: &dyn Bsdf,
+    key: &str,
+    v: &FieldValue,
+) -> std::result::Result<Box<dyn Bsdf>, String> {
+    let num = match v {
+        FieldValue::Scalar(x) => *x,
+        _ => f64::NAN,
+    };
+    let col = match v {
+        FieldValue::Rgb(c) => *c,
+        _ => [f64::NAN; 3],
+    };
+    let unknown = || format!("model.{key}: not settable");
+    let any = b.as_any();
+    if let Some(k) = any.and_then(|a| a.downcast_ref::<Kurt>()) {
+        let mut k = k.clone();
+        if key == "kd" {
+            k.kd = Rgb(col);
+        } else {
+            let (what, rest) = key.split_once('[').ok_or_else(unknown)?;
+            let (i, param) = rest.split_once("].").ok_or_else(unknown)?;
+            let i: usize = i.parse().map_err(|_| unknown())?;
+            let lobes = match what {
+                "reflection" => &mut k.reflection,
+                "transmission" => &mut k.transmission,
+                _ => return Err(unknown()),
+            };
+            let l = lobes.get_mut(i).ok_or_else(unknown)?;
+            match param {
+                "ks" => l.ks = Rgb(col),
+                "mx" => l.mx = num,
+                "my" => l.my = num,
+                "r0" => l.r0 = num,
+                "alpha" => l.alpha = num,
+                _ => return Err(unknown()),
+            }
+        }
+        return Kurt::new(k.kd, k.reflection, k.transmission)
+            .map(|k| Box::new(k) as Box<dyn Bsdf>)
+            .map_err(|e| format!("model.{key}: {e}"));
+    }
+    let ct = any
+        .and_then(|a| a.downcast_ref::<CookTorrance>())
+        .ok_or_else(unknown)?;
+    let mut ch = ct.channels().clone();
+    let model = |e: lustre_brdf::Error| format!("model.{key}: {e}");
+    match key {
+        "rho_d" => (0..3).for_each(|c| ch[c].rho_d = col[c]),
+        "rho_s" => (0..3).for_each(|c| ch[c].rho_s = col[c]),
+        "f0" | "f1" => {
+            for (c, q) in ch.iter_mut().enumerate() {
+                let (mut f0, mut f1) = schlick_form(&q.fresnel).ok_or_else(unknown)?;
+                if key == "f0" {
+                    f0 = col[c];
+                } else {
+                    f1 = col[c];
+                }
+                q.fresnel = Fresnel::generalized_schlick(f0, f1).map_err(model)?;
+            }
+        }
+        "alpha" | "p" | "distribution" => {
+            // Equal channels share one distribution (and one shadowing fit).
+            let mut done: Vec<(usize, (String, u64, u64))> = vec![];
+            for c in 0..3 {
+                let (dist, mut alpha, p) = ndf_shape(&ch[c].ndf).ok_or_else(unknown)?;
+                let mut p = p.unwrap_or(SWITCHED_SGD_P);
+                let mut dist = dist.to_string();
+                match (key, v) {
+                    ("alpha", _) => alpha = col[c],
+                    ("p", _) => p = col[c],
+                    (_, FieldValue::Choice(d)) => dist = d.clone(),
+                    _ => return Err(unknown()),
+                }
+                let id = (dist.clone(), alpha.to_bits(), p.to_bits());
+                if let Some(&(e, _)) = done.iter().find(|(_, k)| *k == id) {
+                    ch[c].ndf = ch[e].ndf;
+                    ch[c].g1 = ch[e].g1.clone();
+                    continue;
+                }
+                (ch[c].ndf, ch[c].g1) = reshaped(&dist, alpha, p, &ch[c].g1).map_err(model)?;
+                done.push((c, id));
+            }
+        }
+        _ => return Err(unknown()),
+    }
+    CookTorrance::new(ct.name(), ch)
+        .map(|m| Box::new(m) as Box<dyn Bsdf>)
+        .map_err(model)
+}
+
 /// Parses `NAME.FIELD=VALUE` (`lustre render --set`, a scene file's `[material_params]` key
 /// and value joined) into its three parts.
 pub fn parse_assignment(text: &str) -> std::result::Result<(String, String, String), String> {
@@ -620,6 +878,9 @@ mod tests {
                         .unwrap(),
                 ),
             ),
+            spec("sgd:gold-metallic-paint"),
+            spec("beckmann(rho_d=0.1, rho_s=0.5, alpha=0.2)"),
+            spec("kurt-glass"),
         ];
         for m in kinds {
             for f in fields(&m) {
@@ -628,6 +889,195 @@ mod tests {
                 assert_eq!(fields(&n), fields(&m), "{} {}", m.name, f.name);
             }
         }
+    }
+
+    fn spec(spec: &str) -> Material {
+        Material::new(
+            "s",
+            MaterialKind::Spec(ResolvedSpec::resolve("s", spec).unwrap()),
+        )
+    }
+
+    fn bsdf(m: &Material) -> Arc<dyn Bsdf> {
+        match &m.kind {
+            MaterialKind::Spec(s) => s.bsdf.clone(),
+            k => panic!("{k:?}"),
+        }
+    }
+
+    fn names(m: &Material) -> Vec<String> {
+        fields(m).into_iter().map(|f| f.name).collect()
+    }
+
+    /// Directions of a few reflection pairs, off the mirror direction and on it.
+    fn pairs() -> Vec<(glam::DVec3, glam::DVec3)> {
+        let d = |t: f64, p: f64| glam::DVec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos());
+        vec![
+            (d(0.3, 0.0), d(0.3, std::f64::consts::PI)),
+            (d(1.0, 0.5), d(0.7, 3.0)),
+            (d(0.1, 0.0), d(1.2, 1.0)),
+        ]
+    }
+
+    #[test]
+    fn a_published_sgd_fit_edits_channel_by_channel() {
+        let m = spec("sgd:gold-metallic-paint");
+        assert_eq!(
+            names(&m),
+            [
+                "spec",
+                "model.distribution",
+                "model.alpha",
+                "model.p",
+                "model.rho_d",
+                "model.rho_s",
+                "model.f0",
+                "model.f1",
+                "two_sided"
+            ]
+        );
+        // ρd: f changes by Δρd/π per channel (004 Eq. III.1) and nothing else moves (the
+        // published θ0 of the shadowing is kept).
+        let old = bsdf(&m);
+        let before = old
+            .as_any()
+            .and_then(|a| a.downcast_ref::<CookTorrance>())
+            .unwrap()
+            .channels()
+            .clone();
+        let mut e = m.clone();
+        set(&mut e, "model.rho_d", "0.5,0.25,0.125").unwrap();
+        let new = bsdf(&e);
+        for (wi, wo) in pairs() {
+            let (a, b) = (old.eval(wi, wo), new.eval(wi, wo));
+            for (c, rd) in [0.5, 0.25, 0.125].into_iter().enumerate() {
+                let want = a[c] + (rd - before[c].rho_d) / std::f64::consts::PI;
+                assert!(
+                    (b[c] - want).abs() <= 1e-12 * (1.0 + want.abs()),
+                    "{b:?} {want}"
+                );
+            }
+        }
+        assert_ne!(e, m, "an edit makes the material differ");
+        match &e.kind {
+            MaterialKind::Spec(s) => {
+                assert_eq!(s.spec, "sgd:gold-metallic-paint");
+                assert_eq!(
+                    s.edits,
+                    [("model.rho_d".to_string(), "0.5,0.25,0.125".to_string())]
+                );
+            }
+            k => panic!("{k:?}"),
+        }
+        // α: a normalized SGD (kap·α·Γ(1−p, α) = 1) with the Eq. V.3 shadowing refitted.
+        set(&mut e, "model.alpha", "0.05,0.05,0.05").unwrap();
+        let ct = bsdf(&e);
+        let ch = ct
+            .as_any()
+            .and_then(|a| a.downcast_ref::<CookTorrance>())
+            .unwrap()
+            .channels()
+            .clone();
+        for (c, q) in ch.iter().enumerate() {
+            let Ndf::Sgd(s) = q.ndf else {
+                panic!("{:?}", q.ndf)
+            };
+            assert_eq!(s.alpha(), 0.05);
+            assert_eq!(Some(s.p()), ndf_shape(&before[c].ndf).and_then(|x| x.2));
+            assert!((s.kap() * s.alpha() * s.gamma0() - 1.0).abs() < 1e-12);
+            let G1Model::SgdApprox(a) = &q.g1 else {
+                panic!("{:?}", q.g1)
+            };
+            let table = G1Table::new(&q.ndf);
+            assert!(a.l2_error(&table) < 1e-3, "{}", a.l2_error(&table));
+        }
+        // Switching the distribution: GGX with the closed-form G1, then back to SGD.
+        set(&mut e, "model.distribution", "ggx").unwrap();
+        let g = bsdf(&e);
+        let q = &g
+            .as_any()
+            .and_then(|a| a.downcast_ref::<CookTorrance>())
+            .unwrap()
+            .channels()[1];
+        assert_eq!((q.ndf, &q.g1), (Ndf::Ggx { alpha: 0.05 }, &G1Model::Closed));
+        assert!(!names(&e).contains(&"model.p".to_string()));
+        set(&mut e, "model.distribution", "sgd").unwrap();
+        let g = bsdf(&e);
+        let q = &g
+            .as_any()
+            .and_then(|a| a.downcast_ref::<CookTorrance>())
+            .unwrap()
+            .channels()[2];
+        assert!(matches!(q.g1, G1Model::SgdApprox(_)), "{:?}", q.g1);
+        assert_eq!(q.ndf, Ndf::sgd(0.05, SWITCHED_SGD_P).unwrap());
+        // Refused, the material unchanged: out of range, not a triple, no such choice.
+        let kept = e.clone();
+        for (f, v) in [
+            ("model.rho_s", "-1,0,0"),
+            ("model.alpha", "0,0.1,0.1"),
+            ("model.p", "5,0,0"),
+            ("model.rho_d", "0.5,0.5"),
+            ("model.distribution", "phong"),
+            ("model.kd", "0.1,0.1,0.1"),
+        ] {
+            let r = set(&mut e, f, v);
+            assert!(r.is_err(), "{f} = {v} accepted");
+            assert_eq!(e, kept, "{f} = {v} changed the material");
+        }
+    }
+
+    #[test]
+    fn a_kurt_model_edits_lobe_by_lobe() {
+        let m = spec("kurt-glass");
+        let n = names(&m);
+        for f in [
+            "model.kd",
+            "model.reflection[0].ks",
+            "model.reflection[0].mx",
+            "model.reflection[0].my",
+            "model.reflection[0].r0",
+            "model.reflection[0].alpha",
+            "model.transmission[0].ks",
+            "model.transmission[0].alpha",
+        ] {
+            assert!(n.iter().any(|x| x == f), "{f} not in {n:?}");
+        }
+        let mut e = m.clone();
+        set(&mut e, "model.transmission[0].my", "0.3").unwrap();
+        set(&mut e, "model.kd", "0.2,0.1,0").unwrap();
+        let b = bsdf(&e);
+        let k = b.as_any().and_then(|a| a.downcast_ref::<Kurt>()).unwrap();
+        assert_eq!(k.transmission[0].my, 0.3);
+        assert_eq!(k.kd, Rgb([0.2, 0.1, 0.0]));
+        let old = bsdf(&m);
+        let o = old.as_any().and_then(|a| a.downcast_ref::<Kurt>()).unwrap();
+        assert_eq!(k.reflection, o.reflection);
+        assert_eq!(k.transmission[0].mx, o.transmission[0].mx);
+        let kept = e.clone();
+        for (f, v) in [
+            ("model.reflection[0].r0", "1.5"),
+            ("model.reflection[0].mx", "0"),
+            ("model.reflection[7].mx", "0.1"),
+            ("model.kd", "-0.1,0,0"),
+            ("model.rho_d", "0.1,0.1,0.1"),
+        ] {
+            assert!(set(&mut e, f, v).is_err(), "{f} = {v} accepted");
+            assert_eq!(e, kept);
+        }
+    }
+
+    #[test]
+    fn a_swap_drops_the_edits_and_an_analytic_spec_keeps_its_own_fields() {
+        let mut m = spec("sgd:gold-metallic-paint");
+        set(&mut m, "model.rho_s", "1,1,1").unwrap();
+        set(&mut m, "spec", "ggx(rho_d=0.1, rho_s=0.5, alpha=0.2)").unwrap();
+        match &m.kind {
+            MaterialKind::Spec(s) => assert!(s.edits.is_empty()),
+            k => panic!("{k:?}"),
+        }
+        // `MODEL(key=value, …)` is edited through its own keys, not `model.…`.
+        assert!(names(&m).iter().all(|f| !f.starts_with("model.")));
+        assert!(names(&m).contains(&"spec.alpha".to_string()));
     }
 
     #[test]
@@ -687,7 +1137,8 @@ mod tests {
             k => panic!("{k:?}"),
         }
         set(&mut m, "spec", "kurt-demo").unwrap();
-        assert_eq!(fields(&m).len(), 2);
+        let names: Vec<String> = fields(&m).into_iter().map(|f| f.name).collect();
+        assert_eq!(names[..2], ["spec", "model.kd"]);
         let e = set(&mut m, "spec", "nope:thing").unwrap_err().to_string();
         assert!(e.contains("nope:thing"), "{e}");
     }

@@ -107,7 +107,8 @@ pub struct SceneFile {
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub materials: BTreeMap<String, String>,
     /// Material parameters set after the overrides: `"MATERIAL.PARAMETER" = "VALUE"`
-    /// (`crate::material_edit`; what `lustre view` saves).
+    /// (`crate::material_edit`; what `lustre view` saves), distributions first, then in key
+    /// order.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub material_params: BTreeMap<String, String>,
     /// Extra emitters.
@@ -744,7 +745,10 @@ pub fn build(path: &Path, file: &SceneFile) -> Result<Scene> {
             )));
         }
     }
-    for (key, value) in &file.material_params {
+    // Distributions first: some parameters (SGD's `model.p`) exist under one distribution only.
+    let mut params: Vec<_> = file.material_params.iter().collect();
+    params.sort_by_key(|(k, _)| !k.ends_with(".distribution"));
+    for (key, value) in params {
         let (name, field) = key.split_once('.').unwrap_or((key.as_str(), ""));
         crate::material_edit::set_named(&mut scene.materials, name, field, value)
             .map_err(|e| fmt(format!("material_params: {e}")))?;

@@ -11,7 +11,7 @@ use crate::{ViewArgs, ViewMethod};
 use anyhow::{anyhow, bail, Context};
 use lustre_scene::camera_path_file::CameraPathFile;
 use lustre_scene::material_edit::{self, Field, FieldValue};
-use lustre_scene::{CameraPath, Keyframe, MaterialKind};
+use lustre_scene::{CameraPath, Keyframe, Material, MaterialKind};
 use lustre_shade::path::PathCamera;
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
@@ -788,6 +788,17 @@ impl App {
                 self.pick((x, y));
                 self.wait = settle;
             }
+            Command::SelectMaterial(name) => {
+                let mesh = self.info.as_ref().and_then(|i| {
+                    i.meshes
+                        .iter()
+                        .position(|(_, m)| i.materials.get(*m).is_some_and(|x| x.name == name))
+                });
+                match mesh {
+                    Some(m) => self.select(Some(m)),
+                    None => self.note(format!("script: no object with material {name:?}"), true),
+                }
+            }
             Command::Set(field, value) => {
                 self.set_material(&field, &value);
                 self.wait = settle;
@@ -846,10 +857,19 @@ impl App {
         }
     }
 
+    /// Starts a recording at the current camera (its first keyframe, at 0 s).
     fn start_recording(&mut self) {
+        let keyframes = self
+            .camera
+            .map(|c| Keyframe {
+                time: 0.0,
+                camera: c.to_camera(&self.record_name),
+            })
+            .into_iter()
+            .collect();
         self.recording = Some(Recording {
             started: Instant::now(),
-            keyframes: vec![],
+            keyframes,
             file: format!("{}.json", self.record_name),
         });
     }
@@ -858,12 +878,18 @@ impl App {
         let Some(mut r) = self.recording.take() else {
             return;
         };
-        if r.keyframes.is_empty() {
-            if let Some(c) = self.camera {
-                r.keyframes.push(Keyframe {
-                    time: 0.0,
-                    camera: c.to_camera(&self.record_name),
-                });
+        // The camera where the recording stops is its last keyframe (a script's instant walk
+        // ends between two frames).
+        if let Some(c) = self.camera {
+            let c = c.to_camera(&self.record_name);
+            let t = r.started.elapsed().as_secs_f64();
+            let moved = r
+                .keyframes
+                .last()
+                .is_none_or(|k| k.camera.position != c.position || k.camera.forward != c.forward);
+            if moved {
+                let t = r.keyframes.last().map_or(t, |k| t.max(k.time + 1e-3));
+                r.keyframes.push(Keyframe { time: t, camera: c });
             }
         }
         let path = CameraPath {
@@ -897,20 +923,24 @@ impl App {
             return;
         };
         let r = match &m.kind {
-            MaterialKind::Spec(s) if s.spec.to_ascii_lowercase().ends_with(".json") => {
+            // An unedited material JSON is copied with its fit record.
+            MaterialKind::Spec(s)
+                if s.edits.is_empty() && s.spec.to_ascii_lowercase().ends_with(".json") =>
+            {
                 lustre_brdf::material::read(Path::new(&s.spec))
                     .and_then(|f| lustre_brdf::material::write(&file, &f))
                     .map_err(|e| e.to_string())
             }
-            MaterialKind::Spec(s) => match model_of(s.bsdf.as_ref()) {
-                Some(model) => lustre_brdf::material::MaterialFile::new(m.name.clone(), model, None)
+            // Anything else fitted (a catalog fit, an edited model) is written from its
+            // parameters; an edited model has no fit record.
+            MaterialKind::Spec(s) => {
+                lustre_brdf::material::MaterialModel::from_bsdf(s.bsdf.as_ref())
+                    .and_then(|model| {
+                        lustre_brdf::material::MaterialFile::new(m.name.clone(), model, None)
+                    })
                     .and_then(|f| lustre_brdf::material::write(&file, &f))
-                    .map_err(|e| e.to_string()),
-                None => Err(format!(
-                    "{:?} ({}) is not a fitted model (SGD, Beckmann, GGX, Kurt): save the scene to keep it",
-                    m.name, s.spec
-                )),
-            },
+                    .map_err(|e| format!("{:?} ({}): {e}; save the scene to keep it", m.name, s.spec))
+            }
             k => Err(format!(
                 "{:?} is a {} material, not a fitted model: its parameters are saved with the scene",
                 m.name,
@@ -931,9 +961,12 @@ impl App {
                  `lustre render --set MATERIAL.PARAMETER=VALUE` replays the edits"
                     .to_string(),
             ),
-            SceneSource::File(src) => edited_scene_file(src, &self.edits).and_then(|f| {
-                lustre_scene::scene_file::write(&file, &f).map_err(|e| e.to_string())
-            }),
+            SceneSource::File(src) => {
+                let current = self.info.as_ref().map_or(&[][..], |i| &i.materials[..]);
+                edited_scene_file(src, &self.edits, current).and_then(|f| {
+                    lustre_scene::scene_file::write(&file, &f).map_err(|e| e.to_string())
+                })
+            }
         };
         match r {
             Ok(()) => self.note(format!("scene → {}", file.display()), false),
@@ -1123,7 +1156,15 @@ impl App {
         if let Some(d) = &mut self.draft {
             let mat = &info.materials[d.material];
             ui.label(format!("material {:?} ({})", mat.name, mat.kind.name()));
+            // Grouped names (`model.reflection[0].mx`) get a group line and their last part
+            // as the label, so that rows stay within the panel.
+            let mut group = String::new();
             for f in &mut d.fields {
+                let g = f.name.rsplit_once('.').map_or("", |(g, _)| g).to_string();
+                if g != group && !g.is_empty() && g != "spec" {
+                    ui.small(&g);
+                }
+                group = g;
                 if let Some(v) = field_ui(ui, f) {
                     commits.push((f.name.clone(), v));
                 }
@@ -1484,21 +1525,15 @@ impl App {
     }
 }
 
-/// The material JSON model of a fitted BSDF (Kurt or per-channel Cook–Torrance).
-fn model_of(bsdf: &dyn lustre_brdf::Bsdf) -> Option<lustre_brdf::material::MaterialModel> {
-    use lustre_brdf::material::MaterialModel;
-    let any = bsdf.as_any()?;
-    if let Some(k) = any.downcast_ref::<lustre_brdf::models::kurt::Kurt>() {
-        return Some(MaterialModel::from_kurt(k));
-    }
-    None
-}
-
 /// The scene file `src` with the edits: `spec` swaps as material overrides (dropping earlier
 /// parameter edits of that material), the rest as `[material_params]`; paths made absolute.
+/// Where a fitted model's distribution, α or p was edited, all three are written with their
+/// values in `current` (the materials as edited), so that the file rebuilds the same
+/// distribution whatever the order of the edits.
 fn edited_scene_file(
     src: &Path,
     edits: &[(String, String, String)],
+    current: &[Material],
 ) -> Result<lustre_scene::scene_file::SceneFile, String> {
     let text = std::fs::read_to_string(src).map_err(|e| format!("{}: {e}", src.display()))?;
     let base = src.parent().unwrap_or(Path::new("."));
@@ -1513,6 +1548,24 @@ fn edited_scene_file(
         } else {
             f.material_params
                 .insert(format!("{m}.{field}"), value.clone());
+        }
+    }
+    const SHAPE: [&str; 3] = ["model.distribution", "model.alpha", "model.p"];
+    for m in current {
+        let prefix = format!("{}.", m.name);
+        let reshaped = SHAPE
+            .iter()
+            .any(|k| f.material_params.contains_key(&format!("{prefix}{k}")));
+        if reshaped {
+            for k in SHAPE {
+                f.material_params.remove(&format!("{prefix}{k}"));
+            }
+            for field in material_edit::fields(m) {
+                if SHAPE.contains(&field.name.as_str()) {
+                    f.material_params
+                        .insert(format!("{prefix}{}", field.name), field.value.to_text());
+                }
+            }
         }
     }
     Ok(f)
@@ -1538,8 +1591,12 @@ fn field_ui(ui: &mut egui::Ui, f: &mut Field) -> Option<String> {
     let mut commit = false;
     let (lo, hi) = f.range;
     let bounded = hi - lo <= 1e6;
-    ui.horizontal(|ui| {
-        ui.label(&f.name);
+    let label = match f.name.rsplit_once('.') {
+        Some((g, last)) if g != "spec" => last,
+        _ => f.name.as_str(),
+    };
+    ui.horizontal_wrapped(|ui| {
+        ui.label(label);
         match &mut f.value {
             FieldValue::Scalar(v) => {
                 let r = if bounded {
@@ -1551,11 +1608,14 @@ fn field_ui(ui: &mut egui::Ui, f: &mut Field) -> Option<String> {
                 commit = r.drag_stopped() || (r.changed() && !r.dragged());
             }
             FieldValue::Rgb(c) => {
+                // A step of 1% of the value (a fitted weight may be 1e-3 in a range of 10).
+                let scale = c.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+                let speed = ((hi - lo) * 0.002).min((scale * 0.01).max(1e-3)).max(1e-4);
                 for x in c.iter_mut() {
                     let r = ui.add(
                         egui::DragValue::new(x)
                             .range(lo..=hi)
-                            .speed(((hi - lo) * 0.002).max(1e-4))
+                            .speed(speed)
                             .max_decimals(4),
                     );
                     commit |= r.drag_stopped() || (r.changed() && !r.dragged());

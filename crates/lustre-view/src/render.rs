@@ -397,6 +397,8 @@ fn serve(
 ) -> anyhow::Result<Exit> {
     let mut session = GpuFrameSession::new();
     let mut wanted: Option<(PathCamera, (usize, usize), FrameSettings)> = None;
+    // The request the last frame sent answered.
+    let mut answered: Option<(PathCamera, (usize, usize), FrameSettings)> = None;
     let mut busy = false;
     let mut reference: Option<Reference> = None;
     loop {
@@ -553,10 +555,17 @@ fn serve(
                 continue;
             }
         };
+        let key = (camera, size, settings);
         if step.work == StepWork::Unchanged {
             busy = false;
-            continue;
+            // The frame is done, but a request that differs only in what the window tracks
+            // (a new generation after a rebuild, queued behind a request made during it) is
+            // answered with it, or the window would wait for it for ever.
+            if answered == Some(key) {
+                continue;
+            }
         }
+        answered = Some(key);
         let image = session.image(ctx)?;
         let _ = tx.send(Reply::Frame(Box::new(FrameReply {
             image,

@@ -8,6 +8,7 @@
 //! look 40 -10            # a mouse motion of (40, −10) pixels
 //! camera default         # a scene camera (bookmark)
 //! select 160 120         # click the 3D view at pixel (160, 120) of the rendered frame
+//! select gold-paint      # or select the first object with that material
 //! set alpha 0.2          # a parameter of the selected object's material
 //! material kurt-demo     # swap it for a material specification
 //! method progressive     # regular | ck | progressive | reference
@@ -58,6 +59,8 @@ pub enum Command {
     Camera(String),
     /// Click the 3D view at a pixel of the rendered frame.
     Select(f64, f64),
+    /// Select the first object whose material has this name.
+    SelectMaterial(String),
     /// Set a parameter of the selected material.
     Set(String, String),
     /// Swap the selected material for a specification.
@@ -153,6 +156,9 @@ pub fn parse(text: &str) -> Result<Vec<Command>, String> {
                 Command::Look(num(args[0])?, num(args[1])?)
             }
             "camera" => Command::Camera(text_arg()?),
+            "select" if args.len() == 1 && args[0].parse::<f64>().is_err() => {
+                Command::SelectMaterial(args[0].to_string())
+            }
             "select" => {
                 need(2)?;
                 Command::Select(num(args[0])?, num(args[1])?)
@@ -243,9 +249,10 @@ mod tests {
                  set alpha 0.2\nmaterial kurt(kd=0.1, ks=0.5, mx=0.1, my=0.1, r0=0.9)\n\
                  method ck\nsamples 8\nbudget 3\nexposure 1.5\nfit a.binary kurt\nrecord start\n\
                  record stop w.json\nscreenshot s.png\nsave-material m.json\nsave-scene s.toml\n\
-                 \n# only a comment\nquit\n";
+                 \n# only a comment\nquit\nselect gold-paint\n";
         let c = parse(s).unwrap();
-        assert_eq!(c.len(), 18);
+        assert_eq!(c.len(), 19);
+        assert_eq!(c[18], Command::SelectMaterial("gold-paint".into()));
         assert_eq!(c[1], Command::Walk(Direction::Forward, 0.5));
         assert_eq!(c[5], Command::Set("alpha".into(), "0.2".into()));
         assert_eq!(
@@ -263,6 +270,7 @@ mod tests {
             ("wait x", "line 1"),
             ("\nwalk sideways 1", "line 2"),
             ("look 1", "2 argument"),
+            ("select 3", "2 argument"),
             ("samples 0", "1 … 256"),
             ("exposure -1", "positive"),
             ("budget 0", "global"),

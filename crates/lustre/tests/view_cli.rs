@@ -1,8 +1,10 @@
 //! `lustre view` end to end in a real window under Xvfb, rendered on lavapipe (issue 12): the
 //! built-in room opened, an input script replayed (walk, look, record the walk, click an object
-//! to select it, change its material's roughness, a refused material swap), screenshots taken.
+//! to select it, change its material's roughness, a refused material swap, select the fitted
+//! gold sphere by material, change its SGD fit's α and ρd, save it as material JSON), screenshots
+//! taken.
 //! The 3D view in the last screenshot matches `lustre render` of the same camera and material
-//! edit within [`PSNR_MIN`]; the panels are drawn; the edit changed the floor; the recorded
+//! edits within [`PSNR_MIN`]; the panels are drawn; the edit changed the floor; the recorded
 //! walk is a camera path file `lustre render --path` reads. Bad input and a missing adapter or
 //! display end with a clear message and a non-zero exit, never a hang.
 //!
@@ -79,7 +81,7 @@ fn viewer_replays_a_script_and_its_view_matches_lustre_render() {
         &script,
         "# walk in, look about, record a short walk\n\
          walk forward 0.6\n\
-         look -40 25\n\
+         look 30 25\n\
          record start\n\
          walk right 0.2\n\
          record stop walk.json\n\
@@ -87,6 +89,11 @@ fn viewer_replays_a_script_and_its_view_matches_lustre_render() {
          screenshot before.png\n\
          set alpha 0.25\n\
          material ward(kd=0.2, ks=0.1, ax=0.1, ay=0.1)\n\
+         screenshot mid.png\n\
+         select gold-paint\n\
+         set model.alpha 0.3,0.3,0.3\n\
+         set model.rho_d 0.4,0.05,0.05\n\
+         save-material gold.json\n\
          screenshot shot.png\n\
          quit\n",
     )
@@ -119,13 +126,29 @@ fn viewer_replays_a_script_and_its_view_matches_lustre_render() {
         all.contains("ward(") && all.contains("not on the GPU"),
         "{all}"
     );
-    let side = read_json(&out.join("shot.json"));
-    assert_eq!(side["selected"]["material"], "floor", "{side}");
     assert_eq!(
-        side["set"],
-        serde_json::json!(["floor.alpha=0.25"]),
-        "{side}"
+        read_json(&out.join("mid.json"))["selected"]["material"],
+        "floor"
     );
+    let side = read_json(&out.join("shot.json"));
+    assert_eq!(side["selected"]["material"], "gold-paint", "{side}");
+    let edits = [
+        "floor.alpha=0.25",
+        "gold-paint.model.alpha=0.3,0.3,0.3",
+        "gold-paint.model.rho_d=0.4,0.05,0.05",
+    ];
+    assert_eq!(side["set"], serde_json::json!(edits), "{side}");
+    // The edited fit (sgd:gold-metallic-paint with α = 0.3: a normalized SGD, its Eq. V.3
+    // shadowing refitted) saved as a material JSON.
+    let gold = lustre_brdf::material::read(&out.join("gold.json")).unwrap();
+    assert_eq!(gold.model.kind(), "sgd");
+    match &gold.model {
+        lustre_brdf::material::MaterialModel::CookTorrance { channels, .. } => {
+            assert!(channels.iter().all(|c| c.alpha == 0.3 && c.g1.is_some()));
+            assert_eq!(channels.map(|c| c.rho_d), [0.4, 0.05, 0.05]);
+        }
+        m => panic!("{m:?}"),
+    }
     assert_eq!(side["method"], "regular");
     let rect: Vec<f64> = side["view"]["rect"]
         .as_array()
@@ -149,6 +172,7 @@ fn viewer_replays_a_script_and_its_view_matches_lustre_render() {
     let shot = image::open(out.join("shot.png")).unwrap().to_rgba8();
     assert_eq!(shot.dimensions(), (900, 500));
     let before = image::open(out.join("before.png")).unwrap().to_rgba8();
+    let mid = image::open(out.join("mid.png")).unwrap().to_rgba8();
 
     // `lustre render` of the same camera (the screenshot's camera path file) and edit, into
     // the folder whose bake/ the viewer made.
@@ -157,12 +181,8 @@ fn viewer_replays_a_script_and_its_view_matches_lustre_render() {
         .args(["render", "--out", ".", "--spp", "1", "--samples", "8"])
         .args(["--probe-size", "32", "--device", "gpu"])
         .args(["--size", &format!("{w}x{h}")])
-        .args([
-            "--path",
-            "out/shot.camera.json",
-            "--set",
-            "floor.alpha=0.25",
-        ])
+        .args(["--path", "out/shot.camera.json"])
+        .args(edits.iter().flat_map(|e| ["--set", e]))
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", text(&o));
@@ -173,11 +193,32 @@ fn viewer_replays_a_script_and_its_view_matches_lustre_render() {
     let psnr = psnr8(&shown, &rendered);
     println!("viewer 3D view vs lustre render, {w}×{h}: {psnr:.2} dB");
     assert!(psnr >= PSNR_MIN, "viewer vs lustre render: {psnr:.2} dB");
-    // The edit changed the picture: rougher floor, softer reflections.
+    // Each edit changed the picture: a rougher floor (softer reflections), then a rougher
+    // gold sphere.
     let was = crop(&before, (x, y, w, h));
-    let d = psnr8(&was, &shown);
-    println!("before vs after floor.alpha=0.25: {d:.2} dB");
-    assert!(d < 45.0, "the edit left the view unchanged ({d:.2} dB)");
+    let floor = crop(&mid, (x, y, w, h));
+    for (what, a, b) in [
+        ("floor.alpha=0.25", &was, &floor),
+        (
+            "gold-paint.model.{alpha=0.3, rho_d=0.4,0.05,0.05}",
+            &floor,
+            &shown,
+        ),
+    ] {
+        let d = psnr8(a, b);
+        // Pixels with a channel off by more than 8 levels (the gold sphere is at the view's
+        // edge).
+        let changed = a
+            .chunks(3)
+            .zip(b.chunks(3))
+            .filter(|(p, q)| p.iter().zip(*q).any(|(x, y)| x.abs_diff(*y) > 8))
+            .count();
+        println!("before vs after {what}: {d:.2} dB, {changed} pixels changed");
+        assert!(
+            changed > 1000,
+            "{what} left the view unchanged ({d:.2} dB, {changed} pixels)"
+        );
+    }
     // The panels are drawn: text (light on the dark theme) left and right of the view.
     for (x0, x1) in [(0, x.saturating_sub(4)), ((x + w + 4).min(900), 900)] {
         let mut lit = 0;
@@ -193,7 +234,17 @@ fn viewer_replays_a_script_and_its_view_matches_lustre_render() {
     }
     // The recorded walk: a camera path file (lustre render --path reads it, as above).
     let walk = CameraPathFile::read(&out.join("walk.json")).unwrap();
-    assert!(!walk.keyframes.is_empty());
+    // From where `record start` was to where `walk right` ended.
+    let (first, last) = (
+        &walk.keyframes[0],
+        &walk.keyframes[walk.keyframes.len() - 1],
+    );
+    assert!(
+        walk.keyframes.len() >= 2 && last.time > first.time,
+        "{walk:?}"
+    );
+    let moved = (last.camera.position - first.camera.position).length();
+    assert!(moved > 0.05, "{moved} {walk:?}");
 }
 
 #[test]
