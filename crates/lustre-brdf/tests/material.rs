@@ -115,13 +115,14 @@ fn cook_torrance_matches_the_catalog_model_and_the_hand_value() {
     assert!((v[0] - 0.2 / PI).abs() < 1e-15, "{v:?}");
 }
 
-#[test]
-fn sgd_channels_with_the_g1_approximation_round_trip() {
+/// The published SGD fit of `name` (004 Table V.2) as material-file channels with the Eq. V.3
+/// shadowing.
+fn published_sgd(name: &str) -> [CtChannelParams; 3] {
     let ps = lustre_brdf::fits::sgd::SgdFits::load_default()
         .expect("table")
-        .params("nickel")
-        .expect("nickel");
-    let channels = ps.map(|q| CtChannelParams {
+        .params(name)
+        .expect(name);
+    ps.map(|q| CtChannelParams {
         rho_d: q.rho_d,
         rho_s: q.rho_s,
         alpha: q.alpha,
@@ -130,7 +131,12 @@ fn sgd_channels_with_the_g1_approximation_round_trip() {
         f0: q.f0,
         f1: q.f1,
         g1: Some([q.lambda, q.c, q.k]),
-    });
+    })
+}
+
+#[test]
+fn sgd_channels_with_the_g1_approximation_round_trip() {
+    let channels = published_sgd("nickel");
     let m = MaterialFile::new(
         "nickel",
         MaterialModel::cook_torrance(CtDistribution::Sgd, channels).expect("sgd"),
@@ -318,24 +324,9 @@ fn fitted_bsdfs_give_back_their_material_model() {
     // A model from a file comes back unchanged from its BSDF (Kurt, SGD with the Eq. V.3
     // shadowing, GGX).
     let kurt = MaterialModel::from_kurt(&kurt_with_transmission());
-    let ps = lustre_brdf::fits::sgd::SgdFits::load_default()
-        .expect("table")
-        .params("gold-metallic-paint")
-        .expect("gold");
-    let sgd = MaterialModel::cook_torrance(
-        CtDistribution::Sgd,
-        ps.map(|q| CtChannelParams {
-            rho_d: q.rho_d,
-            rho_s: q.rho_s,
-            alpha: q.alpha,
-            p: q.p,
-            kap: q.kap,
-            f0: q.f0,
-            f1: q.f1,
-            g1: Some([q.lambda, q.c, q.k]),
-        }),
-    )
-    .expect("sgd");
+    let sgd =
+        MaterialModel::cook_torrance(CtDistribution::Sgd, published_sgd("gold-metallic-paint"))
+            .expect("sgd");
     let ggx = MaterialModel::cook_torrance(
         CtDistribution::Ggx,
         [CtChannelParams {

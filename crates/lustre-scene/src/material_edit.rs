@@ -905,6 +905,16 @@ mod tests {
         }
     }
 
+    /// The channels of a Cook–Torrance spec material.
+    fn channels(m: &Material) -> [CtChannel; 3] {
+        bsdf(m)
+            .as_any()
+            .and_then(|a| a.downcast_ref::<CookTorrance>())
+            .unwrap()
+            .channels()
+            .clone()
+    }
+
     fn names(m: &Material) -> Vec<String> {
         fields(m).into_iter().map(|f| f.name).collect()
     }
@@ -939,12 +949,7 @@ mod tests {
         // ρd: f changes by Δρd/π per channel (004 Eq. III.1) and nothing else moves (the
         // published θ0 of the shadowing is kept).
         let old = bsdf(&m);
-        let before = old
-            .as_any()
-            .and_then(|a| a.downcast_ref::<CookTorrance>())
-            .unwrap()
-            .channels()
-            .clone();
+        let before = channels(&m);
         let mut e = m.clone();
         set(&mut e, "model.rho_d", "0.5,0.25,0.125").unwrap();
         let new = bsdf(&e);
@@ -971,13 +976,7 @@ mod tests {
         }
         // α: a normalized SGD (kap·α·Γ(1−p, α) = 1) with the Eq. V.3 shadowing refitted.
         set(&mut e, "model.alpha", "0.05,0.05,0.05").unwrap();
-        let ct = bsdf(&e);
-        let ch = ct
-            .as_any()
-            .and_then(|a| a.downcast_ref::<CookTorrance>())
-            .unwrap()
-            .channels()
-            .clone();
+        let ch = channels(&e);
         for (c, q) in ch.iter().enumerate() {
             let Ndf::Sgd(s) = q.ndf else {
                 panic!("{:?}", q.ndf)
@@ -993,21 +992,11 @@ mod tests {
         }
         // Switching the distribution: GGX with the closed-form G1, then back to SGD.
         set(&mut e, "model.distribution", "ggx").unwrap();
-        let g = bsdf(&e);
-        let q = &g
-            .as_any()
-            .and_then(|a| a.downcast_ref::<CookTorrance>())
-            .unwrap()
-            .channels()[1];
+        let q = &channels(&e)[1];
         assert_eq!((q.ndf, &q.g1), (Ndf::Ggx { alpha: 0.05 }, &G1Model::Closed));
         assert!(!names(&e).contains(&"model.p".to_string()));
         set(&mut e, "model.distribution", "sgd").unwrap();
-        let g = bsdf(&e);
-        let q = &g
-            .as_any()
-            .and_then(|a| a.downcast_ref::<CookTorrance>())
-            .unwrap()
-            .channels()[2];
+        let q = &channels(&e)[2];
         assert!(matches!(q.g1, G1Model::SgdApprox(_)), "{:?}", q.g1);
         assert_eq!(q.ndf, Ndf::sgd(0.05, SWITCHED_SGD_P).unwrap());
         // Refused, the material unchanged: out of range, not a triple, no such choice.
