@@ -178,11 +178,12 @@ enum Exit {
 /// A change of the scene that needs it built again.
 #[derive(Clone, Debug)]
 enum Edit {
-    /// material_edit::set of a material.
+    /// material_edit::set of a material: the edit and the material it gave (checked once).
     Material {
         material: usize,
         field: String,
         value: String,
+        edited: Box<Material>,
         asked: Instant,
     },
     /// An object's own sample budget.
@@ -251,12 +252,13 @@ fn run_inner(
                 material,
                 field,
                 value,
+                edited,
                 asked,
             }) => {
                 answer = Some((material, format!("{field}={value}"), asked));
                 if let Some(mat) = scene.materials.get_mut(material) {
-                    // Checked by `serve` before it returned: this cannot fail differently.
-                    material_edit::set(mat, &field, &value)?;
+                    // Made and checked by `serve` (an SGD shape edit refits its G1 once).
+                    *mat = *edited;
                 }
             }
             Some(Edit::ObjectSamples {
@@ -474,14 +476,15 @@ fn serve(
                                 .map_err(|e| e.to_string())?;
                             pack_material(&trial, &mut vec![])
                                 .map_err(|e| format!("{e} (the GPU keeps the old material)"))?;
-                            Ok(())
+                            Ok(trial)
                         });
                     match checked {
-                        Ok(()) => {
+                        Ok(trial) => {
                             return Ok(Exit::Edit(Edit::Material {
                                 material,
                                 field,
                                 value,
+                                edited: Box::new(trial),
                                 asked,
                             }))
                         }
