@@ -187,16 +187,11 @@ impl CtChannelParams {
     /// or with an Eq. V.3 approximation whose c underflowed (none of which a material file
     /// holds).
     pub fn from_channel(c: &CtChannel) -> Result<Self> {
-        let (f0, f1) = match c.fresnel {
-            Fresnel::GeneralizedSchlick { f0, f1 } => (f0, f1),
-            Fresnel::Schlick { f0 } => (f0, 0.0),
-            Fresnel::One => (1.0, 0.0),
-            Fresnel::Lazanyi { .. } => {
-                return Err(Error::NotFound(
-                    "a Lazányi Fresnel has no material-file form (generalized Schlick has)".into(),
-                ))
-            }
-        };
+        let (f0, f1) = c.fresnel.generalized_schlick_form().ok_or_else(|| {
+            Error::NotFound(
+                "a Lazányi Fresnel has no material-file form (generalized Schlick has)".into(),
+            )
+        })?;
         let (alpha, p, kap, g1) = match (&c.ndf, &c.g1) {
             (Ndf::Sgd(s), G1Model::SgdApprox(a)) if a.c > 0.0 => {
                 (s.alpha(), s.p(), s.kap(), Some([a.lambda, a.c, a.k]))

@@ -107,16 +107,13 @@ pub fn fit_kd(bsdf: &dyn Bsdf) -> Result<Rgb> {
 /// (F0, F1) of the generalized Schlick form of a channel's Fresnel (Schlick: F1 = 0; one:
 /// F0 = 1, F1 = 0).
 fn fresnel_params(name: &str, f: &Fresnel) -> Result<(f64, f64)> {
-    match *f {
-        Fresnel::GeneralizedSchlick { f0, f1 } => Ok((f0, f1)),
-        Fresnel::Schlick { f0 } => Ok((f0, 0.0)),
-        Fresnel::One => Ok((1.0, 0.0)),
-        Fresnel::Lazanyi { .. } => Err(invalid(
+    f.generalized_schlick_form().ok_or_else(|| {
+        invalid(
             name,
             "the Lazányi Fresnel has no GPU layout (generalized Schlick, Schlick and one do)"
                 .into(),
-        )),
-    }
+        )
+    })
 }
 
 /// The channel index each channel's sampling lobe merges into on the GPU (the first channel

@@ -593,16 +593,6 @@ fn ndf_shape(n: &Ndf) -> Option<(&'static str, f64, Option<f64>)> {
     }
 }
 
-/// (F0, F1) of a Fresnel in the generalized Schlick form (004 Eq. V.5); `None` for Lazányi.
-fn schlick_form(f: &Fresnel) -> Option<(f64, f64)> {
-    match *f {
-        Fresnel::GeneralizedSchlick { f0, f1 } => Some((f0, f1)),
-        Fresnel::Schlick { f0 } => Some((f0, 0.0)),
-        Fresnel::One => Some((1.0, 0.0)),
-        Fresnel::Lazanyi { .. } => None,
-    }
-}
-
 /// The parameters of a fitted model, `model.…`: a Kurt model's kd and, per lobe,
 /// `reflection[i].{ks, mx, my, r0, alpha}` (and `transmission[i]`), 000 Eq. 3.3–3.6; a
 /// Cook–Torrance model's (004 Eq. III.1, V.1, V.5) distribution and its per-channel ρd, ρs,
@@ -672,10 +662,10 @@ fn model_fields(b: &dyn Bsdf) -> Vec<Field> {
     if let Some(x) = per(&|c| Some(c.rho_s)) {
         v.push(triple("model.rho_s", x, WEIGHT));
     }
-    if let Some(f0) = per(&|c| schlick_form(&c.fresnel).map(|f| f.0)) {
+    if let Some(f0) = per(&|c| c.fresnel.generalized_schlick_form().map(|f| f.0)) {
         v.push(triple("model.f0", f0, UNIT));
     }
-    if let Some(f1) = per(&|c| schlick_form(&c.fresnel).map(|f| f.1)) {
+    if let Some(f1) = per(&|c| c.fresnel.generalized_schlick_form().map(|f| f.1)) {
         v.push(triple("model.f1", f1, (-1.0, 1.0)));
     }
     v
@@ -768,7 +758,7 @@ fn set_model(
         "rho_s" => (0..3).for_each(|c| ch[c].rho_s = col[c]),
         "f0" | "f1" => {
             for (c, q) in ch.iter_mut().enumerate() {
-                let (mut f0, mut f1) = schlick_form(&q.fresnel).ok_or_else(unknown)?;
+                let (mut f0, mut f1) = q.fresnel.generalized_schlick_form().ok_or_else(unknown)?;
                 if key == "f0" {
                     f0 = col[c];
                 } else {

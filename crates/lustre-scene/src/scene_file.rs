@@ -107,8 +107,7 @@ pub struct SceneFile {
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub materials: BTreeMap<String, String>,
     /// Material parameters set after the overrides: `"MATERIAL.PARAMETER" = "VALUE"`
-    /// (`crate::material_edit`; what `lustre view` saves), distributions first, then in key
-    /// order.
+    /// (`crate::material_edit`; what `lustre view` saves), in key order.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub material_params: BTreeMap<String, String>,
     /// Extra emitters.
@@ -745,10 +744,9 @@ pub fn build(path: &Path, file: &SceneFile) -> Result<Scene> {
             )));
         }
     }
-    // Distributions first: some parameters (SGD's `model.p`) exist under one distribution only.
-    let mut params: Vec<_> = file.material_params.iter().collect();
-    params.sort_by_key(|(k, _)| !k.ends_with(".distribution"));
-    for (key, value) in params {
+    // In key order: a material's `model.distribution` comes before `model.p` (which exists
+    // under SGD only); `model.alpha` before it gives the same model (α is kept by a switch).
+    for (key, value) in &file.material_params {
         let (name, field) = key.split_once('.').unwrap_or((key.as_str(), ""));
         crate::material_edit::set_named(&mut scene.materials, name, field, value)
             .map_err(|e| fmt(format!("material_params: {e}")))?;

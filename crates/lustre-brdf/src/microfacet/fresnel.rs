@@ -78,6 +78,17 @@ impl Fresnel {
         }
     }
 
+    /// (F0, F1) of the same F in the generalized Schlick form (004 Eq. V.5): Schlick is F1 = 0,
+    /// one is F0 = 1, F1 = 0; `None` for Lazányi, which has no such form.
+    pub fn generalized_schlick_form(&self) -> Option<(f64, f64)> {
+        match *self {
+            Fresnel::GeneralizedSchlick { f0, f1 } => Some((f0, f1)),
+            Fresnel::Schlick { f0 } => Some((f0, 0.0)),
+            Fresnel::One => Some((1.0, 0.0)),
+            Fresnel::Lazanyi { .. } => None,
+        }
+    }
+
     /// An upper bound of F over cos θ ∈ [0, 1] (exact for One, Schlick and Lazányi; for Eq. V.5
     /// the maximum over 4097 points plus the Lipschitz margin (|F1| + 5|1 − F0|)·h/2, so a
     /// guaranteed bound).
