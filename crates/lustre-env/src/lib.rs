@@ -13,6 +13,7 @@ pub mod irradiance;
 pub mod pyramid;
 pub mod sampling;
 pub mod spot;
+pub mod sun;
 
 pub use cube::CubeMap;
 pub use equirect::EquirectMap;
@@ -22,3 +23,4 @@ pub use irradiance::irradiance_map;
 pub use pyramid::{CubePyramid, MipFilter};
 pub use sampling::{Distribution1D, EnvSample, EnvSampler};
 pub use spot::{spot_map, SpotMapParams};
+pub use sun::{split_suns, Sun, SunOptions, SunSplit};

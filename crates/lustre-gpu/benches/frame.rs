@@ -103,7 +103,8 @@ fn scene(n: usize, half: bool) -> PackedScene {
         lobe_start: 0,
         reflection: 1,
         transmission: 0,
-        pad: [0; 2],
+        sun_start: 0,
+        sun_count: 0,
     };
     let diffuse = GpuMaterial {
         reflection: 0,
@@ -135,6 +136,7 @@ fn scene(n: usize, half: bool) -> PackedScene {
         materials: vec![specular, diffuse],
         lobes,
         samples,
+        suns: vec![],
     }
 }
 

@@ -5,8 +5,8 @@ use crate::context::GpuContext;
 use crate::cube::CubeLevelRef;
 use crate::error::{invalid, Result};
 use crate::packed::{
-    f3, CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, PackedScene, LOBE_SCHEME_LATTICE,
-    LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
+    f3, CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, GpuSun, PackedScene,
+    LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
 };
 use crate::shade::{GpuEnvironment, GpuRenderer};
 use lustre_brdf::models::kurt::KurtLobe;
@@ -73,6 +73,7 @@ impl PackedScene {
             materials: Vec::with_capacity(plans.len()),
             lobes: Vec::new(),
             samples: Vec::new(),
+            suns: Vec::new(),
         };
         for (i, plan) in plans.iter().enumerate() {
             let k = &plan.kurt;
@@ -81,8 +82,15 @@ impl PackedScene {
                 lobe_start: packed.lobes.len() as u32,
                 reflection: plan.reflection.len() as u32,
                 transmission: plan.transmission.len() as u32,
-                pad: [0; 2],
+                sun_start: packed.suns.len() as u32,
+                sun_count: plan.suns.len() as u32,
             });
+            packed.suns.extend(plan.suns.iter().map(|s| GpuSun {
+                direction: f3(s.direction),
+                pad0: 0.0,
+                irradiance: s.irradiance.map(|v| v as f32),
+                pad1: 0.0,
+            }));
             for (what, lobes, lobe_plans) in [
                 ("reflection", &k.reflection, &plan.reflection),
                 ("transmission", &k.transmission, &plan.transmission),

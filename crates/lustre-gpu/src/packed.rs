@@ -89,8 +89,24 @@ pub struct GpuMaterial {
     pub reflection: u32,
     /// Number of transmission lobes.
     pub transmission: u32,
+    /// First sun in the sun array (`kernel::MaterialPlan::suns`).
+    pub sun_start: u32,
+    /// Number of suns.
+    pub sun_count: u32,
+}
+
+/// A sun split off the environment (WGSL `Sun`; `lustre_env::Sun`), shaded exactly.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuSun {
+    /// Unit direction towards the sun, world space.
+    pub direction: [f32; 3],
     /// Padding.
-    pub pad: [u32; 2],
+    pub pad0: f32,
+    /// ∫ (excess radiance) dω per channel.
+    pub irradiance: [f32; 3],
+    /// Padding.
+    pub pad1: f32,
 }
 
 /// One Kurt lobe with its regular pattern (WGSL `Lobe`).
@@ -145,6 +161,8 @@ pub struct PackedScene {
     pub lobes: Vec<GpuLobe>,
     /// Half vectors of all patterns (xyz, w = 0), in the lobe's local frame.
     pub samples: Vec<[f32; 4]>,
+    /// Suns of all materials.
+    pub suns: Vec<GpuSun>,
 }
 
 /// f64 vector → f32 array.

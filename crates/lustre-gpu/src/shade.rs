@@ -64,7 +64,7 @@ pub struct GpuScene {
     camera: crate::packed::CameraBasis,
     spheres: u32,
     planes: u32,
-    buffers: [wgpu::Buffer; 5],
+    buffers: [wgpu::Buffer; 6],
 }
 
 impl GpuScene {
@@ -88,6 +88,7 @@ impl GpuScene {
                 storage("materials", bytemuck::cast_slice(&scene.materials)),
                 storage("lobes", bytemuck::cast_slice(&scene.lobes)),
                 storage("samples", bytemuck::cast_slice(&scene.samples)),
+                storage("suns", bytemuck::cast_slice(&scene.suns)),
             ],
         })
     }
@@ -138,10 +139,20 @@ fn check(scene: &PackedScene) -> Result<()> {
     }
     for (i, m) in scene.materials.iter().enumerate() {
         let end = m.lobe_start as usize + m.reflection as usize + m.transmission as usize;
-        if end > scene.lobes.len() || !finite(&m.kd) {
+        let suns = m.sun_start as usize + m.sun_count as usize;
+        if end > scene.lobes.len() || suns > scene.suns.len() || !finite(&m.kd) {
             return Err(invalid(
                 format!("material {i}"),
-                "lobe range outside the lobe array or non-finite kd",
+                "lobe or sun range outside its array, or non-finite kd",
+            ));
+        }
+    }
+    for (i, s) in scene.suns.iter().enumerate() {
+        if !finite(&s.direction) || !finite(&s.irradiance) || s.irradiance.iter().any(|v| *v < 0.0)
+        {
+            return Err(invalid(
+                format!("sun {i}"),
+                "non-finite direction or a non-finite or negative irradiance",
             ));
         }
     }
@@ -345,6 +356,7 @@ impl GpuRenderer {
                 storage_entry(3, true),
                 storage_entry(4, true),
                 storage_entry(5, true),
+                storage_entry(10, true),
                 cube(6),
                 cube(7),
                 wgpu::BindGroupLayoutEntry {
@@ -426,6 +438,7 @@ impl GpuRenderer {
                     buffer(3, &scene.buffers[2]),
                     buffer(4, &scene.buffers[3]),
                     buffer(5, &scene.buffers[4]),
+                    buffer(10, &scene.buffers[5]),
                     wgpu::BindGroupEntry {
                         binding: 6,
                         resource: wgpu::BindingResource::TextureView(&env.pyramid.view),

@@ -47,6 +47,7 @@ struct Plane {
 @group(0) @binding(7) var irradiance: texture_cube<f32>;
 @group(0) @binding(8) var linear_sampler: sampler;
 @group(0) @binding(9) var target_image: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(10) var<storage, read> suns: array<Sun>;
 
 // ---------------------------------------------------------------- scene (scene.rs) ----------
 
@@ -242,6 +243,14 @@ fn shade(hit: Hit, wo: vec3<f32>) -> vec3<f32> {
                               linear_sampler, globals.params.w, globals.params.z);
         } else {
             c += shade_lobe(lobe, k >= m.reflection, wo_l, t, b, n);
+        }
+    }
+    // kernel::shade_suns: the suns of a lattice + sun plan, exactly, after the lobes.
+    for (var s = 0u; s < m.sun_count; s++) {
+        let sun = suns[m.sun_start + s];
+        let sun_l = vec3<f32>(dot(sun.direction, t), dot(sun.direction, b), dot(sun.direction, n));
+        for (var k = 0u; k < m.reflection + m.transmission; k++) {
+            c += sun_lobe(lobes[m.lobe_start + k], k >= m.reflection, wo_l, sun_l, sun.irradiance);
         }
     }
     return c;

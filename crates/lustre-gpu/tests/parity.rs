@@ -1,6 +1,7 @@
 //! GPU ↔ CPU parity: the same scene, material plans (002's stored patterns with
-//! Weighting::Pdf002, ours, the row lattice of `plan_lattice`, and the lattice with several taps
-//! in its long cells of `plan_tap_lattice`) and environment rendered by
+//! Weighting::Pdf002, ours, the row lattice of `plan_lattice`, the lattice with several taps
+//! in its long cells of `plan_tap_lattice`, and the lattice with two suns shaded exactly of
+//! `plan_lattice_sun`) and environment rendered by
 //! `lustre_shade::render` with `kernel::shade_regular` in f64 and by the
 //! WGSL kernel in f32 must agree to PSNR ≥ 45 dB (≥ 90 dB on lavapipe, whose float filtering
 //! leaves only f32 rounding). Fails (does not skip) without an adapter. Set
@@ -9,12 +10,12 @@
 use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::Rgb;
-use lustre_env::{CubeMap, CubePyramid, MipFilter};
+use lustre_env::{CubeMap, CubePyramid, MipFilter, Sun};
 use lustre_gpu::{GpuContext, GpuRenderer};
 use lustre_shade::image::Image;
 use lustre_shade::kernel::{
-    plan_lattice, plan_regular, plan_tap_lattice, shade_regular, Environment, MaterialPlan,
-    Weighting,
+    plan_lattice, plan_lattice_sun, plan_regular, plan_tap_lattice, shade_regular, Environment,
+    MaterialPlan, Weighting,
 };
 use lustre_shade::metrics::{psnr, rms};
 use lustre_shade::render::render;
@@ -143,6 +144,20 @@ fn gpu_render_matches_cpu_shade_regular() {
     };
     let scene = scene();
     let (pyramid, irradiance) = environment();
+    // Two suns (as `lustre_env::split_suns` gives them): one high, lighting the spheres' tops
+    // and the floor; one low behind the camera, seen through the transmitter from below too.
+    let suns = [
+        Sun {
+            direction: DVec3::new(-0.3, 0.9, -0.3).normalize(),
+            irradiance: [3.0, 2.8, 2.4],
+            spread: 0.005,
+        },
+        Sun {
+            direction: DVec3::new(0.4, -0.2, 0.9).normalize(),
+            irradiance: [1.5, 1.5, 2.0],
+            spread: 0.005,
+        },
+    ];
     let env = Environment {
         pyramid: &pyramid,
         irradiance: &irradiance,
@@ -154,6 +169,8 @@ fn gpu_render_matches_cpu_shade_regular() {
         (17, "lattice"),
         (7, "taps"),
         (17, "taps"),
+        (7, "sun"),
+        (17, "sun"),
     ] {
         let plans: Vec<MaterialPlan> = scene
             .materials
@@ -162,6 +179,7 @@ fn gpu_render_matches_cpu_shade_regular() {
                 match tag {
                     "lattice" => plan_lattice(k, budget),
                     "taps" => plan_tap_lattice(k, budget),
+                    "sun" => plan_lattice_sun(k, budget, &suns),
                     _ => plan_regular(k, budget, 0.1),
                 }
                 .unwrap_or_else(|e| panic!("{e}"))

@@ -72,6 +72,7 @@ fn empty_scene(eye: DVec3, target: DVec3, up: DVec3) -> PackedScene {
         materials: vec![],
         lobes: vec![],
         samples: vec![],
+        suns: vec![],
     }
 }
 
@@ -147,7 +148,8 @@ fn diffuse_and_single_sample_lobe_match_hand_values() {
                 lobe_start: 0,
                 reflection: u32::from(!transmission),
                 transmission: u32::from(transmission),
-                pad: [0; 2],
+                sun_start: 0,
+                sun_count: 0,
             }],
             lobes: vec![GpuLobe {
                 ks,
@@ -162,6 +164,7 @@ fn diffuse_and_single_sample_lobe_match_hand_values() {
                 scheme: lustre_gpu::packed::LOBE_SCHEME_PATTERN,
             }],
             samples: vec![[0.0, 0.0, 1.0, 0.0]],
+            suns: vec![],
         };
         let px = renderer
             .render_packed(&scene, &env, 1, 1)

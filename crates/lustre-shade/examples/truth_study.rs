@@ -11,6 +11,9 @@
 //! - `lattice`: ours, `plan_lattice` (per-pixel row lattice, one lookup per cell);
 //! - `lattice + taps`: `plan_tap_lattice`, the lattice whose long cells take up to 3 taps along
 //!   their long axis (an anisotropic footprint), fewer cells so the taps fit the same budget;
+//! - `lattice + sun`: the map's suns split off (`lustre_env::split_suns`, default options) and
+//!   shaded exactly as directional lights (`shade_suns`, one evaluation per sun charged against
+//!   the budget), the lattice with the rest of the budget on the residual map's pyramid;
 //! - `CK`: Colbert–Křivánek with the same budget;
 //! - `MC`: the Monte-Carlo estimator `shade_reference` with `--mc` samples on level 0;
 //!
@@ -31,10 +34,14 @@
 use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::rgb::Rgb;
-use lustre_env::{irradiance_map, read_map, shared_data_dir, CubeMap, CubePyramid, MipFilter};
+use lustre_env::{
+    irradiance_map, read_map, shared_data_dir, split_suns, CubeMap, CubePyramid, MipFilter, Sun,
+    SunOptions,
+};
 use lustre_shade::kernel::{
-    plan_lattice, plan_regular, plan_regular_with, plan_tap_lattice, shade_ck_counted,
-    shade_reference, shade_regular_counted, Environment, MaterialPlan, ShadingFrame, Weighting,
+    plan_lattice, plan_lattice_sun, plan_regular, plan_regular_with, plan_tap_lattice,
+    shade_ck_counted, shade_reference, shade_regular_counted, Environment, MaterialPlan,
+    ShadingFrame, Weighting,
 };
 use lustre_shade::pattern::ConcentricOptions;
 use lustre_shade::truth::{configurations, supersampling, truth, Configuration};
@@ -54,11 +61,12 @@ const BINS: [(f64, f64); 6] = [
     (80.0, 85.0),
 ];
 
-const METHODS: [&str; 6] = [
+const METHODS: [&str; 7] = [
     "regular 002",
     "reach 1",
     "lattice (ours)",
     "lattice + taps",
+    "lattice + sun",
     "CK",
     "MC",
 ];
@@ -101,6 +109,14 @@ struct Plans {
     reach: MaterialPlan,
     lattice: MaterialPlan,
     taps: MaterialPlan,
+    /// `plan_lattice_sun`: the lattice with the budget less one evaluation per sun.
+    sun: MaterialPlan,
+}
+
+/// The map without its suns (its pyramid; the irradiance map stays the whole map's) and the suns.
+struct SunEnv<'a> {
+    env: Environment<'a>,
+    suns: &'a [Sun],
 }
 
 /// Every method on one configuration: (estimate, lookups) in `METHODS` order.
@@ -109,6 +125,7 @@ fn shade_all(
     m: &Material,
     p: &Plans,
     env: &Environment,
+    sun: &SunEnv,
     mc: usize,
     seed: u64,
 ) -> [(Rgb, usize); NM] {
@@ -118,6 +135,7 @@ fn shade_all(
         shade_regular_counted(&c.frame, c.wo, &p.reach, env, w),
         shade_regular_counted(&c.frame, c.wo, &p.lattice, env, w),
         shade_regular_counted(&c.frame, c.wo, &p.taps, env, w),
+        shade_regular_counted(&c.frame, c.wo, &p.sun, &sun.env, w),
         shade_ck_counted(&c.frame, c.wo, &m.kurt, m.budget, env),
         (shade_reference(&c.frame, c.wo, &m.kurt, env, mc, seed), mc),
     ]
@@ -161,6 +179,7 @@ fn study(
     map_name: &str,
     m: &Material,
     env: &Environment,
+    sun: &SunEnv,
     configs: &[Configuration],
     mc: usize,
     md: &mut String,
@@ -177,6 +196,7 @@ fn study(
         )?,
         lattice: plan_lattice(&m.kurt, m.budget)?,
         taps: plan_tap_lattice(&m.kurt, m.budget)?,
+        sun: plan_lattice_sun(&m.kurt, m.budget, sun.suns)?,
     };
     let base = &env.pyramid.levels[0];
     let face = base.size;
@@ -186,7 +206,7 @@ fn study(
         .map(|(k, c)| {
             let s = supersampling(&m.kurt, c.frame.to_local(c.wo), face);
             let t = truth(base, &c.frame, c.wo, &m.kurt, s);
-            (t, shade_all(c, m, &plans, env, mc, 0x5eed + k as u64))
+            (t, shade_all(c, m, &plans, env, sun, mc, 0x5eed + k as u64))
         })
         .collect();
     let peak = rows
@@ -269,7 +289,7 @@ fn study(
     let total: f64 = grazing.iter().map(|g| g.0).sum();
     let _ = writeln!(
         md,
-        "\nLargest lattice errors at θo 60–80° (share of the bin's squared error; brightest texel: elevation above the tangent plane, angle from the lobe's mirror direction):\n\n| θo | share % | elevation | from mirror | truth | lattice | lattice + taps | regular 002 |\n|---:|---:|---:|---:|---:|---:|---:|---:|"
+        "\nLargest lattice errors at θo 60–80° (share of the bin's squared error; brightest texel: elevation above the tangent plane, angle from the lobe's mirror direction):\n\n| θo | share % | elevation | from mirror | truth | lattice | lattice + taps | lattice + sun | regular 002 |\n|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
     for &(e2, k) in grazing.iter().take(3) {
         let c = &configs[k];
@@ -278,7 +298,7 @@ fn study(
         let (t, est) = &rows[k];
         let _ = writeln!(
             md,
-            "| {:.1}° | {:.0} | {:.1}° | {:.1}° | {:.4} | {:.4} | {:.4} | {:.4} |",
+            "| {:.1}° | {:.0} | {:.1}° | {:.1}° | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} |",
             c.theta_o_deg,
             100.0 * e2 / total.max(1e-300),
             c.frame.n.dot(sun).clamp(-1.0, 1.0).asin().to_degrees(),
@@ -286,6 +306,7 @@ fn study(
             t.mean(),
             est[lat].0.mean(),
             est[lat + 1].0.mean(),
+            est[lat + 2].0.mean(),
             est[0].0.mean()
         );
     }
@@ -356,6 +377,15 @@ fn elongation(face: usize, mx: f64, my: f64, budget: usize, md: &mut String) -> 
         pyramid: &pyramid,
         irradiance: &irradiance,
     };
+    let split = split_suns(&pyramid.levels[0], &SunOptions::default())?;
+    let residual = CubePyramid::build(split.residual, MipFilter::Gauss6)?;
+    let sun = SunEnv {
+        env: Environment {
+            pyramid: &residual,
+            irradiance: &irradiance,
+        },
+        suns: &split.suns,
+    };
     let m = material("spot", mx, my, budget)?;
     let plans = Plans {
         printed: plan_regular(&m.kurt, budget, m.xi0)?,
@@ -367,10 +397,11 @@ fn elongation(face: usize, mx: f64, my: f64, budget: usize, md: &mut String) -> 
         )?,
         lattice: plan_lattice(&m.kurt, budget)?,
         taps: plan_tap_lattice(&m.kurt, budget)?,
+        sun: plan_lattice_sun(&m.kurt, budget, sun.suns)?,
     };
     let _ = writeln!(
         md,
-        "\n### Elongation: mx {mx}, my {my}, budget {budget} (one 1.5° spot, {face}² faces)\n\n√(M_t/M_b) of the response over a 41×41 grid of spot positions around the mirror direction (M_t, M_b: second moments along the tangent's and bitangent's projections on the ωi tangent plane); in brackets the response's relative RMS against the truth's.\n\n| θo, φo | truth | regular 002 | reach 1 | lattice (ours) | lattice + taps | CK |\n|---|---:|---:|---:|---:|---:|---:|"
+        "\n### Elongation: mx {mx}, my {my}, budget {budget} (one 1.5° spot, {face}² faces)\n\n√(M_t/M_b) of the response over a 41×41 grid of spot positions around the mirror direction (M_t, M_b: second moments along the tangent's and bitangent's projections on the ωi tangent plane); in brackets the response's relative RMS against the truth's.\n\n| θo, φo | truth | regular 002 | reach 1 | lattice (ours) | lattice + taps | lattice + sun (the spot split off) | CK |\n|---|---:|---:|---:|---:|---:|---:|---:|"
     );
     for (th, ph) in [
         (0.0f64, 0.0f64),
@@ -406,7 +437,7 @@ fn elongation(face: usize, mx: f64, my: f64, budget: usize, md: &mut String) -> 
                     theta_o_deg: th,
                 };
                 let t = truth(&pyramid.levels[0], &frame, c.wo, &m.kurt, 2).mean();
-                let e = shade_all(&c, &m, &plans, &env, 0, 0);
+                let e = shade_all(&c, &m, &plans, &env, &sun, 0, 0);
                 [
                     t,
                     e[0].0.mean(),
@@ -414,6 +445,7 @@ fn elongation(face: usize, mx: f64, my: f64, budget: usize, md: &mut String) -> 
                     e[2].0.mean(),
                     e[3].0.mean(),
                     e[4].0.mean(),
+                    e[5].0.mean(),
                 ]
             })
             .collect();
@@ -492,13 +524,47 @@ fn main() -> Res<()> {
             pyramid: &pyramid,
             irradiance: &irradiance,
         };
+        let split = split_suns(&pyramid.levels[0], &SunOptions::default())?;
+        let residual = CubePyramid::build(split.residual, MipFilter::Gauss6)?;
+        let sun = SunEnv {
+            env: Environment {
+                pyramid: &residual,
+                irradiance: &irradiance,
+            },
+            suns: &split.suns,
+        };
         eprintln!("{map}: loaded in {:.1} s", t0.elapsed().as_secs_f64());
         let _ = writeln!(md, "\n## {map}");
+        let total = pyramid.levels[0].integral();
+        let share = |s: &Sun| {
+            100.0 * s.irradiance.iter().sum::<f64>() / total.iter().sum::<f64>().max(1e-300)
+        };
+        let _ = writeln!(
+            md,
+            "\nSuns split off (threshold 64 × mean luminance): {}",
+            if split.suns.is_empty() {
+                "none".to_string()
+            } else {
+                split
+                    .suns
+                    .iter()
+                    .map(|s| {
+                        format!(
+                            "elevation {:.1}°, spread {:.2}°, {:.1} % of ∫L dω",
+                            s.direction.y.clamp(-1.0, 1.0).asin().to_degrees(),
+                            s.spread.to_degrees(),
+                            share(s)
+                        )
+                    })
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            }
+        );
         for m in materials
             .iter()
             .filter(|m| only.iter().any(|o| m.name == o.as_str()) || only.is_empty())
         {
-            study(map, m, &env, &configs, mc, &mut md, &mut summary)?;
+            study(map, m, &env, &sun, &configs, mc, &mut md, &mut summary)?;
         }
     }
     let _ = writeln!(

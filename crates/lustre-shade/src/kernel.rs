@@ -16,6 +16,9 @@
 //!   Cranley–Patterson rotation) accumulating across calls — 000 §4.4.2's refinement while the
 //!   camera is still.
 //!
+//! Compact, very bright sources split off the map ([`lustre_env::split_suns`]) are shaded exactly
+//! as directional lights by [`shade_suns`]; [`plan_lattice_sun`] plans ours around them.
+//!
 //! Optionally a lookup is corrected by [`BoundingPlane`]s (000 §4.4.1, Fig. 4.5): the secondary
 //! ray from the shaded position is intersected with the planes and the cube map is read in the
 //! direction from the projection centre to the hit point.
@@ -36,7 +39,7 @@ use lustre_brdf::models::kurt::{
 };
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::{hammersley, radical_inverse2, SplitMix64};
-use lustre_env::{CubeMap, CubePyramid, EnvSampler, EquirectMap};
+use lustre_env::{CubeMap, CubePyramid, EnvSampler, EquirectMap, Sun};
 
 /// The number of samples below which a [`shade_reference`] image is not called a reference
 /// (002 §8 uses "> 10000 samples").
@@ -249,6 +252,9 @@ pub struct MaterialPlan {
     pub reflection: Vec<LobePlan>,
     /// One plan per transmission lobe, in the order of `kurt.transmission`.
     pub transmission: Vec<LobePlan>,
+    /// Suns split off the environment ([`plan_lattice_sun`]), shaded exactly by
+    /// [`shade_suns`] after the lobes; empty for every other plan.
+    pub suns: Vec<Sun>,
 }
 
 /// Builds the regular patterns of every lobe: `pattern::concentric_for_budget(mx, my, budget,
@@ -296,6 +302,24 @@ pub fn plan_lattice(kurt: &Kurt, budget_per_lobe: usize) -> Result<MaterialPlan>
     })
 }
 
+/// Ours with the environment's suns split off ([`lustre_env::split_suns`]): every lobe planned
+/// with the row lattice of `budget_per_lobe − suns.len()` lookups, and each sun evaluated
+/// exactly per lobe ([`shade_suns`], one evaluation each, charged against the budget), so a
+/// pixel still makes at most `budget_per_lobe` per lobe. Shade it with an [`Environment`] whose
+/// pyramid is the split's residual (the irradiance map stays the whole map's). Errors as
+/// [`plan_regular`], or a budget that leaves the lattice no lookup.
+pub fn plan_lattice_sun(kurt: &Kurt, budget_per_lobe: usize, suns: &[Sun]) -> Result<MaterialPlan> {
+    if budget_per_lobe <= suns.len() {
+        return Err(ShadeError::Parameter(format!(
+            "a budget of {budget_per_lobe} per lobe leaves no lookup beside {} sun evaluations",
+            suns.len()
+        )));
+    }
+    let mut plan = plan_lattice(kurt, budget_per_lobe - suns.len())?;
+    plan.suns = suns.to_vec();
+    Ok(plan)
+}
+
 /// Plans every lobe with the row lattice whose long cells are read by several taps along their
 /// long axis ([`pattern::tap_lattice`], an anisotropic footprint per cell): still at most
 /// `budget_per_lobe` filtered lookups per lobe, with fewer cells where cells take several taps.
@@ -328,6 +352,7 @@ fn plan_with(
         kurt: kurt.clone(),
         reflection: plan(&kurt.reflection)?,
         transmission: plan(&kurt.transmission)?,
+        suns: vec![],
     })
 }
 
@@ -372,7 +397,9 @@ pub fn shade_regular_counted(
 /// pixel in rows across the lobe's image in ωi so that every cell is about round there, each
 /// read once at the level of its own solid angle ([`mip::footprint_level`]); lobes planned with
 /// [`plan_tap_lattice`] ([`PatternKind::TapLattice`]) read the cells that are long in ωi by
-/// several taps along their long axis, within the same budget.
+/// several taps along their long axis, within the same budget. A plan with suns
+/// ([`plan_lattice_sun`]) adds their exact contribution ([`shade_suns`]) and counts each
+/// evaluation as a lookup.
 pub fn shade_regular_with(
     f: &ShadingFrame,
     wo: DVec3,
@@ -428,7 +455,44 @@ fn shade_regular_full(
         out += c;
         lookups += n;
     }
+    if !plan.suns.is_empty() {
+        let (c, n) = shade_suns(f, wo, k, &plan.suns);
+        out += c;
+        lookups += n;
+    }
     (out, lookups)
+}
+
+/// The lobes of `kurt` lit by suns split off the environment ([`lustre_env::split_suns`]),
+/// exactly: Σ_suns Σ_lobes f(ωs, ωo) |cos θs| E_s (000 Eq. 3.3–3.6 at the sun's direction; a
+/// transmission lobe takes light from below, evaluated on the pair mirrored through the tangent
+/// plane as [`lobe_eval`] expects). The diffuse term is not included: it reads the irradiance
+/// map, which is built from the whole map, suns included. Also returns the evaluations made (one
+/// per sun and lobe on the lobe's side), which a fair comparison charges against the budget.
+/// Frames and two-sided surfaces as [`shade_regular`].
+pub fn shade_suns(f: &ShadingFrame, wo: DVec3, kurt: &Kurt, suns: &[Sun]) -> (Rgb, usize) {
+    let (frame, wo_l) = f.facing(wo);
+    if wo_l.z.is_nan() || wo_l.z <= 0.0 {
+        return (Rgb::ZERO, 0);
+    }
+    let mut out = Rgb::ZERO;
+    let mut evals = 0;
+    for sun in suns {
+        let s = frame.to_local(sun.direction);
+        let e = Rgb(sun.irradiance);
+        let (lobes, kind, wi) = if s.z > 0.0 {
+            (&kurt.reflection, LobeKind::Reflection, s)
+        } else if s.z < 0.0 {
+            (&kurt.transmission, LobeKind::Transmission, mirror_z(s))
+        } else {
+            continue;
+        };
+        for lobe in lobes {
+            out += lobe_eval(lobe, kind, wi, wo_l) * e * wi.z;
+            evals += 1;
+        }
+    }
+    (out, evals)
 }
 
 /// What one pixel's lobes share: the frame facing the viewer, ωo in it (above the surface), the

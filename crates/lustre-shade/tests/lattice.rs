@@ -6,15 +6,16 @@ use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::numeric::SphereQuadrature;
 use lustre_brdf::rgb::Rgb;
+use lustre_brdf::sampling::SplitMix64;
 use lustre_brdf::validate::albedo_quadrature;
-use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter};
+use lustre_env::{irradiance_map, split_suns, CubeMap, CubePyramid, MipFilter, SunOptions};
 use lustre_shade::kernel::{
-    lattice_axes, lattice_cells, lattice_taps, plan_lattice, plan_regular, plan_regular_with,
-    plan_tap_lattice, shade_ck_counted, shade_regular_counted, Environment, LatticeGeometry,
-    ShadingFrame, Weighting,
+    lattice_axes, lattice_cells, lattice_taps, plan_lattice, plan_lattice_sun, plan_regular,
+    plan_regular_with, plan_tap_lattice, shade_ck_counted, shade_regular_counted, shade_suns,
+    Environment, LatticeGeometry, ShadingFrame, Weighting,
 };
 use lustre_shade::pattern::ConcentricOptions;
-use lustre_shade::truth::{configurations, truth};
+use lustre_shade::truth::{configurations, truth, Configuration};
 
 fn env_of(size: usize, f: impl Fn(DVec3) -> [f64; 3] + Sync) -> (CubePyramid, CubeMap) {
     let base = CubeMap::from_fn(size, f).expect("cube map");
@@ -99,6 +100,17 @@ fn furnace_matches_albedo() {
 #[test]
 fn lookups_never_exceed_the_budget() {
     let (p, i) = env_of(16, |d| [1.0 + d.x.abs(); 3]);
+    // Two suns (any directions: the count is what is checked).
+    let suns = split_suns(
+        &sun_sky(
+            64,
+            &[DVec3::new(0.2, 0.9, 0.3), DVec3::new(-0.7, -0.1, 0.7)],
+        ),
+        &SunOptions::default(),
+    )
+    .expect("split")
+    .suns;
+    assert_eq!(suns.len(), 2);
     let env = Environment {
         pyramid: &p,
         irradiance: &i,
@@ -116,6 +128,7 @@ fn lookups_never_exceed_the_budget() {
                 .expect("plan"),
             plan_lattice(&k, budget).expect("plan"),
             plan_tap_lattice(&k, budget).expect("plan"),
+            plan_lattice_sun(&k, budget, &suns).expect("plan"),
         ];
         for c in configurations(300, 89.0, 3) {
             for plan in &plans {
@@ -245,4 +258,154 @@ fn closer_to_the_truth_than_002() {
         assert!(rours <= 0.6 * r002, "m {mx}/{my}: {rours} vs {r002}");
         assert!(rtaps <= 0.6 * r002, "m {mx}/{my}: taps {rtaps} vs {r002}");
     }
+}
+
+/// A dim sky with a 1°-radius sun of radiance 5000 in each direction of `suns`.
+fn sun_sky(size: usize, suns: &[DVec3]) -> CubeMap {
+    let suns: Vec<DVec3> = suns.iter().map(|s| s.normalize()).collect();
+    CubeMap::from_fn(size, |d| {
+        let d = d.normalize();
+        let sky = 0.3 + 0.5 * d.y.max(0.0) + 0.2 * (3.0 * d.x).sin().abs();
+        let s = if suns.iter().any(|s| d.dot(*s) > 1f64.to_radians().cos()) {
+            5000.0
+        } else {
+            0.0
+        };
+        [sky + s, sky + 0.9 * s, 0.8 * sky + 0.7 * s]
+    })
+    .expect("cube map")
+}
+
+/// The suns split off (`split_suns`) and shaded exactly (`plan_lattice_sun`): against the texel
+/// truth on a sky with a 1° sun (128² faces, 80 configurations around it), the relative RMS is
+/// at most a third of the lattice's at the same budget, for a reflecting and a thin
+/// transmitting material (the sun seen through it from below); lookups stay within the budget.
+/// A map that is only the sun is shaded by `shade_suns` alone to within 4 % of the truth (the
+/// point stands in for the 1°-radius disc). Measured (128², 80 configurations): relative RMS
+/// lattice 10.1 % → 0.96 % (m 0.1), 12.4 % → 0.77 % (0.2 / 0.075), 7.9 % → 0.25 % (thin
+/// transmitter); the sun alone: worst 2.9 % over the 25 lit configurations.
+#[test]
+fn suns_split_off_are_shaded_exactly() {
+    let dir = DVec3::new(0.3, 0.8, -0.5).normalize();
+    let map = sun_sky(128, &[dir]);
+    let split = split_suns(&map, &SunOptions::default()).expect("split");
+    assert_eq!(split.suns.len(), 1, "{:?}", split.suns);
+    let pyramid = CubePyramid::build(map, MipFilter::Gauss6).expect("pyramid");
+    let irr = irradiance_map(&pyramid, 8).expect("irradiance");
+    let residual = CubePyramid::build(split.residual.clone(), MipFilter::Gauss6).expect("pyramid");
+    let full = Environment {
+        pyramid: &pyramid,
+        irradiance: &irr,
+    };
+    let rest = Environment {
+        pyramid: &residual,
+        irradiance: &irr,
+    };
+    let configs = around_sun(dir, 80, 5);
+    let lobe = |mx, my, r0| KurtLobe::new(Rgb::ONE, mx, my, r0, 0.0).expect("lobe");
+    let materials = [
+        ("reflection m 0.1", specular(0.1, 0.1, 1.0, 0.0), 14),
+        ("reflection 0.2 / 0.075", specular(0.2, 0.075, 1.0, 0.0), 17),
+        (
+            "thin transmitter m 0.15",
+            Kurt::new(
+                Rgb::ZERO,
+                vec![lobe(0.15, 0.15, 0.04)],
+                vec![lobe(0.15, 0.15, 0.04)],
+            )
+            .expect("material"),
+            15,
+        ),
+    ];
+    for (name, k, budget) in materials {
+        let lattice = plan_lattice(&k, budget).expect("plan");
+        let sun = plan_lattice_sun(&k, budget, &split.suns).expect("plan");
+        let (mut e_lat, mut e_sun, mut t2) = (0.0, 0.0, 0.0);
+        for c in &configs {
+            let t = truth(&pyramid.levels[0], &c.frame, c.wo, &k, 2);
+            let a = shade_regular_counted(&c.frame, c.wo, &lattice, &full, Weighting::Pdf002).0;
+            let (b, n) = shade_regular_counted(&c.frame, c.wo, &sun, &rest, Weighting::Pdf002);
+            let lobes = k.reflection.len() + k.transmission.len();
+            assert!(
+                n <= budget * lobes,
+                "{name}: {n} lookups > {budget} per lobe"
+            );
+            for ch in 0..3 {
+                e_lat += (a[ch] - t[ch]).powi(2);
+                e_sun += (b[ch] - t[ch]).powi(2);
+                t2 += t[ch] * t[ch];
+            }
+        }
+        let (r_lat, r_sun) = ((e_lat / t2).sqrt(), (e_sun / t2).sqrt());
+        println!("{name}, {budget}: relative RMS lattice {r_lat:.4}, lattice + sun {r_sun:.4}");
+        assert!(r_sun <= r_lat / 3.0, "{name}: {r_sun} vs {r_lat}");
+    }
+    // Only the sun: shade_suns against the texel truth where the sun is in the lobe.
+    let only = CubeMap {
+        size: 128,
+        faces: std::array::from_fn(|f| {
+            pyramid.levels[0].faces[f]
+                .iter()
+                .zip(&split.residual.faces[f])
+                .map(|(a, b)| std::array::from_fn(|c| a[c] - b[c]))
+                .collect()
+        }),
+    };
+    let k = specular(0.1, 0.1, 1.0, 0.0);
+    let (mut worst, mut checked): (f64, usize) = (0.0, 0);
+    for c in &configs {
+        let t = truth(&only, &c.frame, c.wo, &k, 4);
+        let (e, _) = shade_suns(&c.frame, c.wo, &k, &split.suns);
+        // Where the sun gives at least 1 % of the brightest response seen.
+        if t.mean() > 1.0 {
+            worst = worst.max((e.mean() / t.mean() - 1.0).abs());
+            checked += 1;
+        }
+    }
+    println!("sun only: {checked} configurations lit, worst relative error {worst:.4}");
+    assert!(checked >= 5, "only {checked} configurations see the sun");
+    assert!(worst < 0.04, "worst {worst}");
+}
+
+/// `count` configurations whose lobes see the sun `s`: ωo uniform with θo < 80°, the normal the
+/// half vector of (s, ωo) tilted by up to 0.3 rad; every other one mirrored through its tangent
+/// plane (frame (−n, t), ωo reflected), so the sun lies below the surface where a transmission
+/// lobe carries it (the flip negates b, which isotropic lobes do not see).
+fn around_sun(s: DVec3, count: usize, seed: u64) -> Vec<Configuration> {
+    let mut rng = SplitMix64::new(seed);
+    let mut out = vec![];
+    while out.len() < count {
+        let z = 1.0 - 2.0 * rng.next_f64();
+        let phi = std::f64::consts::TAU * rng.next_f64();
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let wo = DVec3::new(r * phi.cos(), r * phi.sin(), z);
+        let Some(h) = (s + wo).try_normalize() else {
+            continue;
+        };
+        let tilt = 0.3 * rng.next_f64();
+        let axis = h.any_orthonormal_pair();
+        let a = std::f64::consts::TAU * rng.next_f64();
+        let n = (h * tilt.cos() + (axis.0 * a.cos() + axis.1 * a.sin()) * tilt.sin()).normalize();
+        let cos_o = n.dot(wo);
+        if cos_o.is_nan() || cos_o <= 10f64.to_radians().sin() {
+            continue;
+        }
+        let hint = DVec3::new(rng.next_f64() - 0.5, rng.next_f64() - 0.5, 0.3);
+        let frame = ShadingFrame::new(n, hint);
+        let theta_o_deg = cos_o.acos().to_degrees();
+        if out.len() % 2 == 0 {
+            out.push(Configuration {
+                frame,
+                wo,
+                theta_o_deg,
+            });
+        } else {
+            out.push(Configuration {
+                frame: ShadingFrame::new(-n, frame.t),
+                wo: wo - n * (2.0 * cos_o),
+                theta_o_deg,
+            });
+        }
+    }
+    out
 }

@@ -1,10 +1,11 @@
 // module regular: regular in-lobe sampling of one Kurt lobe and its weighting, per pixel.
 // CPU twins: lustre_shade::kernel::{regular_lobe (Weighting::Pdf002), lattice_lobe,
-// lattice_axes, lattice_taps, lattice_cells, LatticeGeometry}. Equations: ωi = 2(ωo·h)h − ωo
+// lattice_axes, lattice_taps, lattice_cells, LatticeGeometry, shade_suns}. Equations: ωi = 2(ωo·h)h − ωo
 // (000 Eq. 4.8), mirrored through the tangent plane for transmission (000 Eq. 3.5); stored
 // patterns: p_o = p_h / (4 h·ωi) with the pattern's PDF constant (002 Eq. 17–18), estimate
 // ks/n Σ L(ωi) f cos θi / p_o (002 Eq. 9), level 002 Eq. 16; row lattice: weight
-// μ F cos θi / (G cos θh) per cell of mass μ, level from its solid angle μ/p(ωi).
+// μ F cos θi / (G cos θh) per cell of mass μ, level from its solid angle μ/p(ωi); suns split off
+// the map (kernel::shade_suns): ks f(ωs, ωo) cos θs E per lobe.
 //
 // The pyramid is a parameter (`env`, `env_sampler`; `face` = N, `max_lod` = levels − 1), so the
 // module holds no binding; stored patterns live in the pass's buffers, which loops over them
@@ -213,4 +214,19 @@ fn lattice_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>,
         }
     }
     return lobe.ks * sum;
+}
+
+// kernel::shade_suns for one lobe and one sun: ks f(ωs, ωo) cos θs E, the sun at `sun_l` in the
+// frame facing the viewer. A reflection lobe takes a sun above the surface, a transmission lobe
+// one below, evaluated on the pair mirrored through the tangent plane (000 Eq. 3.5).
+fn sun_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>, sun_l: vec3<f32>,
+            irradiance: vec3<f32>) -> vec3<f32> {
+    var wi = sun_l;
+    if (transmission) {
+        wi = mirror_z(sun_l);
+    }
+    if (!(wi.z > 0.0)) {
+        return vec3<f32>(0.0);
+    }
+    return lobe.ks * irradiance * (lobe_eval(lobe, transmission, wi, wo_l) * wi.z);
 }

@@ -14,8 +14,17 @@ struct Material {
     lobe_start: u32,
     reflection: u32,
     transmission: u32,
-    pad0: u32,
-    pad1: u32,
+    // The suns split off the environment: suns[sun_start .. sun_start + sun_count].
+    sun_start: u32,
+    sun_count: u32,
+}
+
+// A sun split off the environment (lustre_env::Sun): a directional light of irradiance E.
+struct Sun {
+    direction: vec3<f32>,
+    pad0: f32,
+    irradiance: vec3<f32>,
+    pad1: f32,
 }
 
 struct Lobe {

@@ -1,0 +1,373 @@
+//! Splitting compact, very bright sources (a sun, a distant lamp) off an environment map.
+//!
+//! A filtered lookup spreads a texel over its footprint: when a source of a few texels holds a
+//! large share of the map's energy and sits in a lobe's tail, the few lookups of a regular
+//! pattern either miss it or smear it over the whole footprint (issue 8's grazing misses are
+//! single configurations of this kind). Real-time renderers keep such a source out of the
+//! pre-filtered map and shade it as a directional light; this is that split, energy-exact:
+//!
+//! 1. Y = luminance (Rec. 709). The threshold is T = `threshold` × the map's mean luminance
+//!    (∫Y dω / 4π).
+//! 2. Texels with Y > T are grouped into connected clusters (8-neighbourhoods, across face
+//!    edges and corners as [`crate::cube::fetch_sources`] reads them).
+//! 3. A cluster is a sun when its excess energy E = Σ (1 − T/Y) L dΩ (RGB) is tightly
+//!    concentrated: the energy-weighted RMS angle from its centroid direction is at most
+//!    `max_spread_deg`. The `max_suns` most energetic suns are kept.
+//! 4. The kept suns' texels are scaled down to luminance T (their chroma kept); what was removed
+//!    is exactly the suns' E. So residual + Σ suns = the map, to rounding: ∫ over the residual
+//!    plus Σ E equals the map's ∫L dω.
+//!
+//! A sun is then a directional light of irradiance E (at normal incidence) along its centroid:
+//! L_o = f(ωs, ωo) cos θs E, exact up to the sun's angular spread.
+
+use crate::cube::{fetch_sources, solid_angle_table, CubeMap};
+use crate::error::{EnvError, Result};
+use glam::DVec3;
+use std::collections::HashMap;
+
+/// How [`split_suns`] finds suns.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SunOptions {
+    /// Threshold T as a multiple of the map's mean luminance (> 1).
+    pub threshold: f64,
+    /// The largest energy-weighted RMS angle of a sun around its direction (degrees, > 0).
+    pub max_spread_deg: f64,
+    /// At most this many suns are split off (the most energetic).
+    pub max_suns: usize,
+}
+
+impl Default for SunOptions {
+    fn default() -> Self {
+        Self {
+            threshold: 64.0,
+            max_spread_deg: 1.5,
+            max_suns: 2,
+        }
+    }
+}
+
+/// A compact source split off a map: a directional light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sun {
+    /// Unit direction towards the sun (the excess energy's centroid), world space.
+    pub direction: DVec3,
+    /// ∫ (excess radiance) dω per channel: the irradiance it gives a surface facing it.
+    pub irradiance: [f64; 3],
+    /// Energy-weighted RMS angle of its texels around `direction`, radians.
+    pub spread: f64,
+}
+
+/// A map without its suns, and the suns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SunSplit {
+    /// The map with every sun texel scaled down to the threshold's luminance.
+    pub residual: CubeMap,
+    /// The suns, most energetic first.
+    pub suns: Vec<Sun>,
+}
+
+fn luminance(v: [f32; 3]) -> f64 {
+    0.2126 * v[0] as f64 + 0.7152 * v[1] as f64 + 0.0722 * v[2] as f64
+}
+
+/// One texel above the threshold.
+struct Bright {
+    face: usize,
+    k: usize,
+    dir: DVec3,
+    /// Excess energy per channel (sr · radiance).
+    excess: [f64; 3],
+    /// Its luminance.
+    weight: f64,
+}
+
+/// Splits the suns off `map` (see the module docs). Errors: options out of range, or a map
+/// with a non-finite or negative texel (it names the face and texel).
+pub fn split_suns(map: &CubeMap, opts: &SunOptions) -> Result<SunSplit> {
+    if !(opts.threshold.is_finite() && opts.threshold > 1.0) {
+        return Err(EnvError::Parameter(format!(
+            "sun threshold {} must be a finite multiple > 1 of the mean luminance",
+            opts.threshold
+        )));
+    }
+    let v = opts.max_spread_deg;
+    if !(v.is_finite() && v > 0.0 && v < 180.0) {
+        return Err(EnvError::Parameter(format!(
+            "sun spread {v}° must lie in (0°, 180°)"
+        )));
+    }
+    let n = map.size;
+    let omega = solid_angle_table(n);
+    let mut total = 0.0;
+    for (face, texels) in map.faces.iter().enumerate() {
+        for (k, &v) in texels.iter().enumerate() {
+            if v.iter().any(|c| !c.is_finite() || *c < 0.0) {
+                return Err(EnvError::Parameter(format!(
+                    "cube face {face} texel ({}, {}) is {v:?}: radiance must be finite and ≥ 0",
+                    k % n,
+                    k / n
+                )));
+            }
+            total += luminance(v) * omega[k];
+        }
+    }
+    let t = opts.threshold * total / (4.0 * std::f64::consts::PI);
+    let mut bright = vec![];
+    if t > 0.0 {
+        for (face, texels) in map.faces.iter().enumerate() {
+            for (k, &v) in texels.iter().enumerate() {
+                let y = luminance(v);
+                if y > t {
+                    let keep = 1.0 - t / y;
+                    let excess = std::array::from_fn(|c| keep * v[c] as f64 * omega[k]);
+                    bright.push(Bright {
+                        face,
+                        k,
+                        dir: CubeMap::texel_dir(n, face, k % n, k / n),
+                        excess,
+                        weight: (y - t) * omega[k],
+                    });
+                }
+            }
+        }
+    }
+    let mut suns: Vec<(Sun, f64, Vec<usize>)> = clusters(&bright, n)
+        .into_iter()
+        .filter_map(|members| {
+            let weight: f64 = members.iter().map(|&i| bright[i].weight).sum();
+            let centroid = members
+                .iter()
+                .fold(DVec3::ZERO, |a, &i| a + bright[i].dir * bright[i].weight);
+            let direction = centroid.try_normalize()?;
+            let var = members
+                .iter()
+                .map(|&i| {
+                    let a = direction.dot(bright[i].dir).clamp(-1.0, 1.0).acos();
+                    bright[i].weight * a * a
+                })
+                .sum::<f64>()
+                / weight;
+            let spread = var.sqrt();
+            if spread > opts.max_spread_deg.to_radians() {
+                return None;
+            }
+            let irradiance =
+                std::array::from_fn(|c| members.iter().map(|&i| bright[i].excess[c]).sum::<f64>());
+            Some((
+                Sun {
+                    direction,
+                    irradiance,
+                    spread,
+                },
+                weight,
+                members,
+            ))
+        })
+        .collect();
+    suns.sort_by(|a, b| b.1.total_cmp(&a.1));
+    suns.truncate(opts.max_suns);
+    let mut residual = map.clone();
+    for (_, _, members) in &suns {
+        for &i in members {
+            let b = &bright[i];
+            let v = &mut residual.faces[b.face][b.k];
+            let scale = (t / luminance(*v)) as f32;
+            for c in v.iter_mut() {
+                *c *= scale;
+            }
+        }
+    }
+    Ok(SunSplit {
+        residual,
+        suns: suns.into_iter().map(|s| s.0).collect(),
+    })
+}
+
+/// The connected components of the bright texels (indices into `bright`): 8-neighbourhoods on
+/// a face, continued across edges and corners.
+fn clusters(bright: &[Bright], n: usize) -> Vec<Vec<usize>> {
+    let index: HashMap<(usize, usize), usize> = bright
+        .iter()
+        .enumerate()
+        .map(|(i, b)| ((b.face, b.k), i))
+        .collect();
+    let mut seen = vec![false; bright.len()];
+    let mut out = vec![];
+    for start in 0..bright.len() {
+        if seen[start] {
+            continue;
+        }
+        seen[start] = true;
+        let mut members = vec![start];
+        let mut next = 0;
+        while next < members.len() {
+            let b = &bright[members[next]];
+            next += 1;
+            let (i, j) = ((b.k % n) as i64, (b.k / n) as i64);
+            for dj in -1..=1 {
+                for di in -1..=1 {
+                    let (src, count) = fetch_sources(n, b.face, i + di, j + dj);
+                    for &(f, a, c) in &src[..count] {
+                        if let Some(&m) = index.get(&(f, c * n + a)) {
+                            if !seen[m] {
+                                seen[m] = true;
+                                members.push(m);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        out.push(members);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spot::{spot_map, SpotMapParams};
+
+    /// A dim sky with one 0.6°-radius sun of 20,000× its radiance.
+    fn sky(d: DVec3) -> [f64; 3] {
+        [0.5 + 0.2 * d.y, 0.6 + 0.2 * d.y, 0.9]
+    }
+
+    fn sky_with_sun(size: usize, sun: DVec3) -> CubeMap {
+        let cos_r = 0.6f64.to_radians().cos();
+        CubeMap::from_fn(size, |d| {
+            if d.dot(sun) >= cos_r {
+                [1.0e4, 0.9e4, 0.8e4]
+            } else {
+                sky(d)
+            }
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn energy_is_conserved_and_the_sun_is_found() {
+        let dir = DVec3::new(0.3, 0.5, -0.8).normalize();
+        let map = sky_with_sun(128, dir);
+        let split = split_suns(&map, &SunOptions::default()).unwrap();
+        assert_eq!(split.suns.len(), 1, "{:?}", split.suns);
+        let s = split.suns[0];
+        // The centroid is the sun's centre to a fraction of a texel (0.7° at 128²).
+        assert!(s.direction.dot(dir).acos().to_degrees() < 0.1, "{s:?}");
+        assert!(s.spread.to_degrees() < 0.6, "{s:?}");
+        let before = map.integral();
+        let after = split.residual.integral();
+        let sky = CubeMap::from_fn(128, sky).unwrap().integral();
+        for c in 0..3 {
+            let sum = after[c] + s.irradiance[c];
+            assert!(
+                (sum - before[c]).abs() <= 1e-5 * before[c],
+                "channel {c}: {sum} vs {}",
+                before[c]
+            );
+            // The sun takes nearly all of its disc's energy (the map less the sky alone): all
+            // but the plateau of T = 64 × the mean left in its texels.
+            let disc = before[c] - sky[c];
+            assert!(
+                s.irradiance[c] > 0.99 * disc && s.irradiance[c] < disc,
+                "channel {c}: {} vs the disc's {disc}",
+                s.irradiance[c]
+            );
+        }
+        // The residual's largest luminance is the threshold.
+        let mean = luminance_mean(&map);
+        let top = split
+            .residual
+            .faces
+            .iter()
+            .flatten()
+            .map(|v| luminance(*v))
+            .fold(0.0, f64::max);
+        assert!(
+            top <= 64.0 * mean * (1.0 + 1e-5),
+            "{top} vs {}",
+            64.0 * mean
+        );
+    }
+
+    fn luminance_mean(map: &CubeMap) -> f64 {
+        let i = map.integral();
+        (0.2126 * i[0] + 0.7152 * i[1] + 0.0722 * i[2]) / (4.0 * std::f64::consts::PI)
+    }
+
+    #[test]
+    fn smooth_maps_and_wide_sources_keep_their_light() {
+        // No texel above 64× the mean: nothing is split, the residual is the map.
+        let sky = CubeMap::from_fn(32, |d| [1.0 + d.y, 1.0, 1.0]).unwrap();
+        let split = split_suns(&sky, &SunOptions::default()).unwrap();
+        assert!(split.suns.is_empty());
+        assert_eq!(split.residual, sky);
+        // A bright 20°-wide window is an area light, not a sun: too wide to split.
+        let win = DVec3::new(0.0, 0.3, 1.0).normalize();
+        let cos_w = 10f64.to_radians().cos();
+        let room = CubeMap::from_fn(64, |d| {
+            if d.dot(win) >= cos_w {
+                [2000.0; 3]
+            } else {
+                [0.1; 3]
+            }
+        })
+        .unwrap();
+        let split = split_suns(&room, &SunOptions::default()).unwrap();
+        assert!(split.suns.is_empty(), "{:?}", split.suns);
+        assert_eq!(split.residual, room);
+    }
+
+    #[test]
+    fn spots_are_split_most_energetic_first() {
+        let map = spot_map(&SpotMapParams {
+            size: 128,
+            spots: 6,
+            min_deg: 1.0,
+            max_deg: 2.0,
+            ..SpotMapParams::default()
+        })
+        .unwrap();
+        let opts = SunOptions {
+            max_suns: 3,
+            ..SunOptions::default()
+        };
+        let split = split_suns(&map, &opts).unwrap();
+        assert!(!split.suns.is_empty() && split.suns.len() <= 3);
+        let e = |s: &Sun| s.irradiance.iter().sum::<f64>();
+        for w in split.suns.windows(2) {
+            assert!(e(&w[0]) >= e(&w[1]));
+        }
+        let before = map.integral();
+        let after = split.residual.integral();
+        for c in 0..3 {
+            let sum = after[c] + split.suns.iter().map(|s| s.irradiance[c]).sum::<f64>();
+            assert!((sum - before[c]).abs() <= 1e-5 * before[c]);
+        }
+    }
+
+    #[test]
+    fn bad_options_and_texels_are_refused() {
+        let map = CubeMap::from_fn(8, |_| [1.0; 3]).unwrap();
+        for opts in [
+            SunOptions {
+                threshold: 0.5,
+                ..SunOptions::default()
+            },
+            SunOptions {
+                max_spread_deg: f64::NAN,
+                ..SunOptions::default()
+            },
+            SunOptions {
+                max_spread_deg: -1.0,
+                ..SunOptions::default()
+            },
+        ] {
+            assert!(split_suns(&map, &opts).is_err(), "{opts:?}");
+        }
+        let mut bad = map.clone();
+        bad.faces[3][10] = [f32::NAN, 0.0, 0.0];
+        let e = split_suns(&bad, &SunOptions::default()).unwrap_err();
+        assert!(e.to_string().contains("face 3 texel (2, 1)"), "{e}");
+    }
+}
