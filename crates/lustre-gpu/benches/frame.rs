@@ -13,7 +13,8 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use glam::DVec3;
 use lustre_gpu::{
     CameraBasis, CubeLevelRef, GpuContext, GpuEnvironment, GpuLobe, GpuMaterial, GpuPlane,
-    GpuRenderer, GpuScene, PackedScene, RenderTarget, LOBE_SCHEME_LATTICE, LOBE_SCHEME_TAP_LATTICE,
+    GpuRenderer, GpuScene, GpuSun, PackedScene, RenderTarget, LOBE_SCHEME_LATTICE,
+    LOBE_SCHEME_TAP_LATTICE,
 };
 use std::f64::consts::PI;
 
@@ -180,11 +181,31 @@ fn bench(c: &mut Criterion) {
             ("pattern", None),
             ("lattice", Some(LOBE_SCHEME_LATTICE)),
             ("taps", Some(LOBE_SCHEME_TAP_LATTICE)),
+            ("lattice+sun", Some(LOBE_SCHEME_LATTICE)),
         ] {
             let mut packed = scene(n, false);
             if let Some(scheme) = scheme {
                 packed.lobes[0].scheme = scheme;
                 packed.lobes[0].sample_count = n as u32;
+            }
+            if name == "lattice+sun" {
+                // kernel::plan_lattice_sun with two suns: n − 2 cells and two exact evaluations.
+                packed.lobes[0].sample_count = n as u32 - 2;
+                packed.materials[0].sun_count = 2;
+                packed.suns = vec![
+                    GpuSun {
+                        direction: [0.3, 0.9, 0.3],
+                        pad0: 0.0,
+                        irradiance: [4.0, 3.8, 3.5],
+                        pad1: 0.0,
+                    },
+                    GpuSun {
+                        direction: [-0.6, 0.3, 0.74],
+                        pad0: 0.0,
+                        irradiance: [1.0, 1.0, 1.2],
+                        pad1: 0.0,
+                    },
+                ];
             }
             let gs = GpuScene::upload(&ctx, &packed).unwrap_or_else(|e| panic!("{e}"));
             let frame = renderer

@@ -54,8 +54,8 @@ pub use lightmap_shade::{
     LIGHTMAP_SHADE_WGSL,
 };
 pub use packed::{
-    CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, PackedScene, LOBE_SCHEME_LATTICE,
-    LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
+    CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, GpuSun, PackedScene,
+    LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
 };
 pub use probe_capture::{face_camera, mesh_triangles, GpuProbe, GpuProbeCapture};
 pub use pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_USAGE, PYRAMID_WGSL};

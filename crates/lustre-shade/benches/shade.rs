@@ -1,5 +1,6 @@
 //! CPU shading throughput: `shade_regular` at budgets 14/17/30 per lobe with 002's printed
-//! patterns (`shade_regular`) and with ours, the row lattice (`shade_lattice`), `shade_ck`, and
+//! patterns (`shade_regular`) and with ours, the row lattice (`shade_lattice`), the lattice with
+//! two suns split off (`shade_lattice_sun`: the same budget, two of it sun evaluations), `shade_ck`, and
 //! the reference per sample. Each iteration shades 64 pixel configurations (throughput in elements
 //! = calls, or samples for the reference).
 
@@ -7,10 +8,10 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::rgb::Rgb;
-use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter};
+use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter, Sun};
 use lustre_shade::kernel::{
-    plan_lattice, plan_regular, plan_tap_lattice, shade_ck, shade_reference, shade_regular,
-    Environment, ShadingFrame, Weighting,
+    plan_lattice, plan_lattice_sun, plan_regular, plan_tap_lattice, shade_ck, shade_reference,
+    shade_regular, Environment, ShadingFrame, Weighting,
 };
 use std::hint::black_box;
 
@@ -62,6 +63,31 @@ fn bench(c: &mut Criterion) {
     g.throughput(Throughput::Elements(PIXELS as u64));
     for budget in [14, 17, 30] {
         let plan = plan_lattice(&kurt, budget).expect("plan");
+        g.bench_with_input(BenchmarkId::from_parameter(budget), &plan, |b, plan| {
+            b.iter(|| {
+                for (f, wo) in &pixels {
+                    black_box(shade_regular(f, *wo, plan, &env, Weighting::Pdf002));
+                }
+            })
+        });
+    }
+    g.finish();
+    let suns = [
+        Sun {
+            direction: DVec3::new(0.3, 0.9, 0.2).normalize(),
+            irradiance: [4.0, 3.8, 3.5],
+            spread: 0.005,
+        },
+        Sun {
+            direction: DVec3::new(-0.6, 0.3, 0.7).normalize(),
+            irradiance: [1.0, 1.0, 1.2],
+            spread: 0.005,
+        },
+    ];
+    let mut g = c.benchmark_group("shade_lattice_sun");
+    g.throughput(Throughput::Elements(PIXELS as u64));
+    for budget in [14, 17, 30] {
+        let plan = plan_lattice_sun(&kurt, budget, &suns).expect("plan");
         g.bench_with_input(BenchmarkId::from_parameter(budget), &plan, |b, plan| {
             b.iter(|| {
                 for (f, wo) in &pixels {
