@@ -119,6 +119,47 @@ struct SunEnv<'a> {
     suns: &'a [Sun],
 }
 
+/// One map's pyramid and irradiance map, and its suns split off with the residual's pyramid.
+struct Maps {
+    pyramid: CubePyramid,
+    irradiance: CubeMap,
+    residual: CubePyramid,
+    suns: Vec<Sun>,
+}
+
+impl Maps {
+    /// Gaussian 6×6 pyramids of `base` and of its residual, a 8² irradiance map of the whole map.
+    fn new(base: CubeMap) -> Res<Self> {
+        let split = split_suns(&base, &SunOptions::default())?;
+        let pyramid = CubePyramid::build(base, MipFilter::Gauss6)?;
+        let irradiance = irradiance_map(&pyramid, 8)?;
+        let residual = CubePyramid::build(split.residual, MipFilter::Gauss6)?;
+        Ok(Maps {
+            pyramid,
+            irradiance,
+            residual,
+            suns: split.suns,
+        })
+    }
+
+    fn env(&self) -> Environment<'_> {
+        Environment {
+            pyramid: &self.pyramid,
+            irradiance: &self.irradiance,
+        }
+    }
+
+    fn sun_env(&self) -> SunEnv<'_> {
+        SunEnv {
+            env: Environment {
+                pyramid: &self.residual,
+                irradiance: &self.irradiance,
+            },
+            suns: &self.suns,
+        }
+    }
+}
+
 /// Every method on one configuration: (estimate, lookups) in `METHODS` order.
 fn shade_all(
     c: &Configuration,
@@ -371,21 +412,8 @@ fn elongation(face: usize, mx: f64, my: f64, budget: usize, md: &mut String) -> 
             [0.0; 3]
         }
     })?;
-    let pyramid = CubePyramid::build(base, MipFilter::Gauss6)?;
-    let irradiance = irradiance_map(&pyramid, 8)?;
-    let env = Environment {
-        pyramid: &pyramid,
-        irradiance: &irradiance,
-    };
-    let split = split_suns(&pyramid.levels[0], &SunOptions::default())?;
-    let residual = CubePyramid::build(split.residual, MipFilter::Gauss6)?;
-    let sun = SunEnv {
-        env: Environment {
-            pyramid: &residual,
-            irradiance: &irradiance,
-        },
-        suns: &split.suns,
-    };
+    let maps = Maps::new(base)?;
+    let (env, sun) = (maps.env(), maps.sun_env());
     let m = material("spot", mx, my, budget)?;
     let plans = Plans {
         printed: plan_regular(&m.kurt, budget, m.xi0)?,
@@ -436,7 +464,7 @@ fn elongation(face: usize, mx: f64, my: f64, budget: usize, md: &mut String) -> 
                     wo: frame.to_world(wo_l),
                     theta_o_deg: th,
                 };
-                let t = truth(&pyramid.levels[0], &frame, c.wo, &m.kurt, 2).mean();
+                let t = truth(&maps.pyramid.levels[0], &frame, c.wo, &m.kurt, 2).mean();
                 let e = shade_all(&c, &m, &plans, &env, &sun, 0, 0);
                 [
                     t,
@@ -518,35 +546,21 @@ fn main() -> Res<()> {
         let t0 = Instant::now();
         let loaded = read_map(&path)?;
         let base = CubeMap::from_equirect(&loaded.map, face)?;
-        let pyramid = CubePyramid::build(base, MipFilter::Gauss6)?;
-        let irradiance = irradiance_map(&pyramid, 8)?;
-        let env = Environment {
-            pyramid: &pyramid,
-            irradiance: &irradiance,
-        };
-        let split = split_suns(&pyramid.levels[0], &SunOptions::default())?;
-        let residual = CubePyramid::build(split.residual, MipFilter::Gauss6)?;
-        let sun = SunEnv {
-            env: Environment {
-                pyramid: &residual,
-                irradiance: &irradiance,
-            },
-            suns: &split.suns,
-        };
+        let maps = Maps::new(base)?;
+        let (env, sun) = (maps.env(), maps.sun_env());
         eprintln!("{map}: loaded in {:.1} s", t0.elapsed().as_secs_f64());
         let _ = writeln!(md, "\n## {map}");
-        let total = pyramid.levels[0].integral();
+        let total = maps.pyramid.levels[0].integral();
         let share = |s: &Sun| {
             100.0 * s.irradiance.iter().sum::<f64>() / total.iter().sum::<f64>().max(1e-300)
         };
         let _ = writeln!(
             md,
             "\nSuns split off (threshold 64 × mean luminance): {}",
-            if split.suns.is_empty() {
+            if maps.suns.is_empty() {
                 "none".to_string()
             } else {
-                split
-                    .suns
+                maps.suns
                     .iter()
                     .map(|s| {
                         format!(
