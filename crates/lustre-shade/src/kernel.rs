@@ -455,12 +455,8 @@ fn shade_regular_full(
         out += c;
         lookups += n;
     }
-    if !plan.suns.is_empty() {
-        let (c, n) = shade_suns(f, wo, k, &plan.suns);
-        out += c;
-        lookups += n;
-    }
-    (out, lookups)
+    let (c, n) = suns_facing(&frame, wo_l, k, &plan.suns);
+    (out + c, lookups + n)
 }
 
 /// The lobes of `kurt` lit by suns split off the environment ([`lustre_env::split_suns`]),
@@ -475,6 +471,11 @@ pub fn shade_suns(f: &ShadingFrame, wo: DVec3, kurt: &Kurt, suns: &[Sun]) -> (Rg
     if wo_l.z.is_nan() || wo_l.z <= 0.0 {
         return (Rgb::ZERO, 0);
     }
+    suns_facing(&frame, wo_l, kurt, suns)
+}
+
+/// [`shade_suns`] in the frame already facing the viewer, ωo = `wo_l` above the surface.
+fn suns_facing(frame: &ShadingFrame, wo_l: DVec3, kurt: &Kurt, suns: &[Sun]) -> (Rgb, usize) {
     let mut out = Rgb::ZERO;
     let mut evals = 0;
     for sun in suns {
