@@ -5,7 +5,7 @@
 use glam::DVec3;
 use lustre_gpu::{
     CameraBasis, CubeLevelRef, GpuContext, GpuEnvironment, GpuError, GpuLobe, GpuMaterial,
-    GpuRenderer, GpuSphere, PackedScene,
+    GpuRenderer, GpuSphere, GpuSun, PackedScene,
 };
 
 fn context() -> GpuContext {
@@ -181,7 +181,8 @@ fn diffuse_and_single_sample_lobe_match_hand_values() {
     }
 }
 
-/// Out-of-range indices and a degenerate camera are errors naming the input, not panics.
+/// Out-of-range indices (spheres, sun ranges), a NaN sun and a degenerate camera are errors
+/// naming the input, not panics.
 #[test]
 fn invalid_scenes_are_reported() {
     let ctx = context();
@@ -208,4 +209,28 @@ fn invalid_scenes_are_reported() {
         renderer.render_packed(&scene, &env, 0, 4),
         Err(GpuError::Invalid { .. })
     ));
+    // A material whose sun range runs past the sun array, and a sun with a NaN irradiance.
+    let mut scene = empty_scene(DVec3::ZERO, DVec3::Z, DVec3::Y);
+    scene.materials.push(GpuMaterial {
+        kd: [0.5; 3],
+        lobe_start: 0,
+        reflection: 0,
+        transmission: 0,
+        sun_start: 0,
+        sun_count: 1,
+    });
+    match renderer.render_packed(&scene, &env, 4, 4) {
+        Err(GpuError::Invalid { parameter, .. }) => assert_eq!(parameter, "material 0"),
+        other => panic!("expected an invalid-material error, got {other:?}"),
+    }
+    scene.suns.push(GpuSun {
+        direction: [0.0, 1.0, 0.0],
+        pad0: 0.0,
+        irradiance: [f32::NAN, 1.0, 1.0],
+        pad1: 0.0,
+    });
+    match renderer.render_packed(&scene, &env, 4, 4) {
+        Err(GpuError::Invalid { parameter, .. }) => assert_eq!(parameter, "sun 0"),
+        other => panic!("expected an invalid-sun error, got {other:?}"),
+    }
 }
