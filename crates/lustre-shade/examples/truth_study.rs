@@ -34,10 +34,8 @@
 use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::rgb::Rgb;
-use lustre_env::{
-    irradiance_map, read_map, shared_data_dir, split_suns, CubeMap, CubePyramid, MipFilter, Sun,
-    SunOptions,
-};
+use lustre_env::{read_map, shared_data_dir, CubeMap, MipFilter, Sun};
+use lustre_shade::harness::{describe_suns, EnvSetup};
 use lustre_shade::kernel::{
     plan_lattice, plan_lattice_sun, plan_regular, plan_regular_with, plan_tap_lattice,
     shade_ck_counted, shade_reference, shade_regular_counted, Environment, MaterialPlan,
@@ -101,8 +99,17 @@ fn arg<T: std::str::FromStr>(args: &[String], name: &str, default: T) -> T {
         .unwrap_or(default)
 }
 
-/// Map, material, and per method the relative RMS overall, at θo < 60° and at 60–80°.
-type SummaryRow = (String, String, [f64; NM], [f64; NM], [f64; NM]);
+/// Map, material, and per method the relative RMS overall, at θo < 60° and at 60–80°, and the
+/// per-configuration relative error ([`Acc::per_config`]) at θo < 60° and at 60–80°.
+type SummaryRow = (
+    String,
+    String,
+    [f64; NM],
+    [f64; NM],
+    [f64; NM],
+    [f64; NM],
+    [f64; NM],
+);
 
 struct Plans {
     printed: MaterialPlan,
@@ -119,44 +126,16 @@ struct SunEnv<'a> {
     suns: &'a [Sun],
 }
 
-/// One map's pyramid and irradiance map, and its suns split off with the residual's pyramid.
-struct Maps {
-    pyramid: CubePyramid,
-    irradiance: CubeMap,
-    residual: CubePyramid,
-    suns: Vec<Sun>,
+/// Gaussian 6×6 pyramids of `base` and of its residual after `split_suns`, a 8² irradiance map
+/// of the whole map.
+fn env_setup(base: CubeMap) -> Res<EnvSetup> {
+    Ok(EnvSetup::new(base, MipFilter::Gauss6, 8)?)
 }
 
-impl Maps {
-    /// Gaussian 6×6 pyramids of `base` and of its residual, a 8² irradiance map of the whole map.
-    fn new(base: CubeMap) -> Res<Self> {
-        let split = split_suns(&base, &SunOptions::default())?;
-        let pyramid = CubePyramid::build(base, MipFilter::Gauss6)?;
-        let irradiance = irradiance_map(&pyramid, 8)?;
-        let residual = CubePyramid::build(split.residual, MipFilter::Gauss6)?;
-        Ok(Maps {
-            pyramid,
-            irradiance,
-            residual,
-            suns: split.suns,
-        })
-    }
-
-    fn env(&self) -> Environment<'_> {
-        Environment {
-            pyramid: &self.pyramid,
-            irradiance: &self.irradiance,
-        }
-    }
-
-    fn sun_env(&self) -> SunEnv<'_> {
-        SunEnv {
-            env: Environment {
-                pyramid: &self.residual,
-                irradiance: &self.irradiance,
-            },
-            suns: &self.suns,
-        }
+fn sun_env(maps: &EnvSetup) -> SunEnv<'_> {
+    SunEnv {
+        env: maps.residual_environment(),
+        suns: &maps.suns,
     }
 }
 
@@ -187,19 +166,37 @@ struct Acc {
     err2: f64,
     truth2: f64,
     n: usize,
+    /// Σ over configurations of (|e − t| / |t|)² (RGB norms).
+    rel2: f64,
 }
 
 impl Acc {
     fn add(&mut self, e: Rgb, t: Rgb) {
+        let (mut e2, mut t2) = (0.0, 0.0);
         for c in 0..3 {
-            self.err2 += (e[c] - t[c]).powi(2);
-            self.truth2 += t[c] * t[c];
+            e2 += (e[c] - t[c]).powi(2);
+            t2 += t[c] * t[c];
+        }
+        self.err2 += e2;
+        self.truth2 += t2;
+        if t2 > 0.0 {
+            self.rel2 += e2 / t2;
         }
         self.n += 1;
     }
+    /// RMS error over RMS truth: configurations weigh by their radiance (a bin holding a
+    /// configuration that faces a bright source is judged mostly on it).
     fn rel(&self) -> f64 {
         if self.truth2 > 0.0 {
             (self.err2 / self.truth2).sqrt()
+        } else {
+            f64::NAN
+        }
+    }
+    /// RMS over configurations of each one's relative error: every configuration weighs alike.
+    fn per_config(&self) -> f64 {
+        if self.n > 0 {
+            (self.rel2 / self.n as f64).sqrt()
         } else {
             f64::NAN
         }
@@ -268,6 +265,8 @@ fn study(
     let mut rels = [0.0; NM];
     let mut low = [0.0; NM];
     let mut high = [0.0; NM];
+    let mut low_cfg = [0.0; NM];
+    let mut high_cfg = [0.0; NM];
     for (mi, name) in METHODS.iter().enumerate() {
         let mut all = Acc::default();
         let mut bins = vec![Acc::default(); BINS.len()];
@@ -300,6 +299,8 @@ fn study(
         rels[mi] = all.rel();
         low[mi] = lo.rel();
         high[mi] = hi.rel();
+        low_cfg[mi] = lo.per_config();
+        high_cfg[mi] = hi.per_config();
         let _ = writeln!(
             md,
             "| {name} | {:.1} / {look_max} | {} | {psnr:.1} | {} | {} |",
@@ -351,7 +352,15 @@ fn study(
             est[0].0.mean()
         );
     }
-    summary.push((map_name.into(), m.name.into(), rels, low, high));
+    summary.push((
+        map_name.into(),
+        m.name.into(),
+        rels,
+        low,
+        high,
+        low_cfg,
+        high_cfg,
+    ));
     eprintln!(
         "{map_name} {}: {:.1} s, rel RMS % {:?}",
         m.name,
@@ -412,8 +421,8 @@ fn elongation(face: usize, mx: f64, my: f64, budget: usize, md: &mut String) -> 
             [0.0; 3]
         }
     })?;
-    let maps = Maps::new(base)?;
-    let (env, sun) = (maps.env(), maps.sun_env());
+    let maps = env_setup(base)?;
+    let (env, sun) = (maps.environment(), sun_env(&maps));
     let m = material("spot", mx, my, budget)?;
     let plans = Plans {
         printed: plan_regular(&m.kurt, budget, m.xi0)?,
@@ -546,33 +555,14 @@ fn main() -> Res<()> {
         let t0 = Instant::now();
         let loaded = read_map(&path)?;
         let base = CubeMap::from_equirect(&loaded.map, face)?;
-        let maps = Maps::new(base)?;
-        let (env, sun) = (maps.env(), maps.sun_env());
+        let maps = env_setup(base)?;
+        let (env, sun) = (maps.environment(), sun_env(&maps));
         eprintln!("{map}: loaded in {:.1} s", t0.elapsed().as_secs_f64());
         let _ = writeln!(md, "\n## {map}");
-        let total = maps.pyramid.levels[0].integral();
-        let share = |s: &Sun| {
-            100.0 * s.irradiance.iter().sum::<f64>() / total.iter().sum::<f64>().max(1e-300)
-        };
         let _ = writeln!(
             md,
             "\nSuns split off (threshold 64 × mean luminance): {}",
-            if maps.suns.is_empty() {
-                "none".to_string()
-            } else {
-                maps.suns
-                    .iter()
-                    .map(|s| {
-                        format!(
-                            "elevation {:.1}°, spread {:.2}°, {:.1} % of ∫L dω",
-                            s.direction.y.clamp(-1.0, 1.0).asin().to_degrees(),
-                            s.spread.to_degrees(),
-                            share(s)
-                        )
-                    })
-                    .collect::<Vec<_>>()
-                    .join("; ")
-            }
+            describe_suns(&maps)
         );
         for m in materials
             .iter()
@@ -587,12 +577,41 @@ fn main() -> Res<()> {
         METHODS.join(" | "),
         "---:|".repeat(METHODS.len())
     );
-    for (map, mat, rel, lo, hi) in &summary {
+    for (map, mat, rel, lo, hi, _, _) in &summary {
         let cells: Vec<String> = (0..NM)
             .map(|i| format!("{} ({} / {})", pct(rel[i]), pct(lo[i]), pct(hi[i])))
             .collect();
         let _ = writeln!(md, "| {map} | {mat} | {} |", cells.join(" | "));
     }
+    let _ = writeln!(
+        md,
+        "\n## Summary: per-configuration relative error % (RMS over configurations of |e − t| / |t|, every configuration weighing alike), θo < 60° / 60–80°\n\n| map | material | {} |\n|---|---|{}",
+        METHODS.join(" | "),
+        "---:|".repeat(METHODS.len())
+    );
+    for (map, mat, _, _, _, lo, hi) in &summary {
+        let cells: Vec<String> = (0..NM)
+            .map(|i| format!("{} / {}", pct(lo[i]), pct(hi[i])))
+            .collect();
+        let _ = writeln!(md, "| {map} | {mat} | {} |", cells.join(" | "));
+    }
+    // The grazing target (θo 60–80° within 2× of θo < 60°), counted per method and metric.
+    let _ = writeln!(
+        md,
+        "\n## Grazing target: cases with θo 60–80° within 2× of θo < 60° (of {})\n\n| metric | {} |\n|---|{}",
+        summary.len(),
+        METHODS.join(" | "),
+        "---:|".repeat(METHODS.len())
+    );
+    let count = |f: &dyn Fn(&SummaryRow, usize) -> bool| -> Vec<String> {
+        (0..NM)
+            .map(|i| summary.iter().filter(|r| f(r, i)).count().to_string())
+            .collect()
+    };
+    let pooled = count(&|r, i| r.4[i] <= 2.0 * r.3[i]);
+    let per_config = count(&|r, i| r.6[i] <= 2.0 * r.5[i]);
+    let _ = writeln!(md, "| pooled relative RMS | {} |", pooled.join(" | "));
+    let _ = writeln!(md, "| per-configuration | {} |", per_config.join(" | "));
     if args.iter().any(|a| a == "--spot") {
         elongation(128, 0.2, 0.075, 17, &mut md)?;
         elongation(128, 0.08, 0.3, 15, &mut md)?;

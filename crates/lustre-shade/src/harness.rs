@@ -36,7 +36,7 @@ use crate::{Result, ShadeError};
 use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::Rgb;
-use lustre_env::{CubeMap, CubePyramid, EnvSampler, MipFilter, SpotMapParams};
+use lustre_env::{CubeMap, CubePyramid, EnvSampler, MipFilter, SpotMapParams, Sun, SunOptions};
 use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -79,6 +79,10 @@ pub enum PatternChoice {
     /// cell at the level of the cell's solid angle; the weighting is its own (the method's
     /// `weighting` is ignored).
     Lattice,
+    /// Ours with the map's suns split off ([`lustre_env::split_suns`]): each sun is shaded
+    /// exactly as a directional light and counts as one lookup, the lattice reads the residual
+    /// map with the rest of the budget (`kernel::plan_lattice_sun`).
+    LatticeSun,
 }
 
 /// A regular-sampling method: a pattern and a weighting.
@@ -93,14 +97,12 @@ pub struct RegularMethod {
 impl RegularMethod {
     /// The label in the table: "regular (Pdf002)", "thesis (Eq. 4.24)", ...
     pub fn label(&self) -> String {
-        if self.pattern == PatternChoice::Lattice {
-            return "lattice (ours)".into();
-        }
         let p = match self.pattern {
+            PatternChoice::Lattice => return "lattice (ours)".into(),
+            PatternChoice::LatticeSun => return "lattice + sun (ours)".into(),
             PatternChoice::Concentric => "regular",
             PatternChoice::Thesis => "thesis",
             PatternChoice::ConcentricReach1 => "regular reach 1",
-            PatternChoice::Lattice => "lattice",
         };
         let w = match self.weighting {
             Weighting::Pdf002 => "Pdf002",
@@ -112,14 +114,12 @@ impl RegularMethod {
 
     /// The tag in file names: "regular-002", "thesis-425", ...
     pub fn tag(&self) -> String {
-        if self.pattern == PatternChoice::Lattice {
-            return "lattice".into();
-        }
         let p = match self.pattern {
+            PatternChoice::Lattice => return "lattice".into(),
+            PatternChoice::LatticeSun => return "lattice-sun".into(),
             PatternChoice::Concentric => "regular",
             PatternChoice::Thesis => "thesis",
             PatternChoice::ConcentricReach1 => "regular-reach1",
-            PatternChoice::Lattice => "lattice",
         };
         let w = match self.weighting {
             Weighting::Pdf002 => "002",
@@ -129,8 +129,14 @@ impl RegularMethod {
         format!("{p}-{w}")
     }
 
-    /// The material plan of this method.
-    pub fn plan(&self, kurt: &Kurt, setting: SampleSetting) -> Result<kernel::MaterialPlan> {
+    /// The material plan of this method; `suns` are the map's suns (used by
+    /// [`PatternChoice::LatticeSun`] only).
+    pub fn plan(
+        &self,
+        kurt: &Kurt,
+        setting: SampleSetting,
+        suns: &[Sun],
+    ) -> Result<kernel::MaterialPlan> {
         match self.pattern {
             PatternChoice::Concentric => kernel::plan_regular(kurt, setting.samples, setting.xi0),
             PatternChoice::Thesis => kernel::plan_thesis(kurt, setting.samples),
@@ -141,7 +147,13 @@ impl RegularMethod {
                 ConcentricOptions { reach: Some(1.0) },
             ),
             PatternChoice::Lattice => kernel::plan_lattice(kurt, setting.samples),
+            PatternChoice::LatticeSun => kernel::plan_lattice_sun(kurt, setting.samples, suns),
         }
+    }
+
+    /// Whether the method shades the map without its suns (plus the suns).
+    pub fn splits_suns(&self) -> bool {
+        self.pattern == PatternChoice::LatticeSun
     }
 }
 
@@ -204,6 +216,10 @@ pub fn experiment_002() -> Result<Experiment> {
             },
             RegularMethod {
                 pattern: PatternChoice::Lattice,
+                weighting: Weighting::Pdf002,
+            },
+            RegularMethod {
+                pattern: PatternChoice::LatticeSun,
                 weighting: Weighting::Pdf002,
             },
         ],
@@ -279,26 +295,41 @@ pub fn experiment_000() -> Result<Experiment> {
                 pattern: PatternChoice::Lattice,
                 weighting: Weighting::Pdf002,
             },
+            RegularMethod {
+                pattern: PatternChoice::LatticeSun,
+                weighting: Weighting::Pdf002,
+            },
         ],
     })
 }
 
-/// The environment of a run: the MIP pyramid and the diffuse irradiance map, owned.
+/// The environment of a run, owned: the MIP pyramid and the diffuse irradiance map of the
+/// whole map, and the map's suns split off ([`lustre_env::split_suns`], default options) with
+/// the pyramid of what is left.
 pub struct EnvSetup {
     /// The filtered cube pyramid (specular lookups).
     pub pyramid: CubePyramid,
     /// E(n)/π (diffuse lookups).
     pub irradiance: CubeMap,
+    /// The pyramid of the map without its suns (same filter).
+    pub residual: CubePyramid,
+    /// The suns split off (none on a map without small, very bright sources).
+    pub suns: Vec<Sun>,
 }
 
 impl EnvSetup {
-    /// Builds the pyramid of `base` with `filter` and a `irradiance_size`² irradiance map.
+    /// Builds the pyramid of `base` with `filter`, a `irradiance_size`² irradiance map, and the
+    /// residual's pyramid after [`lustre_env::split_suns`].
     pub fn new(base: CubeMap, filter: MipFilter, irradiance_size: usize) -> Result<Self> {
+        let split = lustre_env::split_suns(&base, &SunOptions::default())?;
         let pyramid = CubePyramid::build(base, filter)?;
         let irradiance = lustre_env::irradiance_map(&pyramid, irradiance_size)?;
+        let residual = CubePyramid::build(split.residual, filter)?;
         Ok(EnvSetup {
             pyramid,
             irradiance,
+            residual,
+            suns: split.suns,
         })
     }
 
@@ -321,6 +352,15 @@ impl EnvSetup {
     pub fn environment(&self) -> Environment<'_> {
         Environment {
             pyramid: &self.pyramid,
+            irradiance: &self.irradiance,
+        }
+    }
+
+    /// The view for methods that shade the suns apart: the residual's pyramid, the whole map's
+    /// irradiance (the diffuse term is not split).
+    pub fn residual_environment(&self) -> Environment<'_> {
+        Environment {
+            pyramid: &self.residual,
             irradiance: &self.irradiance,
         }
     }
@@ -733,11 +773,42 @@ fn exact_check(
     (sq / (3 * picked.len()) as f64).sqrt()
 }
 
-/// Runs `experiments` on `env` with `opts`; writes images and `compare.md` into `out` when given
-/// (the directory is created). Every image is timed; see the module docs for what is measured.
+/// The suns of `setup` as "elevation E°, spread S°, P % of ∫L dω; …" (elevation above the
+/// map's horizon, +y up; P = the sun's share of the whole map's ∫L dω), or "none".
+pub fn describe_suns(setup: &EnvSetup) -> String {
+    let total: f64 = setup.pyramid.levels[0].integral().iter().sum();
+    if setup.suns.is_empty() {
+        return "none".into();
+    }
+    setup
+        .suns
+        .iter()
+        .map(|s| {
+            format!(
+                "elevation {:.1}°, spread {:.2}°, {:.1} % of ∫L dω",
+                s.direction.y.clamp(-1.0, 1.0).asin().to_degrees(),
+                s.spread.to_degrees(),
+                100.0 * s.irradiance.iter().sum::<f64>() / total.max(1e-300)
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// The report's line on the suns split off `setup`'s map (for the `lattice + sun` method).
+fn sun_note(setup: &EnvSetup) -> String {
+    format!(
+        "suns split off (threshold 64 × mean luminance, spread ≤ 1.5°; `lattice + sun` shades each exactly as one lookup and reads the residual map with the rest of its budget): {}",
+        describe_suns(setup)
+    )
+}
+
+/// Runs `experiments` on `setup`'s map with `opts`; writes images and `compare.md` into `out`
+/// when given (the directory is created). Every image is timed; see the module docs for what is
+/// measured. Methods that split the suns off read `setup`'s residual pyramid and its suns.
 pub fn run(
     experiments: &[Experiment],
-    env: &Environment,
+    setup: &EnvSetup,
     opts: &HarnessOptions,
     out: Option<&Path>,
     progress: Progress,
@@ -768,6 +839,9 @@ pub fn run(
         })?;
     }
     let n = opts.size;
+    let whole = setup.environment();
+    let env = &whole;
+    let residual = setup.residual_environment();
     let sampler = kernel::env_sampler(env.pyramid)?;
     let tree = match opts.reference {
         ReferenceKind::Exact { .. } => Some(truth::TexelTree::new(&env.pyramid.levels[0])),
@@ -798,6 +872,7 @@ pub fn run(
                 env.pyramid.filter,
                 opts.exposure
             ),
+            sun_note(setup),
         ],
     };
     let save = |img: &Image, name: &str| -> Result<String> {
@@ -950,8 +1025,9 @@ pub fn run(
             for setting in &case.settings {
                 let mut images: Vec<Rendered> = vec![];
                 for m in &exp.methods {
-                    let plan = m.plan(&case.kurt, *setting)?;
+                    let plan = m.plan(&case.kurt, *setting, &setup.suns)?;
                     let w = m.weighting;
+                    let env = if m.splits_suns() { &residual } else { env };
                     let label = format!("{stem} n={} {}", setting.samples, m.label());
                     let count = LookupCount::default();
                     let t0 = Instant::now();

@@ -55,21 +55,15 @@ fn tiny_run_writes_a_table_with_finite_numbers() {
         harness::experiment_000().expect("000"),
     ];
     let calls = std::sync::atomic::AtomicUsize::new(0);
-    let report = harness::run(
-        &exps,
-        &env.environment(),
-        &tiny_opts(),
-        Some(&out),
-        &|_, done, total| {
-            assert!(done <= total);
-            calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        },
-    )
+    let report = harness::run(&exps, &env, &tiny_opts(), Some(&out), &|_, done, total| {
+        assert!(done <= total);
+        calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    })
     .expect("run");
     assert!(calls.into_inner() > 0);
-    // 002: 5 settings × (printed, reach-1 and lattice + CK) + 3 × (exact + MIS references);
-    // 000: 4 × (4 + CK) + 4 × 2 references.
-    assert_eq!(report.rows.len(), 5 * 4 + 3 * 2 + 4 * 5 + 4 * 2);
+    // 002: 5 settings × (printed, reach-1, lattice and lattice + sun + CK) + 3 × (exact + MIS
+    // references); 000: 4 × (5 + CK) + 4 × 2 references.
+    assert_eq!(report.rows.len(), 5 * 5 + 3 * 2 + 4 * 6 + 4 * 2);
     for r in &report.rows {
         // Every method within its budget of filtered lookups per lobe and pixel.
         if !r.method.starts_with("reference") {
@@ -119,6 +113,11 @@ fn tiny_run_writes_a_table_with_finite_numbers() {
         md.contains("| aniso-0.2-0.075 | 17 | lattice (ours) |"),
         "{md}"
     );
+    assert!(
+        md.contains("| aniso-0.2-0.075 | 17 | lattice + sun (ours) |")
+            && md.contains("suns split off"),
+        "{md}"
+    );
     assert!(md.contains("lookups mean / max") && md.contains("ref. error ÷ RMS"));
     assert!(md.contains("| iso-0.1 | 0 | reference (exact) |"), "{md}");
     assert!(md.contains("| varnish | 7 | thesis (Eq. 4.25) |"), "{md}");
@@ -136,7 +135,7 @@ fn bad_options_are_errors() {
     .expect("env");
     let e = harness::run(
         &[],
-        &env.environment(),
+        &env,
         &HarnessOptions {
             size: 0,
             ..tiny_opts()
@@ -211,7 +210,7 @@ fn more_samples_come_closer_to_the_reference() {
     exp.materials[0].settings.remove(1);
     let report = harness::run(
         &[exp],
-        &env.environment(),
+        &env,
         &HarnessOptions {
             size: 24,
             reference: harness::ReferenceKind::Mis,
@@ -248,7 +247,7 @@ fn exact_and_mis_references_agree_within_the_mis_noise() {
     exp.materials[0].settings.truncate(1);
     let report = harness::run(
         &[exp],
-        &env.environment(),
+        &env,
         &HarnessOptions {
             size: 12,
             reference_spp: 4096,
@@ -275,4 +274,60 @@ fn exact_and_mis_references_agree_within_the_mis_noise() {
         .find(|r| r.method == "reference (exact)")
         .expect("exact row");
     assert!(exact.rms < 0.05 * noise, "{exact:?}");
+}
+
+#[test]
+fn lattice_sun_shades_a_small_sun_exactly_within_its_budget() {
+    // A 1° sun 2000× brighter than a smooth sky: split off, it is shaded exactly (one lookup),
+    // and the lattice reads the sky without it; against the exact reference the RMS must fall
+    // well below the lattice's on the whole map, at the same budget.
+    let sun = glam::DVec3::new(0.3, 0.8, 0.52).normalize();
+    let env = EnvSetup::new(
+        CubeMap::from_fn(64, |d| {
+            let sky = procedural_sky(d);
+            if d.normalize().dot(sun) > 1f64.to_radians().cos() {
+                [2000.0; 3]
+            } else {
+                sky
+            }
+        })
+        .expect("cube"),
+        MipFilter::Gauss6,
+        8,
+    )
+    .expect("env");
+    assert_eq!(env.suns.len(), 1, "one sun split off");
+    let mut exp = harness::experiment_002().expect("002");
+    exp.materials.retain(|m| m.name != "iso-0.15");
+    let report = harness::run(
+        &[exp],
+        &env,
+        &HarnessOptions {
+            size: 24,
+            reference_spp: 0,
+            ..HarnessOptions::default()
+        },
+        None,
+        &|_, _, _| {},
+    )
+    .expect("run");
+    for (material, n) in [("iso-0.1", 14), ("aniso-0.2-0.075", 17)] {
+        let lattice = report
+            .rms_of(material, n, "lattice (ours)")
+            .expect("lattice");
+        let sun = report
+            .rms_of(material, n, "lattice + sun (ours)")
+            .expect("lattice + sun");
+        assert!(
+            sun < 0.5 * lattice,
+            "{material}: lattice + sun {sun} vs lattice {lattice}"
+        );
+        let row = report
+            .rows
+            .iter()
+            .find(|r| r.material == material && r.method == "lattice + sun (ours)")
+            .expect("row");
+        assert!(row.lookups.1 <= n, "{row:?}");
+    }
+    assert!(report.to_markdown().contains("suns split off"));
 }

@@ -125,7 +125,7 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
     let stage = Mutex::new(String::new());
     let report = harness::run(
         &experiments,
-        &env.environment(),
+        &env,
         &opts,
         Some(&args.out),
         &|label, done, total| {
