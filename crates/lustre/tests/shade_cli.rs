@@ -66,6 +66,11 @@ fn compare_with_a_tiny_configuration_writes_the_table() {
         md.contains("| aniso-0.2-0.075 | 17 | lattice (ours) |"),
         "{md}"
     );
+    assert!(
+        md.contains("| aniso-0.2-0.075 | 17 | lattice + sun (ours) |")
+            && md.contains("suns split off"),
+        "{md}"
+    );
     assert!(md.contains("lookups mean / max"), "{md}");
     // The exact reference, with the MIS one beside it.
     assert!(md.contains("| iso-0.1 | 0 | reference (exact) |"), "{md}");
