@@ -571,30 +571,26 @@ fn main() -> Res<()> {
             study(map, m, &env, &sun, &configs, mc, &mut md, &mut summary)?;
         }
     }
-    let _ = writeln!(
-        md,
-        "\n## Summary: relative RMS % overall (θo < 60° / 60–80°)\n\n| map | material | {} |\n|---|---|{}",
-        METHODS.join(" | "),
-        "---:|".repeat(METHODS.len())
+    let mut table = |title: &str, cell: &dyn Fn(&SummaryRow, usize) -> String| {
+        let _ = writeln!(
+            md,
+            "\n## Summary: {title}\n\n| map | material | {} |\n|---|---|{}",
+            METHODS.join(" | "),
+            "---:|".repeat(METHODS.len())
+        );
+        for r in &summary {
+            let cells: Vec<String> = (0..NM).map(|i| cell(r, i)).collect();
+            let _ = writeln!(md, "| {} | {} | {} |", r.0, r.1, cells.join(" | "));
+        }
+    };
+    table(
+        "relative RMS % overall (θo < 60° / 60–80°)",
+        &|r, i| format!("{} ({} / {})", pct(r.2[i]), pct(r.3[i]), pct(r.4[i])),
     );
-    for (map, mat, rel, lo, hi, _, _) in &summary {
-        let cells: Vec<String> = (0..NM)
-            .map(|i| format!("{} ({} / {})", pct(rel[i]), pct(lo[i]), pct(hi[i])))
-            .collect();
-        let _ = writeln!(md, "| {map} | {mat} | {} |", cells.join(" | "));
-    }
-    let _ = writeln!(
-        md,
-        "\n## Summary: per-configuration relative error % (RMS over configurations of |e − t| / |t|, every configuration weighing alike), θo < 60° / 60–80°\n\n| map | material | {} |\n|---|---|{}",
-        METHODS.join(" | "),
-        "---:|".repeat(METHODS.len())
+    table(
+        "per-configuration relative error % (RMS over configurations of |e − t| / |t|, every configuration weighing alike), θo < 60° / 60–80°",
+        &|r, i| format!("{} / {}", pct(r.5[i]), pct(r.6[i])),
     );
-    for (map, mat, _, _, _, lo, hi) in &summary {
-        let cells: Vec<String> = (0..NM)
-            .map(|i| format!("{} / {}", pct(lo[i]), pct(hi[i])))
-            .collect();
-        let _ = writeln!(md, "| {map} | {mat} | {} |", cells.join(" | "));
-    }
     // The grazing target (θo 60–80° within 2× of θo < 60°), counted per method and metric.
     let _ = writeln!(
         md,
