@@ -21,6 +21,7 @@ pub mod models;
 pub mod numeric;
 pub mod rgb;
 pub mod sampling;
+pub mod tabulated;
 pub mod validate;
 
 pub use bsdf::{Bsdf, BsdfFlags, BsdfSample, LobeFlags};

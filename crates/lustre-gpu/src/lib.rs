@@ -32,6 +32,7 @@ pub mod fit_models;
 pub mod frame_shade;
 pub mod gbuffer;
 pub mod lightmap_shade;
+pub mod measured;
 pub mod packed;
 pub mod probe_capture;
 pub mod pyramid;

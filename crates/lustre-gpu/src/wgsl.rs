@@ -227,8 +227,16 @@ pub const TEXTURED: Module = Module {
     deps: &[&BSDF],
 };
 
+/// Measured BRDFs: MERL tables (trilinear, missing bins left out) and tabulated-CDF importance
+/// sampling (004 §IV.4.3), read from the pass's `bsdf_table`.
+pub const MEASURED: Module = Module {
+    name: "measured",
+    source: include_str!("wgsl/measured.wgsl"),
+    deps: &[&TYPES, &FRESNEL],
+};
+
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 27] = [
+pub const ALL: [&Module; 28] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -256,6 +264,7 @@ pub const ALL: [&Module; 27] = [
     &KURT,
     &BSDF,
     &TEXTURED,
+    &MEASURED,
 ];
 
 /// The source of a pass: every module in `imports` and, transitively, the modules they use,

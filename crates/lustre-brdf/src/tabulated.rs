@@ -1,0 +1,315 @@
+//! Importance sampling of any isotropic reflection BRDF by numerical inversion of tabulated
+//! CDFs, as 004 §IV.4.3 does for acquired materials (after Lawrence et al. 2004: the CDF of the
+//! BRDF, tabulated per view direction and inverted).
+//!
+//! For each of `view_bins` view elevations θo_k = (k + ½)/K · π/2, the luminance of f(ωi, ωo)
+//! cos θi is integrated over the cells of a (θi, φ) grid of the upper hemisphere (θi uniform in
+//! [0, π/2), φ = φi − φo uniform in [0, π]: an isotropic BRDF is even in φ, so the half-plane is
+//! folded onto itself and a sample takes either sign with probability ½), `supersample`²
+//! points per cell, uniform in cos θi and φ. The cell weights are the piecewise-constant density
+//! to sample from: a cell is picked by inverting the cumulative sum of its weights, then a point
+//! inside it uniformly in solid angle. The table of the nearest view bin serves `wo`, so `sample`
+//! and `pdf` use the same table. A fraction `defensive` of the samples is drawn from the cosine
+//! hemisphere, so the density is positive wherever f cos θi may be (cells whose supersampled
+//! weight missed a narrow peak, or where every channel is 0 at the cell's points):
+//!
+//! p(ωi | ωo) = ε cos θi / π + (1 − ε) w_c / (W · 2Ω_c)
+//!
+//! with w_c the weight of the cell holding (θi, |φ|), W the table's total and Ω_c the cell's
+//! solid angle ((cos θa − cos θb) Δφ; the fold doubles it).
+
+use crate::bsdf::{finish_sample, Bsdf, BsdfFlags, BsdfSample, LobeFlags};
+use crate::error::{Error, Result};
+use crate::rgb::Rgb;
+use crate::sampling::cosine_hemisphere;
+use glam::DVec3;
+use rayon::prelude::*;
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// The grid of a [`TabulatedSampler`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TabulatedOptions {
+    /// View elevations θo (one table each), uniform in [0, π/2).
+    pub view_bins: usize,
+    /// Cells along θi, uniform in [0, π/2).
+    pub theta_bins: usize,
+    /// Cells along φ = φi − φo in [0, π].
+    pub phi_bins: usize,
+    /// Points per cell and axis at which f cos θi is evaluated.
+    pub supersample: usize,
+    /// The fraction ε of samples drawn from the cosine hemisphere, in (0, 1].
+    pub defensive: f64,
+}
+
+impl Default for TabulatedOptions {
+    fn default() -> Self {
+        Self {
+            view_bins: 32,
+            theta_bins: 64,
+            phi_bins: 64,
+            supersample: 2,
+            defensive: 0.1,
+        }
+    }
+}
+
+/// The tabulated CDFs of one BRDF: per view bin, the cumulative weights of its cells.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TabulatedSampler {
+    options: TabulatedOptions,
+    /// `view_bins` tables of `theta_bins · phi_bins + 1` cumulative weights (row-major, θi
+    /// outer), each starting at 0 and ending at the table's total.
+    cdf: Vec<f64>,
+}
+
+/// The luminance of an RGB value (Rec. 709 weights).
+fn luminance(c: Rgb) -> f64 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+impl TabulatedSampler {
+    /// Tabulates `bsdf`, which must be isotropic and reflect only; errors on absurd options
+    /// (a zero count, more than 4096 bins along an axis, ε outside (0, 1]) and on a BRDF whose
+    /// f cos θi is not finite at some table point (named with the point).
+    pub fn new(bsdf: &dyn Bsdf, options: TabulatedOptions) -> Result<Self> {
+        let o = options;
+        let bad = |name: &str, value: f64, reason: &str| Error::Parameter {
+            name: format!("{name} (tabulated sampling of {})", bsdf.name()),
+            value,
+            reason: reason.into(),
+        };
+        for (name, n) in [
+            ("view_bins", o.view_bins),
+            ("theta_bins", o.theta_bins),
+            ("phi_bins", o.phi_bins),
+            ("supersample", o.supersample),
+        ] {
+            if n == 0 || n > 4096 {
+                return Err(bad(name, n as f64, "must be 1..=4096"));
+            }
+        }
+        if !(o.defensive > 0.0 && o.defensive <= 1.0) {
+            return Err(bad("defensive", o.defensive, "must lie in (0, 1]"));
+        }
+        let flags = bsdf.flags();
+        if flags.anisotropic || flags.transmission || flags.has_delta() {
+            return Err(bad(
+                "flags",
+                0.0,
+                "only isotropic reflection BRDFs without Dirac lobes are tabulated (the table folds φ and covers the upper hemisphere)",
+            ));
+        }
+        let tables: Vec<Vec<f64>> = (0..o.view_bins)
+            .into_par_iter()
+            .map(|k| view_table(bsdf, &o, k).map_err(|(v, what)| bad("f cos θi", v, &what)))
+            .collect::<Result<_>>()?;
+        let cdf = tables.concat();
+        Ok(Self { options, cdf })
+    }
+
+    /// The options the table was built with.
+    pub fn options(&self) -> TabulatedOptions {
+        self.options
+    }
+
+    /// The cumulative cell weights: `view_bins` tables of `theta_bins · phi_bins + 1` values,
+    /// each from 0 to its total (cells row-major, θi outer).
+    pub fn cumulative(&self) -> &[f64] {
+        &self.cdf
+    }
+
+    /// The cumulative weights of the table serving `wo` (θo's nearest bin), or `None` below or
+    /// at the horizon.
+    fn table(&self, wo: DVec3) -> Option<&[f64]> {
+        if wo.z.is_nan() || wo.z <= 0.0 {
+            return None;
+        }
+        let o = &self.options;
+        let theta_o = wo.z.min(1.0).acos();
+        let k = ((theta_o / FRAC_PI_2 * o.view_bins as f64) as usize).min(o.view_bins - 1);
+        let n = o.theta_bins * o.phi_bins + 1;
+        Some(&self.cdf[k * n..(k + 1) * n])
+    }
+
+    /// The tabulated density of `wi` (local, relative to `wo`'s azimuth through `phi`), without
+    /// the defensive part: w_c / (W · 2Ω_c); 0 for a black table.
+    fn table_pdf(&self, table: &[f64], cos_i: f64, phi: f64) -> f64 {
+        let o = &self.options;
+        let total = table[table.len() - 1];
+        if total <= 0.0 {
+            return 0.0;
+        }
+        let theta = cos_i.clamp(0.0, 1.0).acos();
+        let i = ((theta / FRAC_PI_2 * o.theta_bins as f64) as usize).min(o.theta_bins - 1);
+        let j = ((phi / PI * o.phi_bins as f64) as usize).min(o.phi_bins - 1);
+        let c = i * o.phi_bins + j;
+        let w = table[c + 1] - table[c];
+        let (ca, cb) = theta_cos_range(i, o.theta_bins);
+        let omega = 2.0 * (ca - cb) * PI / o.phi_bins as f64;
+        w / (total * omega)
+    }
+
+    /// Draws `wi` for `wo` (local frame, isotropic) from two uniform numbers: `None` when `wo`
+    /// lies at or below the horizon.
+    pub fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<DVec3> {
+        let table = self.table(wo)?;
+        let o = &self.options;
+        let eps = o.defensive;
+        let total = table[table.len() - 1];
+        if u1 < eps || total <= 0.0 {
+            let u = if total <= 0.0 { u1 } else { u1 / eps };
+            return Some(cosine_hemisphere(u.min(1.0 - f64::EPSILON), u2));
+        }
+        let target = (u1 - eps) / (1.0 - eps) * total;
+        // The first cell whose cumulative weight exceeds the target (cells of weight 0 are
+        // never picked: their upper bound equals their lower one).
+        let c = table[1..]
+            .partition_point(|&v| v <= target)
+            .min(o.theta_bins * o.phi_bins - 1);
+        let (lo, hi) = (table[c], table[c + 1]);
+        let r = if hi > lo {
+            ((target - lo) / (hi - lo)).clamp(0.0, 1.0 - f64::EPSILON)
+        } else {
+            0.5
+        };
+        let (i, j) = (c / o.phi_bins, c % o.phi_bins);
+        let (ca, cb) = theta_cos_range(i, o.theta_bins);
+        let cos_i = ca + (cb - ca) * r;
+        let (sign, v) = if u2 < 0.5 {
+            (1.0, 2.0 * u2)
+        } else {
+            (-1.0, 2.0 * u2 - 1.0)
+        };
+        let phi = sign * (j as f64 + v) * PI / o.phi_bins as f64 + wo.y.atan2(wo.x);
+        let sin = (1.0 - cos_i * cos_i).max(0.0).sqrt();
+        Some(DVec3::new(sin * phi.cos(), sin * phi.sin(), cos_i))
+    }
+
+    /// The density (per solid angle) with which [`TabulatedSampler::sample`] draws `wi`.
+    pub fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
+        let Some(table) = self.table(wo) else {
+            return 0.0;
+        };
+        if wi.z.is_nan() || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let cosine = wi.z / PI;
+        if table[table.len() - 1] <= 0.0 {
+            return cosine;
+        }
+        let mut phi = (wi.y.atan2(wi.x) - wo.y.atan2(wo.x)).abs();
+        if phi > PI {
+            phi = 2.0 * PI - phi;
+        }
+        let eps = self.options.defensive;
+        eps * cosine + (1.0 - eps) * self.table_pdf(table, wi.z, phi)
+    }
+}
+
+/// The cumulative weights of view bin `k` (θo_k = (k + ½)/K · π/2): `theta_bins · phi_bins + 1`
+/// values from 0; a non-finite f cos θi gives the value and where it is.
+fn view_table(
+    bsdf: &dyn Bsdf,
+    o: &TabulatedOptions,
+    k: usize,
+) -> std::result::Result<Vec<f64>, (f64, String)> {
+    let theta_o = (k as f64 + 0.5) / o.view_bins as f64 * FRAC_PI_2;
+    let wo = DVec3::new(theta_o.sin(), 0.0, theta_o.cos());
+    let s = o.supersample as f64;
+    let dphi = PI / o.phi_bins as f64;
+    let mut cdf = Vec::with_capacity(o.theta_bins * o.phi_bins + 1);
+    let mut acc = 0.0;
+    cdf.push(0.0);
+    for i in 0..o.theta_bins {
+        let (ca, cb) = theta_cos_range(i, o.theta_bins);
+        for j in 0..o.phi_bins {
+            let mut sum = 0.0;
+            for a in 0..o.supersample {
+                let c = ca + (cb - ca) * (a as f64 + 0.5) / s;
+                let sin = (1.0 - c * c).max(0.0).sqrt();
+                for b in 0..o.supersample {
+                    let phi = (j as f64 + (b as f64 + 0.5) / s) * dphi;
+                    let wi = DVec3::new(sin * phi.cos(), sin * phi.sin(), c);
+                    let v = luminance(bsdf.eval(wi, wo)) * c;
+                    if !v.is_finite() {
+                        return Err((
+                            v,
+                            format!(
+                                "not finite at θo = {:.2}°, θi = {:.2}°, φ = {:.2}°",
+                                theta_o.to_degrees(),
+                                c.acos().to_degrees(),
+                                phi.to_degrees()
+                            ),
+                        ));
+                    }
+                    sum += v.max(0.0);
+                }
+            }
+            acc += sum / (s * s) * (ca - cb) * dphi;
+            cdf.push(acc);
+        }
+    }
+    Ok(cdf)
+}
+
+/// cos θ at the lower and upper θ edges of cell `i` of `n` (θ uniform in [0, π/2)): (cos θa,
+/// cos θb) with cos θa > cos θb.
+fn theta_cos_range(i: usize, n: usize) -> (f64, f64) {
+    let a = i as f64 / n as f64 * FRAC_PI_2;
+    let b = (i + 1) as f64 / n as f64 * FRAC_PI_2;
+    (a.cos(), if i + 1 == n { 0.0 } else { b.cos() })
+}
+
+/// A BRDF sampled from its own tabulated CDFs: `eval` and `flags` are the inner BRDF's,
+/// `sample` and `pdf` come from its [`TabulatedSampler`].
+#[derive(Clone, Debug)]
+pub struct Tabulated<B> {
+    inner: B,
+    sampler: TabulatedSampler,
+}
+
+impl<B: Bsdf> Tabulated<B> {
+    /// Tabulates `inner` (see [`TabulatedSampler::new`]).
+    pub fn new(inner: B, options: TabulatedOptions) -> Result<Self> {
+        let sampler = TabulatedSampler::new(&inner, options)?;
+        Ok(Self { inner, sampler })
+    }
+
+    /// The BRDF being sampled.
+    pub fn inner(&self) -> &B {
+        &self.inner
+    }
+
+    /// Its tables.
+    pub fn sampler(&self) -> &TabulatedSampler {
+        &self.sampler
+    }
+}
+
+impl<B: Bsdf> Bsdf for Tabulated<B> {
+    fn name(&self) -> String {
+        format!("{} (tabulated sampling)", self.inner.name())
+    }
+
+    fn eval(&self, wi: DVec3, wo: DVec3) -> Rgb {
+        self.inner.eval(wi, wo)
+    }
+
+    fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
+        let wi = self.sampler.sample(wo, u1, u2)?;
+        if wi.z.is_nan() || wi.z <= 0.0 {
+            return None;
+        }
+        finish_sample(wi, wo, self.sampler.pdf(wi, wo), LobeFlags::GLOSSY, || {
+            self.inner.eval(wi, wo)
+        })
+    }
+
+    fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
+        self.sampler.pdf(wi, wo)
+    }
+
+    fn flags(&self) -> BsdfFlags {
+        self.inner.flags()
+    }
+}

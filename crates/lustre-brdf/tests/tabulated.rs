@@ -1,0 +1,226 @@
+//! Tabulated-CDF importance sampling (004 §IV.4.3) of measured BRDFs: the five MERL materials
+//! 004 renders (as their neural BRDFs), chi-square between `sample` and `pdf`, the density's
+//! normalization, the variance it saves over cosine sampling, and refused inputs.
+
+use lustre_brdf::measured::nbrdf::{Nbrdf, NbrdfSet};
+use lustre_brdf::models::kurt::{Kurt, KurtLobe};
+use lustre_brdf::numeric::SphereQuadrature;
+use lustre_brdf::sampling::hammersley;
+use lustre_brdf::tabulated::{Tabulated, TabulatedOptions};
+use lustre_brdf::validate::{chi2_test, pdf_integral};
+use lustre_brdf::{Bsdf, DVec3, Error, Rgb};
+use std::sync::OnceLock;
+
+/// 004 Fig. IV.13 / IV.15's materials.
+const MATERIALS: [&str; 5] = [
+    "gold-paint",
+    "red-metallic-paint",
+    "color-changing-paint3",
+    "blue-rubber",
+    "white-marble",
+];
+
+fn set() -> &'static NbrdfSet {
+    static SET: OnceLock<NbrdfSet> = OnceLock::new();
+    SET.get_or_init(|| {
+        NbrdfSet::read(lustre_brdf::shared_data_dir().join("nbrdf/merl_nbrdf.json"))
+            .expect("merl_nbrdf.json")
+    })
+}
+
+fn material(name: &str) -> Nbrdf {
+    set().material(name).expect("material")
+}
+
+fn wo(theta_deg: f64) -> DVec3 {
+    let t = theta_deg.to_radians();
+    DVec3::new(t.sin() * 0.6, t.sin() * 0.8, t.cos())
+}
+
+#[test]
+fn sample_follows_pdf_and_the_pdf_integrates_to_one() {
+    let q = SphereQuadrature {
+        phi_points: 512,
+        uniform_panels: 96,
+        ..Default::default()
+    };
+    let views = [10.0, 45.0, 75.0];
+    let tests = MATERIALS.len() * views.len();
+    for (mi, name) in MATERIALS.iter().enumerate() {
+        let t = Tabulated::new(material(name), TabulatedOptions::default()).expect("tabulate");
+        for (vi, theta) in views.into_iter().enumerate() {
+            let w = wo(theta);
+            let r = chi2_test(&t, w, 16, 40_000, 77 + (mi * 3 + vi) as u64);
+            assert!(r.passed(0.01, tests), "{name} at θo {theta}°: {r:?}");
+            let integral = pdf_integral(&t, w, &q);
+            eprintln!(
+                "{name} θo {theta}°: ∫pdf = {integral:.5}, chi² p = {:.3}",
+                r.p_value
+            );
+            assert!(
+                (integral - 1.0).abs() < 5e-3,
+                "{name} at θo {theta}°: ∫pdf = {integral}"
+            );
+        }
+    }
+}
+
+/// The variance of the albedo estimator f cos θi / p (luminance) with `n` Hammersley samples.
+fn albedo_variance(b: &dyn Bsdf, w: DVec3, n: usize) -> (f64, f64) {
+    let lum = |c: Rgb| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+    let (mut s, mut s2) = (0.0, 0.0);
+    for k in 0..n {
+        let (u1, u2) = hammersley(k as u32, n as u32);
+        let x = b.sample(w, u1, u2).map_or(0.0, |smp| lum(smp.weight()));
+        s += x;
+        s2 += x * x;
+    }
+    let mean = s / n as f64;
+    (mean, s2 / n as f64 - mean * mean)
+}
+
+#[test]
+fn tabulated_sampling_cuts_the_variance_of_glossy_measured_materials() {
+    // Per sample, against the cosine sampling the neural BRDFs use on their own; both
+    // estimators have the same mean (the albedo), so the variance ratio is the speed-up at
+    // equal noise. Measured (2026-12-03): see BENCHMARKS.md, "Tabulated sampling".
+    for (name, least) in [
+        ("gold-paint", 50.0),
+        ("red-metallic-paint", 50.0),
+        ("color-changing-paint3", 50.0),
+        ("blue-rubber", 10.0),
+        ("white-marble", 10.0),
+    ] {
+        let m = material(name);
+        let t = Tabulated::new(m.clone(), TabulatedOptions::default()).expect("tabulate");
+        for theta in [20.0, 60.0] {
+            let w = wo(theta);
+            let (a_cos, v_cos) = albedo_variance(&m, w, 1 << 16);
+            let (a_tab, v_tab) = albedo_variance(&t, w, 1 << 16);
+            assert!(
+                (a_tab - a_cos).abs() < 0.02 * a_cos.max(1e-3),
+                "{name} θo {theta}°: albedo {a_tab} vs {a_cos}"
+            );
+            eprintln!(
+                "{name} θo {theta}°: albedo {a_tab:.4} / {a_cos:.4}, variance cosine / tabulated = {:.1}",
+                v_cos / v_tab
+            );
+            assert!(
+                v_cos > least * v_tab,
+                "{name} θo {theta}°: variance cosine {v_cos:e} vs tabulated {v_tab:e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn bad_options_and_unsupported_models_are_refused_by_name() {
+    let m = material("blue-rubber");
+    for (o, what) in [
+        (
+            TabulatedOptions {
+                view_bins: 0,
+                ..TabulatedOptions::default()
+            },
+            "view_bins",
+        ),
+        (
+            TabulatedOptions {
+                phi_bins: 100_000,
+                ..TabulatedOptions::default()
+            },
+            "phi_bins",
+        ),
+        (
+            TabulatedOptions {
+                defensive: 0.0,
+                ..TabulatedOptions::default()
+            },
+            "defensive",
+        ),
+        (
+            TabulatedOptions {
+                defensive: f64::NAN,
+                ..TabulatedOptions::default()
+            },
+            "defensive",
+        ),
+    ] {
+        match Tabulated::new(m.clone(), o) {
+            Err(e @ Error::Parameter { .. }) => {
+                let s = e.to_string();
+                assert!(s.contains(what) && s.contains("blue-rubber"), "{s}");
+            }
+            other => panic!("{what}: {other:?}"),
+        }
+    }
+    let aniso = Kurt::new(
+        Rgb::ZERO,
+        vec![KurtLobe::new(Rgb::ONE, 0.1, 0.3, 0.5, 0.0).expect("lobe")],
+        vec![],
+    )
+    .expect("kurt");
+    let e = Tabulated::new(aniso, TabulatedOptions::default()).expect_err("anisotropic");
+    assert!(e.to_string().contains("isotropic"), "{e}");
+}
+
+#[derive(Debug)]
+struct Black;
+
+impl Bsdf for Black {
+    fn name(&self) -> String {
+        "black".into()
+    }
+    fn eval(&self, _: DVec3, _: DVec3) -> Rgb {
+        Rgb::ZERO
+    }
+    fn sample(&self, _: DVec3, _: f64, _: f64) -> Option<lustre_brdf::BsdfSample> {
+        None
+    }
+    fn pdf(&self, _: DVec3, _: DVec3) -> f64 {
+        0.0
+    }
+    fn flags(&self) -> lustre_brdf::BsdfFlags {
+        lustre_brdf::BsdfFlags::isotropic_reflection(true, true)
+    }
+}
+
+#[derive(Debug)]
+struct NanAt30;
+
+impl Bsdf for NanAt30 {
+    fn name(&self) -> String {
+        "nan-at-30".into()
+    }
+    fn eval(&self, wi: DVec3, _: DVec3) -> Rgb {
+        if wi.z < 30f64.to_radians().cos() {
+            Rgb::splat(f64::NAN)
+        } else {
+            Rgb::splat(0.3)
+        }
+    }
+    fn sample(&self, _: DVec3, _: f64, _: f64) -> Option<lustre_brdf::BsdfSample> {
+        None
+    }
+    fn pdf(&self, _: DVec3, _: DVec3) -> f64 {
+        0.0
+    }
+    fn flags(&self) -> lustre_brdf::BsdfFlags {
+        lustre_brdf::BsdfFlags::isotropic_reflection(true, true)
+    }
+}
+
+#[test]
+fn a_black_brdf_falls_back_to_cosine_sampling_and_nan_is_refused() {
+    let t = Tabulated::new(Black, TabulatedOptions::default()).expect("black");
+    let w = wo(40.0);
+    let r = chi2_test(&t, w, 16, 20_000, 3);
+    assert!(r.passed(0.01, 1), "{r:?}");
+    let e = Tabulated::new(NanAt30, TabulatedOptions::default()).expect_err("NaN");
+    let s = e.to_string();
+    assert!(s.contains("nan-at-30") && s.contains("not finite"), "{s}");
+    // Below the horizon nothing is drawn and the density is 0.
+    let below = DVec3::new(0.3, 0.0, -0.95).normalize();
+    assert!(t.sample(below, 0.5, 0.5).is_none());
+    assert_eq!(t.pdf(DVec3::Z, below), 0.0);
+}

@@ -1,0 +1,231 @@
+// Measured BRDFs on the GPU (004 §IV.4.3): MERL tables evaluated from the half/difference
+// angles (lustre_brdf::measured::merl), and importance sampling by numerical inversion of
+// tabulated CDFs (lustre_brdf::tabulated). Both read the pass's side table through
+// `bsdf_table(i)`: the words of measured::pack_merl (3 × 90·90·180 stored values, channel-major,
+// a missing bin as −1) and measured::pack_tabulated (per view bin, the cumulative cell weights
+// over their total, then each cell's weight over the total, so that a cell's density does not
+// come from the difference of two f32 sums).
+
+const MERL_RES_TH: u32 = 90u;
+const MERL_RES_TD: u32 = 90u;
+const MERL_RES_PD: u32 = 180u;
+const MERL_BINS: u32 = 1458000u;
+const MERL_SCALE: vec3<f32> = vec3<f32>(1.0 / 1500.0, 1.15 / 1500.0, 1.66 / 1500.0);
+
+// merl::merl_angles: (θh, θd, φd folded into [0, π), 1), or w = 0 when either direction is at or
+// below the surface or they are opposite. θ from atan2 (acos loses the small angles in f32).
+fn merl_angles(wi: vec3<f32>, wo: vec3<f32>) -> vec4<f32> {
+    if (!(wi.z > 0.0 && wo.z > 0.0)) {
+        return vec4<f32>(0.0);
+    }
+    let s = wi + wo;
+    let l2 = dot(s, s);
+    if (!(l2 > 1e-24)) {
+        return vec4<f32>(0.0);
+    }
+    let h = s / sqrt(l2);
+    let theta_h = atan2(length(h.xy), h.z);
+    let phi_h = atan2(h.y, h.x);
+    // frame::to_half_diff: wi turned by −φh about z, then by −θh about y.
+    let cz = cos(phi_h);
+    let sz = sin(phi_h);
+    let a = vec3<f32>(cz * wi.x + sz * wi.y, -sz * wi.x + cz * wi.y, wi.z);
+    let cy = cos(theta_h);
+    let sy = sin(theta_h);
+    let d = vec3<f32>(cy * a.x - sy * a.z, a.y, sy * a.x + cy * a.z);
+    let theta_d = atan2(length(d.xy), d.z);
+    var phi_d = atan2(d.y, d.x);
+    // merl::fold_phi_d.
+    phi_d = phi_d - PI * floor(phi_d / PI);
+    if (phi_d >= PI) {
+        phi_d = 0.0;
+    }
+    return vec4<f32>(theta_h, theta_d, phi_d, 1.0);
+}
+
+// merl::clamped_axis: the two nodes around index coordinate x and the second's weight
+// (x, y: indices as f32; z: weight).
+fn merl_clamped_axis(x: f32, n: u32) -> vec3<f32> {
+    if (!(x > 0.0)) {
+        return vec3<f32>(0.0);
+    }
+    let last = f32(n - 1u);
+    if (x >= last) {
+        return vec3<f32>(last, last, 0.0);
+    }
+    let i0 = floor(x);
+    return vec3<f32>(i0, i0 + 1.0, x - i0);
+}
+
+// MerlTable::lookup_trilinear on the table at word `base`: trilinear between the nodes at
+// `offset` (0: the lower edge, ½: the centre) in index space, θ ends clamped, φd periodic; a
+// missing (negative) corner is left out and the present weights renormalized; 0 without any.
+fn merl_lookup(base: u32, theta_h: f32, theta_d: f32, phi_d: f32, offset: f32) -> vec3<f32> {
+    var uh = 0.0;
+    if (theta_h > 0.0) {
+        uh = sqrt(theta_h / (0.5 * PI)) * f32(MERL_RES_TH);
+    }
+    let h = merl_clamped_axis(uh - offset, MERL_RES_TH);
+    let d = merl_clamped_axis(theta_d / (0.5 * PI) * f32(MERL_RES_TD) - offset, MERL_RES_TD);
+    let p = phi_d - PI * floor(phi_d / PI);
+    let x = p / PI * f32(MERL_RES_PD) - offset;
+    var p0 = 0u;
+    var tp = 0.0;
+    if (abs(x) <= 3.4e38) {
+        let f = floor(x);
+        tp = clamp(x - f, 0.0, 1.0);
+        let n = i32(MERL_RES_PD);
+        p0 = u32(((i32(f) % n) + n) % n);
+    }
+    let p1 = (p0 + 1u) % MERL_RES_PD;
+    var sum = vec3<f32>(0.0);
+    var wsum = vec3<f32>(0.0);
+    for (var c = 0u; c < 8u; c++) {
+        var i = u32(h.x);
+        var wi = 1.0 - h.z;
+        if ((c & 4u) != 0u) {
+            i = u32(h.y);
+            wi = h.z;
+        }
+        var j = u32(d.x);
+        var wj = 1.0 - d.z;
+        if ((c & 2u) != 0u) {
+            j = u32(d.y);
+            wj = d.z;
+        }
+        var k = p0;
+        var wk = 1.0 - tp;
+        if ((c & 1u) != 0u) {
+            k = p1;
+            wk = tp;
+        }
+        let w = wi * wj * wk;
+        let off = k + MERL_RES_PD * (j + MERL_RES_TD * i);
+        for (var ch = 0u; ch < 3u; ch++) {
+            let v = bsdf_table(base + ch * MERL_BINS + off);
+            if (v >= 0.0) {
+                sum[ch] += w * v;
+                wsum[ch] += w;
+            }
+        }
+    }
+    var out = vec3<f32>(0.0);
+    for (var ch = 0u; ch < 3u; ch++) {
+        if (wsum[ch] > 0.0) {
+            out[ch] = sum[ch] / wsum[ch] * MERL_SCALE[ch];
+        }
+    }
+    return out;
+}
+
+// MerlTable::eval (trilinear): f(wi, wo) in 1/sr, 0 unless both lie above the surface.
+fn merl_eval(base: u32, offset: f32, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    let a = merl_angles(wi, wo);
+    if (a.w == 0.0) {
+        return vec3<f32>(0.0);
+    }
+    return merl_lookup(base, a.x, a.y, a.z, offset);
+}
+
+// The layout of a tabulated sampler (TabulatedOptions): view bins, θi bins, φ bins; ε.
+struct TabulatedDims {
+    view_bins: u32,
+    theta_bins: u32,
+    phi_bins: u32,
+    defensive: f32,
+}
+
+// tabulated::theta_cos_range: (cos θa, cos θb) of θ cell i of n.
+fn tabulated_cos_range(i: u32, n: u32) -> vec2<f32> {
+    let a = f32(i) / f32(n) * 0.5 * PI;
+    var cb = 0.0;
+    if (i + 1u < n) {
+        cb = cos(f32(i + 1u) / f32(n) * 0.5 * PI);
+    }
+    return vec2<f32>(cos(a), cb);
+}
+
+// TabulatedSampler::table: the first word of the table serving wo (θo's bin); wo.z > 0.
+fn tabulated_table(base: u32, dims: TabulatedDims, wo: vec3<f32>) -> u32 {
+    let theta_o = atan2(length(wo.xy), wo.z);
+    let k = min(u32(theta_o / (0.5 * PI) * f32(dims.view_bins)), dims.view_bins - 1u);
+    return base + k * (2u * dims.theta_bins * dims.phi_bins + 1u);
+}
+
+// TabulatedSampler::sample: (wi, 1), or w = 0 when wo lies at or below the horizon.
+fn tabulated_sample(base: u32, dims: TabulatedDims, wo: vec3<f32>, u1: f32,
+                    u2: f32) -> vec4<f32> {
+    if (!(wo.z > 0.0)) {
+        return vec4<f32>(0.0);
+    }
+    let t = tabulated_table(base, dims, wo);
+    let cells = dims.theta_bins * dims.phi_bins;
+    let total = bsdf_table(t + cells);
+    let eps = dims.defensive;
+    if (u1 < eps || !(total > 0.0)) {
+        var u = u1;
+        if (total > 0.0) {
+            u = u1 / eps;
+        }
+        return vec4<f32>(cosine_hemisphere(min(u, 0.99999994), u2), 1.0);
+    }
+    let goal = (u1 - eps) / (1.0 - eps);
+    // The first cell whose cumulative weight exceeds the goal.
+    var lo = 0u;
+    var hi = cells;
+    while (lo < hi) {
+        let mid = (lo + hi) / 2u;
+        if (bsdf_table(t + mid + 1u) <= goal) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    let c = min(lo, cells - 1u);
+    let a = bsdf_table(t + c);
+    let b = bsdf_table(t + c + 1u);
+    var r = 0.5;
+    if (b > a) {
+        r = clamp((goal - a) / (b - a), 0.0, 0.99999994);
+    }
+    let i = c / dims.phi_bins;
+    let j = c % dims.phi_bins;
+    let cr = tabulated_cos_range(i, dims.theta_bins);
+    let cos_i = cr.x + (cr.y - cr.x) * r;
+    var sign = 1.0;
+    var v = 2.0 * u2;
+    if (u2 >= 0.5) {
+        sign = -1.0;
+        v = 2.0 * u2 - 1.0;
+    }
+    let phi = sign * (f32(j) + v) * PI / f32(dims.phi_bins) + atan2(wo.y, wo.x);
+    let sin_i = sqrt(max(1.0 - cos_i * cos_i, 0.0));
+    return vec4<f32>(sin_i * cos(phi), sin_i * sin(phi), cos_i, 1.0);
+}
+
+// TabulatedSampler::pdf: ε cos θi / π + (1 − ε) w_c / (W · 2Ω_c) (the table holds w_c / W).
+fn tabulated_pdf(base: u32, dims: TabulatedDims, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
+    if (!(wo.z > 0.0 && wi.z > 0.0)) {
+        return 0.0;
+    }
+    let t = tabulated_table(base, dims, wo);
+    let cells = dims.theta_bins * dims.phi_bins;
+    let total = bsdf_table(t + cells);
+    let cosine = wi.z / PI;
+    if (!(total > 0.0)) {
+        return cosine;
+    }
+    var phi = abs(atan2(wi.y, wi.x) - atan2(wo.y, wo.x));
+    if (phi > PI) {
+        phi = 2.0 * PI - phi;
+    }
+    let theta = atan2(length(wi.xy), wi.z);
+    let i = min(u32(theta / (0.5 * PI) * f32(dims.theta_bins)), dims.theta_bins - 1u);
+    let j = min(u32(phi / PI * f32(dims.phi_bins)), dims.phi_bins - 1u);
+    let c = i * dims.phi_bins + j;
+    let w = bsdf_table(t + cells + 1u + c);
+    let cr = tabulated_cos_range(i, dims.theta_bins);
+    let omega = 2.0 * (cr.x - cr.y) * PI / f32(dims.phi_bins);
+    let eps = dims.defensive;
+    return eps * cosine + (1.0 - eps) * w / omega;
+}
