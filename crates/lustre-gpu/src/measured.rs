@@ -1,8 +1,9 @@
 //! Side tables of the measured BRDFs the GPU evaluates and samples (`wgsl/measured.wgsl`, read
-//! through a pass's `bsdf_table`): a MERL table's stored values, and the tabulated CDFs of
-//! [`lustre_brdf::tabulated::TabulatedSampler`].
+//! through a pass's `bsdf_table`): a MERL table's stored values, a neural BRDF's weights, and
+//! the tabulated CDFs of [`lustre_brdf::tabulated::TabulatedSampler`].
 
 use lustre_brdf::measured::merl::{MerlTable, BINS, RES_PHI_D, RES_THETA_D, RES_THETA_H};
+use lustre_brdf::measured::nbrdf::Nbrdf;
 use lustre_brdf::tabulated::TabulatedSampler;
 
 /// The words of a MERL table for `merl_lookup`: its 3 × 90·90·180 stored values (unscaled,
@@ -23,6 +24,12 @@ pub fn pack_merl(table: &MerlTable) -> Vec<f32> {
         }
     }
     out
+}
+
+/// The words of a neural BRDF for `nbrdf_eval`: its 6-21-21-3 network's parameters in
+/// [`Nbrdf::parameters`]' order (w1, b1, w2, b2, w3, b3), 675 of them.
+pub fn pack_nbrdf(net: &Nbrdf) -> Vec<f32> {
+    net.parameters().iter().map(|&v| v as f32).collect()
 }
 
 /// `TabulatedDims` of `measured.wgsl`: the sampler's bins and defensive fraction.

@@ -1,6 +1,7 @@
 //! `wgsl/measured.wgsl` against its CPU twins: a MERL table (synthesized from the gold-paint
 //! neural BRDF of 004's scenes, with bins marked missing) evaluated by `merl_eval` vs
-//! `MerlTable::eval`, and tabulated-CDF importance sampling (`tabulated_sample`,
+//! `MerlTable::eval`, the neural BRDFs of 004's five materials (`nbrdf_eval` vs `Nbrdf::eval`),
+//! and tabulated-CDF importance sampling (`tabulated_sample`,
 //! `tabulated_pdf`) vs `TabulatedSampler`. GPU tests fail (never skip) without an adapter.
 
 use glam::DVec3;
@@ -9,7 +10,7 @@ use lustre_brdf::measured::nbrdf::{synthesize_merl, NbrdfSet};
 use lustre_brdf::sampling::{uniform_sphere, SplitMix64};
 use lustre_brdf::tabulated::{TabulatedOptions, TabulatedSampler};
 use lustre_brdf::Bsdf;
-use lustre_gpu::measured::{pack_merl, pack_tabulated};
+use lustre_gpu::measured::{pack_merl, pack_nbrdf, pack_tabulated};
 use lustre_gpu::wgsl::{self, Module};
 
 mod common;
@@ -25,9 +26,7 @@ const TABLE: Module = Module {
 
 /// gold-paint's MERL table with every 997th stored value marked missing (−1 in the file).
 fn gold_paint_with_holes() -> MerlTable {
-    let set = NbrdfSet::read(lustre_brdf::shared_data_dir().join("nbrdf/merl_nbrdf.json"))
-        .expect("merl_nbrdf.json");
-    let table = synthesize_merl(&set.material("gold-paint").expect("gold-paint"), |_| {});
+    let table = synthesize_merl(&set().material("gold-paint").expect("gold-paint"), |_| {});
     let mut bytes = table.to_bytes();
     for n in (0..3 * BINS).step_by(997) {
         let at = HEADER_BYTES + 8 * n;
@@ -39,9 +38,107 @@ fn gold_paint_with_holes() -> MerlTable {
     t
 }
 
+fn set() -> NbrdfSet {
+    NbrdfSet::read(lustre_brdf::shared_data_dir().join("nbrdf/merl_nbrdf.json"))
+        .expect("merl_nbrdf.json")
+}
+
 fn upper(g: &mut SplitMix64) -> DVec3 {
     let w = uniform_sphere(g.next_f64(), g.next_f64());
     DVec3::new(w.x, w.y, w.z.abs().max(1e-3)).normalize()
+}
+
+/// `n` direction pairs: half anywhere above the surface, half within a few degrees of the
+/// mirror direction (the peak, where θh is small).
+fn pairs(g: &mut SplitMix64, n: usize) -> Vec<(DVec3, DVec3)> {
+    (0..n)
+        .map(|k| {
+            let wo = upper(g);
+            let wi = if k % 2 == 0 {
+                upper(g)
+            } else {
+                let mirror = DVec3::new(-wo.x, -wo.y, wo.z);
+                let jitter = uniform_sphere(g.next_f64(), g.next_f64()) * 0.05 * g.next_f64();
+                let w = (mirror + jitter).normalize();
+                DVec3::new(w.x, w.y, w.z.abs().max(1e-3)).normalize()
+            };
+            (wi, wo)
+        })
+        .collect()
+}
+
+/// The pairs as kernel input after `input`'s first `q` words: wi, wo (6 f32 each).
+fn push_pairs(input: &mut Vec<u32>, pairs: &[(DVec3, DVec3)]) {
+    for &(wi, wo) in pairs {
+        push_dir(input, wi);
+        push_dir(input, wo);
+    }
+}
+
+/// Relative error per channel of the GPU's RGB values (`out`, 3 words each) against the CPU's,
+/// over the value's scale (the larger of the two and 1e-3 of the sample's peak): RMS and worst.
+fn relative_error(cpu: &[[f64; 3]], out: &[u32]) -> (f64, f64) {
+    let peak = cpu.iter().flatten().fold(0.0f64, |m, &v| m.max(v));
+    let mut worst = 0.0f64;
+    let mut sq = 0.0;
+    for (k, c) in cpu.iter().enumerate() {
+        for ch in 0..3 {
+            let gv = f64::from(f32::from_bits(out[3 * k + ch]));
+            let e = (gv - c[ch]).abs() / c[ch].abs().max(gv.abs()).max(1e-3 * peak);
+            sq += e * e;
+            worst = worst.max(e);
+        }
+    }
+    ((sq / (3 * cpu.len()) as f64).sqrt(), worst)
+}
+
+/// The kernel body that evaluates `call` (a WGSL expression of `wi`, `wo`) on the pairs at
+/// word `q` and writes its RGB.
+fn eval_body(q: usize, call: &str) -> String {
+    format!(
+        "let b = {q}u + i * 6u;\n\
+         let wi = vec3<f32>(bitcast<f32>(input[b]), bitcast<f32>(input[b + 1u]), bitcast<f32>(input[b + 2u]));\n\
+         let wo = vec3<f32>(bitcast<f32>(input[b + 3u]), bitcast<f32>(input[b + 4u]), bitcast<f32>(input[b + 5u]));\n\
+         let f = {call};\n\
+         for (var c = 0u; c < 3u; c++) {{ output[i * 3u + c] = bitcast<u32>(f[c]); }}"
+    )
+}
+
+#[test]
+fn nbrdf_eval_matches_the_cpu_on_the_five_materials_of_004() {
+    let ctx = ctx();
+    let set = set();
+    let mut g = SplitMix64::new(5);
+    let n = 4096;
+    let pairs = pairs(&mut g, n);
+    for name in [
+        "gold-paint",
+        "red-metallic-paint",
+        "color-changing-paint3",
+        "blue-rubber",
+        "white-marble",
+    ] {
+        let net = set.material(name).expect("material");
+        let mut input = words(&pack_nbrdf(&net));
+        let q = input.len();
+        push_pairs(&mut input, &pairs);
+        let out = run_kernel(
+            &ctx,
+            &[&TABLE, &wgsl::MEASURED],
+            &eval_body(q, "nbrdf_eval(0u, wi, wo)"),
+            &input,
+            3 * n,
+            n as u32,
+            None,
+        );
+        let cpu: Vec<[f64; 3]> = pairs.iter().map(|&(wi, wo)| net.eval(wi, wo).0).collect();
+        let (rms, worst) = relative_error(&cpu, &out);
+        eprintln!("nbrdf_eval vs Nbrdf::eval, {name}, {n} pairs: relative error RMS {rms:.2e}, worst {worst:.2e}");
+        assert!(
+            rms < 1e-4 && worst < 5e-3,
+            "{name}: rms {rms:e}, worst {worst:e}"
+        );
+    }
 }
 
 fn words(v: &[f32]) -> Vec<u32> {
@@ -58,61 +155,26 @@ fn merl_eval_and_tabulated_sampling_match_the_cpu() {
     let table = gold_paint_with_holes();
     let packed = pack_merl(&table);
     let mut g = SplitMix64::new(11);
-    // Half the pairs anywhere above the surface, half within a few degrees of the mirror
-    // direction (the peak, where θh is small).
     let n = 8192;
-    let pairs: Vec<(DVec3, DVec3)> = (0..n)
-        .map(|k| {
-            let wo = upper(&mut g);
-            let wi = if k % 2 == 0 {
-                upper(&mut g)
-            } else {
-                let mirror = DVec3::new(-wo.x, -wo.y, wo.z);
-                let jitter = uniform_sphere(g.next_f64(), g.next_f64()) * 0.05 * g.next_f64();
-                let w = (mirror + jitter).normalize();
-                DVec3::new(w.x, w.y, w.z.abs().max(1e-3)).normalize()
-            };
-            (wi, wo)
-        })
-        .collect();
+    let pairs = pairs(&mut g, n);
     let mut input = words(&packed);
     let q = input.len();
-    for &(wi, wo) in &pairs {
-        push_dir(&mut input, wi);
-        push_dir(&mut input, wo);
-    }
-    let body = format!(
-        "let b = {q}u + i * 6u;\n\
-         let wi = vec3<f32>(bitcast<f32>(input[b]), bitcast<f32>(input[b + 1u]), bitcast<f32>(input[b + 2u]));\n\
-         let wo = vec3<f32>(bitcast<f32>(input[b + 3u]), bitcast<f32>(input[b + 4u]), bitcast<f32>(input[b + 5u]));\n\
-         let f = merl_eval(0u, {offset:?}, wi, wo);\n\
-         for (var c = 0u; c < 3u; c++) {{ output[i * 3u + c] = bitcast<u32>(f[c]); }}",
-        offset = table.convention().offset() as f32
+    push_pairs(&mut input, &pairs);
+    let call = format!(
+        "merl_eval(0u, {:?}, wi, wo)",
+        table.convention().offset() as f32
     );
     let out = run_kernel(
         &ctx,
         &[&TABLE, &wgsl::MEASURED],
-        &body,
+        &eval_body(q, &call),
         &input,
         3 * n,
         n as u32,
         None,
     );
-    // Relative error per channel over the value's scale (the larger of the two and 1e-3 of
-    // the table's peak in this sample).
     let cpu: Vec<[f64; 3]> = pairs.iter().map(|&(wi, wo)| table.eval(wi, wo).0).collect();
-    let peak = cpu.iter().flatten().fold(0.0f64, |m, &v| m.max(v));
-    let mut worst = 0.0f64;
-    let mut sq = 0.0;
-    for (k, c) in cpu.iter().enumerate() {
-        for ch in 0..3 {
-            let gv = f64::from(f32::from_bits(out[3 * k + ch]));
-            let e = (gv - c[ch]).abs() / c[ch].abs().max(gv.abs()).max(1e-3 * peak);
-            sq += e * e;
-            worst = worst.max(e);
-        }
-    }
-    let rms = (sq / (3 * n) as f64).sqrt();
+    let (rms, worst) = relative_error(&cpu, &out);
     eprintln!(
         "merl_eval vs MerlTable::eval on {n} pairs (half near the mirror direction, {} missing values): relative error RMS {rms:.2e}, worst {worst:.2e}; {}",
         table.missing_count(),

@@ -137,6 +137,21 @@ impl Nbrdf {
         &self.name
     }
 
+    /// The network's parameters in one flat list: w1 (6 rows of HIDDEN), b1, w2 (HIDDEN rows
+    /// of HIDDEN), b2, w3 (HIDDEN rows of 3), b3 — the layout the GPU reads
+    /// (`lustre_gpu::measured::pack_nbrdf`).
+    pub fn parameters(&self) -> Vec<f64> {
+        let mut out =
+            Vec::with_capacity(6 * HIDDEN + HIDDEN + HIDDEN * HIDDEN + HIDDEN + 3 * HIDDEN + 3);
+        self.w1.iter().for_each(|r| out.extend_from_slice(r));
+        out.extend_from_slice(&self.b1);
+        self.w2.iter().for_each(|r| out.extend_from_slice(r));
+        out.extend_from_slice(&self.b2);
+        self.w3.iter().for_each(|r| out.extend_from_slice(r));
+        out.extend_from_slice(&self.b3);
+        out
+    }
+
     /// The network input (hx, hy, hz, dx, dy, dz) for half/difference angles, with φh = 0.
     #[inline]
     pub fn input(theta_h: f64, theta_d: f64, phi_d: f64) -> [f64; 6] {

@@ -1,8 +1,9 @@
 // Measured BRDFs on the GPU (004 §IV.4.3): MERL tables evaluated from the half/difference
-// angles (lustre_brdf::measured::merl), and importance sampling by numerical inversion of
+// angles (lustre_brdf::measured::merl), neural BRDFs (lustre_brdf::measured::nbrdf), and
+// importance sampling by numerical inversion of
 // tabulated CDFs (lustre_brdf::tabulated). Both read the pass's side table through
 // `bsdf_table(i)`: the words of measured::pack_merl (3 × 90·90·180 stored values, channel-major,
-// a missing bin as −1) and measured::pack_tabulated (per view bin, the cumulative cell weights
+// a missing bin as −1), measured::pack_nbrdf (the network's 675 weights) and measured::pack_tabulated (per view bin, the cumulative cell weights
 // over their total, then each cell's weight over the total, so that a cell's density does not
 // come from the difference of two f32 sums).
 
@@ -125,6 +126,52 @@ fn merl_eval(base: u32, offset: f32, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> 
         return vec3<f32>(0.0);
     }
     return merl_lookup(base, a.x, a.y, a.z, offset);
+}
+
+// nbrdf::Nbrdf's hidden width.
+const NBRDF_HIDDEN: u32 = 21u;
+
+// Nbrdf::eval: the 6-21-21-3 network (ReLU, ReLU, e^z − 1 clamped at 0) on
+// (sin θh, 0, cos θh, sin θd cos φd, sin θd sin φd, cos θd) at the pair's MERL angles, with the
+// weights at word `base` (measured::pack_nbrdf: w1, b1, w2, b2, w3, b3); 0 unless both lie
+// above the surface.
+fn nbrdf_eval(base: u32, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    let a = merl_angles(wi, wo);
+    if (a.w == 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let x = array<f32, 6>(sin(a.x), 0.0, cos(a.x), sin(a.y) * cos(a.z), sin(a.y) * sin(a.z),
+                          cos(a.y));
+    let b1 = base + 6u * NBRDF_HIDDEN;
+    let w2 = b1 + NBRDF_HIDDEN;
+    let b2 = w2 + NBRDF_HIDDEN * NBRDF_HIDDEN;
+    let w3 = b2 + NBRDF_HIDDEN;
+    let b3 = w3 + 3u * NBRDF_HIDDEN;
+    var h1: array<f32, 21>;
+    for (var j = 0u; j < NBRDF_HIDDEN; j++) {
+        var s = bsdf_table(b1 + j);
+        for (var i = 0u; i < 6u; i++) {
+            s += x[i] * bsdf_table(base + i * NBRDF_HIDDEN + j);
+        }
+        h1[j] = max(s, 0.0);
+    }
+    var h2: array<f32, 21>;
+    for (var j = 0u; j < NBRDF_HIDDEN; j++) {
+        var s = bsdf_table(b2 + j);
+        for (var i = 0u; i < NBRDF_HIDDEN; i++) {
+            s += h1[i] * bsdf_table(w2 + i * NBRDF_HIDDEN + j);
+        }
+        h2[j] = max(s, 0.0);
+    }
+    var out = vec3<f32>(0.0);
+    for (var c = 0u; c < 3u; c++) {
+        var z = bsdf_table(b3 + c);
+        for (var i = 0u; i < NBRDF_HIDDEN; i++) {
+            z += h2[i] * bsdf_table(w3 + i * 3u + c);
+        }
+        out[c] = max(exp(min(z, 80.0)) - 1.0, 0.0);
+    }
+    return out;
 }
 
 // The layout of a tabulated sampler (TabulatedOptions): view bins, θi bins, φ bins; ε.
