@@ -5,7 +5,6 @@
 //! top; cube maps in Vulkan/wgpu face order and orientation (+X, −X, +Y, −Y, +Z, −Z), so a GPU
 //! can upload the faces as they are and sample them with `textureSampleLevel`.
 
-pub mod bandwidth;
 pub mod cube;
 pub mod equirect;
 pub mod error;

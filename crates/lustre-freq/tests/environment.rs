@@ -1,8 +1,8 @@
 //! Local angular bandwidth (004 §IV.3.1) of the shared environment maps: finite everywhere,
 //! high at a small sun, low on an overcast-smooth region.
 
-use lustre_env::bandwidth::angular_bandwidth;
 use lustre_env::{read_map, shared_data_dir};
+use lustre_freq::environment::angular_bandwidth;
 
 fn percentile(v: &mut [f64], p: f64) -> f64 {
     v.sort_by(f64::total_cmp);

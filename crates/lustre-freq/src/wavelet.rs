@@ -1,5 +1,4 @@
-//! Local bandwidth of an image from a 2D wavelet decomposition (004 §IV.3.1, Fig. IV.4–IV.6),
-//! and the local angular bandwidth of an equirectangular environment map.
+//! Local bandwidth of an image from a 2D wavelet decomposition (004 §IV.3.1, Fig. IV.4–IV.5).
 //!
 //! The image (padded to powers of two by reflection, twice its size, so the periodic transform
 //! sees no seam; equirect maps wrap around in x instead) is decomposed with Daubechies-4 wavelets, a 2D pyramid step per level (rows, then columns of
@@ -10,19 +9,13 @@
 //! level, so that the value is an amplitude in the image's units), is its wavelet amplitude at
 //! that level; its square, the level's energy there. The pixel's significant level I_w is the finest level at which the
 //! energy summed from the coarsest level reaches 95 % of the pixel's total (the "95th
-//! percentile" of Fig. IV.5), and its bandwidth the upper edge of that level's band, 2^−I_w
+//! percentile" of Fig. IV.5; amplitudes below 1e-9 of the image's largest |value| count as
+//! rounding, not detail), and its bandwidth the upper edge of that level's band, 2^−I_w
 //! cycles per pixel; a pixel without detail energy has bandwidth 0. As 004 notes, the estimate
 //! is conservative: D4's bands overlap, so a sinusoid may be placed one octave above its band
 //! (measured in the tests: within [f, 4f]).
 //!
-//! Angular bandwidth of a distant environment (§IV.3.1, "Distant illumination"): the pixel
-//! bandwidth times the largest number of pixels per radian of the equirect mapping at the
-//! pixel, max(W / (2π sin θ), H / π) (the largest singular value of the Jacobian from angle to
-//! image), in cycles per radian.
-
-use crate::equirect::EquirectMap;
-use crate::error::{EnvError, Result};
-use std::f64::consts::PI;
+use crate::{FreqError, Result};
 
 /// Daubechies-4 low-pass filter ((1 ± √3), (3 ± √3)) / (4√2).
 const D4_LOW: [f64; 4] = [
@@ -66,14 +59,14 @@ pub fn local_bandwidth(
     wrap_x: bool,
 ) -> Result<Vec<f64>> {
     if width == 0 || height == 0 || values.len() != width * height {
-        return Err(EnvError::Parameter(format!(
+        return Err(FreqError::Parameter(format!(
             "local bandwidth: a {width}×{height} image needs {} values, got {}",
             width * height,
             values.len()
         )));
     }
     if let Some(k) = values.iter().position(|v| !v.is_finite()) {
-        return Err(EnvError::Parameter(format!(
+        return Err(FreqError::Parameter(format!(
             "local bandwidth: value {} at pixel ({}, {}) is not finite",
             values[k],
             k % width,
@@ -143,6 +136,9 @@ pub fn local_bandwidth(
         w = hw;
         h = hh;
     }
+    // Amplitudes below 1e-9 of the image's largest |value| are rounding (the high-pass taps
+    // of a constant sum to ~1e-17, not 0).
+    let floor = 1e-9 * values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let mut out = vec![0.0; width * height];
     let mut energy = vec![0.0; levels.len()];
     for y in 0..height {
@@ -163,7 +159,11 @@ pub fn local_bandwidth(
                 // A 2D orthonormal wavelet of level s peaks at 2^−s: the coefficient's
                 // amplitude in the image.
                 let amplitude = m * 0.5f64.powi(s as i32);
-                energy[i] = amplitude * amplitude;
+                energy[i] = if amplitude > floor {
+                    amplitude * amplitude
+                } else {
+                    0.0
+                };
             }
             let total: f64 = energy.iter().sum();
             if total <= 0.0 {
@@ -185,29 +185,10 @@ pub fn local_bandwidth(
     Ok(out)
 }
 
-/// The local angular bandwidth (cycles per radian) of an equirect environment map's luminance:
-/// [`local_bandwidth`] (periodic in φ) times max(W / (2π sin θ), H / π) pixels per radian.
-pub fn angular_bandwidth(map: &EquirectMap) -> Result<Vec<f64>> {
-    let (w, h) = (map.width, map.height);
-    let lum: Vec<f64> = map
-        .data
-        .iter()
-        .map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64)
-        .collect();
-    let mut out = local_bandwidth(&lum, w, h, true)?;
-    for y in 0..h {
-        let theta = PI * (y as f64 + 0.5) / h as f64;
-        let per_radian = (w as f64 / (2.0 * PI * theta.sin())).max(h as f64 / PI);
-        for v in &mut out[y * w..(y + 1) * w] {
-            *v *= per_radian;
-        }
-    }
-    Ok(out)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     #[test]
     fn d4_filters_are_orthonormal() {
@@ -276,26 +257,5 @@ mod tests {
         assert!(local_bandwidth(&[], 0, 0, false).is_err());
         let e = local_bandwidth(&[1.0, f64::NAN, 1.0, 1.0], 2, 2, false).expect_err("NaN");
         assert!(e.to_string().contains("(1, 0)"), "{e}");
-    }
-
-    #[test]
-    fn angular_bandwidth_of_bands_in_latitude() {
-        // L = 1 + cos(k θ): k/(2π) cycles per radian along θ everywhere. At the equator the
-        // mapping has H/π pixels per radian along θ and W/(2π) = H/π along φ.
-        let (w, h) = (256, 128);
-        let k = 24.0;
-        let data: Vec<[f32; 3]> = (0..w * h)
-            .map(|p| {
-                let theta = PI * ((p / w) as f64 + 0.5) / h as f64;
-                [(1.0 + (k * theta).cos()) as f32; 3]
-            })
-            .collect();
-        let map = EquirectMap::new(w, h, data).expect("map");
-        let b = angular_bandwidth(&map).expect("bandwidth");
-        let want = k / (2.0 * PI);
-        for y in [h / 2 - 8, h / 2, h / 2 + 8] {
-            let v = b[y * w + 17];
-            assert!(v >= want && v <= 4.0 * want, "row {y}: {v} vs {want}");
-        }
     }
 }

@@ -1,0 +1,23 @@
+//! Frequency analysis for adaptive shading (004 chapter IV): how fast the shading varies, so
+//! that a renderer shades only the pixels and samples that need it.
+//!
+//! - [`wavelet`]: the local bandwidth of an image from a 2D Daubechies-4 pyramid (§IV.3.1,
+//!   Fig. IV.4–IV.5).
+//! - [`environment`]: the local angular bandwidth of a distant environment (§IV.3.1, Fig. IV.6).
+//! - [`brdf`]: a BRDF's angular bandwidth tabulated over incident directions (§IV.3.1,
+//!   "Reflectance", Fig. IV.8).
+
+pub mod brdf;
+pub mod environment;
+pub mod wavelet;
+
+/// What can go wrong in a frequency analysis.
+#[derive(Debug, thiserror::Error)]
+pub enum FreqError {
+    /// An absurd parameter or input (zero size, length mismatch, non-finite value).
+    #[error("{0}")]
+    Parameter(String),
+}
+
+/// The result type of lustre-freq.
+pub type Result<T> = std::result::Result<T, FreqError>;
