@@ -6,9 +6,13 @@
 //! - [`environment`]: the local angular bandwidth of a distant environment (§IV.3.1, Fig. IV.6).
 //! - [`brdf`]: a BRDF's angular bandwidth tabulated over incident directions (§IV.3.1,
 //!   "Reflectance", Fig. IV.8).
+//! - [`transport`]: the 2D bandwidth through one bounce (Fig. IV.9, Eq. IV.4–IV.5), the pixel's
+//!   bandwidth and sampling rate (Eq. IV.6–IV.7) and the sample count from the variance bound
+//!   (Eq. IV.9–IV.10).
 
 pub mod brdf;
 pub mod environment;
+pub mod transport;
 pub mod wavelet;
 
 /// What can go wrong in a frequency analysis.
