@@ -300,7 +300,13 @@ impl<B: Bsdf> Bsdf for Tabulated<B> {
         if wi.z.is_nan() || wi.z <= 0.0 {
             return None;
         }
-        finish_sample(wi, wo, self.sampler.pdf(wi, wo), LobeFlags::GLOSSY, || {
+        // The inner BRDF's kind: a diffuse-only model stays diffuse.
+        let kind = if self.inner.flags().diffuse_only() {
+            LobeFlags::DIFFUSE
+        } else {
+            LobeFlags::GLOSSY
+        };
+        finish_sample(wi, wo, self.sampler.pdf(wi, wo), kind, || {
             self.inner.eval(wi, wo)
         })
     }
