@@ -164,40 +164,19 @@ fn bad_options_and_unsupported_models_are_refused_by_name() {
     assert!(e.to_string().contains("isotropic"), "{e}");
 }
 
+/// A test BRDF: `f(wi)` whatever wo, no sampling of its own.
 #[derive(Debug)]
-struct Black;
-
-impl Bsdf for Black {
-    fn name(&self) -> String {
-        "black".into()
-    }
-    fn eval(&self, _: DVec3, _: DVec3) -> Rgb {
-        Rgb::ZERO
-    }
-    fn sample(&self, _: DVec3, _: f64, _: f64) -> Option<lustre_brdf::BsdfSample> {
-        None
-    }
-    fn pdf(&self, _: DVec3, _: DVec3) -> f64 {
-        0.0
-    }
-    fn flags(&self) -> lustre_brdf::BsdfFlags {
-        lustre_brdf::BsdfFlags::isotropic_reflection(true, true)
-    }
+struct Fixed {
+    name: &'static str,
+    f: fn(DVec3) -> Rgb,
 }
 
-#[derive(Debug)]
-struct NanAt30;
-
-impl Bsdf for NanAt30 {
+impl Bsdf for Fixed {
     fn name(&self) -> String {
-        "nan-at-30".into()
+        self.name.into()
     }
     fn eval(&self, wi: DVec3, _: DVec3) -> Rgb {
-        if wi.z < 30f64.to_radians().cos() {
-            Rgb::splat(f64::NAN)
-        } else {
-            Rgb::splat(0.3)
-        }
+        (self.f)(wi)
     }
     fn sample(&self, _: DVec3, _: f64, _: f64) -> Option<lustre_brdf::BsdfSample> {
         None
@@ -212,11 +191,25 @@ impl Bsdf for NanAt30 {
 
 #[test]
 fn a_black_brdf_falls_back_to_cosine_sampling_and_nan_is_refused() {
-    let t = Tabulated::new(Black, TabulatedOptions::default()).expect("black");
+    let black = Fixed {
+        name: "black",
+        f: |_| Rgb::ZERO,
+    };
+    let t = Tabulated::new(black, TabulatedOptions::default()).expect("black");
     let w = wo(40.0);
     let r = chi2_test(&t, w, 16, 20_000, 3);
     assert!(r.passed(0.01, 1), "{r:?}");
-    let e = Tabulated::new(NanAt30, TabulatedOptions::default()).expect_err("NaN");
+    let nan = Fixed {
+        name: "nan-at-30",
+        f: |wi| {
+            if wi.z < 30f64.to_radians().cos() {
+                Rgb::splat(f64::NAN)
+            } else {
+                Rgb::splat(0.3)
+            }
+        },
+    };
+    let e = Tabulated::new(nan, TabulatedOptions::default()).expect_err("NaN");
     let s = e.to_string();
     assert!(s.contains("nan-at-30") && s.contains("not finite"), "{s}");
     // Below the horizon nothing is drawn and the density is 0.
