@@ -8,7 +8,7 @@
 //! over blocks (004 computes at a higher resolution and reduces to 16 × 16, the conservative
 //! way).
 
-use crate::wavelet::local_bandwidth;
+use crate::wavelet::{local_bandwidth, Edges};
 use crate::{FreqError, Result};
 use glam::DVec3;
 use lustre_brdf::Bsdf;
@@ -116,7 +116,7 @@ pub fn brdf_bandwidth(bsdf: &dyn Bsdf, options: BrdfBandwidthOptions) -> Result<
                     slice.push(v);
                 }
             }
-            let mut b = local_bandwidth(&slice, n, n, true)?;
+            let mut b = local_bandwidth(&slice, n, n, Edges::WrapX)?;
             for t in 0..n {
                 let theta = (t as f64 + 0.5) / n as f64 * FRAC_PI_2;
                 let per_radian = (n as f64 / (2.0 * PI * theta.sin())).max(n as f64 / FRAC_PI_2);

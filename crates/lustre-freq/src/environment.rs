@@ -4,7 +4,7 @@
 //! pixel, max(W / (2π sin θ), H / π) (the largest singular value of the Jacobian from angle to
 //! image), in cycles per radian.
 
-use crate::wavelet::local_bandwidth;
+use crate::wavelet::{local_bandwidth, Edges};
 use crate::Result;
 use lustre_env::EquirectMap;
 use std::f64::consts::PI;
@@ -18,7 +18,7 @@ pub fn angular_bandwidth(map: &EquirectMap) -> Result<Vec<f64>> {
         .iter()
         .map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64)
         .collect();
-    let mut out = local_bandwidth(&lum, w, h, true)?;
+    let mut out = local_bandwidth(&lum, w, h, Edges::WrapX)?;
     for y in 0..h {
         let theta = PI * (y as f64 + 0.5) / h as f64;
         let per_radian = (w as f64 / (2.0 * PI * theta.sin())).max(h as f64 / PI);

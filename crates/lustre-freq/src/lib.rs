@@ -4,6 +4,8 @@
 //! - [`wavelet`]: the local bandwidth of an image from a 2D Daubechies-4 pyramid (§IV.3.1,
 //!   Fig. IV.4–IV.5).
 //! - [`environment`]: the local angular bandwidth of a distant environment (§IV.3.1, Fig. IV.6).
+//! - [`spatial`]: the spatial bandwidth of area lights (zero-padded) and textures (§IV.3.1,
+//!   Fig. IV.7).
 //! - [`brdf`]: a BRDF's angular bandwidth tabulated over incident directions (§IV.3.1,
 //!   "Reflectance", Fig. IV.8).
 //! - [`transport`]: the 2D bandwidth through one bounce (Fig. IV.9, Eq. IV.4–IV.5), the pixel's
@@ -12,6 +14,7 @@
 
 pub mod brdf;
 pub mod environment;
+pub mod spatial;
 pub mod transport;
 pub mod wavelet;
 

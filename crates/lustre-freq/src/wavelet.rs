@@ -1,7 +1,7 @@
 //! Local bandwidth of an image from a 2D wavelet decomposition (004 §IV.3.1, Fig. IV.4–IV.5).
 //!
-//! The image (padded to powers of two by reflection, twice its size, so the periodic transform
-//! sees no seam; equirect maps wrap around in x instead) is decomposed with Daubechies-4 wavelets, a 2D pyramid step per level (rows, then columns of
+//! The image (padded to powers of two: mirrored, periodic or with zeros beyond its edges,
+//! [`Edges`]) is decomposed with Daubechies-4 wavelets, a 2D pyramid step per level (rows, then columns of
 //! the current approximation). Detail level i (1 = finest) has coefficients spaced 2^i pixels
 //! and a spectrum concentrated in [2^−(i+1), 2^−i] cycles per pixel (Fig. IV.4). For each pixel
 //! and level, the largest |coefficient| among the three orientations whose support (4 taps,
@@ -49,14 +49,27 @@ fn d4_step(x: &[f64]) -> (Vec<f64>, Vec<f64>) {
     (a, d)
 }
 
+/// What lies beyond an image's edges, per axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Edges {
+    /// The image mirrored (no seam): a window onto a larger scene, a BRDF slice's θ axis.
+    Reflect,
+    /// Periodic in x (the φ axis of an equirect map or a BRDF slice), mirrored in y.
+    WrapX,
+    /// Periodic in both axes (a tiling texture).
+    Wrap,
+    /// Zeros (an area light: its border is an edge of its emission, §IV.3.1).
+    Zero,
+}
+
 /// The local bandwidth (cycles per pixel, in [0, ½]) of a `width × height` single-channel
-/// image `values` (row-major); `wrap_x` makes the image periodic in x (equirect maps), else
-/// its edges repeat. Errors on a zero size, a length mismatch or a non-finite value.
+/// image `values` (row-major), with `edges` beyond its borders. Errors on a zero size, a length
+/// mismatch or a non-finite value.
 pub fn local_bandwidth(
     values: &[f64],
     width: usize,
     height: usize,
-    wrap_x: bool,
+    edges: Edges,
 ) -> Result<Vec<f64>> {
     if width == 0 || height == 0 || values.len() != width * height {
         return Err(FreqError::Parameter(format!(
@@ -73,27 +86,39 @@ pub fn local_bandwidth(
             k / width
         )));
     }
-    // Pad to powers of two (at least 4): a non-periodic axis to twice its size by reflection
-    // (the periodic transform then sees a continuous signal across both ends), a periodic one
-    // by wrapping.
-    let reflect = |i: usize, n: usize| if i < n { i } else { (2 * n - 1 - i).min(n - 1) };
-    let pw = if wrap_x {
-        width.next_power_of_two()
-    } else {
-        (2 * width).next_power_of_two()
-    }
-    .max(4);
-    let ph = (2 * height).next_power_of_two().max(4);
+    // Pad to powers of two (at least 4): a periodic axis by wrapping (to the next power of
+    // two), any other to twice its size, mirrored or with zeros (so the periodic transform sees
+    // no seam between the two ends).
+    let (wrap_x, wrap_y) = match edges {
+        Edges::WrapX => (true, false),
+        Edges::Wrap => (true, true),
+        Edges::Reflect | Edges::Zero => (false, false),
+    };
+    let size = |n: usize, wrap: bool| if wrap { n } else { 2 * n }.next_power_of_two().max(4);
+    let (pw, ph) = (size(width, wrap_x), size(height, wrap_y));
+    // The source index of padded index i along an axis of n, or None for a zero.
+    let source = |i: usize, n: usize, wrap: bool| -> Option<usize> {
+        if wrap {
+            return Some(i % n);
+        }
+        let i = i % (2 * n);
+        if i < n {
+            Some(i)
+        } else if edges == Edges::Zero {
+            None
+        } else {
+            Some(2 * n - 1 - i)
+        }
+    };
     let mut img = vec![0.0; pw * ph];
     for y in 0..ph {
-        let sy = reflect(y % (2 * height), height);
+        let Some(sy) = source(y, height, wrap_y) else {
+            continue;
+        };
         for x in 0..pw {
-            let sx = if wrap_x {
-                x % width
-            } else {
-                reflect(x % (2 * width), width)
-            };
-            img[y * pw + x] = values[sy * width + sx];
+            if let Some(sx) = source(x, width, wrap_x) {
+                img[y * pw + x] = values[sy * width + sx];
+            }
         }
     }
     // The 2D pyramid: per level, the three detail bands' |coefficients|, max over orientation.
@@ -204,7 +229,7 @@ mod tests {
 
     #[test]
     fn a_constant_image_has_no_bandwidth() {
-        let b = local_bandwidth(&vec![3.5; 40 * 24], 40, 24, false).expect("bandwidth");
+        let b = local_bandwidth(&vec![3.5; 40 * 24], 40, 24, Edges::Reflect).expect("bandwidth");
         assert!(b.iter().all(|&v| v == 0.0));
     }
 
@@ -218,7 +243,7 @@ mod tests {
             let img: Vec<f64> = (0..w * h)
                 .map(|k| (2.0 * PI * f * (k % w) as f64).cos())
                 .collect();
-            let b = local_bandwidth(&img, w, h, true).expect("bandwidth");
+            let b = local_bandwidth(&img, w, h, Edges::WrapX).expect("bandwidth");
             for &v in &b {
                 assert!(v >= f && v <= 4.0 * f, "f {f}: estimate {v}");
             }
@@ -239,7 +264,7 @@ mod tests {
                 }
             })
             .collect();
-        let b = local_bandwidth(&img, w, h, false).expect("bandwidth");
+        let b = local_bandwidth(&img, w, h, Edges::Reflect).expect("bandwidth");
         for y in 0..h {
             // Far from the edge only the coarsest levels' support reaches across it.
             assert!(
@@ -253,9 +278,32 @@ mod tests {
 
     #[test]
     fn bad_images_are_refused() {
-        assert!(local_bandwidth(&[1.0; 5], 2, 2, false).is_err());
-        assert!(local_bandwidth(&[], 0, 0, false).is_err());
-        let e = local_bandwidth(&[1.0, f64::NAN, 1.0, 1.0], 2, 2, false).expect_err("NaN");
+        assert!(local_bandwidth(&[1.0; 5], 2, 2, Edges::Reflect).is_err());
+        assert!(local_bandwidth(&[], 0, 0, Edges::Reflect).is_err());
+        let e = local_bandwidth(&[1.0, f64::NAN, 1.0, 1.0], 2, 2, Edges::Reflect).expect_err("NaN");
         assert!(e.to_string().contains("(1, 0)"), "{e}");
+    }
+
+    #[test]
+    fn a_uniform_area_light_has_bandwidth_at_its_border_only() {
+        // 004 Fig. IV.7 (a, b): a solid white square, zero-padded.
+        let n = 64;
+        let b = local_bandwidth(&vec![1.0; n * n], n, n, Edges::Zero).expect("bandwidth");
+        let at = |x: usize, y: usize| b[y * n + x];
+        assert!(
+            at(0, n / 2) >= 0.25 && at(n - 1, n / 2) >= 0.25,
+            "{}",
+            at(0, n / 2)
+        );
+        assert!(
+            at(n / 2, n / 2) < at(0, n / 2) / 4.0,
+            "{}",
+            at(n / 2, n / 2)
+        );
+        // The same image tiling (a texture) or mirrored has none.
+        for edges in [Edges::Wrap, Edges::Reflect] {
+            let b = local_bandwidth(&vec![1.0; n * n], n, n, edges).expect("bandwidth");
+            assert!(b.iter().all(|&v| v == 0.0), "{edges:?}");
+        }
     }
 }
