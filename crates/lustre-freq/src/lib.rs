@@ -11,9 +11,12 @@
 //! - [`transport`]: the 2D bandwidth through one bounce (Fig. IV.9, Eq. IV.4–IV.5), the pixel's
 //!   bandwidth and sampling rate (Eq. IV.6–IV.7) and the sample count from the variance bound
 //!   (Eq. IV.9–IV.10).
+//! - [`pixel`]: one pixel's prediction under a distant environment from n_b directions
+//!   (§IV.3.6): its bandwidth and the sums of the variance bound.
 
 pub mod brdf;
 pub mod environment;
+pub mod pixel;
 pub mod spatial;
 pub mod transport;
 pub mod wavelet;

@@ -1,0 +1,228 @@
+//! The per-pixel prediction of 004 §IV.3.6 under a distant environment: from `n_b` incident
+//! directions, the pixel's 2D bandwidth (Eq. IV.6, each direction's one-bounce bandwidth of
+//! Eq. IV.4–IV.5) and the sums of the variance bound (Eq. IV.9, and Eq. IV.10 for
+//! pre-convolved shading).
+//!
+//! The directions are `n_b` stratified (Hammersley) points of the cosine-weighted hemisphere
+//! around the normal, the same at every pixel, so that the sum of Eq. IV.9 is over a fixed
+//! quadrature of the integrand χ = L ρ (its scale is absorbed by the variance target; 004 uses
+//! n_b = 16). Distant light has ν_s = 0, so T_d leaves its bandwidth (0, ν_a(ω)) unchanged.
+
+use crate::brdf::BrdfBandwidth;
+use crate::environment::angular_bandwidth;
+use crate::transport::{one_bounce, pixel_bandwidth, Bandwidth, Surface, VarianceTerm};
+use crate::{FreqError, Result};
+use glam::DVec3;
+use lustre_brdf::sampling::{cosine_hemisphere, hammersley};
+use lustre_brdf::{Bsdf, Rgb};
+use lustre_env::EquirectMap;
+use std::f64::consts::PI;
+
+/// An environment map with its angular bandwidth (cycles per radian per pixel).
+#[derive(Clone, Debug)]
+pub struct Environment<'a> {
+    /// The map.
+    pub map: &'a EquirectMap,
+    /// [`angular_bandwidth`] of the map.
+    pub bandwidth: Vec<f64>,
+}
+
+impl<'a> Environment<'a> {
+    /// Computes the map's bandwidth.
+    pub fn new(map: &'a EquirectMap) -> Result<Self> {
+        Ok(Self {
+            map,
+            bandwidth: angular_bandwidth(map)?,
+        })
+    }
+
+    /// The bandwidth of the pixel seen in world direction `d` (nearest pixel; +y up, as
+    /// [`EquirectMap::lookup_bilinear`]).
+    pub fn bandwidth_at(&self, d: DVec3) -> f64 {
+        let d = d.normalize_or(DVec3::Y);
+        let u = 0.5 + d.x.atan2(-d.z) / (2.0 * PI);
+        let v = d.y.clamp(-1.0, 1.0).acos() / PI;
+        let (w, h) = (self.map.width, self.map.height);
+        let x = ((u * w as f64) as usize).min(w - 1);
+        let y = ((v * h as f64) as usize).min(h - 1);
+        self.bandwidth[y * w + x]
+    }
+}
+
+/// A visible surface point: its frame, the direction and distance to the eye, its curvature and
+/// its texture's spatial bandwidth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingPoint {
+    /// Tangent, bitangent and normal (world, orthonormal).
+    pub frame: (DVec3, DVec3, DVec3),
+    /// Unit direction towards the eye (world).
+    pub wo: DVec3,
+    /// Distance to the eye (metres).
+    pub eye_distance: f64,
+    /// Curvature c (1/m).
+    pub curvature: f64,
+    /// Texture bandwidth t (cycles per metre).
+    pub texture: f64,
+}
+
+/// What one pixel's prediction gives.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PixelPrediction {
+    /// ν at the image plane (Eq. IV.6).
+    pub bandwidth: Bandwidth,
+    /// Σ (ν_a^i + ν_ρa^i) χ_i² (Eq. IV.9).
+    pub variance: f64,
+    /// Σ 2 ν_ρa^i χ_i² (Eq. IV.10).
+    pub variance_preconvolved: f64,
+}
+
+fn luminance(c: Rgb) -> f64 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// Predicts one pixel from `n_b` directions. A point seen from below its surface, or degenerate
+/// inputs (a zero normal, a non-finite distance or curvature) predict nothing (zeros), never
+/// NaN; errors on `n_b` = 0.
+pub fn predict(
+    p: &ShadingPoint,
+    env: &Environment,
+    bsdf: &dyn Bsdf,
+    brdf_bandwidth: &BrdfBandwidth,
+    n_b: usize,
+) -> Result<PixelPrediction> {
+    if n_b == 0 {
+        return Err(FreqError::Parameter(
+            "pixel prediction with n_b = 0 incident directions".into(),
+        ));
+    }
+    let (t, b, n) = p.frame;
+    let wo_l = DVec3::new(p.wo.dot(t), p.wo.dot(b), p.wo.dot(n));
+    let finite = [p.eye_distance, p.curvature, p.texture]
+        .iter()
+        .all(|v| v.is_finite());
+    if !(wo_l.z > 0.0 && finite && n.length_squared() > 0.5) {
+        return Ok(PixelPrediction::default());
+    }
+    let mut paths = Vec::with_capacity(n_b);
+    let mut terms = Vec::with_capacity(n_b);
+    for k in 0..n_b {
+        let (u1, u2) = hammersley(k as u32, n_b as u32);
+        let wi_l = cosine_hemisphere(u1, u2);
+        let wi = t * wi_l.x + b * wi_l.y + n * wi_l.z;
+        let radiance = luminance(Rgb(env.map.lookup_bilinear(wi)));
+        let rho = luminance(bsdf.eval(wi_l, wo_l));
+        let nu_light = env.bandwidth_at(wi);
+        let nu_brdf = brdf_bandwidth.at(wi_l, wo_l);
+        let s = Surface {
+            cos_i: wi_l.z.max(1e-6),
+            cos_x: wo_l.z.max(1e-6),
+            curvature: p.curvature,
+            texture: p.texture,
+            brdf: nu_brdf,
+        };
+        let nu = one_bounce(Bandwidth::new(0.0, nu_light), 0.0, &s, p.eye_distance);
+        let chi = radiance * rho;
+        paths.push((chi * wi_l.z, nu));
+        terms.push(VarianceTerm {
+            light: nu_light,
+            brdf: nu_brdf,
+            chi,
+        });
+    }
+    Ok(PixelPrediction {
+        bandwidth: pixel_bandwidth(&paths),
+        variance: crate::transport::variance_sum(&terms, false),
+        variance_preconvolved: crate::transport::variance_sum(&terms, true),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::brdf::{brdf_bandwidth, BrdfBandwidthOptions};
+    use lustre_brdf::models::kurt::{Kurt, KurtLobe};
+
+    fn map(f: impl Fn(usize, usize) -> f32) -> EquirectMap {
+        let (w, h) = (64, 32);
+        EquirectMap::new(w, h, (0..w * h).map(|k| [f(k % w, k / w); 3]).collect()).expect("map")
+    }
+
+    fn point(curvature: f64) -> ShadingPoint {
+        let wo = DVec3::new(0.3, 0.9, 0.0).normalize();
+        ShadingPoint {
+            frame: (DVec3::X, DVec3::NEG_Z, DVec3::Y),
+            wo,
+            eye_distance: 2.0,
+            curvature,
+            texture: 0.0,
+        }
+    }
+
+    fn glossy() -> (Kurt, BrdfBandwidth) {
+        let k = Kurt::new(
+            Rgb::splat(0.1),
+            vec![KurtLobe::new(Rgb::splat(0.5), 0.1, 0.1, 1.0, 0.0).expect("lobe")],
+            vec![],
+        )
+        .expect("kurt");
+        let o = BrdfBandwidthOptions {
+            incident: 8,
+            slice: 32,
+            out: 8,
+        };
+        let b = brdf_bandwidth(&k, o).expect("bandwidth");
+        (k, b)
+    }
+
+    #[test]
+    fn a_black_or_constant_sky_and_degenerate_points_predict_no_nan() {
+        let (k, bw) = glossy();
+        let black = map(|_, _| 0.0);
+        let env = Environment::new(&black).expect("env");
+        let p = predict(&point(0.0), &env, &k, &bw, 16).expect("black");
+        assert_eq!(p, PixelPrediction::default());
+        let grey = map(|_, _| 1.0);
+        let env = Environment::new(&grey).expect("env");
+        let p = predict(&point(0.0), &env, &k, &bw, 16).expect("grey");
+        // A constant sky has no angular bandwidth: what is left is the BRDF's, band-limited
+        // by the sky's zero, i.e. nothing; the variance sum keeps the BRDF's term.
+        assert_eq!(p.bandwidth, Bandwidth::default());
+        assert!(p.variance > 0.0 && p.variance_preconvolved >= p.variance);
+        for bad in [
+            ShadingPoint {
+                wo: DVec3::NEG_Y,
+                ..point(0.0)
+            },
+            ShadingPoint {
+                curvature: f64::NAN,
+                ..point(0.0)
+            },
+            ShadingPoint {
+                frame: (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO),
+                ..point(0.0)
+            },
+        ] {
+            let p = predict(&bad, &env, &k, &bw, 16).expect("degenerate");
+            assert_eq!(p, PixelPrediction::default(), "{bad:?}");
+        }
+        assert!(predict(&point(0.0), &env, &k, &bw, 0).is_err());
+    }
+
+    #[test]
+    fn stripes_in_the_sky_give_bandwidth_and_curvature_makes_it_spatial() {
+        let (k, bw) = glossy();
+        let stripes = map(|x, _| if (x / 2) % 2 == 0 { 1.0 } else { 0.1 });
+        let env = Environment::new(&stripes).expect("env");
+        let flat = predict(&point(0.0), &env, &k, &bw, 16).expect("flat");
+        assert!(flat.bandwidth.angular > 0.0, "{flat:?}");
+        assert_eq!(flat.bandwidth.spatial, 0.0);
+        let curved = predict(&point(4.0), &env, &k, &bw, 16).expect("curved");
+        assert!(curved.bandwidth.spatial > 0.0, "{curved:?}");
+        // At the eye the spatial bandwidth shears into angular bandwidth.
+        assert!(
+            curved.bandwidth.angular > flat.bandwidth.angular,
+            "{curved:?}"
+        );
+        assert!(flat.variance.is_finite() && curved.variance == flat.variance);
+    }
+}
