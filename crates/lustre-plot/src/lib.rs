@@ -11,6 +11,7 @@ pub mod array;
 mod color;
 mod draw;
 pub mod font;
+pub mod heat;
 pub mod pattern;
 pub mod polar;
 
@@ -18,6 +19,7 @@ pub use array::{
     direction_pixel, disc_direction, transfer_array, transfer_array_compare, transfer_disc,
     transmits, ArrayColor, ArrayOptions, Disc, Hemisphere,
 };
+pub use heat::{heat_map, HeatScale};
 pub use pattern::{pattern_plot, PatternOptions, PatternPanel};
 pub use polar::{
     polar_curve, polar_plot, Channels, PolarCurve, PolarOptions, PolarSample, Quantity,

@@ -1,6 +1,7 @@
 //! The lustre command line: thin over the libraries.
 
 mod bake_cmd;
+mod bandwidth_cmd;
 mod compare_cmd;
 mod demo_cmd;
 mod fit_cmd;
@@ -59,6 +60,9 @@ enum Command {
     Scene(scene_cmd::SceneArgs),
     /// Error metrics and albedos of any material against any measured input, without fitting.
     Score(score_cmd::ScoreArgs),
+    /// Local bandwidth maps (004 Fig. IV.6 and IV.8): an environment map's angular bandwidth or
+    /// a material's BRDF bandwidth table, as a log-scale heat map.
+    Bandwidth(bandwidth_cmd::BandwidthArgs),
     /// List built-in materials, analytic models, published fits, the 100 MERL materials and
     /// where data comes from.
     List,
@@ -158,6 +162,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Render(args) => render_cmd::run(&args),
         Command::View(args) => lustre_view::run(&args),
         Command::Bake(args) => bake_cmd::run(&args),
+        Command::Bandwidth(args) => bandwidth_cmd::run(&args),
         Command::Scene(args) => scene_cmd::run(&args),
         Command::Score(args) => score_cmd::run(&args),
         Command::List => list(),

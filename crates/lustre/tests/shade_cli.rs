@@ -150,3 +150,64 @@ fn output_into_a_closed_pipe_ends_quietly() {
         "{err}"
     );
 }
+
+#[test]
+fn bandwidth_maps_of_an_environment_and_a_material() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let map = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/envmaps/quarry_01_1k.hdr"
+    );
+    let png = dir.path().join("quarry.png");
+    let stdout = run_ok(
+        lustre()
+            .args(["bandwidth", "--map", map, "--out"])
+            .arg(&png),
+    );
+    assert!(
+        stdout.contains("1024×512") && stdout.contains("cycles per radian"),
+        "{stdout}"
+    );
+    let img = image::open(&png).expect("png").to_rgb8();
+    assert_eq!(img.dimensions(), (1024, 512));
+    // The heat map is not flat: the sun's region is brighter than the median pixel.
+    let lum = |p: &image::Rgb<u8>| p.0.iter().map(|&c| c as u32).sum::<u32>();
+    let max = img.pixels().map(lum).max().expect("pixels");
+    assert!(max > 400, "{max}");
+    let table = dir.path().join("gold.png");
+    let stdout = run_ok(
+        lustre()
+            .args(["bandwidth", "--material", "nbrdf:gold-paint", "--out"])
+            .arg(&table),
+    );
+    assert!(stdout.contains("256×256"), "{stdout}");
+    assert_eq!(image::open(&table).expect("png").to_rgb8().dimensions(), (256, 256));
+    // Bad input: nothing to map, both, a missing map, an unknown material.
+    let e = run_err(lustre().args(["bandwidth", "--out"]).arg(&png));
+    assert!(e.contains("--map FILE or --material SPEC"), "{e}");
+    let e = run_err(
+        lustre()
+            .args([
+                "bandwidth",
+                "--map",
+                map,
+                "--material",
+                "nbrdf:gold-paint",
+                "--out",
+            ])
+            .arg(&png),
+    );
+    assert!(e.contains("cannot be used with"), "{e}");
+    let e = run_err(
+        lustre()
+            .args(["bandwidth", "--map", "/no/such/map.hdr", "--out"])
+            .arg(&png),
+    );
+    assert!(e.contains("/no/such/map.hdr"), "{e}");
+    let e = run_err(
+        lustre()
+            .args(["bandwidth", "--material", "nbrdf:unobtainium", "--out"])
+            .arg(&png),
+    );
+    assert!(e.contains("unobtainium"), "{e}");
+}
