@@ -181,7 +181,10 @@ fn bandwidth_maps_of_an_environment_and_a_material() {
             .arg(&table),
     );
     assert!(stdout.contains("256×256"), "{stdout}");
-    assert_eq!(image::open(&table).expect("png").to_rgb8().dimensions(), (256, 256));
+    assert_eq!(
+        image::open(&table).expect("png").to_rgb8().dimensions(),
+        (256, 256)
+    );
     // Bad input: nothing to map, both, a missing map, an unknown material.
     let e = run_err(lustre().args(["bandwidth", "--out"]).arg(&png));
     assert!(e.contains("--map FILE or --material SPEC"), "{e}");
