@@ -1,4 +1,4 @@
-// Measured BRDFs on the GPU (004 §IV.4.3): MERL tables evaluated from the half/difference
+// module measured: measured BRDFs on the GPU (004 §IV.4.3): MERL tables evaluated from the half/difference
 // angles (lustre_brdf::measured::merl), neural BRDFs (lustre_brdf::measured::nbrdf), and
 // importance sampling by numerical inversion of
 // tabulated CDFs (lustre_brdf::tabulated). Both read the pass's side table through
