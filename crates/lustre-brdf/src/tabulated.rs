@@ -62,11 +62,6 @@ pub struct TabulatedSampler {
     cdf: Vec<f64>,
 }
 
-/// The luminance of an RGB value (Rec. 709 weights).
-fn luminance(c: Rgb) -> f64 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
-}
-
 impl TabulatedSampler {
     /// Tabulates `bsdf`, which must be isotropic and reflect only; errors on absurd options
     /// (a zero count, more than 4096 bins along an axis, ε outside (0, 1]) and on a BRDF whose
@@ -230,7 +225,7 @@ fn view_table(
                 for b in 0..o.supersample {
                     let phi = (j as f64 + (b as f64 + 0.5) / s) * dphi;
                     let wi = DVec3::new(sin * phi.cos(), sin * phi.sin(), c);
-                    let v = luminance(bsdf.eval(wi, wo)) * c;
+                    let v = bsdf.eval(wi, wo).luminance() * c;
                     if !v.is_finite() {
                         return Err((
                             v,

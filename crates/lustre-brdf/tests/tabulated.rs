@@ -67,11 +67,12 @@ fn sample_follows_pdf_and_the_pdf_integrates_to_one() {
 
 /// The variance of the albedo estimator f cos θi / p (luminance) with `n` Hammersley samples.
 fn albedo_variance(b: &dyn Bsdf, w: DVec3, n: usize) -> (f64, f64) {
-    let lum = |c: Rgb| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
     let (mut s, mut s2) = (0.0, 0.0);
     for k in 0..n {
         let (u1, u2) = hammersley(k as u32, n as u32);
-        let x = b.sample(w, u1, u2).map_or(0.0, |smp| lum(smp.weight()));
+        let x = b
+            .sample(w, u1, u2)
+            .map_or(0.0, |smp| smp.weight().luminance());
         s += x;
         s2 += x * x;
     }

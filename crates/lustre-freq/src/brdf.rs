@@ -96,7 +96,6 @@ pub fn brdf_bandwidth(bsdf: &dyn Bsdf, options: BrdfBandwidthOptions) -> Result<
             o.out
         )));
     }
-    let lum = |c: lustre_brdf::Rgb| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
     let blocks: Vec<Vec<f64>> = (0..o.incident * o.incident)
         .into_par_iter()
         .map(|k| -> Result<Vec<f64>> {
@@ -106,7 +105,7 @@ pub fn brdf_bandwidth(bsdf: &dyn Bsdf, options: BrdfBandwidthOptions) -> Result<
             for t in 0..n {
                 for p in 0..n {
                     let wo = cell_direction(t, p, n);
-                    let v = lum(bsdf.eval(wi, wo));
+                    let v = bsdf.eval(wi, wo).luminance();
                     if !v.is_finite() {
                         return Err(FreqError::Parameter(format!(
                             "BRDF bandwidth of {}: f = {v} at ωi = {wi:?}, ωo = {wo:?}",

@@ -6,6 +6,7 @@
 
 use crate::wavelet::{local_bandwidth, Edges};
 use crate::Result;
+use lustre_brdf::Rgb;
 use lustre_env::EquirectMap;
 use std::f64::consts::PI;
 
@@ -16,7 +17,7 @@ pub fn angular_bandwidth(map: &EquirectMap) -> Result<Vec<f64>> {
     let lum: Vec<f64> = map
         .data
         .iter()
-        .map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64)
+        .map(|p| Rgb(p.map(f64::from)).luminance())
         .collect();
     let mut out = local_bandwidth(&lum, w, h, Edges::WrapX)?;
     for y in 0..h {

@@ -18,16 +18,17 @@ use lustre_brdf::{Bsdf, Rgb};
 use lustre_env::EquirectMap;
 use std::f64::consts::PI;
 
-/// An environment map with its angular bandwidth (cycles per radian per pixel).
+/// An environment map with its angular bandwidth (cycles per radian per pixel); the lighting
+/// side of a prediction (`lustre_shade::kernel::Environment` is the shading side: pyramids).
 #[derive(Clone, Debug)]
-pub struct Environment<'a> {
+pub struct EnvironmentBandwidth<'a> {
     /// The map.
     pub map: &'a EquirectMap,
     /// [`angular_bandwidth`] of the map.
     pub bandwidth: Vec<f64>,
 }
 
-impl<'a> Environment<'a> {
+impl<'a> EnvironmentBandwidth<'a> {
     /// Computes the map's bandwidth.
     pub fn new(map: &'a EquirectMap) -> Result<Self> {
         Ok(Self {
@@ -76,16 +77,12 @@ pub struct PixelPrediction {
     pub variance_preconvolved: f64,
 }
 
-fn luminance(c: Rgb) -> f64 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
-}
-
 /// Predicts one pixel from `n_b` directions. A point seen from below its surface, or degenerate
 /// inputs (a zero normal, a non-finite distance or curvature) predict nothing (zeros), never
 /// NaN; errors on `n_b` = 0.
 pub fn predict(
     p: &ShadingPoint,
-    env: &Environment,
+    env: &EnvironmentBandwidth,
     bsdf: &dyn Bsdf,
     brdf_bandwidth: &BrdfBandwidth,
     n_b: usize,
@@ -109,8 +106,8 @@ pub fn predict(
         let (u1, u2) = hammersley(k as u32, n_b as u32);
         let wi_l = cosine_hemisphere(u1, u2);
         let wi = t * wi_l.x + b * wi_l.y + n * wi_l.z;
-        let radiance = luminance(Rgb(env.map.lookup_bilinear(wi)));
-        let rho = luminance(bsdf.eval(wi_l, wo_l));
+        let radiance = Rgb(env.map.lookup_bilinear(wi)).luminance();
+        let rho = bsdf.eval(wi_l, wo_l).luminance();
         let nu_light = env.bandwidth_at(wi);
         let nu_brdf = brdf_bandwidth.at(wi_l, wo_l);
         let s = Surface {
@@ -178,11 +175,11 @@ mod tests {
     fn a_black_or_constant_sky_and_degenerate_points_predict_no_nan() {
         let (k, bw) = glossy();
         let black = map(|_, _| 0.0);
-        let env = Environment::new(&black).expect("env");
+        let env = EnvironmentBandwidth::new(&black).expect("env");
         let p = predict(&point(0.0), &env, &k, &bw, 16).expect("black");
         assert_eq!(p, PixelPrediction::default());
         let grey = map(|_, _| 1.0);
-        let env = Environment::new(&grey).expect("env");
+        let env = EnvironmentBandwidth::new(&grey).expect("env");
         let p = predict(&point(0.0), &env, &k, &bw, 16).expect("grey");
         // A constant sky has no angular bandwidth: what is left is the BRDF's, band-limited
         // by the sky's zero, i.e. nothing; the variance sum keeps the BRDF's term.
@@ -212,7 +209,7 @@ mod tests {
     fn stripes_in_the_sky_give_bandwidth_and_curvature_makes_it_spatial() {
         let (k, bw) = glossy();
         let stripes = map(|x, _| if (x / 2) % 2 == 0 { 1.0 } else { 0.1 });
-        let env = Environment::new(&stripes).expect("env");
+        let env = EnvironmentBandwidth::new(&stripes).expect("env");
         let flat = predict(&point(0.0), &env, &k, &bw, 16).expect("flat");
         assert!(flat.bandwidth.angular > 0.0, "{flat:?}");
         assert_eq!(flat.bandwidth.spatial, 0.0);

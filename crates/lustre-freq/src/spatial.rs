@@ -5,11 +5,12 @@
 
 use crate::wavelet::{local_bandwidth, Edges};
 use crate::{FreqError, Result};
+use lustre_brdf::Rgb;
 
 fn luminance(texels: &[[f32; 3]]) -> Vec<f64> {
     texels
         .iter()
-        .map(|p| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64)
+        .map(|p| Rgb(p.map(f64::from)).luminance())
         .collect()
 }
 
