@@ -27,6 +27,11 @@ impl Rgb {
         Rgb([v; 3])
     }
 
+    /// The channels as f32 (an image's pixel).
+    pub fn to_f32(self) -> [f32; 3] {
+        self.0.map(|c| c as f32)
+    }
+
     /// Rec. 709 luminance.
     pub fn luminance(&self) -> f64 {
         0.2126 * self.0[0] + 0.7152 * self.0[1] + 0.0722 * self.0[2]

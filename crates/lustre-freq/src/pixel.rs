@@ -3,8 +3,8 @@
 //! Eq. IV.4–IV.5) and the sums of the variance bound (Eq. IV.9, and Eq. IV.10 for
 //! pre-convolved shading).
 //!
-//! The directions are `n_b` stratified (Hammersley) points of the cosine-weighted hemisphere
-//! around the normal, the same at every pixel, so that the sum of Eq. IV.9 is over a fixed
+//! The directions are `n_b` stratified (Hammersley, [`incident_direction`]) points of the
+//! cosine-weighted hemisphere around the normal, the same at every pixel, so that the sum of Eq. IV.9 is over a fixed
 //! quadrature of the integrand χ = L ρ (its scale is absorbed by the variance target; 004 uses
 //! n_b = 16). Distant light has ν_s = 0, so T_d leaves its bandwidth (0, ν_a(ω)) unchanged.
 
@@ -75,6 +75,19 @@ pub struct PixelPrediction {
     pub variance: f64,
     /// Σ 2 ν_ρa^i χ_i² (Eq. IV.10).
     pub variance_preconvolved: f64,
+    /// The directions' estimate of the pixel's radiance (luminance), π / n_b Σ χ_i: the
+    /// cosine-weighted quadrature of ∫ χ cos θi dω (a scale for relative variance targets).
+    pub radiance: f64,
+}
+
+/// Direction k of the n_b of a prediction (local frame): point k of the Hammersley set with
+/// both coordinates at their cell's centre ((k + ½) / n_b, and the radical inverse + ½ / n_b),
+/// on the cosine-weighted hemisphere. Centred, the azimuths never fall on the φ edges of a
+/// BRDF bandwidth table (whose 16 cells would otherwise hold every one of 16 points on an
+/// edge, where f32 and f64 round apart).
+pub fn incident_direction(k: usize, n_b: usize) -> DVec3 {
+    let (u1, u2) = hammersley(k as u32, n_b as u32);
+    cosine_hemisphere(u1, u2 + 0.5 / n_b as f64)
 }
 
 /// Predicts one pixel from `n_b` directions. A point seen from below its surface, or degenerate
@@ -102,9 +115,9 @@ pub fn predict(
     }
     let mut paths = Vec::with_capacity(n_b);
     let mut terms = Vec::with_capacity(n_b);
+    let mut chi_sum = 0.0;
     for k in 0..n_b {
-        let (u1, u2) = hammersley(k as u32, n_b as u32);
-        let wi_l = cosine_hemisphere(u1, u2);
+        let wi_l = incident_direction(k, n_b);
         let wi = t * wi_l.x + b * wi_l.y + n * wi_l.z;
         let radiance = Rgb(env.map.lookup_bilinear(wi)).luminance();
         let rho = bsdf.eval(wi_l, wo_l).luminance();
@@ -119,6 +132,7 @@ pub fn predict(
         };
         let nu = one_bounce(Bandwidth::new(0.0, nu_light), 0.0, &s, p.eye_distance);
         let chi = radiance * rho;
+        chi_sum += chi;
         paths.push((chi * wi_l.z, nu));
         terms.push(VarianceTerm {
             light: nu_light,
@@ -130,6 +144,7 @@ pub fn predict(
         bandwidth: pixel_bandwidth(&paths),
         variance: crate::transport::variance_sum(&terms, false),
         variance_preconvolved: crate::transport::variance_sum(&terms, true),
+        radiance: PI * chi_sum / n_b as f64,
     })
 }
 

@@ -235,8 +235,16 @@ pub const MEASURED: Module = Module {
     deps: &[&TYPES, &FRESNEL],
 };
 
+/// Frequency analysis (004 §IV.3): one-bounce bandwidth of a distant light, the n_b
+/// directions, BRDF bandwidth cells, equirect texels.
+pub const FREQUENCY: Module = Module {
+    name: "frequency",
+    source: include_str!("wgsl/frequency.wgsl"),
+    deps: &[&TYPES],
+};
+
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 28] = [
+pub const ALL: [&Module; 29] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -265,6 +273,7 @@ pub const ALL: [&Module; 28] = [
     &BSDF,
     &TEXTURED,
     &MEASURED,
+    &FREQUENCY,
 ];
 
 /// The source of a pass: every module in `imports` and, transitively, the modules they use,

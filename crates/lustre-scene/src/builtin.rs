@@ -306,26 +306,81 @@ pub fn preview(spec: &str, environment: Option<Environment>) -> Result<Scene> {
         MaterialKind::Spec(ResolvedSpec::resolve(spec, spec)?),
     )];
     scene.meshes = vec![Mesh::uv_sphere("preview", Vec3::ZERO, 1.0, 0)];
-    scene.environment = Some(environment.unwrap_or(Environment {
-        source: EnvironmentSource::Sky(Sky::default()),
-        to_local: DMat3::IDENTITY,
-        intensity: 1.0,
-    }));
-    let camera = Camera::look_at(
-        "default",
+    scene.environment = Some(environment.unwrap_or_else(builtin_sky));
+    let camera = default_camera(
+        "material preview",
         DVec3::new(0.0, 1.2, 4.0),
         DVec3::ZERO,
-        DVec3::Y,
         30.0,
-        FovAxis::Y,
-    )
-    .ok_or_else(|| SceneError::Format {
-        path: "material preview".into(),
-        problem: "the camera is degenerate".into(),
-    })?;
+    )?;
     scene.cameras = vec![camera];
     scene.film = Film {
         width: 512,
+        height: 512,
+    };
+    Ok(scene)
+}
+
+/// The camera "default" of a built-in scene at `eye` looking at `target` (+y up, vertical
+/// field of view `fov_y` degrees).
+fn default_camera(scene: &str, eye: DVec3, target: DVec3, fov_y: f64) -> Result<Camera> {
+    Camera::look_at("default", eye, target, DVec3::Y, fov_y, FovAxis::Y).ok_or_else(|| {
+        SceneError::Format {
+            path: scene.into(),
+            problem: "the camera is degenerate".into(),
+        }
+    })
+}
+
+/// The built-in sky, unrotated, at intensity 1.
+fn builtin_sky() -> Environment {
+    Environment {
+        source: EnvironmentSource::Sky(Sky::default()),
+        to_local: DMat3::IDENTITY,
+        intensity: 1.0,
+    }
+}
+
+/// 004 Fig. IV.13's arrangement: three spheres of radius 1 side by side, of materials `spheres`
+/// (left to right), on a 12 × 12 floor of material `floor`, under `environment` (the built-in
+/// sky when `None`), seen from slightly above. No light maps: every surface is integrated
+/// against the environment.
+pub fn lineup(spheres: [&str; 3], floor: &str, environment: Option<Environment>) -> Result<Scene> {
+    let mut scene = Scene::new(format!(
+        "line-up of {}, {}, {} on {floor}",
+        spheres[0], spheres[1], spheres[2]
+    ));
+    for spec in spheres.iter().chain([&floor]) {
+        scene.materials.push(Material::new(
+            *spec,
+            MaterialKind::Spec(ResolvedSpec::resolve(spec, spec)?),
+        ));
+    }
+    for (k, x) in [-2.3f32, 0.0, 2.3].into_iter().enumerate() {
+        scene.meshes.push(Mesh::uv_sphere(
+            &format!("sphere {k}"),
+            Vec3::new(x, 1.0, 0.0),
+            1.0,
+            k,
+        ));
+    }
+    let mut ground = crate::mesh::rectangle("floor", 3);
+    // The square [−1, 1]² of z = 0 turned to face +y and scaled to 12 × 12.
+    ground.transform(
+        &(glam::DMat4::from_scale(DVec3::new(6.0, 1.0, 6.0))
+            * glam::DMat4::from_rotation_x(-std::f64::consts::FRAC_PI_2)),
+    );
+    scene.meshes.push(ground);
+    scene.environment = Some(environment.unwrap_or_else(builtin_sky));
+    let camera = default_camera(
+        "line-up",
+        DVec3::new(0.0, 2.6, 7.5),
+        DVec3::new(0.0, 0.8, 0.0),
+        40.0,
+    )?;
+    scene.cameras = vec![camera];
+    scene.film = Film {
+        width: 768,
         height: 512,
     };
     Ok(scene)

@@ -1,5 +1,6 @@
 //! The lustre command line: thin over the libraries.
 
+mod adaptive_cmd;
 mod bake_cmd;
 mod bandwidth_cmd;
 mod compare_cmd;

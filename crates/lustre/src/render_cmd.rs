@@ -39,6 +39,27 @@ pub enum Method {
     Ck,
     /// Progressive refinement: --frames rotated regular sets, averaged.
     Progressive,
+    /// 004 ch. IV: measured materials shaded adaptively by frequency analysis (bandwidth
+    /// buffer, hierarchical shading, --samples the mean N_p), environment light without
+    /// visibility, on the CPU.
+    Adaptive,
+    /// The brute force adaptive shading is compared with: --samples importance samples at
+    /// every pixel, the same light and estimator, on the CPU.
+    Brute,
+}
+
+/// How `--method adaptive` sets each pixel's sample count.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SampleRuleArg {
+    /// --samples at every shaded pixel (spatial adaptivity only; the fastest at equal PSNR in
+    /// our measurements).
+    Constant,
+    /// 004's Eq. IV.9 bound relative to the pixel's squared radiance, N_p ∝ S / L̂².
+    Relative,
+    /// N_p ∝ √S / L̂ (the allocation minimizing the summed squared relative error).
+    RelativeMse,
+    /// 004's Eq. IV.9 bound as is, N_p ∝ S.
+    Absolute,
 }
 
 /// Where the frame is rendered.
@@ -115,7 +136,22 @@ pub struct RenderArgs {
     /// A `lustre reference` EXR of the same camera and size to compare with.
     #[arg(long)]
     pub compare_reference: Option<PathBuf>,
-    /// Output folder (frame.exr, frame.png, times.csv; diff.png with --compare-reference).
+    /// `--method adaptive`: how N_p is set per pixel (its mean is --samples).
+    #[arg(long, value_enum, default_value_t = SampleRuleArg::Constant)]
+    pub sample_rule: SampleRuleArg,
+    /// `--method adaptive`: read the environment pre-convolved at the BRDF's bandwidth
+    /// (004 §IV.3.5) instead of at full resolution.
+    #[arg(long)]
+    pub preconvolved: bool,
+    /// `--method adaptive`: image samples per cycle of the predicted bandwidth (2: Nyquist's
+    /// rate; 1: 004's Eq. IV.11 as printed, fewer pixels shaded).
+    #[arg(long, default_value_t = 2.0)]
+    pub rate: f64,
+    /// `--method adaptive`: incident directions per pixel of the bandwidth buffer (004: 16).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub n_b: u32,
+    /// Output folder (frame.exr, frame.png, times.csv; diff.png with --compare-reference;
+    /// bandwidth.png, level.png, samples.png and shaded.png with --method adaptive).
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -179,6 +215,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         t: Instant::now(),
     };
     let method = match args.method {
+        Method::Adaptive | Method::Brute => return crate::adaptive_cmd::run(args),
         Method::Regular => FrameMethod::Regular,
         Method::Ck => FrameMethod::Ck,
         Method::Progressive => FrameMethod::Progressive {
@@ -526,6 +563,11 @@ fn report(
         stats.glossy_hits,
         stats.lookups as f64 / glossy_rays as f64
     );
+    compare(args, img)
+}
+
+/// With --compare-reference: PSNR, ΔE and relative RMS against it, and diff.png.
+pub(crate) fn compare(args: &RenderArgs, img: &Image) -> anyhow::Result<()> {
     if let Some(reference) = &args.compare_reference {
         let r = Image::read_exr(reference)?;
         if (r.width, r.height) != (img.width, img.height) {
@@ -556,7 +598,7 @@ fn report(
 /// The cameras of path `name` at `fps` frames per second, named frame_0000 …: a camera path
 /// file (`.json`, `lustre_scene::camera_path_file`, as `lustre view` records) or the name of
 /// one of the scene's paths.
-fn path_cameras(
+pub(crate) fn path_cameras(
     scene: &Scene,
     name: &str,
     fps: f64,

@@ -220,6 +220,10 @@ impl Bsdf for Nbrdf {
     fn flags(&self) -> BsdfFlags {
         BsdfFlags::isotropic_reflection(true, false)
     }
+
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
 }
 
 impl NbrdfSet {

@@ -1,0 +1,245 @@
+//! The shading integral of one pixel (004 §IV.4.3, Eq. IV.1):
+//!
+//! L_p = ∫ L(ωi) f(ωi, ωo) cos θi dωi
+//!
+//! estimated from N samples: half drawn by importance sampling the BRDF, by inversion of its
+//! tabulated CDFs ([`TabulatedSampler`], 004's choice) for isotropic reflection BRDFs or by the
+//! model's own `sample` otherwise (anisotropic, transmissive or Dirac lobes), half by importance
+//! sampling the environment, combined by the balance heuristic (004 samples the BRDF only; its
+//! maps have less dynamic range than a sunlit sky, where BRDF sampling alone converges at about
+//! 1 dB per doubling). Each technique's points are a Hammersley set rotated per pixel
+//! (Cranley–Patterson); the adaptive renderer and the brute-force one share this estimator. No
+//! visibility: the environment is seen from every point (as 004).
+//!
+//! [`Lighting::Preconvolved`] reads the environment's pyramid at the level where its Nyquist
+//! frequency meets the BRDF's largest bandwidth at the pixel (§IV.3.5): a cube texel at level ℓ
+//! spans about (π/2) / (face / 2^ℓ) radians, so it holds frequencies up to ν when
+//! ℓ = log2(face / (π ν)).
+
+use crate::gbuffer::Surfel;
+use crate::{AdaptiveError, Result};
+use glam::DVec3;
+use lustre_brdf::rgb::Rgb;
+use lustre_brdf::sampling::{hammersley, SplitMix64};
+use lustre_brdf::tabulated::{TabulatedOptions, TabulatedSampler};
+use lustre_brdf::Bsdf;
+use lustre_env::CubePyramid;
+use lustre_freq::brdf::{brdf_bandwidth, BrdfBandwidth, BrdfBandwidthOptions};
+use lustre_shade::baked::environment_pyramid;
+use lustre_shade::path::{EnvLight, PathScene};
+use std::f64::consts::PI;
+
+/// Where the environment is read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lighting {
+    /// The full-resolution map, bilinear (Eq. IV.1, variance bound Eq. IV.9).
+    Direct,
+    /// The pyramid at the BRDF's bandwidth (§IV.3.5, variance bound Eq. IV.10).
+    Preconvolved,
+}
+
+/// How the per-material tables are built.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadingOptions {
+    /// The sampling tables.
+    pub tabulated: TabulatedOptions,
+    /// The bandwidth tables (004: 16 × 16 incident directions).
+    pub bandwidth: BrdfBandwidthOptions,
+    /// Cube face of the pre-convolved pyramid (texels); 0 builds none.
+    pub pyramid_face: usize,
+}
+
+impl Default for ShadingOptions {
+    fn default() -> Self {
+        Self {
+            tabulated: TabulatedOptions::default(),
+            bandwidth: BrdfBandwidthOptions::default(),
+            pyramid_face: 256,
+        }
+    }
+}
+
+/// One material's tables, built from its BSDF at uv (½, ½) (homogeneous materials, as 004).
+#[derive(Debug)]
+pub struct MaterialTables {
+    /// The BSDF's name.
+    pub name: String,
+    /// The tabulated CDFs, for isotropic reflection BRDFs.
+    pub sampler: Option<TabulatedSampler>,
+    /// The angular bandwidth.
+    pub bandwidth: BrdfBandwidth,
+}
+
+/// What shading needs: the scene's materials with their tables, the environment and its
+/// pyramid.
+pub struct ShadingContext<'a, 's> {
+    /// The scene (materials).
+    pub scene: &'a PathScene<'s>,
+    /// The scene's environment.
+    pub env: &'a EnvLight,
+    /// Per material of the scene.
+    pub materials: Vec<MaterialTables>,
+    /// The pre-convolved pyramid (world directions), when built.
+    pub pyramid: Option<CubePyramid>,
+}
+
+impl<'a, 's> ShadingContext<'a, 's> {
+    /// Builds every material's tables (`progress(k, n)` after each) and the pyramid. Errors on
+    /// a scene without an environment.
+    pub fn new(
+        scene: &'a PathScene<'s>,
+        options: ShadingOptions,
+        progress: &dyn Fn(usize, usize),
+    ) -> Result<Self> {
+        let env = environment(scene)?;
+        let n = scene.materials.len();
+        let mut materials = Vec::with_capacity(n);
+        for (k, m) in scene.materials.iter().enumerate() {
+            let mut built: Option<Result<MaterialTables>> = None;
+            m.with_bsdf([0.5, 0.5], &mut |b: &dyn Bsdf| {
+                built = Some(tables(b, &options));
+            });
+            let t = built.ok_or_else(|| {
+                AdaptiveError::Parameter(format!("material {k} gave no BSDF at uv (½, ½)"))
+            })??;
+            materials.push(t);
+            progress(k + 1, n);
+        }
+        let pyramid = if options.pyramid_face > 0 {
+            Some(environment_pyramid(env, options.pyramid_face)?)
+        } else {
+            None
+        };
+        Ok(Self {
+            scene,
+            env,
+            materials,
+            pyramid,
+        })
+    }
+
+    /// The pyramid level holding frequencies up to `nu` cycles per radian (0 without a pyramid
+    /// or for ν ≤ 0, which reads the sharpest level).
+    pub fn level_for(&self, nu: f64) -> f64 {
+        match &self.pyramid {
+            Some(p) if nu > 0.0 && nu.is_finite() => {
+                let top = (p.level_count() - 1) as f64;
+                (p.base_size() as f64 / (PI * nu)).log2().clamp(0.0, top)
+            }
+            _ => 0.0,
+        }
+    }
+
+    /// L_p at `s` from `n` samples (≥ 1), the environment read at `lod` (`None`: the map at full
+    /// resolution); `seed` rotates the point sets.
+    ///
+    /// The n samples are split between the BRDF (⌈n/2⌉) and the environment's importance
+    /// sampling (⌊n/2⌋), combined by the multi-sample balance heuristic (Veach 1997 §9.2):
+    /// every sample X_j weighs f L cos θ / (n_f p_f(X_j) + n_l p_l(X_j)). Dirac lobes are
+    /// reached by the BRDF's samples only.
+    pub fn shade(&self, s: &Surfel, n: usize, lod: Option<f64>, seed: u64) -> Rgb {
+        let env = self.env;
+        let f = &s.frame;
+        let to_local = |d: DVec3| DVec3::new(d.dot(f.t), d.dot(f.b), d.dot(f.n));
+        let to_world = |d: DVec3| f.t * d.x + f.b * d.y + f.n * d.z;
+        let wo = to_local(s.wo);
+        let light = |d: DVec3| -> Rgb {
+            match (lod, &self.pyramid) {
+                (Some(l), Some(p)) => Rgb(p.sample(d, l)),
+                _ => env.eval(d),
+            }
+        };
+        let n = n.max(1);
+        let (n_f, n_l) = (n.div_ceil(2), n / 2);
+        let mut rng = SplitMix64::new(seed);
+        let rot = [
+            rng.next_f64(),
+            rng.next_f64(),
+            rng.next_f64(),
+            rng.next_f64(),
+        ];
+        let tables = &self.materials[s.material];
+        let mut sum = Rgb::ZERO;
+        let mut add = |v: Rgb| {
+            if v.0.iter().all(|c| c.is_finite()) {
+                sum += v;
+            }
+        };
+        self.scene.materials[s.material].with_bsdf(s.uv, &mut |b: &dyn Bsdf| {
+            let brdf_pdf = |wi: DVec3| match &tables.sampler {
+                Some(t) => t.pdf(wi, wo),
+                None => b.pdf(wi, wo),
+            };
+            let mix = |p_f: f64, d_world: DVec3| n_f as f64 * p_f + n_l as f64 * env.pdf(d_world);
+            for k in 0..n_f {
+                let (h1, h2) = hammersley(k as u32, n_f as u32);
+                let (u1, u2) = ((h1 + rot[0]).fract(), (h2 + rot[1]).fract());
+                match &tables.sampler {
+                    Some(t) => {
+                        if let Some(wi) = t.sample(wo, u1, u2) {
+                            let d = to_world(wi);
+                            let den = mix(t.pdf(wi, wo), d);
+                            if den > 0.0 {
+                                add(b.eval(wi, wo) * (wi.z.abs() / den) * light(d));
+                            }
+                        }
+                    }
+                    None => {
+                        if let Some(smp) = b.sample(wo, u1, u2) {
+                            let d = to_world(smp.wi);
+                            if smp.is_delta() {
+                                add(smp.weight() * light(d) * (1.0 / n_f as f64));
+                            } else {
+                                let den = mix(smp.pdf, d);
+                                if den > 0.0 {
+                                    add(smp.value * (smp.wi.z.abs() / den) * light(d));
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            for k in 0..n_l {
+                let (h1, h2) = hammersley(k as u32, n_l as u32);
+                let (u1, u2) = ((h1 + rot[2]).fract(), (h2 + rot[3]).fract());
+                let (d, _) = env.sample(u1, u2);
+                let wi = to_local(d);
+                let den = mix(brdf_pdf(wi), d);
+                if den > 0.0 {
+                    add(b.eval(wi, wo) * (wi.z.abs() / den) * light(d));
+                }
+            }
+        });
+        sum
+    }
+}
+
+/// The scene's environment, or an error naming the problem.
+pub fn environment<'a>(scene: &'a PathScene) -> Result<&'a EnvLight> {
+    scene.environment.as_ref().ok_or_else(|| {
+        AdaptiveError::Parameter(
+            "adaptive shading lights the scene by its environment, and it has none".into(),
+        )
+    })
+}
+
+/// The tables of one BSDF.
+fn tables(b: &dyn Bsdf, options: &ShadingOptions) -> Result<MaterialTables> {
+    let f = b.flags();
+    let sampler = if f.anisotropic || f.transmission || f.has_delta() {
+        None
+    } else {
+        Some(TabulatedSampler::new(b, options.tabulated)?)
+    };
+    Ok(MaterialTables {
+        name: b.name(),
+        sampler,
+        bandwidth: brdf_bandwidth(b, options.bandwidth)?,
+    })
+}
+
+/// A pixel's seed: the frame's seed mixed with the pixel index.
+pub fn pixel_seed(seed: u64, pixel: usize) -> u64 {
+    let mut r = SplitMix64::new(seed ^ (pixel as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    r.next_u64()
+}

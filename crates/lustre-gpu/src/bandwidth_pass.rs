@@ -1,0 +1,393 @@
+//! The bandwidth pass of 004 §IV.4.1 on the GPU (`bandwidth_pass.wgsl`): per G-buffer pixel,
+//! the one-bounce bandwidth and variance sums from n_b directions under a distant environment.
+//! Its CPU twin is `lustre_adaptive::buffer::predict_pixels` (built on
+//! `lustre_freq::pixel::predict`); the levels, sample counts and pyramids are assembled from its
+//! output on the CPU (`BandwidthBuffer::assemble`). Materials are neural BRDFs (the measured
+//! materials of 004's scenes).
+
+use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry};
+use crate::context::GpuContext;
+use crate::error::{invalid, Result};
+use crate::gbuffer::map_read;
+use crate::measured::pack_nbrdf;
+use crate::timer::{GpuTimer, Timing};
+use crate::wgsl::{compose, FREQUENCY, MEASURED, TYPES};
+use glam::DVec3;
+use lustre_adaptive::buffer::PixelEstimate;
+use lustre_adaptive::gbuffer::{GBuffer, GPixel};
+use lustre_adaptive::shading::ShadingContext;
+use lustre_brdf::measured::nbrdf::Nbrdf;
+use lustre_env::EquirectMap;
+use lustre_freq::brdf::BrdfBandwidth;
+use lustre_freq::pixel::{EnvironmentBandwidth, PixelPrediction};
+use lustre_freq::transport::Bandwidth;
+
+/// The pass's own WGSL (its bindings and entry point).
+pub const BANDWIDTH_PASS_WGSL: &str = include_str!("bandwidth_pass.wgsl");
+
+/// One pixel for the pass: the shading frame and the direction to the eye in the map's frame,
+/// the depth (distance to the eye), the curvature and the material; `None` for the background.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BandwidthPixel {
+    /// Tangent, bitangent, normal.
+    pub frame: (DVec3, DVec3, DVec3),
+    /// Unit direction to the eye.
+    pub wo: DVec3,
+    /// Distance to the eye.
+    pub depth: f64,
+    /// Curvature (1/m).
+    pub curvature: f64,
+    /// Index into the pass's materials.
+    pub material: u32,
+}
+
+/// `Prediction` of the pass (read back).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuPrediction {
+    /// (ν_s, ν_a) at the eye (Eq. IV.6).
+    pub bandwidth: [f32; 2],
+    /// Σ (ν_a^i + ν_ρa^i) χ_i² (Eq. IV.9).
+    pub variance: f32,
+    /// Σ 2 ν_ρa^i χ_i² (Eq. IV.10).
+    pub variance_preconvolved: f32,
+    /// π / n_b Σ χ_i.
+    pub radiance: f32,
+    /// The BRDF's largest bandwidth over the directions and the mirror direction.
+    pub brdf_max: f32,
+    _pad: [f32; 2],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    pixels: u32,
+    n_b: u32,
+    env_width: u32,
+    env_height: u32,
+    incident: u32,
+    out: u32,
+    _pad: [u32; 2],
+}
+
+/// The environment and the materials, uploaded once.
+pub struct BandwidthScene {
+    environment: wgpu::Buffer,
+    env_size: (u32, u32),
+    materials: wgpu::Buffer,
+    table: wgpu::Buffer,
+    brdf_bandwidth: wgpu::Buffer,
+    material_count: u32,
+    grid: (u32, u32),
+}
+
+/// The compiled pass.
+pub struct BandwidthPass {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    timer: GpuTimer,
+}
+
+impl BandwidthScene {
+    /// Uploads `map` with its per-texel bandwidth (`lustre_freq::environment::angular_bandwidth`)
+    /// and each material's network and bandwidth table (every table on the same grids).
+    pub fn new(
+        ctx: &GpuContext,
+        map: &EquirectMap,
+        map_bandwidth: &[f64],
+        materials: &[(&Nbrdf, &BrdfBandwidth)],
+    ) -> Result<Self> {
+        if map_bandwidth.len() != map.width * map.height {
+            return Err(invalid(
+                "map bandwidth",
+                format!(
+                    "{} values for a {} × {} map",
+                    map_bandwidth.len(),
+                    map.width,
+                    map.height
+                ),
+            ));
+        }
+        if materials.is_empty() {
+            return Err(invalid(
+                "materials",
+                "the bandwidth pass needs one material",
+            ));
+        }
+        let grid = materials[0].1.options;
+        let mut ids = vec![];
+        let (mut table, mut bw) = (vec![], vec![]);
+        for (net, b) in materials {
+            if b.options != grid {
+                return Err(invalid(
+                    "BRDF bandwidth",
+                    format!(
+                        "{}: its table's grids {:?} differ from the first material's {grid:?}",
+                        net.name(),
+                        b.options
+                    ),
+                ));
+            }
+            ids.push([table.len() as u32, bw.len() as u32]);
+            table.extend(pack_nbrdf(net));
+            bw.extend(b.data.iter().map(|&v| v as f32));
+        }
+        let texels: Vec<[f32; 4]> = map
+            .data
+            .iter()
+            .zip(map_bandwidth)
+            .map(|(p, &b)| [p[0], p[1], p[2], b as f32])
+            .collect();
+        let storage = wgpu::BufferUsages::STORAGE;
+        Ok(Self {
+            environment: buffer_init(ctx, "bandwidth env", bytemuck::cast_slice(&texels), storage),
+            env_size: (map.width as u32, map.height as u32),
+            materials: buffer_init(
+                ctx,
+                "bandwidth materials",
+                bytemuck::cast_slice(&ids),
+                storage,
+            ),
+            table: buffer_init(
+                ctx,
+                "bandwidth networks",
+                bytemuck::cast_slice(&table),
+                storage,
+            ),
+            brdf_bandwidth: buffer_init(ctx, "brdf bandwidth", bytemuck::cast_slice(&bw), storage),
+            material_count: materials.len() as u32,
+            grid: (grid.incident as u32, grid.out as u32),
+        })
+    }
+}
+
+impl BandwidthScene {
+    /// The environment and materials of an adaptive-shading context: every material must be a
+    /// neural BRDF (the error names the first that is not).
+    pub fn from_context(
+        ctx: &GpuContext,
+        shading: &ShadingContext,
+        env: &EnvironmentBandwidth,
+    ) -> Result<Self> {
+        let mut nets = vec![];
+        for (k, m) in shading.scene.materials.iter().enumerate() {
+            let mut net = None;
+            m.with_bsdf([0.5, 0.5], &mut |b| {
+                net = b.as_any().and_then(|a| a.downcast_ref::<Nbrdf>()).cloned();
+            });
+            nets.push(net.ok_or_else(|| {
+                invalid(
+                    "bandwidth pass",
+                    format!(
+                        "material {k} ({}): the GPU bandwidth pass evaluates neural BRDFs \
+                         (nbrdf:…) only",
+                        shading.materials[k].name
+                    ),
+                )
+            })?);
+        }
+        let pairs: Vec<(&Nbrdf, &BrdfBandwidth)> = nets
+            .iter()
+            .zip(&shading.materials)
+            .map(|(n, t)| (n, &t.bandwidth))
+            .collect();
+        Self::new(ctx, env.map, &env.bandwidth, &pairs)
+    }
+}
+
+impl BandwidthPass {
+    /// The GPU twin of `lustre_adaptive::buffer::predict_pixels`: the pixels of `g` (turned into
+    /// the map's frame) through [`BandwidthPass::run`].
+    pub fn predict(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &BandwidthScene,
+        g: &GBuffer,
+        shading: &ShadingContext,
+        n_b: u32,
+    ) -> Result<(Vec<Option<PixelEstimate>>, Timing)> {
+        let to_local = shading.env.to_world().transpose();
+        let pixels: Vec<Option<BandwidthPixel>> = g
+            .pixels
+            .iter()
+            .map(|p| match p {
+                GPixel::Surface(s) => Some(BandwidthPixel {
+                    frame: (
+                        to_local * s.frame.t,
+                        to_local * s.frame.b,
+                        to_local * s.frame.n,
+                    ),
+                    wo: to_local * s.wo,
+                    depth: s.depth,
+                    curvature: s.curvature,
+                    material: s.material as u32,
+                }),
+                GPixel::Background(_) => None,
+            })
+            .collect();
+        let (out, timing) = self.run(ctx, scene, &pixels, n_b)?;
+        let estimates = pixels
+            .iter()
+            .zip(&out)
+            .map(|(p, o)| {
+                p.map(|_| PixelEstimate {
+                    prediction: PixelPrediction {
+                        bandwidth: Bandwidth::new(
+                            f64::from(o.bandwidth[0]),
+                            f64::from(o.bandwidth[1]),
+                        ),
+                        variance: f64::from(o.variance),
+                        variance_preconvolved: f64::from(o.variance_preconvolved),
+                        radiance: f64::from(o.radiance),
+                    },
+                    brdf_max: f64::from(o.brdf_max),
+                })
+            })
+            .collect();
+        Ok((estimates, timing))
+    }
+
+    /// Compiles the pass.
+    pub fn new(ctx: &GpuContext) -> Result<Self> {
+        let src = compose(&[&TYPES, &MEASURED, &FREQUENCY], BANDWIDTH_PASS_WGSL);
+        let entries = [
+            uniform_entry(0),
+            storage_entry(1, true),
+            storage_entry(2, true),
+            storage_entry(3, true),
+            storage_entry(4, true),
+            storage_entry(5, true),
+            storage_entry(6, false),
+        ];
+        let (pipeline, layout) =
+            compute_pipeline(ctx, "bandwidth pass", "bandwidth pass", &src, &entries)?;
+        Ok(Self {
+            pipeline,
+            layout,
+            timer: GpuTimer::new(ctx),
+        })
+    }
+
+    /// Runs the pass over `pixels` (one per G-buffer pixel) with `n_b` directions; returns the
+    /// predictions (zeros on the background) and the pass's time (upload of the pixels, the
+    /// dispatch; not the read-back).
+    pub fn run(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &BandwidthScene,
+        pixels: &[Option<BandwidthPixel>],
+        n_b: u32,
+    ) -> Result<(Vec<GpuPrediction>, Timing)> {
+        if pixels.is_empty() || n_b == 0 || n_b > 4096 {
+            return Err(invalid(
+                "bandwidth pass",
+                format!("{} pixels with n_b = {n_b} (1..=4096)", pixels.len()),
+            ));
+        }
+        let mut surfels = Vec::with_capacity(pixels.len() * 16);
+        for p in pixels {
+            match p {
+                Some(p) => {
+                    if p.material >= scene.material_count {
+                        return Err(invalid(
+                            "bandwidth pass",
+                            format!(
+                                "material {} of {} uploaded",
+                                p.material, scene.material_count
+                            ),
+                        ));
+                    }
+                    let (t, b, n) = p.frame;
+                    let v = |d: DVec3, w: f32| [d.x as f32, d.y as f32, d.z as f32, w];
+                    surfels.extend(v(t, p.depth as f32));
+                    surfels.extend(v(b, p.curvature as f32));
+                    surfels.extend(v(n, f32::from_bits(p.material)));
+                    surfels.extend(v(p.wo, 1.0));
+                }
+                None => surfels.extend([0.0f32; 16]),
+            }
+        }
+        let params = Params {
+            pixels: pixels.len() as u32,
+            n_b,
+            env_width: scene.env_size.0,
+            env_height: scene.env_size.1,
+            incident: scene.grid.0,
+            out: scene.grid.1,
+            _pad: [0; 2],
+        };
+        self.timer.start(ctx)?;
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let params_buf = buffer_init(
+            ctx,
+            "bandwidth params",
+            bytemuck::bytes_of(&params),
+            wgpu::BufferUsages::UNIFORM,
+        );
+        let surfel_buf = buffer_init(
+            ctx,
+            "bandwidth surfels",
+            bytemuck::cast_slice(&surfels),
+            wgpu::BufferUsages::STORAGE,
+        );
+        let size = (pixels.len() * std::mem::size_of::<GpuPrediction>()) as u64;
+        let out = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("bandwidth predictions"),
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("bandwidth readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("bandwidth pass"),
+            layout: &self.layout,
+            entries: &[
+                entry(0, &params_buf),
+                entry(1, &surfel_buf),
+                entry(2, &scene.environment),
+                entry(3, &scene.materials),
+                entry(4, &scene.table),
+                entry(5, &scene.brdf_bandwidth),
+                entry(6, &out),
+            ],
+        });
+        let mut enc = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("bandwidth pass"),
+            });
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("bandwidth pass"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups((pixels.len() as u32).div_ceil(64), 1, 1);
+        }
+        ctx.queue.submit([enc.finish()]);
+        let timing = self.timer.stop(ctx)?;
+        let mut enc = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("bandwidth readback"),
+            });
+        enc.copy_buffer_to_buffer(&out, 0, &readback, 0, size);
+        ctx.queue.submit([enc.finish()]);
+        let bytes = map_read(ctx, &readback, "bandwidth pass", scope)?;
+        let predictions = bytemuck::cast_slice::<u8, GpuPrediction>(&bytes).to_vec();
+        Ok((predictions, timing))
+    }
+}
+
+fn entry(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: b.as_entire_binding(),
+    }
+}

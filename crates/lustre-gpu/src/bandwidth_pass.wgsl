@@ -1,0 +1,141 @@
+// The bandwidth pass (004 §IV.4.1, Fig. IV.11 b): per G-buffer pixel, the prediction of
+// lustre_freq::pixel::predict from n_b directions under a distant environment, and the BRDF's
+// largest bandwidth over them and the mirror direction (lustre_adaptive::buffer::predict_pixels).
+// Materials are neural BRDFs (measured.wgsl's nbrdf_eval). Imports: types, measured, frequency.
+
+struct Params {
+    pixels: u32,
+    n_b: u32,
+    env_width: u32,
+    env_height: u32,
+    incident: u32,
+    out: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+// A surface pixel in the map's frame: t, b, n, wo (xyz), depth in t.w, curvature in b.w, the
+// material in n.w (bitcast u32), 1 in wo.w for a surface (0: background).
+struct Surfel {
+    t: vec4<f32>,
+    b: vec4<f32>,
+    n: vec4<f32>,
+    wo: vec4<f32>,
+}
+
+// (ν_s, ν_a) at the eye, Σ(ν_a^i + ν_ρa^i)χ², Σ2ν_ρa^i χ², L̂, the BRDF's largest bandwidth.
+struct Prediction {
+    bandwidth: vec2<f32>,
+    variance: f32,
+    variance_preconvolved: f32,
+    radiance: f32,
+    brdf_max: f32,
+    _pad0: f32,
+    _pad1: f32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> surfels: array<Surfel>;
+// Equirect texels: RGB, and the local bandwidth in w.
+@group(0) @binding(2) var<storage, read> environment: array<vec4<f32>>;
+// Per material: the word where its network starts in `table` and where its bandwidth table
+// starts in `brdf_bandwidth`.
+@group(0) @binding(3) var<storage, read> materials: array<vec2<u32>>;
+@group(0) @binding(4) var<storage, read> table: array<f32>;
+@group(0) @binding(5) var<storage, read> brdf_bandwidth: array<f32>;
+@group(0) @binding(6) var<storage, read_write> predictions: array<Prediction>;
+
+fn bsdf_table(i: u32) -> f32 {
+    return table[i];
+}
+
+fn texel(x: i32, y: i32) -> vec4<f32> {
+    let w = i32(params.env_width);
+    let xi = ((x % w) + w) % w;
+    return environment[u32(y) * params.env_width + u32(xi)];
+}
+
+// EquirectMap::lookup_bilinear (RGB).
+fn env_radiance(d: vec3<f32>) -> vec3<f32> {
+    let uv = freq_equirect_uv(d);
+    let w = f32(params.env_width);
+    let h = f32(params.env_height);
+    let x = uv.x * w - 0.5;
+    let y = clamp(uv.y * h - 0.5, 0.0, h - 1.0);
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = x - x0;
+    let fy = y - y0;
+    let y1 = min(i32(y0) + 1, i32(params.env_height) - 1);
+    let a = texel(i32(x0), i32(y0)).xyz;
+    let b = texel(i32(x0) + 1, i32(y0)).xyz;
+    let c = texel(i32(x0), y1).xyz;
+    let e = texel(i32(x0) + 1, y1).xyz;
+    return (1.0 - fy) * ((1.0 - fx) * a + fx * b) + fy * ((1.0 - fx) * c + fx * e);
+}
+
+// EnvironmentBandwidth::bandwidth_at (nearest texel).
+fn env_bandwidth(d: vec3<f32>) -> f32 {
+    let uv = freq_equirect_uv(d);
+    let x = min(u32(max(uv.x, 0.0) * f32(params.env_width)), params.env_width - 1u);
+    let y = min(u32(max(uv.y, 0.0) * f32(params.env_height)), params.env_height - 1u);
+    return environment[y * params.env_width + x].w;
+}
+
+fn luminance(c: vec3<f32>) -> f32 {
+    return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+}
+
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= params.pixels) {
+        return;
+    }
+    var out: Prediction;
+    let s = surfels[i];
+    let t = s.t.xyz;
+    let b = s.b.xyz;
+    let n = s.n.xyz;
+    let wo = vec3<f32>(dot(s.wo.xyz, t), dot(s.wo.xyz, b), dot(s.wo.xyz, n));
+    let depth = s.t.w;
+    let curvature = s.b.w;
+    let finite = abs(depth) < 3.0e38 && abs(curvature) < 3.0e38 && depth == depth
+        && curvature == curvature;
+    if (s.wo.w == 0.0 || !(wo.z > 0.0 && finite && dot(n, n) > 0.5)) {
+        predictions[i] = out;
+        return;
+    }
+    let m = materials[bitcast<u32>(s.n.w)];
+    let incident = params.incident;
+    let cells = params.out;
+    var weight_sum = 0.0;
+    var nu = vec2<f32>(0.0);
+    var chi_sum = 0.0;
+    let mirror = vec3<f32>(-wo.x, -wo.y, wo.z);
+    var brdf_max = brdf_bandwidth[m.y + freq_brdf_index(mirror, wo, incident, cells)];
+    for (var k = 0u; k < params.n_b; k++) {
+        let wi_l = freq_cosine_direction(k, params.n_b);
+        let wi = t * wi_l.x + b * wi_l.y + n * wi_l.z;
+        let radiance = luminance(env_radiance(wi));
+        let rho = luminance(nbrdf_eval(m.x, wi_l, wo));
+        let nu_light = env_bandwidth(wi);
+        let nu_brdf = brdf_bandwidth[m.y + freq_brdf_index(wi_l, wo, incident, cells)];
+        brdf_max = max(brdf_max, nu_brdf);
+        let nu_i = freq_one_bounce_distant(nu_light, max(wo.z, 1e-6), curvature, 0.0, nu_brdf,
+                                           depth);
+        let chi = radiance * rho;
+        chi_sum += chi;
+        let lambda = max(chi * wi_l.z, 0.0);
+        weight_sum += lambda;
+        nu += lambda * nu_i;
+        out.variance += (nu_light + nu_brdf) * chi * chi;
+        out.variance_preconvolved += 2.0 * nu_brdf * chi * chi;
+    }
+    if (weight_sum > 0.0) {
+        out.bandwidth = nu / weight_sum;
+    }
+    out.radiance = PI * chi_sum / f32(params.n_b);
+    out.brdf_max = brdf_max;
+    predictions[i] = out;
+}

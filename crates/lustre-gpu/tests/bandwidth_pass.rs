@@ -1,0 +1,189 @@
+//! The bandwidth pass (`bandwidth_pass.wgsl`) against its CPU twin
+//! (`lustre_adaptive::buffer::predict_pixels`) on 004's line-up of measured paints (neural
+//! BRDFs) under royal_esplanade_1k, and the buffers assembled from both. GPU tests fail (never
+//! skip) without an adapter.
+
+use lustre_adaptive::buffer::{predict_pixels, BandwidthBuffer, BufferOptions, SampleRule};
+use lustre_adaptive::gbuffer::GBuffer;
+use lustre_adaptive::shading::{ShadingContext, ShadingOptions};
+use lustre_freq::pixel::EnvironmentBandwidth;
+use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthPixel, BandwidthScene};
+use lustre_shade::baked::read_environment;
+use lustre_shade::path::{PathOptions, PathTracer};
+use lustre_shade::reference::{film_camera, path_scene};
+
+mod common;
+use common::ctx;
+
+/// Relative differences |g − c| / max(|c|, floor) over the pixels: RMS, worst, and the share
+/// above `outlier`.
+fn compare(pairs: &[(f64, f64)], floor: f64, outlier: f64) -> (f64, f64, f64) {
+    let d: Vec<f64> = pairs
+        .iter()
+        .map(|(c, g)| (g - c).abs() / c.abs().max(floor))
+        .collect();
+    let rms = (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt();
+    let worst = d.iter().cloned().fold(0.0, f64::max);
+    let share = d.iter().filter(|v| **v > outlier).count() as f64 / d.len() as f64;
+    (rms, worst, share)
+}
+
+#[test]
+fn the_gpu_bandwidth_pass_matches_its_cpu_twin_on_the_line_up() {
+    let map = lustre_env::shared_data_dir().join("envmaps/royal_esplanade_1k.hdr");
+    let env = read_environment(&map).expect("royal_esplanade_1k.hdr");
+    let scene = lustre_scene::builtin::lineup(
+        [
+            "nbrdf:color-changing-paint3",
+            "nbrdf:red-metallic-paint",
+            "nbrdf:gold-paint",
+        ],
+        "nbrdf:white-marble",
+        Some(env),
+    )
+    .expect("line-up");
+    let (w, h) = (96, 64);
+    let (ps, _) = path_scene(&scene).expect("path scene");
+    let tracer = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
+    let cam = film_camera(&scene.cameras[0], w as u32, h as u32).expect("camera");
+    let g = GBuffer::render(&tracer, &ps, &cam, w, h).expect("G-buffer");
+    let shading = ShadingContext::new(
+        &ps,
+        ShadingOptions {
+            pyramid_face: 0,
+            ..Default::default()
+        },
+        &|_, _| {},
+    )
+    .expect("tables");
+    let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+    let n_b = 16;
+    let cpu = predict_pixels(&g, &shading, &env_bw, n_b).expect("cpu");
+    let gpu_ctx = ctx();
+    let scene_gpu = BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw).expect("upload");
+    let mut pass = BandwidthPass::new(&gpu_ctx).expect("pass");
+    let (gpu, timing) = pass
+        .predict(&gpu_ctx, &scene_gpu, &g, &shading, n_b as u32)
+        .expect("gpu");
+    eprintln!("{}", gpu_ctx.describe());
+    eprintln!(
+        "bandwidth pass, {w}×{h}, n_b {n_b}: wall {:.2} ms, GPU {:?} ms",
+        timing.wall_ms, timing.gpu_ms
+    );
+    assert_eq!(cpu.len(), gpu.len());
+    let mut fields: [Vec<(f64, f64)>; 5] = Default::default();
+    let mut surface = 0;
+    for (c, gp) in cpu.iter().zip(&gpu) {
+        match (c, gp) {
+            (None, None) => {}
+            (Some(c), Some(gp)) => {
+                surface += 1;
+                let (a, b) = (&c.prediction, &gp.prediction);
+                fields[0].push((a.bandwidth.angular, b.bandwidth.angular));
+                fields[1].push((a.variance, b.variance));
+                fields[2].push((a.variance_preconvolved, b.variance_preconvolved));
+                fields[3].push((a.radiance, b.radiance));
+                fields[4].push((c.brdf_max, gp.brdf_max));
+            }
+            _ => panic!("the CPU and the GPU disagree on which pixels are surfaces"),
+        }
+    }
+    assert!(surface > w * h / 3, "{surface} surface pixels");
+    let names = [
+        "angular bandwidth",
+        "variance sum",
+        "pre-convolved variance sum",
+        "radiance",
+        "BRDF max bandwidth",
+    ];
+    let stats: Vec<(f64, f64, f64)> = names
+        .iter()
+        .zip(&fields)
+        .map(|(name, pairs)| {
+            let scale = pairs.iter().map(|(c, _)| c.abs()).fold(0.0, f64::max);
+            let (rms, worst, share) = compare(pairs, 1e-3 * scale, 1e-2);
+            eprintln!(
+                "{name}: relative RMS {rms:.2e}, worst {worst:.2e}, {:.2} % of pixels off by > 1 %",
+                100.0 * share
+            );
+            (rms, worst, share)
+        })
+        .collect();
+    for (name, (rms, _, share)) in names.iter().zip(stats) {
+        // f32 against f64: a direction on a cell edge of the BRDF's bandwidth table or of the
+        // map's bandwidth may land in the neighbouring cell; such pixels stay rare.
+        assert!(
+            share < 0.01,
+            "{name}: {:.2} % of pixels off by > 1 %",
+            100.0 * share
+        );
+        assert!(rms < 5e-3, "{name}: relative RMS {rms}");
+    }
+    // The buffers assembled from both agree on the level of nearly every pixel.
+    let o = BufferOptions {
+        scale: SampleRule::Constant,
+        ..Default::default()
+    };
+    let a = BandwidthBuffer::assemble(&g, &cpu, o).expect("cpu buffer");
+    let b = BandwidthBuffer::assemble(&g, &gpu, o).expect("gpu buffer");
+    let differ = a.level.iter().zip(&b.level).filter(|(x, y)| x != y).count();
+    eprintln!("levels differ on {differ} of {} pixels", w * h);
+    assert!(differ * 100 < surface, "{differ} levels differ");
+}
+
+#[test]
+fn the_pass_names_bad_input() {
+    let gpu_ctx = ctx();
+    let map = lustre_env::EquirectMap::new(8, 4, vec![[1.0; 3]; 32]).expect("map");
+    let net = lustre_brdf::measured::nbrdf::NbrdfSet::read(
+        lustre_brdf::shared_data_dir().join("nbrdf/merl_nbrdf.json"),
+    )
+    .expect("merl_nbrdf.json")
+    .material("gold-paint")
+    .expect("gold-paint");
+    let bw = lustre_freq::brdf::brdf_bandwidth(
+        &net,
+        lustre_freq::brdf::BrdfBandwidthOptions {
+            incident: 4,
+            slice: 16,
+            out: 4,
+        },
+    )
+    .expect("bandwidth");
+    match BandwidthScene::new(&gpu_ctx, &map, &[0.0; 31], &[(&net, &bw)]) {
+        Err(e) => assert!(e.to_string().contains("31 values for a 8 × 4 map"), "{e}"),
+        Ok(_) => panic!("31 bandwidth values for 32 texels were accepted"),
+    }
+    let scene = BandwidthScene::new(&gpu_ctx, &map, &[0.0; 32], &[(&net, &bw)]).expect("scene");
+    let mut pass = BandwidthPass::new(&gpu_ctx).expect("pass");
+    let px = BandwidthPixel {
+        frame: (glam::DVec3::X, glam::DVec3::Y, glam::DVec3::Z),
+        wo: glam::DVec3::Z,
+        depth: 1.0,
+        curvature: 0.0,
+        material: 1,
+    };
+    let e = pass
+        .run(&gpu_ctx, &scene, &[Some(px)], 16)
+        .expect_err("material 1 of 1");
+    assert!(e.to_string().contains("material 1 of 1"), "{e}");
+    let e = pass.run(&gpu_ctx, &scene, &[None], 0).expect_err("n_b 0");
+    assert!(e.to_string().contains("n_b"), "{e}");
+    // A degenerate pixel (zero normal, NaN curvature) predicts zeros, not NaN.
+    let bad = BandwidthPixel {
+        frame: (glam::DVec3::ZERO, glam::DVec3::ZERO, glam::DVec3::ZERO),
+        curvature: f64::NAN,
+        material: 0,
+        ..px
+    };
+    let (out, _) = pass
+        .run(
+            &gpu_ctx,
+            &scene,
+            &[Some(bad), Some(BandwidthPixel { material: 0, ..px })],
+            16,
+        )
+        .expect("run");
+    assert_eq!(out[0], Default::default());
+    assert!(out[1].radiance > 0.0 && out[1].variance.is_finite());
+}

@@ -1,0 +1,272 @@
+//! `lustre render --method adaptive | brute`: 004 chapter IV on the CPU (`lustre-adaptive`).
+//! Measured (or any) materials shaded directly under the environment, without visibility: the
+//! adaptive method renders a bandwidth buffer and shades hierarchically; brute force shades
+//! every pixel with --samples samples. Without a scene or --material, 004 Fig. IV.13's line-up
+//! (three spheres of measured paints on white marble).
+
+use crate::render_cmd::{compare, path_cameras, Device, Method, RenderArgs, SampleRuleArg};
+use anyhow::{bail, Context};
+use indicatif::{ProgressBar, ProgressStyle};
+use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BufferOptions, SampleRule};
+use lustre_adaptive::gbuffer::GBuffer;
+use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute};
+use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
+use lustre_freq::pixel::EnvironmentBandwidth;
+use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthScene};
+use lustre_gpu::GpuContext;
+use lustre_scene::material_edit::{parse_assignment, set_named};
+use lustre_scene::Scene;
+use lustre_shade::baked::read_environment;
+use lustre_shade::path::{PathOptions, PathTracer};
+use lustre_shade::reference::{path_camera, path_scene};
+use std::fmt::Write as _;
+use std::time::Instant;
+
+/// The line-up's materials (004 Fig. IV.13), left to right, and its floor.
+const LINEUP: [&str; 3] = [
+    "nbrdf:color-changing-paint3",
+    "nbrdf:red-metallic-paint",
+    "nbrdf:gold-paint",
+];
+const LINEUP_FLOOR: &str = "nbrdf:white-marble";
+
+/// Runs the adaptive or brute-force renderer.
+pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+    let adaptive = args.method == Method::Adaptive;
+    if !(1..=1024).contains(&args.samples) {
+        bail!("--samples {} must be 1..=1024", args.samples);
+    }
+    let k = (f64::from(args.spp)).sqrt().round() as usize;
+    if k * k != args.spp as usize || !(1..=4).contains(&k) {
+        bail!(
+            "--spp {} must be 1, 4, 9 or 16 with --method {:?} (a k × k supersampled G-buffer)",
+            args.spp,
+            args.method
+        );
+    }
+    let mut times: Vec<(String, f64)> = vec![];
+    let mut t = Instant::now();
+    let environment = args.env.as_deref().map(read_environment).transpose()?;
+    let mut scene = match (&args.scene, &args.material) {
+        (Some(path), _) => {
+            if environment.is_some() {
+                bail!("--env applies to --material and the built-in line-up, not to a scene file");
+            }
+            Scene::load(path)?
+        }
+        (None, Some(spec)) => lustre_scene::builtin::preview(spec, environment)
+            .with_context(|| format!("--material {spec}"))?,
+        (None, None) => lustre_scene::builtin::lineup(LINEUP, LINEUP_FLOOR, environment)?,
+    };
+    for a in &args.set {
+        let (material, field, value) =
+            parse_assignment(a).map_err(|e| anyhow::anyhow!("--set {e}"))?;
+        set_named(&mut scene.materials, &material, &field, &value)
+            .with_context(|| format!("--set {a}"))?;
+    }
+    let (w, h) = match args.size.as_deref() {
+        Some(s) => crate::reference_cmd::parse_size(s)?,
+        None => (scene.film.width, scene.film.height),
+    };
+    let (gw, gh) = (w as usize * k, h as usize * k);
+    let cameras = match &args.path {
+        None => vec![(
+            "frame".to_string(),
+            path_camera(&scene, args.camera.as_deref(), gw as u32, gh as u32)?,
+        )],
+        Some(p) => path_cameras(&scene, p, args.fps, gw as u32, gh as u32)?,
+    };
+    let (ps, warnings) = path_scene(&scene)?;
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
+    if ps.environment.is_none() {
+        bail!(
+            "{}: adaptive shading lights the scene by its environment, and it has none",
+            scene.source.display()
+        );
+    }
+    let tracer = PathTracer::new(&ps, PathOptions::default())?;
+    lap(&mut times, "load, BVH", &mut t);
+    let bar = ProgressBar::new(ps.materials.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("material tables [{bar:30}] {pos}/{len}, {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let lighting = if args.preconvolved {
+        Lighting::Preconvolved
+    } else {
+        Lighting::Direct
+    };
+    let shading = ShadingOptions {
+        pyramid_face: if lighting == Lighting::Preconvolved {
+            ShadingOptions::default().pyramid_face
+        } else {
+            0
+        },
+        ..Default::default()
+    };
+    let ctx = ShadingContext::new(&ps, shading, &|i, _| bar.set_position(i as u64))?;
+    bar.finish_and_clear();
+    lap(
+        &mut times,
+        "material tables (sampling CDFs, bandwidth)",
+        &mut t,
+    );
+    let env_bw = EnvironmentBandwidth::new(ctx.env.map())?;
+    lap(&mut times, "environment bandwidth", &mut t);
+    // The bandwidth pass runs on the GPU where it can (neural-BRDF materials); the shading
+    // passes are the CPU's.
+    let mut gpu = match (adaptive, args.device) {
+        (false, _) | (_, Device::Cpu) => None,
+        (true, device) => match gpu_bandwidth(&ctx, &env_bw) {
+            Ok(g) => {
+                eprintln!(
+                    "bandwidth pass on the GPU ({}), shading on the CPU",
+                    g.0.describe()
+                );
+                lap(&mut times, "GPU: adapter, upload", &mut t);
+                Some(g)
+            }
+            Err(e) if device == Device::Auto => {
+                eprintln!("GPU bandwidth pass: {e:#}; the whole frame on the CPU");
+                None
+            }
+            Err(e) => return Err(e),
+        },
+    };
+    if args.device == Device::Gpu && !adaptive {
+        bail!("--method brute shades on the CPU only: use --device cpu or auto");
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let rule = match args.sample_rule {
+        SampleRuleArg::Constant => SampleRule::Constant,
+        SampleRuleArg::Relative => SampleRule::Relative,
+        SampleRuleArg::RelativeMse => SampleRule::RelativeMse,
+        SampleRuleArg::Absolute => SampleRule::Absolute,
+    };
+    let mut summary = String::new();
+    for (stem, camera) in &cameras {
+        let g = GBuffer::render(&tracer, &ps, camera, gw, gh)?;
+        lap(&mut times, &format!("{stem}: G-buffer"), &mut t);
+        let surface = g.surface_pixels();
+        let full = if adaptive {
+            let options = BufferOptions {
+                n_b: args.n_b as usize,
+                mean_samples: args.samples as f64,
+                max_samples: 1024,
+                lighting,
+                scale: rule,
+                rate: args.rate,
+            };
+            let buffer = match &mut gpu {
+                Some((gctx, scene, pass)) => {
+                    let (estimates, timing) = pass.predict(gctx, scene, &g, &ctx, args.n_b)?;
+                    if let Some(ms) = timing.gpu_ms {
+                        times.push((
+                            format!("{stem}: bandwidth pass (GPU timestamps)"),
+                            ms * 1e-3,
+                        ));
+                    }
+                    let b = BandwidthBuffer::assemble(&g, &estimates, options)?;
+                    lap(
+                        &mut times,
+                        &format!("{stem}: bandwidth buffer (GPU pass, read-back, pyramids)"),
+                        &mut t,
+                    );
+                    b
+                }
+                None => {
+                    let b = BandwidthBuffer::build(&g, &ctx, &env_bw, options)?;
+                    lap(
+                        &mut times,
+                        &format!("{stem}: bandwidth buffer (CPU)"),
+                        &mut t,
+                    );
+                    b
+                }
+            };
+            let f = render_adaptive(&g, &ctx, &buffer, lighting, args.seed)?;
+            lap(&mut times, &format!("{stem}: hierarchical shading"), &mut t);
+            write_maps(args, stem, &g, &buffer, &f.shaded_level, &f.samples)?;
+            writeln!(
+                summary,
+                "{stem}: {gw}×{gh} G-buffer, {surface} surface pixels: {} shaded ({:.1} %), {} up-sampled, {} samples ({:.2} per surface pixel)",
+                f.stats.shaded,
+                100.0 * f.stats.shaded as f64 / surface.max(1) as f64,
+                f.stats.upsampled,
+                f.stats.samples,
+                f.stats.samples as f64 / surface.max(1) as f64
+            )?;
+            f.image
+        } else {
+            let (img, st) = render_brute(&g, &ctx, args.samples, args.seed)?;
+            lap(&mut times, &format!("{stem}: brute-force shading"), &mut t);
+            writeln!(
+                summary,
+                "{stem}: {gw}×{gh} G-buffer, {} surface pixels shaded with {} samples each ({} samples)",
+                st.shaded, args.samples, st.samples
+            )?;
+            img
+        };
+        let img = box_downsample(&full, k)?;
+        img.write_exr(&args.out.join(format!("{stem}.exr")))?;
+        img.write_png(&args.out.join(format!("{stem}.png")), args.exposure)?;
+        if cameras.len() == 1 {
+            compare(args, &img)?;
+        }
+    }
+    let mut csv = String::from("stage,seconds\n");
+    for (name, s) in &times {
+        writeln!(csv, "{},{s:.6}", name.replace(',', ";"))?;
+    }
+    lustre_brdf::error::write_atomic(&args.out.join("times.csv"), csv.as_bytes())?;
+    print!("{summary}");
+    for (name, s) in &times {
+        println!("  {name}: {:.3} s", s);
+    }
+    Ok(())
+}
+
+/// Ends the stage `name` (its time since `t`) and starts the next.
+fn lap(times: &mut Vec<(String, f64)>, name: &str, t: &mut Instant) {
+    times.push((name.to_string(), t.elapsed().as_secs_f64()));
+    *t = Instant::now();
+}
+
+/// The GPU's bandwidth pass with the scene's environment and materials uploaded.
+fn gpu_bandwidth(
+    ctx: &ShadingContext,
+    env: &EnvironmentBandwidth,
+) -> anyhow::Result<(GpuContext, BandwidthScene, BandwidthPass)> {
+    let gctx = GpuContext::new()?;
+    let scene = BandwidthScene::from_context(&gctx, ctx, env)?;
+    let pass = BandwidthPass::new(&gctx)?;
+    Ok((gctx, scene, pass))
+}
+
+/// The bandwidth buffer's maps (004 Fig. IV.13, IV.22): b_p, the level ℓ_p, N_p at the shaded
+/// pixels, and the level each pixel was shaded at (black: up-sampled or background).
+fn write_maps(
+    args: &RenderArgs,
+    stem: &str,
+    g: &GBuffer,
+    buffer: &BandwidthBuffer,
+    shaded: &[u8],
+    samples: &[u32],
+) -> anyhow::Result<()> {
+    let (w, h) = (g.width, g.height);
+    let maps: [(&str, Vec<f64>); 4] = [
+        ("bandwidth", buffer.bandwidth.clone()),
+        ("level", level_map(&buffer.level)),
+        ("samples", samples.iter().map(|n| f64::from(*n)).collect()),
+        ("shaded", level_map(shaded)),
+    ];
+    for (name, values) in maps {
+        let path = args.out.join(format!("{stem}_{name}.png"));
+        lustre_plot::heat::heat_map(&values, w, h, &path)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
