@@ -10,7 +10,7 @@
 use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BufferOptions, SampleRule};
 use lustre_adaptive::compare::{time_at_psnr, Measured};
 use lustre_adaptive::gbuffer::GBuffer;
-use lustre_adaptive::hierarchy::{render_adaptive, render_brute};
+use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute};
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_shade::baked::read_environment;
@@ -28,6 +28,7 @@ struct Args {
     scene: String,
     materials: Vec<String>,
     out: Option<PathBuf>,
+    aa: bool,
 }
 
 fn args() -> anyhow::Result<Args> {
@@ -47,6 +48,7 @@ fn args() -> anyhow::Result<Args> {
         .map(|m| format!("nbrdf:{m}"))
         .to_vec(),
         out: None,
+        aa: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(k) = it.next() {
@@ -61,6 +63,7 @@ fn args() -> anyhow::Result<Args> {
             "--scene" => a.scene = v()?,
             "--materials" => a.materials = v()?.split(',').map(str::to_string).collect(),
             "--out" => a.out = Some(v()?.into()),
+            "--aa" => a.aa = true,
             other => anyhow::bail!("unknown argument {other}"),
         }
     }
@@ -98,7 +101,11 @@ fn main() -> anyhow::Result<()> {
         other => anyhow::bail!("unknown scene {other} (sphere, lineup)"),
     };
     for (name, scene) in &cases {
-        study(&a, name, scene)?;
+        if a.aa {
+            aa_study(&a, name, scene)?;
+        } else {
+            study(&a, name, scene)?;
+        }
     }
     Ok(())
 }
@@ -262,6 +269,64 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
     println!();
     validation(&g, &ctx, &env_bw, &reference)?;
     n_b_study(&g, &ctx, &env_bw, &reference, exposure)?;
+    Ok(())
+}
+
+/// Fig. IV.14 (right): the cost of k × k anti-aliasing, brute force (every sub-pixel shaded)
+/// against adaptive shading of the supersampled G-buffer (sub-pixels shaded only where the
+/// bandwidth asks), both with 32 samples per shaded sub-pixel, and the exponent of time against
+/// sub-pixels per pixel.
+fn aa_study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()> {
+    let (ps, _) = path_scene(scene)?;
+    let tracer = PathTracer::new(&ps, PathOptions::default())?;
+    let ctx = ShadingContext::new(&ps, ShadingOptions::default(), &|_, _| {})?;
+    let env_bw = EnvironmentBandwidth::new(ctx.env.map())?;
+    println!(
+        "## {name}: anti-aliasing, {}² pixels, 32 samples per shaded sub-pixel\n",
+        a.size
+    );
+    println!("| sub-pixels | brute force (s) | adaptive (s) | of which bandwidth pass (s) | sub-pixels shaded, adaptive | speed-up |");
+    println!("|---:|---:|---:|---:|---:|---:|");
+    let mut rows = vec![];
+    for k in [1usize, 2, 4] {
+        let (w, h) = (a.size * k, a.size * k);
+        let cam = film_camera(&scene.cameras[0], w as u32, h as u32)?;
+        let g = GBuffer::render(&tracer, &ps, &cam, w, h)?;
+        let t = Instant::now();
+        let (img, _) = render_brute(&g, &ctx, 32, 7)?;
+        let _ = box_downsample(&img, k)?;
+        let t_brute = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let buffer = BandwidthBuffer::build(
+            &g,
+            &ctx,
+            &env_bw,
+            BufferOptions {
+                mean_samples: 32.0,
+                scale: SampleRule::Constant,
+                ..Default::default()
+            },
+        )?;
+        let t_bw = t.elapsed().as_secs_f64();
+        let f = render_adaptive(&g, &ctx, &buffer, Lighting::Direct, 7)?;
+        let _ = box_downsample(&f.image, k)?;
+        let t_ad = t.elapsed().as_secs_f64();
+        println!(
+            "| {} | {t_brute:.3} | {t_ad:.3} | {t_bw:.3} | {} of {} | {:.1}× |",
+            k * k,
+            f.stats.shaded,
+            g.surface_pixels(),
+            t_brute / t_ad
+        );
+        rows.push((t_brute, t_ad));
+    }
+    // From 1 to 16 sub-pixels per pixel.
+    let exponent = |a: f64, b: f64| (b / a).ln() / 16f64.ln();
+    println!(
+        "\nTime ∝ (sub-pixels)^e from 1 to 16: brute force e = {:.2}, adaptive e = {:.2}.\n",
+        exponent(rows[0].0, rows[2].0),
+        exponent(rows[0].1, rows[2].1)
+    );
     Ok(())
 }
 

@@ -11,6 +11,9 @@
 //! - the BRDF's largest bandwidth over the directions and the mirror direction (the
 //!   pre-convolved lookup's level).
 //!
+//! Area lights (`light`) add n_b stratified points each: their paths join Eq. IV.6 with the
+//! environment's (weighed by their shares of L_p), and their terms the variance sums.
+//!
 //! V is chosen so that the mean N_p over the surface pixels is the requested mean (bisection):
 //! 004 keeps the variance constant across the image; the mean sets its value.
 //!
@@ -18,14 +21,21 @@
 //! so a block's entry tells conservatively whether any pixel under it needs a finer level or
 //! more samples.
 
+use crate::gbuffer::Surfel;
 use crate::gbuffer::{GBuffer, GPixel};
 use crate::shading::{Lighting, ShadingContext};
 use crate::{AdaptiveError, Result};
 use glam::DVec3;
+use lustre_brdf::sampling::hammersley;
+use lustre_brdf::Bsdf;
+use lustre_freq::brdf::BrdfBandwidth;
 use lustre_freq::pixel::{
     incident_direction, predict, EnvironmentBandwidth, PixelPrediction, ShadingPoint,
 };
 use lustre_freq::transport::samples_for;
+use lustre_freq::transport::{
+    one_bounce, pixel_bandwidth, variance_sum, Bandwidth, Surface, VarianceTerm,
+};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -145,14 +155,17 @@ pub fn predict_pixels(
             let tables = &ctx.materials[s.material];
             let mut pred = None;
             ctx.scene.materials[s.material].with_bsdf(s.uv, &mut |b| {
-                pred = Some(predict(&point, env, b, &tables.bandwidth, n_b));
+                pred = Some(predict(&point, env, b, &tables.bandwidth, n_b).map(|p| {
+                    let lit = light_paths(ctx, s, b, &tables.bandwidth, n_b);
+                    merge(p, &lit)
+                }));
             });
-            let prediction = pred.ok_or_else(|| {
+            let (prediction, light_brdf_max) = pred.ok_or_else(|| {
                 AdaptiveError::Parameter(format!("material {} gave no BSDF", s.material))
             })??;
             let wo = DVec3::new(s.wo.dot(f.t), s.wo.dot(f.b), s.wo.dot(f.n));
             let mirror = DVec3::new(-wo.x, -wo.y, wo.z);
-            let mut brdf_max = tables.bandwidth.at(mirror, wo);
+            let mut brdf_max = tables.bandwidth.at(mirror, wo).max(light_brdf_max);
             for k in 0..n_b {
                 brdf_max = brdf_max.max(tables.bandwidth.at(incident_direction(k, n_b), wo));
             }
@@ -162,6 +175,91 @@ pub fn predict_pixels(
             }))
         })
         .collect()
+}
+
+/// One path from an area light through the pixel: its share of L_p, its 2D bandwidth at the
+/// eye, and its variance term.
+struct LightPath {
+    contribution: f64,
+    bandwidth: Bandwidth,
+    term: VarianceTerm,
+}
+
+/// The paths from every area light through `s` (n_b stratified points per light, their
+/// bandwidth through Fig. IV.9's operators from the light's surface; `light::AreaLight`).
+fn light_paths(
+    ctx: &ShadingContext,
+    s: &Surfel,
+    b: &dyn Bsdf,
+    brdf: &BrdfBandwidth,
+    n_b: usize,
+) -> Vec<LightPath> {
+    let f = &s.frame;
+    let local = |d: DVec3| DVec3::new(d.dot(f.t), d.dot(f.b), d.dot(f.n));
+    let wo = local(s.wo);
+    let mut out = vec![];
+    if wo.z <= 0.0 || !(s.curvature.is_finite() && s.depth.is_finite()) {
+        return out;
+    }
+    for light in &ctx.lights {
+        for k in 0..n_b {
+            let (u, v) = hammersley(k as u32, n_b as u32);
+            let v = (v + 0.5 / n_b as f64).fract();
+            let (w, dist, cos_l) = light.towards(s.position, u, v);
+            let wi = local(w);
+            if cos_l <= 0.0 || wi.z <= 0.0 {
+                continue;
+            }
+            let g = cos_l * light.area() / (dist * dist * n_b as f64);
+            let chi = light.emitted(u, v).luminance() * b.eval(wi, wo).luminance();
+            let nu_s = light.bandwidth_at(u, v) / cos_l.max(1e-6);
+            let nu_brdf = brdf.at(wi, wo);
+            let surface = Surface {
+                cos_i: wi.z,
+                cos_x: wo.z.max(1e-6),
+                curvature: s.curvature,
+                texture: 0.0,
+                brdf: nu_brdf,
+            };
+            let contribution = chi * wi.z * g;
+            out.push(LightPath {
+                contribution,
+                bandwidth: one_bounce(Bandwidth::new(nu_s, 0.0), dist, &surface, s.depth),
+                term: VarianceTerm {
+                    light: dist * nu_s,
+                    brdf: nu_brdf,
+                    // On the environment's scale, where L̂ = π / n_b Σ χ_i.
+                    chi: contribution * n_b as f64 / PI,
+                },
+            });
+        }
+    }
+    out
+}
+
+/// The environment's prediction merged with the area lights' paths: Eq. IV.6 over all paths,
+/// the environment's weighing as much as its L̂ and each light path as much as its share of
+/// L_p; the variance sums and L̂ add up. Also the BRDF's largest bandwidth over the lights'
+/// directions (0 without lights).
+fn merge(env: PixelPrediction, lights: &[LightPath]) -> (PixelPrediction, f64) {
+    if lights.is_empty() {
+        return (env, 0.0);
+    }
+    let mut paths = vec![(env.radiance, env.bandwidth)];
+    paths.extend(lights.iter().map(|p| (p.contribution, p.bandwidth)));
+    let terms: Vec<VarianceTerm> = lights.iter().map(|p| p.term).collect();
+    let light_sum: f64 = lights.iter().map(|p| p.contribution.max(0.0)).sum();
+    let brdf_max = lights.iter().map(|p| p.term.brdf).fold(0.0, f64::max);
+    (
+        PixelPrediction {
+            bandwidth: pixel_bandwidth(&paths),
+            variance: env.variance + variance_sum(&terms, false),
+            variance_preconvolved: env.variance_preconvolved + variance_sum(&terms, true),
+            radiance: env.radiance + light_sum,
+            weight: env.radiance + light_sum,
+        },
+        brdf_max,
+    )
 }
 
 impl BandwidthBuffer {

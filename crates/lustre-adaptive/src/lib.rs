@@ -14,6 +14,7 @@
 //!   tabulated CDFs, the environment read at level 0 or, pre-convolved (§IV.3.5), at the level
 //!   of the BRDF's bandwidth. No visibility, as in 004.
 //! - [`compare`]: the time to reach a PSNR, for equal-quality comparisons (Fig. IV.15).
+//! - [`light`]: textured quad emitters (§IV.5.3) and their bandwidth.
 //! - [`hierarchy`]: coarse-to-fine shading interleaved with bilateral up-sampling (§IV.4.2,
 //!   Fig. IV.12), and the brute-force renderer it is compared with.
 
@@ -21,6 +22,7 @@ pub mod buffer;
 pub mod compare;
 pub mod gbuffer;
 pub mod hierarchy;
+pub mod light;
 pub mod shading;
 
 /// What can go wrong in adaptive shading.

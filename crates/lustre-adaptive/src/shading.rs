@@ -5,9 +5,10 @@
 //! estimated from N samples: half drawn by importance sampling the BRDF, by inversion of its
 //! tabulated CDFs ([`TabulatedSampler`], 004's choice) for isotropic reflection BRDFs or by the
 //! model's own `sample` otherwise (anisotropic, transmissive or Dirac lobes), half by importance
-//! sampling the environment, combined by the balance heuristic (004 samples the BRDF only; its
-//! maps have less dynamic range than a sunlit sky, where BRDF sampling alone converges at about
-//! 1 dB per doubling). Each technique's points are a Hammersley set rotated per pixel
+//! sampling the environment, combined by the balance heuristic (004 samples the BRDF only; on
+//! gold-paint under royal_esplanade_1k, BRDF sampling alone went from 12.8 to 22.3 dB between 1
+//! and 256 samples at 128², about 1.2 dB per doubling, the balance heuristic from 12.8 to
+//! 44.3 dB). Each technique's points are a Hammersley set rotated per pixel
 //! (Cranley–Patterson); the adaptive renderer and the brute-force one share this estimator. No
 //! visibility: the environment is seen from every point (as 004).
 //!
@@ -17,6 +18,7 @@
 //! ℓ = log2(face / (π ν)).
 
 use crate::gbuffer::Surfel;
+use crate::light::AreaLight;
 use crate::{AdaptiveError, Result};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
@@ -81,6 +83,8 @@ pub struct ShadingContext<'a, 's> {
     pub materials: Vec<MaterialTables>,
     /// The pre-convolved pyramid (world directions), when built.
     pub pyramid: Option<CubePyramid>,
+    /// Area lights (004 §IV.5.3), sampled directly besides the environment.
+    pub lights: Vec<AreaLight>,
 }
 
 impl<'a, 's> ShadingContext<'a, 's> {
@@ -115,6 +119,7 @@ impl<'a, 's> ShadingContext<'a, 's> {
             env,
             materials,
             pyramid,
+            lights: vec![],
         })
     }
 
@@ -136,7 +141,7 @@ impl<'a, 's> ShadingContext<'a, 's> {
     /// The n samples are split between the BRDF (⌈n/2⌉) and the environment's importance
     /// sampling (⌊n/2⌋), combined by the multi-sample balance heuristic (Veach 1997 §9.2):
     /// every sample X_j weighs f L cos θ / (n_f p_f(X_j) + n_l p_l(X_j)). Dirac lobes are
-    /// reached by the BRDF's samples only.
+    /// reached by the BRDF's samples only. Each area light adds n samples of its own area.
     pub fn shade(&self, s: &Surfel, n: usize, lod: Option<f64>, seed: u64) -> Rgb {
         let env = self.env;
         let f = &s.frame;
@@ -159,6 +164,11 @@ impl<'a, 's> ShadingContext<'a, 's> {
             rng.next_f64(),
         ];
         let tables = &self.materials[s.material];
+        let light_rot: Vec<(f64, f64)> = self
+            .lights
+            .iter()
+            .map(|_| (rng.next_f64(), rng.next_f64()))
+            .collect();
         let mut sum = Rgb::ZERO;
         let mut add = |v: Rgb| {
             if v.0.iter().all(|c| c.is_finite()) {
@@ -207,6 +217,21 @@ impl<'a, 's> ShadingContext<'a, 's> {
                 let den = mix(brdf_pdf(wi), d);
                 if den > 0.0 {
                     add(b.eval(wi, wo) * (wi.z.abs() / den) * light(d));
+                }
+            }
+            // Area lights: n points per light, stratified over its area, each weighing
+            // A cos θl / (n d²) (the solid angle it stands for).
+            for (area, &(r1, r2)) in self.lights.iter().zip(&light_rot) {
+                for k in 0..n {
+                    let (h1, h2) = hammersley(k as u32, n as u32);
+                    let (u, v) = ((h1 + r1).fract(), (h2 + r2).fract());
+                    let (w, dist, cos_l) = area.towards(s.position, u, v);
+                    if cos_l <= 0.0 {
+                        continue;
+                    }
+                    let wi = to_local(w);
+                    let g = cos_l * area.area() / (dist * dist * n as f64);
+                    add(b.eval(wi, wo) * (wi.z.abs() * g) * area.emitted(u, v));
                 }
             }
         });

@@ -3,7 +3,9 @@
 use lustre_adaptive::buffer::{BandwidthBuffer, BufferOptions, SampleRule, NO_LEVEL};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute};
+use lustre_adaptive::light::AreaLight;
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
+use lustre_brdf::rgb::Rgb;
 use lustre_env::EquirectMap;
 use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_scene::environment::{Environment, EnvironmentSource};
@@ -45,15 +47,15 @@ impl Frame {
     fn with<R>(
         &self,
         options: ShadingOptions,
-        f: impl FnOnce(&GBuffer, &ShadingContext) -> R,
+        f: impl FnOnce(&GBuffer, &mut ShadingContext) -> R,
     ) -> R {
         let (ps, _) = path_scene(&self.scene).expect("path scene");
         let tracer = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
         let cam = film_camera(&self.scene.cameras[0], self.size as u32, self.size as u32)
             .expect("camera");
         let g = GBuffer::render(&tracer, &ps, &cam, self.size, self.size).expect("G-buffer");
-        let ctx = ShadingContext::new(&ps, options, &|_, _| {}).expect("context");
-        f(&g, &ctx)
+        let mut ctx = ShadingContext::new(&ps, options, &|_, _| {}).expect("context");
+        f(&g, &mut ctx)
     }
 }
 
@@ -311,4 +313,129 @@ fn supersampled_frames_resolve_by_their_blocks() {
     assert_eq!(r.get(1, 0), [(2.0 + 3.0 + 6.0 + 7.0) / 4.0, 1.0, 2.0]);
     assert!(box_downsample(&img, 3).is_err());
     assert!(box_downsample(&img, 0).is_err());
+}
+
+/// The form factor from a point to a parallel a × b rectangle with a corner above it at height c
+/// (Howell's catalog, B-3): 1/2π [A/√(1+A²) atan(B/√(1+A²)) + B/√(1+B²) atan(A/√(1+B²))].
+fn corner_form_factor(a: f64, b: f64, c: f64) -> f64 {
+    let (x, y) = (a / c, b / c);
+    let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+    (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * std::f64::consts::PI)
+}
+
+/// A Lambertian floor (kd 0.5) under a constant sky of 0.1 and a 2 × 2 m light of radiance 3
+/// facing down 2 m above the point the camera's centre pixel sees.
+fn lit_floor(texture: Option<(usize, usize, Vec<[f32; 3]>)>) -> (Scene, AreaLight) {
+    let mut scene =
+        lustre_scene::builtin::preview("lambert(kd=0.5)", Some(map_environment(constant_map(0.1))))
+            .expect("scene");
+    let mut floor = lustre_scene::mesh::rectangle("floor", 0);
+    floor.transform(
+        &(glam::DMat4::from_scale(glam::DVec3::new(6.0, 1.0, 6.0))
+            * glam::DMat4::from_rotation_x(-std::f64::consts::FRAC_PI_2)),
+    );
+    scene.meshes = vec![floor];
+    scene.cameras = vec![lustre_scene::camera::Camera::look_at(
+        "default",
+        glam::DVec3::new(0.0, 4.0, 3.0),
+        glam::DVec3::ZERO,
+        glam::DVec3::Y,
+        40.0,
+        lustre_scene::camera::FovAxis::Y,
+    )
+    .expect("camera")];
+    let light = AreaLight::new(
+        glam::DVec3::new(-1.0, 2.0, -1.0),
+        glam::DVec3::new(2.0, 0.0, 0.0),
+        glam::DVec3::new(0.0, 0.0, 2.0),
+        Rgb::splat(3.0),
+        texture,
+    )
+    .expect("light");
+    (scene, light)
+}
+
+#[test]
+fn an_area_light_over_a_lambertian_floor_gives_the_form_factor_and_its_texture_raises_the_bandwidth(
+) {
+    let (scene, light) = lit_floor(None);
+    assert!(light.normal().y < -0.999, "the light faces down");
+    // 33² pixels: the centre of pixel (16, 16) is the image's centre, which sees the origin.
+    let frame = Frame { scene, size: 33 };
+    let expected = 0.5 * 0.1 + 0.5 * 3.0 * 4.0 * corner_form_factor(1.0, 1.0, 2.0);
+    let plain = frame.with(ShadingOptions::default(), |g, ctx| {
+        ctx.lights = vec![light.clone()];
+        let s = g.surfel(16, 16).expect("the floor");
+        assert!(s.position.length() < 1e-9, "{}", s.position);
+        let v = ctx.shade(s, 1024, None, 3).luminance();
+        eprintln!("area light: {v:.5} vs the form factor's {expected:.5}");
+        assert!((v - expected).abs() < 2e-3 * expected, "{v} vs {expected}");
+        let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("bandwidth");
+        let o = options(16.0, SampleRule::Constant, Lighting::Direct);
+        let b = BandwidthBuffer::build(g, ctx, &env_bw, o).expect("buffer");
+        let (brute, _) = render_brute(g, ctx, 64, 1).expect("brute");
+        let f = render_adaptive(g, ctx, &b, Lighting::Direct, 1).expect("adaptive");
+        let ratio = f.image.mean() / brute.mean();
+        eprintln!(
+            "adaptive / brute mean {ratio:.5}, {} of {} pixels shaded",
+            f.stats.shaded,
+            g.surface_pixels()
+        );
+        assert!((ratio - 1.0).abs() < 0.01, "adaptive / brute mean {ratio}");
+        ctx.lights.clear();
+        let unlit = render_brute(g, ctx, 64, 1).expect("unlit").0;
+        assert!(
+            brute.mean() > 2.0 * unlit.mean(),
+            "the light adds to the floor"
+        );
+        mean_bandwidth(&b)
+    });
+    // A checkerboard of 8 × 8 squares on the same light: more spatial bandwidth reaches the
+    // floor below it.
+    let checker: Vec<[f32; 3]> = (0..64 * 64)
+        .map(|k| {
+            let (x, y) = (k % 64 / 8, k / 64 / 8);
+            [((x + y) % 2) as f32 * 2.0; 3]
+        })
+        .collect();
+    let (scene, light) = lit_floor(Some((64, 64, checker)));
+    let textured = Frame { scene, size: 33 }.with(ShadingOptions::default(), |g, ctx| {
+        ctx.lights = vec![light.clone()];
+        let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("bandwidth");
+        let o = options(16.0, SampleRule::Constant, Lighting::Direct);
+        mean_bandwidth(&BandwidthBuffer::build(g, ctx, &env_bw, o).expect("buffer"))
+    });
+    eprintln!("mean b_p: textured light {textured:.4}, plain {plain:.4} cycles per pixel");
+    assert!(
+        textured > 1.5 * plain,
+        "textured {textured} vs plain {plain}"
+    );
+    // Bad lights are refused by name.
+    for (u, v, r) in [
+        (glam::DVec3::X, glam::DVec3::X, 1.0),
+        (glam::DVec3::X, glam::DVec3::Z, -1.0),
+        (glam::DVec3::X, glam::DVec3::new(0.0, f64::NAN, 1.0), 1.0),
+    ] {
+        assert!(AreaLight::new(glam::DVec3::ZERO, u, v, Rgb::splat(r), None).is_err());
+    }
+    let e = AreaLight::new(
+        glam::DVec3::ZERO,
+        glam::DVec3::X,
+        glam::DVec3::Z,
+        Rgb::ONE,
+        Some((2, 2, vec![[1.0; 3], [f32::NAN; 3], [1.0; 3], [1.0; 3]])),
+    )
+    .expect_err("a NaN texel");
+    assert!(e.to_string().contains("texel (1, 0)"), "{e}");
+}
+
+fn mean_bandwidth(b: &BandwidthBuffer) -> f64 {
+    let v: Vec<f64> = b
+        .bandwidth
+        .iter()
+        .zip(&b.level)
+        .filter(|(_, l)| **l != NO_LEVEL)
+        .map(|(v, _)| *v)
+        .collect();
+    v.iter().sum::<f64>() / v.len() as f64
 }

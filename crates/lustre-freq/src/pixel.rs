@@ -78,6 +78,9 @@ pub struct PixelPrediction {
     /// The directions' estimate of the pixel's radiance (luminance), π / n_b Σ χ_i: the
     /// cosine-weighted quadrature of ∫ χ cos θi dω (a scale for relative variance targets).
     pub radiance: f64,
+    /// Σ λ_i, the weight behind [`PixelPrediction::bandwidth`] (to merge it with other
+    /// lights' paths in Eq. IV.6).
+    pub weight: f64,
 }
 
 /// Direction k of the n_b of a prediction (local frame): point k of the Hammersley set with
@@ -141,6 +144,7 @@ pub fn predict(
         });
     }
     Ok(PixelPrediction {
+        weight: paths.iter().map(|(l, _)| l.max(0.0)).sum(),
         bandwidth: pixel_bandwidth(&paths),
         variance: crate::transport::variance_sum(&terms, false),
         variance_preconvolved: crate::transport::variance_sum(&terms, true),

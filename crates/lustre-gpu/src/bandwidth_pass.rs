@@ -55,7 +55,9 @@ pub struct GpuPrediction {
     pub radiance: f32,
     /// The BRDF's largest bandwidth over the directions and the mirror direction.
     pub brdf_max: f32,
-    _pad: [f32; 2],
+    /// Σ λ_i.
+    pub weight: f32,
+    _pad: f32,
 }
 
 #[repr(C)]
@@ -169,6 +171,12 @@ impl BandwidthScene {
         shading: &ShadingContext,
         env: &EnvironmentBandwidth,
     ) -> Result<Self> {
+        if !shading.lights.is_empty() {
+            return Err(invalid(
+                "bandwidth pass",
+                "the GPU bandwidth pass does not propagate area lights yet (the CPU's does)",
+            ));
+        }
         let mut nets = vec![];
         for (k, m) in shading.scene.materials.iter().enumerate() {
             let mut net = None;
@@ -239,6 +247,7 @@ impl BandwidthPass {
                         variance: f64::from(o.variance),
                         variance_preconvolved: f64::from(o.variance_preconvolved),
                         radiance: f64::from(o.radiance),
+                        weight: f64::from(o.weight),
                     },
                     brdf_max: f64::from(o.brdf_max),
                 })

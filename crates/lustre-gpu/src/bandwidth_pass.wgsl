@@ -23,15 +23,16 @@ struct Surfel {
     wo: vec4<f32>,
 }
 
-// (ν_s, ν_a) at the eye, Σ(ν_a^i + ν_ρa^i)χ², Σ2ν_ρa^i χ², L̂, the BRDF's largest bandwidth.
+// (ν_s, ν_a) at the eye, Σ(ν_a^i + ν_ρa^i)χ², Σ2ν_ρa^i χ², L̂, the BRDF's largest bandwidth,
+// Σλ_i.
 struct Prediction {
     bandwidth: vec2<f32>,
     variance: f32,
     variance_preconvolved: f32,
     radiance: f32,
     brdf_max: f32,
-    _pad0: f32,
-    _pad1: f32,
+    weight: f32,
+    _pad: f32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -136,6 +137,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         out.bandwidth = nu / weight_sum;
     }
     out.radiance = PI * chi_sum / f32(params.n_b);
+    out.weight = weight_sum;
     out.brdf_max = brdf_max;
     predictions[i] = out;
 }

@@ -71,7 +71,7 @@ fn the_gpu_bandwidth_pass_matches_its_cpu_twin_on_the_line_up() {
         timing.wall_ms, timing.gpu_ms
     );
     assert_eq!(cpu.len(), gpu.len());
-    let mut fields: [Vec<(f64, f64)>; 5] = Default::default();
+    let mut fields: [Vec<(f64, f64)>; 6] = Default::default();
     let mut surface = 0;
     for (c, gp) in cpu.iter().zip(&gpu) {
         match (c, gp) {
@@ -84,6 +84,7 @@ fn the_gpu_bandwidth_pass_matches_its_cpu_twin_on_the_line_up() {
                 fields[2].push((a.variance_preconvolved, b.variance_preconvolved));
                 fields[3].push((a.radiance, b.radiance));
                 fields[4].push((c.brdf_max, gp.brdf_max));
+                fields[5].push((a.weight, b.weight));
             }
             _ => panic!("the CPU and the GPU disagree on which pixels are surfaces"),
         }
@@ -95,6 +96,7 @@ fn the_gpu_bandwidth_pass_matches_its_cpu_twin_on_the_line_up() {
         "pre-convolved variance sum",
         "radiance",
         "BRDF max bandwidth",
+        "path weight Σλ",
     ];
     let stats: Vec<(f64, f64, f64)> = names
         .iter()
@@ -129,6 +131,22 @@ fn the_gpu_bandwidth_pass_matches_its_cpu_twin_on_the_line_up() {
     let differ = a.level.iter().zip(&b.level).filter(|(x, y)| x != y).count();
     eprintln!("levels differ on {differ} of {} pixels", w * h);
     assert!(differ * 100 < surface, "{differ} levels differ");
+    // Area lights are the CPU's only: the GPU pass refuses them by name.
+    let mut lit = shading;
+    lit.lights.push(
+        lustre_adaptive::light::AreaLight::new(
+            glam::DVec3::new(-1.0, 4.0, -1.0),
+            glam::DVec3::X * 2.0,
+            glam::DVec3::Z * 2.0,
+            lustre_brdf::rgb::Rgb::ONE,
+            None,
+        )
+        .expect("light"),
+    );
+    match BandwidthScene::from_context(&gpu_ctx, &lit, &env_bw) {
+        Err(e) => assert!(e.to_string().contains("area lights"), "{e}"),
+        Ok(_) => panic!("the GPU pass took an area light"),
+    }
 }
 
 #[test]

@@ -6,11 +6,14 @@
 
 use crate::render_cmd::{compare, path_cameras, Device, Method, RenderArgs, SampleRuleArg};
 use anyhow::{bail, Context};
+use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BufferOptions, SampleRule};
 use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute};
+use lustre_adaptive::light::AreaLight;
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
+use lustre_brdf::rgb::Rgb;
 use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthScene};
 use lustre_gpu::GpuContext;
@@ -64,6 +67,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         set_named(&mut scene.materials, &material, &field, &value)
             .with_context(|| format!("--set {a}"))?;
     }
+    let lights = match &args.area_light {
+        Some(path) => vec![area_light(&scene, path, args.area_light_radiance)?],
+        None => vec![],
+    };
     let (w, h) = match args.size.as_deref() {
         Some(s) => crate::reference_cmd::parse_size(s)?,
         None => (scene.film.width, scene.film.height),
@@ -106,8 +113,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         },
         ..Default::default()
     };
-    let ctx = ShadingContext::new(&ps, shading, &|i, _| bar.set_position(i as u64))?;
+    let mut ctx = ShadingContext::new(&ps, shading, &|i, _| bar.set_position(i as u64))?;
     bar.finish_and_clear();
+    ctx.lights = lights;
     lap(
         &mut times,
         "material tables (sampling CDFs, bandwidth)",
@@ -227,6 +235,28 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         println!("  {name}: {:.3} s", s);
     }
     Ok(())
+}
+
+/// `--area-light`: the image at `path` as a square light facing down above the scene's bounds,
+/// half as wide as the scene (at least 0.5 m), as high above its top as it is wide.
+fn area_light(scene: &Scene, path: &std::path::Path, radiance: f64) -> anyhow::Result<AreaLight> {
+    let loaded =
+        lustre_env::read_map(path).with_context(|| format!("--area-light {}", path.display()))?;
+    let (lo, hi) = scene
+        .bounds()
+        .ok_or_else(|| anyhow::anyhow!("--area-light: the scene has no geometry to light"))?;
+    let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
+    let size = (0.5 * (hi.x - lo.x).max(hi.z - lo.z)).max(0.5);
+    let centre = DVec3::new(0.5 * (lo.x + hi.x), hi.y + size, 0.5 * (lo.z + hi.z));
+    let map = loaded.map;
+    AreaLight::new(
+        centre - DVec3::new(0.5 * size, 0.0, 0.5 * size),
+        DVec3::new(size, 0.0, 0.0),
+        DVec3::new(0.0, 0.0, size),
+        Rgb::splat(radiance),
+        Some((map.width, map.height, map.data)),
+    )
+    .with_context(|| format!("--area-light {}", path.display()))
 }
 
 /// Ends the stage `name` (its time since `t`) and starts the next.

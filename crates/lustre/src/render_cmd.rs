@@ -147,6 +147,14 @@ pub struct RenderArgs {
     /// rate; 1: 004's Eq. IV.11 as printed, fewer pixels shaded).
     #[arg(long, default_value_t = 2.0)]
     pub rate: f64,
+    /// `--method adaptive | brute`: a textured area light (an `.hdr` / `.exr` image, 004
+    /// §IV.5.3) as a square facing down above the scene, half as wide as the scene, as high
+    /// above it as it is wide; shaded without visibility.
+    #[arg(long)]
+    pub area_light: Option<PathBuf>,
+    /// Radiance scale of --area-light.
+    #[arg(long, default_value_t = 1.0)]
+    pub area_light_radiance: f64,
     /// `--method adaptive`: incident directions per pixel of the bandwidth buffer (004: 16).
     #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub n_b: u32,

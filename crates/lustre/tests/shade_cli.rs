@@ -320,4 +320,53 @@ fn adaptive_and_brute_force_renders_of_a_measured_paint_agree_and_bad_input_is_n
             .arg(&adaptive),
     );
     assert!(e.contains("CPU only"), "{e}");
+    let e = run_err(
+        lustre()
+            .args(&common)
+            .args([
+                "--method",
+                "adaptive",
+                "--area-light",
+                "/no/such/light.exr",
+                "--out",
+            ])
+            .arg(&adaptive),
+    );
+    assert!(e.contains("--area-light /no/such/light.exr"), "{e}");
+    // A textured area light (a studio map as its emission) adds light: the frame is brighter.
+    let lit = dir.path().join("lit");
+    let light = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/envmaps/studio_sunrise.exr"
+    );
+    run_ok(
+        lustre()
+            .args(&common)
+            .args([
+                "--method",
+                "adaptive",
+                "--samples",
+                "16",
+                "--area-light",
+                light,
+            ])
+            .args(["--area-light-radiance", "200", "--out"])
+            .arg(&lit),
+    );
+    let mean = |p: &std::path::Path| {
+        lustre_shade::image::Image::read_exr(&p.join("frame.exr"))
+            .expect("frame")
+            .mean()
+    };
+    eprintln!(
+        "mean with the area light {:.4}, without {:.4}",
+        mean(&lit),
+        mean(&adaptive)
+    );
+    assert!(
+        mean(&lit) > 1.2 * mean(&adaptive),
+        "{} vs {}",
+        mean(&lit),
+        mean(&adaptive)
+    );
 }
