@@ -2,7 +2,8 @@
 //! equal PSNR, the predicted against the measured per-pixel variance, and the effect of n_b.
 //!
 //! `cargo run --release -p lustre-adaptive --example adaptive_study -- [--size N]
-//! [--reference N] [--map FILE] [--scene sphere|lineup] [--materials a,b,…] [--out DIR]`
+//! [--reference N] [--map FILE] [--scene sphere|lineup] [--materials a,b,…] [--out DIR] [--aa]`
+//! (`--aa`: only Fig. IV.14's anti-aliasing costs, at 1, 4 and 16 sub-pixels per pixel)
 //!
 //! Prints Markdown tables; with `--out`, writes each case's images (reference, brute force and
 //! adaptive at equal PSNR, the level and N_p maps).
@@ -74,11 +75,15 @@ fn main() -> anyhow::Result<()> {
     let a = args()?;
     let env = read_environment(&a.map)?;
     println!(
-        "# Adaptive shading vs brute force (CPU, {} threads)\n\n- map {}, {}² pixels, reference {} samples per pixel (two halves)\n",
+        "# Adaptive shading vs brute force (CPU, {} threads)\n\n- map {}, {}² pixels{}\n",
         rayon::current_num_threads(),
         a.map.display(),
         a.size,
-        a.reference
+        if a.aa {
+            String::new()
+        } else {
+            format!(", reference {} samples per pixel (two halves)", a.reference)
+        }
     );
     let cases: Vec<(String, lustre_scene::Scene)> = match a.scene.as_str() {
         "sphere" => a

@@ -36,6 +36,9 @@ const LINEUP_FLOOR: &str = "nbrdf:white-marble";
 /// Runs the adaptive or brute-force renderer.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let adaptive = args.method == Method::Adaptive;
+    if args.device == Device::Gpu && !adaptive {
+        bail!("--method brute shades on the CPU only: use --device cpu or auto");
+    }
     if !(1..=1024).contains(&args.samples) {
         bail!("--samples {} must be 1..=1024", args.samples);
     }
@@ -143,9 +146,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             Err(e) => return Err(e),
         },
     };
-    if args.device == Device::Gpu && !adaptive {
-        bail!("--method brute shades on the CPU only: use --device cpu or auto");
-    }
+
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let rule = match args.sample_rule {

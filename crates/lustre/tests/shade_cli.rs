@@ -3,6 +3,17 @@
 
 use std::process::Command;
 
+/// A map of the shared data's `envmaps/`.
+macro_rules! envmap {
+    ($name:literal) => {
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../../shared/data/envmaps/",
+            $name
+        )
+    };
+}
+
 fn lustre() -> Command {
     Command::new(env!("CARGO_BIN_EXE_lustre"))
 }
@@ -154,10 +165,7 @@ fn output_into_a_closed_pipe_ends_quietly() {
 #[test]
 fn bandwidth_maps_of_an_environment_and_a_material() {
     let dir = tempfile::tempdir().expect("temp dir");
-    let map = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/envmaps/quarry_01_1k.hdr"
-    );
+    let map = envmap!("quarry_01_1k.hdr");
     let png = dir.path().join("quarry.png");
     let stdout = run_ok(
         lustre()
@@ -221,10 +229,7 @@ fn adaptive_and_brute_force_renders_of_a_measured_paint_agree_and_bad_input_is_n
     // brute-force frame with 128 samples per pixel as the reference, an adaptive frame with
     // 16 per shaded pixel (its bandwidth pass on lavapipe in CI) compared with it.
     let dir = tempfile::tempdir().expect("temp dir");
-    let map = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/envmaps/royal_esplanade_1k.hdr"
-    );
+    let map = envmap!("royal_esplanade_1k.hdr");
     let base = [
         "render",
         "--material",
@@ -335,10 +340,7 @@ fn adaptive_and_brute_force_renders_of_a_measured_paint_agree_and_bad_input_is_n
     assert!(e.contains("--area-light /no/such/light.exr"), "{e}");
     // A textured area light (a studio map as its emission) adds light: the frame is brighter.
     let lit = dir.path().join("lit");
-    let light = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/envmaps/studio_sunrise.exr"
-    );
+    let light = envmap!("studio_sunrise.exr");
     run_ok(
         lustre()
             .args(&common)
