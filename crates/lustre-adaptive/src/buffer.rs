@@ -327,15 +327,21 @@ impl BandwidthBuffer {
         let level: Vec<u8> = per_pixel.iter().map(|v| v.1).collect();
         let variance: Vec<f64> = per_pixel.iter().map(|v| v.2).collect();
         let brdf_max: Vec<f64> = per_pixel.iter().map(|v| v.3).collect();
-        let surface: Vec<f64> = level
-            .iter()
-            .zip(&variance)
-            .filter(|(l, _)| **l != NO_LEVEL)
-            .map(|(_, v)| *v)
-            .collect();
-        let target = target_for_mean(&surface, options.mean_samples, options.max_samples)?;
+        // A constant N_p needs no target (1 stands in).
         let constant = (options.scale == SampleRule::Constant)
             .then(|| (options.mean_samples.round() as usize).clamp(1, options.max_samples));
+        let target = match constant {
+            Some(_) => 1.0,
+            None => {
+                let surface: Vec<f64> = level
+                    .iter()
+                    .zip(&variance)
+                    .filter(|(l, _)| **l != NO_LEVEL)
+                    .map(|(_, v)| *v)
+                    .collect();
+                target_for_mean(&surface, options.mean_samples, options.max_samples)?
+            }
+        };
         let mut min_level = vec![level.clone()];
         let mut max_variance = vec![variance.clone()];
         for k in 1..levels {

@@ -289,55 +289,36 @@ fn adaptive_and_brute_force_renders_of_a_measured_paint_agree_and_bad_input_is_n
     ] {
         assert!(adaptive.join(f).is_file(), "{f} missing");
     }
-    // Bad input, by name: a scene without an environment is not possible from --material, so
-    // absurd counts and a map that is not there.
-    let e = run_err(
-        lustre()
-            .args(&common)
-            .args(["--method", "adaptive", "--samples", "0", "--out"])
-            .arg(&adaptive),
+    // Bad input, by name: absurd counts, a sub-pixel count that is not a square, a sky or a
+    // light that is not there, brute force on the GPU.
+    let refused = |args: &[&str], named: &str| {
+        let e = run_err(lustre().args(args).arg("--out").arg(&adaptive));
+        assert!(e.contains(named), "{args:?}: {e}");
+    };
+    let with = |extra: &[&'static str]| [&common[..], extra].concat();
+    refused(
+        &with(&["--method", "adaptive", "--samples", "0"]),
+        "--samples 0",
     );
-    assert!(e.contains("--samples 0"), "{e}");
-    let e = run_err(
-        lustre()
-            .args(base)
-            .args(["--method", "adaptive", "--spp", "2", "--out"])
-            .arg(&adaptive),
+    refused(
+        &[&base[..], &["--method", "adaptive", "--spp", "2"]].concat(),
+        "--spp 2",
     );
-    assert!(e.contains("--spp 2"), "{e}");
-    let e = run_err(
-        lustre()
-            .args([
-                "render",
-                "--method",
-                "adaptive",
-                "--env",
-                "/no/such/sky.hdr",
-                "--out",
-            ])
-            .arg(&adaptive),
+    refused(
+        &[
+            "render",
+            "--method",
+            "adaptive",
+            "--env",
+            "/no/such/sky.hdr",
+        ],
+        "/no/such/sky.hdr",
     );
-    assert!(e.contains("/no/such/sky.hdr"), "{e}");
-    let e = run_err(
-        lustre()
-            .args(&common)
-            .args(["--method", "brute", "--device", "gpu", "--out"])
-            .arg(&adaptive),
+    refused(&with(&["--method", "brute", "--device", "gpu"]), "CPU only");
+    refused(
+        &with(&["--method", "adaptive", "--area-light", "/no/such/light.exr"]),
+        "--area-light /no/such/light.exr",
     );
-    assert!(e.contains("CPU only"), "{e}");
-    let e = run_err(
-        lustre()
-            .args(&common)
-            .args([
-                "--method",
-                "adaptive",
-                "--area-light",
-                "/no/such/light.exr",
-                "--out",
-            ])
-            .arg(&adaptive),
-    );
-    assert!(e.contains("--area-light /no/such/light.exr"), "{e}");
     // A textured area light (a studio map as its emission) adds light: the frame is brighter.
     let lit = dir.path().join("lit");
     let light = envmap!("studio_sunrise.exr");
