@@ -128,6 +128,11 @@ impl AreaLight {
         ])
     }
 
+    /// The texture: width, height and row-major texels (row 0 at v = 0).
+    pub fn texture(&self) -> (usize, usize, &[[f32; 3]]) {
+        (self.width, self.height, &self.texels)
+    }
+
     /// The spatial bandwidth at (u, v) (cycles per metre, nearest texel).
     pub fn bandwidth_at(&self, u: f64, v: f64) -> f64 {
         self.bandwidth[self.texel(u, v)]

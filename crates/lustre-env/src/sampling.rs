@@ -72,6 +72,11 @@ impl Distribution1D {
         self.total
     }
 
+    /// The cumulative distribution: `len() + 1` entries from 0 to 1.
+    pub fn cdf(&self) -> &[f64] {
+        &self.cdf
+    }
+
     /// Probability of cell `k`.
     pub fn probability(&self, k: usize) -> f64 {
         self.weights.get(k).map_or(0.0, |w| w / self.total)
@@ -175,6 +180,21 @@ impl EnvSampler {
     /// Map height in texels.
     pub fn height(&self) -> usize {
         self.height
+    }
+
+    /// The distribution over rows (weights Σ_i w_ij Ω_j).
+    pub fn rows(&self) -> &Distribution1D {
+        &self.rows
+    }
+
+    /// The distribution over row `j`'s texels (weights w_ij).
+    pub fn row(&self, j: usize) -> &Distribution1D {
+        &self.cols[j]
+    }
+
+    /// The exact solid angle Ω_j of a texel of row `j`.
+    pub fn row_solid_angle(&self, j: usize) -> f64 {
+        self.row_omega[j]
     }
 
     /// Probability of choosing texel (i, j).

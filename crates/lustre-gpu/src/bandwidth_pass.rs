@@ -2,23 +2,22 @@
 //! the one-bounce bandwidth and variance sums from n_b directions under a distant environment.
 //! Its CPU twin is `lustre_adaptive::buffer::predict_pixels` (built on
 //! `lustre_freq::pixel::predict`); the levels, sample counts and pyramids are assembled from its
-//! output on the CPU (`BandwidthBuffer::assemble`). Materials are neural BRDFs (the measured
-//! materials of 004's scenes).
+//! output on the CPU (`BandwidthBuffer::assemble`). Materials are measured BRDFs evaluated
+//! directly: neural BRDFs (004's scenes) and MERL tables.
 
 use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry};
 use crate::context::GpuContext;
 use crate::error::{invalid, Result};
 use crate::gbuffer::map_read;
-use crate::measured::pack_nbrdf;
+use crate::measured::MeasuredBrdf;
 use crate::timer::{GpuTimer, Timing};
-use crate::wgsl::{compose, FREQUENCY, MEASURED, TYPES};
+use crate::wgsl::{compose, ENV_LIGHT, FREQUENCY, MEASURED, TYPES};
 use glam::DVec3;
 use lustre_adaptive::buffer::PixelEstimate;
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::shading::ShadingContext;
-use lustre_brdf::measured::nbrdf::Nbrdf;
 use lustre_env::EquirectMap;
-use lustre_freq::brdf::BrdfBandwidth;
+use lustre_freq::brdf::{BrdfBandwidth, BrdfBandwidthOptions};
 use lustre_freq::pixel::{EnvironmentBandwidth, PixelPrediction};
 use lustre_freq::transport::Bandwidth;
 
@@ -92,12 +91,65 @@ pub struct BandwidthPass {
 
 impl BandwidthScene {
     /// Uploads `map` with its per-texel bandwidth (`lustre_freq::environment::angular_bandwidth`)
-    /// and each material's network and bandwidth table (every table on the same grids).
+    /// and each material's measured BRDF and bandwidth table (every table on the same grids).
     pub fn new(
         ctx: &GpuContext,
         map: &EquirectMap,
         map_bandwidth: &[f64],
-        materials: &[(&Nbrdf, &BrdfBandwidth)],
+        materials: &[(MeasuredBrdf, &BrdfBandwidth)],
+    ) -> Result<Self> {
+        let mut packed = Packed::default();
+        for (k, (brdf, b)) in materials.iter().enumerate() {
+            packed.push(k, brdf, b)?;
+        }
+        Self::upload(ctx, map, map_bandwidth, packed)
+    }
+
+    /// The environment and materials of an adaptive-shading context: every material must be a
+    /// neural BRDF or a MERL table (the error names the first that is not).
+    pub fn from_context(
+        ctx: &GpuContext,
+        shading: &ShadingContext,
+        env: &EnvironmentBandwidth,
+    ) -> Result<Self> {
+        if !shading.lights.is_empty() {
+            return Err(invalid(
+                "bandwidth pass",
+                "the GPU bandwidth pass does not propagate area lights yet (the CPU's does)",
+            ));
+        }
+        let mut packed = Packed::default();
+        for (k, m) in shading.scene.materials.iter().enumerate() {
+            let mut done: Option<Result<()>> = None;
+            let tables = &shading.materials[k];
+            m.with_bsdf([0.5, 0.5], &mut |b| {
+                done = Some(match MeasuredBrdf::of(b) {
+                    Some(brdf) => packed.push(k, &brdf, &tables.bandwidth),
+                    None => Err(invalid(
+                        "bandwidth pass",
+                        format!(
+                            "material {k} ({}): the GPU bandwidth pass evaluates neural BRDFs \
+                             (nbrdf:…) and MERL tables (merl:…) only",
+                            tables.name
+                        ),
+                    )),
+                });
+            });
+            done.unwrap_or_else(|| {
+                Err(invalid(
+                    "bandwidth pass",
+                    format!("material {k} gave no BSDF"),
+                ))
+            })?;
+        }
+        Self::upload(ctx, env.map, &env.bandwidth, packed)
+    }
+
+    fn upload(
+        ctx: &GpuContext,
+        map: &EquirectMap,
+        map_bandwidth: &[f64],
+        packed: Packed,
     ) -> Result<Self> {
         if map_bandwidth.len() != map.width * map.height {
             return Err(invalid(
@@ -110,30 +162,12 @@ impl BandwidthScene {
                 ),
             ));
         }
-        if materials.is_empty() {
+        let Some(grid) = packed.grid else {
             return Err(invalid(
                 "materials",
                 "the bandwidth pass needs one material",
             ));
-        }
-        let grid = materials[0].1.options;
-        let mut ids = vec![];
-        let (mut table, mut bw) = (vec![], vec![]);
-        for (net, b) in materials {
-            if b.options != grid {
-                return Err(invalid(
-                    "BRDF bandwidth",
-                    format!(
-                        "{}: its table's grids {:?} differ from the first material's {grid:?}",
-                        net.name(),
-                        b.options
-                    ),
-                ));
-            }
-            ids.push([table.len() as u32, bw.len() as u32]);
-            table.extend(pack_nbrdf(net));
-            bw.extend(b.data.iter().map(|&v| v as f32));
-        }
+        };
         let texels: Vec<[f32; 4]> = map
             .data
             .iter()
@@ -147,59 +181,54 @@ impl BandwidthScene {
             materials: buffer_init(
                 ctx,
                 "bandwidth materials",
-                bytemuck::cast_slice(&ids),
+                bytemuck::cast_slice(&packed.ids),
                 storage,
             ),
             table: buffer_init(
                 ctx,
-                "bandwidth networks",
-                bytemuck::cast_slice(&table),
+                "bandwidth BRDFs",
+                bytemuck::cast_slice(&packed.table),
                 storage,
             ),
-            brdf_bandwidth: buffer_init(ctx, "brdf bandwidth", bytemuck::cast_slice(&bw), storage),
-            material_count: materials.len() as u32,
+            brdf_bandwidth: buffer_init(
+                ctx,
+                "brdf bandwidth",
+                bytemuck::cast_slice(&packed.bandwidth),
+                storage,
+            ),
+            material_count: packed.ids.len() as u32,
             grid: (grid.incident as u32, grid.out as u32),
         })
     }
 }
 
-impl BandwidthScene {
-    /// The environment and materials of an adaptive-shading context: every material must be a
-    /// neural BRDF (the error names the first that is not).
-    pub fn from_context(
-        ctx: &GpuContext,
-        shading: &ShadingContext,
-        env: &EnvironmentBandwidth,
-    ) -> Result<Self> {
-        if !shading.lights.is_empty() {
+/// The materials' words on their way to the GPU.
+#[derive(Default)]
+struct Packed {
+    ids: Vec<[u32; 4]>,
+    table: Vec<f32>,
+    bandwidth: Vec<f32>,
+    grid: Option<BrdfBandwidthOptions>,
+}
+
+impl Packed {
+    /// Appends material `k`; errors when its bandwidth table's grids differ from the first's.
+    fn push(&mut self, k: usize, brdf: &MeasuredBrdf, b: &BrdfBandwidth) -> Result<()> {
+        let grid = *self.grid.get_or_insert(b.options);
+        if b.options != grid {
             return Err(invalid(
-                "bandwidth pass",
-                "the GPU bandwidth pass does not propagate area lights yet (the CPU's does)",
+                "BRDF bandwidth",
+                format!(
+                    "material {k}: its table's grids {:?} differ from the first material's {grid:?}",
+                    b.options
+                ),
             ));
         }
-        let mut nets = vec![];
-        for (k, m) in shading.scene.materials.iter().enumerate() {
-            let mut net = None;
-            m.with_bsdf([0.5, 0.5], &mut |b| {
-                net = b.as_any().and_then(|a| a.downcast_ref::<Nbrdf>()).cloned();
-            });
-            nets.push(net.ok_or_else(|| {
-                invalid(
-                    "bandwidth pass",
-                    format!(
-                        "material {k} ({}): the GPU bandwidth pass evaluates neural BRDFs \
-                         (nbrdf:…) only",
-                        shading.materials[k].name
-                    ),
-                )
-            })?);
-        }
-        let pairs: Vec<(&Nbrdf, &BrdfBandwidth)> = nets
-            .iter()
-            .zip(&shading.materials)
-            .map(|(n, t)| (n, &t.bandwidth))
-            .collect();
-        Self::new(ctx, env.map, &env.bandwidth, &pairs)
+        let (kind, base, offset) = brdf.pack(&mut self.table);
+        self.ids
+            .push([kind, base, self.bandwidth.len() as u32, offset.to_bits()]);
+        self.bandwidth.extend(b.data.iter().map(|&v| v as f32));
+        Ok(())
     }
 }
 
@@ -258,7 +287,10 @@ impl BandwidthPass {
 
     /// Compiles the pass.
     pub fn new(ctx: &GpuContext) -> Result<Self> {
-        let src = compose(&[&TYPES, &MEASURED, &FREQUENCY], BANDWIDTH_PASS_WGSL);
+        let src = compose(
+            &[&TYPES, &MEASURED, &FREQUENCY, &ENV_LIGHT],
+            BANDWIDTH_PASS_WGSL,
+        );
         let entries = [
             uniform_entry(0),
             storage_entry(1, true),

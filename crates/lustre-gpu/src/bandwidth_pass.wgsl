@@ -1,7 +1,8 @@
 // The bandwidth pass (004 §IV.4.1, Fig. IV.11 b): per G-buffer pixel, the prediction of
 // lustre_freq::pixel::predict from n_b directions under a distant environment, and the BRDF's
 // largest bandwidth over them and the mirror direction (lustre_adaptive::buffer::predict_pixels).
-// Materials are neural BRDFs (measured.wgsl's nbrdf_eval). Imports: types, measured, frequency.
+// Materials are measured BRDFs (measured.wgsl's measured_eval: neural BRDFs, MERL tables).
+// Imports: types, measured, frequency, env_light.
 
 struct Params {
     pixels: u32,
@@ -39,9 +40,9 @@ struct Prediction {
 @group(0) @binding(1) var<storage, read> surfels: array<Surfel>;
 // Equirect texels: RGB, and the local bandwidth in w.
 @group(0) @binding(2) var<storage, read> environment: array<vec4<f32>>;
-// Per material: the word where its network starts in `table` and where its bandwidth table
-// starts in `brdf_bandwidth`.
-@group(0) @binding(3) var<storage, read> materials: array<vec2<u32>>;
+// Per material: its kind (measured_eval), the word where its BRDF starts in `table`, where its
+// bandwidth table starts in `brdf_bandwidth`, and its MERL node offset (f32 bits).
+@group(0) @binding(3) var<storage, read> materials: array<vec4<u32>>;
 @group(0) @binding(4) var<storage, read> table: array<f32>;
 @group(0) @binding(5) var<storage, read> brdf_bandwidth: array<f32>;
 @group(0) @binding(6) var<storage, read_write> predictions: array<Prediction>;
@@ -50,34 +51,22 @@ fn bsdf_table(i: u32) -> f32 {
     return table[i];
 }
 
-fn texel(x: i32, y: i32) -> vec4<f32> {
-    let w = i32(params.env_width);
-    let xi = ((x % w) + w) % w;
-    return environment[u32(y) * params.env_width + u32(xi)];
+fn env_texel(i: u32) -> vec3<f32> {
+    return environment[i].xyz;
 }
 
-// EquirectMap::lookup_bilinear (RGB).
+// The pass draws no directions from the map: its sampler is not uploaded.
+fn env_table(i: u32) -> f32 {
+    return 0.0;
+}
+
 fn env_radiance(d: vec3<f32>) -> vec3<f32> {
-    let uv = freq_equirect_uv(d);
-    let w = f32(params.env_width);
-    let h = f32(params.env_height);
-    let x = uv.x * w - 0.5;
-    let y = clamp(uv.y * h - 0.5, 0.0, h - 1.0);
-    let x0 = floor(x);
-    let y0 = floor(y);
-    let fx = x - x0;
-    let fy = y - y0;
-    let y1 = min(i32(y0) + 1, i32(params.env_height) - 1);
-    let a = texel(i32(x0), i32(y0)).xyz;
-    let b = texel(i32(x0) + 1, i32(y0)).xyz;
-    let c = texel(i32(x0), y1).xyz;
-    let e = texel(i32(x0) + 1, y1).xyz;
-    return (1.0 - fy) * ((1.0 - fx) * a + fx * b) + fy * ((1.0 - fx) * c + fx * e);
+    return env_bilinear(EnvDims(params.env_width, params.env_height, 0u, 0u), d);
 }
 
 // EnvironmentBandwidth::bandwidth_at (nearest texel).
 fn env_bandwidth(d: vec3<f32>) -> f32 {
-    let uv = freq_equirect_uv(d);
+    let uv = equirect_uv(d);
     let x = min(u32(max(uv.x, 0.0) * f32(params.env_width)), params.env_width - 1u);
     let y = min(u32(max(uv.y, 0.0) * f32(params.env_height)), params.env_height - 1u);
     return environment[y * params.env_width + x].w;
@@ -114,14 +103,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var nu = vec2<f32>(0.0);
     var chi_sum = 0.0;
     let mirror = vec3<f32>(-wo.x, -wo.y, wo.z);
-    var brdf_max = brdf_bandwidth[m.y + freq_brdf_index(mirror, wo, incident, cells)];
+    var brdf_max = brdf_bandwidth[m.z + freq_brdf_index(mirror, wo, incident, cells)];
     for (var k = 0u; k < params.n_b; k++) {
         let wi_l = freq_cosine_direction(k, params.n_b);
         let wi = t * wi_l.x + b * wi_l.y + n * wi_l.z;
         let radiance = luminance(env_radiance(wi));
-        let rho = luminance(nbrdf_eval(m.x, wi_l, wo));
+        let rho = luminance(measured_eval(m.x, m.y, bitcast<f32>(m.w), wi_l, wo));
         let nu_light = env_bandwidth(wi);
-        let nu_brdf = brdf_bandwidth[m.y + freq_brdf_index(wi_l, wo, incident, cells)];
+        let nu_brdf = brdf_bandwidth[m.z + freq_brdf_index(wi_l, wo, incident, cells)];
         brdf_max = max(brdf_max, nu_brdf);
         let nu_i = freq_one_bounce_distant(nu_light, max(wo.z, 1e-6), curvature, 0.0, nu_brdf,
                                            depth);

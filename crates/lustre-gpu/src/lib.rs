@@ -23,6 +23,7 @@
 //! full of one-lobe specular pixels 3.9 s (n = 3), 6.0 s (n = 11), 9.7 s (n = 19); half
 //! specular 4.2 s (n = 11); readback 29 ms; upload of a 256² pyramid 243 ms (`benches/frame.rs`).
 
+pub mod adaptive_pass;
 pub mod bandwidth_pass;
 mod compute;
 pub mod context;

@@ -5,6 +5,42 @@
 use lustre_brdf::measured::merl::{MerlTable, BINS, RES_PHI_D, RES_THETA_D, RES_THETA_H};
 use lustre_brdf::measured::nbrdf::Nbrdf;
 use lustre_brdf::tabulated::TabulatedSampler;
+use lustre_brdf::Bsdf;
+
+/// A measured BRDF the GPU evaluates directly (`measured_eval` of `wgsl/measured.wgsl`).
+#[derive(Clone, Copy, Debug)]
+pub enum MeasuredBrdf<'a> {
+    /// A neural BRDF (kind 0).
+    Nbrdf(&'a Nbrdf),
+    /// A MERL table (kind 1).
+    Merl(&'a MerlTable),
+}
+
+impl<'a> MeasuredBrdf<'a> {
+    /// The measured BRDF behind `b`, or `None` for any other model.
+    pub fn of(b: &'a dyn Bsdf) -> Option<Self> {
+        let any = b.as_any()?;
+        if let Some(n) = any.downcast_ref::<Nbrdf>() {
+            return Some(Self::Nbrdf(n));
+        }
+        any.downcast_ref::<MerlTable>().map(Self::Merl)
+    }
+
+    /// Appends its words to `table`; returns `measured_eval`'s (kind, first word, node offset).
+    pub fn pack(&self, table: &mut Vec<f32>) -> (u32, u32, f32) {
+        let base = table.len() as u32;
+        match self {
+            Self::Nbrdf(n) => {
+                table.extend(pack_nbrdf(n));
+                (0, base, 0.0)
+            }
+            Self::Merl(m) => {
+                table.extend(pack_merl(m));
+                (1, base, m.convention().offset() as f32)
+            }
+        }
+    }
+}
 
 /// The words of a MERL table for `merl_lookup`: its 3 × 90·90·180 stored values (unscaled,
 /// channel-major, bin (i, j, k) at `k + 180·(j + 90·i)`), a missing bin as −1.

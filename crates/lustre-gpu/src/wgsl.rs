@@ -236,15 +236,23 @@ pub const MEASURED: Module = Module {
 };
 
 /// Frequency analysis (004 §IV.3): one-bounce bandwidth of a distant light, the n_b
-/// directions, BRDF bandwidth cells, equirect texels.
+/// directions, BRDF bandwidth cells.
 pub const FREQUENCY: Module = Module {
     name: "frequency",
     source: include_str!("wgsl/frequency.wgsl"),
     deps: &[&TYPES],
 };
 
+/// A distant environment light: bilinear equirect radiance, importance sampling by texels and
+/// its density, read through the pass's `env_texel` and `env_table`.
+pub const ENV_LIGHT: Module = Module {
+    name: "env_light",
+    source: include_str!("wgsl/env_light.wgsl"),
+    deps: &[&TYPES],
+};
+
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 29] = [
+pub const ALL: [&Module; 30] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -274,6 +282,7 @@ pub const ALL: [&Module; 29] = [
     &TEXTURED,
     &MEASURED,
     &FREQUENCY,
+    &ENV_LIGHT,
 ];
 
 /// The source of a pass: every module in `imports` and, transitively, the modules they use,

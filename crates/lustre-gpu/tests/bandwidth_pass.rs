@@ -8,6 +8,7 @@ use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::shading::{ShadingContext, ShadingOptions};
 use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthPixel, BandwidthScene};
+use lustre_gpu::measured::MeasuredBrdf;
 use lustre_shade::baked::read_environment;
 use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::reference::{film_camera, path_scene};
@@ -168,11 +169,22 @@ fn the_pass_names_bad_input() {
         },
     )
     .expect("bandwidth");
-    match BandwidthScene::new(&gpu_ctx, &map, &[0.0; 31], &[(&net, &bw)]) {
+    match BandwidthScene::new(
+        &gpu_ctx,
+        &map,
+        &[0.0; 31],
+        &[(MeasuredBrdf::Nbrdf(&net), &bw)],
+    ) {
         Err(e) => assert!(e.to_string().contains("31 values for a 8 × 4 map"), "{e}"),
         Ok(_) => panic!("31 bandwidth values for 32 texels were accepted"),
     }
-    let scene = BandwidthScene::new(&gpu_ctx, &map, &[0.0; 32], &[(&net, &bw)]).expect("scene");
+    let scene = BandwidthScene::new(
+        &gpu_ctx,
+        &map,
+        &[0.0; 32],
+        &[(MeasuredBrdf::Nbrdf(&net), &bw)],
+    )
+    .expect("scene");
     let mut pass = BandwidthPass::new(&gpu_ctx).expect("pass");
     let px = BandwidthPixel {
         frame: (glam::DVec3::X, glam::DVec3::Y, glam::DVec3::Z),

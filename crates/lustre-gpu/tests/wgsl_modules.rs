@@ -19,15 +19,30 @@ use common::kernel::{angle, f32_round, run_kernel, validate};
 #[test]
 fn every_module_validates_alone_and_has_no_bindings() {
     for m in wgsl::ALL {
-        // A model with a side table (the rough plastic) reads it through `bsdf_table`, which
-        // the pass that binds the table defines: a stub stands in for it here.
-        let needs_table = compose(&[m], "").contains("bsdf_table(");
-        let pass = if needs_table {
-            "fn bsdf_table(i: u32) -> f32 {\n    return f32(i);\n}\n"
-        } else {
-            ""
-        };
-        let src = compose(&[m], pass);
+        // A model with a side table (the rough plastic) reads it through `bsdf_table`, and the
+        // environment light its texels and sampler through `env_texel` and `env_table`, which
+        // the pass that binds them defines: stubs stand in for them here.
+        let alone = compose(&[m], "");
+        let mut pass = String::new();
+        for (call, stub) in [
+            (
+                "bsdf_table(",
+                "fn bsdf_table(i: u32) -> f32 {\n    return f32(i);\n}\n",
+            ),
+            (
+                "env_texel(",
+                "fn env_texel(i: u32) -> vec3<f32> {\n    return vec3<f32>(f32(i));\n}\n",
+            ),
+            (
+                "env_table(",
+                "fn env_table(i: u32) -> f32 {\n    return f32(i);\n}\n",
+            ),
+        ] {
+            if alone.contains(call) {
+                pass.push_str(stub);
+            }
+        }
+        let src = compose(&[m], &pass);
         let module = validate(&src);
         assert!(module.entry_points.is_empty(), "{}: entry point", m.name);
         assert!(

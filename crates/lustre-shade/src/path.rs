@@ -185,6 +185,11 @@ impl EnvLight {
         self.scale
     }
 
+    /// The importance sampler (map directions).
+    pub fn sampler(&self) -> &EnvSampler {
+        &self.sampler
+    }
+
     /// A world direction and its solid-angle density.
     pub fn sample(&self, u1: f64, u2: f64) -> (DVec3, f64) {
         let s = self.sampler.sample(u1, u2);

@@ -678,6 +678,10 @@ impl Bsdf for MerlTable {
     fn flags(&self) -> BsdfFlags {
         BsdfFlags::isotropic_reflection(true, false)
     }
+
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
 }
 
 /// A table of any BSDF: f_r at every bin's node of `convention` (φh = 0; 0 where a direction is

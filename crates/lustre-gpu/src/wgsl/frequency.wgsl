@@ -1,9 +1,7 @@
 // module frequency: frequency analysis on the GPU (004 §IV.3): the one-bounce bandwidth of a
 // distant light (Fig. IV.9, Eq. IV.4–IV.5; lustre_freq::transport::one_bounce with d = 0 and
 // ν_s = 0), the n_b cosine-weighted directions (lustre_freq::pixel::incident_direction), the
-// cells of a BRDF bandwidth table (lustre_freq::brdf::BrdfBandwidth::at) and the equirect
-// texel of a direction (lustre_freq::pixel::EnvironmentBandwidth::bandwidth_at,
-// lustre_env::EquirectMap::lookup_bilinear).
+// cells of a BRDF bandwidth table (lustre_freq::brdf::BrdfBandwidth::at).
 
 // Direction k of n (lustre_freq::pixel::incident_direction): the centred Hammersley point,
 // warped to the cosine-weighted hemisphere (Malley).
@@ -42,9 +40,4 @@ fn freq_brdf_index(wi: vec3<f32>, wo: vec3<f32>, incident: u32, out: u32) -> u32
     let i = freq_cell(wi, incident);
     let o = freq_cell(wo, out);
     return (i.x * incident + i.y) * out * out + o.x * out + o.y;
-}
-
-// (u, v) in [0, 1]² of a map direction (+y up, u = ½ + atan2(x, −z) / 2π, v = acos(y) / π).
-fn freq_equirect_uv(d: vec3<f32>) -> vec2<f32> {
-    return vec2<f32>(0.5 + atan2(d.x, -d.z) / (2.0 * PI), acos(clamp(d.y, -1.0, 1.0)) / PI);
 }

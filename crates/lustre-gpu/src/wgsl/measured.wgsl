@@ -276,3 +276,12 @@ fn tabulated_pdf(base: u32, dims: TabulatedDims, wi: vec3<f32>, wo: vec3<f32>) -
     let eps = dims.defensive;
     return eps * cosine + (1.0 - eps) * w / omega;
 }
+
+// The measured BRDF of a material record (lustre-gpu's measured::MeasuredBrdf::pack): kind 0
+// a neural BRDF, 1 a MERL table read at node offset `offset`; f(wi, wo) in 1/sr.
+fn measured_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    if (kind == 1u) {
+        return merl_eval(base, offset, wi, wo);
+    }
+    return nbrdf_eval(base, wi, wo);
+}

@@ -1,0 +1,638 @@
+//! Adaptive shading on the GPU (004 §IV.4): the bandwidth buffer's pyramids
+//! (`adaptive_pyramid.wgsl`) and hierarchical shading with bilateral up-sampling, one dispatch
+//! per level from the coarsest down (`adaptive_pass.wgsl`). CPU twins:
+//! `lustre_adaptive::buffer::BandwidthBuffer::assemble`'s pyramids and
+//! `lustre_adaptive::hierarchy::{render_adaptive, render_brute}` with
+//! `ShadingContext::shade` (the same points, seeds and estimator, in f32).
+//!
+//! What stays on the CPU: the G-buffer (ray traced), the levels ℓ_p and the variance target V
+//! (`BandwidthBuffer::assemble`, whose bisection on V needs every pixel's sum), then the
+//! upload of ℓ_p and of each pixel's quota 4π² S_p / V. Materials are measured BRDFs the GPU
+//! evaluates directly (neural BRDFs, MERL tables) with their tabulated CDFs; the lighting is
+//! the environment at full resolution (`Lighting::Direct`) plus area lights.
+
+use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry};
+use crate::context::GpuContext;
+use crate::error::{invalid, Result};
+use crate::gbuffer::map_read;
+use crate::measured::{pack_tabulated, GpuTabulatedDims, MeasuredBrdf};
+use crate::timer::{GpuTimer, Timing};
+use crate::wgsl::{compose, ENV_LIGHT, MEASURED, QMC, TYPES};
+use glam::{DMat3, DVec3};
+use lustre_adaptive::buffer::{BandwidthBuffer, NO_LEVEL};
+use lustre_adaptive::gbuffer::{GBuffer, GPixel};
+use lustre_adaptive::hierarchy::{AdaptiveFrame, HierarchyStats, NOT_SHADED};
+use lustre_adaptive::shading::ShadingContext;
+use lustre_env::{Distribution1D, EnvSampler};
+use lustre_shade::image::Image;
+use std::f64::consts::PI;
+
+/// The shading pass's own WGSL (its bindings and entry point).
+pub const ADAPTIVE_PASS_WGSL: &str = include_str!("adaptive_pass.wgsl");
+/// The pyramid pass's WGSL.
+pub const ADAPTIVE_PYRAMID_WGSL: &str = include_str!("adaptive_pyramid.wgsl");
+
+/// `EnvDims` of `env_light.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GpuEnvDims {
+    /// Map width in texels.
+    pub width: u32,
+    /// Map height in texels.
+    pub height: u32,
+    /// First word of the rows' distribution.
+    pub rows: u32,
+    /// First word of row 0's texel distribution.
+    pub cols: u32,
+}
+
+/// The words of an environment sampler for `env_light.wgsl` (`env_table`) and their layout:
+/// the rows' distribution, each row's distribution over its texels, the rows' solid angles. A
+/// distribution of n cells is its n + 1 cumulative values, then its n probabilities (from the
+/// f64 weights, so that a texel's density does not come from the difference of two f32 sums).
+pub fn pack_sampler(sampler: &EnvSampler) -> (Vec<f32>, GpuEnvDims) {
+    let (w, h) = (sampler.width(), sampler.height());
+    let mut out = Vec::with_capacity(2 * h + 1 + h * (2 * w + 1) + h);
+    let push = |out: &mut Vec<f32>, d: &Distribution1D| {
+        out.extend(d.cdf().iter().map(|&c| c as f32));
+        out.extend((0..d.len()).map(|k| d.probability(k) as f32));
+    };
+    push(&mut out, sampler.rows());
+    let cols = out.len() as u32;
+    for j in 0..h {
+        push(&mut out, sampler.row(j));
+    }
+    out.extend((0..h).map(|j| sampler.row_solid_angle(j) as f32));
+    let dims = GpuEnvDims {
+        width: w as u32,
+        height: h as u32,
+        rows: 0,
+        cols,
+    };
+    (out, dims)
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    width: u32,
+    height: u32,
+    level: u32,
+    top: u32,
+    seed: [u32; 2],
+    lights: u32,
+    max_samples: u32,
+    constant: u32,
+    _pad: [u32; 3],
+    env: GpuEnvDims,
+    to_map: [[f32; 4]; 3],
+    right: [f32; 4],
+    up: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct PyramidParams {
+    width: u32,
+    height: u32,
+    level: u32,
+    _pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuMaterial {
+    kind: u32,
+    base: u32,
+    offset: u32,
+    tab_base: u32,
+    dims: GpuTabulatedDims,
+}
+
+/// The environment, the materials and the area lights of an adaptive-shading context,
+/// uploaded once.
+pub struct AdaptiveScene {
+    env_texels: wgpu::Buffer,
+    env_words: wgpu::Buffer,
+    env: GpuEnvDims,
+    to_world: DMat3,
+    materials: wgpu::Buffer,
+    table: wgpu::Buffer,
+    lights: wgpu::Buffer,
+    light_texels: wgpu::Buffer,
+    light_count: u32,
+    material_count: u32,
+}
+
+impl AdaptiveScene {
+    /// Uploads `shading`'s environment (its texels times its scale, and its sampler), every
+    /// material's measured BRDF with its tabulated CDFs, and the area lights. Errors, naming the
+    /// material, on one the GPU does not evaluate (only neural BRDFs and MERL tables) or that
+    /// has no tabulated sampler.
+    pub fn from_context(ctx: &GpuContext, shading: &ShadingContext) -> Result<Self> {
+        let mut table: Vec<f32> = vec![];
+        let mut materials = vec![];
+        for (k, m) in shading.scene.materials.iter().enumerate() {
+            let tables = &shading.materials[k];
+            let Some(sampler) = &tables.sampler else {
+                return Err(invalid(
+                    "adaptive pass",
+                    format!(
+                        "material {k} ({}) has no tabulated sampler (anisotropic, transmissive or \
+                         Dirac): the GPU shades isotropic measured BRDFs only",
+                        tables.name
+                    ),
+                ));
+            };
+            let mut packed = None;
+            m.with_bsdf([0.5, 0.5], &mut |b| {
+                packed = MeasuredBrdf::of(b).map(|brdf| brdf.pack(&mut table));
+            });
+            let (kind, base, offset) = packed.ok_or_else(|| {
+                invalid(
+                    "adaptive pass",
+                    format!(
+                        "material {k} ({}): the GPU shades neural BRDFs (nbrdf:…) and MERL \
+                         tables (merl:… or a .binary file) only",
+                        tables.name
+                    ),
+                )
+            })?;
+            let (words, dims) = pack_tabulated(sampler);
+            let tab_base = table.len() as u32;
+            table.extend(words);
+            materials.push(GpuMaterial {
+                kind,
+                base,
+                offset: offset.to_bits(),
+                tab_base,
+                dims,
+            });
+        }
+        if materials.is_empty() {
+            return Err(invalid("adaptive pass", "a scene without materials"));
+        }
+        if table.len() > u32::MAX as usize {
+            return Err(invalid(
+                "adaptive pass",
+                format!("{} words of BRDF tables", table.len()),
+            ));
+        }
+        let env = shading.env;
+        let scale = env.scale() as f32;
+        let texels: Vec<[f32; 4]> = env
+            .map()
+            .data
+            .iter()
+            .map(|p| [p[0] * scale, p[1] * scale, p[2] * scale, 0.0])
+            .collect();
+        let (env_words, env_dims) = pack_sampler(env.sampler());
+        let mut lights: Vec<[f32; 4]> = vec![];
+        let mut light_texels: Vec<[f32; 4]> = vec![];
+        for l in &shading.lights {
+            let (tw, th, tex) = l.texture();
+            let v = |d: DVec3, w: f32| [d.x as f32, d.y as f32, d.z as f32, w];
+            let r = l.radiance.0;
+            lights.push(v(l.corner, tw as f32));
+            lights.push(v(l.edge_u, th as f32));
+            lights.push(v(l.edge_v, light_texels.len() as f32));
+            lights.push([r[0] as f32, r[1] as f32, r[2] as f32, l.area() as f32]);
+            lights.push(v(l.normal(), 0.0));
+            light_texels.extend(tex.iter().map(|t| [t[0], t[1], t[2], 0.0]));
+        }
+        // Bindings may not be empty: one (unread) light record.
+        if lights.is_empty() {
+            lights.extend([[0.0; 4]; 5]);
+        }
+        if light_texels.is_empty() {
+            light_texels.push([0.0; 4]);
+        }
+        let storage = wgpu::BufferUsages::STORAGE;
+        let init = |label, bytes: &[u8]| buffer_init(ctx, label, bytes, storage);
+        Ok(Self {
+            env_texels: init("adaptive env texels", bytemuck::cast_slice(&texels)),
+            env_words: init("adaptive env sampler", bytemuck::cast_slice(&env_words)),
+            env: env_dims,
+            to_world: env.to_world(),
+            materials: init("adaptive materials", bytemuck::cast_slice(&materials)),
+            table: init("adaptive BRDF tables", bytemuck::cast_slice(&table)),
+            lights: init("adaptive lights", bytemuck::cast_slice(&lights)),
+            light_texels: init("adaptive light texels", bytemuck::cast_slice(&light_texels)),
+            light_count: shading.lights.len() as u32,
+            material_count: materials.len() as u32,
+        })
+    }
+}
+
+/// The compiled passes.
+pub struct AdaptivePass {
+    shade: wgpu::ComputePipeline,
+    shade_layout: wgpu::BindGroupLayout,
+    pyramid: wgpu::ComputePipeline,
+    pyramid_layout: wgpu::BindGroupLayout,
+    timer: GpuTimer,
+}
+
+/// What one GPU frame did and took.
+#[derive(Clone, Debug)]
+pub struct GpuAdaptiveFrame {
+    /// The frame, as `render_adaptive` returns it.
+    pub frame: AdaptiveFrame,
+    /// The passes' time (uploads of the G-buffer and the buffer, the pyramids, every level's
+    /// dispatch; not the read-back).
+    pub timing: Timing,
+}
+
+impl AdaptivePass {
+    /// Compiles both passes.
+    pub fn new(ctx: &GpuContext) -> Result<Self> {
+        let src = compose(&[&TYPES, &MEASURED, &QMC, &ENV_LIGHT], ADAPTIVE_PASS_WGSL);
+        let mut entries = vec![uniform_entry(0)];
+        entries.extend((1..=9).map(|b| storage_entry(b, true)));
+        entries.extend([storage_entry(10, false), storage_entry(11, false)]);
+        let (shade, shade_layout) =
+            compute_pipeline(ctx, "adaptive pass", "adaptive pass", &src, &entries)?;
+        let (pyramid, pyramid_layout) = compute_pipeline(
+            ctx,
+            "adaptive pyramid",
+            "adaptive pyramid",
+            ADAPTIVE_PYRAMID_WGSL,
+            &[
+                uniform_entry(0),
+                storage_entry(1, false),
+                storage_entry(2, false),
+            ],
+        )?;
+        Ok(Self {
+            shade,
+            shade_layout,
+            pyramid,
+            pyramid_layout,
+            timer: GpuTimer::new(ctx),
+        })
+    }
+
+    /// The GPU twin of `render_adaptive(g, shading, buffer, Lighting::Direct, seed)`: the
+    /// pyramids of `buffer`'s levels and quotas, then every level's shading and up-sampling.
+    pub fn render(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &AdaptiveScene,
+        g: &GBuffer,
+        buffer: &BandwidthBuffer,
+        seed: u64,
+    ) -> Result<GpuAdaptiveFrame> {
+        if g.width != buffer.width || g.height != buffer.height {
+            return Err(invalid(
+                "adaptive pass",
+                format!(
+                    "G-buffer of {} × {} with a bandwidth buffer of {} × {}",
+                    g.width, g.height, buffer.width, buffer.height
+                ),
+            ));
+        }
+        let quota: Vec<f32> = buffer
+            .variance
+            .iter()
+            .map(|v| (4.0 * PI * PI * v / buffer.target) as f32)
+            .collect();
+        let level: Vec<u32> = buffer.level.iter().map(|&l| u32::from(l)).collect();
+        let constant = buffer.constant.map_or(0, |n| n as u32);
+        self.run(
+            ctx,
+            scene,
+            g,
+            Levels {
+                count: buffer.levels,
+                level,
+                quota,
+                constant,
+                max_samples: buffer.max_samples as u32,
+            },
+            seed,
+        )
+    }
+
+    /// The GPU twin of `render_brute(g, shading, n, seed)`: one level, every surface pixel
+    /// shaded with `n` samples.
+    pub fn render_brute(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &AdaptiveScene,
+        g: &GBuffer,
+        n: usize,
+        seed: u64,
+    ) -> Result<GpuAdaptiveFrame> {
+        if n == 0 || n > u32::MAX as usize {
+            return Err(invalid(
+                "adaptive pass",
+                format!("brute-force shading with {n} samples per pixel"),
+            ));
+        }
+        let pixels = g.width * g.height;
+        self.run(
+            ctx,
+            scene,
+            g,
+            Levels {
+                count: 1,
+                level: vec![0; pixels],
+                quota: vec![0.0; pixels],
+                constant: n as u32,
+                max_samples: n as u32,
+            },
+            seed,
+        )
+    }
+
+    fn run(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &AdaptiveScene,
+        g: &GBuffer,
+        levels: Levels,
+        seed: u64,
+    ) -> Result<GpuAdaptiveFrame> {
+        let (w, h) = (g.width, g.height);
+        if w == 0 || h == 0 || levels.count == 0 || levels.count > 16 {
+            return Err(invalid(
+                "adaptive pass",
+                format!("a {w} × {h} frame with {} levels", levels.count),
+            ));
+        }
+        let mut surfels: Vec<[f32; 4]> = Vec::with_capacity(w * h * 5);
+        for p in &g.pixels {
+            match p {
+                GPixel::Surface(s) => {
+                    if s.material >= scene.material_count as usize {
+                        return Err(invalid(
+                            "adaptive pass",
+                            format!(
+                                "material {} of {} uploaded",
+                                s.material, scene.material_count
+                            ),
+                        ));
+                    }
+                    let v = |d: DVec3, w: f32| [d.x as f32, d.y as f32, d.z as f32, w];
+                    surfels.push(v(s.position, s.depth as f32));
+                    surfels.push(v(s.frame.t, f32::from_bits(s.material as u32)));
+                    surfels.push(v(s.frame.b, 0.0));
+                    surfels.push(v(s.frame.n, 0.0));
+                    surfels.push(v(s.wo, 0.0));
+                }
+                GPixel::Background(_) => {
+                    surfels.push([0.0; 4]);
+                    surfels.push([0.0, 0.0, 0.0, f32::from_bits(u32::MAX)]);
+                    surfels.extend([[0.0; 4]; 3]);
+                }
+            }
+        }
+        // Level 0 of the pyramids, then room for the coarser levels.
+        let sizes: Vec<usize> = (0..levels.count)
+            .map(|k| w.div_ceil(1 << k) * h.div_ceil(1 << k))
+            .collect();
+        let total: usize = sizes.iter().sum();
+        let mut min_level = levels.level;
+        min_level.resize(total, u32::from(NO_LEVEL));
+        let mut quota = levels.quota;
+        quota.resize(total, 0.0);
+        let m = self.to_map(scene);
+        let cam = &g.camera;
+        let v4 = |d: DVec3| [d.x as f32, d.y as f32, d.z as f32, 0.0];
+        let base = Params {
+            width: w as u32,
+            height: h as u32,
+            level: 0,
+            top: (levels.count - 1) as u32,
+            seed: [seed as u32, (seed >> 32) as u32],
+            lights: scene.light_count,
+            max_samples: levels.max_samples.max(1),
+            constant: levels.constant,
+            _pad: [0; 3],
+            env: scene.env,
+            to_map: m,
+            right: v4(cam.right),
+            up: v4(cam.up),
+        };
+
+        self.timer.start(ctx)?;
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let storage = wgpu::BufferUsages::STORAGE;
+        let surfel_buf = buffer_init(
+            ctx,
+            "adaptive surfels",
+            bytemuck::cast_slice(&surfels),
+            storage,
+        );
+        let level_buf = buffer_init(
+            ctx,
+            "adaptive min level",
+            bytemuck::cast_slice(&min_level),
+            storage,
+        );
+        let quota_buf = buffer_init(
+            ctx,
+            "adaptive max quota",
+            bytemuck::cast_slice(&quota),
+            storage,
+        );
+        let values = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("adaptive values"),
+            size: (w * h * 16) as u64,
+            usage: storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let shaded = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("adaptive shaded"),
+            size: (w * h * 8) as u64,
+            usage: storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("adaptive pass"),
+            });
+        // Zeros: no value yet (w = 0), nothing shaded.
+        enc.clear_buffer(&values, 0, None);
+        enc.clear_buffer(&shaded, 0, None);
+        let pyramid_groups: Vec<(wgpu::BindGroup, (u32, u32))> = (1..levels.count)
+            .map(|k| {
+                let p = PyramidParams {
+                    width: w as u32,
+                    height: h as u32,
+                    level: k as u32,
+                    _pad: 0,
+                };
+                let ub = buffer_init(
+                    ctx,
+                    "adaptive pyramid params",
+                    bytemuck::bytes_of(&p),
+                    wgpu::BufferUsages::UNIFORM,
+                );
+                let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("adaptive pyramid"),
+                    layout: &self.pyramid_layout,
+                    entries: &[entry(0, &ub), entry(1, &level_buf), entry(2, &quota_buf)],
+                });
+                let size = (w.div_ceil(1 << k) as u32, h.div_ceil(1 << k) as u32);
+                (group, size)
+            })
+            .collect();
+        let shade_groups: Vec<(wgpu::BindGroup, (u32, u32))> = (0..levels.count)
+            .rev()
+            .map(|k| {
+                let p = Params {
+                    level: k as u32,
+                    ..base
+                };
+                let ub = buffer_init(
+                    ctx,
+                    "adaptive params",
+                    bytemuck::bytes_of(&p),
+                    wgpu::BufferUsages::UNIFORM,
+                );
+                let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("adaptive pass"),
+                    layout: &self.shade_layout,
+                    entries: &[
+                        entry(0, &ub),
+                        entry(1, &surfel_buf),
+                        entry(2, &scene.env_texels),
+                        entry(3, &scene.env_words),
+                        entry(4, &scene.materials),
+                        entry(5, &scene.table),
+                        entry(6, &scene.lights),
+                        entry(7, &scene.light_texels),
+                        entry(8, &level_buf),
+                        entry(9, &quota_buf),
+                        entry(10, &values),
+                        entry(11, &shaded),
+                    ],
+                });
+                let size = (w.div_ceil(1 << k) as u32, h.div_ceil(1 << k) as u32);
+                (group, size)
+            })
+            .collect();
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("adaptive pass"),
+                timestamp_writes: None,
+            });
+            // Each dispatch reads what the one before it wrote (wgpu orders them).
+            pass.set_pipeline(&self.pyramid);
+            for (group, (gw, gh)) in &pyramid_groups {
+                pass.set_bind_group(0, group, &[]);
+                pass.dispatch_workgroups(gw.div_ceil(8), gh.div_ceil(8), 1);
+            }
+            pass.set_pipeline(&self.shade);
+            for (group, (gw, gh)) in &shade_groups {
+                pass.set_bind_group(0, group, &[]);
+                pass.dispatch_workgroups(gw.div_ceil(8), gh.div_ceil(8), 1);
+            }
+        }
+        ctx.queue.submit([enc.finish()]);
+        let timing = self.timer.stop(ctx)?;
+        let copy = |src: &wgpu::Buffer, label: &'static str| -> wgpu::Buffer {
+            let size = src.size();
+            let dst = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let mut enc = ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
+            enc.copy_buffer_to_buffer(src, 0, &dst, 0, size);
+            ctx.queue.submit([enc.finish()]);
+            dst
+        };
+        let values_dst = copy(&values, "adaptive values readback");
+        let shaded_dst = copy(&shaded, "adaptive shaded readback");
+        let value_bytes = map_read(ctx, &values_dst, "adaptive pass", scope)?;
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let shaded_bytes = map_read(ctx, &shaded_dst, "adaptive pass", scope)?;
+        let value_px = bytemuck::cast_slice::<u8, [f32; 4]>(&value_bytes);
+        let shaded_px = bytemuck::cast_slice::<u8, [u32; 2]>(&shaded_bytes);
+        let frame = assemble(g, value_px, shaded_px, levels.count)?;
+        Ok(GpuAdaptiveFrame { frame, timing })
+    }
+
+    /// The rows of the rotation taking world directions to the map's (the columns of its
+    /// to-world rotation).
+    fn to_map(&self, scene: &AdaptiveScene) -> [[f32; 4]; 3] {
+        let m = scene.to_world.transpose();
+        let row = |r: DVec3| [r.x as f32, r.y as f32, r.z as f32, 0.0];
+        [row(m.row(0)), row(m.row(1)), row(m.row(2))]
+    }
+}
+
+/// A frame's level-0 levels and quotas, before the pyramids.
+struct Levels {
+    count: usize,
+    level: Vec<u32>,
+    quota: Vec<f32>,
+    constant: u32,
+    max_samples: u32,
+}
+
+/// The frame from the read-back: surface pixels take the GPU's values, the background the
+/// G-buffer's radiance.
+fn assemble(
+    g: &GBuffer,
+    values: &[[f32; 4]],
+    shaded: &[[u32; 2]],
+    levels: usize,
+) -> Result<AdaptiveFrame> {
+    let mut stats = HierarchyStats {
+        per_level: vec![(0, 0); levels],
+        ..Default::default()
+    };
+    let n = g.pixels.len();
+    let mut shaded_level = vec![NOT_SHADED; n];
+    let mut samples = vec![0u32; n];
+    let mut data = Vec::with_capacity(n);
+    for (k, p) in g.pixels.iter().enumerate() {
+        match p {
+            GPixel::Background(l) => data.push(l.to_f32()),
+            GPixel::Surface(_) => {
+                let [r, gr, b, _] = values[k];
+                data.push([r, gr, b]);
+                let [lv, ns] = shaded[k];
+                if lv < u32::from(NOT_SHADED) {
+                    shaded_level[k] = lv as u8;
+                    samples[k] = ns;
+                    stats.shaded += 1;
+                    stats.samples += u64::from(ns);
+                    if let Some(e) = stats.per_level.get_mut(lv as usize) {
+                        e.0 += 1;
+                    }
+                } else {
+                    stats.upsampled += 1;
+                    let x = k % g.width;
+                    let y = k / g.width;
+                    // The level of its grid: the largest 2^k dividing both coordinates.
+                    let l = (x | y | (1 << (levels - 1))).trailing_zeros() as usize;
+                    if let Some(e) = stats.per_level.get_mut(l.min(levels - 1)) {
+                        e.1 += 1;
+                    }
+                }
+            }
+        }
+    }
+    Ok(AdaptiveFrame {
+        image: Image::from_data(g.width, g.height, data)
+            .map_err(|e| invalid("adaptive frame", e.to_string()))?,
+        shaded_level,
+        samples,
+        stats,
+    })
+}
+
+fn entry(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: b.as_entire_binding(),
+    }
+}

@@ -1,0 +1,327 @@
+// Hierarchical shading (004 §IV.4.2, Fig. IV.11 c–d, Fig. IV.12) of one level of the
+// bandwidth buffer's pyramid: each pixel of level k's grid that no coarser grid holds is
+// up-sampled from its four parents (depth Gaussian × anisotropic screen-space Gaussian ×
+// bilinear weights) when the min-filtered level allows it, else shaded with the N_p of its
+// block's max-filtered variance. CPU twin: lustre_adaptive::hierarchy::render_adaptive, its
+// shading lustre_adaptive::shading::ShadingContext::shade (Lighting::Direct): tabulated-CDF
+// BRDF samples and environment samples combined by the balance heuristic, plus area lights.
+// Imports: types, measured, qmc, env_light.
+
+struct Params {
+    width: u32,
+    height: u32,
+    level: u32,
+    top: u32,
+    seed: vec2<u32>,
+    lights: u32,
+    max_samples: u32,
+    // N_p everywhere when > 0 (SampleRule::Constant); else from the variance quotas.
+    constant: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+    env: EnvDims,
+    // Rows of the rotation taking world directions to the map's.
+    to_map0: vec4<f32>,
+    to_map1: vec4<f32>,
+    to_map2: vec4<f32>,
+    // The camera's right and up (world).
+    right: vec4<f32>,
+    up: vec4<f32>,
+}
+
+// A pixel of the G-buffer: position (xyz) and depth; the shading frame t, b, n; the direction
+// to the eye; the material index in t.w (bitcast u32; 0xffffffff: background).
+struct Surfel {
+    p: vec4<f32>,
+    t: vec4<f32>,
+    b: vec4<f32>,
+    n: vec4<f32>,
+    wo: vec4<f32>,
+}
+
+// A material: measured_eval's kind, first word and MERL offset (f32 bits), then the first word
+// of its tabulated CDFs and their layout.
+struct MeasuredMaterial {
+    kind: u32,
+    base: u32,
+    offset: u32,
+    tab_base: u32,
+    dims: TabulatedDims,
+}
+
+// A textured parallelogram emitter (lustre_adaptive::light::AreaLight): corner (xyz) and
+// texture width, edge u and texture height, edge v and first texel, radiance scale (rgb) and
+// area, the emitting side's normal.
+struct Light {
+    corner: vec4<f32>,
+    edge_u: vec4<f32>,
+    edge_v: vec4<f32>,
+    radiance: vec4<f32>,
+    normal: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> surfels: array<Surfel>;
+@group(0) @binding(2) var<storage, read> env_texels: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> env_words: array<f32>;
+@group(0) @binding(4) var<storage, read> materials: array<MeasuredMaterial>;
+@group(0) @binding(5) var<storage, read> table: array<f32>;
+@group(0) @binding(6) var<storage, read> lights: array<Light>;
+@group(0) @binding(7) var<storage, read> light_texels: array<vec4<f32>>;
+// The pyramids (adaptive_pyramid.wgsl): per level k, row-major blocks of 2^k × 2^k pixels.
+@group(0) @binding(8) var<storage, read> min_level: array<u32>;
+@group(0) @binding(9) var<storage, read> max_quota: array<f32>;
+// Per pixel: the value (rgb) and 1 in w once set.
+@group(0) @binding(10) var<storage, read_write> values: array<vec4<f32>>;
+// Per pixel: the level it was shaded at (255: not shaded) and its samples.
+@group(0) @binding(11) var<storage, read_write> shaded: array<vec2<u32>>;
+
+fn bsdf_table(i: u32) -> f32 {
+    return table[i];
+}
+
+fn env_texel(i: u32) -> vec3<f32> {
+    return env_texels[i].xyz;
+}
+
+fn env_table(i: u32) -> f32 {
+    return env_words[i];
+}
+
+const BACKGROUND: u32 = 0xffffffffu;
+const NOT_SHADED: u32 = 255u;
+// hierarchy::MIN_WEIGHT and gbuffer::SAME_SURFACE.
+const MIN_WEIGHT: f32 = 0.05;
+const SAME_SURFACE: f32 = 0.05;
+
+// The first entry of level k's blocks, and the width of its rows of blocks.
+fn pyramid_row(k: u32) -> vec2<u32> {
+    var offset = 0u;
+    for (var m = 0u; m < k; m++) {
+        let s = 1u << m;
+        offset += ((params.width + s - 1u) / s) * ((params.height + s - 1u) / s);
+    }
+    let s = 1u << k;
+    return vec2<u32>(offset, (params.width + s - 1u) / s);
+}
+
+fn block(k: u32, x: u32, y: u32) -> u32 {
+    let r = pyramid_row(k);
+    return r.x + (y >> k) * r.y + (x >> k);
+}
+
+// BandwidthBuffer::samples: N_p of the level-k block holding (x, y).
+fn samples_at(k: u32, x: u32, y: u32) -> u32 {
+    if (params.constant > 0u) {
+        return params.constant;
+    }
+    let q = max_quota[block(k, x, y)];
+    if (!(q > 0.0)) {
+        return 1u;
+    }
+    return u32(clamp(ceil(min(q, f32(params.max_samples))), 1.0, f32(params.max_samples)));
+}
+
+fn to_map(d: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(params.to_map0.xyz, d), dot(params.to_map1.xyz, d),
+                     dot(params.to_map2.xyz, d));
+}
+
+fn finite3(v: vec3<f32>) -> bool {
+    return all(abs(v) < vec3<f32>(3.0e38)) && all(v == v);
+}
+
+// lustre_brdf::sampling::hammersley(k, n) as f32: ((k + ½) / n, the radical inverse's top 24
+// bits).
+fn hammersley(k: u32, n: u32) -> vec2<f32> {
+    return vec2<f32>((f32(k) + 0.5) / f32(n),
+                     f32(reverseBits(k) >> 8u) * (1.0 / 16777216.0));
+}
+
+// SplitMix64::next_f64's top 24 bits.
+fn next_unit(state: ptr<function, vec2<u32>>) -> f32 {
+    return f32(splitmix64_next(state).y >> 8u) * (1.0 / 16777216.0);
+}
+
+// shading::pixel_seed(seed, k): SplitMix64(seed ^ k · 0x9E3779B97F4A7C15).next_u64().
+fn shading_seed(k: u32) -> vec2<u32> {
+    var state = params.seed ^ mul64(vec2<u32>(k, 0u), vec2<u32>(0x7F4A7C15u, 0x9E3779B9u));
+    return splitmix64_next(&state);
+}
+
+// ShadingContext::shade at surfel s with n samples (Lighting::Direct).
+fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
+    let t = s.t.xyz;
+    let b = s.b.xyz;
+    let nn = s.n.xyz;
+    let wo = vec3<f32>(dot(s.wo.xyz, t), dot(s.wo.xyz, b), dot(s.wo.xyz, nn));
+    let m = materials[bitcast<u32>(s.t.w)];
+    let offset = bitcast<f32>(m.offset);
+    let n = max(n_in, 1u);
+    let n_f = (n + 1u) / 2u;
+    let n_l = n / 2u;
+    var rng = seed;
+    let rot = vec4<f32>(next_unit(&rng), next_unit(&rng), next_unit(&rng), next_unit(&rng));
+    var sum = vec3<f32>(0.0);
+    for (var k = 0u; k < n_f; k++) {
+        let u = fract(hammersley(k, n_f) + rot.xy);
+        let smp = tabulated_sample(m.tab_base, m.dims, wo, u.x, u.y);
+        if (smp.w == 0.0) {
+            continue;
+        }
+        let wi = smp.xyz;
+        let d = t * wi.x + b * wi.y + nn * wi.z;
+        let dm = to_map(d);
+        let den = f32(n_f) * tabulated_pdf(m.tab_base, m.dims, wi, wo)
+            + f32(n_l) * env_pdf(params.env, dm);
+        if (den > 0.0) {
+            let v = measured_eval(m.kind, m.base, offset, wi, wo) * (abs(wi.z) / den)
+                * env_bilinear(params.env, dm);
+            if (finite3(v)) {
+                sum += v;
+            }
+        }
+    }
+    for (var k = 0u; k < n_l; k++) {
+        let u = fract(hammersley(k, n_l) + rot.zw);
+        let e = env_sample(params.env, u.x, u.y);
+        // The map's direction in world space, then in the shading frame.
+        let d = params.to_map0.xyz * e.x + params.to_map1.xyz * e.y + params.to_map2.xyz * e.z;
+        let wi = vec3<f32>(dot(d, t), dot(d, b), dot(d, nn));
+        let dm = to_map(d);
+        let den = f32(n_f) * tabulated_pdf(m.tab_base, m.dims, wi, wo)
+            + f32(n_l) * env_pdf(params.env, dm);
+        if (den > 0.0) {
+            let v = measured_eval(m.kind, m.base, offset, wi, wo) * (abs(wi.z) / den)
+                * env_bilinear(params.env, dm);
+            if (finite3(v)) {
+                sum += v;
+            }
+        }
+    }
+    // Area lights: n points per light, stratified over its area (the rotations are drawn after
+    // the four above, one pair per light, as on the CPU).
+    for (var l = 0u; l < params.lights; l++) {
+        let r = vec2<f32>(next_unit(&rng), next_unit(&rng));
+        let light = lights[l];
+        let tw = u32(light.corner.w);
+        let th = u32(light.edge_u.w);
+        let first = u32(light.edge_v.w);
+        for (var k = 0u; k < n; k++) {
+            let uv = fract(hammersley(k, n) + r);
+            let q = light.corner.xyz + light.edge_u.xyz * uv.x + light.edge_v.xyz * uv.y;
+            let dv = q - s.p.xyz;
+            let dist = length(dv);
+            if (!(dist > 0.0 && dist < 3.0e38)) {
+                continue;
+            }
+            let w = dv / dist;
+            let cos_l = -dot(w, light.normal.xyz);
+            if (cos_l <= 0.0) {
+                continue;
+            }
+            let wi = vec3<f32>(dot(w, t), dot(w, b), dot(w, nn));
+            let g = cos_l * light.radiance.w / (dist * dist * f32(n));
+            let tx = min(u32(uv.x * f32(tw)), tw - 1u);
+            let ty = min(u32(uv.y * f32(th)), th - 1u);
+            let emitted = light.radiance.xyz * light_texels[first + ty * tw + tx].xyz;
+            let v = measured_eval(m.kind, m.base, offset, wi, wo) * (abs(wi.z) * g) * emitted;
+            if (finite3(v)) {
+                sum += v;
+            }
+        }
+    }
+    return sum;
+}
+
+// hierarchy::upsample: the value of (x, y) at `level` from its parents, w = 1; w = 0 when it
+// must be shaded.
+fn upsample(s: Surfel, x: u32, y: u32, level: u32) -> vec4<f32> {
+    let w = params.width;
+    let p = 2u << level;
+    let x0 = x / p * p;
+    let y0 = y / p * p;
+    let ax = f32(x - x0) / f32(p);
+    let ay = f32(y - y0) / f32(p);
+    let nn = s.n.xyz;
+    let proj = vec2<f32>(dot(nn, params.right.xyz), -dot(nn, params.up.xyz));
+    let len = length(proj);
+    let cos_x = max(abs(dot(nn, s.wo.xyz)), 0.05);
+    let mat = bitcast<u32>(s.t.w);
+    var sum = vec3<f32>(0.0);
+    var weight = 0.0;
+    for (var c = 0u; c < 4u; c++) {
+        let cx = x0 + p * (c & 1u);
+        let cy = y0 + p * (c >> 1u);
+        var alpha = 0.0;
+        switch c {
+            case 0u: { alpha = (1.0 - ax) * (1.0 - ay); }
+            case 1u: { alpha = ax * (1.0 - ay); }
+            case 2u: { alpha = (1.0 - ax) * ay; }
+            default: { alpha = ax * ay; }
+        }
+        if (alpha == 0.0) {
+            continue;
+        }
+        if (cx >= w || cy >= params.height) {
+            return vec4<f32>(0.0);
+        }
+        if (min_level[block(level + 1u, cx, cy)] < level + 1u) {
+            return vec4<f32>(0.0);
+        }
+        let qi = cy * w + cx;
+        let q = surfels[qi];
+        let value = values[qi];
+        if (bitcast<u32>(q.t.w) != mat || value.w == 0.0) {
+            continue;
+        }
+        let dz = (s.p.w - q.p.w) / (SAME_SURFACE * s.p.w);
+        let v = vec2<f32>((f32(x) - f32(cx)) / f32(p), (f32(y) - f32(cy)) / f32(p));
+        var quad = dot(v, v);
+        // glam's try_normalize: a finite, non-zero length.
+        if (len > 0.0 && len < 3.0e38) {
+            let a = proj / len;
+            let par = dot(v, a);
+            let perp = v.x * a.y - v.y * a.x;
+            quad = perp * perp + par * par / (cos_x * cos_x);
+        }
+        let wgt = exp(-dz * dz) * exp(-quad) * alpha;
+        sum += value.xyz * wgt;
+        weight += wgt;
+    }
+    if (weight >= MIN_WEIGHT) {
+        return vec4<f32>(sum / weight, 1.0);
+    }
+    return vec4<f32>(0.0);
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let level = params.level;
+    let x = gid.x << level;
+    let y = gid.y << level;
+    if (x >= params.width || y >= params.height) {
+        return;
+    }
+    let parent = 2u << level;
+    if (level < params.top && x % parent == 0u && y % parent == 0u) {
+        return;
+    }
+    let k = y * params.width + x;
+    let s = surfels[k];
+    if (bitcast<u32>(s.t.w) == BACKGROUND) {
+        return;
+    }
+    if (level < params.top) {
+        let v = upsample(s, x, y, level);
+        if (v.w > 0.0) {
+            values[k] = v;
+            shaded[k] = vec2<u32>(NOT_SHADED, 0u);
+            return;
+        }
+    }
+    let n = samples_at(level, x, y);
+    values[k] = vec4<f32>(shade(s, n, shading_seed(k)), 1.0);
+    shaded[k] = vec2<u32>(level, n);
+}
