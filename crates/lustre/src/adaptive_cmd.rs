@@ -1,7 +1,10 @@
-//! `lustre render --method adaptive | brute`: 004 chapter IV on the CPU (`lustre-adaptive`).
-//! Measured (or any) materials shaded directly under the environment, without visibility: the
-//! adaptive method renders a bandwidth buffer and shades hierarchically; brute force shades
-//! every pixel with --samples samples. Without a scene or --material, 004 Fig. IV.13's line-up
+//! `lustre render --method adaptive | brute`: 004 chapter IV (`lustre-adaptive` on the CPU,
+//! `lustre-gpu`'s bandwidth and adaptive passes on the GPU). Measured (or any) materials shaded
+//! directly under the environment, without visibility: the adaptive method renders a bandwidth
+//! buffer and shades hierarchically; brute force shades every pixel with --samples samples.
+//! The G-buffer, the material tables and the buffer's levels and variance target are the
+//! CPU's; the passes run on the GPU with --device gpu, or auto where the GPU takes the scene
+//! (measured materials evaluated directly, direct lighting; area lights in the shading only). Without a scene or --material, 004 Fig. IV.13's line-up
 //! (three spheres of measured paints on white marble).
 
 use crate::render_cmd::{compare, path_cameras, Device, Method, RenderArgs, SampleRuleArg};
@@ -15,6 +18,7 @@ use lustre_adaptive::light::AreaLight;
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_brdf::rgb::Rgb;
 use lustre_freq::pixel::EnvironmentBandwidth;
+use lustre_gpu::adaptive_pass::{AdaptivePass, AdaptiveScene};
 use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthScene};
 use lustre_gpu::GpuContext;
 use lustre_scene::material_edit::{parse_assignment, set_named};
@@ -36,9 +40,6 @@ const LINEUP_FLOOR: &str = "nbrdf:white-marble";
 /// Runs the adaptive or brute-force renderer.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let adaptive = args.method == Method::Adaptive;
-    if args.device == Device::Gpu && !adaptive {
-        bail!("--method brute shades on the CPU only: use --device cpu or auto");
-    }
     if !(1..=1024).contains(&args.samples) {
         bail!("--samples {} must be 1..=1024", args.samples);
     }
@@ -126,26 +127,25 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     );
     let env_bw = EnvironmentBandwidth::new(ctx.env.map())?;
     lap(&mut times, "environment bandwidth", &mut t);
-    // The bandwidth pass runs on the GPU where it can (neural-BRDF materials); the shading
-    // passes are the CPU's.
-    let mut gpu = match (adaptive, args.device) {
-        (false, _) | (_, Device::Cpu) => None,
-        (true, device) => match gpu_bandwidth(&ctx, &env_bw) {
-            Ok(g) => {
-                eprintln!(
-                    "bandwidth pass on the GPU ({}), shading on the CPU",
-                    g.0.describe()
-                );
-                lap(&mut times, "GPU: adapter, upload", &mut t);
-                Some(g)
-            }
-            Err(e) if device == Device::Auto => {
-                eprintln!("GPU bandwidth pass: {e:#}; the whole frame on the CPU");
-                None
-            }
-            Err(e) => return Err(e),
-        },
+    // The passes run on the GPU where they can (--device auto) or must (--device gpu).
+    let mut gpu = match args.device {
+        Device::Cpu => None,
+        device => gpu_passes(&ctx, &env_bw, adaptive, lighting, device == Device::Gpu)?,
     };
+    if let Some(g) = &gpu {
+        let place = |on: bool| if on { "GPU" } else { "CPU" };
+        eprintln!(
+            "{}shading on the {} ({})",
+            if adaptive {
+                format!("bandwidth pass on the {}, ", place(g.bandwidth.is_some()))
+            } else {
+                String::new()
+            },
+            place(g.shading.is_some()),
+            g.ctx.describe()
+        );
+        lap(&mut times, "GPU: adapter, upload", &mut t);
+    }
 
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
@@ -169,8 +169,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 scale: rule,
                 rate: args.rate,
             };
-            let buffer = match &mut gpu {
-                Some((gctx, scene, pass)) => {
+            let buffer = match gpu.as_mut().and_then(|p| Some((&p.ctx, p.bandwidth.as_mut()?))) {
+                Some((gctx, (scene, pass))) => {
                     let (estimates, timing) = pass.predict(gctx, scene, &g, &ctx, args.n_b)?;
                     if let Some(ms) = timing.gpu_ms {
                         times.push((
@@ -196,8 +196,28 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                     b
                 }
             };
-            let f = render_adaptive(&g, &ctx, &buffer, lighting, args.seed)?;
-            lap(&mut times, &format!("{stem}: hierarchical shading"), &mut t);
+            let f = match gpu.as_mut().and_then(|p| Some((&p.ctx, p.shading.as_mut()?))) {
+                Some((gctx, (scene, pass))) => {
+                    let out = pass.render(gctx, scene, &g, &buffer, args.seed)?;
+                    if let Some(ms) = out.timing.gpu_ms {
+                        times.push((
+                            format!("{stem}: pyramids, hierarchical shading (GPU timestamps)"),
+                            ms * 1e-3,
+                        ));
+                    }
+                    lap(
+                        &mut times,
+                        &format!("{stem}: hierarchical shading (GPU, upload, read-back)"),
+                        &mut t,
+                    );
+                    out.frame
+                }
+                None => {
+                    let f = render_adaptive(&g, &ctx, &buffer, lighting, args.seed)?;
+                    lap(&mut times, &format!("{stem}: hierarchical shading"), &mut t);
+                    f
+                }
+            };
             write_maps(args, stem, &g, &buffer, &f.shaded_level, &f.samples)?;
             writeln!(
                 summary,
@@ -210,12 +230,34 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             )?;
             f.image
         } else {
-            let (img, st) = render_brute(&g, &ctx, args.samples, args.seed)?;
-            lap(&mut times, &format!("{stem}: brute-force shading"), &mut t);
+            let (img, shaded, samples) =
+                match gpu.as_mut().and_then(|p| Some((&p.ctx, p.shading.as_mut()?))) {
+                    Some((gctx, (scene, pass))) => {
+                        let out = pass.render_brute(gctx, scene, &g, args.samples, args.seed)?;
+                        if let Some(ms) = out.timing.gpu_ms {
+                            times.push((
+                                format!("{stem}: brute-force shading (GPU timestamps)"),
+                                ms * 1e-3,
+                            ));
+                        }
+                        lap(
+                            &mut times,
+                            &format!("{stem}: brute-force shading (GPU, upload, read-back)"),
+                            &mut t,
+                        );
+                        let st = out.frame.stats;
+                        (out.frame.image, st.shaded, st.samples)
+                    }
+                    None => {
+                        let (img, st) = render_brute(&g, &ctx, args.samples, args.seed)?;
+                        lap(&mut times, &format!("{stem}: brute-force shading"), &mut t);
+                        (img, st.shaded, st.samples)
+                    }
+                };
             writeln!(
                 summary,
-                "{stem}: {gw}×{gh} G-buffer, {} surface pixels shaded with {} samples each ({} samples)",
-                st.shaded, args.samples, st.samples
+                "{stem}: {gw}×{gh} G-buffer, {shaded} surface pixels shaded with {} samples each ({samples} samples)",
+                args.samples
             )?;
             img
         };
@@ -266,15 +308,72 @@ fn lap(times: &mut Vec<(String, f64)>, name: &str, t: &mut Instant) {
     *t = Instant::now();
 }
 
-/// The GPU's bandwidth pass with the scene's environment and materials uploaded.
-fn gpu_bandwidth(
+/// The GPU's passes with the scene uploaded: the bandwidth pass (adaptive only) and the
+/// shading. A pass the GPU cannot run (no adapter, a material or light it does not take,
+/// pre-convolved lighting) is an error when `required`, else said and left to the CPU.
+struct GpuPasses {
+    ctx: GpuContext,
+    bandwidth: Option<(BandwidthScene, BandwidthPass)>,
+    shading: Option<(AdaptiveScene, AdaptivePass)>,
+}
+
+fn gpu_passes(
     ctx: &ShadingContext,
     env: &EnvironmentBandwidth,
-) -> anyhow::Result<(GpuContext, BandwidthScene, BandwidthPass)> {
-    let gctx = GpuContext::new()?;
-    let scene = BandwidthScene::from_context(&gctx, ctx, env)?;
-    let pass = BandwidthPass::new(&gctx)?;
-    Ok((gctx, scene, pass))
+    adaptive: bool,
+    lighting: Lighting,
+    required: bool,
+) -> anyhow::Result<Option<GpuPasses>> {
+    let fallback = |what: &str, e: anyhow::Error| -> anyhow::Result<()> {
+        if required {
+            Err(e.context(format!("--device gpu: {what}")))
+        } else {
+            eprintln!("{what} on the CPU: {e:#}");
+            Ok(())
+        }
+    };
+    let gctx = match GpuContext::new() {
+        Ok(c) => c,
+        Err(e) => {
+            fallback("the whole frame", e.into())?;
+            return Ok(None);
+        }
+    };
+    let bandwidth = if adaptive {
+        match BandwidthScene::from_context(&gctx, ctx, env)
+            .and_then(|s| Ok((s, BandwidthPass::new(&gctx)?)))
+        {
+            Ok(b) => Some(b),
+            Err(e) => {
+                fallback("the bandwidth pass", e.into())?;
+                None
+            }
+        }
+    } else {
+        None
+    };
+    let shading = if lighting == Lighting::Preconvolved {
+        fallback(
+            "shading",
+            anyhow::anyhow!("pre-convolved shading (--preconvolved) runs on the CPU only"),
+        )?;
+        None
+    } else {
+        match AdaptiveScene::from_context(&gctx, ctx)
+            .and_then(|s| Ok((s, AdaptivePass::new(&gctx)?)))
+        {
+            Ok(p) => Some(p),
+            Err(e) => {
+                fallback("shading", e.into())?;
+                None
+            }
+        }
+    };
+    Ok(Some(GpuPasses {
+        ctx: gctx,
+        bandwidth,
+        shading,
+    }))
 }
 
 /// The bandwidth buffer's maps (004 Fig. IV.13, IV.22): b_p, the level ℓ_p, N_p at the shaded

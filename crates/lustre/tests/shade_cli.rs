@@ -226,8 +226,9 @@ fn bandwidth_maps_of_an_environment_and_a_material() {
 #[test]
 fn adaptive_and_brute_force_renders_of_a_measured_paint_agree_and_bad_input_is_named() {
     // 004 ch. IV from the command line: gold-paint's neural BRDF under royal_esplanade_1k, a
-    // brute-force frame with 128 samples per pixel as the reference, an adaptive frame with
-    // 16 per shaded pixel (its bandwidth pass on lavapipe in CI) compared with it.
+    // brute-force frame with 128 samples per pixel on the CPU as the reference, an adaptive
+    // frame with 16 per shaded pixel on the GPU (lavapipe in CI: its bandwidth pass and its
+    // hierarchical shading) compared with it.
     let dir = tempfile::tempdir().expect("temp dir");
     let map = envmap!("royal_esplanade_1k.hdr");
     let base = [
@@ -244,7 +245,8 @@ fn adaptive_and_brute_force_renders_of_a_measured_paint_agree_and_bad_input_is_n
     let stdout = run_ok(
         lustre()
             .args(&common)
-            .args(["--method", "brute", "--samples", "128", "--out"])
+            .args(["--method", "brute", "--samples", "128", "--device", "cpu"])
+            .arg("--out")
             .arg(&brute),
     );
     assert!(stdout.contains("shaded with 128 samples each"), "{stdout}");
@@ -260,6 +262,8 @@ fn adaptive_and_brute_force_renders_of_a_measured_paint_agree_and_bad_input_is_n
                 "16",
                 "--exposure",
                 "0.5",
+                "--device",
+                "gpu",
             ])
             .arg("--compare-reference")
             .arg(&reference)
@@ -267,15 +271,18 @@ fn adaptive_and_brute_force_renders_of_a_measured_paint_agree_and_bad_input_is_n
             .arg(&adaptive),
     );
     assert!(
-        stdout.contains("up-sampled") && stdout.contains("hierarchical shading"),
+        stdout.contains("up-sampled") && stdout.contains("hierarchical shading (GPU"),
         "{stdout}"
     );
-    let psnr: f64 = stdout
-        .split("PSNR ")
-        .nth(1)
-        .and_then(|s| s.split(' ').next())
-        .and_then(|s| s.parse().ok())
-        .unwrap_or_else(|| panic!("no PSNR in {stdout}"));
+    let psnr_of = |stdout: &str| -> f64 {
+        stdout
+            .split("PSNR ")
+            .nth(1)
+            .and_then(|s| s.split(' ').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap_or_else(|| panic!("no PSNR in {stdout}"))
+    };
+    let psnr = psnr_of(&stdout);
     eprintln!("adaptive (16) vs brute force (128): {psnr:.2} dB");
     assert!(psnr > 30.0, "adaptive vs brute force: {psnr} dB");
     for f in [
@@ -314,7 +321,31 @@ fn adaptive_and_brute_force_renders_of_a_measured_paint_agree_and_bad_input_is_n
         ],
         "/no/such/sky.hdr",
     );
-    refused(&with(&["--method", "brute", "--device", "gpu"]), "CPU only");
+    refused(
+        &with(&["--method", "adaptive", "--device", "gpu", "--preconvolved"]),
+        "pre-convolved",
+    );
+    // Brute force on the GPU takes the CPU's points from the same seed: the frames agree to
+    // f32 rounding.
+    let brute_cpu = dir.path().join("brute16");
+    let brute_gpu = dir.path().join("brute16-gpu");
+    for (device, out) in [("cpu", &brute_cpu), ("gpu", &brute_gpu)] {
+        let mut cmd = lustre();
+        cmd.args(&common)
+            .args(["--method", "brute", "--samples", "16", "--device", device])
+            .arg("--out")
+            .arg(out);
+        if device == "gpu" {
+            cmd.arg("--compare-reference").arg(brute_cpu.join("frame.exr"));
+        }
+        let stdout = run_ok(&mut cmd);
+        if device == "gpu" {
+            assert!(stdout.contains("brute-force shading (GPU"), "{stdout}");
+            let psnr = psnr_of(&stdout);
+            eprintln!("brute force 16 spp, GPU vs CPU: {psnr:.2} dB");
+            assert!(psnr > 60.0, "GPU vs CPU brute force: {psnr} dB");
+        }
+    }
     refused(
         &with(&["--method", "adaptive", "--area-light", "/no/such/light.exr"]),
         "--area-light /no/such/light.exr",
