@@ -132,7 +132,7 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
     let half = (a.reference / 2).max(1);
     let (r1, _) = render_brute(&g, &ctx, half, 1_000_001)?;
     let (r2, _) = render_brute(&g, &ctx, half, 2_000_002)?;
-    let reference = mean(&r1, &r2)?;
+    let reference = r1.average(&r2)?;
     let exposure = 0.5 / reference.mean().max(1e-9);
     if let Some(dir) = &a.out {
         std::fs::create_dir_all(dir)?;
@@ -468,22 +468,6 @@ fn n_b_study(
     }
     println!();
     Ok(())
-}
-
-fn mean(a: &Image, b: &Image) -> anyhow::Result<Image> {
-    let data = a
-        .data
-        .iter()
-        .zip(&b.data)
-        .map(|(p, q)| {
-            [
-                0.5 * (p[0] + q[0]),
-                0.5 * (p[1] + q[1]),
-                0.5 * (p[2] + q[2]),
-            ]
-        })
-        .collect();
-    Ok(Image::from_data(a.width, a.height, data)?)
 }
 
 fn slug(s: &str) -> String {

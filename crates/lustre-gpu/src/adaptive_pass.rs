@@ -8,16 +8,19 @@
 //! What stays on the CPU: the G-buffer (ray traced), the levels ℓ_p and the variance target V
 //! (`BandwidthBuffer::assemble`, whose bisection on V needs every pixel's sum), then the
 //! upload of ℓ_p and of each pixel's quota 4π² S_p / V. Materials are measured BRDFs the GPU
-//! evaluates directly (neural BRDFs, MERL tables) with their tabulated CDFs; the lighting is
-//! the environment at full resolution (`Lighting::Direct`) plus area lights.
+//! evaluates directly (neural BRDFs, MERL tables) or fitted models (SGD, Cook–Torrance, Kurt:
+//! `fit_models`), each sampled by its tabulated CDFs; the lighting is the environment at full
+//! resolution (`Lighting::Direct`) plus area lights.
 
 use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry};
 use crate::context::GpuContext;
 use crate::error::{invalid, Result};
 use crate::gbuffer::map_read;
-use crate::measured::{pack_tabulated, GpuTabulatedDims, MeasuredBrdf};
+use crate::measured::{
+    pack_tabulated, GpuTabulatedDims, MaterialPipelines, PackedBrdfs, EVALUATED,
+};
 use crate::timer::{GpuTimer, Timing};
-use crate::wgsl::{compose, ENV_LIGHT, MEASURED, QMC, TYPES};
+use crate::wgsl::{ENV_LIGHT, QMC, TYPES};
 use glam::{DMat3, DVec3};
 use lustre_adaptive::buffer::{BandwidthBuffer, NO_LEVEL};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
@@ -120,6 +123,8 @@ pub struct AdaptiveScene {
     table: wgpu::Buffer,
     lights: wgpu::Buffer,
     light_texels: wgpu::Buffer,
+    fitted: wgpu::Buffer,
+    has_fitted: bool,
     light_count: u32,
     material_count: u32,
 }
@@ -130,7 +135,7 @@ impl AdaptiveScene {
     /// material, on one the GPU does not evaluate (only neural BRDFs and MERL tables) or that
     /// has no tabulated sampler.
     pub fn from_context(ctx: &GpuContext, shading: &ShadingContext) -> Result<Self> {
-        let mut table: Vec<f32> = vec![];
+        let mut brdfs = PackedBrdfs::default();
         let mut materials = vec![];
         for (k, m) in shading.scene.materials.iter().enumerate() {
             let tables = &shading.materials[k];
@@ -145,22 +150,19 @@ impl AdaptiveScene {
                 ));
             };
             let mut packed = None;
-            m.with_bsdf([0.5, 0.5], &mut |b| {
-                packed = MeasuredBrdf::of(b).map(|brdf| brdf.pack(&mut table));
-            });
+            m.with_bsdf([0.5, 0.5], &mut |b| packed = brdfs.push(b));
             let (kind, base, offset) = packed.ok_or_else(|| {
                 invalid(
                     "adaptive pass",
                     format!(
-                        "material {k} ({}): the GPU shades neural BRDFs (nbrdf:…) and MERL \
-                         tables (merl:… or a .binary file) only",
+                        "material {k} ({}): the GPU shades {EVALUATED} only",
                         tables.name
                     ),
                 )
             })?;
             let (words, dims) = pack_tabulated(sampler);
-            let tab_base = table.len() as u32;
-            table.extend(words);
+            let tab_base = brdfs.table.len() as u32;
+            brdfs.table.extend(words);
             materials.push(GpuMaterial {
                 kind,
                 base,
@@ -172,10 +174,10 @@ impl AdaptiveScene {
         if materials.is_empty() {
             return Err(invalid("adaptive pass", "a scene without materials"));
         }
-        if table.len() > u32::MAX as usize {
+        if brdfs.table.len() > u32::MAX as usize {
             return Err(invalid(
                 "adaptive pass",
-                format!("{} words of BRDF tables", table.len()),
+                format!("{} words of BRDF tables", brdfs.table.len()),
             ));
         }
         let env = shading.env;
@@ -215,9 +217,14 @@ impl AdaptiveScene {
             env: env_dims,
             to_world: env.to_world(),
             materials: init("adaptive materials", bytemuck::cast_slice(&materials)),
-            table: init("adaptive BRDF tables", bytemuck::cast_slice(&table)),
+            table: init("adaptive BRDF tables", bytemuck::cast_slice(&brdfs.table)),
             lights: init("adaptive lights", bytemuck::cast_slice(&lights)),
             light_texels: init("adaptive light texels", bytemuck::cast_slice(&light_texels)),
+            fitted: init(
+                "adaptive fitted models",
+                bytemuck::cast_slice(&brdfs.fitted_or_zero()),
+            ),
+            has_fitted: !brdfs.fitted.is_empty(),
             light_count: shading.lights.len() as u32,
             material_count: materials.len() as u32,
         })
@@ -226,8 +233,7 @@ impl AdaptiveScene {
 
 /// The compiled passes.
 pub struct AdaptivePass {
-    shade: wgpu::ComputePipeline,
-    shade_layout: wgpu::BindGroupLayout,
+    shade: MaterialPipelines,
     pyramid: wgpu::ComputePipeline,
     pyramid_layout: wgpu::BindGroupLayout,
     timer: GpuTimer,
@@ -246,12 +252,21 @@ pub struct GpuAdaptiveFrame {
 impl AdaptivePass {
     /// Compiles both passes.
     pub fn new(ctx: &GpuContext) -> Result<Self> {
-        let src = compose(&[&TYPES, &MEASURED, &QMC, &ENV_LIGHT], ADAPTIVE_PASS_WGSL);
         let mut entries = vec![uniform_entry(0)];
         entries.extend((1..=9).map(|b| storage_entry(b, true)));
-        entries.extend([storage_entry(10, false), storage_entry(11, false)]);
-        let (shade, shade_layout) =
-            compute_pipeline(ctx, "adaptive pass", "adaptive pass", &src, &entries)?;
+        entries.extend([
+            storage_entry(10, false),
+            storage_entry(11, false),
+            storage_entry(12, true),
+        ]);
+        let shade = MaterialPipelines::new(
+            ctx,
+            "adaptive pass",
+            &[&TYPES, &QMC, &ENV_LIGHT],
+            ADAPTIVE_PASS_WGSL,
+            12,
+            entries,
+        )?;
         let (pyramid, pyramid_layout) = compute_pipeline(
             ctx,
             "adaptive pyramid",
@@ -265,7 +280,6 @@ impl AdaptivePass {
         )?;
         Ok(Self {
             shade,
-            shade_layout,
             pyramid,
             pyramid_layout,
             timer: GpuTimer::new(ctx),
@@ -479,6 +493,7 @@ impl AdaptivePass {
                 (group, size)
             })
             .collect();
+        let (shade_pipeline, shade_layout) = self.shade.get(ctx, scene.has_fitted)?;
         let shade_groups: Vec<(wgpu::BindGroup, (u32, u32))> = (0..levels.count)
             .rev()
             .map(|k| {
@@ -494,7 +509,7 @@ impl AdaptivePass {
                 );
                 let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("adaptive pass"),
-                    layout: &self.shade_layout,
+                    layout: shade_layout,
                     entries: &[
                         entry(0, &ub),
                         entry(1, &surfel_buf),
@@ -508,6 +523,7 @@ impl AdaptivePass {
                         entry(9, &quota_buf),
                         entry(10, &values),
                         entry(11, &shaded),
+                        entry(12, &scene.fitted),
                     ],
                 });
                 let size = (w.div_ceil(1 << k) as u32, h.div_ceil(1 << k) as u32);
@@ -525,7 +541,7 @@ impl AdaptivePass {
                 pass.set_bind_group(0, group, &[]);
                 pass.dispatch_workgroups(gw.div_ceil(8), gh.div_ceil(8), 1);
             }
-            pass.set_pipeline(&self.shade);
+            pass.set_pipeline(shade_pipeline);
             for (group, (gw, gh)) in &shade_groups {
                 pass.set_bind_group(0, group, &[]);
                 pass.dispatch_workgroups(gw.div_ceil(8), gh.div_ceil(8), 1);

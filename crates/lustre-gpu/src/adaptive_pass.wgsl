@@ -5,7 +5,9 @@
 // block's max-filtered variance. CPU twin: lustre_adaptive::hierarchy::render_adaptive, its
 // shading lustre_adaptive::shading::ShadingContext::shade (Lighting::Direct): tabulated-CDF
 // BRDF samples and environment samples combined by the balance heuristic, plus area lights.
-// Imports: types, measured, qmc, env_light.
+// Materials: measured BRDFs evaluated directly (measured_eval: kinds 0 and 1) or fitted models
+// (bsdf.wgsl's records: kind 2, `base` indexing `fitted`). Imports: types, measured, qmc,
+// env_light, and bsdf with fitted models.
 
 struct Params {
     width: u32,
@@ -40,9 +42,10 @@ struct Surfel {
     wo: vec4<f32>,
 }
 
-// A material: measured_eval's kind, first word and MERL offset (f32 bits), then the first word
-// of its tabulated CDFs and their layout.
-struct MeasuredMaterial {
+// A material: its kind (0 neural BRDF, 1 MERL table, 2 fitted model), first word (kind 2: its
+// record in `fitted`) and MERL offset (f32 bits), then the first word of its tabulated CDFs
+// and their layout.
+struct PassMaterial {
     kind: u32,
     base: u32,
     offset: u32,
@@ -65,7 +68,7 @@ struct Light {
 @group(0) @binding(1) var<storage, read> surfels: array<Surfel>;
 @group(0) @binding(2) var<storage, read> env_texels: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> env_words: array<f32>;
-@group(0) @binding(4) var<storage, read> materials: array<MeasuredMaterial>;
+@group(0) @binding(4) var<storage, read> materials: array<PassMaterial>;
 @group(0) @binding(5) var<storage, read> table: array<f32>;
 @group(0) @binding(6) var<storage, read> lights: array<Light>;
 @group(0) @binding(7) var<storage, read> light_texels: array<vec4<f32>>;
@@ -76,6 +79,8 @@ struct Light {
 @group(0) @binding(10) var<storage, read_write> values: array<vec4<f32>>;
 // Per pixel: the level it was shaded at (255: not shaded) and its samples.
 @group(0) @binding(11) var<storage, read_write> shaded: array<vec2<u32>>;
+// Binding 12, the fitted models' records, and `material_eval` come with the pass's variant
+// (measured::material_eval_source).
 
 fn bsdf_table(i: u32) -> f32 {
     return table[i];
@@ -157,7 +162,6 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
     let nn = s.n.xyz;
     let wo = vec3<f32>(dot(s.wo.xyz, t), dot(s.wo.xyz, b), dot(s.wo.xyz, nn));
     let m = materials[bitcast<u32>(s.t.w)];
-    let offset = bitcast<f32>(m.offset);
     let n = max(n_in, 1u);
     let n_f = (n + 1u) / 2u;
     let n_l = n / 2u;
@@ -176,7 +180,7 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
         let den = f32(n_f) * tabulated_pdf(m.tab_base, m.dims, wi, wo)
             + f32(n_l) * env_pdf(params.env, dm);
         if (den > 0.0) {
-            let v = measured_eval(m.kind, m.base, offset, wi, wo) * (abs(wi.z) / den)
+            let v = material_eval(m.kind, m.base, bitcast<f32>(m.offset), wi, wo) * (abs(wi.z) / den)
                 * env_bilinear(params.env, dm);
             if (finite3(v)) {
                 sum += v;
@@ -193,7 +197,7 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
         let den = f32(n_f) * tabulated_pdf(m.tab_base, m.dims, wi, wo)
             + f32(n_l) * env_pdf(params.env, dm);
         if (den > 0.0) {
-            let v = measured_eval(m.kind, m.base, offset, wi, wo) * (abs(wi.z) / den)
+            let v = material_eval(m.kind, m.base, bitcast<f32>(m.offset), wi, wo) * (abs(wi.z) / den)
                 * env_bilinear(params.env, dm);
             if (finite3(v)) {
                 sum += v;
@@ -226,7 +230,7 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
             let tx = min(u32(uv.x * f32(tw)), tw - 1u);
             let ty = min(u32(uv.y * f32(th)), th - 1u);
             let emitted = light.radiance.xyz * light_texels[first + ty * tw + tx].xyz;
-            let v = measured_eval(m.kind, m.base, offset, wi, wo) * (abs(wi.z) * g) * emitted;
+            let v = material_eval(m.kind, m.base, bitcast<f32>(m.offset), wi, wo) * (abs(wi.z) * g) * emitted;
             if (finite3(v)) {
                 sum += v;
             }

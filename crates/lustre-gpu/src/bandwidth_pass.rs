@@ -3,15 +3,16 @@
 //! Its CPU twin is `lustre_adaptive::buffer::predict_pixels` (built on
 //! `lustre_freq::pixel::predict`); the levels, sample counts and pyramids are assembled from its
 //! output on the CPU (`BandwidthBuffer::assemble`). Materials are measured BRDFs evaluated
-//! directly: neural BRDFs (004's scenes) and MERL tables.
+//! directly (neural BRDFs, 004's scenes; MERL tables) and fitted models (SGD, Cook–Torrance,
+//! Kurt).
 
-use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry};
+use crate::compute::{buffer_init, storage_entry, uniform_entry};
 use crate::context::GpuContext;
 use crate::error::{invalid, Result};
 use crate::gbuffer::map_read;
-use crate::measured::MeasuredBrdf;
+use crate::measured::{MaterialPipelines, MeasuredBrdf, PackedBrdfs, EVALUATED};
 use crate::timer::{GpuTimer, Timing};
-use crate::wgsl::{compose, ENV_LIGHT, FREQUENCY, MEASURED, TYPES};
+use crate::wgsl::{ENV_LIGHT, FREQUENCY, TYPES};
 use glam::DVec3;
 use lustre_adaptive::buffer::PixelEstimate;
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
@@ -78,14 +79,15 @@ pub struct BandwidthScene {
     materials: wgpu::Buffer,
     table: wgpu::Buffer,
     brdf_bandwidth: wgpu::Buffer,
+    fitted: wgpu::Buffer,
+    has_fitted: bool,
     material_count: u32,
     grid: (u32, u32),
 }
 
 /// The compiled pass.
 pub struct BandwidthPass {
-    pipeline: wgpu::ComputePipeline,
-    layout: wgpu::BindGroupLayout,
+    pipelines: MaterialPipelines,
     timer: GpuTimer,
 }
 
@@ -100,13 +102,14 @@ impl BandwidthScene {
     ) -> Result<Self> {
         let mut packed = Packed::default();
         for (k, (brdf, b)) in materials.iter().enumerate() {
-            packed.push(k, brdf, b)?;
+            let record = brdf.pack(&mut packed.brdfs.table);
+            packed.push(k, record, b)?;
         }
         Self::upload(ctx, map, map_bandwidth, packed)
     }
 
     /// The environment and materials of an adaptive-shading context: every material must be a
-    /// neural BRDF or a MERL table (the error names the first that is not).
+    /// neural BRDF, a MERL table or a fitted model (the error names the first that is not).
     pub fn from_context(
         ctx: &GpuContext,
         shading: &ShadingContext,
@@ -120,27 +123,19 @@ impl BandwidthScene {
         }
         let mut packed = Packed::default();
         for (k, m) in shading.scene.materials.iter().enumerate() {
-            let mut done: Option<Result<()>> = None;
             let tables = &shading.materials[k];
-            m.with_bsdf([0.5, 0.5], &mut |b| {
-                done = Some(match MeasuredBrdf::of(b) {
-                    Some(brdf) => packed.push(k, &brdf, &tables.bandwidth),
-                    None => Err(invalid(
-                        "bandwidth pass",
-                        format!(
-                            "material {k} ({}): the GPU bandwidth pass evaluates neural BRDFs \
-                             (nbrdf:…) and MERL tables (merl:…) only",
-                            tables.name
-                        ),
-                    )),
-                });
-            });
-            done.unwrap_or_else(|| {
-                Err(invalid(
+            let mut brdf = None;
+            m.with_bsdf([0.5, 0.5], &mut |b| brdf = packed.brdfs.push(b));
+            let brdf = brdf.ok_or_else(|| {
+                invalid(
                     "bandwidth pass",
-                    format!("material {k} gave no BSDF"),
-                ))
+                    format!(
+                        "material {k} ({}): the GPU bandwidth pass evaluates {EVALUATED} only",
+                        tables.name
+                    ),
+                )
             })?;
+            packed.push(k, brdf, &tables.bandwidth)?;
         }
         Self::upload(ctx, env.map, &env.bandwidth, packed)
     }
@@ -187,7 +182,13 @@ impl BandwidthScene {
             table: buffer_init(
                 ctx,
                 "bandwidth BRDFs",
-                bytemuck::cast_slice(&packed.table),
+                bytemuck::cast_slice(&packed.brdfs.table),
+                storage,
+            ),
+            fitted: buffer_init(
+                ctx,
+                "bandwidth fitted models",
+                bytemuck::cast_slice(&packed.brdfs.fitted_or_zero()),
                 storage,
             ),
             brdf_bandwidth: buffer_init(
@@ -196,6 +197,7 @@ impl BandwidthScene {
                 bytemuck::cast_slice(&packed.bandwidth),
                 storage,
             ),
+            has_fitted: !packed.brdfs.fitted.is_empty(),
             material_count: packed.ids.len() as u32,
             grid: (grid.incident as u32, grid.out as u32),
         })
@@ -206,14 +208,15 @@ impl BandwidthScene {
 #[derive(Default)]
 struct Packed {
     ids: Vec<[u32; 4]>,
-    table: Vec<f32>,
+    brdfs: PackedBrdfs,
     bandwidth: Vec<f32>,
     grid: Option<BrdfBandwidthOptions>,
 }
 
 impl Packed {
-    /// Appends material `k`; errors when its bandwidth table's grids differ from the first's.
-    fn push(&mut self, k: usize, brdf: &MeasuredBrdf, b: &BrdfBandwidth) -> Result<()> {
+    /// Appends material `k` (its BRDF's record, already packed); errors when its bandwidth
+    /// table's grids differ from the first's.
+    fn push(&mut self, k: usize, brdf: (u32, u32, f32), b: &BrdfBandwidth) -> Result<()> {
         let grid = *self.grid.get_or_insert(b.options);
         if b.options != grid {
             return Err(invalid(
@@ -224,7 +227,7 @@ impl Packed {
                 ),
             ));
         }
-        let (kind, base, offset) = brdf.pack(&mut self.table);
+        let (kind, base, offset) = brdf;
         self.ids
             .push([kind, base, self.bandwidth.len() as u32, offset.to_bits()]);
         self.bandwidth.extend(b.data.iter().map(|&v| v as f32));
@@ -287,10 +290,6 @@ impl BandwidthPass {
 
     /// Compiles the pass.
     pub fn new(ctx: &GpuContext) -> Result<Self> {
-        let src = compose(
-            &[&TYPES, &MEASURED, &FREQUENCY, &ENV_LIGHT],
-            BANDWIDTH_PASS_WGSL,
-        );
         let entries = [
             uniform_entry(0),
             storage_entry(1, true),
@@ -299,12 +298,18 @@ impl BandwidthPass {
             storage_entry(4, true),
             storage_entry(5, true),
             storage_entry(6, false),
+            storage_entry(7, true),
         ];
-        let (pipeline, layout) =
-            compute_pipeline(ctx, "bandwidth pass", "bandwidth pass", &src, &entries)?;
+        let pipelines = MaterialPipelines::new(
+            ctx,
+            "bandwidth pass",
+            &[&TYPES, &FREQUENCY, &ENV_LIGHT],
+            BANDWIDTH_PASS_WGSL,
+            7,
+            entries.to_vec(),
+        )?;
         Ok(Self {
-            pipeline,
-            layout,
+            pipelines,
             timer: GpuTimer::new(ctx),
         })
     }
@@ -384,9 +389,10 @@ impl BandwidthPass {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let (pipeline, layout) = self.pipelines.get(ctx, scene.has_fitted)?;
         let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("bandwidth pass"),
-            layout: &self.layout,
+            layout,
             entries: &[
                 entry(0, &params_buf),
                 entry(1, &surfel_buf),
@@ -395,6 +401,7 @@ impl BandwidthPass {
                 entry(4, &scene.table),
                 entry(5, &scene.brdf_bandwidth),
                 entry(6, &out),
+                entry(7, &scene.fitted),
             ],
         });
         let mut enc = ctx
@@ -407,7 +414,7 @@ impl BandwidthPass {
                 label: Some("bandwidth pass"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&self.pipeline);
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &group, &[]);
             pass.dispatch_workgroups((pixels.len() as u32).div_ceil(64), 1, 1);
         }

@@ -1,8 +1,9 @@
 // The bandwidth pass (004 §IV.4.1, Fig. IV.11 b): per G-buffer pixel, the prediction of
 // lustre_freq::pixel::predict from n_b directions under a distant environment, and the BRDF's
 // largest bandwidth over them and the mirror direction (lustre_adaptive::buffer::predict_pixels).
-// Materials are measured BRDFs (measured.wgsl's measured_eval: neural BRDFs, MERL tables).
-// Imports: types, measured, frequency, env_light.
+// Materials are measured BRDFs (measured.wgsl's measured_eval: neural BRDFs, MERL tables) and
+// fitted models (bsdf.wgsl's records). Imports: types, measured, frequency, env_light, and bsdf
+// with fitted models.
 
 struct Params {
     pixels: u32,
@@ -40,12 +41,15 @@ struct Prediction {
 @group(0) @binding(1) var<storage, read> surfels: array<Surfel>;
 // Equirect texels: RGB, and the local bandwidth in w.
 @group(0) @binding(2) var<storage, read> environment: array<vec4<f32>>;
-// Per material: its kind (measured_eval), the word where its BRDF starts in `table`, where its
-// bandwidth table starts in `brdf_bandwidth`, and its MERL node offset (f32 bits).
+// Per material: its kind (0 neural BRDF, 1 MERL table, 2 fitted model), the word where its BRDF
+// starts in `table` (kind 2: its record in `fitted`), where its bandwidth table starts in
+// `brdf_bandwidth`, and its MERL node offset (f32 bits).
 @group(0) @binding(3) var<storage, read> materials: array<vec4<u32>>;
 @group(0) @binding(4) var<storage, read> table: array<f32>;
 @group(0) @binding(5) var<storage, read> brdf_bandwidth: array<f32>;
 @group(0) @binding(6) var<storage, read_write> predictions: array<Prediction>;
+// Binding 7, the fitted models' records, and `material_eval` come with the pass's variant
+// (measured::material_eval_source).
 
 fn bsdf_table(i: u32) -> f32 {
     return table[i];
@@ -108,7 +112,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let wi_l = freq_cosine_direction(k, params.n_b);
         let wi = t * wi_l.x + b * wi_l.y + n * wi_l.z;
         let radiance = luminance(env_radiance(wi));
-        let rho = luminance(measured_eval(m.x, m.y, bitcast<f32>(m.w), wi_l, wo));
+        let rho = luminance(material_eval(m.x, m.y, bitcast<f32>(m.w), wi_l, wo));
         let nu_light = env_bandwidth(wi);
         let nu_brdf = brdf_bandwidth[m.z + freq_brdf_index(wi_l, wo, incident, cells)];
         brdf_max = max(brdf_max, nu_brdf);

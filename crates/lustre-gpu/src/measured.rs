@@ -2,10 +2,63 @@
 //! through a pass's `bsdf_table`): a MERL table's stored values, a neural BRDF's weights, and
 //! the tabulated CDFs of [`lustre_brdf::tabulated::TabulatedSampler`].
 
+use crate::compute::compute_pipeline;
+use crate::context::GpuContext;
+use crate::error::{invalid, Result};
+use crate::fit_models::pack_fit;
+use crate::frame_shade::GpuBsdf;
+use crate::wgsl::{compose, Module, BSDF, MEASURED};
 use lustre_brdf::measured::merl::{MerlTable, BINS, RES_PHI_D, RES_THETA_D, RES_THETA_H};
 use lustre_brdf::measured::nbrdf::Nbrdf;
 use lustre_brdf::tabulated::TabulatedSampler;
 use lustre_brdf::Bsdf;
+
+/// The materials of a pass that evaluates any BRDF it takes through its `material_eval`: the
+/// measured BRDFs' words (read through `bsdf_table`) and the fitted models' records (kind 2,
+/// `base` indexing them; `fit_models::pack_fit`).
+#[derive(Default)]
+pub struct PackedBrdfs {
+    /// The measured BRDFs' words.
+    pub table: Vec<f32>,
+    /// The fitted models' records.
+    pub fitted: Vec<GpuBsdf>,
+}
+
+/// `material_eval`'s kind of a fitted model.
+pub const KIND_FITTED: u32 = 2;
+
+impl PackedBrdfs {
+    /// Appends `b`; returns (kind, first word or record, MERL node offset), or `None` for a
+    /// model the GPU does not evaluate this way.
+    pub fn push(&mut self, b: &dyn Bsdf) -> Option<(u32, u32, f32)> {
+        if let Some(brdf) = MeasuredBrdf::of(b) {
+            return Some(brdf.pack(&mut self.table));
+        }
+        let (kind, p) = pack_fit(b).ok()?;
+        self.fitted.push(GpuBsdf {
+            kind,
+            flags: 0,
+            pad0: 0,
+            pad1: 0,
+            p,
+        });
+        Some((KIND_FITTED, (self.fitted.len() - 1) as u32, 0.0))
+    }
+
+    /// The fitted records, one zero record when there is none (a binding may not be empty).
+    pub fn fitted_or_zero(&self) -> Vec<GpuBsdf> {
+        if self.fitted.is_empty() {
+            vec![bytemuck::Zeroable::zeroed()]
+        } else {
+            self.fitted.clone()
+        }
+    }
+}
+
+/// What the passes that take any material evaluate: neural BRDFs, MERL tables (a `.binary`
+/// file) and fitted models (SGD, Cook–Torrance, Kurt).
+pub const EVALUATED: &str =
+    "neural BRDFs (nbrdf:…), MERL tables (a .binary file) and fitted models (SGD, Cook–Torrance, Kurt)";
 
 /// A measured BRDF the GPU evaluates directly (`measured_eval` of `wgsl/measured.wgsl`).
 #[derive(Clone, Copy, Debug)]
@@ -104,4 +157,92 @@ pub fn pack_tabulated(sampler: &TabulatedSampler) -> (Vec<f32>, GpuTabulatedDims
         defensive: o.defensive as f32,
     };
     (out, dims)
+}
+
+/// `material_eval(kind, base, offset, wi, wo)` for a pass, with its `fitted` records at
+/// `binding`: with `fitted`, kind 2 evaluates bsdf.wgsl's record `base`; without, the binding
+/// is bound but unread and only measured BRDFs are evaluated (the pass then need not import
+/// bsdf.wgsl, every model of which llvmpipe compiles into the pass).
+fn material_eval_source(binding: u32, fitted: bool) -> String {
+    if fitted {
+        format!(
+            "@group(0) @binding({binding}) var<storage, read> fitted: array<GpuBsdf>;\n\n\
+             fn material_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>,\n                 \
+             wo: vec3<f32>) -> vec3<f32> {{\n    \
+             if (kind == {KIND_FITTED}u) {{\n        return bsdf_eval(fitted[base], wi, wo);\n    }}\n    \
+             return measured_eval(kind, base, offset, wi, wo);\n}}\n\n"
+        )
+    } else {
+        format!(
+            "// No fitted model among the materials: the records are bound but unread.\n\
+             @group(0) @binding({binding}) var<storage, read> fitted: array<vec4<f32>>;\n\n\
+             fn material_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>,\n                 \
+             wo: vec3<f32>) -> vec3<f32> {{\n    \
+             return measured_eval(kind, base, offset, wi, wo);\n}}\n\n"
+        )
+    }
+}
+
+/// A pass that evaluates its materials through `material_eval`, compiled in two variants: for
+/// measured BRDFs only (at once), and with the fitted models (on first need).
+pub(crate) struct MaterialPipelines {
+    label: &'static str,
+    imports: Vec<&'static Module>,
+    pass: &'static str,
+    binding: u32,
+    entries: Vec<wgpu::BindGroupLayoutEntry>,
+    compiled: [Option<(wgpu::ComputePipeline, wgpu::BindGroupLayout)>; 2],
+}
+
+impl MaterialPipelines {
+    /// Compiles the measured-only variant of `pass` (its `fitted` records at `binding`, the
+    /// modules `imports` besides measured.wgsl).
+    pub(crate) fn new(
+        ctx: &GpuContext,
+        label: &'static str,
+        imports: &[&'static Module],
+        pass: &'static str,
+        binding: u32,
+        entries: Vec<wgpu::BindGroupLayoutEntry>,
+    ) -> Result<Self> {
+        let mut p = Self {
+            label,
+            imports: imports.to_vec(),
+            pass,
+            binding,
+            entries,
+            compiled: [None, None],
+        };
+        p.get(ctx, false)?;
+        Ok(p)
+    }
+
+    /// The variant for materials with (`fitted`) or without fitted models.
+    pub(crate) fn get(
+        &mut self,
+        ctx: &GpuContext,
+        fitted: bool,
+    ) -> Result<&(wgpu::ComputePipeline, wgpu::BindGroupLayout)> {
+        let slot = &mut self.compiled[usize::from(fitted)];
+        if slot.is_none() {
+            let mut imports = self.imports.clone();
+            imports.push(&MEASURED);
+            if fitted {
+                imports.push(&BSDF);
+            }
+            let src = compose(
+                &imports,
+                &(material_eval_source(self.binding, fitted) + self.pass),
+            );
+            *slot = Some(compute_pipeline(
+                ctx,
+                self.label,
+                self.label,
+                &src,
+                &self.entries,
+            )?);
+        }
+        slot.as_ref()
+            .ok_or_else(|| invalid(self.label, "the pipeline was not compiled"))
+    }
 }

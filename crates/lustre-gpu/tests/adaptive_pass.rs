@@ -1,6 +1,6 @@
 //! Adaptive shading on the GPU (`adaptive_pass.wgsl`, `adaptive_pyramid.wgsl`) against its CPU
 //! twin (`lustre_adaptive::hierarchy::{render_adaptive, render_brute}`) on 004's line-up under
-//! royal_esplanade_1k: neural BRDFs, a MERL table and a textured area light. Both take the same
+//! royal_esplanade_1k: neural BRDFs, a MERL table, a fitted SGD model and a textured area light. Both take the same
 //! points from the same seeds; the GPU computes in f32. GPU tests fail (never skip) without an
 //! adapter.
 
@@ -66,7 +66,7 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
     let map = lustre_env::shared_data_dir().join("envmaps/royal_esplanade_1k.hdr");
     let env = read_environment(&map).expect("royal_esplanade_1k.hdr");
     let scene = lustre_scene::builtin::lineup(
-        ["nbrdf:gold-paint", &merl_spec, "nbrdf:red-metallic-paint"],
+        ["nbrdf:gold-paint", &merl_spec, "sgd:red-metallic-paint"],
         "nbrdf:white-marble",
         Some(env),
     )

@@ -192,6 +192,24 @@ impl Image {
         s / (3 * self.data.len()).max(1) as f64
     }
 
+    /// The per-pixel mean of two images of the same size (e.g. a reference from two independent
+    /// halves). Errors when the sizes differ.
+    pub fn average(&self, other: &Image) -> Result<Image> {
+        if (self.width, self.height) != (other.width, other.height) {
+            return Err(ShadeError::Parameter(format!(
+                "averaging a {} × {} image with a {} × {} one",
+                self.width, self.height, other.width, other.height
+            )));
+        }
+        let data = self
+            .data
+            .iter()
+            .zip(&other.data)
+            .map(|(p, q)| std::array::from_fn(|c| 0.5 * (p[c] + q[c])))
+            .collect();
+        Image::from_data(self.width, self.height, data)
+    }
+
     /// Writes the linear values as a 32-bit float RGB OpenEXR file atomically.
     pub fn write_exr(&self, path: &Path) -> Result<()> {
         let raw: Vec<f32> = self.data.iter().flatten().copied().collect();

@@ -169,7 +169,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 scale: rule,
                 rate: args.rate,
             };
-            let buffer = match gpu.as_mut().and_then(|p| Some((&p.ctx, p.bandwidth.as_mut()?))) {
+            let buffer = match gpu
+                .as_mut()
+                .and_then(|p| Some((&p.ctx, p.bandwidth.as_mut()?)))
+            {
                 Some((gctx, (scene, pass))) => {
                     let (estimates, timing) = pass.predict(gctx, scene, &g, &ctx, args.n_b)?;
                     if let Some(ms) = timing.gpu_ms {
@@ -196,7 +199,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                     b
                 }
             };
-            let f = match gpu.as_mut().and_then(|p| Some((&p.ctx, p.shading.as_mut()?))) {
+            let f = match gpu
+                .as_mut()
+                .and_then(|p| Some((&p.ctx, p.shading.as_mut()?)))
+            {
                 Some((gctx, (scene, pass))) => {
                     let out = pass.render(gctx, scene, &g, &buffer, args.seed)?;
                     if let Some(ms) = out.timing.gpu_ms {
@@ -230,30 +236,32 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             )?;
             f.image
         } else {
-            let (img, shaded, samples) =
-                match gpu.as_mut().and_then(|p| Some((&p.ctx, p.shading.as_mut()?))) {
-                    Some((gctx, (scene, pass))) => {
-                        let out = pass.render_brute(gctx, scene, &g, args.samples, args.seed)?;
-                        if let Some(ms) = out.timing.gpu_ms {
-                            times.push((
-                                format!("{stem}: brute-force shading (GPU timestamps)"),
-                                ms * 1e-3,
-                            ));
-                        }
-                        lap(
-                            &mut times,
-                            &format!("{stem}: brute-force shading (GPU, upload, read-back)"),
-                            &mut t,
-                        );
-                        let st = out.frame.stats;
-                        (out.frame.image, st.shaded, st.samples)
+            let (img, shaded, samples) = match gpu
+                .as_mut()
+                .and_then(|p| Some((&p.ctx, p.shading.as_mut()?)))
+            {
+                Some((gctx, (scene, pass))) => {
+                    let out = pass.render_brute(gctx, scene, &g, args.samples, args.seed)?;
+                    if let Some(ms) = out.timing.gpu_ms {
+                        times.push((
+                            format!("{stem}: brute-force shading (GPU timestamps)"),
+                            ms * 1e-3,
+                        ));
                     }
-                    None => {
-                        let (img, st) = render_brute(&g, &ctx, args.samples, args.seed)?;
-                        lap(&mut times, &format!("{stem}: brute-force shading"), &mut t);
-                        (img, st.shaded, st.samples)
-                    }
-                };
+                    lap(
+                        &mut times,
+                        &format!("{stem}: brute-force shading (GPU, upload, read-back)"),
+                        &mut t,
+                    );
+                    let st = out.frame.stats;
+                    (out.frame.image, st.shaded, st.samples)
+                }
+                None => {
+                    let (img, st) = render_brute(&g, &ctx, args.samples, args.seed)?;
+                    lap(&mut times, &format!("{stem}: brute-force shading"), &mut t);
+                    (img, st.shaded, st.samples)
+                }
+            };
             writeln!(
                 summary,
                 "{stem}: {gw}×{gh} G-buffer, {shaded} surface pixels shaded with {} samples each ({samples} samples)",

@@ -336,7 +336,8 @@ fn adaptive_and_brute_force_renders_of_a_measured_paint_agree_and_bad_input_is_n
             .arg("--out")
             .arg(out);
         if device == "gpu" {
-            cmd.arg("--compare-reference").arg(brute_cpu.join("frame.exr"));
+            cmd.arg("--compare-reference")
+                .arg(brute_cpu.join("frame.exr"));
         }
         let stdout = run_ok(&mut cmd);
         if device == "gpu" {
