@@ -155,7 +155,16 @@ fn shading_seed(k: u32) -> vec2<u32> {
     return splitmix64_next(&state);
 }
 
-// ShadingContext::shade at surfel s with n samples (Lighting::Direct).
+// Draw k of SplitMix64(seed) as next_unit returns it (the generator is a counter: state k + 1
+// is seed + (k + 1) · γ).
+fn draw_unit(seed: vec2<u32>, k: u32) -> f32 {
+    var state = add64(seed, mul64(vec2<u32>(k, 0u), vec2<u32>(0x7F4A7C15u, 0x9E3779B9u)));
+    return next_unit(&state);
+}
+
+// ShadingContext::shade at surfel s with n samples (Lighting::Direct): ⌈n/2⌉ BRDF samples,
+// ⌊n/2⌋ environment samples, then n points per area light, in the CPU's order, through one
+// loop so that the material's evaluation is compiled once.
 fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
     let t = s.t.xyz;
     let b = s.b.xyz;
@@ -165,55 +174,51 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
     let n = max(n_in, 1u);
     let n_f = (n + 1u) / 2u;
     let n_l = n / 2u;
-    var rng = seed;
-    let rot = vec4<f32>(next_unit(&rng), next_unit(&rng), next_unit(&rng), next_unit(&rng));
+    let rot = vec4<f32>(draw_unit(seed, 0u), draw_unit(seed, 1u), draw_unit(seed, 2u),
+                        draw_unit(seed, 3u));
+    let total = n_f + n_l + params.lights * n;
     var sum = vec3<f32>(0.0);
-    for (var k = 0u; k < n_f; k++) {
-        let u = fract(hammersley(k, n_f) + rot.xy);
-        let smp = tabulated_sample(m.tab_base, m.dims, wo, u.x, u.y);
-        if (smp.w == 0.0) {
-            continue;
-        }
-        let wi = smp.xyz;
-        let d = t * wi.x + b * wi.y + nn * wi.z;
-        let dm = to_map(d);
-        let den = f32(n_f) * tabulated_pdf(m.tab_base, m.dims, wi, wo)
-            + f32(n_l) * env_pdf(params.env, dm);
-        if (den > 0.0) {
-            let v = material_eval(m.kind, m.base, bitcast<f32>(m.offset), wi, wo) * (abs(wi.z) / den)
-                * env_bilinear(params.env, dm);
-            if (finite3(v)) {
-                sum += v;
+    for (var k = 0u; k < total; k++) {
+        var wi = vec3<f32>(0.0);
+        // What multiplies f(wi, wo) (0: no contribution).
+        var weight = vec3<f32>(0.0);
+        if (k < n_f + n_l) {
+            // The BRDF's samples by its tabulated CDFs, then the environment's.
+            var d = vec3<f32>(0.0);
+            if (k < n_f) {
+                let u = fract(hammersley(k, n_f) + rot.xy);
+                let smp = tabulated_sample(m.tab_base, m.dims, wo, u.x, u.y);
+                if (smp.w == 0.0) {
+                    continue;
+                }
+                wi = smp.xyz;
+                d = t * wi.x + b * wi.y + nn * wi.z;
+            } else {
+                let u = fract(hammersley(k - n_f, n_l) + rot.zw);
+                let e = env_sample(params.env, u.x, u.y);
+                // The map's direction in world space, then in the shading frame.
+                d = params.to_map0.xyz * e.x + params.to_map1.xyz * e.y
+                    + params.to_map2.xyz * e.z;
+                wi = vec3<f32>(dot(d, t), dot(d, b), dot(d, nn));
             }
-        }
-    }
-    for (var k = 0u; k < n_l; k++) {
-        let u = fract(hammersley(k, n_l) + rot.zw);
-        let e = env_sample(params.env, u.x, u.y);
-        // The map's direction in world space, then in the shading frame.
-        let d = params.to_map0.xyz * e.x + params.to_map1.xyz * e.y + params.to_map2.xyz * e.z;
-        let wi = vec3<f32>(dot(d, t), dot(d, b), dot(d, nn));
-        let dm = to_map(d);
-        let den = f32(n_f) * tabulated_pdf(m.tab_base, m.dims, wi, wo)
-            + f32(n_l) * env_pdf(params.env, dm);
-        if (den > 0.0) {
-            let v = material_eval(m.kind, m.base, bitcast<f32>(m.offset), wi, wo) * (abs(wi.z) / den)
-                * env_bilinear(params.env, dm);
-            if (finite3(v)) {
-                sum += v;
+            let dm = to_map(d);
+            let den = f32(n_f) * tabulated_pdf(m.tab_base, m.dims, wi, wo)
+                + f32(n_l) * env_pdf(params.env, dm);
+            if (!(den > 0.0)) {
+                continue;
             }
-        }
-    }
-    // Area lights: n points per light, stratified over its area (the rotations are drawn after
-    // the four above, one pair per light, as on the CPU).
-    for (var l = 0u; l < params.lights; l++) {
-        let r = vec2<f32>(next_unit(&rng), next_unit(&rng));
-        let light = lights[l];
-        let tw = u32(light.corner.w);
-        let th = u32(light.edge_u.w);
-        let first = u32(light.edge_v.w);
-        for (var k = 0u; k < n; k++) {
-            let uv = fract(hammersley(k, n) + r);
+            weight = env_bilinear(params.env, dm) * (abs(wi.z) / den);
+        } else {
+            // Area light l's point j, stratified over its area; its rotation is the pair of
+            // draws after the four above.
+            let l = (k - n_f - n_l) / n;
+            let j = (k - n_f - n_l) % n;
+            let r = vec2<f32>(draw_unit(seed, 4u + 2u * l), draw_unit(seed, 5u + 2u * l));
+            let light = lights[l];
+            let tw = u32(light.corner.w);
+            let th = u32(light.edge_u.w);
+            let first = u32(light.edge_v.w);
+            let uv = fract(hammersley(j, n) + r);
             let q = light.corner.xyz + light.edge_u.xyz * uv.x + light.edge_v.xyz * uv.y;
             let dv = q - s.p.xyz;
             let dist = length(dv);
@@ -225,15 +230,15 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
             if (cos_l <= 0.0) {
                 continue;
             }
-            let wi = vec3<f32>(dot(w, t), dot(w, b), dot(w, nn));
+            wi = vec3<f32>(dot(w, t), dot(w, b), dot(w, nn));
             let g = cos_l * light.radiance.w / (dist * dist * f32(n));
             let tx = min(u32(uv.x * f32(tw)), tw - 1u);
             let ty = min(u32(uv.y * f32(th)), th - 1u);
-            let emitted = light.radiance.xyz * light_texels[first + ty * tw + tx].xyz;
-            let v = material_eval(m.kind, m.base, bitcast<f32>(m.offset), wi, wo) * (abs(wi.z) * g) * emitted;
-            if (finite3(v)) {
-                sum += v;
-            }
+            weight = light.radiance.xyz * light_texels[first + ty * tw + tx].xyz * (abs(wi.z) * g);
+        }
+        let v = material_eval(m.kind, m.base, bitcast<f32>(m.offset), wi, wo) * weight;
+        if (finite3(v)) {
+            sum += v;
         }
     }
     return sum;

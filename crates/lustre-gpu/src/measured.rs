@@ -10,6 +10,8 @@ use crate::frame_shade::GpuBsdf;
 use crate::wgsl::{compose, Module, BSDF, MEASURED};
 use lustre_brdf::measured::merl::{MerlTable, BINS, RES_PHI_D, RES_THETA_D, RES_THETA_H};
 use lustre_brdf::measured::nbrdf::Nbrdf;
+use lustre_brdf::measured::rgl::RglBsdf;
+use lustre_brdf::measured::rgl_warp::Marginal2D;
 use lustre_brdf::tabulated::TabulatedSampler;
 use lustre_brdf::Bsdf;
 
@@ -56,9 +58,9 @@ impl PackedBrdfs {
 }
 
 /// What the passes that take any material evaluate: neural BRDFs, MERL tables (a `.binary`
-/// file) and fitted models (SGD, Cook–Torrance, Kurt).
-pub const EVALUATED: &str =
-    "neural BRDFs (nbrdf:…), MERL tables (a .binary file) and fitted models (SGD, Cook–Torrance, Kurt)";
+/// file), RGL tensors (a `.bsdf` file) and fitted models (SGD, Cook–Torrance, Kurt).
+pub const EVALUATED: &str = "neural BRDFs (nbrdf:…), MERL tables (a .binary file), RGL tensors \
+    (a .bsdf file) and fitted models (SGD, Cook–Torrance, Kurt)";
 
 /// A measured BRDF the GPU evaluates directly (`measured_eval` of `wgsl/measured.wgsl`).
 #[derive(Clone, Copy, Debug)]
@@ -67,6 +69,8 @@ pub enum MeasuredBrdf<'a> {
     Nbrdf(&'a Nbrdf),
     /// A MERL table (kind 1).
     Merl(&'a MerlTable),
+    /// An RGL tensor (kind 3).
+    Rgl(&'a RglBsdf),
 }
 
 impl<'a> MeasuredBrdf<'a> {
@@ -76,7 +80,10 @@ impl<'a> MeasuredBrdf<'a> {
         if let Some(n) = any.downcast_ref::<Nbrdf>() {
             return Some(Self::Nbrdf(n));
         }
-        any.downcast_ref::<MerlTable>().map(Self::Merl)
+        if let Some(m) = any.downcast_ref::<MerlTable>() {
+            return Some(Self::Merl(m));
+        }
+        any.downcast_ref::<RglBsdf>().map(Self::Rgl)
     }
 
     /// Appends its words to `table`; returns `measured_eval`'s (kind, first word, node offset).
@@ -90,6 +97,10 @@ impl<'a> MeasuredBrdf<'a> {
             Self::Merl(m) => {
                 table.extend(pack_merl(m));
                 (1, base, m.convention().offset() as f32)
+            }
+            Self::Rgl(r) => {
+                table.extend(pack_rgl(r));
+                (3, base, 0.0)
             }
         }
     }
@@ -119,6 +130,49 @@ pub fn pack_merl(table: &MerlTable) -> Vec<f32> {
 /// [`Nbrdf::parameters`]' order (w1, b1, w2, b2, w3, b3), 675 of them.
 pub fn pack_nbrdf(net: &Nbrdf) -> Vec<f32> {
     net.parameters().iter().map(|&v| v as f32).collect()
+}
+
+/// The words of an RGL tensor for `rgl_eval`: a 16-word header (isotropic, the Jacobian flag,
+/// the symmetry reduction, then at words 4–8 the offsets from the record's start of its five
+/// tables: NDF, σ, VNDF, luminance, RGB), then each table as [`pack_marginal`] lays it out.
+/// Counts and offsets are stored as f32 values (exact: a record is far below 2²⁴ words).
+pub fn pack_rgl(r: &RglBsdf) -> Vec<f32> {
+    let mut out = vec![0.0f32; 16];
+    out[0] = f32::from(u8::from(r.is_isotropic()));
+    out[1] = f32::from(u8::from(r.jacobian()));
+    out[2] = r.reduction() as f32;
+    for (k, m) in r.tables().iter().enumerate() {
+        out[4 + k] = out.len() as f32;
+        out.extend(pack_marginal(m));
+    }
+    out
+}
+
+/// The words of a [`Marginal2D`] for `m2d_load`: a 20-word header (w, h, parameter count,
+/// normalized; node counts at 4–6, slice strides at 8–10, the offsets of each parameter's nodes
+/// at 12–14, of the values, the marginal and the conditional CDFs at 16–18, all from the
+/// block's start), then those arrays.
+pub fn pack_marginal(m: &Marginal2D) -> Vec<f32> {
+    let (w, h) = m.size();
+    let mut out = vec![0.0f32; 20];
+    out[0] = w as f32;
+    out[1] = h as f32;
+    out[2] = m.params().len() as f32;
+    out[3] = f32::from(u8::from(m.is_normalized()));
+    for (k, (nodes, stride)) in m.params().iter().zip(m.strides()).enumerate() {
+        out[4 + k] = nodes.len() as f32;
+        out[8 + k] = *stride as f32;
+        out[12 + k] = out.len() as f32;
+        out.extend(nodes.iter().map(|&v| v as f32));
+    }
+    for (slot, values) in [m.data(), m.marginal_cdf(), m.conditional_cdf()]
+        .into_iter()
+        .enumerate()
+    {
+        out[16 + slot] = out.len() as f32;
+        out.extend(values.iter().map(|&v| v as f32));
+    }
+    out
 }
 
 /// `TabulatedDims` of `measured.wgsl`: the sampler's bins and defensive fraction.

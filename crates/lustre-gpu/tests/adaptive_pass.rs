@@ -1,6 +1,7 @@
 //! Adaptive shading on the GPU (`adaptive_pass.wgsl`, `adaptive_pyramid.wgsl`) against its CPU
 //! twin (`lustre_adaptive::hierarchy::{render_adaptive, render_brute}`) on 004's line-up under
-//! royal_esplanade_1k: neural BRDFs, a MERL table, a fitted SGD model and a textured area light. Both take the same
+//! royal_esplanade_1k: a neural BRDF, a MERL table, a fitted SGD model, an RGL tensor and a
+//! textured area light. Both take the same
 //! points from the same seeds; the GPU computes in f32. GPU tests fail (never skip) without an
 //! adapter.
 
@@ -63,11 +64,16 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
         .write(&merl)
         .expect("write the table");
     let merl_spec = merl.to_string_lossy().into_owned();
+    // An RGL tensor for the floor.
+    let rgl_spec = lustre_brdf::shared_data_dir()
+        .join("measured/rgl/paper_white_rgb.bsdf")
+        .to_string_lossy()
+        .into_owned();
     let map = lustre_env::shared_data_dir().join("envmaps/royal_esplanade_1k.hdr");
     let env = read_environment(&map).expect("royal_esplanade_1k.hdr");
     let scene = lustre_scene::builtin::lineup(
         ["nbrdf:gold-paint", &merl_spec, "sgd:red-metallic-paint"],
-        "nbrdf:white-marble",
+        &rgl_spec,
         Some(env),
     )
     .expect("line-up");
@@ -112,7 +118,7 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
         .count();
     let surface = g.surface_pixels();
     eprintln!(
-        "bandwidth pass with a MERL table: levels differ on {differ} of {surface} surface pixels"
+        "bandwidth pass (neural BRDF, MERL, SGD, RGL): levels differ on {differ} of {surface} surface pixels"
     );
     assert!(differ * 100 < surface, "{differ} levels differ");
 

@@ -651,6 +651,18 @@ impl RglBsdf {
         self.reduction
     }
 
+    /// The tables: the NDF, σ, the VNDF, the luminance and the RGB values (Mitsuba's
+    /// `Measured` fields, in that order).
+    pub fn tables(&self) -> [&Marginal2D; 5] {
+        [
+            &self.ndf,
+            &self.sigma,
+            &self.vndf,
+            &self.luminance,
+            &self.rgb,
+        ]
+    }
+
     /// The θi nodes of the tables (radians).
     pub fn theta_i(&self) -> &[f64] {
         &self.theta_i
@@ -822,6 +834,10 @@ impl Bsdf for RglBsdf {
             Some((c, _)) => self.pdf_config(&c),
             None => 0.0,
         }
+    }
+
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
     }
 
     fn flags(&self) -> BsdfFlags {

@@ -179,6 +179,36 @@ impl Marginal2D {
         (self.w, self.h)
     }
 
+    /// The node values of each conditioning parameter (outermost first).
+    pub fn params(&self) -> &[Vec<f64>] {
+        &self.params
+    }
+
+    /// The slice stride of each parameter (0 for a parameter with a single node).
+    pub fn strides(&self) -> &[usize] {
+        &self.strides
+    }
+
+    /// Every slice's (normalized, if requested) values, `w × h` per slice.
+    pub fn data(&self) -> &[f64] {
+        &self.data
+    }
+
+    /// The marginal CDFs in y, `h − 1` per slice (empty without sampling).
+    pub fn marginal_cdf(&self) -> &[f64] {
+        &self.marg_cdf
+    }
+
+    /// The conditional CDFs in x, `h × (w − 1)` per slice (empty without sampling).
+    pub fn conditional_cdf(&self) -> &[f64] {
+        &self.cond_cdf
+    }
+
+    /// Whether each slice was normalized to a density.
+    pub fn is_normalized(&self) -> bool {
+        self.normalized
+    }
+
     /// The (normalized, if requested) table values of the slice at parameter node indices `idx`.
     pub fn slice(&self, idx: &[usize]) -> Option<&[f64]> {
         if idx.len() != self.params.len() {

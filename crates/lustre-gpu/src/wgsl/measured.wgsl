@@ -1,5 +1,6 @@
 // module measured: measured BRDFs on the GPU (004 §IV.4.3): MERL tables evaluated from the half/difference
-// angles (lustre_brdf::measured::merl), neural BRDFs (lustre_brdf::measured::nbrdf), and
+// angles (lustre_brdf::measured::merl), neural BRDFs (lustre_brdf::measured::nbrdf), RGL
+// tensors (lustre_brdf::measured::rgl, their Marginal2D tables: measured::pack_rgl), and
 // importance sampling by numerical inversion of
 // tabulated CDFs (lustre_brdf::tabulated). Both read the pass's side table through
 // `bsdf_table(i)`: the words of measured::pack_merl (3 × 90·90·180 stored values, channel-major,
@@ -278,10 +279,262 @@ fn tabulated_pdf(base: u32, dims: TabulatedDims, wi: vec3<f32>, wo: vec3<f32>) -
 }
 
 // The measured BRDF of a material record (lustre-gpu's measured::MeasuredBrdf::pack): kind 0
-// a neural BRDF, 1 a MERL table read at node offset `offset`; f(wi, wo) in 1/sr.
+// a neural BRDF, 1 a MERL table read at node offset `offset`, 3 an RGL tensor; f(wi, wo) in
+// 1/sr.
 fn measured_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
     if (kind == 1u) {
         return merl_eval(base, offset, wi, wo);
     }
+    if (kind == 3u) {
+        return rgl_eval(base, wi, wo);
+    }
     return nbrdf_eval(base, wi, wo);
+}
+
+// An RGL table (lustre_brdf::measured::rgl_warp::Marginal2D, measured::pack_rgl's block at word
+// b): resolution, conditioning parameters (node counts, slice strides, first words of their
+// nodes), and the first words of the values and of the marginal and conditional CDFs.
+struct M2d {
+    w: u32,
+    h: u32,
+    np: u32,
+    normalized: bool,
+    size: vec3<u32>,
+    stride: vec3<u32>,
+    nodes: vec3<u32>,
+    data: u32,
+    marg: u32,
+    cond: u32,
+}
+
+fn m2d_word(i: u32) -> u32 {
+    return u32(bsdf_table(i));
+}
+
+fn m2d_load(b: u32) -> M2d {
+    var m: M2d;
+    m.w = m2d_word(b);
+    m.h = m2d_word(b + 1u);
+    m.np = m2d_word(b + 2u);
+    m.normalized = m2d_word(b + 3u) != 0u;
+    for (var k = 0u; k < 3u; k++) {
+        m.size[k] = m2d_word(b + 4u + k);
+        m.stride[k] = m2d_word(b + 8u + k);
+        m.nodes[k] = b + m2d_word(b + 12u + k);
+    }
+    m.data = b + m2d_word(b + 16u);
+    m.marg = b + m2d_word(b + 17u);
+    m.cond = b + m2d_word(b + 18u);
+    return m;
+}
+
+// Marginal2D::corners: the up to 8 slices a parameter vector blends, with their weights.
+struct M2dCorners {
+    n: u32,
+    slice: array<u32, 8>,
+    weight: array<f32, 8>,
+}
+
+fn m2d_corners(m: M2d, param: vec3<f32>) -> M2dCorners {
+    var c: M2dCorners;
+    c.n = 1u;
+    c.weight[0] = 1.0;
+    for (var k = 0u; k < m.np; k++) {
+        let n = m.size[k];
+        if (n == 1u) {
+            continue;
+        }
+        let x = param[k];
+        // find_interval: the last i in [0, n − 2] with nodes[i] < x.
+        var lo = 0u;
+        var hi = n;
+        while (lo < hi) {
+            let mid = (lo + hi) / 2u;
+            if (bsdf_table(m.nodes[k] + mid) < x) {
+                lo = mid + 1u;
+            } else {
+                hi = mid;
+            }
+        }
+        let i = min(max(lo, 1u) - 1u, n - 2u);
+        let p0 = bsdf_table(m.nodes[k] + i);
+        let p1 = bsdf_table(m.nodes[k] + i + 1u);
+        var t = (x - p0) / (p1 - p0);
+        if (!(t > 0.0)) {
+            t = 0.0;
+        }
+        t = min(t, 1.0);
+        let cn = c.n;
+        for (var j = 0u; j < cn; j++) {
+            let s = c.slice[j];
+            let wg = c.weight[j];
+            c.slice[j] = s + m.stride[k] * i;
+            c.weight[j] = wg * (1.0 - t);
+            c.slice[cn + j] = s + m.stride[k] * (i + 1u);
+            c.weight[cn + j] = wg * t;
+        }
+        c.n = 2u * cn;
+    }
+    return c;
+}
+
+// Marginal2D::lookup: entry idx of the table at word `table` (per_slice entries a slice),
+// blended over the corners.
+fn m2d_lookup(table: u32, per_slice: u32, corners: M2dCorners, idx: u32) -> f32 {
+    var c = corners;
+    var v = 0.0;
+    for (var j = 0u; j < c.n; j++) {
+        if (c.weight[j] != 0.0) {
+            v += c.weight[j] * bsdf_table(table + c.slice[j] * per_slice + idx);
+        }
+    }
+    return v;
+}
+
+// Marginal2D::locate: (ix, iy) as f32 in xy, (fx, fy) in zw.
+fn m2d_locate(m: M2d, pos: vec2<f32>) -> vec4<f32> {
+    let sx = clamp(pos.x, 0.0, 1.0) * f32(m.w - 1u);
+    let sy = clamp(pos.y, 0.0, 1.0) * f32(m.h - 1u);
+    let ix = min(u32(max(sx, 0.0)), m.w - 2u);
+    let iy = min(u32(max(sy, 0.0)), m.h - 2u);
+    return vec4<f32>(f32(ix), f32(iy), sx - f32(ix), sy - f32(iy));
+}
+
+// Marginal2D::patch: the corner values (v00, v10, v01, v11) of patch (ix, iy).
+fn m2d_patch(m: M2d, c: M2dCorners, ix: u32, iy: u32) -> vec4<f32> {
+    let n = m.w * m.h;
+    let o = iy * m.w + ix;
+    return vec4<f32>(m2d_lookup(m.data, n, c, o), m2d_lookup(m.data, n, c, o + 1u),
+                     m2d_lookup(m.data, n, c, o + m.w), m2d_lookup(m.data, n, c, o + m.w + 1u));
+}
+
+// Marginal2D::eval: the bilinear interpolant at pos.
+fn m2d_eval(m: M2d, pos: vec2<f32>, param: vec3<f32>) -> f32 {
+    let c = m2d_corners(m, param);
+    let l = m2d_locate(m, pos);
+    let v = m2d_patch(m, c, u32(l.x), u32(l.y));
+    return mix(mix(v.x, v.y, l.z), mix(v.z, v.w, l.z), l.w);
+}
+
+// Marginal2D::invert: the uniform variates of pos (xy) and the density there (z).
+fn m2d_invert(m: M2d, pos: vec2<f32>, param: vec3<f32>) -> vec3<f32> {
+    let n_cond = m.h * (m.w - 1u);
+    let n_marg = m.h - 1u;
+    let c = m2d_corners(m, param);
+    let l = m2d_locate(m, pos);
+    let ix = u32(l.x);
+    let iy = u32(l.y);
+    let v = m2d_patch(m, c, ix, iy);
+    let c0 = mix(v.x, v.z, l.w);
+    let c1 = mix(v.y, v.w, l.w);
+    let pdf = mix(c0, c1, l.z);
+    // invert_segment: t · lerp(v0, v1, t / 2) · width.
+    var sx = l.z * mix(c0, c1, 0.5 * l.z) / f32(m.w - 1u);
+    let off = iy * (m.w - 1u);
+    if (ix > 0u) {
+        let v0 = m2d_lookup(m.cond, n_cond, c, off + ix - 1u);
+        let v1 = m2d_lookup(m.cond, n_cond, c, off + (m.w - 1u) + ix - 1u);
+        sx += mix(v0, v1, l.w);
+    }
+    let r0 = m2d_lookup(m.cond, n_cond, c, off + (m.w - 1u) - 1u);
+    let r1 = m2d_lookup(m.cond, n_cond, c, off + 2u * (m.w - 1u) - 1u);
+    let row_total = mix(r0, r1, l.w);
+    if (row_total > 0.0) {
+        sx = sx / row_total;
+    } else {
+        sx = 0.0;
+    }
+    var sy = l.w * mix(r0, r1, 0.5 * l.w) / f32(m.h - 1u);
+    if (iy > 0u) {
+        sy += m2d_lookup(m.marg, n_marg, c, iy - 1u);
+    }
+    if (!m.normalized) {
+        let total = m2d_lookup(m.marg, n_marg, c, n_marg - 1u);
+        if (total > 0.0) {
+            sy = sy / total;
+        } else {
+            sy = 0.0;
+        }
+    }
+    return vec3<f32>(clamp(sx, 0.0, 1.0), clamp(sy, 0.0, 1.0), pdf);
+}
+
+// rgl::elevation: θ of a unit vector, accurate near the pole.
+fn rgl_elevation(d: vec3<f32>) -> f32 {
+    let dist = sqrt(d.x * d.x + d.y * d.y + (d.z - 1.0) * (d.z - 1.0));
+    return 2.0 * asin(clamp(0.5 * dist, -1.0, 1.0));
+}
+
+fn rgl_theta2u(theta: f32) -> f32 {
+    return sqrt(max(theta * (2.0 / PI), 0.0));
+}
+
+fn rgl_phi2u(phi: f32) -> f32 {
+    return (phi + PI) * (0.5 / PI);
+}
+
+// rgl::mulsign_neg: a when b's sign bit is set, else −a.
+fn rgl_mulsign_neg(a: f32, b: f32) -> f32 {
+    if ((bitcast<u32>(b) >> 31u) != 0u) {
+        return a;
+    }
+    return -a;
+}
+
+// RglBsdf::eval: f(wi, wo) in 1/sr from measured::pack_rgl's record at word `base` (Mitsuba's
+// `Measured`: the pair folded by the file's symmetry, the VNDF warp inverted at the half vector,
+// the RGB table read there, times D / 4σ with the Jacobian flag); 0 unless both lie above.
+fn rgl_eval(base: u32, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    if (!(wi.z > 0.0 && wo.z > 0.0)) {
+        return vec3<f32>(0.0);
+    }
+    let isotropic = m2d_word(base) != 0u;
+    let jacobian = m2d_word(base + 1u) != 0u;
+    let reduction = m2d_word(base + 2u);
+    var sx = -1.0;
+    var sy = -1.0;
+    if (reduction >= 2u) {
+        sy = wo.y;
+        sx = sy;
+        if (reduction == 4u) {
+            sx = wo.x;
+        }
+    }
+    let v = vec3<f32>(rgl_mulsign_neg(wo.x, sx), rgl_mulsign_neg(wo.y, sy), wo.z);
+    let l = vec3<f32>(rgl_mulsign_neg(wi.x, sx), rgl_mulsign_neg(wi.y, sy), wi.z);
+    let s = v + l;
+    let len = length(s);
+    if (!(len > 0.0 && len < 3.0e38)) {
+        return vec3<f32>(0.0);
+    }
+    let m = s / len;
+    let theta_i = rgl_elevation(v);
+    let phi_i = atan2(v.y, v.x);
+    let u_wi = vec2<f32>(rgl_theta2u(theta_i), rgl_phi2u(phi_i));
+    var phi_m = atan2(m.y, m.x);
+    if (isotropic) {
+        phi_m -= phi_i;
+    }
+    let uy = rgl_phi2u(phi_m);
+    let u_m = vec2<f32>(rgl_theta2u(rgl_elevation(m)), uy - floor(uy));
+    let vndf = m2d_load(base + m2d_word(base + 6u));
+    let sample = m2d_invert(vndf, u_m, vec3<f32>(phi_i, theta_i, 0.0)).xy;
+    let rgb = m2d_load(base + m2d_word(base + 8u));
+    var spec = vec3<f32>(0.0);
+    for (var ch = 0u; ch < 3u; ch++) {
+        spec[ch] = max(m2d_eval(rgb, sample, vec3<f32>(phi_i, theta_i, f32(ch))), 0.0);
+    }
+    if (jacobian) {
+        let sigma = m2d_eval(m2d_load(base + m2d_word(base + 5u)), u_wi, vec3<f32>(0.0));
+        if (!(sigma > 0.0)) {
+            return vec3<f32>(0.0);
+        }
+        spec *= m2d_eval(m2d_load(base + m2d_word(base + 4u)), u_m, vec3<f32>(0.0))
+            / (4.0 * sigma);
+    }
+    let f = spec / wi.z;
+    if (!(all(abs(f) < vec3<f32>(3.0e38)))) {
+        return vec3<f32>(0.0);
+    }
+    return f;
 }
