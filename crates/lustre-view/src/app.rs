@@ -2,6 +2,7 @@
 //! latest frame, input scripts, screenshots, and the surface's life (resize, outdated or lost
 //! surfaces reconfigured, a lost device ends the run cleanly).
 
+use crate::adaptive::{rule_name, AdaptiveSettings, BufferView, SAMPLE_RULES};
 use crate::camera::{FlyCamera, Movement};
 use crate::fit::{FitDone, FitJob, PLOT_THETA_I};
 use crate::plot::polar_points;
@@ -186,7 +187,12 @@ struct App {
     view_size: (usize, usize),
     view_rect_px: [f32; 4],
     sent: Option<(PathCamera, (usize, usize), FrameSettings)>,
+    /// The last request the render thread could not render.
+    failed: Option<(PathCamera, (usize, usize), FrameSettings)>,
     frame: Option<FrameReply>,
+    /// What the adaptive method shows, and the heat map's range when a buffer is shown.
+    buffer_view: BufferView,
+    heat_range: Option<(f64, f64)>,
     texture: Option<egui::TextureHandle>,
     frames_received: u32,
     frames_shown: u32,
@@ -238,6 +244,7 @@ impl App {
                 refine_frames: 64,
                 seed: 1,
                 generation: 0,
+                adaptive: AdaptiveSettings::default(),
             },
             scale: args.scale,
             vsync: !args.no_vsync,
@@ -260,7 +267,10 @@ impl App {
             view_size: (0, 0),
             view_rect_px: [0.0; 4],
             sent: None,
+            failed: None,
             frame: None,
+            buffer_view: BufferView::Image,
+            heat_range: None,
             texture: None,
             frames_received: 0,
             frames_shown: 0,
@@ -463,8 +473,33 @@ impl App {
                             false,
                         );
                     }
+                    self.failed = None;
+                    // A frame ends the adaptive method's table building and any render error.
+                    let passing = ["adaptive shading", "render error"];
+                    if passing.iter().any(|p| self.status.starts_with(p)) {
+                        if let Some(info) = &self.info {
+                            self.status = format!("{} on {}", info.name, info.adapter);
+                        }
+                    }
                     self.frame = Some(*f);
                     self.upload_frame();
+                }
+                Reply::FrameFailed {
+                    camera,
+                    size,
+                    settings,
+                    error,
+                } => {
+                    // Said in the view (the frame before it would not be what was asked for)
+                    // and in the notes; a script goes on with its next command.
+                    self.failed = Some((camera, size, settings));
+                    self.frame = None;
+                    let text = format!("render error: {error}");
+                    // Once, not at every camera move (a scene the method cannot light).
+                    if self.notes.last().is_none_or(|n| n.text != text) {
+                        self.note(text.clone(), true);
+                    }
+                    self.status = text;
                 }
                 Reply::Picked(mesh) => {
                     self.pending_pick = false;
@@ -520,13 +555,22 @@ impl App {
         }
     }
 
-    /// The frame as the egui texture, at the current exposure.
+    /// The frame as the egui texture, at the current exposure (or the adaptive method's buffer
+    /// view as a heat map).
     fn upload_frame(&mut self) {
         let Some(f) = &self.frame else { return };
-        let img = egui::ColorImage::from_rgb(
-            [f.image.width, f.image.height],
-            &f.image.to_srgb8(self.exposure),
-        );
+        let buffer = f
+            .adaptive
+            .as_ref()
+            .and_then(|a| Some((a.width, a.height, a.rgb(self.buffer_view)?)));
+        self.heat_range = buffer.as_ref().map(|b| b.2 .1);
+        let img = match buffer {
+            Some((w, h, (rgb, _))) => egui::ColorImage::from_rgb([w, h], &rgb),
+            None => egui::ColorImage::from_rgb(
+                [f.image.width, f.image.height],
+                &f.image.to_srgb8(self.exposure),
+            ),
+        };
         let opts = if self.scale >= 1.0 {
             egui::TextureOptions::NEAREST
         } else {
@@ -704,7 +748,7 @@ impl App {
             && !self.pending_pick
             && self.fit.is_none()
             && self.sent.is_some()
-            && shown == self.sent
+            && (shown == self.sent || self.failed == self.sent)
     }
 
     /// Runs script commands until one has to wait.
@@ -813,6 +857,18 @@ impl App {
             }
             Command::Samples(n) => {
                 self.settings.samples = n;
+                self.wait = settle;
+            }
+            Command::Buffer(v) => {
+                self.buffer_view = v;
+                self.upload_frame();
+            }
+            Command::Rate(r) => {
+                self.settings.adaptive.rate = r;
+                self.wait = settle;
+            }
+            Command::SampleRule(r) => {
+                self.settings.adaptive.rule = r;
                 self.wait = settle;
             }
             Command::Budget(n) => {
@@ -1021,6 +1077,23 @@ impl App {
         ui.label(format!(
             "window {ui_fps:.1} fps · 3D {view_fps:.2} frames/s"
         ));
+        if let Some(a) = self.frame.as_ref().and_then(|f| f.adaptive.as_deref()) {
+            // The adaptive method's line: what it shaded and what it cost.
+            ui.label(format!(
+                "adaptive: {:.1} % of {} surface px shaded · {} samples ({:.2}/px) · bandwidth pass {:.0} ms · shading {:.0} ms · G-buffer {:.0} ms",
+                100.0 * a.shaded_share(),
+                a.surface_pixels,
+                a.samples_total,
+                a.samples_total as f64 / a.surface_pixels.max(1) as f64,
+                a.bandwidth_ms,
+                a.shading_ms,
+                a.gbuffer_ms,
+            ));
+            ui.small(format!(
+                "material tables {:.2} s (once per scene and material edit)",
+                a.tables_ms * 1e-3
+            ));
+        }
         if let Some(f) = &self.frame {
             let t = &f.times;
             ui.label(format!(
@@ -1053,16 +1126,22 @@ impl App {
             ViewMethod::Ck,
             ViewMethod::Progressive,
             ViewMethod::Reference,
+            ViewMethod::Adaptive,
         ] {
             let text = match m {
                 ViewMethod::Regular => "regular sampling",
                 ViewMethod::Ck => "Colbert–Křivánek",
                 ViewMethod::Progressive => "progressive when still",
                 ViewMethod::Reference => "path-traced reference (CPU)",
+                ViewMethod::Adaptive => "adaptive shading (004 ch. IV, CPU)",
             };
             ui.radio_value(&mut self.settings.method, m, text);
         }
-        ui.add(egui::Slider::new(&mut self.settings.samples, 1..=64).text("samples (global)"));
+        if self.settings.method == ViewMethod::Adaptive {
+            self.adaptive_panel(ui);
+        } else {
+            ui.add(egui::Slider::new(&mut self.settings.samples, 1..=64).text("samples (global)"));
+        }
         ui.add(egui::Slider::new(&mut self.settings.supersampling, 1..=4).text("k×k G-buffer"));
         ui.add(
             egui::Slider::new(&mut self.settings.refine_frames, 1..=1024)
@@ -1125,6 +1204,43 @@ impl App {
             self.screenshots += 1;
             self.screenshot =
                 Some(self.out_path(&format!("screenshot-{:03}.png", self.screenshots)));
+        }
+    }
+
+    /// The adaptive method's controls: mean N_p, rate, sample rule, the buffer shown.
+    fn adaptive_panel(&mut self, ui: &mut egui::Ui) {
+        ui.add(
+            egui::Slider::new(&mut self.settings.samples, 1..=256)
+                .logarithmic(true)
+                .text("mean N_p"),
+        );
+        let a = &mut self.settings.adaptive;
+        ui.horizontal(|ui| {
+            ui.label("rate");
+            ui.radio_value(&mut a.rate, 2, "2")
+                .on_hover_text("image samples per cycle of b_p: Nyquist's rate");
+            ui.radio_value(&mut a.rate, 1, "1")
+                .on_hover_text("Eq. IV.11 as printed: fewer pixels shaded");
+        });
+        egui::ComboBox::from_label("N_p rule")
+            .selected_text(rule_name(a.rule))
+            .show_ui(ui, |ui| {
+                for r in SAMPLE_RULES {
+                    ui.selectable_value(&mut a.rule, r, rule_name(r));
+                }
+            });
+        ui.label("show");
+        let before = self.buffer_view;
+        for v in BufferView::ALL {
+            ui.radio_value(&mut self.buffer_view, v, v.label());
+        }
+        if self.buffer_view != before {
+            self.upload_frame();
+        }
+        if let Some((lo, hi)) = self.heat_range {
+            ui.small(format!(
+                "log heat map {lo:.3} … {hi:.3} (1st–99.9th percentile; black: 0)"
+            ));
         }
     }
 
@@ -1488,6 +1604,23 @@ impl App {
                 },
                 "camera": cam_file.file_name().map(|n| n.to_string_lossy().into_owned()),
                 "method": self.settings.method.name(),
+                "adaptive": (self.settings.method == ViewMethod::Adaptive).then(|| {
+                    let a = f.and_then(|f| f.adaptive.as_deref());
+                    serde_json::json!({
+                        "buffer": self.buffer_view.name(),
+                        "rate": self.settings.adaptive.rate,
+                        "sample_rule": rule_name(self.settings.adaptive.rule),
+                        "heat_range": self.heat_range.map(|(lo, hi)| [lo, hi]),
+                        "surface_pixels": a.map(|a| a.surface_pixels),
+                        "shaded_pixels": a.map(|a| a.shaded_pixels),
+                        "upsampled_pixels": a.map(|a| a.upsampled_pixels),
+                        "samples": a.map(|a| a.samples_total),
+                        "gbuffer_ms": a.map(|a| a.gbuffer_ms),
+                        "bandwidth_ms": a.map(|a| a.bandwidth_ms),
+                        "shading_ms": a.map(|a| a.shading_ms),
+                        "tables_ms": a.map(|a| a.tables_ms),
+                    })
+                }),
                 "samples": self.settings.samples,
                 "supersampling": self.settings.supersampling,
                 "exposure": self.exposure,

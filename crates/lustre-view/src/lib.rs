@@ -7,8 +7,15 @@
 //!   speed, shift runs; the scene's cameras as bookmarks; a camera path recorded to a
 //!   `lustre-camera-path` JSON that `lustre render --path FILE.json` replays.
 //! - Overlays: frames per second, a frame-time graph with the GPU's per-pass times, the sample
-//!   budget, the method (regular, Colbert–Křivánek, progressive refinement while still, or a CPU
-//!   path-traced reference filling in), exposure.
+//!   budget, the method (regular, Colbert–Křivánek, progressive refinement while still, a CPU
+//!   path-traced reference filling in, or 004 ch. IV's adaptive shading on the CPU), exposure.
+//! - The adaptive method ([`adaptive`], `lustre render --method adaptive` in the render
+//!   thread): each new view rendered from a bandwidth buffer and shaded hierarchically, with
+//!   controls for the mean N_p, the rate (1 or 2) and the sample rule, a line with the shaded
+//!   share, the samples and the bandwidth pass's and the shading's times, and the buffer views
+//!   of 004 Fig. IV.13 / IV.22 (the shaded image, b_p, ℓ, N_p, the shaded pixels by level) as
+//!   the CLI's heat maps. It lights by the scene's environment only: a scene without one is
+//!   refused with a message.
 //! - Material editor: click an object to select it; its material's parameters as controls
 //!   ([`lustre_scene::material_edit`]); swap it for any material specification (a catalog
 //!   entry, a fitted material JSON, a measured file); **Fit** a measured file in a background
@@ -16,6 +23,7 @@
 //!   JSON and the scene file.
 //! - Unattended runs: `--script FILE` ([`script`]), `--frames N --screenshot FILE`.
 
+pub mod adaptive;
 pub mod app;
 pub mod camera;
 pub mod fit;
@@ -36,6 +44,9 @@ pub enum ViewMethod {
     Progressive,
     /// A CPU path-traced reference filling in (1 sample per pixel per pass).
     Reference,
+    /// 004 ch. IV's adaptive shading on the CPU (bandwidth buffer, hierarchical shading; the
+    /// environment's light without visibility), one frame per view.
+    Adaptive,
 }
 
 impl ViewMethod {
@@ -46,6 +57,7 @@ impl ViewMethod {
             ViewMethod::Ck => "ck",
             ViewMethod::Progressive => "progressive",
             ViewMethod::Reference => "reference",
+            ViewMethod::Adaptive => "adaptive",
         }
     }
 }
@@ -69,7 +81,7 @@ pub struct ViewArgs {
     /// The 3D view's resolution as a fraction of its size on screen (0.1–1).
     #[arg(long, default_value_t = 0.5)]
     pub scale: f64,
-    /// Glossy samples per pixel.
+    /// Glossy samples per pixel (the adaptive method: the mean N_p).
     #[arg(long, default_value_t = 8)]
     pub samples: u32,
     /// k: a k×k supersampled G-buffer per pixel (anti-aliasing).

@@ -3,12 +3,15 @@
 //! walkthrough renderer (`lustre render`'s frame) for the camera the window asks for, sending
 //! every new image back. The window thread never waits for it: requests and replies are
 //! channel messages, frame requests coalesce (only the newest is rendered), and a still camera
-//! keeps refining (progressive refinement, or the CPU path-traced reference filling in).
+//! keeps refining (progressive refinement, or the CPU path-traced reference filling in). The
+//! adaptive method ([`crate::adaptive`]) renders each new view once on the CPU, its shading
+//! context built on the scene's first adaptive frame.
 //!
 //! Material edits (`lustre_scene::material_edit::set`) are checked against the GPU's models
 //! first; a refused edit is answered with its error and the scene keeps running with the old
 //! material. An accepted one rebuilds the light-mapped scene, the GPU upload and the probes.
 
+use crate::adaptive::{AdaptiveMaps, AdaptiveRenderer, AdaptiveSettings};
 use crate::ViewMethod;
 use lustre_gpu::frame_shade::pack_material;
 use lustre_gpu::{
@@ -23,7 +26,7 @@ use lustre_shade::bake::spec_albedo;
 use lustre_shade::baked::{environment_pyramid, BakedScene};
 use lustre_shade::frame::{FrameMethod, FrameStats};
 use lustre_shade::image::Image;
-use lustre_shade::path::{Accumulator, PathCamera, PathOptions, PathTracer};
+use lustre_shade::path::{Accumulator, PathCamera, PathOptions, PathScene, PathTracer};
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, Sender, TryRecvError};
@@ -43,15 +46,17 @@ pub enum SceneSource {
 pub struct FrameSettings {
     /// The glossy integration.
     pub method: ViewMethod,
-    /// Glossy samples per G-buffer pixel, 1–256.
+    /// Glossy samples per G-buffer pixel, 1–256 (the adaptive method: the mean N_p).
     pub samples: u32,
     /// k: a k×k supersampled G-buffer per pixel.
     pub supersampling: u32,
     /// Frames a still camera accumulates (progressive refinement), or samples per pixel the
     /// reference stops at.
     pub refine_frames: u32,
-    /// Seed of the CK points and of the reference's paths.
+    /// Seed of the CK points, of the reference's paths and of the adaptive method's point sets.
     pub seed: u64,
+    /// The adaptive method's rate and sample rule.
+    pub adaptive: AdaptiveSettings,
     /// The window's count of accepted material edits, echoed in the reply: a frame asked
     /// for after an edit is told apart from the one before it.
     pub generation: u64,
@@ -130,9 +135,9 @@ pub struct FrameReply {
     pub camera: PathCamera,
     /// Settings it was rendered with.
     pub settings: FrameSettings,
-    /// GPU pass times of the step that made it (zero for the reference).
+    /// GPU pass times of the step that made it (zero for the reference and adaptive methods).
     pub times: GpuFrameTimes,
-    /// Frames (progressive) or samples per pixel (reference) the image holds.
+    /// Frames (progressive) or samples per pixel (reference) the image holds (adaptive: 1).
     pub frames: u32,
     /// What the step ran.
     pub work: Option<StepWork>,
@@ -140,6 +145,8 @@ pub struct FrameReply {
     pub stats: FrameStats,
     /// Wall time of the step and read-back, ms.
     pub wall_ms: f64,
+    /// The adaptive method's buffers, counts and times.
+    pub adaptive: Option<Box<AdaptiveMaps>>,
 }
 
 /// A message from the render thread.
@@ -151,6 +158,18 @@ pub enum Reply {
     Ready(Box<SceneInfo>),
     /// A new image.
     Frame(Box<FrameReply>),
+    /// The frame asked for cannot be rendered (bad settings, a failed pass, a scene the
+    /// method cannot light); nothing more is rendered until the window asks again.
+    FrameFailed {
+        /// The request's camera.
+        camera: PathCamera,
+        /// Its size.
+        size: (usize, usize),
+        /// Its settings.
+        settings: FrameSettings,
+        /// Why.
+        error: String,
+    },
     /// The answer to a pick: the mesh index, if any.
     Picked(Option<usize>),
     /// The answer to a material edit: the material as it is now, or why it was refused (the
@@ -322,7 +341,7 @@ fn run_inner(
                 seconds: asked.elapsed().as_secs_f64(),
             });
         }
-        let exit = serve(&ctx, &walk, &lit, &pt, rx, tx)?;
+        let exit = serve(&ctx, &walk, &lit, &ps, &pt, rx, tx)?;
         passes = Some(walk.into_passes());
         match exit {
             Exit::Quit => return Ok(()),
@@ -393,6 +412,7 @@ fn serve(
     ctx: &GpuContext,
     walk: &GpuWalkthrough,
     lit: &LitScene,
+    ps: &PathScene,
     pt: &PathTracer,
     rx: &Receiver<Request>,
     tx: &Sender<Reply>,
@@ -403,6 +423,10 @@ fn serve(
     let mut answered: Option<(PathCamera, (usize, usize), FrameSettings)> = None;
     let mut busy = false;
     let mut reference: Option<Reference> = None;
+    // The adaptive method's shading context, built on this scene's first adaptive frame (or
+    // why it cannot be), and the request its last frame answered.
+    let mut adaptive: Option<Result<AdaptiveRenderer, String>> = None;
+    let mut adaptive_done: Option<(PathCamera, (usize, usize), FrameSettings)> = None;
     loop {
         // Block while there is nothing to refine; otherwise take what has arrived.
         let mut requests = vec![];
@@ -433,6 +457,9 @@ fn serve(
                 } => {
                     wanted = Some((camera, size, settings));
                     busy = true;
+                    // Every frame request is answered (the window asks again only for a
+                    // change, e.g. back to the adaptive method after another).
+                    adaptive_done = None;
                 }
                 Request::Pick {
                     camera,
@@ -530,8 +557,53 @@ fn serve(
                 work: None,
                 stats: FrameStats::default(),
                 wall_ms: t.elapsed().as_secs_f64() * 1e3,
+                adaptive: None,
             })));
+            // The window now shows something else than the session's last frame: back to a GPU
+            // method, an unchanged step is sent again.
+            answered = None;
             reference = Some(r);
+            continue;
+        }
+        if settings.method == ViewMethod::Adaptive {
+            let key = (camera, size, settings);
+            busy = false;
+            if adaptive_done == Some(key) {
+                continue;
+            }
+            adaptive_done = Some(key);
+            let renderer = adaptive.get_or_insert_with(|| {
+                let progress = |k: usize, n: usize| {
+                    let _ = tx.send(Reply::Status(format!(
+                        "adaptive shading: material tables {k} of {n}"
+                    )));
+                };
+                AdaptiveRenderer::new(ps, &progress).map_err(|e| format!("{e:#}"))
+            });
+            let rendered = renderer.as_ref().map_err(|e| e.clone()).and_then(|r| {
+                r.render(pt, &camera, size, &settings)
+                    .map_err(|e| format!("{e:#}"))
+            });
+            let _ = tx.send(match rendered {
+                Ok((image, maps)) => Reply::Frame(Box::new(FrameReply {
+                    image,
+                    camera,
+                    settings,
+                    times: GpuFrameTimes::default(),
+                    frames: 1,
+                    work: None,
+                    stats: FrameStats::default(),
+                    wall_ms: t.elapsed().as_secs_f64() * 1e3,
+                    adaptive: Some(Box::new(maps)),
+                })),
+                Err(error) => Reply::FrameFailed {
+                    camera,
+                    size,
+                    settings,
+                    error: format!("adaptive method: {error}"),
+                },
+            });
+            answered = None;
             continue;
         }
         let method = match settings.method {
@@ -552,7 +624,12 @@ fn serve(
             Err(e) => {
                 // Bad settings (or a failed pass): said, and nothing is asked again until the
                 // window sends a new request.
-                let _ = tx.send(Reply::Status(format!("render error: {e}")));
+                let _ = tx.send(Reply::FrameFailed {
+                    camera,
+                    size,
+                    settings,
+                    error: e.to_string(),
+                });
                 wanted = None;
                 busy = false;
                 continue;
@@ -579,6 +656,7 @@ fn serve(
             work: Some(step.work),
             stats: step.stats,
             wall_ms: t.elapsed().as_secs_f64() * 1e3,
+            adaptive: None,
         })));
     }
 }

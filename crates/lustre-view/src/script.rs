@@ -11,8 +11,12 @@
 //! select gold-paint      # or select the first object with that material
 //! set alpha 0.2          # a parameter of the selected object's material
 //! material kurt-demo     # swap it for a material specification
-//! method progressive     # regular | ck | progressive | reference
-//! samples 8            # the global sample budget
+//! method progressive     # regular | ck | progressive | reference | adaptive
+//! samples 8              # the global sample budget (adaptive: the mean N_p)
+//! buffer level           # what the adaptive method shows: image | bandwidth | level | samples
+//!                        #   | shaded (the pixels shaded, by level; up-sampled ones grey)
+//! rate 1                 # the adaptive method's samples per cycle of b_p: 1 | 2
+//! sample-rule relative   # its N_p rule: constant | relative | relative-mse | absolute
 //! budget 3               # the selected object's own (budget global: back to the global one)
 //! exposure 1.5
 //! fit data:measured/merl/…binary sgd   # fit a measured file (sgd | kurt | beckmann | ggx)
@@ -27,7 +31,9 @@
 //! Every command that changes what is rendered is followed by a wait for the frame that shows
 //! it, so a `screenshot` captures the result of the commands before it.
 
+use crate::adaptive::{parse_rule, BufferView};
 use crate::ViewMethod;
+use lustre_adaptive::buffer::SampleRule;
 
 /// Which way `walk` moves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -67,8 +73,14 @@ pub enum Command {
     Material(String),
     /// The glossy integration.
     Method(ViewMethod),
-    /// Glossy samples per pixel.
+    /// Glossy samples per pixel (the adaptive method's mean N_p).
     Samples(u32),
+    /// What the adaptive method shows.
+    Buffer(BufferView),
+    /// The adaptive method's samples per cycle of b_p (1 or 2).
+    Rate(u8),
+    /// The adaptive method's N_p rule.
+    SampleRule(SampleRule),
     /// The selected object's own sample budget (`None`: the global one).
     Budget(Option<u32>),
     /// Display exposure.
@@ -177,8 +189,35 @@ pub fn parse(text: &str) -> Result<Vec<Command>, String> {
                     "ck" => ViewMethod::Ck,
                     "progressive" => ViewMethod::Progressive,
                     "reference" => ViewMethod::Reference,
-                    _ => return Err(err("method: regular | ck | progressive | reference")),
+                    "adaptive" => ViewMethod::Adaptive,
+                    _ => {
+                        return Err(err(
+                            "method: regular | ck | progressive | reference | adaptive",
+                        ))
+                    }
                 })
+            }
+            "buffer" => {
+                need(1)?;
+                Command::Buffer(
+                    BufferView::parse(args[0]).ok_or_else(|| {
+                        err("buffer: image | bandwidth | level | samples | shaded")
+                    })?,
+                )
+            }
+            "rate" => {
+                need(1)?;
+                match args[0] {
+                    "1" => Command::Rate(1),
+                    "2" => Command::Rate(2),
+                    _ => return Err(err("rate: 1 | 2 (image samples per cycle of b_p)")),
+                }
+            }
+            "sample-rule" => {
+                need(1)?;
+                Command::SampleRule(parse_rule(args[0]).ok_or_else(|| {
+                    err("sample-rule: constant | relative | relative-mse | absolute")
+                })?)
             }
             "samples" => {
                 need(1)?;
@@ -262,6 +301,58 @@ mod tests {
         assert_eq!(c[9], Command::Budget(Some(3)));
         assert_eq!(c[11], Command::Fit("a.binary".into(), "kurt".into()));
         assert_eq!(c[17], Command::Quit);
+    }
+
+    #[test]
+    fn parses_the_adaptive_commands() {
+        let s = "method adaptive
+buffer image
+buffer bandwidth
+buffer level # ℓ + 1
+                 buffer samples
+buffer shaded
+rate 1
+rate 2
+sample-rule constant
+                 sample-rule relative
+sample-rule relative-mse
+sample-rule absolute
+";
+        let c = parse(s).unwrap();
+        assert_eq!(
+            c,
+            vec![
+                Command::Method(ViewMethod::Adaptive),
+                Command::Buffer(BufferView::Image),
+                Command::Buffer(BufferView::Bandwidth),
+                Command::Buffer(BufferView::Level),
+                Command::Buffer(BufferView::Samples),
+                Command::Buffer(BufferView::Shaded),
+                Command::Rate(1),
+                Command::Rate(2),
+                Command::SampleRule(SampleRule::Constant),
+                Command::SampleRule(SampleRule::Relative),
+                Command::SampleRule(SampleRule::RelativeMse),
+                Command::SampleRule(SampleRule::Absolute),
+            ]
+        );
+        for (s, says) in [
+            ("method adaptiv", "| adaptive"),
+            ("buffer", "1 argument"),
+            (
+                "buffer mask",
+                "image | bandwidth | level | samples | shaded",
+            ),
+            ("buffer level samples", "1 argument"),
+            ("\n\nrate 3", "line 3"),
+            ("rate 1.5", "rate: 1 | 2"),
+            ("rate", "1 argument"),
+            ("sample-rule uniform", "constant | relative"),
+            ("sample-rule", "1 argument"),
+        ] {
+            let e = parse(s).unwrap_err();
+            assert!(e.contains(says), "{s:?}: {e}");
+        }
     }
 
     #[test]

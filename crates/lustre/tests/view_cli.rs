@@ -1,12 +1,15 @@
 //! `lustre view` end to end in a real window under Xvfb, rendered on lavapipe (issue 12): the
 //! built-in room opened, an input script replayed (walk, look, record the walk, click an object
 //! to select it, change its material's roughness, a refused material swap, select the fitted
-//! gold sphere by material, change its SGD fit's α and ρd, save it as material JSON), screenshots
-//! taken.
+//! gold sphere by material, change its SGD fit's α and ρd, save it as material JSON, then the
+//! adaptive method of 004 ch. IV and its shaded-pixel and bandwidth views), screenshots taken.
 //! The 3D view in the last screenshot matches `lustre render` of the same camera and material
 //! edits within [`PSNR_MIN`]; the panels are drawn; the edit changed the floor; the recorded
-//! walk is a camera path file `lustre render --path` reads. Bad input and a missing adapter or
-//! display end with a clear message and a non-zero exit, never a hang.
+//! walk is a camera path file `lustre render --path` reads; the adaptive view is lit, and its
+//! shaded-pixel view shows as many shaded and up-sampled pixels as the frame counted. Bad input
+//! and a missing adapter or display end with a clear message and a non-zero exit, never a hang;
+//! the adaptive method on a scene without an environment is refused with a message, and the
+//! run goes on.
 //!
 //! `xvfb-run` must be installed (CI installs `xvfb xauth`): without it this test fails.
 
@@ -95,6 +98,12 @@ fn viewer_replays_a_script_and_its_view_matches_lustre_render() {
          set model.rho_d 0.4,0.05,0.05\n\
          save-material gold.json\n\
          screenshot shot.png\n\
+         method adaptive\n\
+         screenshot adaptive.png\n\
+         buffer shaded\n\
+         screenshot mask.png\n\
+         buffer bandwidth\n\
+         screenshot bandwidth.png\n\
          quit\n",
     )
     .unwrap();
@@ -245,6 +254,78 @@ fn viewer_replays_a_script_and_its_view_matches_lustre_render() {
     );
     let moved = (last.camera.position - first.camera.position).length();
     assert!(moved > 0.05, "{moved} {walk:?}");
+
+    // The adaptive method (004 ch. IV on the CPU) from the same camera: a lit image, its counts
+    // and times in the screenshot's JSON.
+    let side = read_json(&out.join("adaptive.json"));
+    assert_eq!(side["method"], "adaptive", "{side}");
+    let a = &side["adaptive"];
+    assert_eq!(a["buffer"], "image", "{a}");
+    assert_eq!(a["rate"], 2, "{a}");
+    let count = |k: &str| a[k].as_u64().unwrap_or_else(|| panic!("{k}: {a}"));
+    let (surface, shaded, upsampled) = (
+        count("surface_pixels"),
+        count("shaded_pixels"),
+        count("upsampled_pixels"),
+    );
+    assert_eq!(shaded + upsampled, surface, "{a}");
+    assert!(shaded * 100 > surface && upsampled * 100 > surface, "{a}");
+    // The constant rule: the mean N_p (--samples 8) at every shaded pixel.
+    assert_eq!(count("samples"), 8 * shaded, "{a}");
+    for k in ["bandwidth_ms", "shading_ms"] {
+        assert!(a[k].as_f64().is_some_and(|ms| ms > 0.0), "{k}: {a}");
+    }
+    println!(
+        "adaptive frame {w}×{h}: {shaded} of {surface} surface pixels shaded, G-buffer {} ms, \
+         bandwidth pass {} ms, shading {} ms (material tables {} ms)",
+        a["gbuffer_ms"], a["bandwidth_ms"], a["shading_ms"], a["tables_ms"]
+    );
+    let lit_view = crop(
+        &image::open(out.join("adaptive.png")).unwrap().to_rgba8(),
+        (x, y, w, h),
+    );
+    let lit = lit_view
+        .chunks(3)
+        .filter(|p| p.iter().any(|c| *c > 40))
+        .count();
+    assert!(
+        lit * 2 > (w * h) as usize,
+        "adaptive view: {lit} of {} pixels lit",
+        w * h
+    );
+    assert!(
+        psnr8(&lit_view, &shown) < 30.0,
+        "the adaptive view is the regular one"
+    );
+    // The shaded-pixel view: up-sampled surface pixels grey, shaded ones coloured by level (a
+    // heat map, never pure black), the background black; as many of each as the frame counted.
+    assert_eq!(
+        read_json(&out.join("mask.json"))["adaptive"]["buffer"],
+        "shaded"
+    );
+    let mask = crop(
+        &image::open(out.join("mask.png")).unwrap().to_rgba8(),
+        (x, y, w, h),
+    );
+    let grey = mask.chunks(3).filter(|p| *p == [110, 110, 110]).count() as u64;
+    let coloured = mask
+        .chunks(3)
+        .filter(|p| *p != [110, 110, 110] && *p != [0, 0, 0])
+        .count() as u64;
+    println!("shaded-pixel view: {grey} grey (up-sampled), {coloured} coloured (shaded)");
+    for (what, seen, counted) in [
+        ("up-sampled", grey, upsampled),
+        ("shaded", coloured, shaded),
+    ] {
+        assert!(
+            seen.abs_diff(counted) * 100 <= surface,
+            "{what}: {seen} pixels in the view, {counted} in the frame"
+        );
+    }
+    // The bandwidth view: a heat map over a positive range of b_p.
+    let range = &read_json(&out.join("bandwidth.json"))["adaptive"]["heat_range"];
+    let (lo, hi) = (range[0].as_f64().unwrap(), range[1].as_f64().unwrap());
+    assert!(lo > 0.0 && hi > lo, "b_p heat map range {range}");
 }
 
 #[test]
@@ -270,6 +351,68 @@ fn viewer_refuses_bad_input_and_missing_devices_clearly() {
         let all = text(&o);
         assert!(!o.status.success() && all.contains(says), "{args:?}: {all}");
     }
+    // The adaptive method on a scene without an environment (a floor and a block under a
+    // rectangle light, baked at tiny settings): said in the view, the script goes on, and the
+    // regular method renders after it.
+    std::fs::write(
+        d.join("floor.obj"),
+        "v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nv -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 1 -0.5\n\
+         v -0.5 1 -0.5\nf 1 3 2\nf 1 4 3\nf 5 8 7\nf 5 7 6\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("dark.toml"),
+        "schema = \"lustre-scene\"\nversion = 1\n[[geometry]]\nfile = \"floor.obj\"\n\
+         [[emitter]]\nshape = \"rectangle\"\nradiance = [5.0, 5.0, 5.0]\n\
+         transform = [0.5, 0, 0, 0,  0, 0, -0.5, 3,  0, 0.5, 0, 0,  0, 0, 0, 1]\n",
+    )
+    .unwrap();
+    let o = lustre()
+        .current_dir(d)
+        .args([
+            "bake",
+            "dark.toml",
+            "--out",
+            "dark",
+            "--spp",
+            "4",
+            "--bounces",
+            "2",
+        ])
+        .args(["--texels-per-metre", "8"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    std::fs::write(
+        d.join("dark.txt"),
+        "method adaptive\nscreenshot a.png\nmethod regular\nscreenshot r.png\nquit\n",
+    )
+    .unwrap();
+    let o = view_in_xvfb(
+        d,
+        &[
+            "dark/scene.toml",
+            "--size",
+            "640x400",
+            "--script",
+            "dark.txt",
+            "--timeout",
+            "300",
+        ],
+    );
+    let all = text(&o);
+    assert!(
+        o.status.success()
+            && all.contains("adaptive method: the scene has no environment")
+            && !all.contains("panicked"),
+        "{all}"
+    );
+    assert_eq!(
+        read_json(&d.join("lustre-view/a.json"))["step_ms"],
+        serde_json::Value::Null
+    );
+    let regular = read_json(&d.join("lustre-view/r.json"));
+    assert!(regular["step_ms"].as_f64().is_some(), "{regular}");
     // No display: a message, not a panic or a hang.
     let o = lustre()
         .current_dir(d)

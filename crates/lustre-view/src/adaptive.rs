@@ -1,0 +1,481 @@
+//! The viewer's adaptive method: 004 chapter IV's adaptive shading of measured materials
+//! (`lustre-adaptive`, on the CPU; the same pipeline as `lustre render --method adaptive`) in
+//! the render thread, and its buffer views (004 Fig. IV.13, IV.22).
+//!
+//! Per frame: the G-buffer from the render thread's path tracer (k×k per pixel with the
+//! G-buffer supersampling, box-filtered after shading), the bandwidth buffer (n_b = 16
+//! directions per pixel against the environment's bandwidth), and the hierarchical shading.
+//! The shading context (the materials' sampling and bandwidth tables) is built once per scene:
+//! the render thread builds it on the first adaptive frame and again after a material edit. The
+//! environment lights everything, without visibility, as in 004: a scene without an
+//! environment is refused with a message.
+//!
+//! The buffer views colour b_p, ℓ + 1, N_p and the level each pixel was shaded at on the log
+//! heat map of the CLI's `frame_{bandwidth,level,samples,shaded}.png` (lustre-plot's inferno
+//! over the octaves between the 1st and the 99.9th percentile of the positive values, zero
+//! black; checked against `lustre_plot::heat_map` in the tests). In the shaded-pixel view the
+//! up-sampled surface pixels are grey (the CLI's map leaves them black like the background).
+
+use crate::render::FrameSettings;
+use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BufferOptions, SampleRule};
+use lustre_adaptive::gbuffer::{GBuffer, GPixel};
+use lustre_adaptive::hierarchy::{box_downsample, render_adaptive};
+use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
+use lustre_freq::pixel::EnvironmentBandwidth;
+use lustre_shade::image::Image;
+use lustre_shade::path::{PathCamera, PathScene, PathTracer};
+use std::time::Instant;
+
+/// Incident directions per pixel of the bandwidth buffer (004: 16; the CLI's default).
+pub const N_B: usize = 16;
+/// The largest N_p of a pixel (the CLI's).
+pub const MAX_SAMPLES: usize = 1024;
+/// The colour of up-sampled surface pixels in the shaded-pixel view.
+pub const UPSAMPLED_GREY: [u8; 3] = [110, 110, 110];
+
+/// What the adaptive method shows in the 3D view.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BufferView {
+    /// The shaded image.
+    #[default]
+    Image,
+    /// The bandwidth buffer b_p (cycles per pixel).
+    Bandwidth,
+    /// The level ℓ_p each pixel must be shaded at (shown as ℓ + 1).
+    Level,
+    /// N_p, the samples of each shaded pixel.
+    Samples,
+    /// The level each pixel was shaded at (ℓ + 1); up-sampled pixels grey.
+    Shaded,
+}
+
+impl BufferView {
+    /// Every view, in the panel's order.
+    pub const ALL: [BufferView; 5] = [
+        BufferView::Image,
+        BufferView::Bandwidth,
+        BufferView::Level,
+        BufferView::Samples,
+        BufferView::Shaded,
+    ];
+
+    /// Its name in scripts and screenshot JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            BufferView::Image => "image",
+            BufferView::Bandwidth => "bandwidth",
+            BufferView::Level => "level",
+            BufferView::Samples => "samples",
+            BufferView::Shaded => "shaded",
+        }
+    }
+
+    /// The view named `name` (see [`BufferView::name`]).
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|v| v.name() == name)
+    }
+
+    /// Its label in the panel.
+    pub fn label(self) -> &'static str {
+        match self {
+            BufferView::Image => "shaded image",
+            BufferView::Bandwidth => "bandwidth b_p",
+            BufferView::Level => "level ℓ + 1",
+            BufferView::Samples => "samples N_p",
+            BufferView::Shaded => "shaded pixels (level; grey: up-sampled)",
+        }
+    }
+}
+
+/// Every sample rule, in the panel's order.
+pub const SAMPLE_RULES: [SampleRule; 4] = [
+    SampleRule::Constant,
+    SampleRule::Relative,
+    SampleRule::RelativeMse,
+    SampleRule::Absolute,
+];
+
+/// A sample rule's name (as `lustre render --sample-rule`).
+pub fn rule_name(rule: SampleRule) -> &'static str {
+    match rule {
+        SampleRule::Constant => "constant",
+        SampleRule::Relative => "relative",
+        SampleRule::RelativeMse => "relative-mse",
+        SampleRule::Absolute => "absolute",
+    }
+}
+
+/// The sample rule named `name` (see [`rule_name`]).
+pub fn parse_rule(name: &str) -> Option<SampleRule> {
+    SAMPLE_RULES.into_iter().find(|r| rule_name(*r) == name)
+}
+
+/// The adaptive method's settings (its mean N_p is the frame's sample count).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AdaptiveSettings {
+    /// Image samples per cycle of b_p: 2 (Nyquist's rate) or 1 (Eq. IV.11 as printed).
+    pub rate: u8,
+    /// How N_p is set per pixel.
+    pub rule: SampleRule,
+}
+
+impl Default for AdaptiveSettings {
+    /// The CLI's defaults: rate 2, a constant N_p.
+    fn default() -> Self {
+        Self {
+            rate: 2,
+            rule: SampleRule::Constant,
+        }
+    }
+}
+
+/// One adaptive frame's buffers (at the G-buffer's resolution, row-major) and counts.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AdaptiveMaps {
+    /// G-buffer width (the frame's × k).
+    pub width: usize,
+    /// G-buffer height.
+    pub height: usize,
+    /// b_p, cycles per pixel (0 on the background).
+    pub bandwidth: Vec<f64>,
+    /// ℓ_p + 1 (0 on the background).
+    pub level: Vec<f64>,
+    /// N_p at the shaded pixels (0 elsewhere).
+    pub samples: Vec<f64>,
+    /// The level each pixel was shaded at, + 1 (0: up-sampled or background).
+    pub shaded: Vec<f64>,
+    /// Whether a surface is seen at each pixel.
+    pub surface: Vec<bool>,
+    /// Surface pixels.
+    pub surface_pixels: usize,
+    /// Pixels shaded.
+    pub shaded_pixels: usize,
+    /// Pixels up-sampled.
+    pub upsampled_pixels: usize,
+    /// Shading samples in all.
+    pub samples_total: u64,
+    /// The G-buffer pass, ms.
+    pub gbuffer_ms: f64,
+    /// The bandwidth pass (predictions, levels, sample counts, pyramids), ms.
+    pub bandwidth_ms: f64,
+    /// The hierarchical shading (and the k×k box filter), ms.
+    pub shading_ms: f64,
+    /// Building the shading context (material tables, environment bandwidth) for this scene,
+    /// ms: paid by the scene's first adaptive frame only.
+    pub tables_ms: f64,
+}
+
+impl AdaptiveMaps {
+    /// The shaded pixels' share of the surface pixels.
+    pub fn shaded_share(&self) -> f64 {
+        self.shaded_pixels as f64 / self.surface_pixels.max(1) as f64
+    }
+
+    /// The buffer `view` as 8-bit RGB (`width · height` pixels) and the heat map's value range
+    /// (`None` for [`BufferView::Image`], which is the frame's image).
+    pub fn rgb(&self, view: BufferView) -> Option<(Vec<u8>, (f64, f64))> {
+        let values = match view {
+            BufferView::Image => return None,
+            BufferView::Bandwidth => &self.bandwidth,
+            BufferView::Level => &self.level,
+            BufferView::Samples => &self.samples,
+            BufferView::Shaded => &self.shaded,
+        };
+        let (mut rgb, scale) = heat_rgb(values);
+        if view == BufferView::Shaded {
+            for (k, v) in values.iter().enumerate() {
+                if *v == 0.0 && self.surface.get(k) == Some(&true) {
+                    rgb[3 * k..3 * k + 3].copy_from_slice(&UPSAMPLED_GREY);
+                }
+            }
+        }
+        Some((rgb, scale))
+    }
+}
+
+/// The inferno colour map's stops (lustre-plot's).
+const INFERNO: [[f64; 3]; 9] = [
+    [0.0, 0.0, 4.0],
+    [31.0, 12.0, 72.0],
+    [85.0, 15.0, 109.0],
+    [136.0, 34.0, 106.0],
+    [186.0, 54.0, 85.0],
+    [227.0, 89.0, 51.0],
+    [249.0, 140.0, 10.0],
+    [249.0, 201.0, 50.0],
+    [252.0, 255.0, 164.0],
+];
+
+/// The colour map at `t` in [0, 1] (clamped), 8-bit RGB.
+fn inferno(t: f64) -> [u8; 3] {
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let x = t * (INFERNO.len() - 1) as f64;
+    let i = (x.floor() as usize).min(INFERNO.len() - 2);
+    let f = x - i as f64;
+    let (a, b) = (INFERNO[i], INFERNO[i + 1]);
+    [0, 1, 2].map(|c| (a[c] + (b[c] - a[c]) * f).round().clamp(0.0, 255.0) as u8)
+}
+
+/// `values` as the CLI's log heat map (`lustre_plot::heat_map`'s colours): 8-bit RGB and the
+/// value range (the 1st and 99.9th percentiles of the positive values). Zero, negative and
+/// non-finite values are black.
+pub fn heat_rgb(values: &[f64]) -> (Vec<u8>, (f64, f64)) {
+    let positive = |v: f64| v.is_finite() && v > 0.0;
+    let mut sorted: Vec<f64> = values.iter().copied().filter(|v| positive(*v)).collect();
+    sorted.sort_by(f64::total_cmp);
+    let (low, high) = if sorted.is_empty() {
+        (0.0, 0.0)
+    } else {
+        let pick = |p: f64| sorted[((sorted.len() - 1) as f64 * p) as usize];
+        (pick(0.01), pick(0.999))
+    };
+    let span = (high / low).log2().max(1e-9);
+    let rgb = values
+        .iter()
+        .flat_map(|&v| {
+            if positive(v) {
+                inferno((v / low).log2() / span)
+            } else {
+                [0, 0, 0]
+            }
+        })
+        .collect();
+    (rgb, (low, high))
+}
+
+/// The adaptive renderer of one scene: its shading context and environment bandwidth.
+pub struct AdaptiveRenderer<'a, 's> {
+    ctx: ShadingContext<'a, 's>,
+    env: EnvironmentBandwidth<'a>,
+    tables_ms: f64,
+}
+
+impl<'a, 's> AdaptiveRenderer<'a, 's> {
+    /// Builds the shading context of `scene` (`progress(k, n)` after each material's tables).
+    /// Errors: a scene without an environment (adaptive shading lights by it alone), a
+    /// material whose tables cannot be built.
+    pub fn new(scene: &'a PathScene<'s>, progress: &dyn Fn(usize, usize)) -> anyhow::Result<Self> {
+        let t = Instant::now();
+        let Some(env) = scene.environment.as_ref() else {
+            anyhow::bail!(
+                "the scene has no environment, and adaptive shading lights by the environment \
+                 alone (004 ch. IV): choose another method, or a scene with an environment map"
+            );
+        };
+        let options = ShadingOptions {
+            // Direct lighting (the CLI's default) reads the map itself: no pyramid.
+            pyramid_face: 0,
+            ..ShadingOptions::default()
+        };
+        let ctx = ShadingContext::new(scene, options, progress)
+            .map_err(|e| anyhow::anyhow!("adaptive shading's material tables: {e}"))?;
+        let env = EnvironmentBandwidth::new(env.map())
+            .map_err(|e| anyhow::anyhow!("the environment's bandwidth: {e}"))?;
+        Ok(Self {
+            ctx,
+            env,
+            tables_ms: t.elapsed().as_secs_f64() * 1e3,
+        })
+    }
+
+    /// Renders a `size` frame from `camera` with `settings`: a k×k G-buffer per pixel (k =
+    /// `supersampling`, 1..=4), the mean N_p `samples` (1..=1024), its `adaptive` rate and rule
+    /// and `seed`. Returns the frame's image (box-filtered to `size`) and the buffers.
+    pub fn render(
+        &self,
+        tracer: &PathTracer,
+        camera: &PathCamera,
+        size: (usize, usize),
+        settings: &FrameSettings,
+    ) -> anyhow::Result<(Image, AdaptiveMaps)> {
+        let FrameSettings {
+            samples,
+            supersampling,
+            seed,
+            adaptive: settings,
+            ..
+        } = *settings;
+        if !(1..=4).contains(&supersampling) {
+            anyhow::bail!("k×k G-buffer: k = {supersampling} must be 1 … 4");
+        }
+        if !(1..=MAX_SAMPLES as u32).contains(&samples) {
+            anyhow::bail!("mean N_p {samples} must be 1 … {MAX_SAMPLES}");
+        }
+        if !matches!(settings.rate, 1 | 2) {
+            anyhow::bail!("rate {} must be 1 or 2", settings.rate);
+        }
+        let k = supersampling as usize;
+        let (gw, gh) = (size.0 * k, size.1 * k);
+        let mut t = Instant::now();
+        let mut lap = || {
+            let ms = t.elapsed().as_secs_f64() * 1e3;
+            t = Instant::now();
+            ms
+        };
+        let g = GBuffer::render(tracer, self.ctx.scene, camera, gw, gh)?;
+        let gbuffer_ms = lap();
+        let options = BufferOptions {
+            n_b: N_B,
+            mean_samples: f64::from(samples),
+            max_samples: MAX_SAMPLES,
+            lighting: Lighting::Direct,
+            scale: settings.rule,
+            rate: f64::from(settings.rate),
+        };
+        let buffer = BandwidthBuffer::build(&g, &self.ctx, &self.env, options)?;
+        let bandwidth_ms = lap();
+        let f = render_adaptive(&g, &self.ctx, &buffer, Lighting::Direct, seed)?;
+        let image = box_downsample(&f.image, k)?;
+        let shading_ms = lap();
+        let maps = AdaptiveMaps {
+            width: gw,
+            height: gh,
+            bandwidth: buffer.bandwidth.clone(),
+            level: level_map(&buffer.level),
+            samples: f.samples.iter().map(|n| f64::from(*n)).collect(),
+            shaded: level_map(&f.shaded_level),
+            surface: g
+                .pixels
+                .iter()
+                .map(|p| matches!(p, GPixel::Surface(_)))
+                .collect(),
+            surface_pixels: g.surface_pixels(),
+            shaded_pixels: f.stats.shaded,
+            upsampled_pixels: f.stats.upsampled,
+            samples_total: f.stats.samples,
+            gbuffer_ms,
+            bandwidth_ms,
+            shading_ms,
+            tables_ms: self.tables_ms,
+        };
+        Ok((image, maps))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lustre_shade::path::PathOptions;
+    use lustre_shade::reference::{film_camera, path_scene};
+
+    #[test]
+    fn names_round_trip() {
+        for v in BufferView::ALL {
+            assert_eq!(BufferView::parse(v.name()), Some(v));
+        }
+        for r in SAMPLE_RULES {
+            assert_eq!(parse_rule(rule_name(r)), Some(r));
+        }
+        assert_eq!(BufferView::parse("mask"), None);
+        assert_eq!(parse_rule("uniform"), None);
+    }
+
+    #[test]
+    fn heat_colours_are_the_cli_maps() {
+        // A ramp over six octaves with zeros, and a constant map: pixel for pixel the PNG the
+        // CLI writes (lustre_plot::heat_map).
+        let (w, h) = (37, 11);
+        let ramp: Vec<f64> = (0..w * h)
+            .map(|k| {
+                if k % 7 == 0 {
+                    0.0
+                } else {
+                    (k as f64 / 60.0).exp2()
+                }
+            })
+            .collect();
+        let dir = tempfile::tempdir().unwrap();
+        for values in [ramp, vec![3.0; w * h], vec![0.0; w * h]] {
+            let path = dir.path().join("heat.png");
+            let scale = lustre_plot::heat_map(&values, w, h, &path).unwrap();
+            let png = image::open(&path).unwrap().to_rgb8();
+            let (rgb, range) = heat_rgb(&values);
+            assert_eq!((range.0, range.1), (scale.low, scale.high));
+            assert_eq!(rgb.len(), png.as_raw().len());
+            assert_eq!(&rgb, png.as_raw());
+        }
+        // Not finite or negative: black, not a panic.
+        let (rgb, _) = heat_rgb(&[f64::NAN, -1.0, f64::INFINITY, 2.0]);
+        assert_eq!(&rgb[..9], &[0; 9]);
+    }
+
+    #[test]
+    fn a_scene_without_an_environment_is_refused_by_name() {
+        let mut scene = lustre_scene::builtin::preview("lambert(kd=0.5)", None).unwrap();
+        scene.environment = None;
+        let (ps, _) = path_scene(&scene).unwrap();
+        let e = match AdaptiveRenderer::new(&ps, &|_, _| {}) {
+            Ok(_) => panic!("a scene without an environment was accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains("the scene has no environment"), "{e}");
+    }
+
+    #[test]
+    fn a_small_frame_has_shaded_and_upsampled_pixels_and_its_views() {
+        // The material preview (a glossy sphere under the built-in sky) at 48 × 32, 2 × 2
+        // G-buffer: an image, every buffer view, shaded and up-sampled pixels.
+        let scene = lustre_scene::builtin::preview(
+            "ggx(rho_d=0.2, rho_s=0.6, alpha=0.15, f0=0.3, f1=0.1)",
+            None,
+        )
+        .unwrap();
+        let (ps, _) = path_scene(&scene).unwrap();
+        let tracer = PathTracer::new(&ps, PathOptions::default()).unwrap();
+        let r = AdaptiveRenderer::new(&ps, &|_, _| {}).unwrap();
+        let cam = film_camera(&scene.cameras[0], 48, 32).unwrap();
+        let settings = FrameSettings {
+            method: crate::ViewMethod::Adaptive,
+            samples: 4,
+            supersampling: 2,
+            refine_frames: 1,
+            seed: 1,
+            generation: 0,
+            adaptive: AdaptiveSettings::default(),
+        };
+        let (img, maps) = r.render(&tracer, &cam, (48, 32), &settings).unwrap();
+        assert_eq!((img.width, img.height), (48, 32));
+        assert_eq!((maps.width, maps.height), (96, 64));
+        assert!(img.data.iter().all(|p| p.iter().all(|c| c.is_finite())));
+        assert!(
+            maps.shaded_pixels > 0 && maps.upsampled_pixels > 0,
+            "{maps:?}"
+        );
+        assert_eq!(
+            maps.shaded_pixels + maps.upsampled_pixels,
+            maps.surface_pixels
+        );
+        // Constant rule: every shaded pixel has the mean N_p.
+        assert_eq!(maps.samples_total, 4 * maps.shaded_pixels as u64);
+        assert!(BufferView::Image.eq(&BufferView::default()));
+        assert!(maps.rgb(BufferView::Image).is_none());
+        for v in &BufferView::ALL[1..] {
+            let (rgb, (lo, hi)) = maps.rgb(*v).unwrap();
+            assert_eq!(rgb.len(), 3 * 96 * 64);
+            assert!(lo > 0.0 && hi >= lo, "{v:?}: {lo} {hi}");
+        }
+        let (mask, _) = maps.rgb(BufferView::Shaded).unwrap();
+        let grey = mask.chunks(3).filter(|p| *p == UPSAMPLED_GREY).count();
+        assert_eq!(grey, maps.upsampled_pixels);
+        // Bad settings are refused by name, not a panic.
+        for (samples, supersampling, rate, says) in
+            [(0, 1, 2, "N_p"), (4, 5, 2, "k×k"), (4, 1, 3, "rate")]
+        {
+            let s = FrameSettings {
+                samples,
+                supersampling,
+                adaptive: AdaptiveSettings {
+                    rate,
+                    ..settings.adaptive
+                },
+                ..settings
+            };
+            let e = r.render(&tracer, &cam, (48, 32), &s).unwrap_err();
+            assert!(e.to_string().contains(says), "{e}");
+        }
+    }
+}
