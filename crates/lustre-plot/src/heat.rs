@@ -54,31 +54,7 @@ pub fn heat_map(values: &[f64], width: usize, height: usize, path: &Path) -> Res
             k / width
         )));
     }
-    let mut positive: Vec<f64> = values.iter().copied().filter(|v| *v > 0.0).collect();
-    positive.sort_by(f64::total_cmp);
-    let pick = |p: f64| positive[((positive.len() - 1) as f64 * p) as usize];
-    let scale = if positive.is_empty() {
-        HeatScale {
-            low: 0.0,
-            high: 0.0,
-        }
-    } else {
-        HeatScale {
-            low: pick(0.01),
-            high: pick(0.999),
-        }
-    };
-    let span = (scale.high / scale.low).log2().max(1e-9);
-    let rgb: Vec<u8> = values
-        .iter()
-        .flat_map(|&v| {
-            if v > 0.0 {
-                colormap((v / scale.low).log2() / span)
-            } else {
-                [0, 0, 0]
-            }
-        })
-        .collect();
+    let (rgb, scale) = heat_rgb(values);
     let fig = HeatFigure {
         width: width as u32,
         height: height as u32,
@@ -86,4 +62,38 @@ pub fn heat_map(values: &[f64], width: usize, height: usize, path: &Path) -> Res
     };
     write_png(&fig, path)?;
     Ok(scale)
+}
+
+/// The colours of a heat map of `values` (8-bit RGB, one triple per value) and its scale: the
+/// inferno colour map over the octaves between the 1st and the 99.9th percentile of the
+/// positive values; zero, negative and non-finite values are black. What [`heat_map`] draws,
+/// for a caller that shows it itself (the viewer's buffer views).
+pub fn heat_rgb(values: &[f64]) -> (Vec<u8>, HeatScale) {
+    let positive = |v: f64| v.is_finite() && v > 0.0;
+    let mut sorted: Vec<f64> = values.iter().copied().filter(|v| positive(*v)).collect();
+    sorted.sort_by(f64::total_cmp);
+    let scale = if sorted.is_empty() {
+        HeatScale {
+            low: 0.0,
+            high: 0.0,
+        }
+    } else {
+        let pick = |p: f64| sorted[((sorted.len() - 1) as f64 * p) as usize];
+        HeatScale {
+            low: pick(0.01),
+            high: pick(0.999),
+        }
+    };
+    let span = (scale.high / scale.low).log2().max(1e-9);
+    let rgb = values
+        .iter()
+        .flat_map(|&v| {
+            if positive(v) {
+                colormap((v / scale.low).log2() / span)
+            } else {
+                [0, 0, 0]
+            }
+        })
+        .collect();
+    (rgb, scale)
 }

@@ -491,3 +491,32 @@ fn non_finite_values_plot_as_zero() {
     };
     transfer_array(&Broken, "broken", &opts, &dir.path().join("a")).unwrap();
 }
+
+#[test]
+fn heat_colours_in_memory_are_the_png_heat_map() {
+    // A ramp over six octaves with zeros, a constant map and an empty one: `heat_rgb` is pixel
+    // for pixel the PNG `heat_map` writes (the viewer shows the former, the CLI writes the
+    // latter).
+    let (w, h) = (37, 11);
+    let ramp: Vec<f64> = (0..w * h)
+        .map(|k| {
+            if k % 7 == 0 {
+                0.0
+            } else {
+                (k as f64 / 60.0).exp2()
+            }
+        })
+        .collect();
+    let dir = tempfile::tempdir().expect("temp dir");
+    for values in [ramp, vec![3.0; w * h], vec![0.0; w * h]] {
+        let path = dir.path().join("heat.png");
+        let scale = heat_map(&values, w, h, &path).expect("heat map");
+        let png = image::open(&path).expect("png").to_rgb8();
+        let (rgb, range) = lustre_plot::heat::heat_rgb(&values);
+        assert_eq!(range, scale);
+        assert_eq!(&rgb, png.as_raw());
+    }
+    // Not finite or negative: black, not a panic.
+    let (rgb, _) = lustre_plot::heat::heat_rgb(&[f64::NAN, -1.0, f64::INFINITY, 2.0]);
+    assert_eq!(&rgb[..9], &[0; 9]);
+}

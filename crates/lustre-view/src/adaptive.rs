@@ -1,6 +1,7 @@
-//! The viewer's adaptive method: 004 chapter IV's adaptive shading of measured materials
-//! (`lustre-adaptive`, on the CPU; the same pipeline as `lustre render --method adaptive`) in
-//! the render thread, and its buffer views (004 Fig. IV.13, IV.22).
+//! The viewer's adaptive method: 004 chapter IV's adaptive shading of measured materials (the
+//! same pipeline as `lustre render --method adaptive`: lustre-gpu's bandwidth and adaptive
+//! passes where the GPU takes the scene's materials, else `lustre-adaptive` on the CPU) in the
+//! render thread, and its buffer views (004 Fig. IV.13, IV.22).
 //!
 //! Per frame: the G-buffer from the render thread's path tracer (k×k per pixel with the
 //! G-buffer supersampling, box-filtered after shading), the bandwidth buffer (n_b = 16
@@ -11,9 +12,9 @@
 //! environment is refused with a message.
 //!
 //! The buffer views colour b_p, ℓ + 1, N_p and the level each pixel was shaded at on the log
-//! heat map of the CLI's `frame_{bandwidth,level,samples,shaded}.png` (lustre-plot's inferno
-//! over the octaves between the 1st and the 99.9th percentile of the positive values, zero
-//! black; checked against `lustre_plot::heat_map` in the tests). In the shaded-pixel view the
+//! heat map of the CLI's `frame_{bandwidth,level,samples,shaded}.png` (`lustre_plot::heat::
+//! heat_rgb`: inferno over the octaves between the 1st and the 99.9th percentile of the positive
+//! values, zero black). In the shaded-pixel view the
 //! up-sampled surface pixels are grey (the CLI's map leaves them black like the background).
 
 use crate::render::FrameSettings;
@@ -22,6 +23,10 @@ use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive};
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_freq::pixel::EnvironmentBandwidth;
+use lustre_gpu::adaptive_pass::{AdaptivePass, AdaptiveScene};
+use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthScene};
+use lustre_gpu::GpuContext;
+use lustre_plot::heat::heat_rgb;
 use lustre_shade::image::Image;
 use lustre_shade::path::{PathCamera, PathScene, PathTracer};
 use std::time::Instant;
@@ -163,6 +168,10 @@ pub struct AdaptiveMaps {
     /// Building the shading context (material tables, environment bandwidth) for this scene,
     /// ms: paid by the scene's first adaptive frame only.
     pub tables_ms: f64,
+    /// Whether the bandwidth pass and the shading ran on the GPU.
+    pub on_gpu: (bool, bool),
+    /// Why a pass ran on the CPU although a GPU was offered (a material it does not take).
+    pub why_cpu: Option<String>,
 }
 
 impl AdaptiveMaps {
@@ -182,6 +191,7 @@ impl AdaptiveMaps {
             BufferView::Shaded => &self.shaded,
         };
         let (mut rgb, scale) = heat_rgb(values);
+        let scale = (scale.low, scale.high);
         if view == BufferView::Shaded {
             for (k, v) in values.iter().enumerate() {
                 if *v == 0.0 && self.surface.get(k) == Some(&true) {
@@ -193,72 +203,54 @@ impl AdaptiveMaps {
     }
 }
 
-/// The inferno colour map's stops (lustre-plot's).
-const INFERNO: [[f64; 3]; 9] = [
-    [0.0, 0.0, 4.0],
-    [31.0, 12.0, 72.0],
-    [85.0, 15.0, 109.0],
-    [136.0, 34.0, 106.0],
-    [186.0, 54.0, 85.0],
-    [227.0, 89.0, 51.0],
-    [249.0, 140.0, 10.0],
-    [249.0, 201.0, 50.0],
-    [252.0, 255.0, 164.0],
-];
-
-/// The colour map at `t` in [0, 1] (clamped), 8-bit RGB.
-fn inferno(t: f64) -> [u8; 3] {
-    let t = if t.is_finite() {
-        t.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let x = t * (INFERNO.len() - 1) as f64;
-    let i = (x.floor() as usize).min(INFERNO.len() - 2);
-    let f = x - i as f64;
-    let (a, b) = (INFERNO[i], INFERNO[i + 1]);
-    [0, 1, 2].map(|c| (a[c] + (b[c] - a[c]) * f).round().clamp(0.0, 255.0) as u8)
-}
-
-/// `values` as the CLI's log heat map (`lustre_plot::heat_map`'s colours): 8-bit RGB and the
-/// value range (the 1st and 99.9th percentiles of the positive values). Zero, negative and
-/// non-finite values are black.
-pub fn heat_rgb(values: &[f64]) -> (Vec<u8>, (f64, f64)) {
-    let positive = |v: f64| v.is_finite() && v > 0.0;
-    let mut sorted: Vec<f64> = values.iter().copied().filter(|v| positive(*v)).collect();
-    sorted.sort_by(f64::total_cmp);
-    let (low, high) = if sorted.is_empty() {
-        (0.0, 0.0)
-    } else {
-        let pick = |p: f64| sorted[((sorted.len() - 1) as f64 * p) as usize];
-        (pick(0.01), pick(0.999))
-    };
-    let span = (high / low).log2().max(1e-9);
-    let rgb = values
-        .iter()
-        .flat_map(|&v| {
-            if positive(v) {
-                inferno((v / low).log2() / span)
-            } else {
-                [0, 0, 0]
-            }
-        })
-        .collect();
-    (rgb, (low, high))
-}
-
 /// The adaptive renderer of one scene: its shading context and environment bandwidth.
 pub struct AdaptiveRenderer<'a, 's> {
     ctx: ShadingContext<'a, 's>,
     env: EnvironmentBandwidth<'a>,
     tables_ms: f64,
+    gpu: GpuPasses,
+}
+
+/// lustre-gpu's twins of the bandwidth pass and of the hierarchical shading, where the GPU
+/// takes the scene's materials (measured BRDFs, fitted models); `why_cpu` says why not.
+#[derive(Default)]
+struct GpuPasses {
+    bandwidth: Option<(BandwidthScene, BandwidthPass)>,
+    shading: Option<(AdaptiveScene, AdaptivePass)>,
+    why_cpu: Option<String>,
+}
+
+impl GpuPasses {
+    fn new(gpu: &GpuContext, ctx: &ShadingContext, env: &EnvironmentBandwidth) -> Self {
+        let mut why = vec![];
+        let bandwidth = BandwidthScene::from_context(gpu, ctx, env)
+            .and_then(|s| Ok((s, BandwidthPass::new(gpu)?)))
+            .map_err(|e| why.push(format!("bandwidth pass: {e}")))
+            .ok();
+        let shading = AdaptiveScene::from_context(gpu, ctx)
+            .and_then(|s| Ok((s, AdaptivePass::new(gpu)?)))
+            .map_err(|e| why.push(format!("shading: {e}")))
+            .ok();
+        Self {
+            bandwidth,
+            shading,
+            why_cpu: (!why.is_empty()).then(|| why.join("; ")),
+        }
+    }
 }
 
 impl<'a, 's> AdaptiveRenderer<'a, 's> {
     /// Builds the shading context of `scene` (`progress(k, n)` after each material's tables).
     /// Errors: a scene without an environment (adaptive shading lights by it alone), a
     /// material whose tables cannot be built.
-    pub fn new(scene: &'a PathScene<'s>, progress: &dyn Fn(usize, usize)) -> anyhow::Result<Self> {
+    ///
+    /// With `gpu`, the bandwidth pass and the shading run there when it takes the scene's
+    /// materials (each pass on its own; the maps say where each ran and why not the GPU).
+    pub fn new(
+        scene: &'a PathScene<'s>,
+        progress: &dyn Fn(usize, usize),
+        gpu: Option<&GpuContext>,
+    ) -> anyhow::Result<Self> {
         let t = Instant::now();
         let Some(env) = scene.environment.as_ref() else {
             anyhow::bail!(
@@ -275,10 +267,12 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
             .map_err(|e| anyhow::anyhow!("adaptive shading's material tables: {e}"))?;
         let env = EnvironmentBandwidth::new(env.map())
             .map_err(|e| anyhow::anyhow!("the environment's bandwidth: {e}"))?;
+        let gpu = gpu.map_or_else(GpuPasses::default, |g| GpuPasses::new(g, &ctx, &env));
         Ok(Self {
             ctx,
             env,
             tables_ms: t.elapsed().as_secs_f64() * 1e3,
+            gpu,
         })
     }
 
@@ -286,7 +280,8 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
     /// `supersampling`, 1..=4), the mean N_p `samples` (1..=1024), its `adaptive` rate and rule
     /// and `seed`. Returns the frame's image (box-filtered to `size`) and the buffers.
     pub fn render(
-        &self,
+        &mut self,
+        gpu: Option<&GpuContext>,
         tracer: &PathTracer,
         camera: &PathCamera,
         size: (usize, usize),
@@ -326,9 +321,23 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
             scale: settings.rule,
             rate: f64::from(settings.rate),
         };
-        let buffer = BandwidthBuffer::build(&g, &self.ctx, &self.env, options)?;
+        let passes = &mut self.gpu;
+        let buffer = match (gpu, passes.bandwidth.as_mut()) {
+            (Some(gctx), Some((scene, pass))) => {
+                let (estimates, _) = pass.predict(gctx, scene, &g, &self.ctx, N_B as u32)?;
+                BandwidthBuffer::assemble(&g, &estimates, options)?
+            }
+            _ => BandwidthBuffer::build(&g, &self.ctx, &self.env, options)?,
+        };
         let bandwidth_ms = lap();
-        let f = render_adaptive(&g, &self.ctx, &buffer, Lighting::Direct, seed)?;
+        let f = match (gpu, passes.shading.as_mut()) {
+            (Some(gctx), Some((scene, pass))) => pass.render(gctx, scene, &g, &buffer, seed)?.frame,
+            _ => render_adaptive(&g, &self.ctx, &buffer, Lighting::Direct, seed)?,
+        };
+        let on_gpu = (
+            gpu.is_some() && passes.bandwidth.is_some(),
+            gpu.is_some() && passes.shading.is_some(),
+        );
         let image = box_downsample(&f.image, k)?;
         let shading_ms = lap();
         let maps = AdaptiveMaps {
@@ -351,6 +360,8 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
             bandwidth_ms,
             shading_ms,
             tables_ms: self.tables_ms,
+            on_gpu,
+            why_cpu: self.gpu.why_cpu.clone(),
         };
         Ok((image, maps))
     }
@@ -375,40 +386,11 @@ mod tests {
     }
 
     #[test]
-    fn heat_colours_are_the_cli_maps() {
-        // A ramp over six octaves with zeros, and a constant map: pixel for pixel the PNG the
-        // CLI writes (lustre_plot::heat_map).
-        let (w, h) = (37, 11);
-        let ramp: Vec<f64> = (0..w * h)
-            .map(|k| {
-                if k % 7 == 0 {
-                    0.0
-                } else {
-                    (k as f64 / 60.0).exp2()
-                }
-            })
-            .collect();
-        let dir = tempfile::tempdir().unwrap();
-        for values in [ramp, vec![3.0; w * h], vec![0.0; w * h]] {
-            let path = dir.path().join("heat.png");
-            let scale = lustre_plot::heat_map(&values, w, h, &path).unwrap();
-            let png = image::open(&path).unwrap().to_rgb8();
-            let (rgb, range) = heat_rgb(&values);
-            assert_eq!((range.0, range.1), (scale.low, scale.high));
-            assert_eq!(rgb.len(), png.as_raw().len());
-            assert_eq!(&rgb, png.as_raw());
-        }
-        // Not finite or negative: black, not a panic.
-        let (rgb, _) = heat_rgb(&[f64::NAN, -1.0, f64::INFINITY, 2.0]);
-        assert_eq!(&rgb[..9], &[0; 9]);
-    }
-
-    #[test]
     fn a_scene_without_an_environment_is_refused_by_name() {
         let mut scene = lustre_scene::builtin::preview("lambert(kd=0.5)", None).unwrap();
         scene.environment = None;
         let (ps, _) = path_scene(&scene).unwrap();
-        let e = match AdaptiveRenderer::new(&ps, &|_, _| {}) {
+        let e = match AdaptiveRenderer::new(&ps, &|_, _| {}, None) {
             Ok(_) => panic!("a scene without an environment was accepted"),
             Err(e) => e.to_string(),
         };
@@ -426,7 +408,7 @@ mod tests {
         .unwrap();
         let (ps, _) = path_scene(&scene).unwrap();
         let tracer = PathTracer::new(&ps, PathOptions::default()).unwrap();
-        let r = AdaptiveRenderer::new(&ps, &|_, _| {}).unwrap();
+        let mut r = AdaptiveRenderer::new(&ps, &|_, _| {}, None).unwrap();
         let cam = film_camera(&scene.cameras[0], 48, 32).unwrap();
         let settings = FrameSettings {
             method: crate::ViewMethod::Adaptive,
@@ -437,7 +419,7 @@ mod tests {
             generation: 0,
             adaptive: AdaptiveSettings::default(),
         };
-        let (img, maps) = r.render(&tracer, &cam, (48, 32), &settings).unwrap();
+        let (img, maps) = r.render(None, &tracer, &cam, (48, 32), &settings).unwrap();
         assert_eq!((img.width, img.height), (48, 32));
         assert_eq!((maps.width, maps.height), (96, 64));
         assert!(img.data.iter().all(|p| p.iter().all(|c| c.is_finite())));
@@ -474,7 +456,7 @@ mod tests {
                 },
                 ..settings
             };
-            let e = r.render(&tracer, &cam, (48, 32), &s).unwrap_err();
+            let e = r.render(None, &tracer, &cam, (48, 32), &s).unwrap_err();
             assert!(e.to_string().contains(says), "{e}");
         }
     }

@@ -1089,10 +1089,16 @@ impl App {
                 a.shading_ms,
                 a.gbuffer_ms,
             ));
+            let place = |gpu: bool| if gpu { "GPU" } else { "CPU" };
             ui.small(format!(
-                "material tables {:.2} s (once per scene and material edit)",
+                "bandwidth pass on the {}, shading on the {} · material tables {:.2} s (once per scene and material edit)",
+                place(a.on_gpu.0),
+                place(a.on_gpu.1),
                 a.tables_ms * 1e-3
             ));
+            if let Some(why) = &a.why_cpu {
+                ui.small(format!("CPU because: {why}"));
+            }
         }
         if let Some(f) = &self.frame {
             let t = &f.times;
@@ -1619,6 +1625,8 @@ impl App {
                         "bandwidth_ms": a.map(|a| a.bandwidth_ms),
                         "shading_ms": a.map(|a| a.shading_ms),
                         "tables_ms": a.map(|a| a.tables_ms),
+                        "bandwidth_on_gpu": a.map(|a| a.on_gpu.0),
+                        "shading_on_gpu": a.map(|a| a.on_gpu.1),
                     })
                 }),
                 "samples": self.settings.samples,

@@ -578,10 +578,10 @@ fn serve(
                         "adaptive shading: material tables {k} of {n}"
                     )));
                 };
-                AdaptiveRenderer::new(ps, &progress).map_err(|e| format!("{e:#}"))
+                AdaptiveRenderer::new(ps, &progress, Some(ctx)).map_err(|e| format!("{e:#}"))
             });
-            let rendered = renderer.as_ref().map_err(|e| e.clone()).and_then(|r| {
-                r.render(pt, &camera, size, &settings)
+            let rendered = renderer.as_mut().map_err(|e| e.clone()).and_then(|r| {
+                r.render(Some(ctx), pt, &camera, size, &settings)
                     .map_err(|e| format!("{e:#}"))
             });
             let _ = tx.send(match rendered {
