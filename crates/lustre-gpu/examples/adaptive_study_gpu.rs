@@ -206,7 +206,7 @@ fn study(
             let (estimates, _) = bw_pass.predict(gpu, &bw_scene, &g, &ctx, 16)?;
             let buffer = BandwidthBuffer::assemble(&g, &estimates, options)?;
             let t_bw = t.elapsed().as_secs_f64();
-            let out = pass.render(gpu, &shade_scene, &g, &buffer, 7)?;
+            let out = pass.render(gpu, &shade_scene, &g, &buffer, None, 7)?;
             let time_s = t.elapsed().as_secs_f64();
             on_gpu.adaptive.push((
                 Measured {

@@ -10,17 +10,19 @@
 //! upload of ℓ_p and of each pixel's quota 4π² S_p / V. Materials are measured BRDFs the GPU
 //! evaluates directly (neural BRDFs, MERL tables) or fitted models (SGD, Cook–Torrance, Kurt:
 //! `fit_models`), each sampled by its tabulated CDFs; the lighting is the environment at full
-//! resolution (`Lighting::Direct`) plus area lights.
+//! resolution (`Lighting::Direct`) or its pyramid at each pixel's BRDF bandwidth
+//! (`Lighting::Preconvolved`, `cube_storage`), plus area lights.
 
 use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry};
 use crate::context::GpuContext;
+use crate::cube_storage::{pack_pyramid, PackedPyramid};
 use crate::error::{invalid, Result};
 use crate::gbuffer::map_read;
 use crate::measured::{
     pack_tabulated, GpuTabulatedDims, MaterialPipelines, PackedBrdfs, EVALUATED,
 };
 use crate::timer::{GpuTimer, Timing};
-use crate::wgsl::{ENV_LIGHT, QMC, TYPES};
+use crate::wgsl::{CUBE_STORAGE, ENV_LIGHT, QMC, TYPES};
 use glam::{DMat3, DVec3};
 use lustre_adaptive::buffer::{BandwidthBuffer, NO_LEVEL};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
@@ -86,7 +88,9 @@ struct Params {
     lights: u32,
     max_samples: u32,
     constant: u32,
-    _pad: [u32; 3],
+    pyramid_levels: u32,
+    phase: u32,
+    _pad: u32,
     env: GpuEnvDims,
     to_map: [[f32; 4]; 3],
     right: [f32; 4],
@@ -125,6 +129,10 @@ pub struct AdaptiveScene {
     light_texels: wgpu::Buffer,
     fitted: wgpu::Buffer,
     has_fitted: bool,
+    cube_texels: wgpu::Buffer,
+    cube_levels: wgpu::Buffer,
+    cube_rings: wgpu::Buffer,
+    pyramid_levels: u32,
     light_count: u32,
     material_count: u32,
 }
@@ -209,9 +217,30 @@ impl AdaptiveScene {
         if light_texels.is_empty() {
             light_texels.push([0.0; 4]);
         }
+        // The pre-convolved pyramid when the context built one (one unread texel else).
+        let pyramid = shading.pyramid.as_ref().map(pack_pyramid);
+        let pyramid_levels = pyramid.as_ref().map_or(0, |p| p.levels.len() as u32);
+        let pyramid = pyramid.unwrap_or(PackedPyramid {
+            texels: vec![[0.0; 4]],
+            levels: vec![[0; 4]],
+            ring: vec![[0; 4]],
+        });
         let storage = wgpu::BufferUsages::STORAGE;
         let init = |label, bytes: &[u8]| buffer_init(ctx, label, bytes, storage);
         Ok(Self {
+            cube_texels: init(
+                "adaptive pyramid texels",
+                bytemuck::cast_slice(&pyramid.texels),
+            ),
+            cube_levels: init(
+                "adaptive pyramid levels",
+                bytemuck::cast_slice(&pyramid.levels),
+            ),
+            cube_rings: init(
+                "adaptive pyramid rings",
+                bytemuck::cast_slice(&pyramid.ring),
+            ),
+            pyramid_levels,
             env_texels: init("adaptive env texels", bytemuck::cast_slice(&texels)),
             env_words: init("adaptive env sampler", bytemuck::cast_slice(&env_words)),
             env: env_dims,
@@ -258,11 +287,16 @@ impl AdaptivePass {
             storage_entry(10, false),
             storage_entry(11, false),
             storage_entry(12, true),
+            storage_entry(13, true),
+            storage_entry(14, true),
+            storage_entry(15, true),
+            storage_entry(16, false),
+            storage_entry(17, false),
         ]);
         let shade = MaterialPipelines::new(
             ctx,
             "adaptive pass",
-            &[&TYPES, &QMC, &ENV_LIGHT],
+            &[&TYPES, &QMC, &ENV_LIGHT, &CUBE_STORAGE],
             ADAPTIVE_PASS_WGSL,
             12,
             entries,
@@ -286,16 +320,27 @@ impl AdaptivePass {
         })
     }
 
-    /// The GPU twin of `render_adaptive(g, shading, buffer, Lighting::Direct, seed)`: the
-    /// pyramids of `buffer`'s levels and quotas, then every level's shading and up-sampling.
+    /// The GPU twin of `render_adaptive(g, shading, buffer, lighting, seed)`: the pyramids of
+    /// `buffer`'s levels and quotas, then every level's shading and up-sampling. `lod` is
+    /// `None` for `Lighting::Direct`; for `Lighting::Preconvolved`, the pyramid level of a
+    /// BRDF bandwidth (`ShadingContext::level_for`), read at each pixel's largest
+    /// (`buffer.brdf_max`); it errors when the scene was uploaded without a pyramid.
     pub fn render(
         &mut self,
         ctx: &GpuContext,
         scene: &AdaptiveScene,
         g: &GBuffer,
         buffer: &BandwidthBuffer,
+        lod: Option<&dyn Fn(f64) -> f64>,
         seed: u64,
     ) -> Result<GpuAdaptiveFrame> {
+        if lod.is_some() && scene.pyramid_levels == 0 {
+            return Err(invalid(
+                "adaptive pass",
+                "pre-convolved shading of a scene uploaded without its pyramid (build the \
+                 shading context with a pyramid face)",
+            ));
+        }
         if g.width != buffer.width || g.height != buffer.height {
             return Err(invalid(
                 "adaptive pass",
@@ -312,6 +357,10 @@ impl AdaptivePass {
             .collect();
         let level: Vec<u32> = buffer.level.iter().map(|&l| u32::from(l)).collect();
         let constant = buffer.constant.map_or(0, |n| n as u32);
+        let lods = match lod {
+            Some(f) => buffer.brdf_max.iter().map(|&nu| f(nu) as f32).collect(),
+            None => vec![-1.0; g.pixels.len()],
+        };
         self.run(
             ctx,
             scene,
@@ -322,6 +371,7 @@ impl AdaptivePass {
                 quota,
                 constant,
                 max_samples: buffer.max_samples as u32,
+                lods,
             },
             seed,
         )
@@ -354,6 +404,7 @@ impl AdaptivePass {
                 quota: vec![0.0; pixels],
                 constant: n as u32,
                 max_samples: n as u32,
+                lods: vec![-1.0; pixels],
             },
             seed,
         )
@@ -375,7 +426,7 @@ impl AdaptivePass {
             ));
         }
         let mut surfels: Vec<[f32; 4]> = Vec::with_capacity(w * h * 5);
-        for p in &g.pixels {
+        for (p, &lod) in g.pixels.iter().zip(&levels.lods) {
             match p {
                 GPixel::Surface(s) => {
                     if s.material >= scene.material_count as usize {
@@ -390,7 +441,7 @@ impl AdaptivePass {
                     let v = |d: DVec3, w: f32| [d.x as f32, d.y as f32, d.z as f32, w];
                     surfels.push(v(s.position, s.depth as f32));
                     surfels.push(v(s.frame.t, f32::from_bits(s.material as u32)));
-                    surfels.push(v(s.frame.b, 0.0));
+                    surfels.push(v(s.frame.b, lod));
                     surfels.push(v(s.frame.n, 0.0));
                     surfels.push(v(s.wo, 0.0));
                 }
@@ -422,7 +473,9 @@ impl AdaptivePass {
             lights: scene.light_count,
             max_samples: levels.max_samples.max(1),
             constant: levels.constant,
-            _pad: [0; 3],
+            pyramid_levels: scene.pyramid_levels,
+            phase: 0,
+            _pad: 0,
             env: scene.env,
             to_map: m,
             right: v4(cam.right),
@@ -494,11 +547,28 @@ impl AdaptivePass {
             })
             .collect();
         let (shade_pipeline, shade_layout) = self.shade.get(ctx, scene.has_fitted)?;
-        let shade_groups: Vec<(wgpu::BindGroup, (u32, u32))> = (0..levels.count)
+        let queue = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("adaptive queue"),
+            size: (w * h * 4) as u64,
+            usage: storage,
+            mapped_at_creation: false,
+        });
+        let counts = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("adaptive queue counts"),
+            size: 4 * 16,
+            usage: storage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        enc.clear_buffer(&counts, 0, None);
+        // Per level, coarsest first: its classification and its shading, each a 1-D dispatch
+        // over the level's grid points.
+        let shade_groups: Vec<(wgpu::BindGroup, u32)> = (0..levels.count)
             .rev()
-            .map(|k| {
+            .flat_map(|k| [(k, 0u32), (k, 1u32)])
+            .map(|(k, phase)| {
                 let p = Params {
                     level: k as u32,
+                    phase,
                     ..base
                 };
                 let ub = buffer_init(
@@ -524,10 +594,15 @@ impl AdaptivePass {
                         entry(10, &values),
                         entry(11, &shaded),
                         entry(12, &scene.fitted),
+                        entry(13, &scene.cube_texels),
+                        entry(14, &scene.cube_levels),
+                        entry(15, &scene.cube_rings),
+                        entry(16, &queue),
+                        entry(17, &counts),
                     ],
                 });
-                let size = (w.div_ceil(1 << k) as u32, h.div_ceil(1 << k) as u32);
-                (group, size)
+                let points = (w.div_ceil(1 << k) * h.div_ceil(1 << k)) as u32;
+                (group, points)
             })
             .collect();
         {
@@ -542,9 +617,10 @@ impl AdaptivePass {
                 pass.dispatch_workgroups(gw.div_ceil(8), gh.div_ceil(8), 1);
             }
             pass.set_pipeline(shade_pipeline);
-            for (group, (gw, gh)) in &shade_groups {
+            for (group, points) in &shade_groups {
                 pass.set_bind_group(0, group, &[]);
-                pass.dispatch_workgroups(gw.div_ceil(8), gh.div_ceil(8), 1);
+                let groups = points.div_ceil(64);
+                pass.dispatch_workgroups(groups.min(65_535), groups.div_ceil(65_535), 1);
             }
         }
         ctx.queue.submit([enc.finish()]);
@@ -591,6 +667,8 @@ struct Levels {
     quota: Vec<f32>,
     constant: u32,
     max_samples: u32,
+    /// Per pixel, the pre-convolved pyramid level (< 0: direct lighting).
+    lods: Vec<f32>,
 }
 
 /// The frame from the read-back: surface pixels take the GPU's values, the background the

@@ -3,11 +3,11 @@
 // up-sampled from its four parents (depth Gaussian × anisotropic screen-space Gaussian ×
 // bilinear weights) when the min-filtered level allows it, else shaded with the N_p of its
 // block's max-filtered variance. CPU twin: lustre_adaptive::hierarchy::render_adaptive, its
-// shading lustre_adaptive::shading::ShadingContext::shade (Lighting::Direct): tabulated-CDF
+// shading lustre_adaptive::shading::ShadingContext::shade (direct or pre-convolved): tabulated-CDF
 // BRDF samples and environment samples combined by the balance heuristic, plus area lights.
 // Materials: measured BRDFs evaluated directly (measured_eval: kinds 0 and 1) or fitted models
 // (bsdf.wgsl's records: kind 2, `base` indexing `fitted`). Imports: types, measured, qmc,
-// env_light, and bsdf with fitted models.
+// env_light, cube_storage, and bsdf with fitted models.
 
 struct Params {
     width: u32,
@@ -19,8 +19,11 @@ struct Params {
     max_samples: u32,
     // N_p everywhere when > 0 (SampleRule::Constant); else from the variance quotas.
     constant: u32,
-    _pad0: u32,
-    _pad1: u32,
+    // Levels of the pre-convolved pyramid (0: none uploaded).
+    pyramid_levels: u32,
+    // 0: classify level `level`'s new grid points (up-sample, or queue for shading); 1: shade
+    // the queue.
+    phase: u32,
     _pad2: u32,
     env: EnvDims,
     // Rows of the rotation taking world directions to the map's.
@@ -33,7 +36,8 @@ struct Params {
 }
 
 // A pixel of the G-buffer: position (xyz) and depth; the shading frame t, b, n; the direction
-// to the eye; the material index in t.w (bitcast u32; 0xffffffff: background).
+// to the eye; the material index in t.w (bitcast u32; 0xffffffff: background); in b.w the
+// pyramid level of pre-convolved shading (< 0: the map at full resolution).
 struct Surfel {
     p: vec4<f32>,
     t: vec4<f32>,
@@ -81,6 +85,35 @@ struct Light {
 @group(0) @binding(11) var<storage, read_write> shaded: array<vec2<u32>>;
 // Binding 12, the fitted models' records, and `material_eval` come with the pass's variant
 // (measured::material_eval_source).
+// The pre-convolved pyramid (world directions; module cube_storage).
+@group(0) @binding(13) var<storage, read> cube_texels: array<vec4<f32>>;
+@group(0) @binding(14) var<storage, read> cube_levels: array<vec4<u32>>;
+@group(0) @binding(15) var<storage, read> cube_rings: array<vec4<i32>>;
+
+// The pixels a level shades (phase 0 appends, phase 1 reads) and, per level, how many.
+@group(0) @binding(16) var<storage, read_write> queue: array<u32>;
+@group(0) @binding(17) var<storage, read_write> counts: array<atomic<u32>>;
+
+fn cube_texel(i: u32) -> vec3<f32> {
+    return cube_texels[i].xyz;
+}
+
+fn cube_level(i: u32) -> vec4<u32> {
+    return cube_levels[i];
+}
+
+fn cube_ring(i: u32) -> vec4<i32> {
+    return cube_rings[i];
+}
+
+// The light arriving from world direction d (dm in the map's frame): the pyramid at `lod`
+// (Lighting::Preconvolved), or the map itself.
+fn incident(d: vec3<f32>, dm: vec3<f32>, lod: f32) -> vec3<f32> {
+    if (lod >= 0.0 && params.pyramid_levels > 0u) {
+        return cube_trilinear(0u, params.pyramid_levels, d, lod);
+    }
+    return env_bilinear(params.env, dm);
+}
 
 fn bsdf_table(i: u32) -> f32 {
     return table[i];
@@ -162,7 +195,7 @@ fn draw_unit(seed: vec2<u32>, k: u32) -> f32 {
     return next_unit(&state);
 }
 
-// ShadingContext::shade at surfel s with n samples (Lighting::Direct): ⌈n/2⌉ BRDF samples,
+// ShadingContext::shade at surfel s with n samples: ⌈n/2⌉ BRDF samples,
 // ⌊n/2⌋ environment samples, then n points per area light, in the CPU's order, through one
 // loop so that the material's evaluation is compiled once.
 fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
@@ -207,7 +240,7 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
             if (!(den > 0.0)) {
                 continue;
             }
-            weight = env_bilinear(params.env, dm) * (abs(wi.z) / den);
+            weight = incident(d, dm, s.b.w) * (abs(wi.z) / den);
         } else {
             // Area light l's point j, stratified over its area; its rotation is the pair of
             // draws after the four above.
@@ -305,11 +338,31 @@ fn upsample(s: Surfel, x: u32, y: u32, level: u32) -> vec4<f32> {
     return vec4<f32>(0.0);
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+// Classification (phase 0), thread i: grid point i of the level (row-major over the ⌈W / 2^k⌉
+// × ⌈H / 2^k⌉ points) is up-sampled now or appended to the queue; shading (phase 1), thread i:
+// the i-th queued pixel. Queuing keeps the shading threads of a workgroup all busy (a level's
+// shaded pixels are scattered) and the dispatches one-dimensional.
+// Dispatches wider than the 65,535 workgroups of one dimension continue in y.
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid3: vec3<u32>,
+        @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = gid3.y * groups.x * 64u + gid3.x;
     let level = params.level;
-    let x = gid.x << level;
-    let y = gid.y << level;
+    if (params.phase == 1u) {
+        if (i >= atomicLoad(&counts[level])) {
+            return;
+        }
+        let k = queue[i];
+        let x = k % params.width;
+        let y = k / params.width;
+        let n = samples_at(level, x, y);
+        values[k] = vec4<f32>(shade(surfels[k], n, shading_seed(k)), 1.0);
+        shaded[k] = vec2<u32>(level, n);
+        return;
+    }
+    let nx = (params.width + (1u << level) - 1u) >> level;
+    let x = (i % nx) << level;
+    let y = (i / nx) << level;
     if (x >= params.width || y >= params.height) {
         return;
     }
@@ -330,7 +383,5 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             return;
         }
     }
-    let n = samples_at(level, x, y);
-    values[k] = vec4<f32>(shade(s, n, shading_seed(k)), 1.0);
-    shaded[k] = vec2<u32>(level, n);
+    queue[atomicAdd(&counts[level], 1u)] = k;
 }

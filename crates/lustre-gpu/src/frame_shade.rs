@@ -35,6 +35,7 @@
 
 use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry};
 use crate::context::GpuContext;
+use crate::cube_storage::ring_entries;
 use crate::error::{invalid, scope_result, wgpu_error, Result};
 use crate::fit_models::pack_fit;
 use crate::gbuffer::{camera_uniform, map_read, texture_slot, GBufferTarget};
@@ -55,7 +56,6 @@ use lustre_brdf::models::rough_dielectric::RoughDielectric;
 use lustre_brdf::models::rough_plastic::{RoughPlastic, RoughPlasticCoating};
 use lustre_brdf::models::thin_dielectric::ThinDielectric;
 use lustre_brdf::rgb::Rgb;
-use lustre_env::cube::fetch_sources;
 use lustre_scene::material::{Distribution, TextureRef};
 use lustre_scene::{Material, MaterialKind, Scene, TexturedRgb, TexturedScalar};
 use lustre_shade::frame::{
@@ -724,30 +724,6 @@ fn concat(
     (out, offsets)
 }
 
-/// The texels one texel beyond the edges of a face of size n (`frame_shade.wgsl`'s
-/// `ring_index` order), as global indices of the level starting at texel `first`.
-fn ring_entries(n: usize, first: u32, out: &mut Vec<[i32; 4]>) {
-    let nn = n as i64;
-    let mut positions = vec![];
-    for j in [-1, nn] {
-        for i in -1..=nn {
-            positions.push((i, j));
-        }
-    }
-    for i in [-1, nn] {
-        for j in 0..nn {
-            positions.push((i, j));
-        }
-    }
-    for face in 0..6 {
-        for &(i, j) in &positions {
-            let (src, count) = fetch_sources(n, face, i, j);
-            let idx = src.map(|(f, a, b)| (first as usize + (f * n + b) * n + a) as i32);
-            out.push([idx[0], idx[1], idx[2], count as i32]);
-        }
-    }
-}
-
 impl FrameShadeScene {
     /// Uploads the CPU frame's incident light (`light`'s probes, else its environment) and
     /// view buffers (`buffers`) and builds the per-triangle records of `lit`.
@@ -1048,6 +1024,7 @@ pub fn frame_shade_wgsl() -> &'static str {
                 &wgsl::QMC,
                 &wgsl::WARP,
                 &wgsl::TEXTURED,
+                &wgsl::CUBE_STORAGE,
             ],
             &[
                 include_str!("texture_sample.wgsl"),

@@ -29,6 +29,7 @@ mod compute;
 pub mod context;
 pub mod contract;
 pub mod cube;
+pub mod cube_storage;
 pub mod error;
 pub mod fit_models;
 pub mod frame_shade;

@@ -251,8 +251,16 @@ pub const ENV_LIGHT: Module = Module {
     deps: &[&TYPES],
 };
 
+/// Cube-map pyramids in storage buffers: face coordinates, edge-crossing fetches, bilinear and
+/// trilinear lookups, read through the pass's `cube_texel`, `cube_level` and `cube_ring`.
+pub const CUBE_STORAGE: Module = Module {
+    name: "cube_storage",
+    source: include_str!("wgsl/cube_storage.wgsl"),
+    deps: &[],
+};
+
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 30] = [
+pub const ALL: [&Module; 31] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -283,6 +291,7 @@ pub const ALL: [&Module; 30] = [
     &MEASURED,
     &FREQUENCY,
     &ENV_LIGHT,
+    &CUBE_STORAGE,
 ];
 
 /// The source of a pass: every module in `imports` and, transitively, the modules they use,

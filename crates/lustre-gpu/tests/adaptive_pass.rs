@@ -150,14 +150,14 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
     let mut pass = AdaptivePass::new(&gpu_ctx).expect("compile");
     // The first dispatch also compiles the shader (llvmpipe compiles at first use): a warm-up.
     let warm = pass
-        .render(&gpu_ctx, &scene_gpu, &g, &cpu_buffer, seed)
+        .render(&gpu_ctx, &scene_gpu, &g, &cpu_buffer, None, seed)
         .expect("gpu");
     eprintln!(
         "first frame (with the shader's compilation): wall {:.1} ms",
         warm.timing.wall_ms
     );
     let gpu = pass
-        .render(&gpu_ctx, &scene_gpu, &g, &cpu_buffer, seed)
+        .render(&gpu_ctx, &scene_gpu, &g, &cpu_buffer, None, seed)
         .expect("gpu");
     eprintln!(
         "adaptive {w}×{h}: CPU {:.1} ms; GPU wall {:.1} ms, timestamps {:?} ms; shaded {} / {} (CPU {} / {}), samples {} (CPU {})",
@@ -215,6 +215,53 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
             assert_eq!(gpu.frame.image.data[k], l.to_f32());
         }
     }
+
+    // Pre-convolved shading (§IV.3.5): the environment's pyramid read at each pixel's BRDF
+    // bandwidth, on both.
+    shading.pyramid =
+        Some(lustre_shade::baked::environment_pyramid(shading.env, 64).expect("pyramid"));
+    let pre_options = BufferOptions {
+        lighting: Lighting::Preconvolved,
+        ..options
+    };
+    let pre_buffer =
+        BandwidthBuffer::build(&g, &shading, &env_bw, pre_options).expect("pre-convolved buffer");
+    let cpu_pre = render_adaptive(&g, &shading, &pre_buffer, Lighting::Preconvolved, seed)
+        .expect("cpu pre-convolved");
+    let scene_pre = AdaptiveScene::from_context(&gpu_ctx, &shading).expect("upload");
+    let level_for = |nu: f64| shading.level_for(nu);
+    let gpu_pre = pass
+        .render(
+            &gpu_ctx,
+            &scene_pre,
+            &g,
+            &pre_buffer,
+            Some(&level_for),
+            seed,
+        )
+        .expect("gpu pre-convolved");
+    let (rms, over1, over10) = image_difference(&g, &cpu_pre.image, &gpu_pre.frame.image);
+    eprintln!(
+        "pre-convolved: relative RMS {rms:.2e}, {:.2} % off by > 1 %, {:.2} % by > 10 %",
+        100.0 * over1,
+        100.0 * over10
+    );
+    assert_eq!(gpu_pre.frame.shaded_level, cpu_pre.shaded_level);
+    assert!(rms < 5e-3, "relative RMS {rms}");
+    assert!(over1 < 0.01, "{over1}");
+    assert!(over10 < 0.002, "{over10}");
+    // The same scene without its pyramid cannot shade pre-convolved.
+    let e = pass
+        .render(
+            &gpu_ctx,
+            &scene_gpu,
+            &g,
+            &pre_buffer,
+            Some(&level_for),
+            seed,
+        )
+        .expect_err("no pyramid");
+    assert!(e.to_string().contains("pyramid"), "{e}");
 
     // Brute force, 8 samples everywhere.
     let (cpu_b, stats_b) = render_brute(&g, &shading, 8, seed).expect("cpu brute");
@@ -299,7 +346,7 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
     let buffer = BandwidthBuffer::build(&small, &shading, &env_bw, BufferOptions::default())
         .expect("buffer");
     let e = pass
-        .render(&gpu_ctx, &scene_gpu, &g, &buffer, 1)
+        .render(&gpu_ctx, &scene_gpu, &g, &buffer, None, 1)
         .expect_err("sizes");
     assert!(e.to_string().contains("24 × 16"), "{e}");
     // Degenerate surfels (a zero frame, a NaN direction to the eye, a zero depth, infinite
@@ -325,7 +372,7 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
         };
         let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, options).expect("buffer");
         let out = pass
-            .render(&gpu_ctx, &scene_gpu, &g, &buffer, 3)
+            .render(&gpu_ctx, &scene_gpu, &g, &buffer, None, 3)
             .expect("frame");
         assert!(
             out.frame.image.data.iter().flatten().all(|v| v.is_finite()),

@@ -19,9 +19,10 @@ use common::kernel::{angle, f32_round, run_kernel, validate};
 #[test]
 fn every_module_validates_alone_and_has_no_bindings() {
     for m in wgsl::ALL {
-        // A model with a side table (the rough plastic) reads it through `bsdf_table`, and the
-        // environment light its texels and sampler through `env_texel` and `env_table`, which
-        // the pass that binds them defines: stubs stand in for them here.
+        // A model with a side table (the rough plastic) reads it through `bsdf_table`, the
+        // environment light its texels and sampler through `env_texel` and `env_table`, the
+        // cube pyramids theirs through `cube_texel`, `cube_level` and `cube_ring`, which the pass
+        // that binds them defines: stubs stand in for them here.
         let alone = compose(&[m], "");
         let mut pass = String::new();
         for (call, stub) in [
@@ -36,6 +37,18 @@ fn every_module_validates_alone_and_has_no_bindings() {
             (
                 "env_table(",
                 "fn env_table(i: u32) -> f32 {\n    return f32(i);\n}\n",
+            ),
+            (
+                "cube_texel(",
+                "fn cube_texel(i: u32) -> vec3<f32> {\n    return vec3<f32>(f32(i));\n}\n",
+            ),
+            (
+                "cube_level(",
+                "fn cube_level(i: u32) -> vec4<u32> {\n    return vec4<u32>(i);\n}\n",
+            ),
+            (
+                "cube_ring(",
+                "fn cube_ring(i: u32) -> vec4<i32> {\n    return vec4<i32>(i32(i));\n}\n",
             ),
         ] {
             if alone.contains(call) {

@@ -331,7 +331,9 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
         };
         let bandwidth_ms = lap();
         let f = match (gpu, passes.shading.as_mut()) {
-            (Some(gctx), Some((scene, pass))) => pass.render(gctx, scene, &g, &buffer, seed)?.frame,
+            (Some(gctx), Some((scene, pass))) => {
+                pass.render(gctx, scene, &g, &buffer, None, seed)?.frame
+            }
             _ => render_adaptive(&g, &self.ctx, &buffer, Lighting::Direct, seed)?,
         };
         let on_gpu = (

@@ -4,7 +4,7 @@
 //! buffer and shades hierarchically; brute force shades every pixel with --samples samples.
 //! The G-buffer, the material tables and the buffer's levels and variance target are the
 //! CPU's; the passes run on the GPU with --device gpu, or auto where the GPU takes the scene
-//! (measured materials evaluated directly, direct lighting; area lights in the shading only). Without a scene or --material, 004 Fig. IV.13's line-up
+//! (measured materials and fitted models; area lights in the shading only). Without a scene or --material, 004 Fig. IV.13's line-up
 //! (three spheres of measured paints on white marble).
 
 use crate::render_cmd::{compare, path_cameras, Device, Method, RenderArgs, SampleRuleArg};
@@ -130,7 +130,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     // The passes run on the GPU where they can (--device auto) or must (--device gpu).
     let mut gpu = match args.device {
         Device::Cpu => None,
-        device => gpu_passes(&ctx, &env_bw, adaptive, lighting, device == Device::Gpu)?,
+        device => gpu_passes(&ctx, &env_bw, adaptive, device == Device::Gpu)?,
     };
     if let Some(g) = &gpu {
         let place = |on: bool| if on { "GPU" } else { "CPU" };
@@ -204,7 +204,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 .and_then(|p| Some((&p.ctx, p.shading.as_mut()?)))
             {
                 Some((gctx, (scene, pass))) => {
-                    let out = pass.render(gctx, scene, &g, &buffer, args.seed)?;
+                    let level_for = |nu: f64| ctx.level_for(nu);
+                    let lod = (lighting == Lighting::Preconvolved)
+                        .then_some(&level_for as &dyn Fn(f64) -> f64);
+                    let out = pass.render(gctx, scene, &g, &buffer, lod, args.seed)?;
                     if let Some(ms) = out.timing.gpu_ms {
                         times.push((
                             format!("{stem}: pyramids, hierarchical shading (GPU timestamps)"),
@@ -317,8 +320,8 @@ fn lap(times: &mut Vec<(String, f64)>, name: &str, t: &mut Instant) {
 }
 
 /// The GPU's passes with the scene uploaded: the bandwidth pass (adaptive only) and the
-/// shading. A pass the GPU cannot run (no adapter, a material or light it does not take,
-/// pre-convolved lighting) is an error when `required`, else said and left to the CPU.
+/// shading. A pass the GPU cannot run (no adapter, a material or light it does not take) is an
+/// error when `required`, else said and left to the CPU.
 struct GpuPasses {
     ctx: GpuContext,
     bandwidth: Option<(BandwidthScene, BandwidthPass)>,
@@ -329,7 +332,6 @@ fn gpu_passes(
     ctx: &ShadingContext,
     env: &EnvironmentBandwidth,
     adaptive: bool,
-    lighting: Lighting,
     required: bool,
 ) -> anyhow::Result<Option<GpuPasses>> {
     let fallback = |what: &str, e: anyhow::Error| -> anyhow::Result<()> {
@@ -360,21 +362,13 @@ fn gpu_passes(
     } else {
         None
     };
-    let shading = if lighting == Lighting::Preconvolved {
-        fallback(
-            "shading",
-            anyhow::anyhow!("pre-convolved shading (--preconvolved) runs on the CPU only"),
-        )?;
-        None
-    } else {
-        match AdaptiveScene::from_context(&gctx, ctx)
-            .and_then(|s| Ok((s, AdaptivePass::new(&gctx)?)))
-        {
-            Ok(p) => Some(p),
-            Err(e) => {
-                fallback("shading", e.into())?;
-                None
-            }
+    let shading = match AdaptiveScene::from_context(&gctx, ctx)
+        .and_then(|s| Ok((s, AdaptivePass::new(&gctx)?)))
+    {
+        Ok(p) => Some(p),
+        Err(e) => {
+            fallback("shading", e.into())?;
+            None
         }
     };
     Ok(Some(GpuPasses {

@@ -322,8 +322,15 @@ fn adaptive_and_brute_force_renders_of_a_measured_paint_agree_and_bad_input_is_n
         "/no/such/sky.hdr",
     );
     refused(
-        &with(&["--method", "adaptive", "--device", "gpu", "--preconvolved"]),
-        "pre-convolved",
+        &with(&[
+            "--method",
+            "adaptive",
+            "--device",
+            "gpu",
+            "--area-light",
+            envmap!("studio_sunrise.exr"),
+        ]),
+        "area lights",
     );
     // Brute force on the GPU takes the CPU's points from the same seed: the frames agree to
     // f32 rounding.
