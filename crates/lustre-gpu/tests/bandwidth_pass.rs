@@ -4,17 +4,12 @@
 //! skip) without an adapter.
 
 use lustre_adaptive::buffer::{predict_pixels, BandwidthBuffer, BufferOptions, SampleRule};
-use lustre_adaptive::gbuffer::GBuffer;
-use lustre_adaptive::shading::{ShadingContext, ShadingOptions};
 use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthPixel, BandwidthScene};
 use lustre_gpu::measured::MeasuredBrdf;
-use lustre_shade::baked::read_environment;
-use lustre_shade::path::{PathOptions, PathTracer};
-use lustre_shade::reference::{film_camera, path_scene};
 
 mod common;
-use common::ctx;
+use common::{ctx, line_up};
 
 /// Relative differences |g − c| / max(|c|, floor) over the pixels: RMS, worst, and the share
 /// above `outlier`.
@@ -31,123 +26,108 @@ fn compare(pairs: &[(f64, f64)], floor: f64, outlier: f64) -> (f64, f64, f64) {
 
 #[test]
 fn the_gpu_bandwidth_pass_matches_its_cpu_twin_on_the_line_up() {
-    let map = lustre_env::shared_data_dir().join("envmaps/royal_esplanade_1k.hdr");
-    let env = read_environment(&map).expect("royal_esplanade_1k.hdr");
-    let scene = lustre_scene::builtin::lineup(
+    let scene = line_up::scene(
         [
             "nbrdf:color-changing-paint3",
             "nbrdf:red-metallic-paint",
             "nbrdf:gold-paint",
         ],
         "nbrdf:white-marble",
-        Some(env),
-    )
-    .expect("line-up");
-    let (w, h) = (96, 64);
-    let (ps, _) = path_scene(&scene).expect("path scene");
-    let tracer = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
-    let cam = film_camera(&scene.cameras[0], w as u32, h as u32).expect("camera");
-    let g = GBuffer::render(&tracer, &ps, &cam, w, h).expect("G-buffer");
-    let shading = ShadingContext::new(
-        &ps,
-        ShadingOptions {
-            pyramid_face: 0,
-            ..Default::default()
-        },
-        &|_, _| {},
-    )
-    .expect("tables");
-    let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
-    let n_b = 16;
-    let cpu = predict_pixels(&g, &shading, &env_bw, n_b).expect("cpu");
-    let gpu_ctx = ctx();
-    let scene_gpu = BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw).expect("upload");
-    let mut pass = BandwidthPass::new(&gpu_ctx).expect("pass");
-    let (gpu, timing) = pass
-        .predict(&gpu_ctx, &scene_gpu, &g, &shading, n_b as u32)
-        .expect("gpu");
-    eprintln!("{}", gpu_ctx.describe());
-    eprintln!(
-        "bandwidth pass, {w}×{h}, n_b {n_b}: wall {:.2} ms, GPU {:?} ms",
-        timing.wall_ms, timing.gpu_ms
     );
-    assert_eq!(cpu.len(), gpu.len());
-    let mut fields: [Vec<(f64, f64)>; 6] = Default::default();
-    let mut surface = 0;
-    for (c, gp) in cpu.iter().zip(&gpu) {
-        match (c, gp) {
-            (None, None) => {}
-            (Some(c), Some(gp)) => {
-                surface += 1;
-                let (a, b) = (&c.prediction, &gp.prediction);
-                fields[0].push((a.bandwidth.angular, b.bandwidth.angular));
-                fields[1].push((a.variance, b.variance));
-                fields[2].push((a.variance_preconvolved, b.variance_preconvolved));
-                fields[3].push((a.radiance, b.radiance));
-                fields[4].push((c.brdf_max, gp.brdf_max));
-                fields[5].push((a.weight, b.weight));
+    let (w, h) = (96, 64);
+    line_up::with_frame(&scene, (w, h), |_, g, shading| {
+        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let n_b = 16;
+        let cpu = predict_pixels(&g, &shading, &env_bw, n_b).expect("cpu");
+        let gpu_ctx = ctx();
+        let scene_gpu = BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw).expect("upload");
+        let mut pass = BandwidthPass::new(&gpu_ctx).expect("pass");
+        let (gpu, timing) = pass
+            .predict(&gpu_ctx, &scene_gpu, &g, &shading, n_b as u32)
+            .expect("gpu");
+        eprintln!("{}", gpu_ctx.describe());
+        eprintln!(
+            "bandwidth pass, {w}×{h}, n_b {n_b}: wall {:.2} ms, GPU {:?} ms",
+            timing.wall_ms, timing.gpu_ms
+        );
+        assert_eq!(cpu.len(), gpu.len());
+        let mut fields: [Vec<(f64, f64)>; 6] = Default::default();
+        let mut surface = 0;
+        for (c, gp) in cpu.iter().zip(&gpu) {
+            match (c, gp) {
+                (None, None) => {}
+                (Some(c), Some(gp)) => {
+                    surface += 1;
+                    let (a, b) = (&c.prediction, &gp.prediction);
+                    fields[0].push((a.bandwidth.angular, b.bandwidth.angular));
+                    fields[1].push((a.variance, b.variance));
+                    fields[2].push((a.variance_preconvolved, b.variance_preconvolved));
+                    fields[3].push((a.radiance, b.radiance));
+                    fields[4].push((c.brdf_max, gp.brdf_max));
+                    fields[5].push((a.weight, b.weight));
+                }
+                _ => panic!("the CPU and the GPU disagree on which pixels are surfaces"),
             }
-            _ => panic!("the CPU and the GPU disagree on which pixels are surfaces"),
         }
-    }
-    assert!(surface > w * h / 3, "{surface} surface pixels");
-    let names = [
-        "angular bandwidth",
-        "variance sum",
-        "pre-convolved variance sum",
-        "radiance",
-        "BRDF max bandwidth",
-        "path weight Σλ",
-    ];
-    let stats: Vec<(f64, f64, f64)> = names
-        .iter()
-        .zip(&fields)
-        .map(|(name, pairs)| {
-            let scale = pairs.iter().map(|(c, _)| c.abs()).fold(0.0, f64::max);
-            let (rms, worst, share) = compare(pairs, 1e-3 * scale, 1e-2);
-            eprintln!(
-                "{name}: relative RMS {rms:.2e}, worst {worst:.2e}, {:.2} % of pixels off by > 1 %",
+        assert!(surface > w * h / 3, "{surface} surface pixels");
+        let names = [
+            "angular bandwidth",
+            "variance sum",
+            "pre-convolved variance sum",
+            "radiance",
+            "BRDF max bandwidth",
+            "path weight Σλ",
+        ];
+        let stats: Vec<(f64, f64, f64)> = names
+            .iter()
+            .zip(&fields)
+            .map(|(name, pairs)| {
+                let scale = pairs.iter().map(|(c, _)| c.abs()).fold(0.0, f64::max);
+                let (rms, worst, share) = compare(pairs, 1e-3 * scale, 1e-2);
+                eprintln!(
+                    "{name}: relative RMS {rms:.2e}, worst {worst:.2e}, {:.2} % of pixels off by > 1 %",
+                    100.0 * share
+                );
+                (rms, worst, share)
+            })
+            .collect();
+        for (name, (rms, _, share)) in names.iter().zip(stats) {
+            // f32 against f64: a direction on a cell edge of the BRDF's bandwidth table or of the
+            // map's bandwidth may land in the neighbouring cell; such pixels stay rare.
+            assert!(
+                share < 0.01,
+                "{name}: {:.2} % of pixels off by > 1 %",
                 100.0 * share
             );
-            (rms, worst, share)
-        })
-        .collect();
-    for (name, (rms, _, share)) in names.iter().zip(stats) {
-        // f32 against f64: a direction on a cell edge of the BRDF's bandwidth table or of the
-        // map's bandwidth may land in the neighbouring cell; such pixels stay rare.
-        assert!(
-            share < 0.01,
-            "{name}: {:.2} % of pixels off by > 1 %",
-            100.0 * share
+            assert!(rms < 5e-3, "{name}: relative RMS {rms}");
+        }
+        // The buffers assembled from both agree on the level of nearly every pixel.
+        let o = BufferOptions {
+            scale: SampleRule::Constant,
+            ..Default::default()
+        };
+        let a = BandwidthBuffer::assemble(&g, &cpu, o).expect("cpu buffer");
+        let b = BandwidthBuffer::assemble(&g, &gpu, o).expect("gpu buffer");
+        let differ = a.level.iter().zip(&b.level).filter(|(x, y)| x != y).count();
+        eprintln!("levels differ on {differ} of {} pixels", w * h);
+        assert!(differ * 100 < surface, "{differ} levels differ");
+        // Area lights are the CPU's only: the GPU pass refuses them by name.
+        let mut lit = shading;
+        lit.lights.push(
+            lustre_adaptive::light::AreaLight::new(
+                glam::DVec3::new(-1.0, 4.0, -1.0),
+                glam::DVec3::X * 2.0,
+                glam::DVec3::Z * 2.0,
+                lustre_brdf::rgb::Rgb::ONE,
+                None,
+            )
+            .expect("light"),
         );
-        assert!(rms < 5e-3, "{name}: relative RMS {rms}");
-    }
-    // The buffers assembled from both agree on the level of nearly every pixel.
-    let o = BufferOptions {
-        scale: SampleRule::Constant,
-        ..Default::default()
-    };
-    let a = BandwidthBuffer::assemble(&g, &cpu, o).expect("cpu buffer");
-    let b = BandwidthBuffer::assemble(&g, &gpu, o).expect("gpu buffer");
-    let differ = a.level.iter().zip(&b.level).filter(|(x, y)| x != y).count();
-    eprintln!("levels differ on {differ} of {} pixels", w * h);
-    assert!(differ * 100 < surface, "{differ} levels differ");
-    // Area lights are the CPU's only: the GPU pass refuses them by name.
-    let mut lit = shading;
-    lit.lights.push(
-        lustre_adaptive::light::AreaLight::new(
-            glam::DVec3::new(-1.0, 4.0, -1.0),
-            glam::DVec3::X * 2.0,
-            glam::DVec3::Z * 2.0,
-            lustre_brdf::rgb::Rgb::ONE,
-            None,
-        )
-        .expect("light"),
-    );
-    match BandwidthScene::from_context(&gpu_ctx, &lit, &env_bw) {
-        Err(e) => assert!(e.to_string().contains("area lights"), "{e}"),
-        Ok(_) => panic!("the GPU pass took an area light"),
-    }
+        match BandwidthScene::from_context(&gpu_ctx, &lit, &env_bw) {
+            Err(e) => assert!(e.to_string().contains("area lights"), "{e}"),
+            Ok(_) => panic!("the GPU pass took an area light"),
+        }
+    })
 }
 
 #[test]

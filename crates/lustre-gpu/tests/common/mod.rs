@@ -4,6 +4,7 @@
 #![allow(dead_code)] // Each test binary uses a subset.
 
 pub mod kernel;
+pub mod line_up;
 
 use lustre_gpu::{GpuContext, GpuViewBuffer};
 use lustre_scene::lightmap::{build_atlas, AtlasOptions, LightmapAtlas};

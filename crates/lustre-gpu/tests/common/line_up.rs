@@ -1,0 +1,39 @@
+//! 004 Fig. IV.13's line-up under royal_esplanade_1k for the adaptive-shading tests: the scene,
+//! its path tracer, a G-buffer and the shading context (material tables, no pyramid).
+
+use lustre_adaptive::gbuffer::GBuffer;
+use lustre_adaptive::shading::{ShadingContext, ShadingOptions};
+use lustre_scene::Scene;
+use lustre_shade::baked::read_environment;
+use lustre_shade::path::{PathOptions, PathTracer};
+use lustre_shade::reference::{film_camera, path_scene};
+
+/// The line-up of `spheres` (left to right) on `floor`.
+pub fn scene(spheres: [&str; 3], floor: &str) -> Scene {
+    let map = lustre_env::shared_data_dir().join("envmaps/royal_esplanade_1k.hdr");
+    let env = read_environment(&map).expect("royal_esplanade_1k.hdr");
+    lustre_scene::builtin::lineup(spheres, floor, Some(env)).expect("line-up")
+}
+
+/// Calls `f` with `scene`'s tracer, its G-buffer of `w × h` pixels from its first camera and
+/// its shading context.
+pub fn with_frame<R>(
+    scene: &Scene,
+    (w, h): (usize, usize),
+    f: impl FnOnce(&PathTracer, GBuffer, ShadingContext) -> R,
+) -> R {
+    let (ps, _) = path_scene(scene).expect("path scene");
+    let tracer = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
+    let cam = film_camera(&scene.cameras[0], w as u32, h as u32).expect("camera");
+    let g = GBuffer::render(&tracer, &ps, &cam, w, h).expect("G-buffer");
+    let shading = ShadingContext::new(
+        &ps,
+        ShadingOptions {
+            pyramid_face: 0,
+            ..Default::default()
+        },
+        &|_, _| {},
+    )
+    .expect("tables");
+    f(&tracer, g, shading)
+}
