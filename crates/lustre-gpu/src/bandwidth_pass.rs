@@ -1,10 +1,11 @@
 //! The bandwidth pass of 004 §IV.4.1 on the GPU (`bandwidth_pass.wgsl`): per G-buffer pixel,
-//! the one-bounce bandwidth and variance sums from n_b directions under a distant environment.
-//! Its CPU twin is `lustre_adaptive::buffer::predict_pixels` (built on
-//! `lustre_freq::pixel::predict`); the levels, sample counts and pyramids are assembled from its
-//! output on the CPU (`BandwidthBuffer::assemble`). Materials are measured BRDFs evaluated
-//! directly (neural BRDFs, 004's scenes; MERL tables) and fitted models (SGD, Cook–Torrance,
-//! Kurt).
+//! the one-bounce bandwidth and variance sums from n_b directions under a distant environment,
+//! and from n_b points of each textured area light (§IV.5.3). Its CPU twin is
+//! `lustre_adaptive::buffer::predict_pixels` (built on `lustre_freq::pixel::predict`); the
+//! levels and sample counts are assembled from its output on the CPU
+//! (`BandwidthBuffer::assemble`), the pyramids on the GPU (`adaptive_pass`). Materials are
+//! measured BRDFs evaluated directly (neural BRDFs, 004's scenes; MERL tables; RGL tensors) and
+//! fitted models (SGD, Cook–Torrance, Kurt).
 
 use crate::compute::{buffer_init, storage_entry, uniform_entry};
 use crate::context::GpuContext;
@@ -29,6 +30,8 @@ pub const BANDWIDTH_PASS_WGSL: &str = include_str!("bandwidth_pass.wgsl");
 /// the depth (distance to the eye), the curvature and the material; `None` for the background.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BandwidthPixel {
+    /// Position (the map's frame, as the lights are uploaded).
+    pub position: DVec3,
     /// Tangent, bitangent, normal.
     pub frame: (DVec3, DVec3, DVec3),
     /// Unit direction to the eye.
@@ -69,7 +72,8 @@ struct Params {
     env_height: u32,
     incident: u32,
     out: u32,
-    _pad: [u32; 2],
+    lights: u32,
+    _pad: u32,
 }
 
 /// The environment and the materials, uploaded once.
@@ -81,6 +85,9 @@ pub struct BandwidthScene {
     brdf_bandwidth: wgpu::Buffer,
     fitted: wgpu::Buffer,
     has_fitted: bool,
+    lights: wgpu::Buffer,
+    light_texels: wgpu::Buffer,
+    light_count: u32,
     material_count: u32,
     grid: (u32, u32),
 }
@@ -115,12 +122,6 @@ impl BandwidthScene {
         shading: &ShadingContext,
         env: &EnvironmentBandwidth,
     ) -> Result<Self> {
-        if !shading.lights.is_empty() {
-            return Err(invalid(
-                "bandwidth pass",
-                "the GPU bandwidth pass does not propagate area lights yet (the CPU's does)",
-            ));
-        }
         let mut packed = Packed::default();
         for (k, m) in shading.scene.materials.iter().enumerate() {
             let tables = &shading.materials[k];
@@ -136,6 +137,31 @@ impl BandwidthScene {
                 )
             })?;
             packed.push(k, brdf, &tables.bandwidth)?;
+        }
+        // The lights in the map's frame, as the pixels.
+        let to_local = shading.env.to_world().transpose();
+        let v = |d: DVec3, w: f32| {
+            let d = to_local * d;
+            [d.x as f32, d.y as f32, d.z as f32, w]
+        };
+        for l in &shading.lights {
+            let (tw, th, tex) = l.texture();
+            let r = l.radiance.0;
+            packed.lights.extend([
+                v(l.corner, tw as f32),
+                v(l.edge_u, th as f32),
+                v(l.edge_v, packed.light_texels.len() as f32),
+                [r[0] as f32, r[1] as f32, r[2] as f32, l.area() as f32],
+                v(l.normal(), 0.0),
+            ]);
+            for y in 0..th {
+                for x in 0..tw {
+                    let t = tex[y * tw + x];
+                    let nu =
+                        l.bandwidth_at((x as f64 + 0.5) / tw as f64, (y as f64 + 0.5) / th as f64);
+                    packed.light_texels.push([t[0], t[1], t[2], nu as f32]);
+                }
+            }
         }
         Self::upload(ctx, env.map, &env.bandwidth, packed)
     }
@@ -198,19 +224,45 @@ impl BandwidthScene {
                 storage,
             ),
             has_fitted: !packed.brdfs.fitted.is_empty(),
+            light_count: (packed.lights.len() / 5) as u32,
+            // Bindings may not be empty: one unread record of each.
+            lights: buffer_init(
+                ctx,
+                "bandwidth lights",
+                bytemuck::cast_slice(if packed.lights.is_empty() {
+                    &[[0.0f32; 4]; 5][..]
+                } else {
+                    &packed.lights
+                }),
+                storage,
+            ),
+            light_texels: buffer_init(
+                ctx,
+                "bandwidth light texels",
+                bytemuck::cast_slice(if packed.light_texels.is_empty() {
+                    &[[0.0f32; 4]][..]
+                } else {
+                    &packed.light_texels
+                }),
+                storage,
+            ),
             material_count: packed.ids.len() as u32,
             grid: (grid.incident as u32, grid.out as u32),
         })
     }
 }
 
-/// The materials' words on their way to the GPU.
+/// The materials' and the lights' words on their way to the GPU.
 #[derive(Default)]
 struct Packed {
     ids: Vec<[u32; 4]>,
     brdfs: PackedBrdfs,
     bandwidth: Vec<f32>,
     grid: Option<BrdfBandwidthOptions>,
+    /// Five vec4 per area light (`Light` of the WGSL).
+    lights: Vec<[f32; 4]>,
+    /// RGB and the spatial bandwidth per light texel.
+    light_texels: Vec<[f32; 4]>,
 }
 
 impl Packed {
@@ -252,6 +304,7 @@ impl BandwidthPass {
             .iter()
             .map(|p| match p {
                 GPixel::Surface(s) => Some(BandwidthPixel {
+                    position: to_local * s.position,
                     frame: (
                         to_local * s.frame.t,
                         to_local * s.frame.b,
@@ -299,6 +352,8 @@ impl BandwidthPass {
             storage_entry(5, true),
             storage_entry(6, false),
             storage_entry(7, true),
+            storage_entry(8, true),
+            storage_entry(9, true),
         ];
         let pipelines = MaterialPipelines::new(
             ctx,
@@ -330,7 +385,7 @@ impl BandwidthPass {
                 format!("{} pixels with n_b = {n_b} (1..=4096)", pixels.len()),
             ));
         }
-        let mut surfels = Vec::with_capacity(pixels.len() * 16);
+        let mut surfels = Vec::with_capacity(pixels.len() * 20);
         for p in pixels {
             match p {
                 Some(p) => {
@@ -349,8 +404,9 @@ impl BandwidthPass {
                     surfels.extend(v(b, p.curvature as f32));
                     surfels.extend(v(n, f32::from_bits(p.material)));
                     surfels.extend(v(p.wo, 1.0));
+                    surfels.extend(v(p.position, 0.0));
                 }
-                None => surfels.extend([0.0f32; 16]),
+                None => surfels.extend([0.0f32; 20]),
             }
         }
         let params = Params {
@@ -360,7 +416,8 @@ impl BandwidthPass {
             env_height: scene.env_size.1,
             incident: scene.grid.0,
             out: scene.grid.1,
-            _pad: [0; 2],
+            lights: scene.light_count,
+            _pad: 0,
         };
         self.timer.start(ctx)?;
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -402,6 +459,8 @@ impl BandwidthPass {
                 entry(5, &scene.brdf_bandwidth),
                 entry(6, &out),
                 entry(7, &scene.fitted),
+                entry(8, &scene.lights),
+                entry(9, &scene.light_texels),
             ],
         });
         let mut enc = ctx

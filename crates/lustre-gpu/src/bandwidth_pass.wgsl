@@ -1,7 +1,8 @@
 // The bandwidth pass (004 §IV.4.1, Fig. IV.11 b): per G-buffer pixel, the prediction of
 // lustre_freq::pixel::predict from n_b directions under a distant environment, and the BRDF's
 // largest bandwidth over them and the mirror direction (lustre_adaptive::buffer::predict_pixels).
-// Materials are measured BRDFs (measured.wgsl's measured_eval: neural BRDFs, MERL tables) and
+// Area lights add their paths (buffer::light_paths, merge). Materials are measured BRDFs
+// (measured.wgsl's measured_eval: neural BRDFs, MERL tables, RGL tensors) and
 // fitted models (bsdf.wgsl's records). Imports: types, measured, frequency, env_light, and bsdf
 // with fitted models.
 
@@ -12,17 +13,29 @@ struct Params {
     env_height: u32,
     incident: u32,
     out: u32,
-    _pad0: u32,
+    lights: u32,
     _pad1: u32,
 }
 
 // A surface pixel in the map's frame: t, b, n, wo (xyz), depth in t.w, curvature in b.w, the
-// material in n.w (bitcast u32), 1 in wo.w for a surface (0: background).
+// material in n.w (bitcast u32), 1 in wo.w for a surface (0: background); its position (xyz).
 struct Surfel {
     t: vec4<f32>,
     b: vec4<f32>,
     n: vec4<f32>,
     wo: vec4<f32>,
+    p: vec4<f32>,
+}
+
+// A textured parallelogram emitter in the map's frame (lustre_adaptive::light::AreaLight):
+// corner and texture width, edge u and texture height, edge v and first texel, radiance scale
+// and area, the emitting side's normal.
+struct Light {
+    corner: vec4<f32>,
+    edge_u: vec4<f32>,
+    edge_v: vec4<f32>,
+    radiance: vec4<f32>,
+    normal: vec4<f32>,
 }
 
 // (ν_s, ν_a) at the eye, Σ(ν_a^i + ν_ρa^i)χ², Σ2ν_ρa^i χ², L̂, the BRDF's largest bandwidth,
@@ -50,6 +63,9 @@ struct Prediction {
 @group(0) @binding(6) var<storage, read_write> predictions: array<Prediction>;
 // Binding 7, the fitted models' records, and `material_eval` come with the pass's variant
 // (measured::material_eval_source).
+@group(0) @binding(8) var<storage, read> lights: array<Light>;
+// Per light texel: RGB and its spatial bandwidth (cycles per metre) in w.
+@group(0) @binding(9) var<storage, read> light_texels: array<vec4<f32>>;
 
 fn bsdf_table(i: u32) -> f32 {
     return table[i];
@@ -108,29 +124,96 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var chi_sum = 0.0;
     let mirror = vec3<f32>(-wo.x, -wo.y, wo.z);
     var brdf_max = brdf_bandwidth[m.z + freq_brdf_index(mirror, wo, incident, cells)];
-    for (var k = 0u; k < params.n_b; k++) {
-        let wi_l = freq_cosine_direction(k, params.n_b);
-        let wi = t * wi_l.x + b * wi_l.y + n * wi_l.z;
-        let radiance = luminance(env_radiance(wi));
+    // One loop over the n_b environment directions, then n_b stratified points per area light
+    // (buffer::light_paths), so that the material is evaluated at one call site.
+    var light_nu = vec2<f32>(0.0);
+    var light_sum = 0.0;
+    var paths = 0u;
+    let total = params.n_b * (1u + params.lights);
+    for (var k = 0u; k < total; k++) {
+        let from_env = k < params.n_b;
+        var wi_l = vec3<f32>(0.0);
+        // An area light's point: the light's radiance, its bandwidth there, the distance, the
+        // cosine at the light and the solid-angle weight.
+        var emitted = 0.0;
+        var nu_s = 0.0;
+        var dist = 0.0;
+        var g = 0.0;
+        if (from_env) {
+            wi_l = freq_cosine_direction(k, params.n_b);
+        } else {
+            let light = lights[(k - params.n_b) / params.n_b];
+            let j = (k - params.n_b) % params.n_b;
+            let tw = u32(light.corner.w);
+            let th = u32(light.edge_u.w);
+            let first = u32(light.edge_v.w);
+            let u = (f32(j) + 0.5) / f32(params.n_b);
+            let v = fract(f32(reverseBits(j) >> 8u) * (1.0 / 16777216.0)
+                + 0.5 / f32(params.n_b));
+            let dv = light.corner.xyz + light.edge_u.xyz * u + light.edge_v.xyz * v - s.p.xyz;
+            dist = length(dv);
+            if (!(dist > 0.0 && dist < 3.0e38)) {
+                continue;
+            }
+            let w = dv / dist;
+            let cos_l = -dot(w, light.normal.xyz);
+            wi_l = vec3<f32>(dot(w, t), dot(w, b), dot(w, n));
+            if (cos_l <= 0.0 || wi_l.z <= 0.0) {
+                continue;
+            }
+            g = cos_l * light.radiance.w / (dist * dist * f32(params.n_b));
+            let texel = light_texels[first + min(u32(v * f32(th)), th - 1u) * tw
+                + min(u32(u * f32(tw)), tw - 1u)];
+            emitted = luminance(light.radiance.xyz * texel.xyz);
+            nu_s = texel.w / max(cos_l, 1e-6);
+        }
         let rho = luminance(material_eval(m.x, m.y, bitcast<f32>(m.w), wi_l, wo));
-        let nu_light = env_bandwidth(wi);
         let nu_brdf = brdf_bandwidth[m.z + freq_brdf_index(wi_l, wo, incident, cells)];
         brdf_max = max(brdf_max, nu_brdf);
-        let nu_i = freq_one_bounce_distant(nu_light, max(wo.z, 1e-6), curvature, 0.0, nu_brdf,
-                                           depth);
-        let chi = radiance * rho;
-        chi_sum += chi;
-        let lambda = max(chi * wi_l.z, 0.0);
-        weight_sum += lambda;
-        nu += lambda * nu_i;
-        out.variance += (nu_light + nu_brdf) * chi * chi;
-        out.variance_preconvolved += 2.0 * nu_brdf * chi * chi;
+        if (from_env) {
+            let wi = t * wi_l.x + b * wi_l.y + n * wi_l.z;
+            let nu_light = env_bandwidth(wi);
+            let nu_i = freq_one_bounce_distant(nu_light, max(wo.z, 1e-6), curvature, 0.0,
+                                               nu_brdf, depth);
+            let chi = luminance(env_radiance(wi)) * rho;
+            chi_sum += chi;
+            let lambda = max(chi * wi_l.z, 0.0);
+            weight_sum += lambda;
+            nu += lambda * nu_i;
+            out.variance += (nu_light + nu_brdf) * chi * chi;
+            out.variance_preconvolved += 2.0 * nu_brdf * chi * chi;
+        } else {
+            // One path of buffer::light_paths: its share of L_p, its bandwidth at the eye
+            // (Eq. IV.5 from the light's surface), its variance term on the environment's scale.
+            let contribution = emitted * rho * wi_l.z * g;
+            let path_nu = freq_one_bounce(vec2<f32>(nu_s, 0.0), dist, wi_l.z, max(wo.z, 1e-6),
+                                          curvature, 0.0, nu_brdf, depth);
+            light_nu += max(contribution, 0.0) * path_nu;
+            light_sum += max(contribution, 0.0);
+            let chi = contribution * f32(params.n_b) / PI;
+            out.variance += (dist * nu_s + nu_brdf) * chi * chi;
+            out.variance_preconvolved += 2.0 * nu_brdf * chi * chi;
+            paths += 1u;
+        }
     }
+    var env_nu = vec2<f32>(0.0);
     if (weight_sum > 0.0) {
-        out.bandwidth = nu / weight_sum;
+        env_nu = nu / weight_sum;
     }
+    out.bandwidth = env_nu;
     out.radiance = PI * chi_sum / f32(params.n_b);
     out.weight = weight_sum;
+    // buffer::merge: Eq. IV.6 over the environment's path (weighing its L̂) and the lights'.
+    if (paths > 0u) {
+        let env_weight = max(out.radiance, 0.0);
+        let total_weight = env_weight + light_sum;
+        out.bandwidth = vec2<f32>(0.0);
+        if (total_weight > 0.0) {
+            out.bandwidth = (env_weight * env_nu + light_nu) / total_weight;
+        }
+        out.radiance += light_sum;
+        out.weight = out.radiance;
+    }
     out.brdf_max = brdf_max;
     predictions[i] = out;
 }

@@ -111,21 +111,61 @@ fn the_gpu_bandwidth_pass_matches_its_cpu_twin_on_the_line_up() {
         let differ = a.level.iter().zip(&b.level).filter(|(x, y)| x != y).count();
         eprintln!("levels differ on {differ} of {} pixels", w * h);
         assert!(differ * 100 < surface, "{differ} levels differ");
-        // Area lights are the CPU's only: the GPU pass refuses them by name.
+        // A textured area light above the line-up (a 2 × 2 checkerboard): its paths join the
+        // prediction on both.
         let mut lit = shading;
+        let tex: Vec<[f32; 3]> = (0..4)
+            .map(|k| if k == 0 || k == 3 { [1.0; 3] } else { [0.2; 3] })
+            .collect();
         lit.lights.push(
             lustre_adaptive::light::AreaLight::new(
-                glam::DVec3::new(-1.0, 4.0, -1.0),
-                glam::DVec3::X * 2.0,
+                glam::DVec3::new(-1.5, 4.0, -1.0),
+                glam::DVec3::X * 3.0,
                 glam::DVec3::Z * 2.0,
-                lustre_brdf::rgb::Rgb::ONE,
-                None,
+                lustre_brdf::rgb::Rgb([40.0; 3]),
+                Some((2, 2, tex)),
             )
             .expect("light"),
         );
-        match BandwidthScene::from_context(&gpu_ctx, &lit, &env_bw) {
-            Err(e) => assert!(e.to_string().contains("area lights"), "{e}"),
-            Ok(_) => panic!("the GPU pass took an area light"),
+        let cpu_lit = predict_pixels(&g, &lit, &env_bw, n_b).expect("cpu");
+        let scene_lit = BandwidthScene::from_context(&gpu_ctx, &lit, &env_bw).expect("upload");
+        let (gpu_lit, _) = pass
+            .predict(&gpu_ctx, &scene_lit, &g, &lit, n_b as u32)
+            .expect("gpu");
+        let mut lit_fields: [Vec<(f64, f64)>; 3] = Default::default();
+        let mut raised = 0;
+        for ((c, gp), unlit) in cpu_lit.iter().zip(&gpu_lit).zip(&cpu) {
+            if let (Some(c), Some(gp), Some(u)) = (c, gp, unlit) {
+                lit_fields[0].push((
+                    c.prediction.bandwidth.angular,
+                    gp.prediction.bandwidth.angular,
+                ));
+                lit_fields[1].push((c.prediction.variance, gp.prediction.variance));
+                lit_fields[2].push((c.prediction.radiance, gp.prediction.radiance));
+                if c.prediction.radiance > 1.05 * u.prediction.radiance {
+                    raised += 1;
+                }
+            }
+        }
+        eprintln!(
+            "with the area light, {raised} of {surface} pixels receive more than 5 % more light"
+        );
+        assert!(
+            raised * 4 > surface,
+            "{raised} pixels lit by the area light"
+        );
+        for (name, pairs) in ["angular bandwidth", "variance sum", "radiance"]
+            .iter()
+            .zip(&lit_fields)
+        {
+            let scale = pairs.iter().map(|(c, _)| c.abs()).fold(0.0, f64::max);
+            let (rms, worst, share) = compare(pairs, 1e-3 * scale, 1e-2);
+            eprintln!(
+                "with the area light, {name}: relative RMS {rms:.2e}, worst {worst:.2e}, {:.2} % of pixels off by > 1 %",
+                100.0 * share
+            );
+            assert!(share < 0.01, "{name}: {:.2} % off by > 1 %", 100.0 * share);
+            assert!(rms < 5e-3, "{name}: relative RMS {rms}");
         }
     })
 }
@@ -167,6 +207,7 @@ fn the_pass_names_bad_input() {
     .expect("scene");
     let mut pass = BandwidthPass::new(&gpu_ctx).expect("pass");
     let px = BandwidthPixel {
+        position: glam::DVec3::ZERO,
         frame: (glam::DVec3::X, glam::DVec3::Y, glam::DVec3::Z),
         wo: glam::DVec3::Z,
         depth: 1.0,

@@ -1,6 +1,6 @@
 // module frequency: frequency analysis on the GPU (004 §IV.3): the one-bounce bandwidth of a
 // distant light (Fig. IV.9, Eq. IV.4–IV.5; lustre_freq::transport::one_bounce with d = 0 and
-// ν_s = 0), the n_b cosine-weighted directions (lustre_freq::pixel::incident_direction), the
+// ν_s = 0) and of a light at a distance (an area light), the n_b cosine-weighted directions (lustre_freq::pixel::incident_direction), the
 // cells of a BRDF bandwidth table (lustre_freq::brdf::BrdfBandwidth::at).
 
 // Direction k of n (lustre_freq::pixel::incident_direction): the centred Hammersley point,
@@ -21,6 +21,20 @@ fn freq_one_bounce_distant(nu_l: f32, cos_x: f32, curvature: f32, texture: f32, 
     let angular = min(nu_l, rho);
     let spatial = (c * nu_l + texture + c * angular) / cos_x;
     return vec2<f32>(spatial, abs(d_eye) * spatial + angular);
+}
+
+// Eq. IV.5 for a light at distance d of bandwidth nu = (ν_s, ν_a) (lustre_freq::transport::
+// one_bounce): T_d' P_x C_−c S B_{t,ρ} C_c P_i T_d ν, each operator |M| ν. Returns (ν_s, ν_a).
+fn freq_one_bounce(nu: vec2<f32>, d: f32, cos_i: f32, cos_x: f32, curvature: f32,
+                   texture: f32, rho: f32, d_eye: f32) -> vec2<f32> {
+    let c = abs(curvature);
+    var v = vec2<f32>(nu.x, abs(d) * nu.x + nu.y);
+    v = vec2<f32>(cos_i * v.x, v.y);
+    v = vec2<f32>(v.x + c * v.y, v.y);
+    v = vec2<f32>(v.x + texture, min(v.y, rho));
+    v = vec2<f32>(v.x + c * v.y, v.y);
+    v = vec2<f32>(v.x / cos_x, v.y);
+    return vec2<f32>(v.x, abs(d_eye) * v.x + v.y);
 }
 
 // (θ row, φ column) of direction w on an n × n hemisphere grid.
