@@ -29,6 +29,7 @@ use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{AdaptiveFrame, HierarchyStats, NOT_SHADED};
 use lustre_adaptive::shading::ShadingContext;
 use lustre_env::{Distribution1D, EnvSampler};
+use lustre_scene::Material;
 use lustre_shade::image::Image;
 use std::f64::consts::PI;
 
@@ -142,7 +143,14 @@ impl AdaptiveScene {
     /// material's measured BRDF with its tabulated CDFs, and the area lights. Errors, naming the
     /// material, on one the GPU does not evaluate (only neural BRDFs and MERL tables) or that
     /// has no tabulated sampler.
-    pub fn from_context(ctx: &GpuContext, shading: &ShadingContext) -> Result<Self> {
+    ///
+    /// `scene_materials`, the scene's materials in the path scene's order, lets the GPU shade
+    /// lustre's untextured analytic models too (`None`: measured and fitted models only).
+    pub fn from_context(
+        ctx: &GpuContext,
+        shading: &ShadingContext,
+        scene_materials: Option<&[Material]>,
+    ) -> Result<Self> {
         let mut brdfs = PackedBrdfs::default();
         let mut materials = vec![];
         for (k, m) in shading.scene.materials.iter().enumerate() {
@@ -158,7 +166,8 @@ impl AdaptiveScene {
                 ));
             };
             let mut packed = None;
-            m.with_bsdf([0.5, 0.5], &mut |b| packed = brdfs.push(b));
+            let scene_material = scene_materials.and_then(|ms| ms.get(k));
+            m.with_bsdf([0.5, 0.5], &mut |b| packed = brdfs.push(b, scene_material));
             let (kind, base, offset) = packed.ok_or_else(|| {
                 invalid(
                     "adaptive pass",

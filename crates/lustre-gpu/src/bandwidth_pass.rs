@@ -22,6 +22,7 @@ use lustre_env::EquirectMap;
 use lustre_freq::brdf::{BrdfBandwidth, BrdfBandwidthOptions};
 use lustre_freq::pixel::{EnvironmentBandwidth, PixelPrediction};
 use lustre_freq::transport::Bandwidth;
+use lustre_scene::Material;
 
 /// The pass's own WGSL (its bindings and entry point).
 pub const BANDWIDTH_PASS_WGSL: &str = include_str!("bandwidth_pass.wgsl");
@@ -115,18 +116,24 @@ impl BandwidthScene {
         Self::upload(ctx, map, map_bandwidth, packed)
     }
 
-    /// The environment and materials of an adaptive-shading context: every material must be a
-    /// neural BRDF, a MERL table or a fitted model (the error names the first that is not).
+    /// The environment, materials and area lights of an adaptive-shading context: every
+    /// material must be one the GPU evaluates ([`crate::measured::EVALUATED`]; the error names
+    /// the first that is not).
+    /// `materials`: as [`crate::adaptive_pass::AdaptiveScene::from_context`]'s.
     pub fn from_context(
         ctx: &GpuContext,
         shading: &ShadingContext,
         env: &EnvironmentBandwidth,
+        materials: Option<&[Material]>,
     ) -> Result<Self> {
         let mut packed = Packed::default();
         for (k, m) in shading.scene.materials.iter().enumerate() {
             let tables = &shading.materials[k];
             let mut brdf = None;
-            m.with_bsdf([0.5, 0.5], &mut |b| brdf = packed.brdfs.push(b));
+            let scene_material = materials.and_then(|ms| ms.get(k));
+            m.with_bsdf([0.5, 0.5], &mut |b| {
+                brdf = packed.brdfs.push(b, scene_material)
+            });
             let brdf = brdf.ok_or_else(|| {
                 invalid(
                     "bandwidth pass",

@@ -6,7 +6,7 @@ use crate::compute::compute_pipeline;
 use crate::context::GpuContext;
 use crate::error::{invalid, Result};
 use crate::fit_models::pack_fit;
-use crate::frame_shade::GpuBsdf;
+use crate::frame_shade::{pack_material, GpuBsdf, FLAG_NORMAL_MAPPED, FLAG_TEXTURED};
 use crate::wgsl::{compose, Module, BSDF, MEASURED};
 use lustre_brdf::measured::merl::{MerlTable, BINS, RES_PHI_D, RES_THETA_D, RES_THETA_H};
 use lustre_brdf::measured::nbrdf::Nbrdf;
@@ -14,40 +14,53 @@ use lustre_brdf::measured::rgl::RglBsdf;
 use lustre_brdf::measured::rgl_warp::Marginal2D;
 use lustre_brdf::tabulated::TabulatedSampler;
 use lustre_brdf::Bsdf;
+use lustre_scene::Material;
 
 /// The materials of a pass that evaluates any BRDF it takes through its `material_eval`: the
-/// measured BRDFs' words (read through `bsdf_table`) and the fitted models' records (kind 2,
-/// `base` indexing them; `fit_models::pack_fit`).
+/// measured BRDFs' words (read through `bsdf_table`) and bsdf.wgsl's records (kind 2, `base`
+/// indexing them): the fitted models (`fit_models::pack_fit`) and lustre's analytic models
+/// (`frame_shade::pack_material`, untextured).
 #[derive(Default)]
 pub struct PackedBrdfs {
-    /// The measured BRDFs' words.
+    /// The measured BRDFs' words, and the analytic models' side tables.
     pub table: Vec<f32>,
-    /// The fitted models' records.
+    /// bsdf.wgsl's records.
     pub fitted: Vec<GpuBsdf>,
 }
 
-/// `material_eval`'s kind of a fitted model.
-pub const KIND_FITTED: u32 = 2;
+/// `material_eval`'s kind of a bsdf.wgsl record (a fitted or an analytic model).
+pub const KIND_RECORD: u32 = 2;
 
 impl PackedBrdfs {
-    /// Appends `b`; returns (kind, first word or record, MERL node offset), or `None` for a
-    /// model the GPU does not evaluate this way.
-    pub fn push(&mut self, b: &dyn Bsdf) -> Option<(u32, u32, f32)> {
+    /// Appends `b` (the BSDF of the scene material `material`, when known); returns (kind,
+    /// first word or record, MERL node offset), or `None` for a model the GPU does not evaluate
+    /// this way (a textured or normal-mapped analytic material, whose parameters vary over the
+    /// surface, or a model without a GPU twin).
+    pub fn push(&mut self, b: &dyn Bsdf, material: Option<&Material>) -> Option<(u32, u32, f32)> {
         if let Some(brdf) = MeasuredBrdf::of(b) {
             return Some(brdf.pack(&mut self.table));
         }
-        let (kind, p) = pack_fit(b).ok()?;
-        self.fitted.push(GpuBsdf {
-            kind,
-            flags: 0,
-            pad0: 0,
-            pad1: 0,
-            p,
-        });
-        Some((KIND_FITTED, (self.fitted.len() - 1) as u32, 0.0))
+        let record = match pack_fit(b) {
+            Ok((kind, p)) => GpuBsdf {
+                kind,
+                flags: 0,
+                pad0: 0,
+                pad1: 0,
+                p,
+            },
+            Err(_) => {
+                let rec = pack_material(material?, &mut self.table).ok()?;
+                if rec.kind == 0 || rec.flags & (FLAG_TEXTURED | FLAG_NORMAL_MAPPED) != 0 {
+                    return None;
+                }
+                rec
+            }
+        };
+        self.fitted.push(record);
+        Some((KIND_RECORD, (self.fitted.len() - 1) as u32, 0.0))
     }
 
-    /// The fitted records, one zero record when there is none (a binding may not be empty).
+    /// The records, one zero record when there is none (a binding may not be empty).
     pub fn fitted_or_zero(&self) -> Vec<GpuBsdf> {
         if self.fitted.is_empty() {
             vec![bytemuck::Zeroable::zeroed()]
@@ -58,9 +71,10 @@ impl PackedBrdfs {
 }
 
 /// What the passes that take any material evaluate: neural BRDFs, MERL tables (a `.binary`
-/// file), RGL tensors (a `.bsdf` file) and fitted models (SGD, Cook–Torrance, Kurt).
+/// file), RGL tensors (a `.bsdf` file), fitted models (SGD, Cook–Torrance, Kurt) and, given the
+/// scene's materials, lustre's untextured analytic models.
 pub const EVALUATED: &str = "neural BRDFs (nbrdf:…), MERL tables (a .binary file), RGL tensors \
-    (a .bsdf file) and fitted models (SGD, Cook–Torrance, Kurt)";
+    (a .bsdf file), fitted models (SGD, Cook–Torrance, Kurt) and untextured analytic models";
 
 /// A measured BRDF the GPU evaluates directly (`measured_eval` of `wgsl/measured.wgsl`).
 #[derive(Clone, Copy, Debug)]
@@ -223,7 +237,7 @@ fn material_eval_source(binding: u32, fitted: bool) -> String {
             "@group(0) @binding({binding}) var<storage, read> fitted: array<GpuBsdf>;\n\n\
              fn material_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>,\n                 \
              wo: vec3<f32>) -> vec3<f32> {{\n    \
-             if (kind == {KIND_FITTED}u) {{\n        return bsdf_eval(fitted[base], wi, wo);\n    }}\n    \
+             if (kind == {KIND_RECORD}u) {{\n        return bsdf_eval(fitted[base], wi, wo);\n    }}\n    \
              return measured_eval(kind, base, offset, wi, wo);\n}}\n\n"
         )
     } else {

@@ -88,7 +88,8 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
         };
         let cpu_buffer =
             BandwidthBuffer::build(&g, &shading, &env_bw, options).expect("cpu buffer");
-        let bw_scene = BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw).expect("upload");
+        let bw_scene =
+            BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, None).expect("upload");
         let mut bw_pass = BandwidthPass::new(&gpu_ctx).expect("bandwidth pass");
         let (estimates, _) = bw_pass
             .predict(&gpu_ctx, &bw_scene, &g, &shading, n_b as u32)
@@ -130,7 +131,7 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
         let t = Instant::now();
         let cpu = render_adaptive(&g, &shading, &cpu_buffer, Lighting::Direct, seed).expect("cpu");
         let cpu_s = t.elapsed().as_secs_f64();
-        let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading).expect("upload");
+        let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, None).expect("upload");
         let mut pass = AdaptivePass::new(&gpu_ctx).expect("compile");
         // The first dispatch also compiles the shader (llvmpipe compiles at first use): a warm-up.
         let warm = pass
@@ -212,7 +213,7 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
             .expect("pre-convolved buffer");
         let cpu_pre = render_adaptive(&g, &shading, &pre_buffer, Lighting::Preconvolved, seed)
             .expect("cpu pre-convolved");
-        let scene_pre = AdaptiveScene::from_context(&gpu_ctx, &shading).expect("upload");
+        let scene_pre = AdaptiveScene::from_context(&gpu_ctx, &shading, None).expect("upload");
         let level_for = |nu: f64| shading.level_for(nu);
         let gpu_pre = pass
             .render(
@@ -289,13 +290,47 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
     )
     .expect("tables");
     let gpu_ctx = ctx();
-    match AdaptiveScene::from_context(&gpu_ctx, &shading) {
-        Err(e) => {
-            let m = e.to_string();
-            assert!(m.contains("material 1") && m.contains("MERL"), "{m}");
+    // A Lambertian spec is not one of the GPU's models, with or without the scene's materials.
+    for materials in [None, Some(&scene.materials[..])] {
+        match AdaptiveScene::from_context(&gpu_ctx, &shading, materials) {
+            Err(e) => {
+                let m = e.to_string();
+                assert!(m.contains("material 1") && m.contains("MERL"), "{m}");
+            }
+            Ok(_) => panic!("the GPU took the spec lambert(kd=0.5)"),
         }
-        Ok(_) => panic!("the GPU took a Lambertian material"),
     }
+
+    // A Lambertian scene material: refused without the scene's materials, shaded with them
+    // (bsdf.wgsl's record), its frame the CPU's.
+    let mut scene = line_up::scene(
+        ["nbrdf:gold-paint", "nbrdf:gold-paint", "nbrdf:gold-paint"],
+        "nbrdf:white-marble",
+    );
+    scene.materials[1] = lustre_scene::Material::diffuse("lambert", Rgb([0.5, 0.4, 0.3]));
+    line_up::with_frame(&scene, (48, 32), |_, g, shading| {
+        let e = match AdaptiveScene::from_context(&gpu_ctx, &shading, None) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("the GPU took a Lambertian material without the scene's"),
+        };
+        assert!(e.contains("material 1"), "{e}");
+        let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene.materials))
+            .expect("upload with the scene's materials");
+        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, BufferOptions::default())
+            .expect("buffer");
+        let cpu = render_adaptive(&g, &shading, &buffer, Lighting::Direct, 5).expect("cpu");
+        let mut pass = AdaptivePass::new(&gpu_ctx).expect("compile");
+        let gpu = pass
+            .render(&gpu_ctx, &scene_gpu, &g, &buffer, None, 5)
+            .expect("gpu");
+        let (rms, over1, _) = image_difference(&g, &cpu.image, &gpu.frame.image);
+        eprintln!(
+            "a Lambertian scene material on the GPU: relative RMS {rms:.2e}, {:.2} % off by > 1 %",
+            100.0 * over1
+        );
+        assert!(rms < 5e-3 && over1 < 0.01, "rms {rms}, {over1}");
+    });
 
     // Measured materials only, on a small frame.
     let scene = line_up::scene(
@@ -304,7 +339,7 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
     );
     line_up::with_frame(&scene, (24, 16), |tracer, mut g, shading| {
         let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
-        let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading).expect("upload");
+        let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, None).expect("upload");
         let mut pass = AdaptivePass::new(&gpu_ctx).expect("compile");
         let e = pass
             .render_brute(&gpu_ctx, &scene_gpu, &g, 0, 1)

@@ -40,7 +40,8 @@ fn the_gpu_bandwidth_pass_matches_its_cpu_twin_on_the_line_up() {
         let n_b = 16;
         let cpu = predict_pixels(&g, &shading, &env_bw, n_b).expect("cpu");
         let gpu_ctx = ctx();
-        let scene_gpu = BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw).expect("upload");
+        let scene_gpu =
+            BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, None).expect("upload");
         let mut pass = BandwidthPass::new(&gpu_ctx).expect("pass");
         let (gpu, timing) = pass
             .predict(&gpu_ctx, &scene_gpu, &g, &shading, n_b as u32)
@@ -128,7 +129,8 @@ fn the_gpu_bandwidth_pass_matches_its_cpu_twin_on_the_line_up() {
             .expect("light"),
         );
         let cpu_lit = predict_pixels(&g, &lit, &env_bw, n_b).expect("cpu");
-        let scene_lit = BandwidthScene::from_context(&gpu_ctx, &lit, &env_bw).expect("upload");
+        let scene_lit =
+            BandwidthScene::from_context(&gpu_ctx, &lit, &env_bw, None).expect("upload");
         let (gpu_lit, _) = pass
             .predict(&gpu_ctx, &scene_lit, &g, &lit, n_b as u32)
             .expect("gpu");

@@ -27,6 +27,7 @@ use lustre_gpu::adaptive_pass::{AdaptivePass, AdaptiveScene};
 use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthScene};
 use lustre_gpu::GpuContext;
 use lustre_plot::heat::heat_rgb;
+use lustre_scene::Material;
 use lustre_shade::image::Image;
 use lustre_shade::path::{PathCamera, PathScene, PathTracer};
 use std::time::Instant;
@@ -221,13 +222,18 @@ struct GpuPasses {
 }
 
 impl GpuPasses {
-    fn new(gpu: &GpuContext, ctx: &ShadingContext, env: &EnvironmentBandwidth) -> Self {
+    fn new(
+        gpu: &GpuContext,
+        ctx: &ShadingContext,
+        env: &EnvironmentBandwidth,
+        materials: Option<&[Material]>,
+    ) -> Self {
         let mut why = vec![];
-        let bandwidth = BandwidthScene::from_context(gpu, ctx, env)
+        let bandwidth = BandwidthScene::from_context(gpu, ctx, env, materials)
             .and_then(|s| Ok((s, BandwidthPass::new(gpu)?)))
             .map_err(|e| why.push(format!("bandwidth pass: {e}")))
             .ok();
-        let shading = AdaptiveScene::from_context(gpu, ctx)
+        let shading = AdaptiveScene::from_context(gpu, ctx, materials)
             .and_then(|s| Ok((s, AdaptivePass::new(gpu)?)))
             .map_err(|e| why.push(format!("shading: {e}")))
             .ok();
@@ -244,12 +250,13 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
     /// Errors: a scene without an environment (adaptive shading lights by it alone), a
     /// material whose tables cannot be built.
     ///
-    /// With `gpu`, the bandwidth pass and the shading run there when it takes the scene's
-    /// materials (each pass on its own; the maps say where each ran and why not the GPU).
+    /// With `gpu` (the context and the scene's materials in the path scene's order), the
+    /// bandwidth pass and the shading run there when it takes the scene's materials (each pass
+    /// on its own; the maps say where each ran and why not the GPU).
     pub fn new(
         scene: &'a PathScene<'s>,
         progress: &dyn Fn(usize, usize),
-        gpu: Option<&GpuContext>,
+        gpu: Option<(&GpuContext, &[Material])>,
     ) -> anyhow::Result<Self> {
         let t = Instant::now();
         let Some(env) = scene.environment.as_ref() else {
@@ -267,7 +274,9 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
             .map_err(|e| anyhow::anyhow!("adaptive shading's material tables: {e}"))?;
         let env = EnvironmentBandwidth::new(env.map())
             .map_err(|e| anyhow::anyhow!("the environment's bandwidth: {e}"))?;
-        let gpu = gpu.map_or_else(GpuPasses::default, |g| GpuPasses::new(g, &ctx, &env));
+        let gpu = gpu.map_or_else(GpuPasses::default, |(g, materials)| {
+            GpuPasses::new(g, &ctx, &env, Some(materials))
+        });
         Ok(Self {
             ctx,
             env,

@@ -578,7 +578,8 @@ fn serve(
                         "adaptive shading: material tables {k} of {n}"
                     )));
                 };
-                AdaptiveRenderer::new(ps, &progress, Some(ctx)).map_err(|e| format!("{e:#}"))
+                AdaptiveRenderer::new(ps, &progress, Some((ctx, &lit.scene.materials[..])))
+                    .map_err(|e| format!("{e:#}"))
             });
             let rendered = renderer.as_mut().map_err(|e| e.clone()).and_then(|r| {
                 r.render(Some(ctx), pt, &camera, size, &settings)

@@ -4,7 +4,7 @@
 //! buffer and shades hierarchically; brute force shades every pixel with --samples samples.
 //! The G-buffer, the material tables and the buffer's levels and variance target are the
 //! CPU's; the passes run on the GPU with --device gpu, or auto where the GPU takes the scene
-//! (measured materials and fitted models, area lights). Without a scene or --material, 004 Fig. IV.13's line-up
+//! (measured materials, fitted and untextured analytic models, area lights). Without a scene or --material, 004 Fig. IV.13's line-up
 //! (three spheres of measured paints on white marble).
 
 use crate::render_cmd::{compare, path_cameras, Device, Method, RenderArgs, SampleRuleArg};
@@ -130,7 +130,13 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     // The passes run on the GPU where they can (--device auto) or must (--device gpu).
     let mut gpu = match args.device {
         Device::Cpu => None,
-        device => gpu_passes(&ctx, &env_bw, adaptive, device == Device::Gpu)?,
+        device => gpu_passes(
+            &ctx,
+            &env_bw,
+            adaptive,
+            device == Device::Gpu,
+            &scene.materials,
+        )?,
     };
     if let Some(g) = &gpu {
         let place = |on: bool| if on { "GPU" } else { "CPU" };
@@ -333,6 +339,7 @@ fn gpu_passes(
     env: &EnvironmentBandwidth,
     adaptive: bool,
     required: bool,
+    materials: &[lustre_scene::Material],
 ) -> anyhow::Result<Option<GpuPasses>> {
     let fallback = |what: &str, e: anyhow::Error| -> anyhow::Result<()> {
         if required {
@@ -350,7 +357,7 @@ fn gpu_passes(
         }
     };
     let bandwidth = if adaptive {
-        match BandwidthScene::from_context(&gctx, ctx, env)
+        match BandwidthScene::from_context(&gctx, ctx, env, Some(materials))
             .and_then(|s| Ok((s, BandwidthPass::new(&gctx)?)))
         {
             Ok(b) => Some(b),
@@ -362,7 +369,7 @@ fn gpu_passes(
     } else {
         None
     };
-    let shading = match AdaptiveScene::from_context(&gctx, ctx)
+    let shading = match AdaptiveScene::from_context(&gctx, ctx, Some(materials))
         .and_then(|s| Ok((s, AdaptivePass::new(&gctx)?)))
     {
         Ok(p) => Some(p),
