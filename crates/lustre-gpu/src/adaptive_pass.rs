@@ -22,11 +22,12 @@ use crate::measured::{
     pack_tabulated, GpuTabulatedDims, MaterialPipelines, PackedBrdfs, EVALUATED,
 };
 use crate::timer::{GpuTimer, Timing};
-use crate::wgsl::{CUBE_STORAGE, ENV_LIGHT, QMC, TYPES};
+use crate::wgsl::{AREA_LIGHT, CUBE_STORAGE, ENV_LIGHT, QMC, TYPES};
 use glam::{DMat3, DVec3};
 use lustre_adaptive::buffer::{BandwidthBuffer, NO_LEVEL};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{AdaptiveFrame, HierarchyStats, NOT_SHADED};
+use lustre_adaptive::light::AreaLight;
 use lustre_adaptive::shading::ShadingContext;
 use lustre_env::{Distribution1D, EnvSampler};
 use lustre_scene::Material;
@@ -37,6 +38,42 @@ use std::f64::consts::PI;
 pub const ADAPTIVE_PASS_WGSL: &str = include_str!("adaptive_pass.wgsl");
 /// The pyramid pass's WGSL.
 pub const ADAPTIVE_PYRAMID_WGSL: &str = include_str!("adaptive_pyramid.wgsl");
+
+/// The area lights for `area_light.wgsl`, their geometry turned by `to_frame` (the identity for
+/// world space): five vec4 per light (`AreaLight`), and every light's texels (RGB, and in w the
+/// spatial bandwidth at the texel's centre, cycles per metre). Neither is empty: without lights
+/// one unread record and texel stand in (a binding may not be empty).
+pub fn pack_lights(lights: &[AreaLight], to_frame: DMat3) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+    let mut records = vec![];
+    let mut texels: Vec<[f32; 4]> = vec![];
+    let v = |d: DVec3, w: f32| {
+        let d = to_frame * d;
+        [d.x as f32, d.y as f32, d.z as f32, w]
+    };
+    for l in lights {
+        let (tw, th, tex) = l.texture();
+        let r = l.radiance.0;
+        records.extend([
+            v(l.corner, tw as f32),
+            v(l.edge_u, th as f32),
+            v(l.edge_v, texels.len() as f32),
+            [r[0] as f32, r[1] as f32, r[2] as f32, l.area() as f32],
+            v(l.normal(), 0.0),
+        ]);
+        for (k, t) in tex.iter().enumerate() {
+            let (x, y) = ((k % tw) as f64 + 0.5, (k / tw) as f64 + 0.5);
+            let nu = l.bandwidth_at(x / tw as f64, y / th as f64);
+            texels.push([t[0], t[1], t[2], nu as f32]);
+        }
+    }
+    if records.is_empty() {
+        records.extend([[0.0; 4]; 5]);
+    }
+    if texels.is_empty() {
+        texels.push([0.0; 4]);
+    }
+    (records, texels)
+}
 
 /// `EnvDims` of `env_light.wgsl`.
 #[repr(C)]
@@ -206,26 +243,7 @@ impl AdaptiveScene {
             .map(|p| [p[0] * scale, p[1] * scale, p[2] * scale, 0.0])
             .collect();
         let (env_words, env_dims) = pack_sampler(env.sampler());
-        let mut lights: Vec<[f32; 4]> = vec![];
-        let mut light_texels: Vec<[f32; 4]> = vec![];
-        for l in &shading.lights {
-            let (tw, th, tex) = l.texture();
-            let v = |d: DVec3, w: f32| [d.x as f32, d.y as f32, d.z as f32, w];
-            let r = l.radiance.0;
-            lights.push(v(l.corner, tw as f32));
-            lights.push(v(l.edge_u, th as f32));
-            lights.push(v(l.edge_v, light_texels.len() as f32));
-            lights.push([r[0] as f32, r[1] as f32, r[2] as f32, l.area() as f32]);
-            lights.push(v(l.normal(), 0.0));
-            light_texels.extend(tex.iter().map(|t| [t[0], t[1], t[2], 0.0]));
-        }
-        // Bindings may not be empty: one (unread) light record.
-        if lights.is_empty() {
-            lights.extend([[0.0; 4]; 5]);
-        }
-        if light_texels.is_empty() {
-            light_texels.push([0.0; 4]);
-        }
+        let (lights, light_texels) = pack_lights(&shading.lights, DMat3::IDENTITY);
         // The pre-convolved pyramid when the context built one (one unread texel else).
         let pyramid = shading.pyramid.as_ref().map(pack_pyramid);
         let pyramid_levels = pyramid.as_ref().map_or(0, |p| p.levels.len() as u32);
@@ -305,7 +323,7 @@ impl AdaptivePass {
         let shade = MaterialPipelines::new(
             ctx,
             "adaptive pass",
-            &[&TYPES, &QMC, &ENV_LIGHT, &CUBE_STORAGE],
+            &[&TYPES, &QMC, &ENV_LIGHT, &CUBE_STORAGE, &AREA_LIGHT],
             ADAPTIVE_PASS_WGSL,
             12,
             entries,

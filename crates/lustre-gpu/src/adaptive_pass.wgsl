@@ -7,7 +7,7 @@
 // BRDF samples and environment samples combined by the balance heuristic, plus area lights.
 // Materials: measured BRDFs evaluated directly (measured_eval: kinds 0 and 1) or fitted models
 // (bsdf.wgsl's records: kind 2, `base` indexing `fitted`). Imports: types, measured, qmc,
-// env_light, cube_storage, and bsdf with fitted models.
+// env_light, cube_storage, area_light, and bsdf with fitted models.
 
 struct Params {
     width: u32,
@@ -57,24 +57,13 @@ struct PassMaterial {
     dims: TabulatedDims,
 }
 
-// A textured parallelogram emitter (lustre_adaptive::light::AreaLight): corner (xyz) and
-// texture width, edge u and texture height, edge v and first texel, radiance scale (rgb) and
-// area, the emitting side's normal.
-struct Light {
-    corner: vec4<f32>,
-    edge_u: vec4<f32>,
-    edge_v: vec4<f32>,
-    radiance: vec4<f32>,
-    normal: vec4<f32>,
-}
-
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var<storage, read> surfels: array<Surfel>;
 @group(0) @binding(2) var<storage, read> env_texels: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> env_words: array<f32>;
 @group(0) @binding(4) var<storage, read> materials: array<PassMaterial>;
 @group(0) @binding(5) var<storage, read> table: array<f32>;
-@group(0) @binding(6) var<storage, read> lights: array<Light>;
+@group(0) @binding(6) var<storage, read> lights: array<AreaLight>;
 @group(0) @binding(7) var<storage, read> light_texels: array<vec4<f32>>;
 // The pyramids (adaptive_pyramid.wgsl): per level k, row-major blocks of 2^k × 2^k pixels.
 @group(0) @binding(8) var<storage, read> min_level: array<u32>;
@@ -248,12 +237,8 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
             let j = (k - n_f - n_l) % n;
             let r = vec2<f32>(draw_unit(seed, 4u + 2u * l), draw_unit(seed, 5u + 2u * l));
             let light = lights[l];
-            let tw = u32(light.corner.w);
-            let th = u32(light.edge_u.w);
-            let first = u32(light.edge_v.w);
             let uv = fract(hammersley(j, n) + r);
-            let q = light.corner.xyz + light.edge_u.xyz * uv.x + light.edge_v.xyz * uv.y;
-            let dv = q - s.p.xyz;
+            let dv = area_light_point(light, uv) - s.p.xyz;
             let dist = length(dv);
             if (!(dist > 0.0 && dist < 3.0e38)) {
                 continue;
@@ -265,9 +250,8 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
             }
             wi = vec3<f32>(dot(w, t), dot(w, b), dot(w, nn));
             let g = cos_l * light.radiance.w / (dist * dist * f32(n));
-            let tx = min(u32(uv.x * f32(tw)), tw - 1u);
-            let ty = min(u32(uv.y * f32(th)), th - 1u);
-            weight = light.radiance.xyz * light_texels[first + ty * tw + tx].xyz * (abs(wi.z) * g);
+            weight = light.radiance.xyz * light_texels[area_light_texel(light, uv)].xyz
+                * (abs(wi.z) * g);
         }
         let v = material_eval(m.kind, m.base, bitcast<f32>(m.offset), wi, wo) * weight;
         if (finite3(v)) {

@@ -7,13 +7,14 @@
 //! measured BRDFs evaluated directly (neural BRDFs, 004's scenes; MERL tables; RGL tensors) and
 //! fitted models (SGD, Cook–Torrance, Kurt).
 
+use crate::adaptive_pass::pack_lights;
 use crate::compute::{buffer_init, storage_entry, uniform_entry};
 use crate::context::GpuContext;
 use crate::error::{invalid, Result};
 use crate::gbuffer::map_read;
 use crate::measured::{MaterialPipelines, MeasuredBrdf, PackedBrdfs, EVALUATED};
 use crate::timer::{GpuTimer, Timing};
-use crate::wgsl::{ENV_LIGHT, FREQUENCY, TYPES};
+use crate::wgsl::{AREA_LIGHT, ENV_LIGHT, FREQUENCY, TYPES};
 use glam::DVec3;
 use lustre_adaptive::buffer::PixelEstimate;
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
@@ -101,7 +102,8 @@ pub struct BandwidthPass {
 
 impl BandwidthScene {
     /// Uploads `map` with its per-texel bandwidth (`lustre_freq::environment::angular_bandwidth`)
-    /// and each material's measured BRDF and bandwidth table (every table on the same grids).
+    /// and each material's measured BRDF and bandwidth table (every table on the same grids);
+    /// no area light.
     pub fn new(
         ctx: &GpuContext,
         map: &EquirectMap,
@@ -113,6 +115,8 @@ impl BandwidthScene {
             let record = brdf.pack(&mut packed.brdfs.table);
             packed.push(k, record, b)?;
         }
+        // No area light (one unread record).
+        (packed.lights, packed.light_texels) = pack_lights(&[], glam::DMat3::IDENTITY);
         Self::upload(ctx, map, map_bandwidth, packed)
     }
 
@@ -146,30 +150,9 @@ impl BandwidthScene {
             packed.push(k, brdf, &tables.bandwidth)?;
         }
         // The lights in the map's frame, as the pixels.
-        let to_local = shading.env.to_world().transpose();
-        let v = |d: DVec3, w: f32| {
-            let d = to_local * d;
-            [d.x as f32, d.y as f32, d.z as f32, w]
-        };
-        for l in &shading.lights {
-            let (tw, th, tex) = l.texture();
-            let r = l.radiance.0;
-            packed.lights.extend([
-                v(l.corner, tw as f32),
-                v(l.edge_u, th as f32),
-                v(l.edge_v, packed.light_texels.len() as f32),
-                [r[0] as f32, r[1] as f32, r[2] as f32, l.area() as f32],
-                v(l.normal(), 0.0),
-            ]);
-            for y in 0..th {
-                for x in 0..tw {
-                    let t = tex[y * tw + x];
-                    let nu =
-                        l.bandwidth_at((x as f64 + 0.5) / tw as f64, (y as f64 + 0.5) / th as f64);
-                    packed.light_texels.push([t[0], t[1], t[2], nu as f32]);
-                }
-            }
-        }
+        (packed.lights, packed.light_texels) =
+            pack_lights(&shading.lights, shading.env.to_world().transpose());
+        packed.light_count = shading.lights.len() as u32;
         Self::upload(ctx, env.map, &env.bandwidth, packed)
     }
 
@@ -231,26 +214,17 @@ impl BandwidthScene {
                 storage,
             ),
             has_fitted: !packed.brdfs.fitted.is_empty(),
-            light_count: (packed.lights.len() / 5) as u32,
-            // Bindings may not be empty: one unread record of each.
+            light_count: packed.light_count,
             lights: buffer_init(
                 ctx,
                 "bandwidth lights",
-                bytemuck::cast_slice(if packed.lights.is_empty() {
-                    &[[0.0f32; 4]; 5][..]
-                } else {
-                    &packed.lights
-                }),
+                bytemuck::cast_slice(&packed.lights),
                 storage,
             ),
             light_texels: buffer_init(
                 ctx,
                 "bandwidth light texels",
-                bytemuck::cast_slice(if packed.light_texels.is_empty() {
-                    &[[0.0f32; 4]][..]
-                } else {
-                    &packed.light_texels
-                }),
+                bytemuck::cast_slice(&packed.light_texels),
                 storage,
             ),
             material_count: packed.ids.len() as u32,
@@ -266,10 +240,10 @@ struct Packed {
     brdfs: PackedBrdfs,
     bandwidth: Vec<f32>,
     grid: Option<BrdfBandwidthOptions>,
-    /// Five vec4 per area light (`Light` of the WGSL).
+    /// `adaptive_pass::pack_lights`'s records and texels.
     lights: Vec<[f32; 4]>,
-    /// RGB and the spatial bandwidth per light texel.
     light_texels: Vec<[f32; 4]>,
+    light_count: u32,
 }
 
 impl Packed {
@@ -365,7 +339,7 @@ impl BandwidthPass {
         let pipelines = MaterialPipelines::new(
             ctx,
             "bandwidth pass",
-            &[&TYPES, &FREQUENCY, &ENV_LIGHT],
+            &[&TYPES, &FREQUENCY, &ENV_LIGHT, &AREA_LIGHT],
             BANDWIDTH_PASS_WGSL,
             7,
             entries.to_vec(),

@@ -3,8 +3,8 @@
 // largest bandwidth over them and the mirror direction (lustre_adaptive::buffer::predict_pixels).
 // Area lights add their paths (buffer::light_paths, merge). Materials are measured BRDFs
 // (measured.wgsl's measured_eval: neural BRDFs, MERL tables, RGL tensors) and
-// fitted models (bsdf.wgsl's records). Imports: types, measured, frequency, env_light, and bsdf
-// with fitted models.
+// fitted models (bsdf.wgsl's records). Imports: types, measured, frequency, env_light,
+// area_light, and bsdf with fitted models.
 
 struct Params {
     pixels: u32,
@@ -27,16 +27,6 @@ struct Surfel {
     p: vec4<f32>,
 }
 
-// A textured parallelogram emitter in the map's frame (lustre_adaptive::light::AreaLight):
-// corner and texture width, edge u and texture height, edge v and first texel, radiance scale
-// and area, the emitting side's normal.
-struct Light {
-    corner: vec4<f32>,
-    edge_u: vec4<f32>,
-    edge_v: vec4<f32>,
-    radiance: vec4<f32>,
-    normal: vec4<f32>,
-}
 
 // (ν_s, ν_a) at the eye, Σ(ν_a^i + ν_ρa^i)χ², Σ2ν_ρa^i χ², L̂, the BRDF's largest bandwidth,
 // Σλ_i.
@@ -63,7 +53,8 @@ struct Prediction {
 @group(0) @binding(6) var<storage, read_write> predictions: array<Prediction>;
 // Binding 7, the fitted models' records, and `material_eval` come with the pass's variant
 // (measured::material_eval_source).
-@group(0) @binding(8) var<storage, read> lights: array<Light>;
+// The area lights, in the map's frame.
+@group(0) @binding(8) var<storage, read> lights: array<AreaLight>;
 // Per light texel: RGB and its spatial bandwidth (cycles per metre) in w.
 @group(0) @binding(9) var<storage, read> light_texels: array<vec4<f32>>;
 
@@ -144,13 +135,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         } else {
             let light = lights[(k - params.n_b) / params.n_b];
             let j = (k - params.n_b) % params.n_b;
-            let tw = u32(light.corner.w);
-            let th = u32(light.edge_u.w);
-            let first = u32(light.edge_v.w);
-            let u = (f32(j) + 0.5) / f32(params.n_b);
-            let v = fract(f32(reverseBits(j) >> 8u) * (1.0 / 16777216.0)
-                + 0.5 / f32(params.n_b));
-            let dv = light.corner.xyz + light.edge_u.xyz * u + light.edge_v.xyz * v - s.p.xyz;
+            let uv = vec2<f32>((f32(j) + 0.5) / f32(params.n_b),
+                               fract(f32(reverseBits(j) >> 8u) * (1.0 / 16777216.0)
+                                     + 0.5 / f32(params.n_b)));
+            let dv = area_light_point(light, uv) - s.p.xyz;
             dist = length(dv);
             if (!(dist > 0.0 && dist < 3.0e38)) {
                 continue;
@@ -162,8 +150,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
                 continue;
             }
             g = cos_l * light.radiance.w / (dist * dist * f32(params.n_b));
-            let texel = light_texels[first + min(u32(v * f32(th)), th - 1u) * tw
-                + min(u32(u * f32(tw)), tw - 1u)];
+            let texel = light_texels[area_light_texel(light, uv)];
             emitted = luminance(light.radiance.xyz * texel.xyz);
             nu_s = texel.w / max(cos_l, 1e-6);
         }

@@ -259,8 +259,15 @@ pub const CUBE_STORAGE: Module = Module {
     deps: &[],
 };
 
+/// Textured parallelogram emitters: the record, a point, the texel of a point.
+pub const AREA_LIGHT: Module = Module {
+    name: "area_light",
+    source: include_str!("wgsl/area_light.wgsl"),
+    deps: &[],
+};
+
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 31] = [
+pub const ALL: [&Module; 32] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -292,6 +299,7 @@ pub const ALL: [&Module; 31] = [
     &FREQUENCY,
     &ENV_LIGHT,
     &CUBE_STORAGE,
+    &AREA_LIGHT,
 ];
 
 /// The source of a pass: every module in `imports` and, transitively, the modules they use,
