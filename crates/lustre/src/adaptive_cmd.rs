@@ -190,7 +190,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                     let b = BandwidthBuffer::assemble(&g, &estimates, options)?;
                     lap(
                         &mut times,
-                        &format!("{stem}: bandwidth buffer (GPU pass, read-back, pyramids)"),
+                        &format!("{stem}: bandwidth buffer (GPU pass, read-back, assembly)"),
                         &mut t,
                     );
                     b
