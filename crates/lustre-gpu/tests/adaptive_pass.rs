@@ -10,15 +10,14 @@ use lustre_adaptive::buffer::{BandwidthBuffer, BufferOptions, SampleRule};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{render_adaptive, render_brute, NOT_SHADED};
 use lustre_adaptive::light::AreaLight;
-use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
+use lustre_adaptive::shading::Lighting;
 use lustre_brdf::measured::nbrdf::{synthesize_merl, NbrdfSet};
 use lustre_brdf::rgb::Rgb;
 use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_gpu::adaptive_pass::{AdaptivePass, AdaptiveScene};
 use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthScene};
-use lustre_shade::baked::read_environment;
 use lustre_shade::image::Image;
-use lustre_shade::reference::{film_camera, path_scene};
+use lustre_shade::reference::film_camera;
 use std::time::Instant;
 
 mod common;
@@ -271,35 +270,23 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
 
 #[test]
 fn the_adaptive_pass_names_what_it_cannot_shade() {
-    let map = lustre_env::shared_data_dir().join("envmaps/royal_esplanade_1k.hdr");
-    let env = read_environment(&map).expect("royal_esplanade_1k.hdr");
-    let scene = lustre_scene::builtin::lineup(
+    let gpu_ctx = ctx();
+    let scene = line_up::scene(
         ["nbrdf:gold-paint", "lambert(kd=0.5)", "nbrdf:gold-paint"],
         "nbrdf:white-marble",
-        Some(env),
-    )
-    .expect("line-up");
-    let (ps, _) = path_scene(&scene).expect("path scene");
-    let shading = ShadingContext::new(
-        &ps,
-        ShadingOptions {
-            pyramid_face: 0,
-            ..Default::default()
-        },
-        &|_, _| {},
-    )
-    .expect("tables");
-    let gpu_ctx = ctx();
-    // A Lambertian spec is not one of the GPU's models, with or without the scene's materials.
-    for materials in [None, Some(&scene.materials[..])] {
-        match AdaptiveScene::from_context(&gpu_ctx, &shading, materials) {
-            Err(e) => {
-                let m = e.to_string();
-                assert!(m.contains("material 1") && m.contains("MERL"), "{m}");
+    );
+    line_up::with_frame(&scene, (8, 8), |_, _, shading| {
+        // A Lambertian spec is not one of the GPU's models, with or without the scene's materials.
+        for materials in [None, Some(&scene.materials[..])] {
+            match AdaptiveScene::from_context(&gpu_ctx, &shading, materials) {
+                Err(e) => {
+                    let m = e.to_string();
+                    assert!(m.contains("material 1") && m.contains("MERL"), "{m}");
+                }
+                Ok(_) => panic!("the GPU took the spec lambert(kd=0.5)"),
             }
-            Ok(_) => panic!("the GPU took the spec lambert(kd=0.5)"),
         }
-    }
+    });
 
     // A Lambertian scene material: refused without the scene's materials, shaded with them
     // (bsdf.wgsl's record), its frame the CPU's.
