@@ -2,11 +2,14 @@
 //! equal PSNR, the predicted against the measured per-pixel variance, and the effect of n_b.
 //!
 //! `cargo run --release -p lustre-adaptive --example adaptive_study -- [--size N]
-//! [--reference N] [--map FILE] [--scene sphere|lineup] [--materials a,b,…] [--out DIR] [--aa]`
+//! [--reference N] [--map FILE] [--scene sphere|lineup] [--materials a,b,…] [--out DIR] [--aa]
+//! [--rates 2,1] [--speed-only]`
 //! (`--aa`: only Fig. IV.14's anti-aliasing costs, at 1, 4 and 16 sub-pixels per pixel)
 //!
 //! Prints Markdown tables; with `--out`, writes each case's images (reference, brute force and
-//! adaptive at equal PSNR, the level and N_p maps).
+//! adaptive at equal PSNR, the level and N_p maps). `--rates` sets the sampling rates of the
+//! constant-N_p rows (samples per cycle of b_p; 2 and 1 by default); `--speed-only` prints only
+//! those rows, without the sample rules, pre-convolved shading and Fig. IV.16–IV.17.
 
 use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BufferOptions, SampleRule};
 use lustre_adaptive::compare::{time_at_psnr, Measured};
@@ -30,6 +33,10 @@ struct Args {
     materials: Vec<String>,
     out: Option<PathBuf>,
     aa: bool,
+    /// Rates of the constant-N_p rows (direct lighting); 1 and 2 by default.
+    rates: Vec<f64>,
+    /// Only Fig. IV.15's constant-N_p rows, without Fig. IV.16–IV.17.
+    speed_only: bool,
 }
 
 fn args() -> anyhow::Result<Args> {
@@ -50,6 +57,8 @@ fn args() -> anyhow::Result<Args> {
         .to_vec(),
         out: None,
         aa: false,
+        rates: vec![2.0, 1.0],
+        speed_only: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(k) = it.next() {
@@ -65,6 +74,13 @@ fn args() -> anyhow::Result<Args> {
             "--materials" => a.materials = v()?.split(',').map(str::to_string).collect(),
             "--out" => a.out = Some(v()?.into()),
             "--aa" => a.aa = true,
+            "--rates" => {
+                a.rates = v()?
+                    .split(',')
+                    .map(|r| r.trim().parse::<f64>())
+                    .collect::<Result<_, _>>()?
+            }
+            "--speed-only" => a.speed_only = true,
             other => anyhow::bail!("unknown argument {other}"),
         }
     }
@@ -175,16 +191,25 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
             m.label, m.time_s, m.psnr, m.samples, m.shaded
         );
     }
-    for (lighting, scale, rate) in [
-        (Lighting::Direct, SampleRule::Absolute, 2.0),
-        (Lighting::Direct, SampleRule::Constant, 2.0),
-        (Lighting::Direct, SampleRule::Constant, 1.0),
-        (Lighting::Direct, SampleRule::Relative, 2.0),
-        (Lighting::Direct, SampleRule::RelativeMse, 2.0),
-        (Lighting::Preconvolved, SampleRule::Relative, 2.0),
-        (Lighting::Preconvolved, SampleRule::Constant, 2.0),
-        (Lighting::Preconvolved, SampleRule::Constant, 1.0),
-    ] {
+    let mut rows = vec![];
+    if !a.speed_only {
+        rows.push((Lighting::Direct, SampleRule::Absolute, 2.0));
+    }
+    rows.extend(
+        a.rates
+            .iter()
+            .map(|&r| (Lighting::Direct, SampleRule::Constant, r)),
+    );
+    if !a.speed_only {
+        rows.extend([
+            (Lighting::Direct, SampleRule::Relative, 2.0),
+            (Lighting::Direct, SampleRule::RelativeMse, 2.0),
+            (Lighting::Preconvolved, SampleRule::Relative, 2.0),
+            (Lighting::Preconvolved, SampleRule::Constant, 2.0),
+            (Lighting::Preconvolved, SampleRule::Constant, 1.0),
+        ]);
+    }
+    for (lighting, scale, rate) in rows {
         let means: &[f64] = if scale == SampleRule::Constant {
             &[1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0, 256.0]
         } else {
@@ -256,9 +281,11 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
                     SampleRule::RelativeMse => " (N_p ∝ σ)",
                 },
                 if rate == 1.0 {
-                    ", Eq. IV.11 as printed (1 sample per cycle)"
+                    ", Eq. IV.11 as printed (1 sample per cycle)".to_string()
+                } else if rate == 2.0 {
+                    String::new()
                 } else {
-                    ""
+                    format!(", rate {rate}")
                 },
                 mean_samples,
                 time_s,
@@ -272,8 +299,10 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
         }
     }
     println!();
-    validation(&g, &ctx, &env_bw, &reference)?;
-    n_b_study(&g, &ctx, &env_bw, &reference, exposure)?;
+    if !a.speed_only {
+        validation(&g, &ctx, &env_bw, &reference)?;
+        n_b_study(&g, &ctx, &env_bw, &reference, exposure)?;
+    }
     Ok(())
 }
 

@@ -23,4 +23,4 @@ pub use irradiance::irradiance_map;
 pub use pyramid::{CubePyramid, MipFilter};
 pub use sampling::{Distribution1D, EnvSample, EnvSampler};
 pub use spot::{spot_map, SpotMapParams};
-pub use sun::{split_suns, Sun, SunOptions, SunSplit};
+pub use sun::{split_suns, Sun, SunFill, SunOptions, SunSplit};

@@ -78,6 +78,11 @@ impl GpuContext {
         )
     }
 
+    /// Whether the adapter is a software rasterizer on the CPU (lavapipe, llvmpipe, WARP).
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// Waits until the GPU has finished everything submitted so far.
     pub fn wait(&self) -> Result<()> {
         self.device

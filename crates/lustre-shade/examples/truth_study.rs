@@ -561,7 +561,7 @@ fn main() -> Res<()> {
         let _ = writeln!(md, "\n## {map}");
         let _ = writeln!(
             md,
-            "\nSuns split off (threshold 64 × mean luminance): {}",
+            "\nSuns split off (threshold 64 × mean luminance, their texels filled with the sky around them): {}",
             describe_suns(&maps)
         );
         for m in materials

@@ -3,9 +3,10 @@
 //! directly under the environment, without visibility: the adaptive method renders a bandwidth
 //! buffer and shades hierarchically; brute force shades every pixel with --samples samples.
 //! The G-buffer, the material tables and the buffer's levels and variance target are the
-//! CPU's; the passes run on the GPU with --device gpu, or auto where the GPU takes the scene
-//! (measured materials, fitted and untextured analytic models, area lights). Without a scene or --material, 004 Fig. IV.13's line-up
-//! (three spheres of measured paints on white marble).
+//! CPU's; the passes run on the GPU with --device gpu, or with auto where the GPU takes the
+//! scene (measured materials, fitted and untextured analytic models, area lights) and the
+//! adapter is not a software rasterizer. Without a scene or --material, 004 Fig. IV.13's
+//! line-up (three spheres of measured paints on white marble).
 
 use crate::render_cmd::{compare, path_cameras, Device, Method, RenderArgs, SampleRuleArg};
 use anyhow::{bail, Context};
@@ -356,6 +357,17 @@ fn gpu_passes(
             return Ok(None);
         }
     };
+    // A software adapter (lavapipe) runs these passes on the same cores as the CPU path, at a
+    // third of its samples per second (BENCHMARKS.md, "Adaptive shading on the GPU"): auto
+    // keeps the CPU; --device gpu still runs them there.
+    if !required && gctx.is_software() {
+        eprintln!(
+            "the whole frame on the CPU: the adapter {} is a software rasterizer, slower than \
+             the CPU path (--device gpu runs the passes on it anyway)",
+            gctx.describe()
+        );
+        return Ok(None);
+    }
     let bandwidth = if adaptive {
         match BandwidthScene::from_context(&gctx, ctx, env, Some(materials))
             .and_then(|s| Ok((s, BandwidthPass::new(&gctx)?)))

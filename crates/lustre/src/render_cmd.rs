@@ -65,7 +65,8 @@ pub enum SampleRuleArg {
 /// Where the frame is rendered.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Device {
-    /// The GPU when an adapter is found and every pass can run there, else the CPU (said so).
+    /// The GPU when an adapter is found and every pass can run there, else the CPU (said so);
+    /// `--method adaptive | brute` keeps the CPU on a software adapter (lavapipe), slower there.
     Auto,
     /// The GPU (lustre-gpu); an error without an adapter or for a material it cannot shade.
     Gpu,
