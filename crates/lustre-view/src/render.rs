@@ -778,3 +778,48 @@ fn serve(
         })));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn measured_materials_and_unbaked_files_are_refused_the_walkthrough_by_name() {
+        let material = |spec| {
+            let mut s = lustre_scene::builtin::preview(spec, None).unwrap();
+            s.materials.remove(0)
+        };
+        let why = gpu_refusal(&material("nbrdf:gold-paint")).expect("a neural BRDF");
+        assert!(
+            why.starts_with(
+                "material \"nbrdf:gold-paint\" (nbrdf:gold-paint): not on the GPU walkthrough"
+            ),
+            "{why}"
+        );
+        assert_eq!(gpu_refusal(&material("sgd:gold-metallic-paint")), None);
+
+        // A scene file without light maps opens, saying how to bake it; a missing one does not.
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::write(
+            d.join("floor.obj"),
+            "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nf 1 3 2\n",
+        )
+        .unwrap();
+        std::fs::write(
+            d.join("floor.toml"),
+            "schema = \"lustre-scene\"\nversion = 1\n[[geometry]]\nfile = \"floor.obj\"\n\
+             [environment]\nconstant = [1.0, 1.0, 1.0]\n",
+        )
+        .unwrap();
+        let (scene, lightmaps) = load_file(&d.join("floor.toml")).unwrap();
+        assert_eq!(scene.meshes.len(), 1);
+        let why = lightmaps.expect_err("no light maps");
+        assert!(
+            why.contains("floor.toml has no light maps") && why.contains("lustre bake"),
+            "{why}"
+        );
+        let e = load_file(&d.join("nope.toml")).expect_err("a missing file");
+        assert!(e.to_string().contains("nope.toml"), "{e}");
+    }
+}
