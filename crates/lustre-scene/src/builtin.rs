@@ -20,6 +20,17 @@ pub const ROOM: [f32; 3] = [6.0, 3.0, 8.0];
 /// The fitted measured material of the first sphere.
 pub const FITTED_SPEC: &str = "sgd:gold-metallic-paint";
 
+/// 004 Fig. IV.13's three measured paints, left to right, for [`lineup`] (what `lustre render
+/// --method adaptive` and `lustre view --lineup` show by default).
+pub const LINEUP_PAINTS: [&str; 3] = [
+    "nbrdf:color-changing-paint3",
+    "nbrdf:red-metallic-paint",
+    "nbrdf:gold-paint",
+];
+
+/// The floor under [`LINEUP_PAINTS`] in 004 Fig. IV.13: white marble.
+pub const LINEUP_FLOOR: &str = "nbrdf:white-marble";
+
 /// A quad p0, p0+eu, p0+eu+ev, p0+ev facing eu × ev.
 fn quad(name: &str, p0: Vec3, eu: Vec3, ev: Vec3, material: usize) -> Mesh {
     let n = eu.cross(ev).normalize();

@@ -81,15 +81,7 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
     };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
-    let source = match &args.scene {
-        Some(p) => {
-            if !p.is_file() {
-                bail!("{}: no such scene file", p.display());
-            }
-            SceneSource::File(p.clone())
-        }
-        None => SceneSource::BuiltinRoom(args.bake_dir.clone()),
-    };
+    let source = scene_source(args)?;
     let event_loop = EventLoop::new().map_err(|e| {
         anyhow!("no window system ({e}); run under X11 (or xvfb-run for a virtual display)")
     })?;
@@ -118,6 +110,44 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
     }
     looped?;
     app.outcome.unwrap_or(Ok(())).map_err(|e| anyhow!(e))
+}
+
+/// What `args` open: a scene file, `--material`'s preview, `--lineup`, or the built-in room.
+/// The in-memory scenes are made here, so that a bad specification or map fails before the
+/// window opens.
+fn scene_source(args: &ViewArgs) -> anyhow::Result<SceneSource> {
+    use lustre_scene::builtin::{lineup, preview, LINEUP_FLOOR, LINEUP_PAINTS};
+    let unbaked = args.material.is_some() || args.lineup;
+    if let (Some(env), false) = (&args.env, unbaked) {
+        bail!(
+            "--env {}: applies to --material and --lineup (a scene file, and the built-in room, \
+             have their own environment)",
+            env.display()
+        );
+    }
+    let environment = args
+        .env
+        .as_deref()
+        .map(|p| {
+            lustre_shade::baked::read_environment(p)
+                .with_context(|| format!("--env {}", p.display()))
+        })
+        .transpose()?;
+    Ok(match (&args.scene, &args.material) {
+        (Some(p), _) => {
+            if !p.is_file() {
+                bail!("{}: no such scene file", p.display());
+            }
+            SceneSource::File(p.clone())
+        }
+        (None, Some(spec)) => SceneSource::Unbaked(Box::new(
+            preview(spec, environment).with_context(|| format!("--material {spec}"))?,
+        )),
+        (None, None) if args.lineup => SceneSource::Unbaked(Box::new(
+            lineup(LINEUP_PAINTS, LINEUP_FLOOR, environment).context("--lineup")?,
+        )),
+        (None, None) => SceneSource::BuiltinRoom(args.bake_dir.clone()),
+    })
 }
 
 /// The window's GPU objects.
@@ -452,6 +482,11 @@ impl App {
                     self.status = format!("{} on {}", info.name, info.adapter);
                     let text = self.status.clone();
                     self.note(format!("ready: {text}"), false);
+                    if let Some(why) = &info.no_walkthrough {
+                        // Adaptive-only: the window starts in the adaptive method.
+                        self.settings.method = ViewMethod::Adaptive;
+                        self.note(format!("adaptive method only: {why}"), false);
+                    }
                     self.info = Some(*info);
                 }
                 Reply::Frame(f) => {
@@ -626,6 +661,25 @@ impl App {
             field: field.to_string(),
             value: value.to_string(),
         });
+    }
+
+    /// Switches to method `m`, unless it is a walkthrough method and the scene is adaptive-only
+    /// (said, and the method kept).
+    fn choose_method(&mut self, m: ViewMethod) {
+        match self.walkthrough_refusal(m) {
+            Some(why) => {
+                let text = format!("{} method refused: {why}", m.name());
+                self.note(text.clone(), true);
+                self.status = text;
+            }
+            None => self.settings.method = m,
+        }
+    }
+
+    /// Why method `m` cannot show the scene: a walkthrough method on an adaptive-only scene.
+    fn walkthrough_refusal(&self, m: ViewMethod) -> Option<String> {
+        let why = self.info.as_ref()?.no_walkthrough.as_ref()?;
+        m.walkthrough().then(|| why.clone())
     }
 
     /// Gives mesh `mesh` its own sample budget (`None`: the global one).
@@ -852,7 +906,7 @@ impl App {
                 self.wait = settle;
             }
             Command::Method(m) => {
-                self.settings.method = m;
+                self.choose_method(m);
                 self.wait = settle;
             }
             Command::Samples(n) => {
@@ -1017,6 +1071,11 @@ impl App {
                  `lustre render --set MATERIAL.PARAMETER=VALUE` replays the edits"
                     .to_string(),
             ),
+            SceneSource::Unbaked(scene) => Err(format!(
+                "{} has no scene file: save the material JSON or the camera path; `lustre render \
+                 --method adaptive --set MATERIAL.PARAMETER=VALUE` replays the edits",
+                scene.source.display()
+            )),
             SceneSource::File(src) => {
                 let current = self.info.as_ref().map_or(&[][..], |i| &i.materials[..]);
                 edited_scene_file(src, &self.edits, current).and_then(|f| {
@@ -1141,7 +1200,16 @@ impl App {
                 ViewMethod::Reference => "path-traced reference (CPU)",
                 ViewMethod::Adaptive => "adaptive shading (004 ch. IV, CPU)",
             };
-            ui.radio_value(&mut self.settings.method, m, text);
+            let refused = self.walkthrough_refusal(m);
+            let radio = egui::RadioButton::new(self.settings.method == m, text);
+            let clicked = match refused {
+                Some(why) => ui.add_enabled(false, radio).on_disabled_hover_text(why),
+                None => ui.add(radio),
+            }
+            .clicked();
+            if clicked {
+                self.choose_method(m);
+            }
         }
         if self.settings.method == ViewMethod::Adaptive {
             self.adaptive_panel(ui);

@@ -16,6 +16,12 @@
 //!   of 004 Fig. IV.13 / IV.22 (the shaded image, b_p, ℓ, N_p, the shaded pixels by level) as
 //!   the CLI's heat maps. It lights by the scene's environment only: a scene without one is
 //!   refused with a message.
+//! - Measured materials (`--material SPEC`: `lustre_scene::builtin::preview` of a neural, MERL
+//!   or RGL BRDF or any material specification, under `--env MAP` or the built-in sky;
+//!   `--lineup`: 004 Fig. IV.13's three measured paints on white marble), and any scene without
+//!   light maps or with a material the GPU walkthrough does not take, open *adaptive-only*: the
+//!   window starts in the adaptive method and says why; the walkthrough methods (regular, CK,
+//!   progressive) are refused with that reason; the reference and material edits work.
 //! - Material editor: click an object to select it; its material's parameters as controls
 //!   ([`lustre_scene::material_edit`]); swap it for any material specification (a catalog
 //!   entry, a fitted material JSON, a measured file); **Fit** a measured file in a background
@@ -60,14 +66,38 @@ impl ViewMethod {
             ViewMethod::Adaptive => "adaptive",
         }
     }
+
+    /// Whether it is one of the GPU walkthrough's methods (regular, CK, progressive), which
+    /// need the scene's light maps and its materials on the GPU.
+    pub fn walkthrough(self) -> bool {
+        matches!(
+            self,
+            ViewMethod::Regular | ViewMethod::Ck | ViewMethod::Progressive
+        )
+    }
 }
 
 /// Arguments of `lustre view`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct ViewArgs {
     /// A scene with baked light maps (the scene.toml `lustre bake --out DIR` writes); the
-    /// built-in room when absent (its light maps baked once into --bake-dir).
+    /// built-in room when absent (its light maps baked once into --bake-dir). A scene without
+    /// light maps, or with a material the GPU walkthrough does not take (measured BRDFs), opens
+    /// adaptive-only.
     pub scene: Option<PathBuf>,
+    /// Instead of a scene: the material preview of this specification (a sphere under --env,
+    /// or the built-in sky; `lustre render --method adaptive --material`'s scene), e.g.
+    /// `nbrdf:gold-paint`, a MERL `.binary`, an RGL `.bsdf`. Adaptive-only (no light maps).
+    #[arg(long, conflicts_with = "scene")]
+    pub material: Option<String>,
+    /// Instead of a scene: 004 Fig. IV.13's line-up, three measured paints on white marble
+    /// under --env or the built-in sky (`lustre render --method adaptive`'s default scene).
+    /// Adaptive-only.
+    #[arg(long, conflicts_with_all = ["scene", "material"])]
+    pub lineup: bool,
+    /// The environment map (.hdr / .exr) of --material or --lineup.
+    #[arg(long)]
+    pub env: Option<PathBuf>,
     /// Where the built-in room's light maps are baked and reused.
     #[arg(long, default_value = "lustre-view/bake")]
     pub bake_dir: PathBuf,

@@ -7,9 +7,18 @@
 //! adaptive method ([`crate::adaptive`]) renders each new view once on the CPU, its shading
 //! context built on the scene's first adaptive frame.
 //!
+//! A scene the walkthrough cannot show — without baked light maps (the material preview and
+//! the line-up of `--material` / `--lineup`, an unbaked scene file), or with a material the
+//! GPU walkthrough does not take (measured BRDFs: neural, MERL, RGL) — opens *adaptive-only*:
+//! the adaptive method and the CPU reference render it, and a frame asked of a walkthrough
+//! method (regular, CK, progressive) fails with [`SceneInfo::no_walkthrough`], the reason.
+//!
 //! Material edits (`lustre_scene::material_edit::set`) are checked against the GPU's models
-//! first; a refused edit is answered with its error and the scene keeps running with the old
-//! material. An accepted one rebuilds the light-mapped scene, the GPU upload and the probes.
+//! first (adaptive-only: not, the walkthrough does not show them); a refused edit is answered
+//! with its error and the scene keeps running with the old material. An accepted one rebuilds
+//! the scene: the path scene and the adaptive method's tables (on its next frame), and with the
+//! walkthrough the light-mapped scene, the GPU upload and the probes. The mode is chosen when
+//! the scene opens: an edit does not make an adaptive-only scene a walkthrough one.
 
 use crate::adaptive::{AdaptiveMaps, AdaptiveRenderer, AdaptiveSettings};
 use crate::ViewMethod;
@@ -18,9 +27,10 @@ use lustre_gpu::{
     GpuContext, GpuFrameOptions, GpuFrameSession, GpuFrameTimes, GpuWalkthrough,
     LightmapFrameScene, StepWork, WalkthroughPasses,
 };
+use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::material_edit;
 use lustre_scene::mesh::MAX_OBJECT_SAMPLES;
-use lustre_scene::{Camera, Material, Scene};
+use lustre_scene::{Camera, Material, MaterialKind, Scene};
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::spec_albedo;
 use lustre_shade::baked::{environment_pyramid, BakedScene};
@@ -28,17 +38,20 @@ use lustre_shade::frame::{FrameMethod, FrameStats};
 use lustre_shade::image::Image;
 use lustre_shade::path::{Accumulator, PathCamera, PathOptions, PathScene, PathTracer};
 use lustre_shade::probe::{LitScene, ProbeOptions};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, Sender, TryRecvError};
 use std::time::Instant;
 
 /// What to show.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SceneSource {
-    /// A scene file with baked light maps.
+    /// A scene file, with baked light maps for the walkthrough methods (adaptive-only without).
     File(PathBuf),
     /// The built-in room, its light maps baked into (and reused from) this folder.
     BuiltinRoom(PathBuf),
+    /// A scene made in memory without light maps (`lustre_scene::builtin::preview` of
+    /// `--material`, the line-up of `--lineup`): adaptive-only.
+    Unbaked(Box<Scene>),
 }
 
 /// How a frame is rendered.
@@ -124,6 +137,9 @@ pub struct SceneInfo {
     pub adapter: String,
     /// Scene extent (diagonal of the bounds), for the walking speed.
     pub extent: f64,
+    /// Why the walkthrough methods (regular, CK, progressive) cannot show the scene (no light
+    /// maps, a material the GPU walkthrough does not take); `None` when they can.
+    pub no_walkthrough: Option<String>,
 }
 
 /// A rendered frame.
@@ -232,10 +248,18 @@ fn run_inner(
         ..ProbeOptions::default()
     };
     probe_opts.validate()?;
-    let (name, baked) = match &source {
+    let (name, baked) = match source {
         SceneSource::File(p) => {
             let _ = tx.send(Reply::Status(format!("loading {}", p.display())));
-            (p.display().to_string(), BakedScene::load(p)?)
+            (p.display().to_string(), load_file(&p)?)
+        }
+        SceneSource::Unbaked(scene) => {
+            let name = scene.source.display().to_string();
+            let why = format!(
+                "{name} has no light maps (the walkthrough methods need them) — use the \
+                 adaptive method"
+            );
+            (name, (*scene, Err(why)))
         }
         SceneSource::BuiltinRoom(dir) => {
             let _ = tx.send(Reply::Status(format!(
@@ -247,18 +271,20 @@ fn run_inner(
                     "baking the built-in room's light maps: tile {k} of {n}"
                 )));
             };
+            let b = BakedScene::builtin_room(&dir, None, &report)?;
             (
                 "the built-in room".to_string(),
-                BakedScene::builtin_room(dir, None, &report)?,
+                (b.scene, Ok((b.atlas, b.pages))),
             )
         }
     };
-    let BakedScene {
-        mut scene,
-        atlas,
-        pages,
-        ..
-    } = baked;
+    let (mut scene, lightmaps) = baked;
+    // The light maps, or why the walkthrough cannot show the scene (a material first: baking
+    // would not help there).
+    let walkthrough = match scene.materials.iter().find_map(gpu_refusal) {
+        Some(why) => Err(why),
+        None => lightmaps,
+    };
     let _ = tx.send(Reply::Status("opening the GPU".into()));
     let ctx = GpuContext::new().map_err(|e| anyhow::anyhow!("no GPU adapter: {e}"))?;
     let mut first = true;
@@ -297,10 +323,13 @@ fn run_inner(
             }
             None => {}
         }
-        let _ = tx.send(Reply::Status(if first {
-            "preparing the scene for the GPU (upload, probes)".into()
-        } else {
-            "applying the material (light-mapped scene, upload, probes)".into()
+        let _ = tx.send(Reply::Status(match (first, walkthrough.is_ok()) {
+            (true, true) => "preparing the scene for the GPU (upload, probes)".into(),
+            (true, false) => "preparing the scene (BVH)".into(),
+            (false, true) => "applying the material (light-mapped scene, upload, probes)".into(),
+            (false, false) => {
+                "applying the material (BVH; adaptive tables on its next frame)".into()
+            }
         }));
         let (ps, warnings) = lustre_shade::reference::path_scene(&scene)?;
         if first {
@@ -308,25 +337,49 @@ fn run_inner(
                 let _ = tx.send(Reply::Status(format!("warning: {w}")));
             }
         }
-        let spec = scene.materials.iter().map(spec_albedo).collect();
-        let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec)?;
         let pt = PathTracer::new(&ps, PathOptions::default())?;
-        let lit = LitScene::new(&scene, &ps, &pt, &lm)?;
-        let has_probes = scene.meshes.iter().any(|m| m.hints.probe);
-        let env = match (&ps.environment, has_probes) {
-            (Some(e), false) => Some(environment_pyramid(e, probe_size)?),
-            _ => None,
+        // The walkthrough's parts, each with what the next needs, or why there is none.
+        let lm = match &walkthrough {
+            Ok((atlas, pages)) => {
+                let spec = scene.materials.iter().map(spec_albedo).collect();
+                let lm = Lightmapped::new(&scene, atlas, pages, &ps.geometry, spec)?;
+                Ok((lm, atlas, pages))
+            }
+            Err(why) => Err(why.as_str()),
         };
-        let uploaded = LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages)?;
-        // The passes are compiled once (a material edit only uploads the scene again).
-        let compiled = match passes.take() {
-            Some(p) => p,
-            None => WalkthroughPasses::new(&ctx)?,
+        let lit = match &lm {
+            Ok((lm, atlas, pages)) => Ok((LitScene::new(&scene, &ps, &pt, lm)?, *atlas, *pages)),
+            Err(why) => Err(*why),
         };
-        let walk =
-            GpuWalkthrough::with_passes(&ctx, compiled, &lit, uploaded, &probe_opts, env.as_ref())?;
+        let walk = match &lit {
+            Ok((lit, atlas, pages)) => {
+                let has_probes = scene.meshes.iter().any(|m| m.hints.probe);
+                let env = match (&ps.environment, has_probes) {
+                    (Some(e), false) => Some(environment_pyramid(e, probe_size)?),
+                    _ => None,
+                };
+                let uploaded = LightmapFrameScene::upload(&ctx, &scene, atlas, pages)?;
+                // The passes are compiled once (a material edit only uploads the scene again).
+                let compiled = match passes.take() {
+                    Some(p) => p,
+                    None => WalkthroughPasses::new(&ctx)?,
+                };
+                let walk = GpuWalkthrough::with_passes(
+                    &ctx,
+                    compiled,
+                    lit,
+                    uploaded,
+                    &probe_opts,
+                    env.as_ref(),
+                )?;
+                Ok((walk, lit))
+            }
+            Err(why) => Err(*why),
+        };
         if first {
-            let _ = tx.send(Reply::Ready(Box::new(info(&scene, &name, &ctx))));
+            let mut info = info(&scene, &name, &ctx);
+            info.no_walkthrough = walkthrough.as_ref().err().cloned();
+            let _ = tx.send(Reply::Ready(Box::new(info)));
             first = false;
         }
         if let Some((material, edit, asked)) = answer {
@@ -341,13 +394,52 @@ fn run_inner(
                 seconds: asked.elapsed().as_secs_f64(),
             });
         }
-        let exit = serve(&ctx, &walk, &lit, &ps, &pt, rx, tx)?;
-        passes = Some(walk.into_passes());
+        let view = walk.as_ref().map(|(w, l)| (w, *l)).map_err(|why| *why);
+        let exit = serve(&ctx, view, &scene, &ps, &pt, rx, tx)?;
+        passes = walk.ok().map(|(w, _)| w.into_passes());
         match exit {
             Exit::Quit => return Ok(()),
             Exit::Edit(e) => edit = Some(e),
         }
     }
+}
+
+/// A scene's light-map atlas and its baked irradiance pages.
+type Lightmaps = (LightmapAtlas, Vec<Vec<[f32; 3]>>);
+
+/// The scene file at `path` with its light maps, or, for a scene file that was not baked, the
+/// scene and why the walkthrough cannot show it.
+fn load_file(path: &Path) -> anyhow::Result<(Scene, Result<Lightmaps, String>)> {
+    match BakedScene::load(path) {
+        Ok(b) => Ok((b.scene, Ok((b.atlas, b.pages)))),
+        Err(baked) => match Scene::load(path) {
+            Ok(scene) if scene.lightmap.is_none() => {
+                let why = format!(
+                    "{} has no light maps (the walkthrough methods need them: `lustre bake {} \
+                     --out DIR`, then open DIR/scene.toml) — use the adaptive method",
+                    path.display(),
+                    path.display()
+                );
+                Ok((scene, Err(why)))
+            }
+            _ => Err(baked.into()),
+        },
+    }
+}
+
+/// Why the GPU walkthrough cannot shade material `m` (a measured BRDF, a model without a GPU
+/// layout), or `None`.
+fn gpu_refusal(m: &Material) -> Option<String> {
+    let e = pack_material(m, &mut vec![]).err()?;
+    let what = match &m.kind {
+        MaterialKind::Spec(s) => s.spec.clone(),
+        k => k.name().to_string(),
+    };
+    Some(format!(
+        "material {:?} ({what}): not on the GPU walkthrough in this build — use the adaptive \
+         method ({e})",
+        m.name
+    ))
 }
 
 /// The window's view of the scene.
@@ -369,6 +461,7 @@ fn info(scene: &Scene, name: &str, ctx: &GpuContext) -> SceneInfo {
         start: start_camera(scene),
         adapter: ctx.describe(),
         extent,
+        no_walkthrough: None,
     }
 }
 
@@ -407,16 +500,25 @@ struct Reference {
     acc: Accumulator,
 }
 
-/// Answers requests over one built scene until a quit or an accepted material edit.
+/// Answers requests over one built scene until a quit or an accepted material edit; `walk` is
+/// the walkthrough renderer over the light-mapped scene, or why the scene has none
+/// (adaptive-only: its methods' frames fail with that reason).
 fn serve(
     ctx: &GpuContext,
-    walk: &GpuWalkthrough,
-    lit: &LitScene,
+    walk: Result<(&GpuWalkthrough, &LitScene), &str>,
+    scene: &Scene,
     ps: &PathScene,
     pt: &PathTracer,
     rx: &Receiver<Request>,
     tx: &Sender<Reply>,
 ) -> anyhow::Result<Exit> {
+    // Mesh index of every triangle, in the path scene's order (as LitScene::mesh_of).
+    let mesh_of: Vec<usize> = scene
+        .meshes
+        .iter()
+        .enumerate()
+        .flat_map(|(k, m)| std::iter::repeat_n(k, m.indices.len()))
+        .collect();
     let mut session = GpuFrameSession::new();
     let mut wanted: Option<(PathCamera, (usize, usize), FrameSettings)> = None;
     // The request the last frame sent answered.
@@ -469,11 +571,11 @@ fn serve(
                     let d = camera.direction(pixel.0, pixel.1, size.0, size.1);
                     let mesh = pt
                         .intersect(camera.origin, d)
-                        .and_then(|h| lit.mesh_of.get(h.prim).map(|&m| m as usize));
+                        .and_then(|h| mesh_of.get(h.prim).copied());
                     let _ = tx.send(Reply::Picked(mesh));
                 }
                 Request::SetObjectSamples { mesh, samples } => {
-                    let ok = mesh < lit.scene.meshes.len()
+                    let ok = mesh < scene.meshes.len()
                         && samples.is_none_or(|n| (1..=MAX_OBJECT_SAMPLES).contains(&n));
                     if ok {
                         return Ok(Exit::Edit(Edit::ObjectSamples {
@@ -492,8 +594,7 @@ fn serve(
                     value,
                 } => {
                     let asked = Instant::now();
-                    let checked = lit
-                        .scene
+                    let checked = scene
                         .materials
                         .get(material)
                         .ok_or_else(|| format!("no material #{material}"))
@@ -501,8 +602,10 @@ fn serve(
                             let mut trial = m.clone();
                             material_edit::set(&mut trial, &field, &value)
                                 .map_err(|e| e.to_string())?;
-                            pack_material(&trial, &mut vec![])
-                                .map_err(|e| format!("{e} (the GPU keeps the old material)"))?;
+                            if walk.is_ok() {
+                                pack_material(&trial, &mut vec![])
+                                    .map_err(|e| format!("{e} (the GPU keeps the old material)"))?;
+                            }
                             Ok(trial)
                         });
                     match checked {
@@ -578,7 +681,7 @@ fn serve(
                         "adaptive shading: material tables {k} of {n}"
                     )));
                 };
-                AdaptiveRenderer::new(ps, &progress, Some((ctx, &lit.scene.materials[..])))
+                AdaptiveRenderer::new(ps, &progress, Some((ctx, &scene.materials[..])))
                     .map_err(|e| format!("{e:#}"))
             });
             let rendered = renderer.as_mut().map_err(|e| e.clone()).and_then(|r| {
@@ -607,6 +710,20 @@ fn serve(
             answered = None;
             continue;
         }
+        let (walk, lit) = match walk {
+            Ok(w) => w,
+            Err(why) => {
+                let _ = tx.send(Reply::FrameFailed {
+                    camera,
+                    size,
+                    settings,
+                    error: format!("the {} method: {why}", settings.method.name()),
+                });
+                wanted = None;
+                busy = false;
+                continue;
+            }
+        };
         let method = match settings.method {
             ViewMethod::Regular => FrameMethod::Regular,
             ViewMethod::Ck => FrameMethod::Ck,
@@ -659,5 +776,50 @@ fn serve(
             wall_ms: t.elapsed().as_secs_f64() * 1e3,
             adaptive: None,
         })));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn measured_materials_and_unbaked_files_are_refused_the_walkthrough_by_name() {
+        let material = |spec| {
+            let mut s = lustre_scene::builtin::preview(spec, None).unwrap();
+            s.materials.remove(0)
+        };
+        let why = gpu_refusal(&material("nbrdf:gold-paint")).expect("a neural BRDF");
+        assert!(
+            why.starts_with(
+                "material \"nbrdf:gold-paint\" (nbrdf:gold-paint): not on the GPU walkthrough"
+            ),
+            "{why}"
+        );
+        assert_eq!(gpu_refusal(&material("sgd:gold-metallic-paint")), None);
+
+        // A scene file without light maps opens, saying how to bake it; a missing one does not.
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::write(
+            d.join("floor.obj"),
+            "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nf 1 3 2\n",
+        )
+        .unwrap();
+        std::fs::write(
+            d.join("floor.toml"),
+            "schema = \"lustre-scene\"\nversion = 1\n[[geometry]]\nfile = \"floor.obj\"\n\
+             [environment]\nconstant = [1.0, 1.0, 1.0]\n",
+        )
+        .unwrap();
+        let (scene, lightmaps) = load_file(&d.join("floor.toml")).unwrap();
+        assert_eq!(scene.meshes.len(), 1);
+        let why = lightmaps.expect_err("no light maps");
+        assert!(
+            why.contains("floor.toml has no light maps") && why.contains("lustre bake"),
+            "{why}"
+        );
+        let e = load_file(&d.join("nope.toml")).expect_err("a missing file");
+        assert!(e.to_string().contains("nope.toml"), "{e}");
     }
 }

@@ -11,7 +11,8 @@
 //! select gold-paint      # or select the first object with that material
 //! set alpha 0.2          # a parameter of the selected object's material
 //! material kurt-demo     # swap it for a material specification
-//! method progressive     # regular | ck | progressive | reference | adaptive
+//! method progressive     # regular | ck | progressive | reference | adaptive (an
+//!                        #   adaptive-only scene refuses the first three, by name)
 //! samples 8              # the global sample budget (adaptive: the mean N_p)
 //! buffer level           # what the adaptive method shows: image | bandwidth | level | samples
 //!                        #   | shaded (the pixels shaded, by level; up-sampled ones grey)

@@ -22,6 +22,7 @@ use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_gpu::adaptive_pass::{AdaptivePass, AdaptiveScene};
 use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthScene};
 use lustre_gpu::GpuContext;
+use lustre_scene::builtin::{LINEUP_FLOOR, LINEUP_PAINTS};
 use lustre_scene::material_edit::{parse_assignment, set_named};
 use lustre_scene::Scene;
 use lustre_shade::baked::read_environment;
@@ -29,14 +30,6 @@ use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::reference::{path_camera, path_scene};
 use std::fmt::Write as _;
 use std::time::Instant;
-
-/// The line-up's materials (004 Fig. IV.13), left to right, and its floor.
-const LINEUP: [&str; 3] = [
-    "nbrdf:color-changing-paint3",
-    "nbrdf:red-metallic-paint",
-    "nbrdf:gold-paint",
-];
-const LINEUP_FLOOR: &str = "nbrdf:white-marble";
 
 /// Runs the adaptive or brute-force renderer.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
@@ -64,7 +57,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         }
         (None, Some(spec)) => lustre_scene::builtin::preview(spec, environment)
             .with_context(|| format!("--material {spec}"))?,
-        (None, None) => lustre_scene::builtin::lineup(LINEUP, LINEUP_FLOOR, environment)?,
+        (None, None) => lustre_scene::builtin::lineup(LINEUP_PAINTS, LINEUP_FLOOR, environment)?,
     };
     for a in &args.set {
         let (material, field, value) =

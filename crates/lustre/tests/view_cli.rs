@@ -11,6 +11,13 @@
 //! the adaptive method on a scene without an environment is refused with a message, and the
 //! run goes on.
 //!
+//!
+//! Measured materials, which the GPU walkthrough does not take, open adaptive-only (004 ch. IV):
+//! `--material nbrdf:gold-paint`, `--lineup` (004 Fig. IV.13) and an unbaked scene file of a
+//! measured material start in the adaptive method, their views match `lustre render --method
+//! adaptive` of the same camera, the buffer views work, a walkthrough method is refused by
+//! name, and a material swap applies to the adaptive method.
+//!
 //! `xvfb-run` must be installed (CI installs `xvfb xauth`): without it this test fails.
 
 use lustre_scene::camera_path_file::CameraPathFile;
@@ -20,6 +27,10 @@ use std::process::{Command, Output};
 
 /// The 3D view in the window against `lustre render` of the same camera, 8-bit sRGB PSNR.
 const PSNR_MIN: f64 = 40.0;
+
+/// The adaptive method's 3D view against `lustre render --method adaptive` of the same camera,
+/// seed and mean N_p, 8-bit sRGB PSNR.
+const ADAPTIVE_PSNR_MIN: f64 = 40.0;
 
 fn lustre() -> Command {
     Command::new(env!("CARGO_BIN_EXE_lustre"))
@@ -341,6 +352,19 @@ fn viewer_refuses_bad_input_and_missing_devices_clearly() {
         (vec!["--size", "10x10"], "--size"),
         (vec!["--samples", "0"], "--samples"),
         (vec!["--probe-size", "0"], "--probe-size"),
+        (
+            vec!["--env", "sky.hdr"],
+            "--env sky.hdr: applies to --material and --lineup",
+        ),
+        (vec!["--lineup", "--env", "missing.hdr"], "missing.hdr"),
+        (
+            vec!["--material", "nbrdf:no-such-paint"],
+            "--material nbrdf:no-such-paint",
+        ),
+        (
+            vec!["--material", "nbrdf:gold-paint", "--lineup"],
+            "--lineup",
+        ),
     ] {
         let o = lustre()
             .current_dir(d)
@@ -440,4 +464,304 @@ fn viewer_refuses_bad_input_and_missing_devices_clearly() {
         !o.status.success() && all.contains("no GPU adapter") && !all.contains("panicked"),
         "{all}"
     );
+}
+
+/// The 3D view of screenshot `stem` (its PNG and JSON in `out`; shown at --scale 1): the rectangle (x, y, w, h) in
+/// the window, its RGB bytes, and the JSON.
+fn view_of(out: &Path, stem: &str) -> ((u32, u32, u32, u32), Vec<u8>, serde_json::Value) {
+    let side = read_json(&out.join(format!("{stem}.json")));
+    let num = |v: &serde_json::Value| v.as_f64().unwrap_or_else(|| panic!("{stem}: {side}"));
+    let rect = (
+        num(&side["view"]["rect"][0]).round() as u32,
+        num(&side["view"]["rect"][1]).round() as u32,
+        num(&side["view"]["size"][0]) as u32,
+        num(&side["view"]["size"][1]) as u32,
+    );
+    // Shown pixel for pixel (--scale 1).
+    let shown = (
+        num(&side["view"]["rect"][2]).round() as u32,
+        num(&side["view"]["rect"][3]).round() as u32,
+    );
+    assert_eq!(shown, (rect.2, rect.3), "{stem}: {side}");
+    let png = image::open(out.join(format!("{stem}.png")))
+        .unwrap_or_else(|e| panic!("{stem}.png: {e}"))
+        .to_rgba8();
+    (rect, crop(&png, rect), side)
+}
+
+/// Mean of 8-bit values.
+fn mean8(p: &[u8]) -> f64 {
+    p.iter().map(|&c| f64::from(c)).sum::<f64>() / p.len().max(1) as f64
+}
+
+/// Checks the adaptive view of screenshot `stem` in `dir/out` against `lustre render --method
+/// adaptive SCENE_ARGS` from its camera (seed 1, the view's size, 8 samples, no supersampling,
+/// as the viewer): a lit view, the CLI's image finite, PSNR ≥ [`ADAPTIVE_PSNR_MIN`] and the
+/// mean 8-bit level within 2 %. Returns the view's mean level and its pixels.
+fn check_adaptive_view(dir: &Path, out: &str, stem: &str, scene_args: &[&str]) -> (f64, Vec<u8>) {
+    let ((_, _, w, h), shown, side) = view_of(&dir.join(out), stem);
+    assert_eq!(side["method"], "adaptive", "{side}");
+    let a = &side["adaptive"];
+    let count = |k: &str| a[k].as_u64().unwrap_or_else(|| panic!("{k}: {a}"));
+    let (surface, shaded, upsampled) = (
+        count("surface_pixels"),
+        count("shaded_pixels"),
+        count("upsampled_pixels"),
+    );
+    assert!(surface > 0 && shaded + upsampled == surface, "{a}");
+    println!(
+        "{stem}: adaptive frame {w}×{h} in the viewer: {shaded} of {surface} surface pixels \
+         shaded; G-buffer {:.0} ms, bandwidth pass {:.0} ms (GPU: {}), shading {:.0} ms (GPU: \
+         {}); the step {:.0} ms; material tables {:.0} ms (the scene's first adaptive frame)",
+        a["gbuffer_ms"].as_f64().unwrap_or(f64::NAN),
+        a["bandwidth_ms"].as_f64().unwrap_or(f64::NAN),
+        a["bandwidth_on_gpu"],
+        a["shading_ms"].as_f64().unwrap_or(f64::NAN),
+        a["shading_on_gpu"],
+        side["step_ms"].as_f64().unwrap_or(f64::NAN),
+        a["tables_ms"].as_f64().unwrap_or(f64::NAN),
+    );
+    let o = lustre()
+        .current_dir(dir)
+        .args([
+            "render", "--method", "adaptive", "--out", "cli", "--spp", "1",
+        ])
+        .args([
+            "--samples",
+            "8",
+            "--seed",
+            "1",
+            "--size",
+            &format!("{w}x{h}"),
+        ])
+        .args(["--path", &format!("{out}/{stem}.camera.json")])
+        .args(scene_args)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    let frame = Image::read_exr(&dir.join("cli/frame_0000.exr")).unwrap();
+    assert_eq!((frame.width, frame.height), (w as usize, h as usize));
+    assert!(frame.data.iter().flatten().all(|c| c.is_finite()));
+    let rendered = frame.to_srgb8(side["exposure"].as_f64().unwrap());
+    let psnr = psnr8(&shown, &rendered);
+    let (m_view, m_cli) = (mean8(&shown), mean8(&rendered));
+    println!(
+        "{stem}: viewer vs lustre render --method adaptive {scene_args:?}: {psnr:.2} dB, mean \
+         8-bit level {m_view:.2} vs {m_cli:.2}"
+    );
+    assert!(
+        psnr >= ADAPTIVE_PSNR_MIN,
+        "{stem}: viewer vs lustre render: {psnr:.2} dB"
+    );
+    assert!(
+        (m_view - m_cli).abs() <= 0.02 * m_cli,
+        "{stem}: mean level {m_view:.2} in the viewer, {m_cli:.2} from lustre render"
+    );
+    (m_view, shown)
+}
+
+#[test]
+fn viewer_opens_a_measured_material_adaptive_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("gold.txt"),
+        "screenshot gold.png\n\
+         buffer shaded\n\
+         screenshot mask.png\n\
+         buffer bandwidth\n\
+         screenshot bandwidth.png\n\
+         buffer image\n\
+         method regular\n\
+         screenshot refused.png\n\
+         select nbrdf:gold-paint\n\
+         material lambert(kd=0.5)\n\
+         screenshot swapped.png\n\
+         quit\n",
+    )
+    .unwrap();
+    let o = view_in_xvfb(
+        d,
+        &[
+            "--material",
+            "nbrdf:gold-paint",
+            "--size",
+            "640x360",
+            "--scale",
+            "1",
+            "--samples",
+            "8",
+            "--script",
+            "gold.txt",
+            "--timeout",
+            "600",
+        ],
+    );
+    let all = text(&o);
+    assert!(o.status.success() && !all.contains("panicked"), "{all}");
+    // Adaptive-only from the start, said with the material; the regular method refused by
+    // name, and the view stays in the adaptive method.
+    let why = "material \"nbrdf:gold-paint\" (nbrdf:gold-paint): not on the GPU walkthrough \
+               in this build — use the adaptive method";
+    assert!(
+        all.contains(&format!("adaptive method only: {why}")),
+        "{all}"
+    );
+    assert!(
+        all.contains(&format!("regular method refused: {why}")),
+        "{all}"
+    );
+    let out = d.join("lustre-view");
+    assert_eq!(read_json(&out.join("refused.json"))["method"], "adaptive");
+
+    // The gold sphere under the built-in sky, as `lustre render --method adaptive` shows it;
+    // its mean level measured at 640×360, --scale 1 (a 134×319 view): 86.5.
+    let (level, gold) = check_adaptive_view(
+        d,
+        "lustre-view",
+        "gold",
+        &["--material", "nbrdf:gold-paint"],
+    );
+    assert!(
+        (80.0..=93.0).contains(&level),
+        "mean 8-bit level {level:.2} of the gold sphere's view"
+    );
+
+    // The shaded-pixel view: as many grey (up-sampled) and coloured (shaded) pixels as the
+    // frame counted; the bandwidth view over a positive range of b_p.
+    let (_, mask, side) = view_of(&out, "mask");
+    let a = &side["adaptive"];
+    assert_eq!(a["buffer"], "shaded", "{a}");
+    let grey = mask.chunks(3).filter(|p| *p == [110, 110, 110]).count() as u64;
+    let coloured = mask
+        .chunks(3)
+        .filter(|p| *p != [110, 110, 110] && *p != [0, 0, 0])
+        .count() as u64;
+    let surface = a["surface_pixels"].as_u64().unwrap();
+    for (what, seen, counted) in [
+        ("up-sampled", grey, &a["upsampled_pixels"]),
+        ("shaded", coloured, &a["shaded_pixels"]),
+    ] {
+        let counted = counted.as_u64().unwrap();
+        assert!(
+            counted > 0 && seen.abs_diff(counted) * 100 <= surface,
+            "{what}: {seen} pixels in the view, {counted} in the frame"
+        );
+    }
+    let range = &read_json(&out.join("bandwidth.json"))["adaptive"]["heat_range"];
+    let (lo, hi) = (range[0].as_f64().unwrap(), range[1].as_f64().unwrap());
+    assert!(lo > 0.0 && hi > lo, "b_p heat map range {range}");
+
+    // The swap applies to the adaptive method: a grey Lambert sphere in place of the gold.
+    let (_, swapped, side) = view_of(&out, "swapped");
+    assert_eq!(side["method"], "adaptive", "{side}");
+    assert_eq!(
+        side["set"],
+        serde_json::json!(["nbrdf:gold-paint.spec=lambert(kd=0.5)"]),
+        "{side}"
+    );
+    let changed = gold
+        .chunks(3)
+        .zip(swapped.chunks(3))
+        .filter(|(p, q)| p.iter().zip(*q).any(|(x, y)| x.abs_diff(*y) > 8))
+        .count();
+    assert!(changed > 2000, "the swap changed {changed} pixels");
+}
+
+#[test]
+fn viewer_opens_the_line_up_and_an_unbaked_measured_scene_adaptive_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let env = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/data/envmaps/royal_esplanade_1k.hdr"
+    );
+    // 004 Fig. IV.13's line-up under the Royal Esplanade: the CK method refused by the first
+    // paint's name.
+    std::fs::write(
+        d.join("lineup.txt"),
+        "screenshot lineup.png\nmethod ck\nquit\n",
+    )
+    .unwrap();
+    let o = view_in_xvfb(
+        d,
+        &[
+            "--lineup",
+            "--env",
+            env,
+            "--size",
+            "640x360",
+            "--scale",
+            "1",
+            "--out",
+            "lineup",
+            "--script",
+            "lineup.txt",
+            "--timeout",
+            "600",
+        ],
+    );
+    let all = text(&o);
+    assert!(o.status.success() && !all.contains("panicked"), "{all}");
+    assert!(
+        all.contains(
+            "ck method refused: material \"nbrdf:color-changing-paint3\" \
+             (nbrdf:color-changing-paint3): not on the GPU walkthrough"
+        ),
+        "{all}"
+    );
+    check_adaptive_view(d, "lineup", "lineup", &["--env", env]);
+
+    // A scene file of a measured material, not baked: a floor and a block of gold paint under
+    // a constant sky.
+    std::fs::write(
+        d.join("floor.obj"),
+        "mtllib floor.mtl\nusemtl grey\nv -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nf 1 3 2\n\
+         f 1 4 3\nusemtl metal\nv -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 1 -0.5\nv -0.5 1 -0.5\n\
+         f 5 8 7\nf 5 7 6\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("floor.mtl"),
+        "newmtl grey\nKd 0.6 0.6 0.6\nnewmtl metal\nKd 0.5 0.5 0.5\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("gold.toml"),
+        "schema = \"lustre-scene\"\nversion = 1\n[[geometry]]\nfile = \"floor.obj\"\n\
+         [environment]\nconstant = [1.0, 1.0, 1.0]\n\
+         [materials]\nmetal = \"nbrdf:gold-paint\"\n",
+    )
+    .unwrap();
+    std::fs::write(
+        d.join("file.txt"),
+        "screenshot file.png\nmethod progressive\nquit\n",
+    )
+    .unwrap();
+    let o = view_in_xvfb(
+        d,
+        &[
+            "gold.toml",
+            "--size",
+            "640x360",
+            "--scale",
+            "1",
+            "--out",
+            "file",
+            "--script",
+            "file.txt",
+            "--timeout",
+            "600",
+        ],
+    );
+    let all = text(&o);
+    assert!(o.status.success() && !all.contains("panicked"), "{all}");
+    assert!(
+        all.contains(
+            "progressive method refused: material \"metal\" (nbrdf:gold-paint): not on the \
+             GPU walkthrough"
+        ),
+        "{all}"
+    );
+    check_adaptive_view(d, "file", "file", &["gold.toml"]);
 }
