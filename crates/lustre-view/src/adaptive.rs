@@ -18,6 +18,7 @@
 //! up-sampled surface pixels are grey (the CLI's map leaves them black like the background).
 
 use crate::render::FrameSettings;
+use crate::AdaptiveDevice;
 use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BufferOptions, SampleRule};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive};
@@ -222,6 +223,14 @@ struct GpuPasses {
 }
 
 impl GpuPasses {
+    /// Both passes on the CPU, for `why`.
+    fn cpu(why: String) -> Self {
+        Self {
+            why_cpu: Some(why),
+            ..Self::default()
+        }
+    }
+
     fn new(
         gpu: &GpuContext,
         ctx: &ShadingContext,
@@ -252,11 +261,13 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
     ///
     /// With `gpu` (the context and the scene's materials in the path scene's order), the
     /// bandwidth pass and the shading run there when it takes the scene's materials (each pass
-    /// on its own; the maps say where each ran and why not the GPU).
+    /// on its own; the maps say where each ran and why not the GPU) and `device` allows it
+    /// ([`AdaptiveDevice::Auto`] keeps a software rasterizer off).
     pub fn new(
         scene: &'a PathScene<'s>,
         progress: &dyn Fn(usize, usize),
         gpu: Option<(&GpuContext, &[Material])>,
+        device: AdaptiveDevice,
     ) -> anyhow::Result<Self> {
         let t = Instant::now();
         let Some(env) = scene.environment.as_ref() else {
@@ -274,9 +285,16 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
             .map_err(|e| anyhow::anyhow!("adaptive shading's material tables: {e}"))?;
         let env = EnvironmentBandwidth::new(env.map())
             .map_err(|e| anyhow::anyhow!("the environment's bandwidth: {e}"))?;
-        let gpu = gpu.map_or_else(GpuPasses::default, |(g, materials)| {
-            GpuPasses::new(g, &ctx, &env, Some(materials))
-        });
+        let gpu = match (gpu, device) {
+            (None, _) => GpuPasses::default(),
+            (Some(_), AdaptiveDevice::Cpu) => GpuPasses::cpu("--adaptive-device cpu".into()),
+            (Some((g, _)), AdaptiveDevice::Auto) if g.is_software() => GpuPasses::cpu(format!(
+                "the adapter {} is a software rasterizer, slower than the CPU path \
+                 (--adaptive-device gpu runs the passes on it)",
+                g.describe()
+            )),
+            (Some((g, materials)), _) => GpuPasses::new(g, &ctx, &env, Some(materials)),
+        };
         Ok(Self {
             ctx,
             env,
@@ -401,7 +419,7 @@ mod tests {
         let mut scene = lustre_scene::builtin::preview("lambert(kd=0.5)", None).unwrap();
         scene.environment = None;
         let (ps, _) = path_scene(&scene).unwrap();
-        let e = match AdaptiveRenderer::new(&ps, &|_, _| {}, None) {
+        let e = match AdaptiveRenderer::new(&ps, &|_, _| {}, None, AdaptiveDevice::Auto) {
             Ok(_) => panic!("a scene without an environment was accepted"),
             Err(e) => e.to_string(),
         };
@@ -419,7 +437,7 @@ mod tests {
         .unwrap();
         let (ps, _) = path_scene(&scene).unwrap();
         let tracer = PathTracer::new(&ps, PathOptions::default()).unwrap();
-        let mut r = AdaptiveRenderer::new(&ps, &|_, _| {}, None).unwrap();
+        let mut r = AdaptiveRenderer::new(&ps, &|_, _| {}, None, AdaptiveDevice::Auto).unwrap();
         let cam = film_camera(&scene.cameras[0], 48, 32).unwrap();
         let settings = FrameSettings {
             method: crate::ViewMethod::Adaptive,

@@ -89,9 +89,10 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
     let (rep_tx, rep_rx) = channel();
     let src = source.clone();
     let probe_size = args.probe_size;
+    let adaptive_device = args.adaptive_device;
     let render_thread = std::thread::Builder::new()
         .name("lustre-view render".into())
-        .spawn(move || render::run(src, probe_size, req_rx, rep_tx))
+        .spawn(move || render::run(src, probe_size, adaptive_device, req_rx, rep_tx))
         .context("starting the render thread")?;
     let mut app = App::new(args.clone(), size, source, commands, req_tx, rep_rx);
     let looped = event_loop
@@ -1695,6 +1696,7 @@ impl App {
                         "tables_ms": a.map(|a| a.tables_ms),
                         "bandwidth_on_gpu": a.map(|a| a.on_gpu.0),
                         "shading_on_gpu": a.map(|a| a.on_gpu.1),
+                        "why_cpu": a.and_then(|a| a.why_cpu.clone()),
                     })
                 }),
                 "samples": self.settings.samples,

@@ -77,6 +77,18 @@ impl ViewMethod {
     }
 }
 
+/// Where the adaptive method's passes run (`--adaptive-device`).
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum AdaptiveDevice {
+    /// The GPU where it takes the scene's materials and is not a software rasterizer.
+    #[default]
+    Auto,
+    /// The GPU where it takes the scene's materials, a software rasterizer included.
+    Gpu,
+    /// The CPU.
+    Cpu,
+}
+
 /// Arguments of `lustre view`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct ViewArgs {
@@ -120,6 +132,11 @@ pub struct ViewArgs {
     /// Probe cube face size in texels (as `lustre render --probe-size`).
     #[arg(long, default_value_t = 128)]
     pub probe_size: usize,
+    /// Where the adaptive method's bandwidth pass and shading run: auto (the GPU where it takes
+    /// the scene's materials, unless the adapter is a software rasterizer such as lavapipe,
+    /// slower there than the CPU), gpu or cpu.
+    #[arg(long, value_enum, default_value_t = AdaptiveDevice::Auto)]
+    pub adaptive_device: AdaptiveDevice,
     /// Present without waiting for the display's refresh.
     #[arg(long)]
     pub no_vsync: bool,

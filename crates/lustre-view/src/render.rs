@@ -21,7 +21,7 @@
 //! the scene opens: an edit does not make an adaptive-only scene a walkthrough one.
 
 use crate::adaptive::{AdaptiveMaps, AdaptiveRenderer, AdaptiveSettings};
-use crate::ViewMethod;
+use crate::{AdaptiveDevice, ViewMethod};
 use lustre_gpu::frame_shade::pack_material;
 use lustre_gpu::{
     GpuContext, GpuFrameOptions, GpuFrameSession, GpuFrameTimes, GpuWalkthrough,
@@ -230,9 +230,16 @@ enum Edit {
 }
 
 /// Runs the render thread until [`Request::Quit`] or the window's end of the channel closes;
-/// probes are captured at `probe_size`² texels per face.
-pub fn run(source: SceneSource, probe_size: usize, rx: Receiver<Request>, tx: Sender<Reply>) {
-    if let Err(e) = run_inner(source, probe_size, &rx, &tx) {
+/// probes are captured at `probe_size`² texels per face, and the adaptive method's passes run
+/// where `adaptive_device` says.
+pub fn run(
+    source: SceneSource,
+    probe_size: usize,
+    adaptive_device: AdaptiveDevice,
+    rx: Receiver<Request>,
+    tx: Sender<Reply>,
+) {
+    if let Err(e) = run_inner(source, probe_size, adaptive_device, &rx, &tx) {
         let _ = tx.send(Reply::Fatal(format!("{e:#}")));
     }
 }
@@ -240,6 +247,7 @@ pub fn run(source: SceneSource, probe_size: usize, rx: Receiver<Request>, tx: Se
 fn run_inner(
     source: SceneSource,
     probe_size: usize,
+    adaptive_device: AdaptiveDevice,
     rx: &Receiver<Request>,
     tx: &Sender<Reply>,
 ) -> anyhow::Result<()> {
@@ -395,7 +403,11 @@ fn run_inner(
             });
         }
         let view = walk.as_ref().map(|(w, l)| (w, *l)).map_err(|why| *why);
-        let exit = serve(&ctx, view, &scene, &ps, &pt, rx, tx)?;
+        let gpu = Gpu {
+            ctx: &ctx,
+            adaptive: adaptive_device,
+        };
+        let exit = serve(gpu, view, &scene, &ps, &pt, rx, tx)?;
         passes = walk.ok().map(|(w, _)| w.into_passes());
         match exit {
             Exit::Quit => return Ok(()),
@@ -500,11 +512,18 @@ struct Reference {
     acc: Accumulator,
 }
 
+/// The render thread's device, and where the adaptive method's passes may run.
+#[derive(Clone, Copy)]
+struct Gpu<'a> {
+    ctx: &'a GpuContext,
+    adaptive: AdaptiveDevice,
+}
+
 /// Answers requests over one built scene until a quit or an accepted material edit; `walk` is
 /// the walkthrough renderer over the light-mapped scene, or why the scene has none
 /// (adaptive-only: its methods' frames fail with that reason).
 fn serve(
-    ctx: &GpuContext,
+    gpu: Gpu,
     walk: Result<(&GpuWalkthrough, &LitScene), &str>,
     scene: &Scene,
     ps: &PathScene,
@@ -512,6 +531,7 @@ fn serve(
     rx: &Receiver<Request>,
     tx: &Sender<Reply>,
 ) -> anyhow::Result<Exit> {
+    let ctx = gpu.ctx;
     // Mesh index of every triangle, in the path scene's order (as LitScene::mesh_of).
     let mesh_of: Vec<usize> = scene
         .meshes
@@ -681,7 +701,8 @@ fn serve(
                         "adaptive shading: material tables {k} of {n}"
                     )));
                 };
-                AdaptiveRenderer::new(ps, &progress, Some((ctx, &scene.materials[..])))
+                let passes = Some((ctx, &scene.materials[..]));
+                AdaptiveRenderer::new(ps, &progress, passes, gpu.adaptive)
                     .map_err(|e| format!("{e:#}"))
             });
             let rendered = renderer.as_mut().map_err(|e| e.clone()).and_then(|r| {

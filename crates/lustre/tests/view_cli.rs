@@ -591,6 +591,8 @@ fn viewer_opens_a_measured_material_adaptive_only() {
             "1",
             "--samples",
             "8",
+            "--adaptive-device",
+            "gpu",
             "--script",
             "gold.txt",
             "--timeout",
@@ -625,6 +627,14 @@ fn viewer_opens_a_measured_material_adaptive_only() {
     assert!(
         (80.0..=93.0).contains(&level),
         "mean 8-bit level {level:.2} of the gold sphere's view"
+    );
+    // --adaptive-device gpu: both passes ran on the GPU (lavapipe in CI), and the view above
+    // matched the CLI's frame, which `--device auto` renders on the CPU on a software adapter.
+    let (_, _, side) = view_of(&out, "gold");
+    let a = &side["adaptive"];
+    assert!(
+        a["bandwidth_on_gpu"] == true && a["shading_on_gpu"] == true,
+        "{a}"
     );
 
     // The shaded-pixel view: as many grey (up-sampled) and coloured (shaded) pixels as the
@@ -711,6 +721,21 @@ fn viewer_opens_the_line_up_and_an_unbaked_measured_scene_adaptive_only() {
         "{all}"
     );
     check_adaptive_view(d, "lineup", "lineup", &["--env", env]);
+    // --adaptive-device auto: the GPU passes, unless the adapter is a software rasterizer
+    // (lavapipe), which is slower than the CPU path; the view says which and why.
+    let (_, _, side) = view_of(&d.join("lineup"), "lineup");
+    let a = &side["adaptive"];
+    let software = side["adapter"].as_str().is_some_and(|s| s.contains("Cpu"));
+    assert_eq!(a["bandwidth_on_gpu"], !software, "{side}");
+    assert_eq!(a["shading_on_gpu"], !software, "{side}");
+    if software {
+        assert!(
+            a["why_cpu"]
+                .as_str()
+                .is_some_and(|w| w.contains("software rasterizer")),
+            "{a}"
+        );
+    }
 
     // A scene file of a measured material, not baked: a floor and a block of gold paint under
     // a constant sky.
