@@ -21,7 +21,8 @@
 //!
 //! A `TwoSided` wrapper (of a resolved spec: `twosided:…`, or of a two-sided scene material's
 //! spec) packs its model flagged [`FLAG_TWO_SIDED`]: `record_eval` mirrors both directions to
-//! the upper side when ωo lies below, as `TwoSided::eval` does. The exponential Cook–Torrance's
+//! the upper side when ωo lies below, as `TwoSided::eval` does (a pass without analytic records
+//! evaluates the model as is: `measured::Evaluates::Records`). The exponential Cook–Torrance's
 //! numeric Smith G1 tables ([`G1Table`]) go to the side table ([`pack_g1_table`]).
 //!
 //! Refused with a named error ([`crate::error::GpuError::Invalid`]): models without a GPU twin

@@ -273,10 +273,13 @@ pub fn pack_tabulated(sampler: &TabulatedSampler) -> (Vec<f32>, GpuTabulatedDims
 pub(crate) enum Evaluates {
     /// Measured BRDFs only: the records are bound but unread.
     Measured = 0,
-    /// bsdf.wgsl's records too (`bsdf_eval`): fitted models, the scene's materials, none of
-    /// them two-sided.
+    /// bsdf.wgsl's records too (`bsdf_eval`): fitted models, the scene's materials and the
+    /// specs of bsdf.wgsl's models. A two-sided record is evaluated as its model: the same
+    /// wherever ωo lies above the surface, which is where these passes evaluate a two-sided
+    /// material (the G-buffer turns its frame towards the viewer, `lustre_adaptive::gbuffer`).
     Records = 1,
-    /// analytic.wgsl's records and two-sided ones too (`record_eval`).
+    /// analytic.wgsl's records too (`record_eval`, which also mirrors a two-sided record seen
+    /// from below, as `TwoSided::eval` does).
     Analytic = 2,
 }
 
@@ -285,11 +288,7 @@ impl PackedBrdfs {
     pub(crate) fn evaluates(&self) -> Evaluates {
         if self.fitted.is_empty() {
             Evaluates::Measured
-        } else if self
-            .fitted
-            .iter()
-            .any(|r| r.kind >= KIND_OREN_NAYAR || r.flags & FLAG_TWO_SIDED != 0)
-        {
+        } else if self.fitted.iter().any(|r| r.kind >= KIND_OREN_NAYAR) {
             Evaluates::Analytic
         } else {
             Evaluates::Records

@@ -315,6 +315,34 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
             }
         }
     });
+    // A transmissive spec: the GPU evaluates it (bsdf.wgsl's rough dielectric), but the pass
+    // samples by tabulated CDFs, which a transmissive model does not have: named.
+    let scene = line_up::scene(
+        [
+            "nbrdf:gold-paint",
+            "roughdielectric(alpha=0.2)",
+            "nbrdf:gold-paint",
+        ],
+        "nbrdf:white-marble",
+    );
+    line_up::with_frame(
+        &scene,
+        (8, 8),
+        |_, _, shading| match AdaptiveScene::from_context(
+            &gpu_ctx,
+            &shading,
+            Some(&scene.materials),
+        ) {
+            Err(e) => {
+                let m = e.to_string();
+                assert!(
+                    m.contains("material 1") && m.contains("transmissive"),
+                    "{m}"
+                );
+            }
+            Ok(_) => panic!("the adaptive pass took the spec roughdielectric(alpha=0.2)"),
+        },
+    );
 
     // A Lambertian scene material: refused without the scene's materials, shaded with them
     // (bsdf.wgsl's record), its frame the CPU's.
