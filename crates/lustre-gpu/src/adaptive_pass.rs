@@ -8,8 +8,10 @@
 //! What stays on the CPU: the G-buffer (ray traced), the levels ℓ_p and the variance target V
 //! (`BandwidthBuffer::assemble`, whose bisection on V needs every pixel's sum), then the
 //! upload of ℓ_p and of each pixel's quota 4π² S_p / V. Materials are measured BRDFs the GPU
-//! evaluates directly (neural BRDFs, MERL tables) or fitted models (SGD, Cook–Torrance, Kurt:
-//! `fit_models`), each sampled by its tabulated CDFs; the lighting is the environment at full
+//! evaluates directly (neural BRDFs, MERL tables, RGL tensors), fitted models (SGD,
+//! Cook–Torrance, Kurt: `fit_models`) or, given the scene's materials, lustre's analytic
+//! reflection models (`analytic`; [`crate::measured::EVALUATED`]), each sampled by its tabulated
+//! CDFs; the lighting is the environment at full
 //! resolution (`Lighting::Direct`) or its pyramid at each pixel's BRDF bandwidth
 //! (`Lighting::Preconvolved`, `cube_storage`), plus area lights.
 
@@ -19,7 +21,7 @@ use crate::cube_storage::{pack_pyramid, PackedPyramid};
 use crate::error::{invalid, Result};
 use crate::gbuffer::map_read;
 use crate::measured::{
-    pack_tabulated, GpuTabulatedDims, MaterialPipelines, PackedBrdfs, EVALUATED,
+    pack_tabulated, Evaluates, GpuTabulatedDims, MaterialPipelines, PackedBrdfs, EVALUATED,
 };
 use crate::timer::{GpuTimer, Timing};
 use crate::wgsl::{AREA_LIGHT, CUBE_STORAGE, ENV_LIGHT, QMC, TYPES};
@@ -166,7 +168,7 @@ pub struct AdaptiveScene {
     lights: wgpu::Buffer,
     light_texels: wgpu::Buffer,
     fitted: wgpu::Buffer,
-    has_fitted: bool,
+    evaluates: Evaluates,
     cube_texels: wgpu::Buffer,
     cube_levels: wgpu::Buffer,
     cube_rings: wgpu::Buffer,
@@ -177,12 +179,13 @@ pub struct AdaptiveScene {
 
 impl AdaptiveScene {
     /// Uploads `shading`'s environment (its texels times its scale, and its sampler), every
-    /// material's measured BRDF with its tabulated CDFs, and the area lights. Errors, naming the
-    /// material, on one the GPU does not evaluate (only neural BRDFs and MERL tables) or that
-    /// has no tabulated sampler.
+    /// material's BRDF with its tabulated CDFs, and the area lights. Errors, naming the
+    /// material, on one the GPU does not evaluate ([`EVALUATED`]; `PackedBrdfs::push` says
+    /// why) or that has no tabulated sampler.
     ///
     /// `scene_materials`, the scene's materials in the path scene's order, lets the GPU shade
-    /// lustre's untextured analytic models too (`None`: measured and fitted models only).
+    /// the untextured scene materials and every analytic reflection model of a spec too
+    /// (`None`: measured and fitted models only).
     pub fn from_context(
         ctx: &GpuContext,
         shading: &ShadingContext,
@@ -204,16 +207,20 @@ impl AdaptiveScene {
             };
             let mut packed = None;
             let scene_material = scene_materials.and_then(|ms| ms.get(k));
-            m.with_bsdf([0.5, 0.5], &mut |b| packed = brdfs.push(b, scene_material));
-            let (kind, base, offset) = packed.ok_or_else(|| {
-                invalid(
-                    "adaptive pass",
-                    format!(
-                        "material {k} ({}): the GPU shades {EVALUATED} only",
-                        tables.name
-                    ),
-                )
-            })?;
+            m.with_bsdf([0.5, 0.5], &mut |b| {
+                packed = Some(brdfs.push(b, scene_material))
+            });
+            let (kind, base, offset) = packed
+                .unwrap_or_else(|| Err(invalid(&tables.name, "no BSDF")))
+                .map_err(|e| {
+                    invalid(
+                        "adaptive pass",
+                        format!(
+                            "material {k} ({}): {e}; the GPU shades {EVALUATED} only",
+                            tables.name
+                        ),
+                    )
+                })?;
             let (words, dims) = pack_tabulated(sampler);
             let tab_base = brdfs.table.len() as u32;
             brdfs.table.extend(words);
@@ -280,7 +287,7 @@ impl AdaptiveScene {
                 "adaptive fitted models",
                 bytemuck::cast_slice(&brdfs.fitted_or_zero()),
             ),
-            has_fitted: !brdfs.fitted.is_empty(),
+            evaluates: brdfs.evaluates(),
             light_count: shading.lights.len() as u32,
             material_count: materials.len() as u32,
         })
@@ -573,7 +580,7 @@ impl AdaptivePass {
                 (group, size)
             })
             .collect();
-        let (shade_pipeline, shade_layout) = self.shade.get(ctx, scene.has_fitted)?;
+        let (shade_pipeline, shade_layout) = self.shade.get(ctx, scene.evaluates)?;
         let queue = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("adaptive queue"),
             size: (w * h * 4) as u64,

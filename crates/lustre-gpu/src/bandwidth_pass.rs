@@ -4,15 +4,16 @@
 //! `lustre_adaptive::buffer::predict_pixels` (built on `lustre_freq::pixel::predict`); the
 //! levels and sample counts are assembled from its output on the CPU
 //! (`BandwidthBuffer::assemble`), the pyramids on the GPU (`adaptive_pass`). Materials are
-//! measured BRDFs evaluated directly (neural BRDFs, 004's scenes; MERL tables; RGL tensors) and
-//! fitted models (SGD, Cook–Torrance, Kurt).
+//! measured BRDFs evaluated directly (neural BRDFs, 004's scenes; MERL tables; RGL tensors),
+//! fitted models (SGD, Cook–Torrance, Kurt) and, given the scene's materials, lustre's analytic
+//! reflection models (`analytic`; [`crate::measured::EVALUATED`]).
 
 use crate::adaptive_pass::pack_lights;
 use crate::compute::{buffer_init, storage_entry, uniform_entry};
 use crate::context::GpuContext;
 use crate::error::{invalid, Result};
 use crate::gbuffer::map_read;
-use crate::measured::{MaterialPipelines, MeasuredBrdf, PackedBrdfs, EVALUATED};
+use crate::measured::{Evaluates, MaterialPipelines, MeasuredBrdf, PackedBrdfs, EVALUATED};
 use crate::timer::{GpuTimer, Timing};
 use crate::wgsl::{AREA_LIGHT, ENV_LIGHT, FREQUENCY, TYPES};
 use glam::DVec3;
@@ -86,7 +87,7 @@ pub struct BandwidthScene {
     table: wgpu::Buffer,
     brdf_bandwidth: wgpu::Buffer,
     fitted: wgpu::Buffer,
-    has_fitted: bool,
+    evaluates: Evaluates,
     lights: wgpu::Buffer,
     light_texels: wgpu::Buffer,
     light_count: u32,
@@ -136,17 +137,20 @@ impl BandwidthScene {
             let mut brdf = None;
             let scene_material = materials.and_then(|ms| ms.get(k));
             m.with_bsdf([0.5, 0.5], &mut |b| {
-                brdf = packed.brdfs.push(b, scene_material)
+                brdf = Some(packed.brdfs.push(b, scene_material))
             });
-            let brdf = brdf.ok_or_else(|| {
-                invalid(
-                    "bandwidth pass",
-                    format!(
-                        "material {k} ({}): the GPU bandwidth pass evaluates {EVALUATED} only",
-                        tables.name
-                    ),
-                )
-            })?;
+            let brdf = brdf
+                .unwrap_or_else(|| Err(invalid(&tables.name, "no BSDF")))
+                .map_err(|e| {
+                    invalid(
+                        "bandwidth pass",
+                        format!(
+                            "material {k} ({}): {e}; the GPU bandwidth pass evaluates {EVALUATED} \
+                             only",
+                            tables.name
+                        ),
+                    )
+                })?;
             packed.push(k, brdf, &tables.bandwidth)?;
         }
         // The lights in the map's frame, as the pixels.
@@ -213,7 +217,7 @@ impl BandwidthScene {
                 bytemuck::cast_slice(&packed.bandwidth),
                 storage,
             ),
-            has_fitted: !packed.brdfs.fitted.is_empty(),
+            evaluates: packed.brdfs.evaluates(),
             light_count: packed.light_count,
             lights: buffer_init(
                 ctx,
@@ -427,7 +431,7 @@ impl BandwidthPass {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let (pipeline, layout) = self.pipelines.get(ctx, scene.has_fitted)?;
+        let (pipeline, layout) = self.pipelines.get(ctx, scene.evaluates)?;
         let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("bandwidth pass"),
             layout,

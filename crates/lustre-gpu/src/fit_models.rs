@@ -106,7 +106,7 @@ pub fn fit_kd(bsdf: &dyn Bsdf) -> Result<Rgb> {
 
 /// (F0, F1) of the generalized Schlick form of a channel's Fresnel (Schlick: F1 = 0; one:
 /// F0 = 1, F1 = 0).
-fn fresnel_params(name: &str, f: &Fresnel) -> Result<(f64, f64)> {
+pub(crate) fn fresnel_params(name: &str, f: &Fresnel) -> Result<(f64, f64)> {
     f.generalized_schlick_form().ok_or_else(|| {
         invalid(
             name,

@@ -15,7 +15,8 @@
 //! [`KIND_LAMBERT`] 7 (read only where the light map does not cover the pixel; a textured
 //! Lambertian is kind 0), [`KIND_PLASTIC`] 8, [`KIND_DIELECTRIC`] 9 (smooth transmissive glTF
 //! glass, built by the CPU as this interface);
-//! 16–19 belong to the fitted models (gpu-fits). Per pixel the pass reads the diffuse albedo kd
+//! 16–19 belong to the fitted models (gpu-fits), 20–27 to the analytic models only the adaptive
+//! and bandwidth passes evaluate (`analytic`; this pass refuses them). Per pixel the pass reads the diffuse albedo kd
 //! as `Lightmapped::albedo` does (textures included) from the light-map pass's records
 //! (`material_albedo.wgsl`); a material's textured parameters at uv0 from its
 //! [`pack_material_params`] record, resolved into the model's by `wgsl/textured.wgsl`
@@ -124,20 +125,20 @@ pub struct GpuBsdf {
 }
 
 /// The parameters of a record, each checked finite (named in the error).
-struct Params {
-    p: [[f32; 4]; 8],
+pub(crate) struct Params {
+    pub(crate) p: [[f32; 4]; 8],
     model: &'static str,
 }
 
 impl Params {
-    fn new(model: &'static str) -> Self {
+    pub(crate) fn new(model: &'static str) -> Self {
         Params {
             p: [[0.0; 4]; 8],
             model,
         }
     }
 
-    fn set(&mut self, row: usize, v: [f64; 4]) -> Result<()> {
+    pub(crate) fn set(&mut self, row: usize, v: [f64; 4]) -> Result<()> {
         for (k, x) in v.iter().enumerate() {
             let y = *x as f32;
             if !y.is_finite() {
@@ -151,7 +152,7 @@ impl Params {
         Ok(())
     }
 
-    fn rgb(&mut self, row: usize, c: Rgb, w: f64) -> Result<()> {
+    pub(crate) fn rgb(&mut self, row: usize, c: Rgb, w: f64) -> Result<()> {
         self.set(row, [c[0], c[1], c[2], w])
     }
 }
@@ -301,6 +302,17 @@ fn microfacet(d: Distribution) -> MicrofacetType {
     match d {
         Distribution::Beckmann => MicrofacetType::Beckmann,
         Distribution::Ggx => MicrofacetType::Ggx,
+    }
+}
+
+/// [`FLAG_DIFFUSE_ONLY`] or [`FLAG_DELTA_ONLY`] as a model's lobes are.
+pub(crate) fn lobe_flags(f: &lustre_brdf::bsdf::BsdfFlags) -> u32 {
+    if f.diffuse_only() {
+        FLAG_DIFFUSE_ONLY
+    } else if f.delta_only() {
+        FLAG_DELTA_ONLY
+    } else {
+        0
     }
 }
 
@@ -542,15 +554,7 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
         MaterialKind::Spec(s) => {
             let (kind, p) = pack_fit(s.bsdf.as_ref())
                 .map_err(|e| refuse(&format!("the spec {:?} ({e})", s.spec)))?;
-            let f = s.bsdf.flags();
-            let flags = if f.diffuse_only() {
-                FLAG_DIFFUSE_ONLY
-            } else if f.delta_only() {
-                FLAG_DELTA_ONLY
-            } else {
-                0
-            };
-            Ok(record(kind, flags, p))
+            Ok(record(kind, lobe_flags(&s.bsdf.flags()), p))
         }
     }
 }

@@ -24,6 +24,7 @@
 //! specular 4.2 s (n = 11); readback 29 ms; upload of a 256² pyramid 243 ms (`benches/frame.rs`).
 
 pub mod adaptive_pass;
+pub mod analytic;
 pub mod bandwidth_pass;
 mod compute;
 pub mod context;

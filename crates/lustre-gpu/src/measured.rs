@@ -2,62 +2,95 @@
 //! through a pass's `bsdf_table`): a MERL table's stored values, a neural BRDF's weights, and
 //! the tabulated CDFs of [`lustre_brdf::tabulated::TabulatedSampler`].
 
+use crate::analytic::{pack_analytic, KIND_OREN_NAYAR};
 use crate::compute::compute_pipeline;
 use crate::context::GpuContext;
 use crate::error::{invalid, Result};
 use crate::fit_models::pack_fit;
-use crate::frame_shade::{pack_material, GpuBsdf, FLAG_NORMAL_MAPPED, FLAG_TEXTURED};
-use crate::wgsl::{compose, Module, BSDF, MEASURED};
+use crate::frame_shade::{pack_material, GpuBsdf, FLAG_TEXTURED, FLAG_TWO_SIDED, KIND_NONE};
+use crate::wgsl::{compose, Module, ANALYTIC, BSDF, MEASURED};
 use lustre_brdf::measured::merl::{MerlTable, BINS, RES_PHI_D, RES_THETA_D, RES_THETA_H};
 use lustre_brdf::measured::nbrdf::Nbrdf;
 use lustre_brdf::measured::rgl::RglBsdf;
 use lustre_brdf::measured::rgl_warp::Marginal2D;
 use lustre_brdf::tabulated::TabulatedSampler;
 use lustre_brdf::Bsdf;
-use lustre_scene::Material;
+use lustre_scene::{Material, MaterialKind};
 
 /// The materials of a pass that evaluates any BRDF it takes through its `material_eval`: the
-/// measured BRDFs' words (read through `bsdf_table`) and bsdf.wgsl's records (kind 2, `base`
-/// indexing them): the fitted models (`fit_models::pack_fit`) and lustre's analytic models
-/// (`frame_shade::pack_material`, untextured).
+/// measured BRDFs' words (read through `bsdf_table`) and the records of bsdf.wgsl and
+/// analytic.wgsl (kind 2, `base` indexing them, evaluated by `record_eval`): the fitted models
+/// (`fit_models::pack_fit`), the scene's untextured materials (`frame_shade::pack_material`) and
+/// every reflection model a scene material's spec resolves to (`analytic::pack_analytic`).
 #[derive(Default)]
 pub struct PackedBrdfs {
     /// The measured BRDFs' words, and the analytic models' side tables.
     pub table: Vec<f32>,
-    /// bsdf.wgsl's records.
+    /// The records of bsdf.wgsl and analytic.wgsl.
     pub fitted: Vec<GpuBsdf>,
 }
 
-/// `material_eval`'s kind of a bsdf.wgsl record (a fitted or an analytic model).
+/// `material_eval`'s kind of a record (a fitted or an analytic model).
 pub const KIND_RECORD: u32 = 2;
 
 impl PackedBrdfs {
-    /// Appends `b` (the BSDF of the scene material `material`, when known); returns (kind,
-    /// first word or record, MERL node offset), or `None` for a model the GPU does not evaluate
-    /// this way (a textured or normal-mapped analytic material, whose parameters vary over the
-    /// surface, or a model without a GPU twin).
-    pub fn push(&mut self, b: &dyn Bsdf, material: Option<&Material>) -> Option<(u32, u32, f32)> {
+    /// Appends `b`, the BSDF of the scene material `material` when known; returns (kind, first
+    /// word or record, MERL node offset). Without `material` only measured BRDFs and fitted
+    /// models are taken (an analytic model's parameters may be textured: only the scene material
+    /// says). Errors (naming the model, and the material and its spec when known): a textured or
+    /// normal-mapped material, whose parameters vary over the surface, or a model without a GPU
+    /// twin ([`EVALUATED`] lists those with one).
+    pub fn push(&mut self, b: &dyn Bsdf, material: Option<&Material>) -> Result<(u32, u32, f32)> {
         if let Some(brdf) = MeasuredBrdf::of(b) {
-            return Some(brdf.pack(&mut self.table));
+            return Ok(brdf.pack(&mut self.table));
         }
-        let record = match pack_fit(b) {
-            Ok((kind, p)) => GpuBsdf {
+        let fit = pack_fit(b);
+        let record = match (fit, material) {
+            (Ok((kind, p)), _) => GpuBsdf {
                 kind,
                 flags: 0,
                 pad0: 0,
                 pad1: 0,
                 p,
             },
-            Err(_) => {
-                let rec = pack_material(material?, &mut self.table).ok()?;
-                if rec.kind == 0 || rec.flags & (FLAG_TEXTURED | FLAG_NORMAL_MAPPED) != 0 {
-                    return None;
+            (Err(e), None) => {
+                return Err(invalid(
+                    b.name(),
+                    format!(
+                        "{e}; without the scene's materials the GPU takes measured and fitted \
+                         models only"
+                    ),
+                ))
+            }
+            (Err(_), Some(m)) => {
+                let name = format!("material {:?}", m.name);
+                if m.normal_map.is_some() {
+                    return Err(invalid(
+                        name,
+                        "normal-mapped analytic models are not on the GPU in these passes",
+                    ));
                 }
-                rec
+                if let MaterialKind::Spec(s) = &m.kind {
+                    pack_analytic(b, &mut self.table)
+                        .map_err(|e| invalid(name, format!("spec {:?}: {e}", s.spec)))?
+                } else {
+                    let mut rec = pack_material(m, &mut self.table)?;
+                    if rec.kind == KIND_NONE || rec.flags & FLAG_TEXTURED != 0 {
+                        return Err(invalid(
+                            name,
+                            "textured: its parameters vary over the surface",
+                        ));
+                    }
+                    // Two-sided as the CPU wraps it (`TwoSided`): reflection-only models.
+                    if b.flags().transmission {
+                        rec.flags &= !FLAG_TWO_SIDED;
+                    }
+                    rec
+                }
             }
         };
         self.fitted.push(record);
-        Some((KIND_RECORD, (self.fitted.len() - 1) as u32, 0.0))
+        Ok((KIND_RECORD, (self.fitted.len() - 1) as u32, 0.0))
     }
 
     /// The records, one zero record when there is none (a binding may not be empty).
@@ -72,9 +105,15 @@ impl PackedBrdfs {
 
 /// What the passes that take any material evaluate: neural BRDFs, MERL tables (a `.binary`
 /// file), RGL tensors (a `.bsdf` file), fitted models (SGD, Cook–Torrance, Kurt) and, given the
-/// scene's materials, lustre's untextured analytic models.
+/// scene's materials, the untextured ones and every reflection model of a spec (`lambert`,
+/// `oren-nayar`, `phong`, `blinn-phong`, `ward`, `ward-duer`, `ward-gmd`, `lafortune` and the
+/// `lafortune:` fits, `ashikhmin-shirley`, `abc` and the `abc:` fits, `exponential`, the
+/// conductors, plastics, dielectrics and `pbr`, each also `twosided:`).
 pub const EVALUATED: &str = "neural BRDFs (nbrdf:…), MERL tables (a .binary file), RGL tensors \
-    (a .bsdf file), fitted models (SGD, Cook–Torrance, Kurt) and untextured analytic models";
+    (a .bsdf file), fitted models (SGD, Cook–Torrance, Kurt) and, given the scene's materials, \
+    untextured scene materials and the analytic models of a spec (Lambert, Oren–Nayar, Phong, \
+    Blinn–Phong, Ward and its variants, Lafortune, Ashikhmin–Shirley, ABC, exponential \
+    Cook–Torrance, conductors, plastics, dielectrics, glTF metallic-roughness, two-sided or not)";
 
 /// A measured BRDF the GPU evaluates directly (`measured_eval` of `wgsl/measured.wgsl`).
 #[derive(Clone, Copy, Debug)]
@@ -227,39 +266,73 @@ pub fn pack_tabulated(sampler: &TabulatedSampler) -> (Vec<f32>, GpuTabulatedDims
     (out, dims)
 }
 
-/// `material_eval(kind, base, offset, wi, wo)` for a pass, with its `fitted` records at
-/// `binding`: with `fitted`, kind 2 evaluates bsdf.wgsl's record `base`; without, the binding
-/// is bound but unread and only measured BRDFs are evaluated (the pass then need not import
-/// bsdf.wgsl, every model of which llvmpipe compiles into the pass).
-fn material_eval_source(binding: u32, fitted: bool) -> String {
-    if fitted {
-        format!(
-            "@group(0) @binding({binding}) var<storage, read> fitted: array<GpuBsdf>;\n\n\
-             fn material_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>,\n                 \
-             wo: vec3<f32>) -> vec3<f32> {{\n    \
-             if (kind == {KIND_RECORD}u) {{\n        return bsdf_eval(fitted[base], wi, wo);\n    }}\n    \
-             return measured_eval(kind, base, offset, wi, wo);\n}}\n\n"
-        )
-    } else {
-        format!(
-            "// No fitted model among the materials: the records are bound but unread.\n\
-             @group(0) @binding({binding}) var<storage, read> fitted: array<vec4<f32>>;\n\n\
-             fn material_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>,\n                 \
-             wo: vec3<f32>) -> vec3<f32> {{\n    \
-             return measured_eval(kind, base, offset, wi, wo);\n}}\n\n"
-        )
+/// Which `material_eval` a pass compiles ([`MaterialPipelines`]' variants): the leanest that
+/// evaluates every material of the scene (llvmpipe compiles every model a variant imports into
+/// the pass).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Evaluates {
+    /// Measured BRDFs only: the records are bound but unread.
+    Measured = 0,
+    /// bsdf.wgsl's records too (`bsdf_eval`): fitted models, the scene's materials and the
+    /// specs of bsdf.wgsl's models. A two-sided record is evaluated as its model: the same
+    /// wherever ωo lies above the surface, which is where these passes evaluate a two-sided
+    /// material (the G-buffer turns its frame towards the viewer, `lustre_adaptive::gbuffer`).
+    Records = 1,
+    /// analytic.wgsl's records too (`record_eval`, which also mirrors a two-sided record seen
+    /// from below, as `TwoSided::eval` does).
+    Analytic = 2,
+}
+
+impl PackedBrdfs {
+    /// The variant that evaluates these materials.
+    pub(crate) fn evaluates(&self) -> Evaluates {
+        if self.fitted.is_empty() {
+            Evaluates::Measured
+        } else if self.fitted.iter().any(|r| r.kind >= KIND_OREN_NAYAR) {
+            Evaluates::Analytic
+        } else {
+            Evaluates::Records
+        }
     }
 }
 
-/// A pass that evaluates its materials through `material_eval`, compiled in two variants: for
-/// measured BRDFs only (at once), and with the fitted models (on first need).
+/// `material_eval(kind, base, offset, wi, wo)` for a pass, with its `fitted` records at
+/// `binding`: kind 2 evaluates record `base` by bsdf.wgsl's `bsdf_eval` ([`Evaluates::Records`])
+/// or analytic.wgsl's `record_eval` ([`Evaluates::Analytic`]); with [`Evaluates::Measured`]
+/// the binding is bound but unread and only measured BRDFs are evaluated.
+fn material_eval_source(binding: u32, evaluates: Evaluates) -> String {
+    let record = match evaluates {
+        Evaluates::Measured => {
+            return format!(
+                "// No fitted model among the materials: the records are bound but unread.\n\
+                 @group(0) @binding({binding}) var<storage, read> fitted: array<vec4<f32>>;\n\n\
+                 fn material_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>,\n                 \
+                 wo: vec3<f32>) -> vec3<f32> {{\n    \
+                 return measured_eval(kind, base, offset, wi, wo);\n}}\n\n"
+            )
+        }
+        Evaluates::Records => "bsdf_eval",
+        Evaluates::Analytic => "record_eval",
+    };
+    format!(
+        "@group(0) @binding({binding}) var<storage, read> fitted: array<GpuBsdf>;\n\n\
+         fn material_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>,\n                 \
+         wo: vec3<f32>) -> vec3<f32> {{\n    \
+         if (kind == {KIND_RECORD}u) {{\n        return {record}(fitted[base], wi, wo);\n    }}\n    \
+         return measured_eval(kind, base, offset, wi, wo);\n}}\n\n"
+    )
+}
+
+/// A pass that evaluates its materials through `material_eval`, compiled in three variants
+/// ([`Evaluates`]): for measured BRDFs only (at once), with bsdf.wgsl's records and with
+/// analytic.wgsl's too (each on first need).
 pub(crate) struct MaterialPipelines {
     label: &'static str,
     imports: Vec<&'static Module>,
     pass: &'static str,
     binding: u32,
     entries: Vec<wgpu::BindGroupLayoutEntry>,
-    compiled: [Option<(wgpu::ComputePipeline, wgpu::BindGroupLayout)>; 2],
+    compiled: [Option<(wgpu::ComputePipeline, wgpu::BindGroupLayout)>; 3],
 }
 
 impl MaterialPipelines {
@@ -279,28 +352,30 @@ impl MaterialPipelines {
             pass,
             binding,
             entries,
-            compiled: [None, None],
+            compiled: [None, None, None],
         };
-        p.get(ctx, false)?;
+        p.get(ctx, Evaluates::Measured)?;
         Ok(p)
     }
 
-    /// The variant for materials with (`fitted`) or without fitted models.
+    /// The variant that evaluates `evaluates`.
     pub(crate) fn get(
         &mut self,
         ctx: &GpuContext,
-        fitted: bool,
+        evaluates: Evaluates,
     ) -> Result<&(wgpu::ComputePipeline, wgpu::BindGroupLayout)> {
-        let slot = &mut self.compiled[usize::from(fitted)];
+        let slot = &mut self.compiled[evaluates as usize];
         if slot.is_none() {
             let mut imports = self.imports.clone();
             imports.push(&MEASURED);
-            if fitted {
-                imports.push(&BSDF);
+            match evaluates {
+                Evaluates::Measured => {}
+                Evaluates::Records => imports.push(&BSDF),
+                Evaluates::Analytic => imports.push(&ANALYTIC),
             }
             let src = compose(
                 &imports,
-                &(material_eval_source(self.binding, fitted) + self.pass),
+                &(material_eval_source(self.binding, evaluates) + self.pass),
             );
             *slot = Some(compute_pipeline(
                 ctx,

@@ -219,6 +219,15 @@ pub const BSDF: Module = Module {
     ],
 };
 
+/// lustre's analytic models bsdf.wgsl does not have (Oren–Nayar, Phong, Blinn–Phong, the Ward
+/// variants, Lafortune, Ashikhmin–Shirley, ABC, exponential Cook–Torrance), evaluation only, and
+/// `record_eval`: a record of those passes that take any material (`analytic::pack_analytic`).
+pub const ANALYTIC: Module = Module {
+    name: "analytic",
+    source: include_str!("wgsl/analytic.wgsl"),
+    deps: &[&TYPES, &COOK_TORRANCE, &BSDF],
+};
+
 /// A material's textured parameters and normal map at a pixel: `textured_bsdf` (the record with
 /// its parameters at the pixel), `tangent_space_normal`, `mapped_normal`.
 pub const TEXTURED: Module = Module {
@@ -267,7 +276,7 @@ pub const AREA_LIGHT: Module = Module {
 };
 
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 32] = [
+pub const ALL: [&Module; 33] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -294,6 +303,7 @@ pub const ALL: [&Module; 32] = [
     &SGD,
     &KURT,
     &BSDF,
+    &ANALYTIC,
     &TEXTURED,
     &MEASURED,
     &FREQUENCY,

@@ -276,17 +276,73 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
         "nbrdf:white-marble",
     );
     line_up::with_frame(&scene, (8, 8), |_, _, shading| {
-        // A Lambertian spec is not one of the GPU's models, with or without the scene's materials.
+        // A Lambertian spec: refused without the scene's materials (a model's parameters may be
+        // textured), taken with them.
+        match AdaptiveScene::from_context(&gpu_ctx, &shading, None) {
+            Err(e) => {
+                let m = e.to_string();
+                assert!(m.contains("material 1") && m.contains("MERL"), "{m}");
+            }
+            Ok(_) => panic!("the GPU took the spec lambert(kd=0.5) without the scene's materials"),
+        }
+        AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene.materials))
+            .expect("lambert(kd=0.5) with the scene's materials");
+    });
+    // A spec without a GPU twin (Cook–Torrance with the SGD's numeric Smith G1), with or
+    // without the scene's materials: named, material and spec.
+    let scene = line_up::scene(
+        [
+            "nbrdf:gold-paint",
+            "sgd(alpha=0.1, p=0.5)",
+            "nbrdf:gold-paint",
+        ],
+        "nbrdf:white-marble",
+    );
+    line_up::with_frame(&scene, (8, 8), |_, _, shading| {
         for materials in [None, Some(&scene.materials[..])] {
             match AdaptiveScene::from_context(&gpu_ctx, &shading, materials) {
                 Err(e) => {
                     let m = e.to_string();
-                    assert!(m.contains("material 1") && m.contains("MERL"), "{m}");
+                    assert!(
+                        m.contains("material 1") && m.contains("numeric Smith G1"),
+                        "{m}"
+                    );
+                    if materials.is_some() {
+                        assert!(m.contains("spec \"sgd(alpha=0.1, p=0.5)\""), "{m}");
+                    }
                 }
-                Ok(_) => panic!("the GPU took the spec lambert(kd=0.5)"),
+                Ok(_) => panic!("the GPU took the spec sgd(alpha=0.1, p=0.5)"),
             }
         }
     });
+    // A transmissive spec: the GPU evaluates it (bsdf.wgsl's rough dielectric), but the pass
+    // samples by tabulated CDFs, which a transmissive model does not have: named.
+    let scene = line_up::scene(
+        [
+            "nbrdf:gold-paint",
+            "roughdielectric(alpha=0.2)",
+            "nbrdf:gold-paint",
+        ],
+        "nbrdf:white-marble",
+    );
+    line_up::with_frame(
+        &scene,
+        (8, 8),
+        |_, _, shading| match AdaptiveScene::from_context(
+            &gpu_ctx,
+            &shading,
+            Some(&scene.materials),
+        ) {
+            Err(e) => {
+                let m = e.to_string();
+                assert!(
+                    m.contains("material 1") && m.contains("transmissive"),
+                    "{m}"
+                );
+            }
+            Ok(_) => panic!("the adaptive pass took the spec roughdielectric(alpha=0.2)"),
+        },
+    );
 
     // A Lambertian scene material: refused without the scene's materials, shaded with them
     // (bsdf.wgsl's record), its frame the CPU's.
@@ -371,4 +427,60 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
             );
         }
     })
+}
+
+#[test]
+fn analytic_specs_are_shaded_on_the_gpu_as_on_the_cpu() {
+    let gpu_ctx = ctx();
+    // Isotropic analytic specs (the adaptive pass samples by tabulated CDFs, which anisotropic
+    // models do not have) on the line-up, the floor Oren–Nayar.
+    let scene = line_up::scene(
+        [
+            "ward(kd=0.1, ks=0.4, ax=0.15)",
+            "twosided:ashikhmin-shirley(rd=0.3, rs=0.2, nu=200)",
+            "exponential(rho_d=0.1, rho_s=0.5, alpha=0.1)",
+        ],
+        "oren-nayar(kd=0.6, sigma=0.5)",
+    );
+    line_up::with_frame(&scene, (48, 32), |_, g, shading| {
+        let e = match AdaptiveScene::from_context(&gpu_ctx, &shading, None) {
+            Err(e) => e.to_string(),
+            Ok(_) => panic!("the GPU took analytic specs without the scene's materials"),
+        };
+        assert!(e.contains("material 0"), "{e}");
+        let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene.materials))
+            .expect("upload with the scene's materials");
+        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene.materials))
+            .expect("the bandwidth pass takes them too");
+        let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, BufferOptions::default())
+            .expect("buffer");
+        let cpu = render_adaptive(&g, &shading, &buffer, Lighting::Direct, 9).expect("cpu");
+        let t = Instant::now();
+        let mut pass = AdaptivePass::new(&gpu_ctx).expect("compile");
+        let new_s = t.elapsed().as_secs_f64();
+        // The first frame compiles the variant with the records' models (bsdf.wgsl, analytic.wgsl).
+        let t = Instant::now();
+        let gpu = pass
+            .render(&gpu_ctx, &scene_gpu, &g, &buffer, None, 9)
+            .expect("gpu");
+        let first_s = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        pass.render(&gpu_ctx, &scene_gpu, &g, &buffer, None, 9)
+            .expect("gpu");
+        let (rms, over1, over10) = image_difference(&g, &cpu.image, &gpu.frame.image);
+        eprintln!(
+            "analytic specs (ward, twosided:ashikhmin-shirley, exponential, oren-nayar) through \
+             the adaptive pass, 48 × 32: relative RMS {rms:.2e}, {:.2} % off by > 1 %, {:.2} % \
+             by > 10 %; AdaptivePass::new {new_s:.1} s, first frame (compiling the records' \
+             variant) {first_s:.1} s, second frame {:.2} s",
+            100.0 * over1,
+            100.0 * over10,
+            t.elapsed().as_secs_f64()
+        );
+        assert!(
+            rms < 5e-3 && over1 < 0.01 && over10 < 0.002,
+            "rms {rms}, {over1}, {over10}"
+        );
+    });
 }

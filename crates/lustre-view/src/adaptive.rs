@@ -214,7 +214,7 @@ pub struct AdaptiveRenderer<'a, 's> {
 }
 
 /// lustre-gpu's twins of the bandwidth pass and of the hierarchical shading, where the GPU
-/// takes the scene's materials (measured BRDFs, fitted models); `why_cpu` says why not.
+/// takes the scene's materials (`lustre_gpu::measured::EVALUATED`); `why_cpu` says why not.
 #[derive(Default)]
 struct GpuPasses {
     bandwidth: Option<(BandwidthScene, BandwidthPass)>,

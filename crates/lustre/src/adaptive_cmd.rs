@@ -4,9 +4,10 @@
 //! buffer and shades hierarchically; brute force shades every pixel with --samples samples.
 //! The G-buffer, the material tables and the buffer's levels and variance target are the
 //! CPU's; the passes run on the GPU with --device gpu, or with auto where the GPU takes the
-//! scene (measured materials, fitted and untextured analytic models, area lights) and the
-//! adapter is not a software rasterizer. Without a scene or --material, 004 Fig. IV.13's
-//! line-up (three spheres of measured paints on white marble).
+//! scene (measured materials, fitted models, untextured scene materials and the analytic
+//! reflection models of a spec: `lustre_gpu::measured::EVALUATED`; area lights) and the adapter
+//! is not a software rasterizer. Without a scene or --material, 004 Fig. IV.13's line-up (three
+//! spheres of measured paints on white marble).
 
 use crate::render_cmd::{compare, path_cameras, Device, Method, RenderArgs, SampleRuleArg};
 use anyhow::{bail, Context};

@@ -202,6 +202,17 @@ impl G1Table {
         }
     }
 
+    /// The table as [`Self::eval_coord`] reads it: (s0, 1/ds, ds), the nodes G1 and dG1/ds, and
+    /// the grazing extrapolation (μ_min, J(μ_min), dJ/dμ at μ_min).
+    pub fn layout(&self) -> ([f64; 3], &[f64], &[f64], [f64; 3]) {
+        (
+            [self.s0, self.inv_ds, self.ds],
+            &self.g,
+            &self.dg,
+            [self.mu_min, self.j_min, self.k_min],
+        )
+    }
+
     /// G1 at cos θ (0 at and below the horizon, 1 at normal incidence).
     #[inline]
     pub fn eval(&self, cos_theta: f64) -> f64 {

@@ -139,6 +139,9 @@ impl Abc {
 }
 
 impl Bsdf for Abc {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         if self.label.is_empty() {
             format!("abc(B={}, C={}, ior={})", self.b, self.c, self.ior)

@@ -43,6 +43,11 @@ impl AshikhminShirley {
         Ok(AshikhminShirley { nu, nv, rs, rd })
     }
 
+    /// (nu, nv, Rs, Rd).
+    pub fn params(&self) -> (f64, f64, Rgb, Rgb) {
+        (self.nu, self.nv, self.rs, self.rd)
+    }
+
     /// The exponent nu cos²φh + nv sin²φh of a unit half vector.
     fn exponent(&self, h: DVec3) -> f64 {
         let s2 = h.x * h.x + h.y * h.y;
@@ -68,6 +73,9 @@ impl AshikhminShirley {
 }
 
 impl Bsdf for AshikhminShirley {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         format!("ashikhmin-shirley(nu={}, nv={})", self.nu, self.nv)
     }

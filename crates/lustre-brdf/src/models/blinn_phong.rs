@@ -44,6 +44,9 @@ impl BlinnPhong {
 }
 
 impl Bsdf for BlinnPhong {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         format!("Blinn-Phong (n = {})", self.n)
     }

@@ -86,6 +86,9 @@ impl Conductor {
 }
 
 impl Bsdf for Conductor {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         "conductor".to_string()
     }

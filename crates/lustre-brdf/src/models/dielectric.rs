@@ -112,6 +112,9 @@ impl Dielectric {
 }
 
 impl Bsdf for Dielectric {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         format!("dielectric(η={})", self.eta)
     }

@@ -96,7 +96,7 @@ impl LafortuneLobe {
     }
 
     /// (scale K, divisor m) with lobe = ρ·K·(C·(u∘v)/m)^n.
-    fn scale(&self) -> (f64, f64) {
+    pub fn scale(&self) -> (f64, f64) {
         match self.norm {
             LobeNorm::Raw => (1.0, 1.0),
             LobeNorm::Peak => ((self.n + 2.0) / (2.0 * PI), self.c.abs().max_element()),
@@ -184,6 +184,9 @@ impl Lafortune {
 }
 
 impl Bsdf for Lafortune {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         if self.label.is_empty() {
             format!("lafortune({} lobes)", self.lobes.len())

@@ -25,6 +25,9 @@ impl Lambert {
 }
 
 impl Bsdf for Lambert {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         "Lambert".to_string()
     }

@@ -51,6 +51,9 @@ impl OrenNayar {
 }
 
 impl Bsdf for OrenNayar {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         format!("Oren-Nayar (σ = {})", self.sigma)
     }

@@ -80,6 +80,9 @@ impl PbrMetallicRoughness {
 }
 
 impl Bsdf for PbrMetallicRoughness {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         format!(
             "pbr(metallic={}, roughness={})",

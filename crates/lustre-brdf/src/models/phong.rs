@@ -68,6 +68,9 @@ impl Phong {
 }
 
 impl Bsdf for Phong {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         format!("Phong (Lewis, n = {})", self.n)
     }

@@ -104,6 +104,9 @@ impl Plastic {
 }
 
 impl Bsdf for Plastic {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         format!("plastic(η={})", self.eta)
     }

@@ -45,6 +45,9 @@ impl RoughConductor {
 }
 
 impl Bsdf for RoughConductor {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         format!(
             "roughconductor({}, αu={}, αv={})",

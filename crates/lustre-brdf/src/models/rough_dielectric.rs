@@ -95,6 +95,9 @@ impl RoughDielectric {
 }
 
 impl Bsdf for RoughDielectric {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         format!(
             "roughdielectric({}, αu={}, αv={}, η={})",

@@ -196,6 +196,9 @@ impl RoughPlastic {
 }
 
 impl Bsdf for RoughPlastic {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         format!(
             "roughplastic({}, α={}, η={}{})",

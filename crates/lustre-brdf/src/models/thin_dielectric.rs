@@ -55,6 +55,9 @@ impl ThinDielectric {
 }
 
 impl Bsdf for ThinDielectric {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         format!("thindielectric(η={})", self.eta)
     }

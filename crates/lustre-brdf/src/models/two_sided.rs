@@ -48,7 +48,10 @@ impl<B: Bsdf> TwoSided<B> {
     }
 }
 
-impl<B: Bsdf> Bsdf for TwoSided<B> {
+impl<B: Bsdf + 'static> Bsdf for TwoSided<B> {
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
     fn name(&self) -> String {
         format!("twosided({})", self.inner.name())
     }

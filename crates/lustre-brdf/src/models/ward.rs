@@ -202,6 +202,16 @@ macro_rules! ward_variant {
                 Self::new(rho_d, rho_s, alpha, alpha)
             }
 
+            /// (ρd, ρs, α, β): the diffuse albedo, the specular weight and the roughnesses
+            /// along the tangent and the bitangent.
+            pub fn params(&self) -> ($crate::rgb::Rgb, $crate::rgb::Rgb, f64, f64) {
+                (
+                    self.core.rho_d,
+                    self.core.rho_s,
+                    self.core.alpha,
+                    self.core.beta,
+                )
+            }
             /// The specular lobe alone, without ρs (1/sr).
             pub fn specular_lobe(&self, wi: glam::DVec3, wo: glam::DVec3) -> f64 {
                 self.core.specular(wi, wo)
@@ -231,6 +241,9 @@ macro_rules! ward_variant {
             }
             fn flags(&self) -> $crate::bsdf::BsdfFlags {
                 self.core.flags()
+            }
+            fn as_any(&self) -> Option<&dyn std::any::Any> {
+                Some(self)
             }
         }
     };
