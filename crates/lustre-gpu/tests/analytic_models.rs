@@ -9,7 +9,7 @@
 
 use glam::DVec3;
 use lustre_brdf::catalog::resolve;
-use lustre_brdf::sampling::{uniform_sphere, SplitMix64};
+use lustre_brdf::sampling::SplitMix64;
 use lustre_brdf::Bsdf;
 use lustre_gpu::analytic::pack_analytic;
 use lustre_gpu::wgsl::{self, Module};
@@ -111,28 +111,16 @@ const CASES: [(&str, f64, f64); 33] = [
     ("pbr(base_color=0.9, metallic=1, roughness=0.3)", 1e-6, 1e-5),
 ];
 
-fn upper(g: &mut SplitMix64) -> DVec3 {
-    let w = uniform_sphere(g.next_f64(), g.next_f64());
-    DVec3::new(w.x, w.y, w.z.abs().max(1e-3)).normalize()
-}
-
 /// `n` pairs (ωi, ωo) in the local frame: a third anywhere above the surface, a third within a
 /// few degrees of the mirror direction (the peak), a third of those two kinds mirrored below
 /// the surface (ωo under it: zero for a one-sided model, the upper side's value for a
 /// two-sided one). Rounded to f32 (the GPU's input), so the CPU evaluates the same pairs.
 fn pairs(g: &mut SplitMix64, n: usize) -> Vec<(DVec3, DVec3)> {
-    (0..n)
-        .map(|k| {
-            let wo = upper(g);
-            let wi = if k % 2 == 0 {
-                upper(g)
-            } else {
-                let mirror = DVec3::new(-wo.x, -wo.y, wo.z);
-                let jitter = uniform_sphere(g.next_f64(), g.next_f64()) * 0.05 * g.next_f64();
-                let w = (mirror + jitter).normalize();
-                DVec3::new(w.x, w.y, w.z.abs().max(1e-3)).normalize()
-            };
-            let flip = |w: DVec3| DVec3::new(w.x, w.y, -w.z);
+    let flip = |w: DVec3| DVec3::new(w.x, w.y, -w.z);
+    common::kernel::pairs(g, n)
+        .into_iter()
+        .enumerate()
+        .map(|(k, (wi, wo))| {
             let (wi, wo) = if k % 3 == 2 {
                 (flip(wi), flip(wo))
             } else {

@@ -8,7 +8,7 @@ use glam::DVec3;
 use lustre_brdf::measured::merl::{MerlTable, NegativeValues, BINS, HEADER_BYTES};
 use lustre_brdf::measured::nbrdf::{synthesize_merl, NbrdfSet};
 use lustre_brdf::measured::rgl::RglBsdf;
-use lustre_brdf::sampling::{uniform_sphere, SplitMix64};
+use lustre_brdf::sampling::SplitMix64;
 use lustre_brdf::tabulated::{TabulatedOptions, TabulatedSampler};
 use lustre_brdf::Bsdf;
 use lustre_gpu::measured::{pack_merl, pack_nbrdf, pack_rgl, pack_tabulated};
@@ -16,7 +16,7 @@ use lustre_gpu::wgsl::{self, Module};
 
 mod common;
 use common::ctx;
-use common::kernel::run_kernel;
+use common::kernel::{pairs, run_kernel, upper};
 
 /// The side table of the test kernel: the first words of its `input`.
 const TABLE: Module = Module {
@@ -42,30 +42,6 @@ fn gold_paint_with_holes() -> MerlTable {
 fn set() -> NbrdfSet {
     NbrdfSet::read(lustre_brdf::shared_data_dir().join("nbrdf/merl_nbrdf.json"))
         .expect("merl_nbrdf.json")
-}
-
-fn upper(g: &mut SplitMix64) -> DVec3 {
-    let w = uniform_sphere(g.next_f64(), g.next_f64());
-    DVec3::new(w.x, w.y, w.z.abs().max(1e-3)).normalize()
-}
-
-/// `n` direction pairs: half anywhere above the surface, half within a few degrees of the
-/// mirror direction (the peak, where θh is small).
-fn pairs(g: &mut SplitMix64, n: usize) -> Vec<(DVec3, DVec3)> {
-    (0..n)
-        .map(|k| {
-            let wo = upper(g);
-            let wi = if k % 2 == 0 {
-                upper(g)
-            } else {
-                let mirror = DVec3::new(-wo.x, -wo.y, wo.z);
-                let jitter = uniform_sphere(g.next_f64(), g.next_f64()) * 0.05 * g.next_f64();
-                let w = (mirror + jitter).normalize();
-                DVec3::new(w.x, w.y, w.z.abs().max(1e-3)).normalize()
-            };
-            (wi, wo)
-        })
-        .collect()
 }
 
 /// The pairs as kernel input after `input`'s first `q` words: wi, wo (6 f32 each).

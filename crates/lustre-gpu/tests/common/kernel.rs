@@ -2,6 +2,7 @@
 //! the modules it imports, reading and writing u32 storage arrays, validated by naga first.
 
 use glam::DVec3;
+use lustre_brdf::sampling::{uniform_sphere, SplitMix64};
 use lustre_gpu::cube::linear_sampler;
 use lustre_gpu::wgsl::{compose, Module};
 use lustre_gpu::{GpuContext, GpuEnvironment};
@@ -155,4 +156,29 @@ pub fn f32_round(v: DVec3) -> DVec3 {
 /// Angle between two directions, accurate near 0.
 pub fn angle(a: DVec3, b: DVec3) -> f64 {
     a.cross(b).length().atan2(a.dot(b))
+}
+
+/// A uniformly random direction above the surface (z ≥ 1e-3).
+pub fn upper(g: &mut SplitMix64) -> DVec3 {
+    let w = uniform_sphere(g.next_f64(), g.next_f64());
+    DVec3::new(w.x, w.y, w.z.abs().max(1e-3)).normalize()
+}
+
+/// `n` direction pairs (ωi, ωo) above the surface: even ones anywhere, odd ones within a few
+/// degrees of the mirror direction (the peak, where θh is small).
+pub fn pairs(g: &mut SplitMix64, n: usize) -> Vec<(DVec3, DVec3)> {
+    (0..n)
+        .map(|k| {
+            let wo = upper(g);
+            let wi = if k % 2 == 0 {
+                upper(g)
+            } else {
+                let mirror = DVec3::new(-wo.x, -wo.y, wo.z);
+                let jitter = uniform_sphere(g.next_f64(), g.next_f64()) * 0.05 * g.next_f64();
+                let w = (mirror + jitter).normalize();
+                DVec3::new(w.x, w.y, w.z.abs().max(1e-3)).normalize()
+            };
+            (wi, wo)
+        })
+        .collect()
 }
