@@ -131,7 +131,7 @@ fn refused(name: &str) -> crate::error::GpuError {
 
 /// The model a `TwoSided` wrapper of a resolved spec holds (`twosided:…` boxes it, a two-sided
 /// scene material shares it).
-fn two_sided_inner(any: &dyn Any) -> Option<&dyn Bsdf> {
+pub(crate) fn two_sided_inner(any: &dyn Any) -> Option<&dyn Bsdf> {
     if let Some(t) = any.downcast_ref::<TwoSided<Box<dyn Bsdf>>>() {
         return Some(t.inner().as_ref());
     }

@@ -127,9 +127,14 @@ pub enum MeasuredBrdf<'a> {
 }
 
 impl<'a> MeasuredBrdf<'a> {
-    /// The measured BRDF behind `b`, or `None` for any other model.
+    /// The measured BRDF behind `b` (also inside a `TwoSided` wrapper: the passes' G-buffers
+    /// turn a two-sided surface's frame towards the viewer, so ωo is above it), or `None` for
+    /// any other model.
     pub fn of(b: &'a dyn Bsdf) -> Option<Self> {
         let any = b.as_any()?;
+        if let Some(inner) = crate::analytic::two_sided_inner(any) {
+            return Self::of(inner);
+        }
         if let Some(n) = any.downcast_ref::<Nbrdf>() {
             return Some(Self::Nbrdf(n));
         }
