@@ -150,7 +150,7 @@ pub fn predict_pixels(
                 wo: to_local * s.wo,
                 eye_distance: s.depth,
                 curvature: s.curvature,
-                texture: 0.0,
+                texture: ctx.texture_bandwidth(s),
             };
             let tables = &ctx.materials[s.material];
             let mut pred = None;
@@ -218,7 +218,7 @@ fn light_paths(
                 cos_i: wi.z,
                 cos_x: wo.z.max(1e-6),
                 curvature: s.curvature,
-                texture: 0.0,
+                texture: ctx.texture_bandwidth(s),
                 brdf: nu_brdf,
             };
             let contribution = chi * wi.z * g;

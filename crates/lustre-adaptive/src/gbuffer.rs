@@ -34,6 +34,11 @@ pub struct Surfel {
     pub uv: [f64; 2],
     /// Screen-space curvature (1/m).
     pub curvature: f64,
+    /// Texture coordinates per metre along the surface, (u, v): per screen axis the smaller of
+    /// the two one-sided differences to neighbours on the same surface (a UV seam on one side
+    /// is skipped), the larger of the two axes. Scaled by a texture's size it gives the texels
+    /// per metre that turn the texture's bandwidth into cycles per metre.
+    pub uv_rate: [f64; 2],
 }
 
 /// What a pixel sees.
@@ -99,6 +104,7 @@ impl GBuffer {
                             material,
                             uv,
                             curvature: 0.0,
+                            uv_rate: [0.0; 2],
                         })
                     }
                     None => GPixel::Background(
@@ -114,9 +120,14 @@ impl GBuffer {
             .into_par_iter()
             .map(|k| screen_curvature(&pixels, width, height, k))
             .collect();
-        for (p, c) in pixels.iter_mut().zip(curvature) {
+        let uv_rate: Vec<[f64; 2]> = (0..width * height)
+            .into_par_iter()
+            .map(|k| screen_uv_rate(&pixels, width, height, k))
+            .collect();
+        for ((p, c), r) in pixels.iter_mut().zip(curvature).zip(uv_rate) {
             if let GPixel::Surface(s) = p {
                 s.curvature = c;
+                s.uv_rate = r;
             }
         }
         Ok(GBuffer {
@@ -156,6 +167,43 @@ impl GBuffer {
 /// Whether `q` lies on the same surface as `p` (same material, depth within [`SAME_SURFACE`]).
 pub fn same_surface(p: &Surfel, q: &Surfel) -> bool {
     p.material == q.material && (p.depth - q.depth).abs() <= SAME_SURFACE * p.depth
+}
+
+/// [`Surfel::uv_rate`] at pixel `k` (0 for the background and isolated pixels).
+fn screen_uv_rate(pixels: &[GPixel], w: usize, h: usize, k: usize) -> [f64; 2] {
+    let GPixel::Surface(p) = &pixels[k] else {
+        return [0.0; 2];
+    };
+    let (x, y) = (k % w, k / w);
+    // |Δu| / |Δx| and |Δv| / |Δx| to neighbour `q` on the same surface.
+    let rate = |q: Option<usize>| -> Option<[f64; 2]> {
+        let GPixel::Surface(q) = &pixels[q?] else {
+            return None;
+        };
+        let dx = (q.position - p.position).length();
+        if !(same_surface(p, q) && dx > 0.0) {
+            return None;
+        }
+        let r = [
+            (q.uv[0] - p.uv[0]).abs() / dx,
+            (q.uv[1] - p.uv[1]).abs() / dx,
+        ];
+        r.iter().all(|v| v.is_finite()).then_some(r)
+    };
+    let axes = [
+        ((x > 0).then(|| k - 1), (x + 1 < w).then_some(k + 1)),
+        ((y > 0).then(|| k - w), (y + 1 < h).then_some(k + w)),
+    ];
+    let mut out = [0.0f64; 2];
+    for (a, b) in axes {
+        let side = match (rate(a), rate(b)) {
+            (Some(a), Some(b)) => [a[0].min(b[0]), a[1].min(b[1])],
+            (Some(r), None) | (None, Some(r)) => r,
+            (None, None) => continue,
+        };
+        out = [out[0].max(side[0]), out[1].max(side[1])];
+    }
+    out
 }
 
 /// The screen-space curvature at pixel `k` (0 for the background and isolated pixels).

@@ -27,9 +27,13 @@ use lustre_brdf::tabulated::{TabulatedOptions, TabulatedSampler};
 use lustre_brdf::Bsdf;
 use lustre_env::CubePyramid;
 use lustre_freq::brdf::{brdf_bandwidth, BrdfBandwidth, BrdfBandwidthOptions};
+use lustre_freq::spatial::texture_bandwidth;
+use lustre_scene::Texture;
 use lustre_shade::baked::environment_pyramid;
 use lustre_shade::path::{EnvLight, PathScene};
+use std::collections::HashMap;
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 /// Where the environment is read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,6 +74,62 @@ pub struct MaterialTables {
     pub sampler: Option<TabulatedSampler>,
     /// The angular bandwidth.
     pub bandwidth: BrdfBandwidth,
+    /// The local bandwidth of each texture that varies the BSDF or the shading normal
+    /// ([`lustre_shade::path::Surface::bsdf_textures`]; shared between materials).
+    pub textures: Vec<Arc<TextureBandwidth>>,
+}
+
+/// A texture's local spatial bandwidth in cycles per texel (004 §IV.3.1:
+/// [`lustre_freq::spatial::texture_bandwidth`], the 95th percentile of the local wavelet
+/// spectrum, the texture tiling).
+#[derive(Clone, Debug)]
+pub struct TextureBandwidth {
+    /// Width in texels.
+    pub width: usize,
+    /// Height in texels.
+    pub height: usize,
+    /// Cycles per texel, row-major as the texture's texels (row 0 at v = 0).
+    pub cycles_per_texel: Vec<f64>,
+}
+
+impl TextureBandwidth {
+    /// The bandwidth map of `t`'s RGB (luminance).
+    pub fn new(t: &Texture) -> Result<Self> {
+        let (w, h) = (t.width as usize, t.height as usize);
+        let texels: Vec<[f32; 3]> = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| {
+                let v = t.texel(x as u32, y as u32);
+                [v[0], v[1], v[2]]
+            })
+            .collect();
+        Ok(Self {
+            width: w,
+            height: h,
+            cycles_per_texel: texture_bandwidth(&texels, w, h)?,
+        })
+    }
+
+    /// Cycles per metre at `uv` (the texel under it, repeating as `Texture::sample`) on a
+    /// surface whose texture coordinates change by `uv_rate` per metre: the bandwidth per texel
+    /// times the larger of the texels per metre along u and v.
+    pub fn at(&self, uv: [f64; 2], uv_rate: [f64; 2]) -> f64 {
+        let texel = |c: f64, n: usize| -> usize {
+            if c.is_finite() {
+                ((c * n as f64).floor() as i64).rem_euclid(n as i64) as usize
+            } else {
+                0
+            }
+        };
+        let (x, y) = (texel(uv[0], self.width), texel(uv[1], self.height));
+        let per_metre = (uv_rate[0] * self.width as f64).max(uv_rate[1] * self.height as f64);
+        let v = self.cycles_per_texel[y * self.width + x] * per_metre;
+        if v.is_finite() {
+            v
+        } else {
+            0.0
+        }
+    }
 }
 
 /// What shading needs: the scene's materials with their tables, the environment and its
@@ -98,14 +158,27 @@ impl<'a, 's> ShadingContext<'a, 's> {
         let env = environment(scene)?;
         let n = scene.materials.len();
         let mut materials = Vec::with_capacity(n);
+        // One bandwidth map per texture, however many materials use it.
+        let mut maps: HashMap<*const Texture, Arc<TextureBandwidth>> = HashMap::new();
         for (k, m) in scene.materials.iter().enumerate() {
             let mut built: Option<Result<MaterialTables>> = None;
             m.with_bsdf([0.5, 0.5], &mut |b: &dyn Bsdf| {
                 built = Some(tables(b, &options));
             });
-            let t = built.ok_or_else(|| {
+            let mut t = built.ok_or_else(|| {
                 AdaptiveError::Parameter(format!("material {k} gave no BSDF at uv (½, ½)"))
             })??;
+            for tex in m.bsdf_textures() {
+                let map = match maps.get(&(tex as *const Texture)) {
+                    Some(m) => m.clone(),
+                    None => {
+                        let m = Arc::new(TextureBandwidth::new(tex)?);
+                        maps.insert(tex as *const Texture, m.clone());
+                        m
+                    }
+                };
+                t.textures.push(map);
+            }
             materials.push(t);
             progress(k + 1, n);
         }
@@ -121,6 +194,16 @@ impl<'a, 's> ShadingContext<'a, 's> {
             pyramid,
             lights: vec![],
         })
+    }
+
+    /// The spatial bandwidth of the textures of `s`'s material at `s` in cycles per metre (the
+    /// largest over its textures; 0 when untextured): what Fig. IV.9's texture operator adds.
+    pub fn texture_bandwidth(&self, s: &Surfel) -> f64 {
+        self.materials[s.material]
+            .textures
+            .iter()
+            .map(|t| t.at(s.uv, s.uv_rate))
+            .fold(0.0, f64::max)
     }
 
     /// The pyramid level holding frequencies up to `nu` cycles per radian (0 without a pyramid
@@ -260,6 +343,7 @@ fn tables(b: &dyn Bsdf, options: &ShadingOptions) -> Result<MaterialTables> {
         name: b.name(),
         sampler,
         bandwidth: brdf_bandwidth(b, options.bandwidth)?,
+        textures: vec![],
     })
 }
 

@@ -439,3 +439,90 @@ fn mean_bandwidth(b: &BandwidthBuffer) -> f64 {
         .collect();
     v.iter().sum::<f64>() / v.len() as f64
 }
+
+/// The floor of [`lit_floor`] (12 × 12 m, uv over [0, 1]²) under its constant sky alone, its
+/// material a Lambertian of reflectance `reflectance`, textured by `texture` (64² texels).
+fn floor_of(reflectance: lustre_scene::TexturedRgb, texture: Option<Vec<f32>>) -> Scene {
+    let (mut scene, _) = lit_floor(None);
+    scene.materials[0] =
+        lustre_scene::Material::new("floor", lustre_scene::MaterialKind::Diffuse { reflectance });
+    if let Some(data) = texture {
+        scene.textures.push(
+            lustre_scene::Texture::new(
+                "checker",
+                64,
+                64,
+                3,
+                lustre_scene::ColorSpace::Linear,
+                data,
+            )
+            .expect("texture"),
+        );
+    }
+    scene
+}
+
+#[test]
+fn a_textured_material_adds_its_texture_bandwidth_at_the_rate_of_its_uv_mapping() {
+    // A checkerboard of 8 × 8-texel squares, reflectance 0.2 / 0.8, against its mean, 0.5.
+    let checker: Vec<f32> = (0..64 * 64)
+        .flat_map(|k| {
+            let (x, y) = (k % 64 / 8, k / 64 / 8);
+            [if (x + y) % 2 == 0 { 0.2 } else { 0.8 }; 3]
+        })
+        .collect();
+    let textured = floor_of(
+        lustre_scene::TexturedRgb::texture(lustre_scene::TextureRef {
+            texture: 0,
+            uv_set: 0,
+        }),
+        Some(checker),
+    );
+    let plain = floor_of(lustre_scene::TexturedRgb::constant(Rgb::splat(0.5)), None);
+    let run = |scene: Scene| {
+        Frame { scene, size: 33 }.with(ShadingOptions::default(), |g, ctx| {
+            let s = g.surfel(16, 16).expect("the floor");
+            let t = ctx.texture_bandwidth(s);
+            let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("bandwidth");
+            let o = options(16.0, SampleRule::Constant, Lighting::Direct);
+            let b = BandwidthBuffer::build(g, ctx, &env_bw, o).expect("buffer");
+            assert!(b.bandwidth.iter().all(|v| v.is_finite()));
+            // Eq. IV.6–IV.7 at the centre pixel, which sees the origin from 5 m at cos θ = 0.8:
+            // t cycles per metre on the floor are t · d / cos θ cycles per radian at the eye.
+            let expected = t * s.depth / s.wo.dot(s.frame.n) * g.radians_per_pixel();
+            (
+                s.uv_rate,
+                t,
+                mean_bandwidth(&b),
+                b.bandwidth[16 * 33 + 16],
+                expected,
+            )
+        })
+    };
+    let (rate, t, textured_bp, centre, expected) = run(textured);
+    let (plain_rate, plain_t, plain_bp, _, _) = run(plain);
+    // The floor is 12 m across its uv square: 1/12 uv per metre along both axes.
+    for r in rate {
+        assert!(
+            (r - 1.0 / 12.0).abs() < 0.02 / 12.0,
+            "uv per metre {rate:?}"
+        );
+    }
+    assert_eq!(rate, plain_rate);
+    // 64 texels per 12 m, the checker's bandwidth per texel: cycles per metre > 0; none
+    // untextured.
+    assert_eq!(plain_t, 0.0);
+    assert!(t > 0.0 && t.is_finite(), "{t}");
+    eprintln!(
+        "texture bandwidth at the centre {t:.3} cycles per metre; b_p there {centre:.4} \
+         cycles per pixel (t · d / cos θ per pixel: {expected:.4}); mean b_p textured \
+         {textured_bp:.4}, plain {plain_bp:.4}"
+    );
+    // Under a constant sky a plain Lambertian floor has nothing to resolve; the texture alone
+    // sets b_p.
+    assert!(plain_bp < 1e-9, "plain {plain_bp}");
+    assert!(
+        (centre - expected).abs() < 0.05 * expected,
+        "b_p {centre} at the centre vs {expected}"
+    );
+}

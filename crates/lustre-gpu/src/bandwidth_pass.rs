@@ -43,6 +43,8 @@ pub struct BandwidthPixel {
     pub depth: f64,
     /// Curvature (1/m).
     pub curvature: f64,
+    /// The spatial bandwidth of the material's textures (cycles per metre; 0 untextured).
+    pub texture: f64,
     /// Index into the pass's materials.
     pub material: u32,
 }
@@ -298,6 +300,7 @@ impl BandwidthPass {
                     wo: to_local * s.wo,
                     depth: s.depth,
                     curvature: s.curvature,
+                    texture: shading.texture_bandwidth(s),
                     material: s.material as u32,
                 }),
                 GPixel::Background(_) => None,
@@ -389,7 +392,7 @@ impl BandwidthPass {
                     surfels.extend(v(b, p.curvature as f32));
                     surfels.extend(v(n, f32::from_bits(p.material)));
                     surfels.extend(v(p.wo, 1.0));
-                    surfels.extend(v(p.position, 0.0));
+                    surfels.extend(v(p.position, p.texture as f32));
                 }
                 None => surfels.extend([0.0f32; 20]),
             }

@@ -18,7 +18,8 @@ struct Params {
 }
 
 // A surface pixel in the map's frame: t, b, n, wo (xyz), depth in t.w, curvature in b.w, the
-// material in n.w (bitcast u32), 1 in wo.w for a surface (0: background); its position (xyz).
+// material in n.w (bitcast u32), 1 in wo.w for a surface (0: background); its position (xyz)
+// and its textures' spatial bandwidth (cycles per metre) in p.w.
 struct Surfel {
     t: vec4<f32>,
     b: vec4<f32>,
@@ -101,8 +102,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let wo = vec3<f32>(dot(s.wo.xyz, t), dot(s.wo.xyz, b), dot(s.wo.xyz, n));
     let depth = s.t.w;
     let curvature = s.b.w;
+    let texture = s.p.w;
     let finite = abs(depth) < 3.0e38 && abs(curvature) < 3.0e38 && depth == depth
-        && curvature == curvature;
+        && curvature == curvature && abs(texture) < 3.0e38 && texture == texture;
     if (s.wo.w == 0.0 || !(wo.z > 0.0 && finite && dot(n, n) > 0.5)) {
         predictions[i] = out;
         return;
@@ -160,7 +162,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (from_env) {
             let wi = t * wi_l.x + b * wi_l.y + n * wi_l.z;
             let nu_light = env_bandwidth(wi);
-            let nu_i = freq_one_bounce_distant(nu_light, max(wo.z, 1e-6), curvature, 0.0,
+            let nu_i = freq_one_bounce_distant(nu_light, max(wo.z, 1e-6), curvature, texture,
                                                nu_brdf, depth);
             let chi = luminance(env_radiance(wi)) * rho;
             chi_sum += chi;
@@ -174,7 +176,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             // (Eq. IV.5 from the light's surface), its variance term on the environment's scale.
             let contribution = emitted * rho * wi_l.z * g;
             let path_nu = freq_one_bounce(vec2<f32>(nu_s, 0.0), dist, wi_l.z, max(wo.z, 1e-6),
-                                          curvature, 0.0, nu_brdf, depth);
+                                          curvature, texture, nu_brdf, depth);
             light_nu += max(contribution, 0.0) * path_nu;
             light_sum += max(contribution, 0.0);
             let chi = contribution * f32(params.n_b) / PI;

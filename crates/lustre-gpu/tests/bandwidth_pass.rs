@@ -214,6 +214,7 @@ fn the_pass_names_bad_input() {
         wo: glam::DVec3::Z,
         depth: 1.0,
         curvature: 0.0,
+        texture: 0.0,
         material: 1,
     };
     let e = pass
@@ -239,4 +240,96 @@ fn the_pass_names_bad_input() {
         .expect("run");
     assert_eq!(out[0], Default::default());
     assert!(out[1].radiance > 0.0 && out[1].variance.is_finite());
+}
+
+#[test]
+fn the_textures_bandwidth_reaches_the_gpu_pass_as_the_cpus() {
+    // The line-up's pixels with a texture bandwidth of 0.5–12.5 cycles per metre each (the
+    // passes take no textured material yet, so it is set here, as `predict` would from
+    // `ShadingContext::texture_bandwidth`), against `lustre_freq::pixel::predict`.
+    let scene = line_up::scene(
+        [
+            "nbrdf:color-changing-paint3",
+            "nbrdf:red-metallic-paint",
+            "nbrdf:gold-paint",
+        ],
+        "nbrdf:white-marble",
+    );
+    line_up::with_frame(&scene, (48, 32), |_, g, shading| {
+        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let n_b = 16;
+        let gpu_ctx = ctx();
+        let scene_gpu =
+            BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, None).expect("upload");
+        let mut pass = BandwidthPass::new(&gpu_ctx).expect("pass");
+        let to_local = shading.env.to_world().transpose();
+        let texture = |k: usize| 0.5 + 2.0 * (k % 7) as f64;
+        let pixels: Vec<Option<BandwidthPixel>> = g
+            .pixels
+            .iter()
+            .enumerate()
+            .map(|(k, p)| match p {
+                lustre_adaptive::gbuffer::GPixel::Surface(s) => Some(BandwidthPixel {
+                    position: to_local * s.position,
+                    frame: (
+                        to_local * s.frame.t,
+                        to_local * s.frame.b,
+                        to_local * s.frame.n,
+                    ),
+                    wo: to_local * s.wo,
+                    depth: s.depth,
+                    curvature: s.curvature,
+                    texture: texture(k),
+                    material: s.material as u32,
+                }),
+                lustre_adaptive::gbuffer::GPixel::Background(_) => None,
+            })
+            .collect();
+        let (gpu, _) = pass
+            .run(&gpu_ctx, &scene_gpu, &pixels, n_b as u32)
+            .expect("gpu");
+        let (mut with, mut raised) = (vec![], 0);
+        for (k, (p, gp)) in pixels.iter().zip(&gpu).enumerate() {
+            let (Some(p), lustre_adaptive::gbuffer::GPixel::Surface(s)) = (p, &g.pixels[k]) else {
+                continue;
+            };
+            let point = |texture: f64| lustre_freq::pixel::ShadingPoint {
+                frame: p.frame,
+                wo: p.wo,
+                eye_distance: p.depth,
+                curvature: p.curvature,
+                texture,
+            };
+            let mut cpu = None;
+            shading.scene.materials[s.material].with_bsdf(s.uv, &mut |b| {
+                let tables = &shading.materials[s.material];
+                let with = lustre_freq::pixel::predict(
+                    &point(p.texture),
+                    &env_bw,
+                    b,
+                    &tables.bandwidth,
+                    n_b,
+                );
+                let without =
+                    lustre_freq::pixel::predict(&point(0.0), &env_bw, b, &tables.bandwidth, n_b);
+                cpu = Some((with.expect("cpu"), without.expect("cpu")));
+            });
+            let (c, plain) = cpu.expect("a BSDF");
+            with.push((c.bandwidth.angular, f64::from(gp.bandwidth[1])));
+            if c.bandwidth.angular > 1.05 * plain.bandwidth.angular {
+                raised += 1;
+            }
+        }
+        let scale = with.iter().map(|(c, _)| c.abs()).fold(0.0, f64::max);
+        let (rms, worst, share) = compare(&with, 1e-3 * scale, 1e-2);
+        eprintln!(
+            "with textures, angular bandwidth at the eye: relative RMS {rms:.2e}, worst \
+             {worst:.2e}, {:.2} % of {} pixels off by > 1 %; the texture raised it by > 5 % on \
+             {raised}",
+            100.0 * share,
+            with.len()
+        );
+        assert!(raised * 2 > with.len(), "{raised} of {} raised", with.len());
+        assert!(share < 0.01 && rms < 5e-3, "rms {rms}, {share}");
+    })
 }

@@ -34,6 +34,7 @@ use lustre_brdf::bsdf::{Bsdf, BsdfSample};
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
 use lustre_env::{Distribution1D, EnvSampler, EquirectMap};
+use lustre_scene::Texture;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -64,6 +65,12 @@ pub trait Surface: Send + Sync {
     /// [`Surface::normal_mapped`].
     fn normal_map(&self, _uv: [f64; 2]) -> Option<DVec3> {
         None
+    }
+    /// The textures that vary the surface's BSDF or its shading normal (its parameters' and
+    /// normal map's images; not the emission's nor the alpha mask's): what frequency analysis
+    /// adds to a hit's spatial bandwidth (004 §IV.3.1). None for an untextured surface.
+    fn bsdf_textures(&self) -> Vec<&Texture> {
+        vec![]
     }
     /// Whether the emitted radiance is textured.
     fn emission_textured(&self) -> bool {

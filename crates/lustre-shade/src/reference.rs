@@ -60,6 +60,20 @@ impl Surface for SceneSurface<'_> {
         let uv = [Vec2::new(uv[0] as f32, uv[1] as f32); 2];
         self.material.normal_map_at(self.textures, &uv)
     }
+    fn bsdf_textures(&self) -> Vec<&Texture> {
+        let m = self.material;
+        let mask = m.alpha_mask.and_then(|a| a.opacity.texture);
+        let mut out: Vec<usize> = m
+            .texture_refs()
+            .into_iter()
+            .filter(|r| Some(*r) != mask && Some(*r) != m.emission_texture)
+            .map(|r| r.texture)
+            .filter(|&k| k < self.textures.len())
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out.into_iter().map(|k| &self.textures[k]).collect()
+    }
     fn emission_textured(&self) -> bool {
         self.material.emission_texture.is_some()
     }
