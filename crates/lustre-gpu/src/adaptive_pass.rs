@@ -280,7 +280,10 @@ impl AdaptiveScene {
             env: env_dims,
             to_world: env.to_world(),
             materials: init("adaptive materials", bytemuck::cast_slice(&materials)),
-            table: init("adaptive BRDF tables", bytemuck::cast_slice(&brdfs.table)),
+            table: init(
+                "adaptive BRDF tables",
+                bytemuck::cast_slice(&brdfs.table_or_zero()),
+            ),
             lights: init("adaptive lights", bytemuck::cast_slice(&lights)),
             light_texels: init("adaptive light texels", bytemuck::cast_slice(&light_texels)),
             fitted: init(

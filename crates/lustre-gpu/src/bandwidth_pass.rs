@@ -204,7 +204,7 @@ impl BandwidthScene {
             table: buffer_init(
                 ctx,
                 "bandwidth BRDFs",
-                bytemuck::cast_slice(&packed.brdfs.table),
+                bytemuck::cast_slice(&packed.brdfs.table_or_zero()),
                 storage,
             ),
             fitted: buffer_init(

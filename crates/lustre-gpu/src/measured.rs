@@ -93,6 +93,16 @@ impl PackedBrdfs {
         Ok((KIND_RECORD, (self.fitted.len() - 1) as u32, 0.0))
     }
 
+    /// The table's words, one zero word when there is none (a binding may not be empty: a
+    /// scene of analytic models alone may need no table).
+    pub fn table_or_zero(&self) -> Vec<f32> {
+        if self.table.is_empty() {
+            vec![0.0]
+        } else {
+            self.table.clone()
+        }
+    }
+
     /// The records, one zero record when there is none (a binding may not be empty).
     pub fn fitted_or_zero(&self) -> Vec<GpuBsdf> {
         if self.fitted.is_empty() {

@@ -333,3 +333,53 @@ fn the_textures_bandwidth_reaches_the_gpu_pass_as_the_cpus() {
         assert!(share < 0.01 && rms < 5e-3, "rms {rms}, {share}");
     })
 }
+
+#[test]
+fn analytic_specs_in_the_bandwidth_pass_match_the_cpu() {
+    // Analytic models that need no side table (their scene uploads an empty BRDF table, which
+    // the pass must still bind), against `predict_pixels`.
+    let scene = line_up::scene(
+        [
+            "lambert(kd=0.5)",
+            "ward(kd=0.1, ks=0.4, ax=0.15)",
+            "phong(kd=0.2, ks=0.5, n=10)",
+        ],
+        "oren-nayar(kd=0.6, sigma=0.5)",
+    );
+    line_up::with_frame(&scene, (48, 32), |_, g, shading| {
+        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let n_b = 16;
+        let cpu = predict_pixels(&g, &shading, &env_bw, n_b).expect("cpu");
+        let gpu_ctx = ctx();
+        let scene_gpu =
+            BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene.materials))
+                .expect("upload");
+        let mut pass = BandwidthPass::new(&gpu_ctx).expect("pass");
+        let (gpu, _) = pass
+            .predict(&gpu_ctx, &scene_gpu, &g, &shading, n_b as u32)
+            .expect("an empty BRDF table is bound");
+        let mut fields: [Vec<(f64, f64)>; 3] = Default::default();
+        for (c, gp) in cpu.iter().zip(&gpu) {
+            if let (Some(c), Some(gp)) = (c, gp) {
+                let (a, b) = (&c.prediction, &gp.prediction);
+                fields[0].push((a.bandwidth.angular, b.bandwidth.angular));
+                fields[1].push((a.variance, b.variance));
+                fields[2].push((a.radiance, b.radiance));
+            }
+        }
+        for (name, pairs) in ["angular bandwidth", "variance sum", "radiance"]
+            .iter()
+            .zip(&fields)
+        {
+            let scale = pairs.iter().map(|(c, _)| c.abs()).fold(0.0, f64::max);
+            let (rms, worst, share) = compare(pairs, 1e-3 * scale, 1e-2);
+            eprintln!(
+                "analytic specs, {name}: relative RMS {rms:.2e}, worst {worst:.2e}, {:.2} % of \
+                 {} pixels off by > 1 %",
+                100.0 * share,
+                pairs.len()
+            );
+            assert!(share < 0.01 && rms < 5e-3, "{name}: rms {rms}, {share}");
+        }
+    })
+}
