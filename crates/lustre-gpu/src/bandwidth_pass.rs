@@ -275,19 +275,11 @@ impl Packed {
 }
 
 impl BandwidthPass {
-    /// The GPU twin of `lustre_adaptive::buffer::predict_pixels`: the pixels of `g` (turned into
-    /// the map's frame) through [`BandwidthPass::run`].
-    pub fn predict(
-        &mut self,
-        ctx: &GpuContext,
-        scene: &BandwidthScene,
-        g: &GBuffer,
-        shading: &ShadingContext,
-        n_b: u32,
-    ) -> Result<(Vec<Option<PixelEstimate>>, Timing)> {
+    /// The pass's pixels of `g`: its surface pixels turned into the map's frame, with their
+    /// textures' bandwidth ([`ShadingContext::texture_bandwidth`]); `None` for the background.
+    pub fn pixels(g: &GBuffer, shading: &ShadingContext) -> Vec<Option<BandwidthPixel>> {
         let to_local = shading.env.to_world().transpose();
-        let pixels: Vec<Option<BandwidthPixel>> = g
-            .pixels
+        g.pixels
             .iter()
             .map(|p| match p {
                 GPixel::Surface(s) => Some(BandwidthPixel {
@@ -305,7 +297,20 @@ impl BandwidthPass {
                 }),
                 GPixel::Background(_) => None,
             })
-            .collect();
+            .collect()
+    }
+
+    /// The GPU twin of `lustre_adaptive::buffer::predict_pixels`: the pixels of `g` (turned into
+    /// the map's frame) through [`BandwidthPass::run`].
+    pub fn predict(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &BandwidthScene,
+        g: &GBuffer,
+        shading: &ShadingContext,
+        n_b: u32,
+    ) -> Result<(Vec<Option<PixelEstimate>>, Timing)> {
+        let pixels = Self::pixels(g, shading);
         let (out, timing) = self.run(ctx, scene, &pixels, n_b)?;
         let estimates = pixels
             .iter()

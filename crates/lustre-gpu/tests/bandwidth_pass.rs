@@ -262,27 +262,15 @@ fn the_textures_bandwidth_reaches_the_gpu_pass_as_the_cpus() {
         let scene_gpu =
             BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, None).expect("upload");
         let mut pass = BandwidthPass::new(&gpu_ctx).expect("pass");
-        let to_local = shading.env.to_world().transpose();
         let texture = |k: usize| 0.5 + 2.0 * (k % 7) as f64;
-        let pixels: Vec<Option<BandwidthPixel>> = g
-            .pixels
-            .iter()
+        let pixels: Vec<Option<BandwidthPixel>> = BandwidthPass::pixels(&g, &shading)
+            .into_iter()
             .enumerate()
-            .map(|(k, p)| match p {
-                lustre_adaptive::gbuffer::GPixel::Surface(s) => Some(BandwidthPixel {
-                    position: to_local * s.position,
-                    frame: (
-                        to_local * s.frame.t,
-                        to_local * s.frame.b,
-                        to_local * s.frame.n,
-                    ),
-                    wo: to_local * s.wo,
-                    depth: s.depth,
-                    curvature: s.curvature,
+            .map(|(k, p)| {
+                p.map(|p| BandwidthPixel {
                     texture: texture(k),
-                    material: s.material as u32,
-                }),
-                lustre_adaptive::gbuffer::GPixel::Background(_) => None,
+                    ..p
+                })
             })
             .collect();
         let (gpu, _) = pass
