@@ -1199,7 +1199,7 @@ impl App {
                 ViewMethod::Ck => "Colbert–Křivánek",
                 ViewMethod::Progressive => "progressive when still",
                 ViewMethod::Reference => "path-traced reference (CPU)",
-                ViewMethod::Adaptive => "adaptive shading (004 ch. IV, CPU)",
+                ViewMethod::Adaptive => "adaptive shading (004 ch. IV)",
             };
             let refused = self.walkthrough_refusal(m);
             let radio = egui::RadioButton::new(self.settings.method == m, text);
