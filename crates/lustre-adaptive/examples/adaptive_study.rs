@@ -3,13 +3,16 @@
 //!
 //! `cargo run --release -p lustre-adaptive --example adaptive_study -- [--size N]
 //! [--reference N] [--map FILE] [--scene sphere|lineup] [--materials a,b,…] [--out DIR] [--aa]
-//! [--rates 2,1] [--speed-only]`
+//! [--rates 2,1] [--n-b 16,8] [--speed-only]`
 //! (`--aa`: only Fig. IV.14's anti-aliasing costs, at 1, 4 and 16 sub-pixels per pixel)
 //!
 //! Prints Markdown tables; with `--out`, writes each case's images (reference, brute force and
 //! adaptive at equal PSNR, the level and N_p maps). `--rates` sets the sampling rates of the
-//! constant-N_p rows (samples per cycle of b_p; 2 and 1 by default); `--speed-only` prints only
-//! those rows, without the sample rules, pre-convolved shading and Fig. IV.16–IV.17.
+//! constant-N_p rows (samples per cycle of b_p; 2 and 1 by default), `--n-b` the incident
+//! directions of the bandwidth pass (`buffer::DEFAULT_N_B` by default; 004 uses 16; every row
+//! is repeated for each);
+//! `--speed-only` prints only the constant-N_p rows, without the sample rules, pre-convolved
+//! shading and Fig. IV.16–IV.17.
 
 use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BufferOptions, SampleRule};
 use lustre_adaptive::compare::{time_at_psnr, Measured};
@@ -37,6 +40,8 @@ struct Args {
     rates: Vec<f64>,
     /// Only Fig. IV.15's constant-N_p rows, without Fig. IV.16–IV.17.
     speed_only: bool,
+    /// The n_b of Fig. IV.15's rows (`buffer::DEFAULT_N_B` by default), each with every row.
+    n_bs: Vec<usize>,
 }
 
 fn args() -> anyhow::Result<Args> {
@@ -59,6 +64,7 @@ fn args() -> anyhow::Result<Args> {
         aa: false,
         rates: vec![2.0, 1.0],
         speed_only: false,
+        n_bs: vec![lustre_adaptive::buffer::DEFAULT_N_B],
     };
     let mut it = std::env::args().skip(1);
     while let Some(k) = it.next() {
@@ -81,6 +87,12 @@ fn args() -> anyhow::Result<Args> {
                     .collect::<Result<_, _>>()?
             }
             "--speed-only" => a.speed_only = true,
+            "--n-b" => {
+                a.n_bs = v()?
+                    .split(',')
+                    .map(|r| r.trim().parse::<usize>())
+                    .collect::<Result<_, _>>()?
+            }
             other => anyhow::bail!("unknown argument {other}"),
         }
     }
@@ -209,7 +221,12 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
             (Lighting::Preconvolved, SampleRule::Constant, 1.0),
         ]);
     }
-    for (lighting, scale, rate) in rows {
+    let rows: Vec<(Lighting, SampleRule, f64, usize)> = a
+        .n_bs
+        .iter()
+        .flat_map(|&n_b| rows.iter().map(move |&(l, s, r)| (l, s, r, n_b)))
+        .collect();
+    for (lighting, scale, rate, n_b) in rows {
         let means: &[f64] = if scale == SampleRule::Constant {
             &[1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0, 256.0]
         } else {
@@ -222,6 +239,7 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
                 &ctx,
                 &env_bw,
                 BufferOptions {
+                    n_b,
                     mean_samples,
                     lighting,
                     scale,
@@ -286,6 +304,10 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
                     String::new()
                 } else {
                     format!(", rate {rate}")
+                } + &if n_b == lustre_adaptive::buffer::DEFAULT_N_B {
+                    String::new()
+                } else {
+                    format!(", n_b {n_b}")
                 },
                 mean_samples,
                 time_s,
@@ -462,7 +484,7 @@ fn validation(
     Ok(())
 }
 
-/// Fig. IV.17: n_b = 16 … 1024 at a constant N_p of 32.
+/// Fig. IV.17: n_b = 4 … 1024 at a constant N_p of 32.
 fn n_b_study(
     g: &GBuffer,
     ctx: &ShadingContext,
@@ -473,7 +495,7 @@ fn n_b_study(
     println!("Fig. IV.17, n_b (constant N_p = 32):\n");
     println!("| n_b | bandwidth pass (s) | total (s) | shaded pixels | PSNR (dB) |");
     println!("|---:|---:|---:|---:|---:|");
-    for n_b in [16, 64, 256, 1024] {
+    for n_b in [4, 8, 16, 64, 256, 1024] {
         let t = Instant::now();
         let buffer = BandwidthBuffer::build(
             g,

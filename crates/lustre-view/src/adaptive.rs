@@ -4,7 +4,7 @@
 //! render thread, and its buffer views (004 Fig. IV.13, IV.22).
 //!
 //! Per frame: the G-buffer from the render thread's path tracer (k×k per pixel with the
-//! G-buffer supersampling, box-filtered after shading), the bandwidth buffer (n_b = 16
+//! G-buffer supersampling, box-filtered after shading), the bandwidth buffer (n_b = 8
 //! directions per pixel against the environment's bandwidth), and the hierarchical shading.
 //! The shading context (the materials' sampling and bandwidth tables) is built once per scene:
 //! the render thread builds it on the first adaptive frame and again after a material edit. The
@@ -33,8 +33,8 @@ use lustre_shade::image::Image;
 use lustre_shade::path::{PathCamera, PathScene, PathTracer};
 use std::time::Instant;
 
-/// Incident directions per pixel of the bandwidth buffer (004: 16; the CLI's default).
-pub const N_B: usize = 16;
+/// Incident directions per pixel of the bandwidth buffer (the CLI's default; 004: 16).
+pub const N_B: usize = lustre_adaptive::buffer::DEFAULT_N_B;
 /// The largest N_p of a pixel (the CLI's).
 pub const MAX_SAMPLES: usize = 1024;
 /// The colour of up-sampled surface pixels in the shaded-pixel view.
