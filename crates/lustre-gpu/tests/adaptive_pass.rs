@@ -81,6 +81,7 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
         // predictions match the CPU's.
         let n_b = 16;
         let options = BufferOptions {
+            n_b,
             mean_samples: 16.0,
             scale: SampleRule::Relative,
             ..Default::default()
