@@ -158,7 +158,8 @@ pub struct RenderArgs {
     pub area_light_radiance: f64,
     /// `--method adaptive`: incident directions per pixel of the bandwidth buffer (004: 16; 8
     /// shades fewer pixels at the same PSNR, `lustre_adaptive::buffer::DEFAULT_N_B`).
-    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    #[arg(long, default_value_t = lustre_adaptive::buffer::DEFAULT_N_B as u32,
+          value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub n_b: u32,
     /// Output folder (frame.exr, frame.png, times.csv; diff.png with --compare-reference;
     /// bandwidth.png, level.png, samples.png and shaded.png with --method adaptive).
