@@ -1,22 +1,29 @@
-//! Importance sampling of any isotropic reflection BRDF by numerical inversion of tabulated
-//! CDFs, as 004 §IV.4.3 does for acquired materials (after Lawrence et al. 2004: the CDF of the
-//! BRDF, tabulated per view direction and inverted).
+//! Importance sampling of any reflection BRDF by numerical inversion of tabulated CDFs, as 004
+//! §IV.4.3 does for acquired materials (after Lawrence et al. 2004: the CDF of the BRDF,
+//! tabulated per view direction and inverted).
 //!
-//! For each of `view_bins` view elevations θo_k = (k + ½)/K · π/2, the luminance of f(ωi, ωo)
-//! cos θi is integrated over the cells of a (θi, φ) grid of the upper hemisphere (θi uniform in
-//! [0, π/2), φ = φi − φo uniform in [0, π]: an isotropic BRDF is even in φ, so the half-plane is
-//! folded onto itself and a sample takes either sign with probability ½), `supersample`²
-//! points per cell, uniform in cos θi and φ. The cell weights are the piecewise-constant density
-//! to sample from: a cell is picked by inverting the cumulative sum of its weights, then a point
-//! inside it uniformly in solid angle. The table of the nearest view bin serves `wo`, so `sample`
-//! and `pdf` use the same table. A fraction `defensive` of the samples is drawn from the cosine
-//! hemisphere, so the density is positive wherever f cos θi may be (cells whose supersampled
-//! weight missed a narrow peak, or where every channel is 0 at the cell's points):
+//! For each of `view_bins` view elevations θo_k = (k + ½)/K · π/2 (and, for an anisotropic
+//! BRDF, each of `azimuth_bins` view azimuths φo_a = (a + ½)/A · 2π in the local frame, x
+//! along the tangent), the luminance of f(ωi, ωo) cos θi is integrated over the cells of a
+//! (θi, φ) grid of the upper hemisphere, `supersample`² points per cell, uniform in cos θi and
+//! φ: θi uniform in [0, π/2), φ = φi − φo the azimuth relative to the view. An isotropic BRDF
+//! is even in φ, so its grid covers φ ∈ [0, π] with `phi_bins` cells and a sample takes either
+//! sign with probability ½ (the half-plane folded onto itself); an anisotropic one's covers
+//! φ ∈ [0, 2π) with `phi_bins` cells, unfolded and twice as wide (its `azimuth_bins` tables per
+//! elevation already multiply the memory: 16.8 MB per material with the defaults). The cell weights are the
+//! piecewise-constant density to sample from: a cell is picked by inverting the cumulative sum
+//! of its weights, then a point inside it uniformly in solid angle. The table of the nearest
+//! view elevation serves `wo`, so `sample` and `pdf` use the same table. A fraction `defensive` of the samples is drawn
+//! from the cosine hemisphere, so the density is positive wherever f cos θi may be (cells whose
+//! supersampled weight missed a narrow peak, or where every channel is 0 at the cell's points):
 //!
-//! p(ωi | ωo) = ε cos θi / π + (1 − ε) w_c / (W · 2Ω_c)
+//! p(ωi | ωo) = ε cos θi / π + (1 − ε) w_c / (W · Ω_c)
 //!
-//! with w_c the weight of the cell holding (θi, |φ|), W the table's total and Ω_c the cell's
-//! solid angle ((cos θa − cos θb) Δφ; the fold doubles it).
+//! with w_c the weight of the cell holding (θi, φ) (|φ| when folded), W the table's total and
+//! Ω_c the cell's solid angle ((cos θa − cos θb) Δφ, doubled when folded). An anisotropic
+//! BRDF's view azimuth falls between two azimuth bins: their tables are mixed with linear
+//! weights (one picked at random per sample, the density their weighted sum), so the density
+//! follows φo continuously.
 
 use crate::bsdf::{finish_sample, Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use crate::error::{Error, Result};
@@ -31,9 +38,12 @@ use std::f64::consts::{FRAC_PI_2, PI};
 pub struct TabulatedOptions {
     /// View elevations θo (one table each), uniform in [0, π/2).
     pub view_bins: usize,
+    /// View azimuths φo per view elevation, uniform in [0, 2π), for anisotropic BRDFs (an
+    /// isotropic BRDF has one table per elevation).
+    pub azimuth_bins: usize,
     /// Cells along θi, uniform in [0, π/2).
     pub theta_bins: usize,
-    /// Cells along φ = φi − φo in [0, π].
+    /// Cells along φ = φi − φo in [0, π] (an anisotropic BRDF's tables: over [0, 2π)).
     pub phi_bins: usize,
     /// Points per cell and axis at which f cos θi is evaluated.
     pub supersample: usize,
@@ -45,6 +55,7 @@ impl Default for TabulatedOptions {
     fn default() -> Self {
         Self {
             view_bins: 32,
+            azimuth_bins: 16,
             theta_bins: 64,
             phi_bins: 64,
             supersample: 2,
@@ -57,15 +68,27 @@ impl Default for TabulatedOptions {
 #[derive(Clone, Debug, PartialEq)]
 pub struct TabulatedSampler {
     options: TabulatedOptions,
-    /// `view_bins` tables of `theta_bins · phi_bins + 1` cumulative weights (row-major, θi
-    /// outer), each starting at 0 and ending at the table's total.
+    /// Unfolded tables per view azimuth (an anisotropic BRDF).
+    anisotropic: bool,
+    /// `view_bins` (× `azimuth_bins` when anisotropic, azimuth inner) tables of `theta_bins ·`
+    /// [`TabulatedSampler::phi_cells`] `+ 1` cumulative weights (row-major, θi outer), each
+    /// starting at 0 and ending at the table's total.
     cdf: Vec<f64>,
 }
 
+/// The grid of one table: its φ cells and their width (radians), and whether φ is folded.
+#[derive(Clone, Copy, Debug)]
+struct Grid {
+    theta_bins: usize,
+    phi_cells: usize,
+    dphi: f64,
+    folded: bool,
+}
+
 impl TabulatedSampler {
-    /// Tabulates `bsdf`, which must be isotropic and reflect only; errors on absurd options
-    /// (a zero count, more than 4096 bins along an axis, ε outside (0, 1]) and on a BRDF whose
-    /// f cos θi is not finite at some table point (named with the point).
+    /// Tabulates `bsdf`, a reflection BRDF without Dirac lobes (isotropic or not); errors on
+    /// absurd options (a zero count, more than 4096 bins along an axis, ε outside (0, 1]) and
+    /// on a BRDF whose f cos θi is not finite at some table point (named with the point).
     pub fn new(bsdf: &dyn Bsdf, options: TabulatedOptions) -> Result<Self> {
         let o = options;
         let bad = |name: &str, value: f64, reason: &str| Error::Parameter {
@@ -75,6 +98,7 @@ impl TabulatedSampler {
         };
         for (name, n) in [
             ("view_bins", o.view_bins),
+            ("azimuth_bins", o.azimuth_bins),
             ("theta_bins", o.theta_bins),
             ("phi_bins", o.phi_bins),
             ("supersample", o.supersample),
@@ -87,19 +111,51 @@ impl TabulatedSampler {
             return Err(bad("defensive", o.defensive, "must lie in (0, 1]"));
         }
         let flags = bsdf.flags();
-        if flags.anisotropic || flags.transmission || flags.has_delta() {
+        if flags.transmission || flags.has_delta() {
             return Err(bad(
                 "flags",
                 0.0,
-                "only isotropic reflection BRDFs without Dirac lobes are tabulated (the table folds φ and covers the upper hemisphere)",
+                "only reflection BRDFs without Dirac lobes are tabulated (the table covers the upper hemisphere)",
             ));
         }
-        let tables: Vec<Vec<f64>> = (0..o.view_bins)
+        let anisotropic = flags.anisotropic;
+        let azimuths = if anisotropic { o.azimuth_bins } else { 1 };
+        let grid = Grid::new(&o, anisotropic);
+        let tables: Vec<Vec<f64>> = (0..o.view_bins * azimuths)
             .into_par_iter()
-            .map(|k| view_table(bsdf, &o, k).map_err(|(v, what)| bad("f cos θi", v, &what)))
+            .map(|t| {
+                let (k, a) = (t / azimuths, t % azimuths);
+                let theta_o = (k as f64 + 0.5) / o.view_bins as f64 * FRAC_PI_2;
+                let phi_o = (a as f64 + 0.5) / azimuths as f64 * 2.0 * PI;
+                let phi_o = if anisotropic { phi_o } else { 0.0 };
+                view_table(bsdf, &o, grid, theta_o, phi_o)
+                    .map_err(|(v, what)| bad("f cos θi", v, &what))
+            })
             .collect::<Result<_>>()?;
         let cdf = tables.concat();
-        Ok(Self { options, cdf })
+        Ok(Self {
+            options,
+            anisotropic,
+            cdf,
+        })
+    }
+
+    /// Whether the tables are per view azimuth and unfolded (the BRDF was anisotropic).
+    pub fn is_anisotropic(&self) -> bool {
+        self.anisotropic
+    }
+
+    /// The φ cells of one table: `phi_bins`, over [0, π] (isotropic, folded) or [0, 2π)
+    /// (anisotropic).
+    pub fn phi_cells(&self) -> usize {
+        Grid::new(&self.options, self.anisotropic).phi_cells
+    }
+
+    /// The tables: `view_bins` × ([`TabulatedSampler::is_anisotropic`]: `azimuth_bins`, else
+    /// 1), azimuth inner.
+    pub fn table_count(&self) -> usize {
+        let o = &self.options;
+        o.view_bins * if self.anisotropic { o.azimuth_bins } else { 1 }
     }
 
     /// The options the table was built with.
@@ -107,49 +163,72 @@ impl TabulatedSampler {
         self.options
     }
 
-    /// The cumulative cell weights: `view_bins` tables of `theta_bins · phi_bins + 1` values,
-    /// each from 0 to its total (cells row-major, θi outer).
+    /// The cumulative cell weights: [`TabulatedSampler::table_count`] tables of `theta_bins ·`
+    /// [`TabulatedSampler::phi_cells`] `+ 1` values, each from 0 to its total (cells row-major,
+    /// θi outer).
     pub fn cumulative(&self) -> &[f64] {
         &self.cdf
     }
 
-    /// The cumulative weights of the table serving `wo` (θo's nearest bin), or `None` below or
-    /// at the horizon.
-    fn table(&self, wo: DVec3) -> Option<&[f64]> {
+    /// The tables serving `wo` with their weights (summing to 1), or `None` below or at the
+    /// horizon: θo's nearest bin and, when anisotropic, the two azimuth bins around φo, weighted
+    /// linearly (a mixture, so the density follows φo continuously); an isotropic BRDF's one
+    /// table twice, weights 1 and 0.
+    fn tables(&self, wo: DVec3) -> Option<[(&[f64], f64); 2]> {
         if wo.z.is_nan() || wo.z <= 0.0 {
             return None;
         }
         let o = &self.options;
         let theta_o = wo.z.min(1.0).acos();
         let k = ((theta_o / FRAC_PI_2 * o.view_bins as f64) as usize).min(o.view_bins - 1);
-        let n = o.theta_bins * o.phi_bins + 1;
-        Some(&self.cdf[k * n..(k + 1) * n])
+        let n = o.theta_bins * self.phi_cells() + 1;
+        let table = |t: usize| &self.cdf[t * n..(t + 1) * n];
+        if !self.anisotropic {
+            return Some([(table(k), 1.0), (table(k), 0.0)]);
+        }
+        let az = o.azimuth_bins;
+        let x = wo.y.atan2(wo.x).rem_euclid(2.0 * PI) / (2.0 * PI) * az as f64 - 0.5;
+        let x = if x.is_finite() { x } else { 0.0 };
+        let lo = x.floor();
+        let t = (x - lo).clamp(0.0, 1.0);
+        let a0 = (lo as i64).rem_euclid(az as i64) as usize;
+        let a1 = (a0 + 1) % az;
+        Some([(table(k * az + a0), 1.0 - t), (table(k * az + a1), t)])
     }
 
-    /// The tabulated density of `wi` (local, relative to `wo`'s azimuth through `phi`), without
-    /// the defensive part: w_c / (W · 2Ω_c); 0 for a black table.
+    /// The tabulated density of `wi` (local, at azimuth `phi` relative to `wo`'s: |φ| ∈ [0, π]
+    /// when folded, φ ∈ [0, 2π) else), without the defensive part: w_c / (W · Ω_c); 0 for a
+    /// black table.
     fn table_pdf(&self, table: &[f64], cos_i: f64, phi: f64) -> f64 {
-        let o = &self.options;
+        let g = Grid::new(&self.options, self.anisotropic);
         let total = table[table.len() - 1];
         if total <= 0.0 {
             return 0.0;
         }
         let theta = cos_i.clamp(0.0, 1.0).acos();
-        let i = ((theta / FRAC_PI_2 * o.theta_bins as f64) as usize).min(o.theta_bins - 1);
-        let j = ((phi / PI * o.phi_bins as f64) as usize).min(o.phi_bins - 1);
-        let c = i * o.phi_bins + j;
+        let i = ((theta / FRAC_PI_2 * g.theta_bins as f64) as usize).min(g.theta_bins - 1);
+        let j = ((phi / g.dphi) as usize).min(g.phi_cells - 1);
+        let c = i * g.phi_cells + j;
         let w = table[c + 1] - table[c];
-        let (ca, cb) = theta_cos_range(i, o.theta_bins);
-        let omega = 2.0 * (ca - cb) * PI / o.phi_bins as f64;
+        let (ca, cb) = theta_cos_range(i, g.theta_bins);
+        let fold = if g.folded { 2.0 } else { 1.0 };
+        let omega = fold * (ca - cb) * g.dphi;
         w / (total * omega)
     }
 
-    /// Draws `wi` for `wo` (local frame, isotropic) from two uniform numbers: `None` when `wo`
-    /// lies at or below the horizon.
+    /// Draws `wi` for `wo` (local frame) from two uniform numbers: `None` when `wo` lies at or
+    /// below the horizon. An anisotropic BRDF's table is picked by `u1` (rescaled) with the
+    /// probabilities of its weights.
     pub fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<DVec3> {
-        let table = self.table(wo)?;
-        let o = &self.options;
-        let eps = o.defensive;
+        let [(ta, wa), (tb, _)] = self.tables(wo)?;
+        let (table, u1) = if u1 < wa || wa >= 1.0 {
+            (ta, u1 / wa)
+        } else {
+            (tb, (u1 - wa) / (1.0 - wa))
+        };
+        let u1 = u1.clamp(0.0, 1.0 - f64::EPSILON);
+        let g = Grid::new(&self.options, self.anisotropic);
+        let eps = self.options.defensive;
         let total = table[table.len() - 1];
         if u1 < eps || total <= 0.0 {
             let u = if total <= 0.0 { u1 } else { u1 / eps };
@@ -160,78 +239,115 @@ impl TabulatedSampler {
         // never picked: their upper bound equals their lower one).
         let c = table[1..]
             .partition_point(|&v| v <= target)
-            .min(o.theta_bins * o.phi_bins - 1);
+            .min(g.theta_bins * g.phi_cells - 1);
         let (lo, hi) = (table[c], table[c + 1]);
         let r = if hi > lo {
             ((target - lo) / (hi - lo)).clamp(0.0, 1.0 - f64::EPSILON)
         } else {
             0.5
         };
-        let (i, j) = (c / o.phi_bins, c % o.phi_bins);
-        let (ca, cb) = theta_cos_range(i, o.theta_bins);
+        let (i, j) = (c / g.phi_cells, c % g.phi_cells);
+        let (ca, cb) = theta_cos_range(i, g.theta_bins);
         let cos_i = ca + (cb - ca) * r;
-        let (sign, v) = if u2 < 0.5 {
+        let (sign, v) = if !g.folded {
+            (1.0, u2)
+        } else if u2 < 0.5 {
             (1.0, 2.0 * u2)
         } else {
             (-1.0, 2.0 * u2 - 1.0)
         };
-        let phi = sign * (j as f64 + v) * PI / o.phi_bins as f64 + wo.y.atan2(wo.x);
+        let phi = sign * (j as f64 + v) * g.dphi + wo.y.atan2(wo.x);
         let sin = (1.0 - cos_i * cos_i).max(0.0).sqrt();
         Some(DVec3::new(sin * phi.cos(), sin * phi.sin(), cos_i))
     }
 
-    /// The density (per solid angle) with which [`TabulatedSampler::sample`] draws `wi`.
+    /// The density (per solid angle) with which [`TabulatedSampler::sample`] draws `wi`: the
+    /// weighted sum of its tables' densities.
     pub fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        let Some(table) = self.table(wo) else {
+        let Some(tables) = self.tables(wo) else {
             return 0.0;
         };
         if wi.z.is_nan() || wi.z <= 0.0 {
             return 0.0;
         }
         let cosine = wi.z / PI;
-        if table[table.len() - 1] <= 0.0 {
-            return cosine;
-        }
-        let mut phi = (wi.y.atan2(wi.x) - wo.y.atan2(wo.x)).abs();
-        if phi > PI {
-            phi = 2.0 * PI - phi;
-        }
+        let rel = (wi.y.atan2(wi.x) - wo.y.atan2(wo.x)).rem_euclid(2.0 * PI);
+        let phi = if self.anisotropic || rel <= PI {
+            rel
+        } else {
+            2.0 * PI - rel
+        };
         let eps = self.options.defensive;
-        eps * cosine + (1.0 - eps) * self.table_pdf(table, wi.z, phi)
+        tables
+            .iter()
+            .filter(|(_, w)| *w > 0.0)
+            .map(|&(table, w)| {
+                w * if table[table.len() - 1] <= 0.0 {
+                    cosine
+                } else {
+                    eps * cosine + (1.0 - eps) * self.table_pdf(table, wi.z, phi)
+                }
+            })
+            .sum()
     }
 }
 
-/// The cumulative weights of view bin `k` (θo_k = (k + ½)/K · π/2): `theta_bins · phi_bins + 1`
+impl Grid {
+    fn new(o: &TabulatedOptions, anisotropic: bool) -> Self {
+        if anisotropic {
+            Self {
+                theta_bins: o.theta_bins,
+                phi_cells: o.phi_bins,
+                dphi: 2.0 * PI / o.phi_bins as f64,
+                folded: false,
+            }
+        } else {
+            Self {
+                theta_bins: o.theta_bins,
+                phi_cells: o.phi_bins,
+                dphi: PI / o.phi_bins as f64,
+                folded: true,
+            }
+        }
+    }
+}
+
+/// The cumulative weights of the table of the view (θo, φo): `theta_bins · phi_cells + 1`
 /// values from 0; a non-finite f cos θi gives the value and where it is.
 fn view_table(
     bsdf: &dyn Bsdf,
     o: &TabulatedOptions,
-    k: usize,
+    g: Grid,
+    theta_o: f64,
+    phi_o: f64,
 ) -> std::result::Result<Vec<f64>, (f64, String)> {
-    let theta_o = (k as f64 + 0.5) / o.view_bins as f64 * FRAC_PI_2;
-    let wo = DVec3::new(theta_o.sin(), 0.0, theta_o.cos());
+    let wo = DVec3::new(
+        theta_o.sin() * phi_o.cos(),
+        theta_o.sin() * phi_o.sin(),
+        theta_o.cos(),
+    );
     let s = o.supersample as f64;
-    let dphi = PI / o.phi_bins as f64;
-    let mut cdf = Vec::with_capacity(o.theta_bins * o.phi_bins + 1);
+    let mut cdf = Vec::with_capacity(g.theta_bins * g.phi_cells + 1);
     let mut acc = 0.0;
     cdf.push(0.0);
-    for i in 0..o.theta_bins {
-        let (ca, cb) = theta_cos_range(i, o.theta_bins);
-        for j in 0..o.phi_bins {
+    for i in 0..g.theta_bins {
+        let (ca, cb) = theta_cos_range(i, g.theta_bins);
+        for j in 0..g.phi_cells {
             let mut sum = 0.0;
             for a in 0..o.supersample {
                 let c = ca + (cb - ca) * (a as f64 + 0.5) / s;
                 let sin = (1.0 - c * c).max(0.0).sqrt();
                 for b in 0..o.supersample {
-                    let phi = (j as f64 + (b as f64 + 0.5) / s) * dphi;
-                    let wi = DVec3::new(sin * phi.cos(), sin * phi.sin(), c);
+                    let phi = (j as f64 + (b as f64 + 0.5) / s) * g.dphi;
+                    let wi = DVec3::new(sin * (phi + phi_o).cos(), sin * (phi + phi_o).sin(), c);
                     let v = bsdf.eval(wi, wo).luminance() * c;
                     if !v.is_finite() {
                         return Err((
                             v,
                             format!(
-                                "not finite at θo = {:.2}°, θi = {:.2}°, φ = {:.2}°",
+                                "not finite at θo = {:.2}°, φo = {:.2}°, θi = {:.2}°, φ = {:.2}°",
                                 theta_o.to_degrees(),
+                                phi_o.to_degrees(),
                                 c.acos().to_degrees(),
                                 phi.to_degrees()
                             ),
@@ -240,7 +356,7 @@ fn view_table(
                     sum += v.max(0.0);
                 }
             }
-            acc += sum / (s * s) * (ca - cb) * dphi;
+            acc += sum / (s * s) * (ca - cb) * g.dphi;
             cdf.push(acc);
         }
     }

@@ -199,8 +199,8 @@ impl AdaptiveScene {
                 return Err(invalid(
                     "adaptive pass",
                     format!(
-                        "material {k} ({}) has no tabulated sampler (anisotropic, transmissive or \
-                         Dirac): the GPU shades isotropic measured BRDFs only",
+                        "material {k} ({}) has no tabulated sampler (transmissive or Dirac): the \
+                         GPU shades reflection BRDFs only",
                         tables.name
                     ),
                 ));
@@ -239,6 +239,36 @@ impl AdaptiveScene {
             return Err(invalid(
                 "adaptive pass",
                 format!("{} words of BRDF tables", brdfs.table.len()),
+            ));
+        }
+        // Every material's BRDF and sampling tables share one binding (an anisotropic BRDF's
+        // tabulated CDFs, per view azimuth, take 16.8 MB with the default options).
+        let limit = ctx.device.limits().max_storage_buffer_binding_size as usize;
+        if 4 * brdfs.table.len() > limit {
+            let sizes: Vec<String> = shading
+                .materials
+                .iter()
+                .enumerate()
+                .map(|(k, t)| {
+                    let words = t.sampler.as_ref().map_or(0, |s| {
+                        s.table_count() * (2 * s.options().theta_bins * s.phi_cells() + 1)
+                    });
+                    format!(
+                        "material {k} ({}): {:.1} MB",
+                        t.name,
+                        4.0 * words as f64 / 1e6
+                    )
+                })
+                .collect();
+            return Err(invalid(
+                "adaptive pass",
+                format!(
+                    "the BRDF tables take {:.1} MB, beyond this GPU's {:.1} MB per binding \
+                     (sampling tables: {})",
+                    4.0 * brdfs.table.len() as f64 / 1e6,
+                    limit as f64 / 1e6,
+                    sizes.join(", ")
+                ),
             ));
         }
         let env = shading.env;

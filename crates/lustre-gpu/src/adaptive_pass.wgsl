@@ -207,6 +207,7 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
         if (k < n_f + n_l) {
             // The BRDF's samples by its tabulated CDFs, then the environment's.
             var d = vec3<f32>(0.0);
+            var p_f = 0.0;
             if (k < n_f) {
                 let u = fract(hammersley(k, n_f) + rot.xy);
                 let smp = tabulated_sample(m.tab_base, m.dims, wo, u.x, u.y);
@@ -214,6 +215,7 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
                     continue;
                 }
                 wi = smp.xyz;
+                p_f = smp.w;
                 d = t * wi.x + b * wi.y + nn * wi.z;
             } else {
                 let u = fract(hammersley(k - n_f, n_l) + rot.zw);
@@ -222,10 +224,10 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
                 d = params.to_map0.xyz * e.x + params.to_map1.xyz * e.y
                     + params.to_map2.xyz * e.z;
                 wi = vec3<f32>(dot(d, t), dot(d, b), dot(d, nn));
+                p_f = tabulated_pdf(m.tab_base, m.dims, wi, wo);
             }
             let dm = to_map(d);
-            let den = f32(n_f) * tabulated_pdf(m.tab_base, m.dims, wi, wo)
-                + f32(n_l) * env_pdf(params.env, dm);
+            let den = f32(n_f) * p_f + f32(n_l) * env_pdf(params.env, dm);
             if (!(den > 0.0)) {
                 continue;
             }

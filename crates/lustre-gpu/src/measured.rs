@@ -247,25 +247,29 @@ pub fn pack_marginal(m: &Marginal2D) -> Vec<f32> {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct GpuTabulatedDims {
-    /// View bins.
+    /// View elevation bins.
     pub view_bins: u32,
+    /// View azimuth bins per elevation of an anisotropic BRDF's tables (unfolded, φ over
+    /// [0, 2π)); 0 for an isotropic BRDF's (one per elevation, φ folded onto [0, π]).
+    pub azimuth_bins: u32,
     /// θi cells.
     pub theta_bins: u32,
-    /// φ cells.
-    pub phi_bins: u32,
+    /// φ cells of a table.
+    pub phi_cells: u32,
     /// The cosine-sampled fraction ε.
     pub defensive: f32,
 }
 
 /// The words of a tabulated sampler for `tabulated_sample` / `tabulated_pdf`, and its layout:
-/// per view bin, the `cells + 1` cumulative weights over the table's total (0 … 1; all 0 for a
-/// black table), then the `cells` weights over the total (computed in f64, so a cell's density
-/// does not come from the difference of two f32 sums).
+/// per table (view elevation, and azimuth when anisotropic, azimuth inner), the `cells + 1`
+/// cumulative weights over the table's total (0 … 1; all 0 for a black table), then the
+/// `cells` weights over the total (computed in f64, so a cell's density does not come from the
+/// difference of two f32 sums).
 pub fn pack_tabulated(sampler: &TabulatedSampler) -> (Vec<f32>, GpuTabulatedDims) {
     let o = sampler.options();
-    let cells = o.theta_bins * o.phi_bins;
+    let cells = o.theta_bins * sampler.phi_cells();
     let cdf = sampler.cumulative();
-    let mut out = Vec::with_capacity(o.view_bins * (2 * cells + 1));
+    let mut out = Vec::with_capacity(sampler.table_count() * (2 * cells + 1));
     for table in cdf.chunks_exact(cells + 1) {
         let total = table[cells];
         let norm = if total > 0.0 { 1.0 / total } else { 0.0 };
@@ -274,8 +278,13 @@ pub fn pack_tabulated(sampler: &TabulatedSampler) -> (Vec<f32>, GpuTabulatedDims
     }
     let dims = GpuTabulatedDims {
         view_bins: o.view_bins as u32,
+        azimuth_bins: if sampler.is_anisotropic() {
+            o.azimuth_bins as u32
+        } else {
+            0
+        },
         theta_bins: o.theta_bins as u32,
-        phi_bins: o.phi_bins as u32,
+        phi_cells: sampler.phi_cells() as u32,
         defensive: o.defensive as f32,
     };
     (out, dims)

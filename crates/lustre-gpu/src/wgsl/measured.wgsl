@@ -175,12 +175,23 @@ fn nbrdf_eval(base: u32, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
     return out;
 }
 
-// The layout of a tabulated sampler (TabulatedOptions): view bins, θi bins, φ bins; ε.
+// The layout of a tabulated sampler (measured::GpuTabulatedDims): view elevation bins, view
+// azimuth bins (0: an isotropic BRDF's tables, one per elevation, φ folded onto [0, π]; else
+// unfolded over [0, 2π)), θi cells, φ cells per table; ε.
 struct TabulatedDims {
     view_bins: u32,
+    azimuth_bins: u32,
     theta_bins: u32,
-    phi_bins: u32,
+    phi_cells: u32,
     defensive: f32,
+}
+
+// The width of a φ cell (radians).
+fn tabulated_dphi(dims: TabulatedDims) -> f32 {
+    if (dims.azimuth_bins == 0u) {
+        return PI / f32(dims.phi_cells);
+    }
+    return 2.0 * PI / f32(dims.phi_cells);
 }
 
 // tabulated::theta_cos_range: (cos θa, cos θb) of θ cell i of n.
@@ -193,89 +204,162 @@ fn tabulated_cos_range(i: u32, n: u32) -> vec2<f32> {
     return vec2<f32>(cos(a), cb);
 }
 
-// TabulatedSampler::table: the first word of the table serving wo (θo's bin); wo.z > 0.
-fn tabulated_table(base: u32, dims: TabulatedDims, wo: vec3<f32>) -> u32 {
+// TabulatedSampler::tables: the first words of the two tables serving wo and the first's
+// weight (the second's is 1 − w0): θo's nearest bin and, when anisotropic, the two azimuth bins
+// around φo, weighted linearly; an isotropic BRDF's one table twice, w0 = 1. wo.z > 0.
+struct TabulatedView {
+    t0: u32,
+    t1: u32,
+    w0: f32,
+}
+
+fn tabulated_view(base: u32, dims: TabulatedDims, wo: vec3<f32>) -> TabulatedView {
     let theta_o = atan2(length(wo.xy), wo.z);
     let k = min(u32(theta_o / (0.5 * PI) * f32(dims.view_bins)), dims.view_bins - 1u);
-    return base + k * (2u * dims.theta_bins * dims.phi_bins + 1u);
+    let size = 2u * dims.theta_bins * dims.phi_cells + 1u;
+    if (dims.azimuth_bins == 0u) {
+        let t = base + k * size;
+        return TabulatedView(t, t, 1.0);
+    }
+    let az = dims.azimuth_bins;
+    var phi_o = atan2(wo.y, wo.x);
+    if (phi_o < 0.0) {
+        phi_o += 2.0 * PI;
+    }
+    let x = phi_o / (2.0 * PI) * f32(az) - 0.5;
+    let lo = floor(x);
+    let w = clamp(x - lo, 0.0, 1.0);
+    let a0 = u32((i32(lo) + i32(az)) % i32(az));
+    let a1 = (a0 + 1u) % az;
+    return TabulatedView(base + (k * az + a0) * size, base + (k * az + a1) * size, 1.0 - w);
 }
 
-// TabulatedSampler::sample: (wi, 1), or w = 0 when wo lies at or below the horizon.
-fn tabulated_sample(base: u32, dims: TabulatedDims, wo: vec3<f32>, u1: f32,
-                    u2: f32) -> vec4<f32> {
-    if (!(wo.z > 0.0)) {
-        return vec4<f32>(0.0);
-    }
-    let t = tabulated_table(base, dims, wo);
-    let cells = dims.theta_bins * dims.phi_bins;
-    let total = bsdf_table(t + cells);
-    let eps = dims.defensive;
-    if (u1 < eps || !(total > 0.0)) {
-        var u = u1;
-        if (total > 0.0) {
-            u = u1 / eps;
-        }
-        return vec4<f32>(cosine_hemisphere(min(u, 0.99999994), u2), 1.0);
-    }
-    let goal = (u1 - eps) / (1.0 - eps);
-    // The first cell whose cumulative weight exceeds the goal.
-    var lo = 0u;
-    var hi = cells;
-    while (lo < hi) {
-        let mid = (lo + hi) / 2u;
-        if (bsdf_table(t + mid + 1u) <= goal) {
-            lo = mid + 1u;
-        } else {
-            hi = mid;
-        }
-    }
-    let c = min(lo, cells - 1u);
-    let a = bsdf_table(t + c);
-    let b = bsdf_table(t + c + 1u);
-    var r = 0.5;
-    if (b > a) {
-        r = clamp((goal - a) / (b - a), 0.0, 0.99999994);
-    }
-    let i = c / dims.phi_bins;
-    let j = c % dims.phi_bins;
-    let cr = tabulated_cos_range(i, dims.theta_bins);
-    let cos_i = cr.x + (cr.y - cr.x) * r;
-    var sign = 1.0;
-    var v = 2.0 * u2;
-    if (u2 >= 0.5) {
-        sign = -1.0;
-        v = 2.0 * u2 - 1.0;
-    }
-    let phi = sign * (f32(j) + v) * PI / f32(dims.phi_bins) + atan2(wo.y, wo.x);
-    let sin_i = sqrt(max(1.0 - cos_i * cos_i, 0.0));
-    return vec4<f32>(sin_i * cos(phi), sin_i * sin(phi), cos_i, 1.0);
-}
-
-// TabulatedSampler::pdf: ε cos θi / π + (1 − ε) w_c / (W · 2Ω_c) (the table holds w_c / W).
-fn tabulated_pdf(base: u32, dims: TabulatedDims, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
-    if (!(wo.z > 0.0 && wi.z > 0.0)) {
-        return 0.0;
-    }
-    let t = tabulated_table(base, dims, wo);
-    let cells = dims.theta_bins * dims.phi_bins;
+// The density of table t (first word) at wi: ε cos θi / π + (1 − ε) w_c / (W · Ω_c) (the
+// table holds w_c / W; Ω_c doubled when folded), cos θi / π for a black table.
+fn tabulated_table_pdf(t: u32, dims: TabulatedDims, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
+    let cells = dims.theta_bins * dims.phi_cells;
     let total = bsdf_table(t + cells);
     let cosine = wi.z / PI;
     if (!(total > 0.0)) {
         return cosine;
     }
-    var phi = abs(atan2(wi.y, wi.x) - atan2(wo.y, wo.x));
-    if (phi > PI) {
-        phi = 2.0 * PI - phi;
+    var phi = atan2(wi.y, wi.x) - atan2(wo.y, wo.x);
+    if (phi < 0.0) {
+        phi += 2.0 * PI;
     }
+    var fold = 1.0;
+    if (dims.azimuth_bins == 0u) {
+        fold = 2.0;
+        if (phi > PI) {
+            phi = 2.0 * PI - phi;
+        }
+    }
+    let dphi = tabulated_dphi(dims);
     let theta = atan2(length(wi.xy), wi.z);
     let i = min(u32(theta / (0.5 * PI) * f32(dims.theta_bins)), dims.theta_bins - 1u);
-    let j = min(u32(phi / PI * f32(dims.phi_bins)), dims.phi_bins - 1u);
-    let c = i * dims.phi_bins + j;
+    let j = min(u32(phi / dphi), dims.phi_cells - 1u);
+    let c = i * dims.phi_cells + j;
     let w = bsdf_table(t + cells + 1u + c);
     let cr = tabulated_cos_range(i, dims.theta_bins);
-    let omega = 2.0 * (cr.x - cr.y) * PI / f32(dims.phi_bins);
+    let omega = fold * (cr.x - cr.y) * dphi;
     let eps = dims.defensive;
     return eps * cosine + (1.0 - eps) * w / omega;
+}
+
+// TabulatedSampler::sample: (wi, its density), or w = 0 when wo lies at or below the horizon.
+// The drawn table's density is the drawn cell's, not looked up again from wi: in f32 a draw at
+// a cell's edge may round into its neighbour, whose weight can be far smaller.
+fn tabulated_sample(base: u32, dims: TabulatedDims, wo: vec3<f32>, u1_in: f32,
+                    u2: f32) -> vec4<f32> {
+    if (!(wo.z > 0.0)) {
+        return vec4<f32>(0.0);
+    }
+    let view = tabulated_view(base, dims, wo);
+    // The table by u1 (rescaled), with the probabilities of the weights.
+    var t = view.t0;
+    var other = view.t1;
+    var w_t = view.w0;
+    var u1 = u1_in / view.w0;
+    if (!(u1_in < view.w0 || view.w0 >= 1.0)) {
+        t = view.t1;
+        other = view.t0;
+        w_t = 1.0 - view.w0;
+        u1 = (u1_in - view.w0) / w_t;
+    }
+    u1 = clamp(u1, 0.0, 0.99999994);
+    let cells = dims.theta_bins * dims.phi_cells;
+    let total = bsdf_table(t + cells);
+    let eps = dims.defensive;
+    var wi = vec3<f32>(0.0);
+    var p_t = 0.0;
+    if (u1 < eps || !(total > 0.0)) {
+        var u = u1;
+        if (total > 0.0) {
+            u = u1 / eps;
+        }
+        wi = cosine_hemisphere(min(u, 0.99999994), u2);
+        p_t = tabulated_table_pdf(t, dims, wi, wo);
+    } else {
+        let goal = (u1 - eps) / (1.0 - eps);
+        // The first cell whose cumulative weight exceeds the goal.
+        var lo = 0u;
+        var hi = cells;
+        while (lo < hi) {
+            let mid = (lo + hi) / 2u;
+            if (bsdf_table(t + mid + 1u) <= goal) {
+                lo = mid + 1u;
+            } else {
+                hi = mid;
+            }
+        }
+        let c = min(lo, cells - 1u);
+        let a = bsdf_table(t + c);
+        let b = bsdf_table(t + c + 1u);
+        var r = 0.5;
+        if (b > a) {
+            r = clamp((goal - a) / (b - a), 0.0, 0.99999994);
+        }
+        let i = c / dims.phi_cells;
+        let j = c % dims.phi_cells;
+        let cr = tabulated_cos_range(i, dims.theta_bins);
+        let cos_i = cr.x + (cr.y - cr.x) * r;
+        var sign = 1.0;
+        var v = u2;
+        var fold = 1.0;
+        if (dims.azimuth_bins == 0u) {
+            // Folded: either side of the view's plane.
+            fold = 2.0;
+            v = 2.0 * u2;
+            if (u2 >= 0.5) {
+                sign = -1.0;
+                v = 2.0 * u2 - 1.0;
+            }
+        }
+        let dphi = tabulated_dphi(dims);
+        let phi = sign * (f32(j) + v) * dphi + atan2(wo.y, wo.x);
+        let sin_i = sqrt(max(1.0 - cos_i * cos_i, 0.0));
+        wi = vec3<f32>(sin_i * cos(phi), sin_i * sin(phi), cos_i);
+        p_t = eps * cos_i / PI + (1.0 - eps) * bsdf_table(t + cells + 1u + c)
+            / (fold * (cr.x - cr.y) * dphi);
+    }
+    var pdf = w_t * p_t;
+    if (w_t < 1.0) {
+        pdf += (1.0 - w_t) * tabulated_table_pdf(other, dims, wi, wo);
+    }
+    return vec4<f32>(wi, pdf);
+}
+
+// TabulatedSampler::pdf: the weighted sum of the serving tables' densities.
+fn tabulated_pdf(base: u32, dims: TabulatedDims, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
+    if (!(wo.z > 0.0 && wi.z > 0.0)) {
+        return 0.0;
+    }
+    let view = tabulated_view(base, dims, wo);
+    var pdf = view.w0 * tabulated_table_pdf(view.t0, dims, wi, wo);
+    if (view.w0 < 1.0) {
+        pdf += (1.0 - view.w0) * tabulated_table_pdf(view.t1, dims, wi, wo);
+    }
+    return pdf;
 }
 
 // The measured BRDF of a material record (lustre-gpu's measured::MeasuredBrdf::pack): kind 0

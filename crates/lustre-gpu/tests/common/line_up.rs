@@ -19,21 +19,27 @@ pub fn scene(spheres: [&str; 3], floor: &str) -> Scene {
 /// its shading context.
 pub fn with_frame<R>(
     scene: &Scene,
+    size: (usize, usize),
+    f: impl FnOnce(&PathTracer, GBuffer, ShadingContext) -> R,
+) -> R {
+    let options = ShadingOptions {
+        pyramid_face: 0,
+        ..Default::default()
+    };
+    with_frame_options(scene, size, options, f)
+}
+
+/// [`with_frame`] with the shading context built with `options`.
+pub fn with_frame_options<R>(
+    scene: &Scene,
     (w, h): (usize, usize),
+    options: ShadingOptions,
     f: impl FnOnce(&PathTracer, GBuffer, ShadingContext) -> R,
 ) -> R {
     let (ps, _) = path_scene(scene).expect("path scene");
     let tracer = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let cam = film_camera(&scene.cameras[0], w as u32, h as u32).expect("camera");
     let g = GBuffer::render(&tracer, &ps, &cam, w, h).expect("G-buffer");
-    let shading = ShadingContext::new(
-        &ps,
-        ShadingOptions {
-            pyramid_face: 0,
-            ..Default::default()
-        },
-        &|_, _| {},
-    )
-    .expect("tables");
+    let shading = ShadingContext::new(&ps, options, &|_, _| {}).expect("tables");
     f(&tracer, g, shading)
 }
