@@ -17,18 +17,20 @@
 //! | 24 [`KIND_LAFORTUNE`] | Lafortune | ρd (3), lobe count; lobe j at 4 + 9j: C (3), n, ρ (3), K, m |
 //! | 25 [`KIND_ASHIKHMIN_SHIRLEY`] | Ashikhmin–Shirley | Rd (3), nu, Rs (3), nv |
 //! | 26 [`KIND_ABC`] | ABC | kD (3), B, A (3), C, ior |
-//! | 27 [`KIND_CT_EXPONENTIAL`] | Cook–Torrance, exponential NDF | channel c at 5c: ρd, ρs, α, F0, F1; [15] bit c: a G1 table; [16 + c] its side-table word |
+//! | 27 [`KIND_CT_CHANNELS`] | Cook–Torrance, any NDF per channel (the exponential, and those the fitted layouts do not take: the numeric Smith G1 of an SGD, Beckmann or GGX, mixed distributions) | channel c at 7c: ρd, ρs, α, F0, F1, p, ln κ (p, ln κ: SGD); [21] bit c: a G1 table, bit 3 + c: the closed-form G1; [22 + c] the table's side-table word; [25 + c] the NDF: 0 Beckmann, 1 GGX, 2 exponential, 3 SGD |
 //!
 //! A `TwoSided` wrapper (of a resolved spec: `twosided:…`, or of a two-sided scene material's
 //! spec) packs its model flagged [`FLAG_TWO_SIDED`]: `record_eval` mirrors both directions to
 //! the upper side when ωo lies below, as `TwoSided::eval` does (a pass without analytic records
-//! evaluates the model as is: `measured::Evaluates::Records`). The exponential Cook–Torrance's
-//! numeric Smith G1 tables ([`G1Table`]) go to the side table ([`pack_g1_table`]).
+//! evaluates the model as is: `measured::Evaluates::Records`). Cook–Torrance's numeric Smith G1
+//! tables ([`G1Table`]) go to the side table ([`pack_g1_table`]). A Cook–Torrance the fitted
+//! layouts take (`fit_models::pack_fit`: kinds 16–18, which also sample) is packed there; kind 27
+//! takes the others, with the Lazányi Fresnel as the Schlick form it equals.
 //!
 //! Refused with a named error ([`crate::error::GpuError::Invalid`]): models without a GPU twin
-//! (ALTA and goniometric tables, Cook–Torrance with the numeric Smith G1 of an SGD, Beckmann or
-//! GGX distribution, the Lazányi Fresnel, mixed distributions), more than
-//! [`LAFORTUNE_MAX_LOBES`] Lafortune lobes, side-table offsets beyond f32's exact integers.
+//! (ALTA and goniometric tables; Cook–Torrance with 004's Eq. V.3 shadowing outside an
+//! all-SGD layout), more than [`LAFORTUNE_MAX_LOBES`] Lafortune lobes, side-table offsets beyond
+//! f32's exact integers.
 
 use crate::error::{invalid, Result};
 use crate::fit_models::{fresnel_params, pack_fit};
@@ -39,6 +41,7 @@ use crate::frame_shade::{
     KIND_DIELECTRIC, KIND_LAMBERT, KIND_PBR_METALLIC_ROUGHNESS, KIND_PLASTIC, KIND_ROUGH_CONDUCTOR,
     KIND_ROUGH_DIELECTRIC, KIND_ROUGH_PLASTIC, KIND_THIN_DIELECTRIC,
 };
+use lustre_brdf::microfacet::fresnel::Fresnel;
 use lustre_brdf::microfacet::ndf::Ndf;
 use lustre_brdf::microfacet::smith::G1Table;
 use lustre_brdf::models::abc::Abc;
@@ -81,8 +84,9 @@ pub const KIND_LAFORTUNE: u32 = 24;
 pub const KIND_ASHIKHMIN_SHIRLEY: u32 = 25;
 /// ABC (Löw et al. 2012).
 pub const KIND_ABC: u32 = 26;
-/// Cook–Torrance with the exponential distribution.
-pub const KIND_CT_EXPONENTIAL: u32 = 27;
+/// Cook–Torrance with any distribution per channel (the exponential; the numeric Smith G1 of
+/// an SGD, Beckmann or GGX; mixed distributions).
+pub const KIND_CT_CHANNELS: u32 = 27;
 /// Most Lafortune lobes the layout holds: 4 + 9 × 3 = 31 floats.
 pub const LAFORTUNE_MAX_LOBES: usize = 3;
 /// Side-table words before a [`G1Table`]'s nodes ([`pack_g1_table`]).
@@ -272,52 +276,63 @@ fn pack_evaluated(any: &dyn Any, table: &mut Vec<f32>) -> Result<Option<(u32, [[
         return Ok(Some((KIND_ABC, floats("ABC", &f)?)));
     }
     if let Some(ct) = any.downcast_ref::<CookTorrance>() {
-        if matches!(ct.channels()[0].ndf, Ndf::Exponential { .. }) {
-            return Ok(Some((KIND_CT_EXPONENTIAL, pack_ct_exponential(ct, table)?)));
+        // The fitted layouts (which also sample) take what they can.
+        if pack_fit(ct).is_err() {
+            return Ok(Some((KIND_CT_CHANNELS, pack_ct_channels(ct, table)?)));
         }
     }
     Ok(None)
 }
 
-/// The exponential Cook–Torrance layout (kind 27): every channel exponential, with the numeric
-/// Smith G1 (its table appended to `table`) or none.
-fn pack_ct_exponential(ct: &CookTorrance, table: &mut Vec<f32>) -> Result<[[f32; 4]; 8]> {
+/// The per-channel Cook–Torrance layout (kind 27; module notes): each channel's distribution,
+/// Fresnel (generalized Schlick; Lazányi as its exact Schlick form) and Smith G1 (the numeric
+/// table, appended to `table`, the closed form of Beckmann or GGX, or none).
+fn pack_ct_channels(ct: &CookTorrance, table: &mut Vec<f32>) -> Result<[[f32; 4]; 8]> {
     let name = ct.name();
     let mut f = [0f64; 32];
     let mut flags = 0u32;
     for (c, q) in ct.channels().iter().enumerate() {
-        let Ndf::Exponential { alpha } = q.ndf else {
-            return Err(invalid(
-                &name,
-                format!(
-                    "channel {c} has {} where channel 0 has the exponential distribution: one \
-                     distribution for all",
-                    q.ndf.name()
-                ),
-            ));
+        let (code, alpha, p, ln_kap) = match q.ndf {
+            Ndf::Beckmann { alpha } => (0.0, alpha, 0.0, 0.0),
+            Ndf::Ggx { alpha } => (1.0, alpha, 0.0, 0.0),
+            Ndf::Exponential { alpha } => (2.0, alpha, 0.0, 0.0),
+            Ndf::Sgd(s) => (3.0, s.alpha(), s.p(), s.kap().ln()),
         };
-        let (f0, f1) = fresnel_params(&name, &q.fresnel)?;
-        put(&mut f, 5 * c, &[q.rho_d, q.rho_s, alpha, f0, f1]);
+        let (f0, f1) = match q.fresnel {
+            // ((n − 1)² + k² + 4n(1 − cos)⁵)/((n + 1)² + k²) = F0 + (1 − F0)(1 − cos)⁵ with
+            // F0 = ((n − 1)² + k²)/((n + 1)² + k²), since 1 − F0 = 4n/((n + 1)² + k²).
+            Fresnel::Lazanyi { n, k } => {
+                let k2 = k * k;
+                (
+                    ((n - 1.0) * (n - 1.0) + k2) / ((n + 1.0) * (n + 1.0) + k2),
+                    0.0,
+                )
+            }
+            _ => fresnel_params(&name, &q.fresnel)?,
+        };
+        put(&mut f, 7 * c, &[q.rho_d, q.rho_s, alpha, f0, f1, p, ln_kap]);
+        f[25 + c] = code;
         match &q.g1 {
             G1Model::None => {}
             G1Model::Numeric(t) => {
                 flags |= 1 << c;
-                f[16 + c] = f64::from(table_offset(&name, table)?);
+                f[22 + c] = f64::from(table_offset(&name, table)?);
                 table.extend(pack_g1_table(t));
             }
-            _ => {
+            G1Model::Closed => flags |= 1 << (3 + c),
+            G1Model::SgdApprox(_) => {
                 return Err(invalid(
                     &name,
                     format!(
-                        "channel {c}: the exponential distribution takes the numeric Smith G1 \
-                         or none"
+                        "channel {c}: 004's Eq. V.3 shadowing is on the GPU in the all-SGD layout \
+                         only (every channel an SGD with κ = 1/(αΓ(1−p, α)))"
                     ),
                 ))
             }
         }
     }
-    f[15] = f64::from(flags);
-    floats("exponential Cook-Torrance", &f)
+    f[21] = f64::from(flags);
+    floats("Cook-Torrance", &f)
 }
 
 /// The words of a [`G1Table`] for `g1_table_eval`: s0, 1/ds, ds, node count, μ_min, J(μ_min),

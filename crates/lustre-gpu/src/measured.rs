@@ -117,12 +117,13 @@ impl PackedBrdfs {
 /// file), RGL tensors (a `.bsdf` file), fitted models (SGD, Cook–Torrance, Kurt) and, given the
 /// scene's materials, the untextured ones and every reflection model of a spec (`lambert`,
 /// `oren-nayar`, `phong`, `blinn-phong`, `ward`, `ward-duer`, `ward-gmd`, `lafortune` and the
-/// `lafortune:` fits, `ashikhmin-shirley`, `abc` and the `abc:` fits, `exponential`, the
+/// `lafortune:` fits, `ashikhmin-shirley`, `abc` and the `abc:` fits, every Cook–Torrance
+/// (`exponential`, `sgd` and `sgd-numeric:` with the numeric Smith G1, mixed distributions), the
 /// conductors, plastics, dielectrics and `pbr`, each also `twosided:`).
 pub const EVALUATED: &str = "neural BRDFs (nbrdf:…), MERL tables (a .binary file), RGL tensors \
     (a .bsdf file), fitted models (SGD, Cook–Torrance, Kurt) and, given the scene's materials, \
     untextured scene materials and the analytic models of a spec (Lambert, Oren–Nayar, Phong, \
-    Blinn–Phong, Ward and its variants, Lafortune, Ashikhmin–Shirley, ABC, exponential \
+    Blinn–Phong, Ward and its variants, Lafortune, Ashikhmin–Shirley, ABC, any \
     Cook–Torrance, conductors, plastics, dielectrics, glTF metallic-roughness, two-sided or not)";
 
 /// A measured BRDF the GPU evaluates directly (`measured_eval` of `wgsl/measured.wgsl`).

@@ -220,7 +220,7 @@ pub const BSDF: Module = Module {
 };
 
 /// lustre's analytic models bsdf.wgsl does not have (Oren–Nayar, Phong, Blinn–Phong, the Ward
-/// variants, Lafortune, Ashikhmin–Shirley, ABC, exponential Cook–Torrance), evaluation only, and
+/// variants, Lafortune, Ashikhmin–Shirley, ABC, Cook–Torrance per channel), evaluation only, and
 /// `record_eval`: a record of those passes that take any material (`analytic::pack_analytic`).
 pub const ANALYTIC: Module = Module {
     name: "analytic",

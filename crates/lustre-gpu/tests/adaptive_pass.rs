@@ -290,8 +290,8 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
         AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene.materials))
             .expect("lambert(kd=0.5) with the scene's materials");
     });
-    // A spec without a GPU twin (Cook–Torrance with the SGD's numeric Smith G1), with or
-    // without the scene's materials: named, material and spec.
+    // Cook–Torrance with the SGD's numeric Smith G1: not a fitted layout, so refused without the
+    // scene's materials (named), evaluated with them (`analytic.wgsl`'s kind 27).
     let scene = line_up::scene(
         [
             "nbrdf:gold-paint",
@@ -301,22 +301,45 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
         "nbrdf:white-marble",
     );
     line_up::with_frame(&scene, (8, 8), |_, _, shading| {
-        for materials in [None, Some(&scene.materials[..])] {
-            match AdaptiveScene::from_context(&gpu_ctx, &shading, materials) {
-                Err(e) => {
-                    let m = e.to_string();
-                    assert!(
-                        m.contains("material 1") && m.contains("numeric Smith G1"),
-                        "{m}"
-                    );
-                    if materials.is_some() {
-                        assert!(m.contains("spec \"sgd(alpha=0.1, p=0.5)\""), "{m}");
-                    }
-                }
-                Ok(_) => panic!("the GPU took the spec sgd(alpha=0.1, p=0.5)"),
+        match AdaptiveScene::from_context(&gpu_ctx, &shading, None) {
+            Err(e) => {
+                let m = e.to_string();
+                assert!(
+                    m.contains("material 1") && m.contains("numeric Smith G1"),
+                    "{m}"
+                );
             }
+            Ok(_) => panic!("the GPU took sgd(alpha=0.1, p=0.5) without the scene's materials"),
         }
+        AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene.materials))
+            .expect("sgd(alpha=0.1, p=0.5) with the scene's materials");
     });
+    // A spec without a GPU twin (an ALTA table): named, material and spec.
+    let dat = lustre_brdf::shared_data_dir().join("measured/goniometric/retro-gray-tape.dat");
+    let alta = format!("{}#inv-sr-cos", dat.to_string_lossy());
+    let scene = line_up::scene(
+        ["nbrdf:gold-paint", &alta, "nbrdf:gold-paint"],
+        "nbrdf:white-marble",
+    );
+    line_up::with_frame(
+        &scene,
+        (8, 8),
+        |_, _, shading| match AdaptiveScene::from_context(
+            &gpu_ctx,
+            &shading,
+            Some(&scene.materials),
+        ) {
+            Err(e) => {
+                let m = e.to_string();
+                assert!(
+                    m.contains("material 1") && m.contains("no GPU evaluation"),
+                    "{m}"
+                );
+                assert!(m.contains(&format!("spec {alta:?}")), "{m}");
+            }
+            Ok(_) => panic!("the GPU took the ALTA table {alta}"),
+        },
+    );
     // A transmissive spec: the GPU evaluates it (bsdf.wgsl's rough dielectric), but the pass
     // samples by tabulated CDFs, which a transmissive model does not have: named.
     let scene = line_up::scene(

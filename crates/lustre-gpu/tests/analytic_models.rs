@@ -9,6 +9,9 @@
 
 use glam::DVec3;
 use lustre_brdf::catalog::resolve;
+use lustre_brdf::microfacet::fresnel::Fresnel;
+use lustre_brdf::microfacet::ndf::Ndf;
+use lustre_brdf::models::cook_torrance::{CookTorrance, CtChannel, G1Model};
 use lustre_brdf::sampling::SplitMix64;
 use lustre_brdf::Bsdf;
 use lustre_gpu::analytic::pack_analytic;
@@ -29,7 +32,7 @@ const TABLE: Module = Module {
 /// the near-specular lobes that raise a cosine close to 1 to a power n (Phong, Blinn–Phong,
 /// Lafortune, Ashikhmin–Shirley): one rounding of the cosine in f32 (≈ 6e-8 of it) becomes
 /// n·6e-8 of the value, so their bounds grow with n (stated per case).
-const CASES: [(&str, f64, f64); 33] = [
+const CASES: [(&str, f64, f64); 35] = [
     ("lambert(kd_r=0.8, kd_g=0.5, kd_b=0.2)", 1e-7, 1e-6),
     (
         "oren-nayar(kd_r=0.8, kd_g=0.5, kd_b=0.2, sigma=0.3)",
@@ -81,6 +84,9 @@ const CASES: [(&str, f64, f64); 33] = [
     ("abc(kd=0.05, a=5000, b=100000, c=0.5, ior=2.2)", 1e-6, 1e-5),
     ("abc:nickel", 1e-6, 1e-5),
     ("exponential(rho_d=0.1, rho_s=0.5, alpha=0.1)", 1e-6, 1e-5),
+    // The SGD with its numeric Smith G1 (kind 27; the fitted layout takes Eq. V.3 only).
+    ("sgd(alpha=0.1, p=0.5)", 1e-6, 1e-5),
+    ("sgd-numeric:nickel", 1e-6, 1e-5),
     (
         "exponential(rho_d=0.02, rho_s=0.8, alpha=0.02, f0=0.04)",
         1e-6,
@@ -159,15 +165,23 @@ fn every_analytic_reflection_model_matches_its_cpu_twin() {
     let mut g = SplitMix64::new(13);
     let n = 6144;
     let pairs = pairs(&mut g, n);
-    let models: Vec<Box<dyn Bsdf>> = CASES
+    let mut cases: Vec<(String, f64, f64)> = CASES
+        .iter()
+        .map(|&(spec, r, w)| (spec.to_string(), r, w))
+        .collect();
+    let mut models: Vec<Box<dyn Bsdf>> = CASES
         .iter()
         .map(|(spec, _, _)| resolve(spec).unwrap_or_else(|e| panic!("{spec}: {e}")))
         .collect();
+    for (name, m) in constructed_cook_torrance() {
+        cases.push((name, 1e-6, 1e-5));
+        models.push(m);
+    }
     // Input: the side table, the records (36 words each), the pairs (6 words each).
     let mut table = vec![];
     let records: Vec<_> = models
         .iter()
-        .zip(CASES)
+        .zip(&cases)
         .map(|(b, (spec, _, _))| {
             pack_analytic(b.as_ref(), &mut table).unwrap_or_else(|e| panic!("{spec}: {e}"))
         })
@@ -195,7 +209,7 @@ fn every_analytic_reflection_model_matches_its_cpu_twin() {
          let f = record_eval(rec, wi, wo);\n\
          for (var c = 0u; c < 3u; c++) {{ output[i * 3u + c] = bitcast<u32>(f[c]); }}"
     );
-    let count = n * CASES.len();
+    let count = n * cases.len();
     let t = std::time::Instant::now();
     let out = run_kernel(
         &ctx,
@@ -214,7 +228,7 @@ fn every_analytic_reflection_model_matches_its_cpu_twin() {
     eprintln!("| spec | kind | rel. RMS | worst pair (ωi; ωo) |");
     eprintln!("|---|---|---|---|");
     let mut failures = vec![];
-    for (k, (b, (spec, max_rms, max_worst))) in models.iter().zip(CASES).enumerate() {
+    for (k, (b, (spec, max_rms, max_worst))) in models.iter().zip(cases).enumerate() {
         let cpu: Vec<[f64; 3]> = pairs.iter().map(|&(wi, wo)| b.eval(wi, wo).0).collect();
         let gpu: Vec<[f32; 3]> = (0..n)
             .map(|p| {
@@ -237,25 +251,79 @@ fn every_analytic_reflection_model_matches_its_cpu_twin() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+/// Cook–Torrance models no spec writes, for kind 27: the numeric Smith G1 of Beckmann and GGX,
+/// mixed distributions per channel (with the closed-form G1 and none), the Lazányi Fresnel.
+fn constructed_cook_torrance() -> Vec<(String, Box<dyn Bsdf>)> {
+    let ch = |rho_d: f64, rho_s: f64, ndf: Ndf, numeric: bool, fresnel: Fresnel| {
+        let g1 = if numeric {
+            G1Model::numeric(&ndf)
+        } else {
+            G1Model::Closed
+        };
+        CtChannel::new(rho_d, rho_s, ndf, g1, fresnel)
+    };
+    let ok = |r: lustre_brdf::Result<Ndf>| r.expect("ndf");
+    let one = Fresnel::One;
+    let gold = Fresnel::lazanyi(0.2, 3.4).expect("lazanyi");
+    let beckmann = ch(0.1, 0.6, ok(Ndf::beckmann(0.15)), true, one);
+    let ggx = ch(0.05, 0.8, ok(Ndf::ggx(0.08)), true, gold);
+    let mut mixed = [
+        ch(0.2, 0.5, ok(Ndf::beckmann(0.3)), false, gold),
+        ch(
+            0.1,
+            0.7,
+            ok(Ndf::ggx(0.05)),
+            true,
+            Fresnel::schlick(0.04).expect("f0"),
+        ),
+        ch(0.3, 0.4, ok(Ndf::sgd(0.2, 0.6)), true, one),
+    ];
+    mixed[2].g1 = G1Model::None;
+    [
+        (
+            "beckmann, numeric G1",
+            [beckmann.clone(), beckmann.clone(), beckmann],
+        ),
+        ("ggx, numeric G1, Lazányi", [ggx.clone(), ggx.clone(), ggx]),
+        ("beckmann / ggx / sgd, Lazányi", mixed),
+    ]
+    .into_iter()
+    .map(|(name, c)| {
+        let m = CookTorrance::new(name, c).expect("cook-torrance");
+        (name.to_string(), Box::new(m) as Box<dyn Bsdf>)
+    })
+    .collect()
+}
+
 #[test]
 fn specs_without_a_gpu_twin_are_refused_by_name() {
     let dat = lustre_brdf::shared_data_dir().join("measured/goniometric/retro-gray-tape.dat");
     let alta = format!("{}#inv-sr-cos", dat.to_string_lossy());
-    for (spec, says) in [
-        (alta.as_str(), "no GPU evaluation"),
-        // Cook–Torrance with the numeric Smith G1 of an SGD.
-        ("sgd(alpha=0.1, p=0.5)", "numeric Smith G1"),
-        ("sgd-numeric:nickel", "numeric Smith G1"),
-    ] {
-        let b = resolve(spec).unwrap_or_else(|e| panic!("{spec}: {e}"));
-        let mut table = vec![];
-        match pack_analytic(b.as_ref(), &mut table) {
-            Ok(r) => panic!("{spec}: packed as kind {}", r.kind),
-            Err(e) => {
-                let m = e.to_string();
-                assert!(m.contains(&b.name()) && m.contains(says), "{spec}: {m}");
-                eprintln!("{spec}: {m}");
-            }
+    let b = resolve(&alta).unwrap_or_else(|e| panic!("{alta}: {e}"));
+    match pack_analytic(b.as_ref(), &mut vec![]) {
+        Ok(r) => panic!("{alta}: packed as kind {}", r.kind),
+        Err(e) => {
+            let m = e.to_string();
+            assert!(
+                m.contains(&b.name()) && m.contains("no GPU evaluation"),
+                "{alta}: {m}"
+            );
         }
     }
+    // 004's Eq. V.3 shadowing outside the all-SGD layout: a published SGD fit with one channel
+    // turned Beckmann.
+    let nickel = resolve("sgd:nickel").expect("sgd:nickel");
+    let any = nickel.as_any().expect("as_any");
+    let ct = any.downcast_ref::<CookTorrance>().expect("a Cook-Torrance");
+    let mut c = ct.channels().clone();
+    c[1] = CtChannel::new(
+        0.1,
+        0.5,
+        Ndf::beckmann(0.2).expect("ndf"),
+        G1Model::Closed,
+        Fresnel::One,
+    );
+    let mixed = CookTorrance::new("nickel, one channel beckmann", c).expect("model");
+    let m = pack_analytic(&mixed, &mut vec![]).expect_err("Eq. V.3 with a Beckmann channel");
+    assert!(m.to_string().contains("Eq. V.3"), "{m}");
 }

@@ -4,8 +4,8 @@
 // CPU twins, f(ωi, ωo) without the cosine (lustre_brdf::models::…::eval): oren_nayar::OrenNayar
 // (kind 20), phong::Phong (21), blinn_phong::BlinnPhong (22), ward::{Ward, WardDuer, WardGmd}
 // (23), lafortune::Lafortune (24), ashikhmin_shirley::AshikhminShirley (25), abc::Abc (26),
-// cook_torrance::CookTorrance with the exponential distribution and the tabulated Smith G1
-// (27; microfacet::smith::G1Table, read through `bsdf_table`), two_sided::TwoSided (the
+// cook_torrance::CookTorrance per channel, any distribution, the tabulated Smith G1
+// (27; microfacet::smith::G1Table, read through `bsdf_table`) or the closed form, two_sided::TwoSided (the
 // record's FLAG_TWO_SIDED). Layouts: lustre_gpu::analytic.
 
 // ward::COS_MIN: directions this close to the surface plane give 0 (Ward, Lafortune, A–S, ABC).
@@ -214,12 +214,32 @@ fn g1_table_eval(base: u32, w: vec3<f32>) -> f32 {
     return clamp(v, 0.0, 1.0);
 }
 
-// Cook–Torrance with the exponential distribution (004 Eq. III.1, III.2, Table III.2):
-// ρd/π + (ρs/π) F(ωi·h) D(θh) G1(θi) G1(θo)/(cos θi cos θo) per channel, D = P22(tan²θh)/(π cos⁴θh),
-// P22(x) = e^{−√x/α}/(2α²), F the generalized Schlick (cook_torrance's ct_fresnel), G1 the
-// channel's tabulated Smith G1 or 1. Channel c at float 5c: ρd, ρs, α, F0, F1; [15] bit c set:
-// channel c has a G1 table, at side-table word [16 + c].
-fn ct_exponential_eval(p: array<vec4<f32>, 8>, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+// Ndf::d of a kind-27 channel: P22(tan²θh)/(π cos⁴θh) for the distribution `code` (0 Beckmann,
+// 1 GGX, 2 exponential P22 = e^{−√x/α}/(2α²), 3 SGD P22 = κ e^{−a} a^{−p} with a = α + x/α, 004
+// Eq. V.2, from ln κ), in logarithms where cos⁴θh underflows; h a unit vector above the surface.
+fn ct_channel_d(code: u32, alpha: f32, p: f32, ln_kap: f32, h: vec3<f32>) -> f32 {
+    if (code == 0u) {
+        return ct_beckmann_d(alpha, h);
+    }
+    if (code == 1u) {
+        return ct_ggx_d(alpha, h);
+    }
+    // sin²θh and cos²θh of the unit half vector (1 − cos² cancels near the peak).
+    let c2 = h.z * h.z;
+    let x = (h.x * h.x + h.y * h.y) / c2;
+    if (code == 2u) {
+        return exp(-sqrt(x) / alpha) / (2.0 * alpha * alpha) / (PI * c2 * c2);
+    }
+    let a = alpha + x / alpha;
+    return exp(ln_kap - a - p * log(a) - log(PI) - 2.0 * log(c2));
+}
+
+// Cook–Torrance per channel (004 Eq. III.1, III.2, Table III.2, cook_torrance::CookTorrance):
+// ρd/π + (ρs/π) F(ωi·h) D(θh) G1(θi) G1(θo)/(cos θi cos θo), F the generalized Schlick
+// (cook_torrance's ct_fresnel), G1 the channel's tabulated Smith G1, the closed form of Beckmann
+// or GGX, or 1. Channel c at float 7c: ρd, ρs, α, F0, F1, p, ln κ; [21] bit c: a G1 table (at
+// side-table word [22 + c]), bit 3 + c: the closed form; [25 + c] the distribution.
+fn ct_channels_eval(p: array<vec4<f32>, 8>, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
     let ci = wi.z;
     let co = wo.z;
     if (!(ci > 0.0 && co > 0.0)) {
@@ -229,24 +249,25 @@ fn ct_exponential_eval(p: array<vec4<f32>, 8>, wi: vec3<f32>, wo: vec3<f32>) -> 
     let hv = wi + wo;
     let h = hv / length(hv);
     let cd = dot(wi, h);
-    let flags = u32(q[15]);
-    // sin²θh and cos²θh of the unit half vector (1 − cos² cancels near the peak).
-    let c2 = h.z * h.z;
-    let s2 = h.x * h.x + h.y * h.y;
+    let flags = u32(q[21]);
     var f = vec3<f32>(0.0);
     for (var c = 0u; c < 3u; c++) {
-        let rho_d = q[5u * c];
-        let rho_s = q[5u * c + 1u];
+        let rho_d = q[7u * c];
+        let rho_s = q[7u * c + 1u];
         var spec = 0.0;
         if (rho_s != 0.0 && h.z > 0.0) {
-            let alpha = q[5u * c + 2u];
-            let d = exp(-sqrt(s2 / c2) / alpha) / (2.0 * alpha * alpha) / (PI * c2 * c2);
+            let alpha = q[7u * c + 2u];
+            let code = u32(q[25u + c]);
+            let d = ct_channel_d(code, alpha, q[7u * c + 5u], q[7u * c + 6u], h);
             var g = 1.0;
             if ((flags & (1u << c)) != 0u) {
-                let base = u32(q[16u + c]);
+                let base = u32(q[22u + c]);
                 g = g1_table_eval(base, wi) * g1_table_eval(base, wo);
+            } else if ((flags & (1u << (3u + c))) != 0u) {
+                let dist = select(MICROFACET_BECKMANN, MICROFACET_GGX, code == 1u);
+                g = ct_smith_g1(dist, alpha, wi) * ct_smith_g1(dist, alpha, wo);
             }
-            spec = rho_s * ct_fresnel(q[5u * c + 3u], q[5u * c + 4u], cd) * d * g / (ci * co);
+            spec = rho_s * ct_fresnel(q[7u * c + 3u], q[7u * c + 4u], cd) * d * g / (ci * co);
         }
         f[c] = (rho_d + spec) / PI;
     }
@@ -283,7 +304,7 @@ fn record_eval(b: GpuBsdf, wi_in: vec3<f32>, wo_in: vec3<f32>) -> vec3<f32> {
             return abc_eval(b.p, wi, wo);
         }
         case 27u: {
-            return ct_exponential_eval(b.p, wi, wo);
+            return ct_channels_eval(b.p, wi, wo);
         }
         default: {
             return bsdf_eval(b, wi, wo);
