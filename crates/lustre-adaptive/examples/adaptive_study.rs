@@ -14,7 +14,7 @@
 //! `--speed-only` prints only the constant-N_p rows, without the sample rules, pre-convolved
 //! shading and Fig. IV.16–IV.17.
 
-use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BufferOptions, SampleRule};
+use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule};
 use lustre_adaptive::compare::{time_at_psnr, Measured};
 use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute};
@@ -42,6 +42,8 @@ struct Args {
     speed_only: bool,
     /// The n_b of Fig. IV.15's rows (`buffer::DEFAULT_N_B` by default), each with every row.
     n_bs: Vec<usize>,
+    /// Where the bandwidth pass reads ρ (`--weights tabulated,evaluated`; the default's only).
+    weights: Vec<BrdfWeights>,
 }
 
 fn args() -> anyhow::Result<Args> {
@@ -65,6 +67,7 @@ fn args() -> anyhow::Result<Args> {
         rates: vec![2.0, 1.0],
         speed_only: false,
         n_bs: vec![lustre_adaptive::buffer::DEFAULT_N_B],
+        weights: vec![BufferOptions::default().weights],
     };
     let mut it = std::env::args().skip(1);
     while let Some(k) = it.next() {
@@ -92,6 +95,18 @@ fn args() -> anyhow::Result<Args> {
                     .split(',')
                     .map(|r| r.trim().parse::<usize>())
                     .collect::<Result<_, _>>()?
+            }
+            "--weights" => {
+                a.weights = v()?
+                    .split(',')
+                    .map(|w| match w.trim() {
+                        "tabulated" => Ok(BrdfWeights::Tabulated),
+                        "evaluated" => Ok(BrdfWeights::Evaluated),
+                        other => Err(anyhow::anyhow!(
+                            "--weights: {other:?} (tabulated or evaluated)"
+                        )),
+                    })
+                    .collect::<anyhow::Result<_>>()?
             }
             other => anyhow::bail!("unknown argument {other}"),
         }
@@ -221,12 +236,13 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
             (Lighting::Preconvolved, SampleRule::Constant, 1.0),
         ]);
     }
-    let rows: Vec<(Lighting, SampleRule, f64, usize)> = a
-        .n_bs
+    let rows: Vec<(Lighting, SampleRule, f64, usize, BrdfWeights)> = a
+        .weights
         .iter()
-        .flat_map(|&n_b| rows.iter().map(move |&(l, s, r)| (l, s, r, n_b)))
+        .flat_map(|&w| a.n_bs.iter().map(move |&n_b| (n_b, w)))
+        .flat_map(|(n_b, w)| rows.iter().map(move |&(l, s, r)| (l, s, r, n_b, w)))
         .collect();
-    for (lighting, scale, rate, n_b) in rows {
+    for (lighting, scale, rate, n_b, weights) in rows {
         let means: &[f64] = if scale == SampleRule::Constant {
             &[1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0, 256.0]
         } else {
@@ -244,6 +260,7 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
                     lighting,
                     scale,
                     rate,
+                    weights,
                     ..Default::default()
                 },
             )?;
@@ -308,6 +325,10 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
                     String::new()
                 } else {
                     format!(", n_b {n_b}")
+                } + if weights == BufferOptions::default().weights {
+                    ""
+                } else {
+                    ", ρ evaluated"
                 },
                 mean_samples,
                 time_s,

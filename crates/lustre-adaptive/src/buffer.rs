@@ -14,6 +14,11 @@
 //! Area lights (`light`) add n_b stratified points each: their paths join Eq. IV.6 with the
 //! environment's (weighed by their shares of L_p), and their terms the variance sums.
 //!
+//! The paths' weights χ = L ρ need the BRDF's luminance ρ at each direction: on the CPU it is
+//! read from the material's tabulated CDFs by default ([`BrdfWeights::Tabulated`]: the cell's
+//! mean of f, a lookup, where a neural BRDF's `eval` is a network and took most of the pass),
+//! or evaluated ([`BrdfWeights::Evaluated`], what the GPU pass does: `eval` is cheap there).
+//!
 //! V is chosen so that the mean N_p over the surface pixels is the requested mean (bisection):
 //! 004 keeps the variance constant across the image; the mean sets its value.
 //!
@@ -27,10 +32,9 @@ use crate::shading::{Lighting, ShadingContext};
 use crate::{AdaptiveError, Result};
 use glam::DVec3;
 use lustre_brdf::sampling::hammersley;
-use lustre_brdf::Bsdf;
 use lustre_freq::brdf::BrdfBandwidth;
 use lustre_freq::pixel::{
-    incident_direction, predict, EnvironmentBandwidth, PixelPrediction, ShadingPoint,
+    incident_direction, predict_with, EnvironmentBandwidth, PixelPrediction, ShadingPoint,
 };
 use lustre_freq::transport::samples_for;
 use lustre_freq::transport::{
@@ -49,6 +53,16 @@ pub const NO_LEVEL: u8 = u8::MAX;
 /// directions grows with n_b, Fig. IV.17), and its pass took half the time; n_b = 4 lost up to
 /// 2.8 dB.
 pub const DEFAULT_N_B: usize = 8;
+
+/// Where the bandwidth pass reads the BRDF's luminance ρ (the paths' weights χ = L ρ).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BrdfWeights {
+    /// From the material's tabulated CDFs (`TabulatedSampler::brdf_luminance`: the cell's mean
+    /// of f) when it has them and no texture varies it; `Bsdf::eval` otherwise.
+    Tabulated,
+    /// `Bsdf::eval` (the GPU pass's choice, `lustre_gpu::bandwidth_pass`).
+    Evaluated,
+}
 
 /// How N_p is set across the image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,6 +96,8 @@ pub struct BufferOptions {
     /// Samples per cycle of b_p: ℓ_p = ⌊log2(1 / (rate · b_p))⌋. 2 is Nyquist's rate; 1 is
     /// Eq. IV.11 as printed (⌊log2(1 / b_p)⌋, which relies on b_p's own over-estimate).
     pub rate: f64,
+    /// Where the CPU's pass reads ρ.
+    pub weights: BrdfWeights,
 }
 
 impl Default for BufferOptions {
@@ -93,6 +109,7 @@ impl Default for BufferOptions {
             lighting: Lighting::Direct,
             scale: SampleRule::Relative,
             rate: 2.0,
+            weights: BrdfWeights::Tabulated,
         }
     }
 }
@@ -138,12 +155,14 @@ pub struct PixelEstimate {
 }
 
 /// The bandwidth pass on the CPU: per pixel of `g`, its prediction from `n_b` directions
-/// (`None` on the background). The scene's directions are turned into the map's frame first.
+/// (`None` on the background), ρ read as `weights` says. The scene's directions are turned into
+/// the map's frame first.
 pub fn predict_pixels(
     g: &GBuffer,
     ctx: &ShadingContext,
     env: &EnvironmentBandwidth,
     n_b: usize,
+    weights: BrdfWeights,
 ) -> Result<Vec<Option<PixelEstimate>>> {
     let to_local = ctx.env.to_world().transpose();
     g.pixels
@@ -161,12 +180,22 @@ pub fn predict_pixels(
                 texture: ctx.texture_bandwidth(s),
             };
             let tables = &ctx.materials[s.material];
+            let table = match (weights, &tables.sampler) {
+                (BrdfWeights::Tabulated, Some(t)) if tables.textures.is_empty() => Some(t),
+                _ => None,
+            };
             let mut pred = None;
             ctx.scene.materials[s.material].with_bsdf(s.uv, &mut |b| {
-                pred = Some(predict(&point, env, b, &tables.bandwidth, n_b).map(|p| {
-                    let lit = light_paths(ctx, s, b, &tables.bandwidth, n_b);
-                    merge(p, &lit)
-                }));
+                let rho = |wi: DVec3, wo: DVec3| match table {
+                    Some(t) => t.brdf_luminance(wi, wo),
+                    None => b.eval(wi, wo).luminance(),
+                };
+                pred = Some(
+                    predict_with(&point, env, &rho, &tables.bandwidth, n_b).map(|p| {
+                        let lit = light_paths(ctx, s, &rho, &tables.bandwidth, n_b);
+                        merge(p, &lit)
+                    }),
+                );
             });
             let (prediction, light_brdf_max) = pred.ok_or_else(|| {
                 AdaptiveError::Parameter(format!("material {} gave no BSDF", s.material))
@@ -198,7 +227,7 @@ struct LightPath {
 fn light_paths(
     ctx: &ShadingContext,
     s: &Surfel,
-    b: &dyn Bsdf,
+    rho: &dyn Fn(DVec3, DVec3) -> f64,
     brdf: &BrdfBandwidth,
     n_b: usize,
 ) -> Vec<LightPath> {
@@ -219,7 +248,7 @@ fn light_paths(
                 continue;
             }
             let g = cos_l * light.area() / (dist * dist * n_b as f64);
-            let chi = light.emitted(u, v).luminance() * b.eval(wi, wo).luminance();
+            let chi = light.emitted(u, v).luminance() * rho(wi, wo);
             let nu_s = light.bandwidth_at(u, v) / cos_l.max(1e-6);
             let nu_brdf = brdf.at(wi, wo);
             let surface = Surface {
@@ -280,7 +309,7 @@ impl BandwidthBuffer {
         options: BufferOptions,
     ) -> Result<Self> {
         check(&options)?;
-        let estimates = predict_pixels(g, ctx, env, options.n_b)?;
+        let estimates = predict_pixels(g, ctx, env, options.n_b, options.weights)?;
         Self::assemble(g, &estimates, options)
     }
 

@@ -1,6 +1,6 @@
 //! Adaptive shading (004 ch. IV) against exact and converged answers, on real data.
 
-use lustre_adaptive::buffer::{BandwidthBuffer, BufferOptions, SampleRule, NO_LEVEL};
+use lustre_adaptive::buffer::{BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule, NO_LEVEL};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute};
 use lustre_adaptive::light::AreaLight;
@@ -202,6 +202,34 @@ fn on_a_measured_paint_under_a_real_sky_adaptive_beats_brute_force_at_equal_samp
         assert!(ref_noise < 0.3 * err_adaptive, "the reference is too noisy");
         assert!(p_adaptive > p_brute, "{p_adaptive} ≤ {p_brute}");
         assert!(10 * adaptive.stats.samples < 6 * bstats.samples);
+        // ρ read from the tables (the default) against ρ evaluated: the same levels on nearly
+        // every pixel, and an image as close to the reference.
+        let evaluated = BandwidthBuffer::build(
+            g,
+            ctx,
+            &env_bw,
+            BufferOptions {
+                weights: BrdfWeights::Evaluated,
+                ..options(32.0, SampleRule::Constant, Lighting::Direct)
+            },
+        )
+        .expect("buffer");
+        let same = buffer
+            .level
+            .iter()
+            .zip(&evaluated.level)
+            .filter(|(a, b)| a == b)
+            .count() as f64
+            / buffer.level.len() as f64;
+        let by_eval = render_adaptive(g, ctx, &evaluated, Lighting::Direct, 5).expect("adaptive");
+        let p_eval = psnr(&reference, &by_eval.image, exposure).expect("psnr");
+        eprintln!(
+            "ρ evaluated: {p_eval:.2} dB, {} pixels shaded; levels equal on {:.2} % of pixels",
+            by_eval.stats.shaded,
+            100.0 * same
+        );
+        assert!(same > 0.97, "levels equal on {same}");
+        assert!((p_adaptive - p_eval).abs() < 0.3, "{p_adaptive} vs {p_eval}");
     });
 }
 

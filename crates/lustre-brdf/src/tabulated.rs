@@ -22,7 +22,7 @@
 //! with w_c the weight of the cell holding (θi, φ) (|φ| when folded), W the table's total and
 //! Ω_c the cell's solid angle ((cos θa − cos θb) Δφ, doubled when folded). An anisotropic
 //! BRDF's view azimuth falls between two azimuth bins: their tables are mixed with linear
-//! weights (one picked at random per sample, the density their weighted sum), so the density
+//! weights (one picked per sample by u2, the density their weighted sum), so the density
 //! follows φo continuously.
 
 use crate::bsdf::{finish_sample, Bsdf, BsdfFlags, BsdfSample, LobeFlags};
@@ -217,16 +217,18 @@ impl TabulatedSampler {
     }
 
     /// Draws `wi` for `wo` (local frame) from two uniform numbers: `None` when `wo` lies at or
-    /// below the horizon. An anisotropic BRDF's table is picked by `u1` (rescaled) with the
+    /// below the horizon. An anisotropic BRDF's table is picked by `u2` (rescaled) with the
     /// probabilities of its weights.
     pub fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<DVec3> {
         let [(ta, wa), (tb, _)] = self.tables(wo)?;
-        let (table, u1) = if u1 < wa || wa >= 1.0 {
-            (ta, u1 / wa)
+        // The table by u2 (rescaled), which then only places the point inside its cell's φ
+        // range (unfolded tables): rounding in the rescale never moves a draw to another cell.
+        let (table, u2) = if u2 < wa || wa >= 1.0 {
+            (ta, u2 / wa)
         } else {
-            (tb, (u1 - wa) / (1.0 - wa))
+            (tb, (u2 - wa) / (1.0 - wa))
         };
-        let u1 = u1.clamp(0.0, 1.0 - f64::EPSILON);
+        let u2 = u2.clamp(0.0, 1.0 - f64::EPSILON);
         let g = Grid::new(&self.options, self.anisotropic);
         let eps = self.options.defensive;
         let total = table[table.len() - 1];
@@ -259,6 +261,38 @@ impl TabulatedSampler {
         let phi = sign * (j as f64 + v) * g.dphi + wo.y.atan2(wo.x);
         let sin = (1.0 - cos_i * cos_i).max(0.0).sqrt();
         Some(DVec3::new(sin * phi.cos(), sin * phi.sin(), cos_i))
+    }
+
+    /// The luminance of f(ωi, ωo) as the tables hold it (the serving tables' weighted sum): the
+    /// cell holding ωi, its ∫ f cos θi dω over its solid angle and its mean cosine (cos θa +
+    /// cos θb)/2 — the cell's mean of f, piecewise constant, finite at the horizon. 0 at or
+    /// below the horizon and for a black table. A lookup where `Bsdf::eval` may be a network
+    /// or a table walk (the CPU bandwidth pass's weights, `lustre_adaptive::buffer`).
+    pub fn brdf_luminance(&self, wi: DVec3, wo: DVec3) -> f64 {
+        let Some(tables) = self.tables(wo) else {
+            return 0.0;
+        };
+        if wi.z.is_nan() || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let g = Grid::new(&self.options, self.anisotropic);
+        let rel = (wi.y.atan2(wi.x) - wo.y.atan2(wo.x)).rem_euclid(2.0 * PI);
+        let phi = if self.anisotropic || rel <= PI {
+            rel
+        } else {
+            2.0 * PI - rel
+        };
+        let theta = wi.z.clamp(0.0, 1.0).acos();
+        let i = ((theta / FRAC_PI_2 * g.theta_bins as f64) as usize).min(g.theta_bins - 1);
+        let j = ((phi / g.dphi) as usize).min(g.phi_cells - 1);
+        let c = i * g.phi_cells + j;
+        let (ca, cb) = theta_cos_range(i, g.theta_bins);
+        let scale = 1.0 / ((ca - cb) * g.dphi * 0.5 * (ca + cb));
+        tables
+            .iter()
+            .filter(|(_, w)| *w > 0.0)
+            .map(|&(table, w)| w * (table[c + 1] - table[c]) * scale)
+            .sum()
     }
 
     /// The density (per solid angle) with which [`TabulatedSampler::sample`] draws `wi`: the

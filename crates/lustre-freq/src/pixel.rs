@@ -103,6 +103,24 @@ pub fn predict(
     brdf_bandwidth: &BrdfBandwidth,
     n_b: usize,
 ) -> Result<PixelPrediction> {
+    predict_with(
+        p,
+        env,
+        &|wi, wo| bsdf.eval(wi, wo).luminance(),
+        brdf_bandwidth,
+        n_b,
+    )
+}
+
+/// [`predict`] with the BRDF's luminance ρ(ωi, ωo) (local frame) given as a function: the
+/// BSDF's `eval`, or a table of it (`TabulatedSampler::brdf_luminance`).
+pub fn predict_with(
+    p: &ShadingPoint,
+    env: &EnvironmentBandwidth,
+    rho: &dyn Fn(DVec3, DVec3) -> f64,
+    brdf_bandwidth: &BrdfBandwidth,
+    n_b: usize,
+) -> Result<PixelPrediction> {
     if n_b == 0 {
         return Err(FreqError::Parameter(
             "pixel prediction with n_b = 0 incident directions".into(),
@@ -123,7 +141,7 @@ pub fn predict(
         let wi_l = incident_direction(k, n_b);
         let wi = t * wi_l.x + b * wi_l.y + n * wi_l.z;
         let radiance = Rgb(env.map.lookup_bilinear(wi)).luminance();
-        let rho = bsdf.eval(wi_l, wo_l).luminance();
+        let rho = rho(wi_l, wo_l);
         let nu_light = env.bandwidth_at(wi);
         let nu_brdf = brdf_bandwidth.at(wi_l, wo_l);
         let s = Surface {

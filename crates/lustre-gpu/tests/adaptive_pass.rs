@@ -6,7 +6,7 @@
 //! adapter.
 
 use glam::DVec3;
-use lustre_adaptive::buffer::{BandwidthBuffer, BufferOptions, SampleRule};
+use lustre_adaptive::buffer::{BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{render_adaptive, render_brute, NOT_SHADED};
 use lustre_adaptive::light::AreaLight;
@@ -81,10 +81,12 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
         // The bandwidth pass evaluates the MERL table too: the levels assembled from its
         // predictions match the CPU's.
         let n_b = 16;
+        // ρ evaluated, as the GPU pass does.
         let options = BufferOptions {
             n_b,
             mean_samples: 16.0,
             scale: SampleRule::Relative,
+            weights: BrdfWeights::Evaluated,
             ..Default::default()
         };
         let cpu_buffer =
@@ -534,15 +536,8 @@ fn anisotropic_specs_are_sampled_by_their_azimuth_tables_on_the_gpu_as_on_the_cp
         let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
         BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene.materials))
             .expect("the bandwidth pass takes them too");
-        // 64 samples per shaded pixel: a draw at a cell's edge may land in the neighbouring cell in
-        // f32 (the tables have 16 × more cells than an isotropic one's), and such pixels then
-        // differ by Monte-Carlo noise, which falls with the count (measured: relative RMS
-        // 1.5e-2, 5.3e-3, 3.4e-3 at 4, 16, 64 samples).
-        let options = BufferOptions {
-            mean_samples: 64.0,
-            ..Default::default()
-        };
-        let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, options).expect("buffer");
+        let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, BufferOptions::default())
+            .expect("buffer");
         let cpu = render_adaptive(&g, &shading, &buffer, Lighting::Direct, 9).expect("cpu");
         let mut pass = AdaptivePass::new(&gpu_ctx).expect("compile");
         let gpu = pass
@@ -561,13 +556,13 @@ fn anisotropic_specs_are_sampled_by_their_azimuth_tables_on_the_gpu_as_on_the_cp
         let (rms, over1, over10) = image_difference(&g, &cpu.image, &gpu.frame.image);
         eprintln!(
             "anisotropic specs (ward, ashikhmin-shirley, roughconductor; ward floor) through \
-             the adaptive pass, 48 × 32, 64 samples: relative RMS {rms:.2e}, {:.2} % off by > \
-             1 %, {:.2} % by > 10 %; mean GPU / CPU − 1 = {bias:.1e}",
+             the adaptive pass, 48 × 32: relative RMS {rms:.2e}, {:.2} % off by > 1 %, {:.2} % \
+             by > 10 %; mean GPU / CPU − 1 = {bias:.1e}",
             100.0 * over1,
             100.0 * over10,
         );
         assert!(
-            rms < 5e-3 && over1 < 0.02 && over10 < 0.002 && bias.abs() < 1e-3,
+            rms < 5e-3 && over1 < 0.01 && over10 < 0.002 && bias.abs() < 1e-3,
             "rms {rms}, {over1}, {over10}, bias {bias}"
         );
     });

@@ -3,7 +3,9 @@
 //! BRDFs) under royal_esplanade_1k, and the buffers assembled from both. GPU tests fail (never
 //! skip) without an adapter.
 
-use lustre_adaptive::buffer::{predict_pixels, BandwidthBuffer, BufferOptions, SampleRule};
+use lustre_adaptive::buffer::{
+    predict_pixels, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule,
+};
 use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthPixel, BandwidthScene};
 use lustre_gpu::measured::MeasuredBrdf;
@@ -38,7 +40,7 @@ fn the_gpu_bandwidth_pass_matches_its_cpu_twin_on_the_line_up() {
     line_up::with_frame(&scene, (w, h), |_, g, shading| {
         let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
         let n_b = 16;
-        let cpu = predict_pixels(&g, &shading, &env_bw, n_b).expect("cpu");
+        let cpu = predict_pixels(&g, &shading, &env_bw, n_b, BrdfWeights::Evaluated).expect("cpu");
         let gpu_ctx = ctx();
         let scene_gpu =
             BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, None).expect("upload");
@@ -128,7 +130,7 @@ fn the_gpu_bandwidth_pass_matches_its_cpu_twin_on_the_line_up() {
             )
             .expect("light"),
         );
-        let cpu_lit = predict_pixels(&g, &lit, &env_bw, n_b).expect("cpu");
+        let cpu_lit = predict_pixels(&g, &lit, &env_bw, n_b, BrdfWeights::Evaluated).expect("cpu");
         let scene_lit =
             BandwidthScene::from_context(&gpu_ctx, &lit, &env_bw, None).expect("upload");
         let (gpu_lit, _) = pass
@@ -337,7 +339,7 @@ fn analytic_specs_in_the_bandwidth_pass_match_the_cpu() {
     line_up::with_frame(&scene, (48, 32), |_, g, shading| {
         let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
         let n_b = 16;
-        let cpu = predict_pixels(&g, &shading, &env_bw, n_b).expect("cpu");
+        let cpu = predict_pixels(&g, &shading, &env_bw, n_b, BrdfWeights::Evaluated).expect("cpu");
         let gpu_ctx = ctx();
         let scene_gpu =
             BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene.materials))

@@ -347,6 +347,7 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
             lighting: Lighting::Direct,
             scale: settings.rule,
             rate: f64::from(settings.rate),
+            ..Default::default()
         };
         let passes = &mut self.gpu;
         let buffer = match (gpu, passes.bandwidth.as_mut()) {

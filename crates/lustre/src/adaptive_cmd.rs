@@ -169,6 +169,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 lighting,
                 scale: rule,
                 rate: args.rate,
+                ..Default::default()
             };
             let buffer = match gpu
                 .as_mut()

@@ -269,24 +269,25 @@ fn tabulated_table_pdf(t: u32, dims: TabulatedDims, wi: vec3<f32>, wo: vec3<f32>
 // TabulatedSampler::sample: (wi, its density), or w = 0 when wo lies at or below the horizon.
 // The drawn table's density is the drawn cell's, not looked up again from wi: in f32 a draw at
 // a cell's edge may round into its neighbour, whose weight can be far smaller.
-fn tabulated_sample(base: u32, dims: TabulatedDims, wo: vec3<f32>, u1_in: f32,
-                    u2: f32) -> vec4<f32> {
+fn tabulated_sample(base: u32, dims: TabulatedDims, wo: vec3<f32>, u1: f32,
+                    u2_in: f32) -> vec4<f32> {
     if (!(wo.z > 0.0)) {
         return vec4<f32>(0.0);
     }
     let view = tabulated_view(base, dims, wo);
-    // The table by u1 (rescaled), with the probabilities of the weights.
+    // The table by u2 (rescaled), with the probabilities of the weights; u2 then only places
+    // the point inside its cell's φ range (unfolded tables).
     var t = view.t0;
     var other = view.t1;
     var w_t = view.w0;
-    var u1 = u1_in / view.w0;
-    if (!(u1_in < view.w0 || view.w0 >= 1.0)) {
+    var u2 = u2_in / view.w0;
+    if (!(u2_in < view.w0 || view.w0 >= 1.0)) {
         t = view.t1;
         other = view.t0;
         w_t = 1.0 - view.w0;
-        u1 = (u1_in - view.w0) / w_t;
+        u2 = (u2_in - view.w0) / w_t;
     }
-    u1 = clamp(u1, 0.0, 0.99999994);
+    u2 = clamp(u2, 0.0, 0.99999994);
     let cells = dims.theta_bins * dims.phi_cells;
     let total = bsdf_table(t + cells);
     let eps = dims.defensive;
