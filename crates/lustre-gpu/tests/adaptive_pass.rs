@@ -272,6 +272,30 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
     })
 }
 
+/// The line-up with `spec` as its middle sphere (material 1), uploaded with the scene's
+/// materials: refused, the message naming material 1 and holding every one of `says`.
+fn refused_as_material_1(gpu_ctx: &lustre_gpu::GpuContext, spec: &str, says: &[&str]) {
+    let scene = line_up::scene(
+        ["nbrdf:gold-paint", spec, "nbrdf:gold-paint"],
+        "nbrdf:white-marble",
+    );
+    line_up::with_frame(
+        &scene,
+        (8, 8),
+        |_, _, shading| match AdaptiveScene::from_context(gpu_ctx, &shading, Some(&scene.materials))
+        {
+            Err(e) => {
+                let m = e.to_string();
+                assert!(m.contains("material 1"), "{m}");
+                for s in says {
+                    assert!(m.contains(s), "{spec}: {m} (wanted {s:?})");
+                }
+            }
+            Ok(_) => panic!("the adaptive pass took the spec {spec}"),
+        },
+    );
+}
+
 #[test]
 fn the_adaptive_pass_names_what_it_cannot_shade() {
     let gpu_ctx = ctx();
@@ -319,57 +343,14 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
     // A spec without a GPU twin (an ALTA table): named, material and spec.
     let dat = lustre_brdf::shared_data_dir().join("measured/goniometric/retro-gray-tape.dat");
     let alta = format!("{}#inv-sr-cos", dat.to_string_lossy());
-    let scene = line_up::scene(
-        ["nbrdf:gold-paint", &alta, "nbrdf:gold-paint"],
-        "nbrdf:white-marble",
-    );
-    line_up::with_frame(
-        &scene,
-        (8, 8),
-        |_, _, shading| match AdaptiveScene::from_context(
-            &gpu_ctx,
-            &shading,
-            Some(&scene.materials),
-        ) {
-            Err(e) => {
-                let m = e.to_string();
-                assert!(
-                    m.contains("material 1") && m.contains("no GPU evaluation"),
-                    "{m}"
-                );
-                assert!(m.contains(&format!("spec {alta:?}")), "{m}");
-            }
-            Ok(_) => panic!("the GPU took the ALTA table {alta}"),
-        },
+    refused_as_material_1(
+        &gpu_ctx,
+        &alta,
+        &["no GPU evaluation", &format!("spec {alta:?}")],
     );
     // A transmissive spec: the GPU evaluates it (bsdf.wgsl's rough dielectric), but the pass
     // samples by tabulated CDFs, which a transmissive model does not have: named.
-    let scene = line_up::scene(
-        [
-            "nbrdf:gold-paint",
-            "roughdielectric(alpha=0.2)",
-            "nbrdf:gold-paint",
-        ],
-        "nbrdf:white-marble",
-    );
-    line_up::with_frame(
-        &scene,
-        (8, 8),
-        |_, _, shading| match AdaptiveScene::from_context(
-            &gpu_ctx,
-            &shading,
-            Some(&scene.materials),
-        ) {
-            Err(e) => {
-                let m = e.to_string();
-                assert!(
-                    m.contains("material 1") && m.contains("transmissive"),
-                    "{m}"
-                );
-            }
-            Ok(_) => panic!("the adaptive pass took the spec roughdielectric(alpha=0.2)"),
-        },
-    );
+    refused_as_material_1(&gpu_ctx, "roughdielectric(alpha=0.2)", &["transmissive"]);
 
     // A Lambertian scene material: refused without the scene's materials, shaded with them
     // (bsdf.wgsl's record), its frame the CPU's.
