@@ -196,24 +196,14 @@ impl TabulatedSampler {
         Some([(table(k * az + a0), 1.0 - t), (table(k * az + a1), t)])
     }
 
-    /// The tabulated density of `wi` (local, at azimuth `phi` relative to `wo`'s: |φ| ∈ [0, π]
-    /// when folded, φ ∈ [0, 2π) else), without the defensive part: w_c / (W · Ω_c); 0 for a
-    /// black table.
-    fn table_pdf(&self, table: &[f64], cos_i: f64, phi: f64) -> f64 {
-        let g = Grid::new(&self.options, self.anisotropic);
+    /// The tabulated density of cell `c` of solid angle `omega` (the fold's mirror included),
+    /// without the defensive part: w_c / (W · Ω_c); 0 for a black table.
+    fn table_pdf(table: &[f64], c: usize, omega: f64) -> f64 {
         let total = table[table.len() - 1];
         if total <= 0.0 {
             return 0.0;
         }
-        let theta = cos_i.clamp(0.0, 1.0).acos();
-        let i = ((theta / FRAC_PI_2 * g.theta_bins as f64) as usize).min(g.theta_bins - 1);
-        let j = ((phi / g.dphi) as usize).min(g.phi_cells - 1);
-        let c = i * g.phi_cells + j;
-        let w = table[c + 1] - table[c];
-        let (ca, cb) = theta_cos_range(i, g.theta_bins);
-        let fold = if g.folded { 2.0 } else { 1.0 };
-        let omega = fold * (ca - cb) * g.dphi;
-        w / (total * omega)
+        (table[c + 1] - table[c]) / (total * omega)
     }
 
     /// Draws `wi` for `wo` (local frame) from two uniform numbers: `None` when `wo` lies at or
@@ -276,17 +266,7 @@ impl TabulatedSampler {
             return 0.0;
         }
         let g = Grid::new(&self.options, self.anisotropic);
-        let rel = (wi.y.atan2(wi.x) - wo.y.atan2(wo.x)).rem_euclid(2.0 * PI);
-        let phi = if self.anisotropic || rel <= PI {
-            rel
-        } else {
-            2.0 * PI - rel
-        };
-        let theta = wi.z.clamp(0.0, 1.0).acos();
-        let i = ((theta / FRAC_PI_2 * g.theta_bins as f64) as usize).min(g.theta_bins - 1);
-        let j = ((phi / g.dphi) as usize).min(g.phi_cells - 1);
-        let c = i * g.phi_cells + j;
-        let (ca, cb) = theta_cos_range(i, g.theta_bins);
+        let (c, _, (ca, cb)) = g.cell(wi, wo);
         let scale = 1.0 / ((ca - cb) * g.dphi * 0.5 * (ca + cb));
         tables
             .iter()
@@ -305,12 +285,7 @@ impl TabulatedSampler {
             return 0.0;
         }
         let cosine = wi.z / PI;
-        let rel = (wi.y.atan2(wi.x) - wo.y.atan2(wo.x)).rem_euclid(2.0 * PI);
-        let phi = if self.anisotropic || rel <= PI {
-            rel
-        } else {
-            2.0 * PI - rel
-        };
+        let (c, omega, _) = Grid::new(&self.options, self.anisotropic).cell(wi, wo);
         let eps = self.options.defensive;
         tables
             .iter()
@@ -319,7 +294,7 @@ impl TabulatedSampler {
                 w * if table[table.len() - 1] <= 0.0 {
                     cosine
                 } else {
-                    eps * cosine + (1.0 - eps) * self.table_pdf(table, wi.z, phi)
+                    eps * cosine + (1.0 - eps) * Self::table_pdf(table, c, omega)
                 }
             })
             .sum()
@@ -328,21 +303,34 @@ impl TabulatedSampler {
 
 impl Grid {
     fn new(o: &TabulatedOptions, anisotropic: bool) -> Self {
-        if anisotropic {
-            Self {
-                theta_bins: o.theta_bins,
-                phi_cells: o.phi_bins,
-                dphi: 2.0 * PI / o.phi_bins as f64,
-                folded: false,
-            }
-        } else {
-            Self {
-                theta_bins: o.theta_bins,
-                phi_cells: o.phi_bins,
-                dphi: PI / o.phi_bins as f64,
-                folded: true,
-            }
+        let span = if anisotropic { 2.0 * PI } else { PI };
+        Self {
+            theta_bins: o.theta_bins,
+            phi_cells: o.phi_bins,
+            dphi: span / o.phi_bins as f64,
+            folded: !anisotropic,
         }
+    }
+
+    /// The cell holding `wi` (local, above the surface) relative to `wo`'s azimuth (|φ| when
+    /// folded) and its solid angle (the fold's mirror cell included) and its cos θ range.
+    fn cell(&self, wi: DVec3, wo: DVec3) -> (usize, f64, (f64, f64)) {
+        let rel = (wi.y.atan2(wi.x) - wo.y.atan2(wo.x)).rem_euclid(2.0 * PI);
+        let phi = if self.folded && rel > PI {
+            2.0 * PI - rel
+        } else {
+            rel
+        };
+        let theta = wi.z.clamp(0.0, 1.0).acos();
+        let i = ((theta / FRAC_PI_2 * self.theta_bins as f64) as usize).min(self.theta_bins - 1);
+        let j = ((phi / self.dphi) as usize).min(self.phi_cells - 1);
+        let (ca, cb) = theta_cos_range(i, self.theta_bins);
+        let fold = if self.folded { 2.0 } else { 1.0 };
+        (
+            i * self.phi_cells + j,
+            fold * (ca - cb) * self.dphi,
+            (ca, cb),
+        )
     }
 }
 
