@@ -3,7 +3,7 @@
 //!
 //! `cargo run --release -p lustre-adaptive --example adaptive_study -- [--size N]
 //! [--reference N] [--map FILE] [--scene sphere|lineup] [--materials a,b,…] [--out DIR] [--aa]
-//! [--rates 2,1] [--n-b 16,8] [--speed-only]`
+//! [--rates 2,1] [--n-b 16,8] [--speed-only [--preconvolved]]`
 //! (`--aa`: only Fig. IV.14's anti-aliasing costs, at 1, 4 and 16 sub-pixels per pixel)
 //!
 //! Prints Markdown tables; with `--out`, writes each case's images (reference, brute force and
@@ -12,7 +12,8 @@
 //! directions of the bandwidth pass (`buffer::DEFAULT_N_B` by default; 004 uses 16; every row
 //! is repeated for each);
 //! `--speed-only` prints only the constant-N_p rows, without the sample rules, pre-convolved
-//! shading and Fig. IV.16–IV.17.
+//! shading and Fig. IV.16–IV.17; `--preconvolved` adds pre-convolved constant-N_p rows at
+//! every rate to them.
 
 use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule};
 use lustre_adaptive::compare::{time_at_psnr, Measured};
@@ -44,6 +45,8 @@ struct Args {
     n_bs: Vec<usize>,
     /// Where the bandwidth pass reads ρ (`--weights tabulated,evaluated`; the default's only).
     weights: Vec<BrdfWeights>,
+    /// With `--speed-only`, also the pre-convolved constant-N_p rows at every rate.
+    preconvolved: bool,
 }
 
 fn args() -> anyhow::Result<Args> {
@@ -68,6 +71,7 @@ fn args() -> anyhow::Result<Args> {
         speed_only: false,
         n_bs: vec![lustre_adaptive::buffer::DEFAULT_N_B],
         weights: vec![BufferOptions::default().weights],
+        preconvolved: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(k) = it.next() {
@@ -90,6 +94,7 @@ fn args() -> anyhow::Result<Args> {
                     .collect::<Result<_, _>>()?
             }
             "--speed-only" => a.speed_only = true,
+            "--preconvolved" => a.preconvolved = true,
             "--n-b" => {
                 a.n_bs = v()?
                     .split(',')
@@ -227,6 +232,13 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
             .iter()
             .map(|&r| (Lighting::Direct, SampleRule::Constant, r)),
     );
+    if a.speed_only && a.preconvolved {
+        rows.extend(
+            a.rates
+                .iter()
+                .map(|&r| (Lighting::Preconvolved, SampleRule::Constant, r)),
+        );
+    }
     if !a.speed_only {
         rows.extend([
             (Lighting::Direct, SampleRule::Relative, 2.0),

@@ -34,7 +34,7 @@ use glam::DVec3;
 use lustre_brdf::sampling::hammersley;
 use lustre_freq::brdf::BrdfBandwidth;
 use lustre_freq::pixel::{
-    incident_direction, predict_with, EnvironmentBandwidth, PixelPrediction, ShadingPoint,
+    incident_directions, predict_with, EnvironmentBandwidth, PixelPrediction, ShadingPoint,
 };
 use lustre_freq::transport::samples_for;
 use lustre_freq::transport::{
@@ -165,6 +165,7 @@ pub fn predict_pixels(
     weights: BrdfWeights,
 ) -> Result<Vec<Option<PixelEstimate>>> {
     let to_local = ctx.env.to_world().transpose();
+    let dirs = incident_directions(n_b);
     g.pixels
         .par_iter()
         .map(|p| -> Result<Option<PixelEstimate>> {
@@ -191,21 +192,21 @@ pub fn predict_pixels(
                     None => b.eval(wi, wo).luminance(),
                 };
                 pred = Some(
-                    predict_with(&point, env, &rho, &tables.bandwidth, n_b).map(|p| {
-                        let lit = light_paths(ctx, s, &rho, &tables.bandwidth, n_b);
-                        merge(p, &lit)
-                    }),
+                    predict_with(&point, env, &rho, &tables.bandwidth, &dirs).map(
+                        |(p, dirs_max)| {
+                            let lit = light_paths(ctx, s, &rho, &tables.bandwidth, n_b);
+                            let (p, light_max) = merge(p, &lit);
+                            (p, dirs_max.max(light_max))
+                        },
+                    ),
                 );
             });
-            let (prediction, light_brdf_max) = pred.ok_or_else(|| {
+            let (prediction, dirs_max) = pred.ok_or_else(|| {
                 AdaptiveError::Parameter(format!("material {} gave no BSDF", s.material))
             })??;
             let wo = DVec3::new(s.wo.dot(f.t), s.wo.dot(f.b), s.wo.dot(f.n));
             let mirror = DVec3::new(-wo.x, -wo.y, wo.z);
-            let mut brdf_max = tables.bandwidth.at(mirror, wo).max(light_brdf_max);
-            for k in 0..n_b {
-                brdf_max = brdf_max.max(tables.bandwidth.at(incident_direction(k, n_b), wo));
-            }
+            let brdf_max = tables.bandwidth.at(mirror, wo).max(dirs_max);
             Ok(Some(PixelEstimate {
                 prediction,
                 brdf_max,

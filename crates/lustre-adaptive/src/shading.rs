@@ -13,10 +13,11 @@
 //! (Cranley–Patterson); the adaptive renderer and the brute-force one share this estimator. No
 //! visibility: the environment is seen from every point (as 004).
 //!
-//! [`Lighting::Preconvolved`] reads the environment's pyramid at the level where its Nyquist
-//! frequency meets the BRDF's largest bandwidth at the pixel (§IV.3.5): a cube texel at level ℓ
-//! spans about (π/2) / (face / 2^ℓ) radians, so it holds frequencies up to ν when
-//! ℓ = log2(face / (π ν)).
+//! [`Lighting::Preconvolved`] reads the environment's pyramid at the level of the BRDF's largest
+//! bandwidth ν at the pixel (§IV.3.5), [`preconvolved_level`]: the coarsest level whose filter
+//! still passes frequency ν with [`PRECONVOLVED_PASSBAND`] of its amplitude. 004's level, where
+//! the level's Nyquist frequency meets ν (ℓ = log2(face / (π ν))), keeps only ≈ 6 % of ν's
+//! amplitude under the Gaussian 6×6 pyramid and capped PSNR at 34–39 dB (BENCHMARKS.md).
 
 use crate::gbuffer::Surfel;
 use crate::light::AreaLight;
@@ -26,7 +27,7 @@ use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::{hammersley, SplitMix64};
 use lustre_brdf::tabulated::{TabulatedOptions, TabulatedSampler};
 use lustre_brdf::Bsdf;
-use lustre_env::CubePyramid;
+use lustre_env::{CubePyramid, MipFilter};
 use lustre_freq::brdf::{brdf_bandwidth, BrdfBandwidth, BrdfBandwidthOptions};
 use lustre_freq::spatial::texture_bandwidth;
 use lustre_scene::Texture;
@@ -207,15 +208,12 @@ impl<'a, 's> ShadingContext<'a, 's> {
             .fold(0.0, f64::max)
     }
 
-    /// The pyramid level holding frequencies up to `nu` cycles per radian (0 without a pyramid
-    /// or for ν ≤ 0, which reads the sharpest level).
+    /// The pyramid level for frequencies up to `nu` cycles per radian ([`preconvolved_level`];
+    /// 0 without a pyramid).
     pub fn level_for(&self, nu: f64) -> f64 {
         match &self.pyramid {
-            Some(p) if nu > 0.0 && nu.is_finite() => {
-                let top = (p.level_count() - 1) as f64;
-                (p.base_size() as f64 / (PI * nu)).log2().clamp(0.0, top)
-            }
-            _ => 0.0,
+            Some(p) => preconvolved_level(p, nu),
+            None => 0.0,
         }
     }
 
@@ -323,6 +321,41 @@ impl<'a, 's> ShadingContext<'a, 's> {
     }
 }
 
+/// The fraction of a frequency's amplitude the pre-convolved lookup keeps at the BRDF's
+/// bandwidth (see [`preconvolved_level`]).
+pub const PRECONVOLVED_PASSBAND: f64 = 0.95;
+
+/// The standard deviation of a level-ℓ lookup of a pyramid built with `filter`, in level-ℓ
+/// texels: each down-sampling step adds the kernel's variance v (in parent texels²), so level ℓ
+/// holds v (4^ℓ − 1)/3 level-0 texels² ≈ v/3 of its own texels², and the bilinear tap adds 1/6
+/// (Gauss6: v = 5/4, σ = 0.76; Gauss4: 0.65; Box2: 0.5).
+fn lookup_sigma_texels(filter: MipFilter) -> f64 {
+    let (w, _) = filter.kernel();
+    let mean: f64 = w.iter().enumerate().map(|(i, w)| i as f64 * w).sum();
+    let var: f64 = w
+        .iter()
+        .enumerate()
+        .map(|(i, w)| (i as f64 - mean).powi(2) * w)
+        .sum();
+    (var / 3.0 + 1.0 / 6.0).sqrt()
+}
+
+/// The coarsest level of `pyramid` that keeps [`PRECONVOLVED_PASSBAND`] (a) of the amplitude of
+/// a frequency of `nu` cycles per radian: a level-ℓ lookup blurs by a Gaussian of σ = s 2^ℓ (π/2)
+/// / face radians (s from [`lookup_sigma_texels`]), which scales frequency ν by e^{−2π² σ² ν²};
+/// so 2^ℓ = √(−ln a / (2π²)) / (s (π/2) ν / face): for the Gaussian 6×6 pyramid about 2.9
+/// levels finer than where the level's Nyquist frequency meets ν. Clamped to the pyramid; ν ≤ 0
+/// or not finite reads level 0.
+pub fn preconvolved_level(pyramid: &CubePyramid, nu: f64) -> f64 {
+    if !(nu > 0.0 && nu.is_finite()) {
+        return 0.0;
+    }
+    let top = (pyramid.level_count() - 1) as f64;
+    let sigma = (-PRECONVOLVED_PASSBAND.ln() / (2.0 * PI * PI)).sqrt() / nu;
+    let texel0 = lookup_sigma_texels(pyramid.filter) * (PI / 2.0) / pyramid.base_size() as f64;
+    (sigma / texel0).log2().clamp(0.0, top)
+}
+
 /// The scene's environment, or an error naming the problem.
 pub fn environment<'a>(scene: &'a PathScene) -> Result<&'a EnvLight> {
     scene.environment.as_ref().ok_or_else(|| {
@@ -352,4 +385,55 @@ fn tables(b: &dyn Bsdf, options: &ShadingOptions) -> Result<MaterialTables> {
 pub fn pixel_seed(seed: u64, pixel: usize) -> u64 {
     let mut r = SplitMix64::new(seed ^ (pixel as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
     r.next_u64()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use lustre_env::CubeMap;
+
+    /// A cosine of ν cycles per radian across the +z face's centre, read at the pre-convolved
+    /// level, keeps about [`PRECONVOLVED_PASSBAND`] of its amplitude (less at the face centre,
+    /// where a cube texel spans 4/π of the mean texel angle); at 004's Nyquist level it is
+    /// nearly gone.
+    #[test]
+    fn the_preconvolved_level_keeps_the_brdf_bandwidth() {
+        let face = 256;
+        for filter in [MipFilter::Gauss6, MipFilter::Gauss4, MipFilter::Box2] {
+            for nu in [1.0, 2.0, 4.0] {
+                let cube = CubeMap::from_fn(face, |d| {
+                    let v = 1.0 + (2.0 * PI * nu * d.x.atan2(d.z)).cos();
+                    [v; 3]
+                })
+                .expect("cube");
+                let p = CubePyramid::build(cube, filter).expect("pyramid");
+                let amplitude = |level: f64| p.sample(DVec3::Z, level)[0] - 1.0;
+                let level = preconvolved_level(&p, nu);
+                let nyquist = (face as f64 / (PI * nu)).log2();
+                assert!(
+                    level > 0.5 && level < nyquist - 1.5,
+                    "{filter:?} ν {nu}: {level}"
+                );
+                let kept = amplitude(level);
+                assert!(
+                    (0.85..0.99).contains(&kept),
+                    "{filter:?} ν {nu}: level {level:.2} keeps {kept:.3}"
+                );
+                let at_nyquist = amplitude(nyquist);
+                assert!(
+                    at_nyquist < 0.35,
+                    "{filter:?} ν {nu}: {at_nyquist:.3} at {nyquist:.2}"
+                );
+            }
+        }
+        let p = CubePyramid::build(
+            CubeMap::from_fn(4, |_| [1.0; 3]).expect("cube"),
+            MipFilter::Gauss6,
+        )
+        .expect("pyramid");
+        for nu in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert_eq!(preconvolved_level(&p, nu), 0.0);
+        }
+        assert_eq!(preconvolved_level(&p, 1e-9), 2.0);
+    }
 }

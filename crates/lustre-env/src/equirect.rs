@@ -96,15 +96,13 @@ impl EquirectMap {
     /// Bilinear lookup in direction `d` (need not be normalised): wraps around in φ, clamps at
     /// the poles. A zero or non-finite direction reads the top-centre pixel row.
     pub fn lookup_bilinear(&self, d: DVec3) -> [f64; 3] {
-        let len = d.length();
-        let d = if len.is_finite() && len > 0.0 {
-            d / len
-        } else {
-            DVec3::Y
-        };
-        let phi = d.x.atan2(-d.z);
-        let u = 0.5 + phi / (2.0 * PI);
-        let v = d.y.clamp(-1.0, 1.0).acos() / PI;
+        let (u, v) = direction_uv(d);
+        self.bilinear_uv(u, v)
+    }
+
+    /// [`EquirectMap::lookup_bilinear`] at map coordinates (u, v) ∈ [0, 1]² of
+    /// [`direction_uv`].
+    pub fn bilinear_uv(&self, u: f64, v: f64) -> [f64; 3] {
         let (w, h) = (self.width as i64, self.height as i64);
         let x = u * w as f64 - 0.5;
         let y = (v * h as f64 - 0.5).clamp(0.0, (h - 1) as f64);
@@ -124,6 +122,19 @@ impl EquirectMap {
                 + fy * ((1.0 - fx) * c[k] as f64 + fx * e[k] as f64)
         })
     }
+}
+
+/// The map coordinates (u, v) ∈ [0, 1]² of direction `d` (need not be normalised; +y up, u = ½ at
+/// −z): u = ½ + atan2(x, −z) / 2π, v = acos(y) / π. A zero or non-finite direction gives +y.
+pub fn direction_uv(d: DVec3) -> (f64, f64) {
+    let len = d.length();
+    let d = if len.is_finite() && len > 0.0 {
+        d / len
+    } else {
+        DVec3::Y
+    };
+    let phi = d.x.atan2(-d.z);
+    (0.5 + phi / (2.0 * PI), d.y.clamp(-1.0, 1.0).acos() / PI)
 }
 
 #[cfg(test)]

@@ -50,19 +50,45 @@ impl BrdfBandwidth {
     /// The bandwidth stored for the incident and outgoing cells holding `wi` and `wo` (local,
     /// above the surface; directions below are clamped onto the horizon's cells).
     pub fn at(&self, wi: DVec3, wo: DVec3) -> f64 {
-        let o = &self.options;
-        let cell = |w: DVec3, n: usize| -> (usize, usize) {
-            let theta = w.z.clamp(0.0, 1.0).acos();
-            let phi = w.y.atan2(w.x).rem_euclid(2.0 * PI);
-            (
-                ((theta / FRAC_PI_2 * n as f64) as usize).min(n - 1),
-                ((phi / (2.0 * PI) * n as f64) as usize).min(n - 1),
-            )
-        };
-        let (ti, pi) = cell(wi, o.incident);
-        let (to, po) = cell(wo, o.out);
-        self.data[(ti * o.incident + pi) * o.out * o.out + to * o.out + po]
+        self.view(wo).at(wi)
     }
+
+    /// The table seen from `wo` (its outgoing cell found once, for many `wi`).
+    pub fn view(&self, wo: DVec3) -> BrdfBandwidthView<'_> {
+        let o = &self.options;
+        let (to, po) = grid_cell(wo, o.out);
+        BrdfBandwidthView {
+            table: self,
+            out_cell: to * o.out + po,
+        }
+    }
+}
+
+/// A [`BrdfBandwidth`] at one outgoing direction ([`BrdfBandwidth::view`]).
+#[derive(Clone, Copy, Debug)]
+pub struct BrdfBandwidthView<'a> {
+    table: &'a BrdfBandwidth,
+    out_cell: usize,
+}
+
+impl BrdfBandwidthView<'_> {
+    /// The bandwidth for incident direction `wi` (as [`BrdfBandwidth::at`]).
+    pub fn at(&self, wi: DVec3) -> f64 {
+        let o = &self.table.options;
+        let (ti, pi) = grid_cell(wi, o.incident);
+        self.table.data[(ti * o.incident + pi) * o.out * o.out + self.out_cell]
+    }
+}
+
+/// The (θ row, φ column) of the `n`² hemisphere grid holding `w` (θ uniform in [0, π/2), φ in
+/// [0, 2π); below the horizon clamps onto it).
+fn grid_cell(w: DVec3, n: usize) -> (usize, usize) {
+    let theta = w.z.clamp(0.0, 1.0).acos();
+    let phi = w.y.atan2(w.x).rem_euclid(2.0 * PI);
+    (
+        ((theta / FRAC_PI_2 * n as f64) as usize).min(n - 1),
+        ((phi / (2.0 * PI) * n as f64) as usize).min(n - 1),
+    )
 }
 
 /// The direction at the centre of cell (row `t`, column `p`) of an `n`² hemisphere grid.

@@ -15,6 +15,7 @@ use crate::{FreqError, Result};
 use glam::DVec3;
 use lustre_brdf::sampling::{cosine_hemisphere, hammersley};
 use lustre_brdf::{Bsdf, Rgb};
+use lustre_env::equirect::direction_uv;
 use lustre_env::EquirectMap;
 use std::f64::consts::PI;
 
@@ -40,9 +41,18 @@ impl<'a> EnvironmentBandwidth<'a> {
     /// The bandwidth of the pixel seen in world direction `d` (nearest pixel; +y up, as
     /// [`EquirectMap::lookup_bilinear`]).
     pub fn bandwidth_at(&self, d: DVec3) -> f64 {
-        let d = d.normalize_or(DVec3::Y);
-        let u = 0.5 + d.x.atan2(-d.z) / (2.0 * PI);
-        let v = d.y.clamp(-1.0, 1.0).acos() / PI;
+        let (u, v) = direction_uv(d);
+        self.bandwidth_uv(u, v)
+    }
+
+    /// The map's radiance (bilinear, [`EquirectMap::lookup_bilinear`]) and bandwidth
+    /// ([`EnvironmentBandwidth::bandwidth_at`]) in direction `d`, its map coordinates found once.
+    pub fn radiance_and_bandwidth(&self, d: DVec3) -> ([f64; 3], f64) {
+        let (u, v) = direction_uv(d);
+        (self.map.bilinear_uv(u, v), self.bandwidth_uv(u, v))
+    }
+
+    fn bandwidth_uv(&self, u: f64, v: f64) -> f64 {
         let (w, h) = (self.map.width, self.map.height);
         let x = ((u * w as f64) as usize).min(w - 1);
         let y = ((v * h as f64) as usize).min(h - 1);
@@ -93,6 +103,12 @@ pub fn incident_direction(k: usize, n_b: usize) -> DVec3 {
     cosine_hemisphere(u1, u2 + 0.5 / n_b as f64)
 }
 
+/// The n_b directions of a prediction, [`incident_direction`] k = 0 … n_b − 1 (the same for
+/// every pixel: a pass computes them once).
+pub fn incident_directions(n_b: usize) -> Vec<DVec3> {
+    (0..n_b).map(|k| incident_direction(k, n_b)).collect()
+}
+
 /// Predicts one pixel from `n_b` directions. A point seen from below its surface, or degenerate
 /// inputs (a zero normal, a non-finite distance or curvature) predict nothing (zeros), never
 /// NaN; errors on `n_b` = 0.
@@ -108,19 +124,23 @@ pub fn predict(
         env,
         &|wi, wo| bsdf.eval(wi, wo).luminance(),
         brdf_bandwidth,
-        n_b,
+        &incident_directions(n_b),
     )
+    .map(|(prediction, _)| prediction)
 }
 
-/// [`predict`] with the BRDF's luminance ρ(ωi, ωo) (local frame) given as a function: the
-/// BSDF's `eval`, or a table of it (`TabulatedSampler::brdf_luminance`).
+/// [`predict`] from the directions `dirs` ([`incident_directions`]), with the BRDF's luminance
+/// ρ(ωi, ωo) (local frame) given as a function: the BSDF's `eval`, or a table of it
+/// (`TabulatedSampler::brdf_luminance`). Also returns the BRDF's largest bandwidth over `dirs`
+/// (found for degenerate points too, ωo clamped onto the horizon). Errors on no direction.
 pub fn predict_with(
     p: &ShadingPoint,
     env: &EnvironmentBandwidth,
     rho: &dyn Fn(DVec3, DVec3) -> f64,
     brdf_bandwidth: &BrdfBandwidth,
-    n_b: usize,
-) -> Result<PixelPrediction> {
+    dirs: &[DVec3],
+) -> Result<(PixelPrediction, f64)> {
+    let n_b = dirs.len();
     if n_b == 0 {
         return Err(FreqError::Parameter(
             "pixel prediction with n_b = 0 incident directions".into(),
@@ -128,22 +148,25 @@ pub fn predict_with(
     }
     let (t, b, n) = p.frame;
     let wo_l = DVec3::new(p.wo.dot(t), p.wo.dot(b), p.wo.dot(n));
+    let view = brdf_bandwidth.view(wo_l);
     let finite = [p.eye_distance, p.curvature, p.texture]
         .iter()
         .all(|v| v.is_finite());
     if !(wo_l.z > 0.0 && finite && n.length_squared() > 0.5) {
-        return Ok(PixelPrediction::default());
+        let brdf_max = dirs.iter().map(|&d| view.at(d)).fold(0.0, f64::max);
+        return Ok((PixelPrediction::default(), brdf_max));
     }
     let mut paths = Vec::with_capacity(n_b);
     let mut terms = Vec::with_capacity(n_b);
     let mut chi_sum = 0.0;
-    for k in 0..n_b {
-        let wi_l = incident_direction(k, n_b);
+    let mut brdf_max = 0.0f64;
+    for &wi_l in dirs {
         let wi = t * wi_l.x + b * wi_l.y + n * wi_l.z;
-        let radiance = Rgb(env.map.lookup_bilinear(wi)).luminance();
+        let (radiance, nu_light) = env.radiance_and_bandwidth(wi);
+        let radiance = Rgb(radiance).luminance();
         let rho = rho(wi_l, wo_l);
-        let nu_light = env.bandwidth_at(wi);
-        let nu_brdf = brdf_bandwidth.at(wi_l, wo_l);
+        let nu_brdf = view.at(wi_l);
+        brdf_max = brdf_max.max(nu_brdf);
         let s = Surface {
             cos_i: wi_l.z.max(1e-6),
             cos_x: wo_l.z.max(1e-6),
@@ -161,13 +184,16 @@ pub fn predict_with(
             chi,
         });
     }
-    Ok(PixelPrediction {
-        weight: paths.iter().map(|(l, _)| l.max(0.0)).sum(),
-        bandwidth: pixel_bandwidth(&paths),
-        variance: crate::transport::variance_sum(&terms, false),
-        variance_preconvolved: crate::transport::variance_sum(&terms, true),
-        radiance: PI * chi_sum / n_b as f64,
-    })
+    Ok((
+        PixelPrediction {
+            weight: paths.iter().map(|(l, _)| l.max(0.0)).sum(),
+            bandwidth: pixel_bandwidth(&paths),
+            variance: crate::transport::variance_sum(&terms, false),
+            variance_preconvolved: crate::transport::variance_sum(&terms, true),
+            radiance: PI * chi_sum / n_b as f64,
+        },
+        brdf_max,
+    ))
 }
 
 #[cfg(test)]
