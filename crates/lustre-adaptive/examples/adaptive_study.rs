@@ -3,7 +3,7 @@
 //!
 //! `cargo run --release -p lustre-adaptive --example adaptive_study -- [--size N]
 //! [--reference N] [--map FILE] [--scene sphere|lineup] [--materials a,b,…] [--out DIR] [--aa]
-//! [--rates 2,1] [--n-b 16,8] [--speed-only [--preconvolved]]`
+//! [--rates 2,1] [--n-b 16,8] [--speed-only [--preconvolved]] [--repeat N]`
 //! (`--aa`: only Fig. IV.14's anti-aliasing costs, at 1, 4 and 16 sub-pixels per pixel)
 //!
 //! Prints Markdown tables; with `--out`, writes each case's images (reference, brute force and
@@ -13,7 +13,8 @@
 //! is repeated for each);
 //! `--speed-only` prints only the constant-N_p rows, without the sample rules, pre-convolved
 //! shading and Fig. IV.16–IV.17; `--preconvolved` adds pre-convolved constant-N_p rows at
-//! every rate to them.
+//! every rate to them. `--repeat N` times every row of Fig. IV.15 (brute force and adaptive) as
+//! the least of N runs, which steadies the speed-ups on a shared machine.
 
 use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule};
 use lustre_adaptive::compare::{time_at_psnr, Measured};
@@ -47,6 +48,8 @@ struct Args {
     weights: Vec<BrdfWeights>,
     /// With `--speed-only`, also the pre-convolved constant-N_p rows at every rate.
     preconvolved: bool,
+    /// Times of Fig. IV.15's rows: the least of this many runs (brute force and adaptive alike).
+    repeat: usize,
 }
 
 fn args() -> anyhow::Result<Args> {
@@ -72,6 +75,7 @@ fn args() -> anyhow::Result<Args> {
         n_bs: vec![lustre_adaptive::buffer::DEFAULT_N_B],
         weights: vec![BufferOptions::default().weights],
         preconvolved: false,
+        repeat: 1,
     };
     let mut it = std::env::args().skip(1);
     while let Some(k) = it.next() {
@@ -95,6 +99,7 @@ fn args() -> anyhow::Result<Args> {
             }
             "--speed-only" => a.speed_only = true,
             "--preconvolved" => a.preconvolved = true,
+            "--repeat" => a.repeat = v()?.parse::<usize>()?.max(1),
             "--n-b" => {
                 a.n_bs = v()?
                     .split(',')
@@ -199,9 +204,15 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
     );
     let mut brute = vec![];
     for n in [1usize, 2, 4, 8, 16, 32, 64, 128, 256, 512] {
-        let t = Instant::now();
-        let (img, st) = render_brute(&g, &ctx, n, 7)?;
-        let time_s = t.elapsed().as_secs_f64();
+        // The least of `--repeat` wall times (the render is deterministic).
+        let mut time_s = f64::INFINITY;
+        let mut out = None;
+        for _ in 0..a.repeat {
+            let t = Instant::now();
+            out = Some(render_brute(&g, &ctx, n, 7)?);
+            time_s = time_s.min(t.elapsed().as_secs_f64());
+        }
+        let (img, st) = out.ok_or_else(|| anyhow::anyhow!("--repeat 0"))?;
         let p = psnr(&reference, &img, exposure)?;
         brute.push((
             img,
@@ -261,24 +272,31 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
             &[1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0]
         };
         for &mean_samples in means {
-            let t = Instant::now();
-            let buffer = BandwidthBuffer::build(
-                &g,
-                &ctx,
-                &env_bw,
-                BufferOptions {
-                    n_b,
-                    mean_samples,
-                    lighting,
-                    scale,
-                    rate,
-                    weights,
-                    ..Default::default()
-                },
-            )?;
-            let t_bw = t.elapsed().as_secs_f64();
-            let f = render_adaptive(&g, &ctx, &buffer, lighting, 7)?;
-            let time_s = t.elapsed().as_secs_f64();
+            // The least of `--repeat` wall times, for the pass and for the whole frame.
+            let (mut t_bw, mut time_s) = (f64::INFINITY, f64::INFINITY);
+            let mut out = None;
+            for _ in 0..a.repeat {
+                let t = Instant::now();
+                let buffer = BandwidthBuffer::build(
+                    &g,
+                    &ctx,
+                    &env_bw,
+                    BufferOptions {
+                        n_b,
+                        mean_samples,
+                        lighting,
+                        scale,
+                        rate,
+                        weights,
+                        ..Default::default()
+                    },
+                )?;
+                t_bw = t_bw.min(t.elapsed().as_secs_f64());
+                let f = render_adaptive(&g, &ctx, &buffer, lighting, 7)?;
+                time_s = time_s.min(t.elapsed().as_secs_f64());
+                out = Some((buffer, f));
+            }
+            let (buffer, f) = out.ok_or_else(|| anyhow::anyhow!("--repeat 0"))?;
             let p = psnr(&reference, &f.image, exposure)?;
             let equal = time_at_psnr(&curve, p);
             let pictured = mean_samples == 32.0

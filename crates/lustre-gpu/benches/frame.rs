@@ -195,13 +195,13 @@ fn bench(c: &mut Criterion) {
                 packed.suns = vec![
                     GpuSun {
                         direction: [0.3, 0.9, 0.3],
-                        pad0: 0.0,
+                        spread: 0.01,
                         irradiance: [4.0, 3.8, 3.5],
                         pad1: 0.0,
                     },
                     GpuSun {
                         direction: [-0.6, 0.3, 0.74],
-                        pad0: 0.0,
+                        spread: 0.06,
                         irradiance: [1.0, 1.0, 1.2],
                         pad1: 0.0,
                     },

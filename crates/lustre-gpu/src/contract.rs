@@ -87,7 +87,7 @@ impl PackedScene {
             });
             packed.suns.extend(plan.suns.iter().map(|s| GpuSun {
                 direction: f3(s.direction),
-                pad0: 0.0,
+                spread: s.spread as f32,
                 irradiance: s.irradiance.map(|v| v as f32),
                 pad1: 0.0,
             }));

@@ -101,8 +101,9 @@ pub struct GpuMaterial {
 pub struct GpuSun {
     /// Unit direction towards the sun, world space.
     pub direction: [f32; 3],
-    /// Padding.
-    pub pad0: f32,
+    /// Energy-weighted RMS angle of its texels around `direction`, radians (the lobes are
+    /// widened by it, `kernel::sun_widened`).
+    pub spread: f32,
     /// ∫ (excess radiance) dω per channel.
     pub irradiance: [f32; 3],
     /// Padding.

@@ -148,11 +148,15 @@ fn check(scene: &PackedScene) -> Result<()> {
         }
     }
     for (i, s) in scene.suns.iter().enumerate() {
-        if !finite(&s.direction) || !finite(&s.irradiance) || s.irradiance.iter().any(|v| *v < 0.0)
-        {
+        let valid = finite(&s.direction)
+            && finite(&s.irradiance)
+            && s.irradiance.iter().all(|v| *v >= 0.0)
+            && s.spread.is_finite()
+            && s.spread >= 0.0;
+        if !valid {
             return Err(invalid(
                 format!("sun {i}"),
-                "non-finite direction or a non-finite or negative irradiance",
+                "non-finite direction, a non-finite or negative irradiance or spread",
             ));
         }
     }

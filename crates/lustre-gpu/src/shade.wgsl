@@ -250,7 +250,8 @@ fn shade(hit: Hit, wo: vec3<f32>) -> vec3<f32> {
         let sun = suns[m.sun_start + s];
         let sun_l = vec3<f32>(dot(sun.direction, t), dot(sun.direction, b), dot(sun.direction, n));
         for (var k = 0u; k < m.reflection + m.transmission; k++) {
-            c += sun_lobe(lobes[m.lobe_start + k], k >= m.reflection, wo_l, sun_l, sun.irradiance);
+            c += sun_lobe(lobes[m.lobe_start + k], k >= m.reflection, wo_l, sun_l, sun.irradiance,
+                           sun.spread);
         }
     }
     return c;

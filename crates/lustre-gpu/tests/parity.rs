@@ -155,7 +155,8 @@ fn gpu_render_matches_cpu_shade_regular() {
         Sun {
             direction: DVec3::new(0.4, -0.2, 0.9).normalize(),
             irradiance: [1.5, 1.5, 2.0],
-            spread: 0.005,
+            // A 4° source: the lobes are widened by it (`kernel::sun_widened`) on both sides.
+            spread: 0.07,
         },
     ];
     let env = Environment {

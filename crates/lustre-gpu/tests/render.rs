@@ -225,12 +225,25 @@ fn invalid_scenes_are_reported() {
     }
     scene.suns.push(GpuSun {
         direction: [0.0, 1.0, 0.0],
-        pad0: 0.0,
+        spread: 0.0,
         irradiance: [f32::NAN, 1.0, 1.0],
         pad1: 0.0,
     });
     match renderer.render_packed(&scene, &env, 4, 4) {
         Err(GpuError::Invalid { parameter, .. }) => assert_eq!(parameter, "sun 0"),
         other => panic!("expected an invalid-sun error, got {other:?}"),
+    }
+    // A sun's spread widens the lobes: a negative or NaN one is refused too.
+    for spread in [-0.1, f32::NAN] {
+        scene.suns[0] = GpuSun {
+            direction: [0.0, 1.0, 0.0],
+            spread,
+            irradiance: [1.0, 1.0, 1.0],
+            pad1: 0.0,
+        };
+        match renderer.render_packed(&scene, &env, 4, 4) {
+            Err(GpuError::Invalid { parameter, .. }) => assert_eq!(parameter, "sun 0"),
+            other => panic!("expected an invalid-sun error for spread {spread}, got {other:?}"),
+        }
     }
 }

@@ -34,7 +34,7 @@
 use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::rgb::Rgb;
-use lustre_env::{read_map, shared_data_dir, CubeMap, MipFilter, Sun};
+use lustre_env::{read_map, shared_data_dir, CubeMap, MipFilter, Sun, SunOptions};
 use lustre_shade::harness::{describe_suns, EnvSetup};
 use lustre_shade::kernel::{
     plan_lattice, plan_lattice_sun, plan_regular, plan_regular_with, plan_tap_lattice,
@@ -561,7 +561,9 @@ fn main() -> Res<()> {
         let _ = writeln!(md, "\n## {map}");
         let _ = writeln!(
             md,
-            "\nSuns split off (threshold 64 × mean luminance, their texels filled with the sky around them): {}",
+            "\nSuns split off (threshold {} × mean luminance, spread ≤ {}°, their texels filled with the sky around them; each shaded as one evaluation of the lobes widened by its spread): {}",
+            SunOptions::default().threshold,
+            SunOptions::default().max_spread_deg,
             describe_suns(&maps)
         );
         for m in materials

@@ -797,8 +797,11 @@ pub fn describe_suns(setup: &EnvSetup) -> String {
 
 /// The report's line on the suns split off `setup`'s map (for the `lattice + sun` method).
 fn sun_note(setup: &EnvSetup) -> String {
+    let o = SunOptions::default();
     format!(
-        "suns split off (threshold 64 × mean luminance, spread ≤ 1.5°; `lattice + sun` shades each exactly as one lookup and reads the residual map with the rest of its budget): {}",
+        "suns split off (threshold {} × mean luminance, spread ≤ {}°; `lattice + sun` shades each as one evaluation of the lobes widened by its spread, `kernel::sun_widened`, and reads the residual map with the rest of its budget): {}",
+        o.threshold,
+        o.max_spread_deg,
         describe_suns(setup)
     )
 }

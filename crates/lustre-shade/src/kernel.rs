@@ -489,11 +489,30 @@ fn suns_facing(frame: &ShadingFrame, wo_l: DVec3, kurt: &Kurt, suns: &[Sun]) -> 
             continue;
         };
         for lobe in lobes {
-            out += lobe_eval(lobe, kind, wi, wo_l) * e * wi.z;
+            out += lobe_eval(&sun_widened(lobe, sun.spread), kind, wi, wo_l) * e * wi.z;
             evals += 1;
         }
     }
     (out, evals)
+}
+
+/// `lobe` convolved with a sun's extent: the sun's texels lie around its direction with an
+/// energy-weighted RMS angle `spread` (2D), so σ² = spread²/2 per axis in ωi and, the half
+/// vector turning by half as much, spread²/8 in h; the lobe's slope distribution is a Gaussian
+/// of variance m²/2 per axis (000 Eq. 4.5), so the convolution has m'² = m² + spread²/4 (near
+/// the lobe's centre, where slope ≈ angle). Evaluated at the sun's direction, it stands for
+/// ∫_sun f L dω / E to second order, where a point would over-read a sharp lobe's peak.
+pub fn sun_widened(lobe: &KurtLobe, spread: f64) -> KurtLobe {
+    let w = if spread.is_finite() {
+        spread * spread / 4.0
+    } else {
+        0.0
+    };
+    KurtLobe {
+        mx: (lobe.mx * lobe.mx + w).sqrt(),
+        my: (lobe.my * lobe.my + w).sqrt(),
+        ..*lobe
+    }
 }
 
 /// What one pixel's lobes share: the frame facing the viewer, ωo in it (above the surface), the

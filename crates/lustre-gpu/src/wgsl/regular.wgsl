@@ -217,10 +217,15 @@ fn lattice_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>,
 }
 
 // kernel::shade_suns for one lobe and one sun: ks f(ωs, ωo) cos θs E, the sun at `sun_l` in the
-// frame facing the viewer. A reflection lobe takes a sun above the surface, a transmission lobe
+// frame facing the viewer, the lobe widened by the sun's spread (kernel::sun_widened:
+// m'² = m² + spread²/4). A reflection lobe takes a sun above the surface, a transmission lobe
 // one below, evaluated on the pair mirrored through the tangent plane (000 Eq. 3.5).
-fn sun_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>, sun_l: vec3<f32>,
-            irradiance: vec3<f32>) -> vec3<f32> {
+fn sun_lobe(lobe_in: Lobe, transmission: bool, wo_l: vec3<f32>, sun_l: vec3<f32>,
+            irradiance: vec3<f32>, spread: f32) -> vec3<f32> {
+    var lobe = lobe_in;
+    let w = spread * spread * 0.25;
+    lobe.mx = sqrt(lobe.mx * lobe.mx + w);
+    lobe.my = sqrt(lobe.my * lobe.my + w);
     var wi = sun_l;
     if (transmission) {
         wi = mirror_z(sun_l);

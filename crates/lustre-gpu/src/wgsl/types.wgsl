@@ -22,7 +22,7 @@ struct Material {
 // A sun split off the environment (lustre_env::Sun): a directional light of irradiance E.
 struct Sun {
     direction: vec3<f32>,
-    pad0: f32,
+    spread: f32,
     irradiance: vec3<f32>,
     pad1: f32,
 }
