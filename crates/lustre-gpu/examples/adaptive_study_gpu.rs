@@ -139,9 +139,9 @@ fn study(
     let reference = r1.average(&r2)?;
     let exposure = 0.5 / reference.mean().max(1e-9);
     let ref_psnr = psnr(&r1, &r2, exposure)? + 20.0 * 2f64.log10();
-    let bw_scene = BandwidthScene::from_context(gpu, &ctx, &env_bw, Some(&scene.materials))?;
+    let bw_scene = BandwidthScene::from_context(gpu, &ctx, &env_bw, Some(scene))?;
     let mut bw_pass = BandwidthPass::new(gpu)?;
-    let shade_scene = AdaptiveScene::from_context(gpu, &ctx, Some(&scene.materials))?;
+    let shade_scene = AdaptiveScene::from_context(gpu, &ctx, Some(scene))?;
     let mut pass = AdaptivePass::new(gpu)?;
     // Warm-ups: llvmpipe compiles a shader at its first dispatch.
     pass.render_brute(gpu, &shade_scene, &g, 1, 1)?;

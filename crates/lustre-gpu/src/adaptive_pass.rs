@@ -9,11 +9,13 @@
 //! (`BandwidthBuffer::assemble`, whose bisection on V needs every pixel's sum), then the
 //! upload of ℓ_p and of each pixel's quota 4π² S_p / V. Materials are measured BRDFs the GPU
 //! evaluates directly (neural BRDFs, MERL tables, RGL tensors), fitted models (SGD,
-//! Cook–Torrance, Kurt: `fit_models`) or, given the scene's materials, lustre's analytic
-//! reflection models (`analytic`; [`crate::measured::EVALUATED`]), each sampled by its tabulated
-//! CDFs; the lighting is the environment at full
-//! resolution (`Lighting::Direct`) or its pyramid at each pixel's BRDF bandwidth
-//! (`Lighting::Preconvolved`, `cube_storage`), plus area lights.
+//! Cook–Torrance, Kurt: `fit_models`) or, given the scene, its reflection materials and
+//! lustre's analytic reflection models (`analytic`; [`crate::measured::EVALUATED`]), each
+//! sampled by its tabulated CDFs (built at uv (½, ½), as the CPU's). A textured material's
+//! parameters are read at the pixel's uv (`material_prepare`; the G-buffer's uv rides in the
+//! surfel's n.w and wo.w), a normal map is in the G-buffer's shading frame. The lighting is
+//! the environment at full resolution (`Lighting::Direct`) or its pyramid at each pixel's BRDF
+//! bandwidth (`Lighting::Preconvolved`, `cube_storage`), plus area lights.
 
 use crate::compute::{buffer_init, compute_pipeline, storage_entry, uniform_entry};
 use crate::context::GpuContext;
@@ -32,7 +34,7 @@ use lustre_adaptive::hierarchy::{AdaptiveFrame, HierarchyStats, NOT_SHADED};
 use lustre_adaptive::light::AreaLight;
 use lustre_adaptive::shading::ShadingContext;
 use lustre_env::{Distribution1D, EnvSampler};
-use lustre_scene::Material;
+use lustre_scene::Scene;
 use lustre_shade::image::Image;
 use std::f64::consts::PI;
 
@@ -168,6 +170,10 @@ pub struct AdaptiveScene {
     lights: wgpu::Buffer,
     light_texels: wgpu::Buffer,
     fitted: wgpu::Buffer,
+    /// The records' textured parameters and the textures they read.
+    params: wgpu::Buffer,
+    texels: wgpu::Buffer,
+    tex_info: wgpu::Buffer,
     evaluates: Evaluates,
     cube_texels: wgpu::Buffer,
     cube_levels: wgpu::Buffer,
@@ -183,13 +189,14 @@ impl AdaptiveScene {
     /// material, on one the GPU does not evaluate ([`EVALUATED`]; `PackedBrdfs::push` says
     /// why) or that has no tabulated sampler.
     ///
-    /// `scene_materials`, the scene's materials in the path scene's order, lets the GPU shade
-    /// the untextured scene materials and every analytic reflection model of a spec too
-    /// (`None`: measured and fitted models only).
+    /// `scene`, whose materials are the path scene's in its order, lets the GPU shade the
+    /// scene's materials (textured ones read at each pixel's uv, normal-mapped ones in the
+    /// G-buffer's tilted frame) and every analytic reflection model of a spec too (`None`:
+    /// measured and fitted models only).
     pub fn from_context(
         ctx: &GpuContext,
         shading: &ShadingContext,
-        scene_materials: Option<&[Material]>,
+        scene: Option<&Scene>,
     ) -> Result<Self> {
         let mut brdfs = PackedBrdfs::default();
         let mut materials = vec![];
@@ -206,7 +213,7 @@ impl AdaptiveScene {
                 ));
             };
             let mut packed = None;
-            let scene_material = scene_materials.and_then(|ms| ms.get(k));
+            let scene_material = scene.and_then(|sc| sc.materials.get(k).map(|m| (sc, m)));
             m.with_bsdf([0.5, 0.5], &mut |b| {
                 packed = Some(brdfs.push(b, scene_material))
             });
@@ -271,6 +278,7 @@ impl AdaptiveScene {
                 ),
             ));
         }
+        let (texture_texels, tex_info) = brdfs.textures(scene, limit)?;
         let env = shading.env;
         let scale = env.scale() as f32;
         let texels: Vec<[f32; 4]> = env
@@ -320,6 +328,12 @@ impl AdaptiveScene {
                 "adaptive fitted models",
                 bytemuck::cast_slice(&brdfs.fitted_or_zero()),
             ),
+            params: init(
+                "adaptive material parameters",
+                bytemuck::cast_slice(&brdfs.params_or_zero()),
+            ),
+            texels: init("adaptive textures", bytemuck::cast_slice(&texture_texels)),
+            tex_info: init("adaptive texture sizes", bytemuck::cast_slice(&tex_info)),
             evaluates: brdfs.evaluates(),
             light_count: shading.lights.len() as u32,
             material_count: materials.len() as u32,
@@ -365,7 +379,7 @@ impl AdaptivePass {
             "adaptive pass",
             &[&TYPES, &QMC, &ENV_LIGHT, &CUBE_STORAGE, &AREA_LIGHT],
             ADAPTIVE_PASS_WGSL,
-            12,
+            (12, 18),
             entries,
         )?;
         let (pyramid, pyramid_layout) = compute_pipeline(
@@ -509,8 +523,9 @@ impl AdaptivePass {
                     surfels.push(v(s.position, s.depth as f32));
                     surfels.push(v(s.frame.t, f32::from_bits(s.material as u32)));
                     surfels.push(v(s.frame.b, lod));
-                    surfels.push(v(s.frame.n, 0.0));
-                    surfels.push(v(s.wo, 0.0));
+                    // The texture coordinates in n.w and wo.w (material_prepare).
+                    surfels.push(v(s.frame.n, s.uv[0] as f32));
+                    surfels.push(v(s.wo, s.uv[1] as f32));
                 }
                 GPixel::Background(_) => {
                     surfels.push([0.0; 4]);
@@ -666,6 +681,9 @@ impl AdaptivePass {
                         entry(15, &scene.cube_rings),
                         entry(16, &queue),
                         entry(17, &counts),
+                        entry(18, &scene.params),
+                        entry(19, &scene.texels),
+                        entry(20, &scene.tex_info),
                     ],
                 });
                 let points = (w.div_ceil(1 << k) * h.div_ceil(1 << k)) as u32;

@@ -5,9 +5,10 @@
 // block's max-filtered variance. CPU twin: lustre_adaptive::hierarchy::render_adaptive, its
 // shading lustre_adaptive::shading::ShadingContext::shade (direct or pre-convolved): tabulated-CDF
 // BRDF samples and environment samples combined by the balance heuristic, plus area lights.
-// Materials: measured BRDFs evaluated directly (measured_eval: kinds 0 and 1) or fitted models
-// (bsdf.wgsl's records: kind 2, `base` indexing `fitted`). Imports: types, measured, qmc,
-// env_light, cube_storage, area_light, and bsdf with fitted models.
+// Materials: measured BRDFs evaluated directly (measured_eval: kinds 0, 1 and 3) or records
+// (kind 2, `base` indexing `fitted`; textured ones read at the pixel's uv by material_prepare).
+// Imports: types, measured, qmc, env_light, cube_storage, area_light, and with records bsdf (or
+// analytic) and textured.
 
 struct Params {
     width: u32,
@@ -37,7 +38,8 @@ struct Params {
 
 // A pixel of the G-buffer: position (xyz) and depth; the shading frame t, b, n; the direction
 // to the eye; the material index in t.w (bitcast u32; 0xffffffff: background); in b.w the
-// pyramid level of pre-convolved shading (< 0: the map at full resolution).
+// pyramid level of pre-convolved shading (< 0: the map at full resolution); the texture
+// coordinates in n.w and wo.w.
 struct Surfel {
     p: vec4<f32>,
     t: vec4<f32>,
@@ -72,7 +74,8 @@ struct PassMaterial {
 @group(0) @binding(10) var<storage, read_write> values: array<vec4<f32>>;
 // Per pixel: the level it was shaded at (255: not shaded) and its samples.
 @group(0) @binding(11) var<storage, read_write> shaded: array<vec2<u32>>;
-// Binding 12, the fitted models' records, and `material_eval` come with the pass's variant
+// Binding 12, the records, bindings 18–20, their textured parameters and textures, and
+// `material_prepare` / `material_eval` come with the pass's variant
 // (measured::material_eval_source).
 // The pre-convolved pyramid (world directions; module cube_storage).
 @group(0) @binding(13) var<storage, read> cube_texels: array<vec4<f32>>;
@@ -193,6 +196,7 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
     let nn = s.n.xyz;
     let wo = vec3<f32>(dot(s.wo.xyz, t), dot(s.wo.xyz, b), dot(s.wo.xyz, nn));
     let m = materials[bitcast<u32>(s.t.w)];
+    material_prepare(m.kind, m.base, vec2<f32>(s.n.w, s.wo.w));
     let n = max(n_in, 1u);
     let n_f = (n + 1u) / 2u;
     let n_l = n / 2u;

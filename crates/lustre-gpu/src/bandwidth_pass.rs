@@ -12,7 +12,7 @@ use crate::adaptive_pass::pack_lights;
 use crate::compute::{buffer_init, storage_entry, uniform_entry};
 use crate::context::GpuContext;
 use crate::error::{invalid, Result};
-use crate::gbuffer::map_read;
+use crate::gbuffer::{map_read, PackedTextures};
 use crate::measured::{Evaluates, MaterialPipelines, MeasuredBrdf, PackedBrdfs, EVALUATED};
 use crate::timer::{GpuTimer, Timing};
 use crate::wgsl::{AREA_LIGHT, ENV_LIGHT, FREQUENCY, TYPES};
@@ -24,7 +24,7 @@ use lustre_env::EquirectMap;
 use lustre_freq::brdf::{BrdfBandwidth, BrdfBandwidthOptions};
 use lustre_freq::pixel::{EnvironmentBandwidth, PixelPrediction};
 use lustre_freq::transport::Bandwidth;
-use lustre_scene::Material;
+use lustre_scene::Scene;
 
 /// The pass's own WGSL (its bindings and entry point).
 pub const BANDWIDTH_PASS_WGSL: &str = include_str!("bandwidth_pass.wgsl");
@@ -47,6 +47,8 @@ pub struct BandwidthPixel {
     pub texture: f64,
     /// Index into the pass's materials.
     pub material: u32,
+    /// Texture coordinates (a textured material's parameters are read there).
+    pub uv: [f64; 2],
 }
 
 /// `Prediction` of the pass (read back).
@@ -89,6 +91,10 @@ pub struct BandwidthScene {
     table: wgpu::Buffer,
     brdf_bandwidth: wgpu::Buffer,
     fitted: wgpu::Buffer,
+    /// The records' textured parameters and the textures they read.
+    params: wgpu::Buffer,
+    texels: wgpu::Buffer,
+    tex_info: wgpu::Buffer,
     evaluates: Evaluates,
     lights: wgpu::Buffer,
     light_texels: wgpu::Buffer,
@@ -118,26 +124,27 @@ impl BandwidthScene {
             let record = brdf.pack(&mut packed.brdfs.table);
             packed.push(k, record, b)?;
         }
-        // No area light (one unread record).
+        // No area light (one unread record), no texture (one unread texel).
         (packed.lights, packed.light_texels) = pack_lights(&[], glam::DMat3::IDENTITY);
+        packed.textures = packed.brdfs.textures(None, 0)?;
         Self::upload(ctx, map, map_bandwidth, packed)
     }
 
     /// The environment, materials and area lights of an adaptive-shading context: every
     /// material must be one the GPU evaluates ([`crate::measured::EVALUATED`]; the error names
     /// the first that is not).
-    /// `materials`: as [`crate::adaptive_pass::AdaptiveScene::from_context`]'s.
+    /// `scene`: as [`crate::adaptive_pass::AdaptiveScene::from_context`]'s.
     pub fn from_context(
         ctx: &GpuContext,
         shading: &ShadingContext,
         env: &EnvironmentBandwidth,
-        materials: Option<&[Material]>,
+        scene: Option<&Scene>,
     ) -> Result<Self> {
         let mut packed = Packed::default();
         for (k, m) in shading.scene.materials.iter().enumerate() {
             let tables = &shading.materials[k];
             let mut brdf = None;
-            let scene_material = materials.and_then(|ms| ms.get(k));
+            let scene_material = scene.and_then(|sc| sc.materials.get(k).map(|m| (sc, m)));
             m.with_bsdf([0.5, 0.5], &mut |b| {
                 brdf = Some(packed.brdfs.push(b, scene_material))
             });
@@ -159,6 +166,8 @@ impl BandwidthScene {
         (packed.lights, packed.light_texels) =
             pack_lights(&shading.lights, shading.env.to_world().transpose());
         packed.light_count = shading.lights.len() as u32;
+        let limit = ctx.device.limits().max_storage_buffer_binding_size as usize;
+        packed.textures = packed.brdfs.textures(scene, limit)?;
         Self::upload(ctx, env.map, &env.bandwidth, packed)
     }
 
@@ -219,6 +228,24 @@ impl BandwidthScene {
                 bytemuck::cast_slice(&packed.bandwidth),
                 storage,
             ),
+            params: buffer_init(
+                ctx,
+                "bandwidth material parameters",
+                bytemuck::cast_slice(&packed.brdfs.params_or_zero()),
+                storage,
+            ),
+            texels: buffer_init(
+                ctx,
+                "bandwidth textures",
+                bytemuck::cast_slice(&packed.textures.0),
+                storage,
+            ),
+            tex_info: buffer_init(
+                ctx,
+                "bandwidth texture sizes",
+                bytemuck::cast_slice(&packed.textures.1),
+                storage,
+            ),
             evaluates: packed.brdfs.evaluates(),
             light_count: packed.light_count,
             lights: buffer_init(
@@ -250,6 +277,8 @@ struct Packed {
     lights: Vec<[f32; 4]>,
     light_texels: Vec<[f32; 4]>,
     light_count: u32,
+    /// The textures the records' parameters read (`PackedBrdfs::textures`).
+    textures: PackedTextures,
 }
 
 impl Packed {
@@ -294,6 +323,7 @@ impl BandwidthPass {
                     curvature: s.curvature,
                     texture: shading.texture_bandwidth(s),
                     material: s.material as u32,
+                    uv: s.uv,
                 }),
                 GPixel::Background(_) => None,
             })
@@ -353,7 +383,7 @@ impl BandwidthPass {
             "bandwidth pass",
             &[&TYPES, &FREQUENCY, &ENV_LIGHT, &AREA_LIGHT],
             BANDWIDTH_PASS_WGSL,
-            7,
+            (7, 10),
             entries.to_vec(),
         )?;
         Ok(Self {
@@ -378,7 +408,7 @@ impl BandwidthPass {
                 format!("{} pixels with n_b = {n_b} (1..=4096)", pixels.len()),
             ));
         }
-        let mut surfels = Vec::with_capacity(pixels.len() * 20);
+        let mut surfels = Vec::with_capacity(pixels.len() * 24);
         for p in pixels {
             match p {
                 Some(p) => {
@@ -398,8 +428,9 @@ impl BandwidthPass {
                     surfels.extend(v(n, f32::from_bits(p.material)));
                     surfels.extend(v(p.wo, 1.0));
                     surfels.extend(v(p.position, p.texture as f32));
+                    surfels.extend([p.uv[0] as f32, p.uv[1] as f32, 0.0, 0.0]);
                 }
-                None => surfels.extend([0.0f32; 20]),
+                None => surfels.extend([0.0f32; 24]),
             }
         }
         let params = Params {
@@ -454,6 +485,9 @@ impl BandwidthPass {
                 entry(7, &scene.fitted),
                 entry(8, &scene.lights),
                 entry(9, &scene.light_texels),
+                entry(10, &scene.params),
+                entry(11, &scene.texels),
+                entry(12, &scene.tex_info),
             ],
         });
         let mut enc = ctx

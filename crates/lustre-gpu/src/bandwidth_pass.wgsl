@@ -19,13 +19,15 @@ struct Params {
 
 // A surface pixel in the map's frame: t, b, n, wo (xyz), depth in t.w, curvature in b.w, the
 // material in n.w (bitcast u32), 1 in wo.w for a surface (0: background); its position (xyz)
-// and its textures' spatial bandwidth (cycles per metre) in p.w.
+// and its textures' spatial bandwidth (cycles per metre) in p.w; its texture coordinates in
+// uv.xy.
 struct Surfel {
     t: vec4<f32>,
     b: vec4<f32>,
     n: vec4<f32>,
     wo: vec4<f32>,
     p: vec4<f32>,
+    uv: vec4<f32>,
 }
 
 
@@ -52,7 +54,8 @@ struct Prediction {
 @group(0) @binding(4) var<storage, read> table: array<f32>;
 @group(0) @binding(5) var<storage, read> brdf_bandwidth: array<f32>;
 @group(0) @binding(6) var<storage, read_write> predictions: array<Prediction>;
-// Binding 7, the fitted models' records, and `material_eval` come with the pass's variant
+// Binding 7, the records, bindings 10–12, their textured parameters and textures, and
+// `material_prepare` / `material_eval` come with the pass's variant
 // (measured::material_eval_source).
 // The area lights, in the map's frame.
 @group(0) @binding(8) var<storage, read> lights: array<AreaLight>;
@@ -110,6 +113,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let m = materials[bitcast<u32>(s.n.w)];
+    material_prepare(m.x, m.y, s.uv.xy);
     let incident = params.incident;
     let cells = params.out;
     var weight_sum = 0.0;

@@ -2,20 +2,7 @@
 // texture_sample.wgsl): a material's diffuse albedo at a hit, the CPU's
 // `lustre_shade::bake::diffuse_albedo`. The including shader declares `mats: array<vec4<f32>>`
 // (4 vec4 per material, `lightmap_shade.rs` `gpu_material`) beside texture_sample.wgsl's
-// `texels` and `tex_info`.
-
-// `TexturedScalar::at`: factor × the texture's channel at the uv set it names.
-fn scalar_at(q: vec4<f32>, uv0: vec2<f32>, uv1: vec2<f32>) -> f32 {
-    let t = bitcast<i32>(q.y);
-    if t < 0 {
-        return q.x;
-    }
-    var uv = uv0;
-    if bitcast<u32>(q.z) == 1u {
-        uv = uv1;
-    }
-    return q.x * texture_sample(u32(t), uv)[bitcast<u32>(q.w)];
-}
+// `texels` and `tex_info` (and its `scalar_at`).
 
 // `lustre_shade::bake::diffuse_albedo` as uploaded: clamp(base factor · texture, 0, 1) · k, with
 // k = 1 − clamp(metallic, 0, 1), or 0 where transmission ≥ ½, per pixel when those are textured.

@@ -3,48 +3,64 @@
 //! the tabulated CDFs of [`lustre_brdf::tabulated::TabulatedSampler`].
 
 use crate::analytic::{pack_analytic, KIND_OREN_NAYAR};
-use crate::compute::compute_pipeline;
+use crate::compute::{compute_pipeline, storage_entry};
 use crate::context::GpuContext;
 use crate::error::{invalid, Result};
 use crate::fit_models::pack_fit;
-use crate::frame_shade::{pack_material, GpuBsdf, FLAG_TEXTURED, FLAG_TWO_SIDED, KIND_NONE};
-use crate::wgsl::{compose, Module, ANALYTIC, BSDF, MEASURED};
+use crate::frame_shade::{
+    pack_material, pack_material_params, GpuBsdf, FLAG_TEXTURED, FLAG_TWO_SIDED, MATERIAL_PARAMS,
+};
+use crate::gbuffer::{pack_textures, PackedTextures};
+use crate::wgsl::{compose, Module, ANALYTIC, BSDF, MEASURED, TEXTURED, TEXTURE_SAMPLE_WGSL};
 use lustre_brdf::measured::merl::{MerlTable, BINS, RES_PHI_D, RES_THETA_D, RES_THETA_H};
 use lustre_brdf::measured::nbrdf::Nbrdf;
 use lustre_brdf::measured::rgl::RglBsdf;
 use lustre_brdf::measured::rgl_warp::Marginal2D;
 use lustre_brdf::tabulated::TabulatedSampler;
 use lustre_brdf::Bsdf;
-use lustre_scene::{Material, MaterialKind};
+use lustre_scene::{Material, MaterialKind, Scene};
 
 /// The materials of a pass that evaluates any BRDF it takes through its `material_eval`: the
 /// measured BRDFs' words (read through `bsdf_table`) and the records of bsdf.wgsl and
 /// analytic.wgsl (kind 2, `base` indexing them, evaluated by `record_eval`): the fitted models
-/// (`fit_models::pack_fit`), the scene's untextured materials (`frame_shade::pack_material`) and
-/// every reflection model a scene material's spec resolves to (`analytic::pack_analytic`).
+/// (`fit_models::pack_fit`), the scene's materials (`frame_shade::pack_material`, textured ones
+/// with their [`pack_material_params`] rows and textures) and every reflection model a scene
+/// material's spec resolves to (`analytic::pack_analytic`).
 #[derive(Default)]
 pub struct PackedBrdfs {
     /// The measured BRDFs' words, and the analytic models' side tables.
     pub table: Vec<f32>,
     /// The records of bsdf.wgsl and analytic.wgsl.
     pub fitted: Vec<GpuBsdf>,
+    /// Per record of `fitted`: its textured parameters ([`pack_material_params`]), read where
+    /// the record is flagged [`FLAG_TEXTURED`] (zeros otherwise).
+    pub params: Vec<[[f32; 4]; MATERIAL_PARAMS]>,
+    /// The scene's textures those rows read, in slot order.
+    pub slots: Vec<usize>,
 }
 
 /// `material_eval`'s kind of a record (a fitted or an analytic model).
 pub const KIND_RECORD: u32 = 2;
 
 impl PackedBrdfs {
-    /// Appends `b`, the BSDF of the scene material `material` when known; returns (kind, first
-    /// word or record, MERL node offset). Without `material` only measured BRDFs and fitted
-    /// models are taken (an analytic model's parameters may be textured: only the scene material
-    /// says). Errors (naming the model, and the material and its spec when known): a textured or
-    /// normal-mapped material, whose parameters vary over the surface, or a model without a GPU
-    /// twin ([`EVALUATED`] lists those with one).
-    pub fn push(&mut self, b: &dyn Bsdf, material: Option<&Material>) -> Result<(u32, u32, f32)> {
+    /// Appends `b`, the BSDF of the scene material `material` of `scene` when known; returns
+    /// (kind, first word or record, MERL node offset). Without the scene only measured BRDFs
+    /// and fitted models are taken (an analytic model's parameters may be textured: only the
+    /// scene material says). A textured material's parameters are read per pixel at the
+    /// G-buffer's uv (`material_prepare`); a normal map needs nothing here: the G-buffer's
+    /// shading frame is already tilted by it (`PathTracer::shading_point`). Errors (naming the
+    /// model, and the material and its spec when known): a model without a GPU twin
+    /// ([`EVALUATED`] lists those with one).
+    pub fn push(
+        &mut self,
+        b: &dyn Bsdf,
+        material: Option<(&Scene, &Material)>,
+    ) -> Result<(u32, u32, f32)> {
         if let Some(brdf) = MeasuredBrdf::of(b) {
             return Ok(brdf.pack(&mut self.table));
         }
         let fit = pack_fit(b);
+        let mut params = [[0.0f32; 4]; MATERIAL_PARAMS];
         let record = match (fit, material) {
             (Ok((kind, p)), _) => GpuBsdf {
                 kind,
@@ -62,24 +78,15 @@ impl PackedBrdfs {
                     ),
                 ))
             }
-            (Err(_), Some(m)) => {
+            (Err(_), Some((scene, m))) => {
                 let name = format!("material {:?}", m.name);
-                if m.normal_map.is_some() {
-                    return Err(invalid(
-                        name,
-                        "normal-mapped analytic models are not on the GPU in these passes",
-                    ));
-                }
                 if let MaterialKind::Spec(s) = &m.kind {
                     pack_analytic(b, &mut self.table)
                         .map_err(|e| invalid(name, format!("spec {:?}: {e}", s.spec)))?
                 } else {
                     let mut rec = pack_material(m, &mut self.table)?;
-                    if rec.kind == KIND_NONE || rec.flags & FLAG_TEXTURED != 0 {
-                        return Err(invalid(
-                            name,
-                            "textured: its parameters vary over the surface",
-                        ));
+                    if rec.flags & FLAG_TEXTURED != 0 {
+                        params = pack_material_params(scene, m, &mut self.slots)?;
                     }
                     // Two-sided as the CPU wraps it (`TwoSided`): reflection-only models.
                     if b.flags().transmission {
@@ -90,7 +97,28 @@ impl PackedBrdfs {
             }
         };
         self.fitted.push(record);
+        self.params.push(params);
         Ok((KIND_RECORD, (self.fitted.len() - 1) as u32, 0.0))
+    }
+
+    /// The records' parameter rows, one zero row when there is none (a binding may not be
+    /// empty).
+    pub fn params_or_zero(&self) -> Vec<[f32; 4]> {
+        let mut rows: Vec<[f32; 4]> = self.params.iter().flatten().copied().collect();
+        if rows.is_empty() {
+            rows.push([0.0; 4]);
+        }
+        rows
+    }
+
+    /// The texels of the textures the parameter rows read ([`crate::gbuffer`]'s
+    /// `pack_textures`; one dummy texel when none), and per texture (first texel, width,
+    /// height, 0). Errors: more texels than a binding of `limit` bytes holds.
+    pub(crate) fn textures(&self, scene: Option<&Scene>, limit: usize) -> Result<PackedTextures> {
+        match scene {
+            Some(scene) => pack_textures(scene, &self.slots, limit),
+            None => Ok((vec![[0.0; 4]], vec![[0; 4]])),
+        }
     }
 
     /// The table's words, one zero word when there is none (a binding may not be empty: a
@@ -115,16 +143,17 @@ impl PackedBrdfs {
 
 /// What the passes that take any material evaluate: neural BRDFs, MERL tables (a `.binary`
 /// file), RGL tensors (a `.bsdf` file), fitted models (SGD, Cook–Torrance, Kurt) and, given the
-/// scene's materials, the untextured ones and every reflection model of a spec (`lambert`,
+/// scene, its materials (textured ones read at each pixel's uv, normal-mapped ones in the
+/// G-buffer's tilted frame) and every reflection model of a spec (`lambert`,
 /// `oren-nayar`, `phong`, `blinn-phong`, `ward`, `ward-duer`, `ward-gmd`, `lafortune` and the
 /// `lafortune:` fits, `ashikhmin-shirley`, `abc` and the `abc:` fits, every Cook–Torrance
 /// (`exponential`, `sgd` and `sgd-numeric:` with the numeric Smith G1, mixed distributions), the
 /// conductors, plastics, dielectrics and `pbr`, each also `twosided:`).
 pub const EVALUATED: &str = "neural BRDFs (nbrdf:…), MERL tables (a .binary file), RGL tensors \
-    (a .bsdf file), fitted models (SGD, Cook–Torrance, Kurt) and, given the scene's materials, \
-    untextured scene materials and the analytic models of a spec (Lambert, Oren–Nayar, Phong, \
-    Blinn–Phong, Ward and its variants, Lafortune, Ashikhmin–Shirley, ABC, any \
-    Cook–Torrance, conductors, plastics, dielectrics, glTF metallic-roughness, two-sided or not)";
+    (a .bsdf file), fitted models (SGD, Cook–Torrance, Kurt) and, given the scene, its \
+    reflection materials (textured and normal-mapped ones too) and the analytic models of a \
+    spec (Lambert, Oren–Nayar, Phong, Blinn–Phong, Ward and its variants, Lafortune, \
+    Ashikhmin–Shirley, ABC, any Cook–Torrance, conductors, plastics, dielectrics, glTF metallic-roughness, two-sided or not)";
 
 /// A measured BRDF the GPU evaluates directly (`measured_eval` of `wgsl/measured.wgsl`).
 #[derive(Clone, Copy, Debug)]
@@ -321,16 +350,24 @@ impl PackedBrdfs {
     }
 }
 
-/// `material_eval(kind, base, offset, wi, wo)` for a pass, with its `fitted` records at
-/// `binding`: kind 2 evaluates record `base` by bsdf.wgsl's `bsdf_eval` ([`Evaluates::Records`])
-/// or analytic.wgsl's `record_eval` ([`Evaluates::Analytic`]); with [`Evaluates::Measured`]
-/// the binding is bound but unread and only measured BRDFs are evaluated.
-fn material_eval_source(binding: u32, evaluates: Evaluates) -> String {
+/// `material_prepare(kind, base, uv)` and `material_eval(kind, base, offset, wi, wo)` for a
+/// pass, with its `fitted` records at `binding` and, at `textures`, `textures + 1` and
+/// `textures + 2`, the records' parameter rows ([`PackedBrdfs::params`]), the texels and the
+/// per-texture offsets and sizes (`texture_sample.wgsl`). A pass calls `material_prepare` once
+/// per pixel (its material, the G-buffer's uv): kind 2 copies record `base` into the pixel's
+/// record, with its textured parameters at uv where it is flagged FLAG_TEXTURED
+/// (`textured_bsdf`, as `frame_shade.wgsl` and the CPU's `Material::with_bsdf_at` with
+/// [uv; 2]); `material_eval` then evaluates that record by bsdf.wgsl's `bsdf_eval`
+/// ([`Evaluates::Records`]) or analytic.wgsl's `record_eval` ([`Evaluates::Analytic`]). With
+/// [`Evaluates::Measured`] the records and textures are bound but unread and only measured
+/// BRDFs are evaluated.
+fn material_eval_source(binding: u32, textures: u32, evaluates: Evaluates) -> String {
     let record = match evaluates {
         Evaluates::Measured => {
             return format!(
                 "// No fitted model among the materials: the records are bound but unread.\n\
                  @group(0) @binding({binding}) var<storage, read> fitted: array<vec4<f32>>;\n\n\
+                 fn material_prepare(kind: u32, base: u32, uv: vec2<f32>) {{}}\n\n\
                  fn material_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>,\n                 \
                  wo: vec3<f32>) -> vec3<f32> {{\n    \
                  return measured_eval(kind, base, offset, wi, wo);\n}}\n\n"
@@ -339,12 +376,34 @@ fn material_eval_source(binding: u32, evaluates: Evaluates) -> String {
         Evaluates::Records => "bsdf_eval",
         Evaluates::Analytic => "record_eval",
     };
+    let (params, texels, info) = (textures, textures + 1, textures + 2);
     format!(
-        "@group(0) @binding({binding}) var<storage, read> fitted: array<GpuBsdf>;\n\n\
+        "@group(0) @binding({binding}) var<storage, read> fitted: array<GpuBsdf>;\n\
+         @group(0) @binding({params}) var<storage, read> material_params: array<vec4<f32>>;\n\
+         @group(0) @binding({texels}) var<storage, read> texels: array<vec4<f32>>;\n\
+         @group(0) @binding({info}) var<storage, read> tex_info: array<vec4<u32>>;\n\n\
+         {}\n\
+         // The pixel's record (material_prepare).\n\
+         var<private> prepared: GpuBsdf;\n\n\
+         fn material_prepare(kind: u32, base: u32, uv: vec2<f32>) {{\n    \
+         if (kind != {KIND_RECORD}u) {{\n        return;\n    }}\n    \
+         var b = fitted[base];\n    \
+         if ((b.flags & FLAG_TEXTURED) != 0u) {{\n        \
+         let q = {MATERIAL_PARAMS}u * base;\n        \
+         let c = material_params[q];\n        \
+         var rgb = c.xyz;\n        \
+         if (bitcast<i32>(c.w) >= 0) {{\n            \
+         rgb = c.xyz * texture_sample(bitcast<u32>(c.w), uv).xyz;\n        }}\n        \
+         let s = vec3<f32>(scalar_at(material_params[q + 1u], uv, uv),\n                          \
+         scalar_at(material_params[q + 2u], uv, uv),\n                          \
+         scalar_at(material_params[q + 3u], uv, uv));\n        \
+         b = textured_bsdf(b, rgb, s);\n    }}\n    \
+         prepared = b;\n}}\n\n\
          fn material_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>,\n                 \
          wo: vec3<f32>) -> vec3<f32> {{\n    \
-         if (kind == {KIND_RECORD}u) {{\n        return {record}(fitted[base], wi, wo);\n    }}\n    \
-         return measured_eval(kind, base, offset, wi, wo);\n}}\n\n"
+         if (kind == {KIND_RECORD}u) {{\n        return {record}(prepared, wi, wo);\n    }}\n    \
+         return measured_eval(kind, base, offset, wi, wo);\n}}\n\n",
+        TEXTURE_SAMPLE_WGSL
     )
 }
 
@@ -356,26 +415,30 @@ pub(crate) struct MaterialPipelines {
     imports: Vec<&'static Module>,
     pass: &'static str,
     binding: u32,
+    textures: u32,
     entries: Vec<wgpu::BindGroupLayoutEntry>,
     compiled: [Option<(wgpu::ComputePipeline, wgpu::BindGroupLayout)>; 3],
 }
 
 impl MaterialPipelines {
     /// Compiles the measured-only variant of `pass` (its `fitted` records at `binding`, the
-    /// modules `imports` besides measured.wgsl).
+    /// records' parameter rows and textures at `textures` … `textures + 2`, added to the
+    /// pass's `entries`; the modules `imports` besides measured.wgsl).
     pub(crate) fn new(
         ctx: &GpuContext,
         label: &'static str,
         imports: &[&'static Module],
         pass: &'static str,
-        binding: u32,
-        entries: Vec<wgpu::BindGroupLayoutEntry>,
+        (binding, textures): (u32, u32),
+        mut entries: Vec<wgpu::BindGroupLayoutEntry>,
     ) -> Result<Self> {
+        entries.extend((textures..textures + 3).map(|b| storage_entry(b, true)));
         let mut p = Self {
             label,
             imports: imports.to_vec(),
             pass,
             binding,
+            textures,
             entries,
             compiled: [None, None, None],
         };
@@ -395,12 +458,12 @@ impl MaterialPipelines {
             imports.push(&MEASURED);
             match evaluates {
                 Evaluates::Measured => {}
-                Evaluates::Records => imports.push(&BSDF),
-                Evaluates::Analytic => imports.push(&ANALYTIC),
+                Evaluates::Records => imports.extend([&BSDF, &TEXTURED]),
+                Evaluates::Analytic => imports.extend([&ANALYTIC, &TEXTURED]),
             }
             let src = compose(
                 &imports,
-                &(material_eval_source(self.binding, evaluates) + self.pass),
+                &(material_eval_source(self.binding, self.textures, evaluates) + self.pass),
             );
             *slot = Some(compute_pipeline(
                 ctx,

@@ -1,4 +1,6 @@
-// Shared by gbuffer.wgsl and lightmap_shade.wgsl (prepended to each): the CPU's texture lookup.
+// Shared by gbuffer.wgsl, lightmap_shade.wgsl, frame_shade.wgsl and the passes that evaluate
+// textured records (`measured::material_eval_source`), prepended to each: the CPU's texture
+// lookup.
 // The including shader declares `texels: array<vec4<f32>>` (RGBA texels of every uploaded
 // texture) and `tex_info: array<vec4<u32>>` (per texture: first texel, width, height, 0).
 
@@ -31,3 +33,15 @@ fn texture_sample(t: u32, uv: vec2<f32>) -> vec4<f32> {
     return top + (bottom - top) * fy;
 }
 
+// `TexturedScalar::at`: factor × the texture's channel at the uv set it names.
+fn scalar_at(q: vec4<f32>, uv0: vec2<f32>, uv1: vec2<f32>) -> f32 {
+    let t = bitcast<i32>(q.y);
+    if t < 0 {
+        return q.x;
+    }
+    var uv = uv0;
+    if bitcast<u32>(q.z) == 1u {
+        uv = uv1;
+    }
+    return q.x * texture_sample(u32(t), uv)[bitcast<u32>(q.w)];
+}

@@ -236,6 +236,10 @@ pub const TEXTURED: Module = Module {
     deps: &[&BSDF],
 };
 
+/// The CPU's texture lookup (`texture_sample`, `scalar_at`) over a shader's own `texels` and
+/// `tex_info` bindings: prepended to the passes that read textures, not a binding-free module.
+pub const TEXTURE_SAMPLE_WGSL: &str = include_str!("texture_sample.wgsl");
+
 /// Measured BRDFs: MERL tables (trilinear, missing bins left out) and tabulated-CDF importance
 /// sampling (004 §IV.4.3), read from the pass's `bsdf_table`.
 pub const MEASURED: Module = Module {

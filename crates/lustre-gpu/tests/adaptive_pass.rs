@@ -282,8 +282,7 @@ fn refused_as_material_1(gpu_ctx: &lustre_gpu::GpuContext, spec: &str, says: &[&
     line_up::with_frame(
         &scene,
         (8, 8),
-        |_, _, shading| match AdaptiveScene::from_context(gpu_ctx, &shading, Some(&scene.materials))
-        {
+        |_, _, shading| match AdaptiveScene::from_context(gpu_ctx, &shading, Some(&scene)) {
             Err(e) => {
                 let m = e.to_string();
                 assert!(m.contains("material 1"), "{m}");
@@ -313,7 +312,7 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
             }
             Ok(_) => panic!("the GPU took the spec lambert(kd=0.5) without the scene's materials"),
         }
-        AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene.materials))
+        AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene))
             .expect("lambert(kd=0.5) with the scene's materials");
     });
     // Cook–Torrance with the SGD's numeric Smith G1: not a fitted layout, so refused without the
@@ -337,7 +336,7 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
             }
             Ok(_) => panic!("the GPU took sgd(alpha=0.1, p=0.5) without the scene's materials"),
         }
-        AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene.materials))
+        AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene))
             .expect("sgd(alpha=0.1, p=0.5) with the scene's materials");
     });
     // A spec without a GPU twin (an ALTA table): named, material and spec.
@@ -365,7 +364,7 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
             Ok(_) => panic!("the GPU took a Lambertian material without the scene's"),
         };
         assert!(e.contains("material 1"), "{e}");
-        let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene.materials))
+        let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene))
             .expect("upload with the scene's materials");
         let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
         let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, BufferOptions::default())
@@ -456,10 +455,10 @@ fn analytic_specs_are_shaded_on_the_gpu_as_on_the_cpu() {
             Ok(_) => panic!("the GPU took analytic specs without the scene's materials"),
         };
         assert!(e.contains("material 0"), "{e}");
-        let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene.materials))
+        let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene))
             .expect("upload with the scene's materials");
         let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
-        BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene.materials))
+        BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene))
             .expect("the bandwidth pass takes them too");
         let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, BufferOptions::default())
             .expect("buffer");
@@ -512,10 +511,10 @@ fn anisotropic_specs_are_sampled_by_their_azimuth_tables_on_the_gpu_as_on_the_cp
             let s = t.sampler.as_ref().expect("a tabulated sampler");
             assert!(s.is_anisotropic(), "material {k} ({})", t.name);
         }
-        let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene.materials))
+        let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene))
             .expect("anisotropic specs on the GPU");
         let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
-        BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene.materials))
+        BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene))
             .expect("the bandwidth pass takes them too");
         let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, BufferOptions::default())
             .expect("buffer");
@@ -564,7 +563,7 @@ fn anisotropic_specs_are_sampled_by_their_azimuth_tables_on_the_gpu_as_on_the_cp
             .map(|s| s.table_count() * (2 * s.options().theta_bins * s.phi_cells() + 1))
             .sum();
         let limit = gpu_ctx.device.limits().max_storage_buffer_binding_size as usize;
-        match AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene.materials)) {
+        match AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene)) {
             Err(e) => {
                 let m = e.to_string();
                 assert!(4 * words > limit, "refused below the limit: {m}");

@@ -218,6 +218,7 @@ fn the_pass_names_bad_input() {
         curvature: 0.0,
         texture: 0.0,
         material: 1,
+        uv: [0.5, 0.5],
     };
     let e = pass
         .run(&gpu_ctx, &scene, &[Some(px)], 16)
@@ -246,9 +247,9 @@ fn the_pass_names_bad_input() {
 
 #[test]
 fn the_textures_bandwidth_reaches_the_gpu_pass_as_the_cpus() {
-    // The line-up's pixels with a texture bandwidth of 0.5–12.5 cycles per metre each (the
-    // passes take no textured material yet, so it is set here, as `predict` would from
-    // `ShadingContext::texture_bandwidth`), against `lustre_freq::pixel::predict`.
+    // The line-up's pixels with a texture bandwidth of 0.5–12.5 cycles per metre each (set
+    // here on measured materials, as `predict` would from `ShadingContext::texture_bandwidth`
+    // for textured ones), against `lustre_freq::pixel::predict`.
     let scene = line_up::scene(
         [
             "nbrdf:color-changing-paint3",
@@ -341,9 +342,8 @@ fn analytic_specs_in_the_bandwidth_pass_match_the_cpu() {
         let n_b = 16;
         let cpu = predict_pixels(&g, &shading, &env_bw, n_b, BrdfWeights::Evaluated).expect("cpu");
         let gpu_ctx = ctx();
-        let scene_gpu =
-            BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene.materials))
-                .expect("upload");
+        let scene_gpu = BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene))
+            .expect("upload");
         let mut pass = BandwidthPass::new(&gpu_ctx).expect("pass");
         let (gpu, _) = pass
             .predict(&gpu_ctx, &scene_gpu, &g, &shading, n_b as u32)

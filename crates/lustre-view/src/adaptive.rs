@@ -28,7 +28,7 @@ use lustre_gpu::adaptive_pass::{AdaptivePass, AdaptiveScene};
 use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthScene};
 use lustre_gpu::GpuContext;
 use lustre_plot::heat::heat_rgb;
-use lustre_scene::Material;
+use lustre_scene::Scene;
 use lustre_shade::image::Image;
 use lustre_shade::path::{PathCamera, PathScene, PathTracer};
 use std::time::Instant;
@@ -235,14 +235,14 @@ impl GpuPasses {
         gpu: &GpuContext,
         ctx: &ShadingContext,
         env: &EnvironmentBandwidth,
-        materials: Option<&[Material]>,
+        scene: Option<&Scene>,
     ) -> Self {
         let mut why = vec![];
-        let bandwidth = BandwidthScene::from_context(gpu, ctx, env, materials)
+        let bandwidth = BandwidthScene::from_context(gpu, ctx, env, scene)
             .and_then(|s| Ok((s, BandwidthPass::new(gpu)?)))
             .map_err(|e| why.push(format!("bandwidth pass: {e}")))
             .ok();
-        let shading = AdaptiveScene::from_context(gpu, ctx, materials)
+        let shading = AdaptiveScene::from_context(gpu, ctx, scene)
             .and_then(|s| Ok((s, AdaptivePass::new(gpu)?)))
             .map_err(|e| why.push(format!("shading: {e}")))
             .ok();
@@ -259,14 +259,14 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
     /// Errors: a scene without an environment (adaptive shading lights by it alone), a
     /// material whose tables cannot be built.
     ///
-    /// With `gpu` (the context and the scene's materials in the path scene's order), the
+    /// With `gpu` (the context and the scene, whose materials are the path scene's in its order), the
     /// bandwidth pass and the shading run there when it takes the scene's materials (each pass
     /// on its own; the maps say where each ran and why not the GPU) and `device` allows it
     /// ([`AdaptiveDevice::Auto`] keeps a software rasterizer off).
     pub fn new(
         scene: &'a PathScene<'s>,
         progress: &dyn Fn(usize, usize),
-        gpu: Option<(&GpuContext, &[Material])>,
+        gpu: Option<(&GpuContext, &Scene)>,
         device: AdaptiveDevice,
     ) -> anyhow::Result<Self> {
         let t = Instant::now();
@@ -293,7 +293,7 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
                  (--adaptive-device gpu runs the passes on it)",
                 g.describe()
             )),
-            (Some((g, materials)), _) => GpuPasses::new(g, &ctx, &env, Some(materials)),
+            (Some((g, scene)), _) => GpuPasses::new(g, &ctx, &env, Some(scene)),
         };
         Ok(Self {
             ctx,

@@ -701,7 +701,7 @@ fn serve(
                         "adaptive shading: material tables {k} of {n}"
                     )));
                 };
-                let passes = Some((ctx, &scene.materials[..]));
+                let passes = Some((ctx, &*scene));
                 AdaptiveRenderer::new(ps, &progress, passes, gpu.adaptive)
                     .map_err(|e| format!("{e:#}"))
             });

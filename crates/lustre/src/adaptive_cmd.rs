@@ -4,8 +4,9 @@
 //! buffer and shades hierarchically; brute force shades every pixel with --samples samples.
 //! The G-buffer, the material tables and the buffer's levels and variance target are the
 //! CPU's; the passes run on the GPU with --device gpu, or with auto where the GPU takes the
-//! scene (measured materials, fitted models, untextured scene materials and the analytic
-//! reflection models of a spec: `lustre_gpu::measured::EVALUATED`; area lights) and the adapter
+//! scene (measured materials, fitted models, the scene's reflection materials, textured and
+//! normal-mapped ones too, and the analytic reflection models of a spec:
+//! `lustre_gpu::measured::EVALUATED`; area lights) and the adapter
 //! is not a software rasterizer. Without a scene or --material, 004 Fig. IV.13's line-up (three
 //! spheres of measured paints on white marble).
 
@@ -125,13 +126,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     // The passes run on the GPU where they can (--device auto) or must (--device gpu).
     let mut gpu = match args.device {
         Device::Cpu => None,
-        device => gpu_passes(
-            &ctx,
-            &env_bw,
-            adaptive,
-            device == Device::Gpu,
-            &scene.materials,
-        )?,
+        device => gpu_passes(&ctx, &env_bw, adaptive, device == Device::Gpu, &scene)?,
     };
     if let Some(g) = &gpu {
         let place = |on: bool| if on { "GPU" } else { "CPU" };
@@ -335,7 +330,7 @@ fn gpu_passes(
     env: &EnvironmentBandwidth,
     adaptive: bool,
     required: bool,
-    materials: &[lustre_scene::Material],
+    scene: &lustre_scene::Scene,
 ) -> anyhow::Result<Option<GpuPasses>> {
     let fallback = |what: &str, e: anyhow::Error| -> anyhow::Result<()> {
         if required {
@@ -364,7 +359,7 @@ fn gpu_passes(
         return Ok(None);
     }
     let bandwidth = if adaptive {
-        match BandwidthScene::from_context(&gctx, ctx, env, Some(materials))
+        match BandwidthScene::from_context(&gctx, ctx, env, Some(scene))
             .and_then(|s| Ok((s, BandwidthPass::new(&gctx)?)))
         {
             Ok(b) => Some(b),
@@ -376,7 +371,7 @@ fn gpu_passes(
     } else {
         None
     };
-    let shading = match AdaptiveScene::from_context(&gctx, ctx, Some(materials))
+    let shading = match AdaptiveScene::from_context(&gctx, ctx, Some(scene))
         .and_then(|s| Ok((s, AdaptivePass::new(&gctx)?)))
     {
         Ok(p) => Some(p),

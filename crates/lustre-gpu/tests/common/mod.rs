@@ -5,6 +5,7 @@
 
 pub mod kernel;
 pub mod line_up;
+pub mod textures;
 
 use lustre_gpu::{GpuContext, GpuViewBuffer};
 use lustre_scene::lightmap::{build_atlas, AtlasOptions, LightmapAtlas};
