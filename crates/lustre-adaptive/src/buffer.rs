@@ -34,7 +34,8 @@ use glam::DVec3;
 use lustre_brdf::sampling::hammersley;
 use lustre_freq::brdf::BrdfBandwidth;
 use lustre_freq::pixel::{
-    incident_directions, predict_with, EnvironmentBandwidth, PixelPrediction, ShadingPoint,
+    incident_directions, predict_with, EnvironmentBandwidth, Incident, PixelPrediction,
+    ShadingPoint,
 };
 use lustre_freq::transport::samples_for;
 use lustre_freq::transport::{
@@ -185,11 +186,15 @@ pub fn predict_pixels(
                 (BrdfWeights::Tabulated, Some(t)) if tables.textures.is_empty() => Some(t),
                 _ => None,
             };
+            // The tables seen from ωo, found once per pixel (ωo as predict_with finds it).
+            let (t, b, n) = point.frame;
+            let wo_l = DVec3::new(point.wo.dot(t), point.wo.dot(b), point.wo.dot(n));
+            let view = table.map(|t| t.luminance_view(wo_l));
             let mut pred = None;
             ctx.scene.materials[s.material].with_bsdf(s.uv, &mut |b| {
-                let rho = |wi: DVec3, wo: DVec3| match table {
-                    Some(t) => t.brdf_luminance(wi, wo),
-                    None => b.eval(wi, wo).luminance(),
+                let rho = |wi: &Incident, wo: DVec3| match &view {
+                    Some(v) => v.at_polar(wi.dir.z, wi.theta, wi.phi),
+                    None => b.eval(wi.dir, wo).luminance(),
                 };
                 pred = Some(
                     predict_with(&point, env, &rho, &tables.bandwidth, &dirs).map(
@@ -228,7 +233,7 @@ struct LightPath {
 fn light_paths(
     ctx: &ShadingContext,
     s: &Surfel,
-    rho: &dyn Fn(DVec3, DVec3) -> f64,
+    rho: &dyn Fn(&Incident, DVec3) -> f64,
     brdf: &BrdfBandwidth,
     n_b: usize,
 ) -> Vec<LightPath> {
@@ -249,7 +254,7 @@ fn light_paths(
                 continue;
             }
             let g = cos_l * light.area() / (dist * dist * n_b as f64);
-            let chi = light.emitted(u, v).luminance() * rho(wi, wo);
+            let chi = light.emitted(u, v).luminance() * rho(&Incident::new(wi), wo);
             let nu_s = light.bandwidth_at(u, v) / cos_l.max(1e-6);
             let nu_brdf = brdf.at(wi, wo);
             let surface = Surface {

@@ -74,6 +74,9 @@ pub struct TabulatedSampler {
     /// [`TabulatedSampler::phi_cells`] `+ 1` cumulative weights (row-major, θi outer), each
     /// starting at 0 and ending at the table's total.
     cdf: Vec<f64>,
+    /// cos θ at the θi rows' edges, `theta_bins + 1` values from 1 to 0 ([`theta_cos_range`]'s,
+    /// found once).
+    cos_edges: Vec<f64>,
 }
 
 /// The grid of one table: its φ cells and their width (radians), and whether φ is folded.
@@ -133,10 +136,15 @@ impl TabulatedSampler {
             })
             .collect::<Result<_>>()?;
         let cdf = tables.concat();
+        let n = o.theta_bins;
+        let cos_edges = (0..=n)
+            .map(|i| if i < n { theta_cos_range(i, n).0 } else { 0.0 })
+            .collect();
         Ok(Self {
             options,
             anisotropic,
             cdf,
+            cos_edges,
         })
     }
 
@@ -239,7 +247,7 @@ impl TabulatedSampler {
             0.5
         };
         let (i, j) = (c / g.phi_cells, c % g.phi_cells);
-        let (ca, cb) = theta_cos_range(i, g.theta_bins);
+        let (ca, cb) = (self.cos_edges[i], self.cos_edges[i + 1]);
         let cos_i = ca + (cb - ca) * r;
         let (sign, v) = if !g.folded {
             (1.0, u2)
@@ -259,20 +267,18 @@ impl TabulatedSampler {
     /// below the horizon and for a black table. A lookup where `Bsdf::eval` may be a network
     /// or a table walk (the CPU bandwidth pass's weights, `lustre_adaptive::buffer`).
     pub fn brdf_luminance(&self, wi: DVec3, wo: DVec3) -> f64 {
-        let Some(tables) = self.tables(wo) else {
-            return 0.0;
-        };
-        if wi.z.is_nan() || wi.z <= 0.0 {
-            return 0.0;
+        self.luminance_view(wo).at(wi)
+    }
+
+    /// [`TabulatedSampler::brdf_luminance`] seen from `wo`: its tables and azimuth found once,
+    /// for many ωi.
+    pub fn luminance_view(&self, wo: DVec3) -> LuminanceView<'_> {
+        LuminanceView {
+            tables: self.tables(wo),
+            grid: Grid::new(&self.options, self.anisotropic),
+            cos_edges: &self.cos_edges,
+            phi_o: wo.y.atan2(wo.x),
         }
-        let g = Grid::new(&self.options, self.anisotropic);
-        let (c, _, (ca, cb)) = g.cell(wi, wo);
-        let scale = 1.0 / ((ca - cb) * g.dphi * 0.5 * (ca + cb));
-        tables
-            .iter()
-            .filter(|(_, w)| *w > 0.0)
-            .map(|&(table, w)| w * (table[c + 1] - table[c]) * scale)
-            .sum()
     }
 
     /// The density (per solid angle) with which [`TabulatedSampler::sample`] draws `wi`: the
@@ -285,7 +291,8 @@ impl TabulatedSampler {
             return 0.0;
         }
         let cosine = wi.z / PI;
-        let (c, omega, _) = Grid::new(&self.options, self.anisotropic).cell(wi, wo);
+        let (c, omega, _) =
+            Grid::new(&self.options, self.anisotropic).cell(wi, wo, &self.cos_edges);
         let eps = self.options.defensive;
         tables
             .iter()
@@ -314,23 +321,72 @@ impl Grid {
 
     /// The cell holding `wi` (local, above the surface) relative to `wo`'s azimuth (|φ| when
     /// folded) and its solid angle (the fold's mirror cell included) and its cos θ range.
-    fn cell(&self, wi: DVec3, wo: DVec3) -> (usize, f64, (f64, f64)) {
-        let rel = (wi.y.atan2(wi.x) - wo.y.atan2(wo.x)).rem_euclid(2.0 * PI);
+    /// `cos_edges`: the sampler's [`TabulatedSampler`] `cos_edges`.
+    fn cell(&self, wi: DVec3, wo: DVec3, cos_edges: &[f64]) -> (usize, f64, (f64, f64)) {
+        self.cell_polar(
+            wi.z.clamp(0.0, 1.0).acos(),
+            wi.y.atan2(wi.x) - wo.y.atan2(wo.x),
+            cos_edges,
+        )
+    }
+
+    /// [`Grid::cell`] from ωi's θ and its azimuth relative to ωo's (any multiple of 2π).
+    fn cell_polar(
+        &self,
+        theta: f64,
+        relative_phi: f64,
+        cos_edges: &[f64],
+    ) -> (usize, f64, (f64, f64)) {
+        let rel = relative_phi.rem_euclid(2.0 * PI);
         let phi = if self.folded && rel > PI {
             2.0 * PI - rel
         } else {
             rel
         };
-        let theta = wi.z.clamp(0.0, 1.0).acos();
         let i = ((theta / FRAC_PI_2 * self.theta_bins as f64) as usize).min(self.theta_bins - 1);
         let j = ((phi / self.dphi) as usize).min(self.phi_cells - 1);
-        let (ca, cb) = theta_cos_range(i, self.theta_bins);
+        let (ca, cb) = (cos_edges[i], cos_edges[i + 1]);
         let fold = if self.folded { 2.0 } else { 1.0 };
         (
             i * self.phi_cells + j,
             fold * (ca - cb) * self.dphi,
             (ca, cb),
         )
+    }
+}
+
+/// [`TabulatedSampler::brdf_luminance`] at one ωo ([`TabulatedSampler::luminance_view`]).
+#[derive(Clone, Copy, Debug)]
+pub struct LuminanceView<'a> {
+    tables: Option<[(&'a [f64], f64); 2]>,
+    grid: Grid,
+    cos_edges: &'a [f64],
+    phi_o: f64,
+}
+
+impl LuminanceView<'_> {
+    /// The luminance of f(ωi, ωo) as the tables hold it ([`TabulatedSampler::brdf_luminance`]).
+    pub fn at(&self, wi: DVec3) -> f64 {
+        self.at_polar(wi.z, wi.z.clamp(0.0, 1.0).acos(), wi.y.atan2(wi.x))
+    }
+
+    /// [`LuminanceView::at`] from ωi's cos θ, its θ = acos(clamp(cos θ, 0, 1)) and its azimuth
+    /// atan2(y, x), when a caller knows them (a fixed set of directions).
+    pub fn at_polar(&self, cos_theta: f64, theta: f64, phi: f64) -> f64 {
+        let Some(tables) = self.tables else {
+            return 0.0;
+        };
+        if cos_theta.is_nan() || cos_theta <= 0.0 {
+            return 0.0;
+        }
+        let g = &self.grid;
+        let (c, _, (ca, cb)) = g.cell_polar(theta, phi - self.phi_o, self.cos_edges);
+        let scale = 1.0 / ((ca - cb) * g.dphi * 0.5 * (ca + cb));
+        tables
+            .iter()
+            .filter(|(_, w)| *w > 0.0)
+            .map(|&(table, w)| w * (table[c + 1] - table[c]) * scale)
+            .sum()
     }
 }
 

@@ -103,6 +103,18 @@ impl EquirectMap {
     /// [`EquirectMap::lookup_bilinear`] at map coordinates (u, v) ∈ [0, 1]² of
     /// [`direction_uv`].
     pub fn bilinear_uv(&self, u: f64, v: f64) -> [f64; 3] {
+        let taps = self.bilinear_taps(u, v);
+        std::array::from_fn(|k| {
+            let t = |i: usize| self.data[taps.texels[i]][k] as f64;
+            let [w00, w10, w01, w11] = taps.weights;
+            (w00 * t(0) + w10 * t(1)) + (w01 * t(2) + w11 * t(3))
+        })
+    }
+
+    /// The four texels [`EquirectMap::bilinear_uv`] reads at (u, v) and their weights: a
+    /// lookup of another per-texel quantity of the map (its luminance, its bandwidth) at the
+    /// same place.
+    pub fn bilinear_taps(&self, u: f64, v: f64) -> BilinearTaps {
         let (w, h) = (self.width as i64, self.height as i64);
         let x = u * w as f64 - 0.5;
         let y = (v * h as f64 - 0.5).clamp(0.0, (h - 1) as f64);
@@ -110,18 +122,42 @@ impl EquirectMap {
         let y0 = y.floor();
         let fx = x - x0;
         let fy = y - y0;
-        let xi = |k: i64| k.rem_euclid(w) as usize;
+        // Columns wrap around (no division for the columns next to [0, w), which are all a
+        // direction's uv can give).
+        let xi = |k: i64| {
+            if (0..w).contains(&k) {
+                k as usize
+            } else if (-w..0).contains(&k) {
+                (k + w) as usize
+            } else {
+                k.rem_euclid(w) as usize
+            }
+        };
         let (x0, y0) = (x0 as i64, y0 as i64);
         let y1 = (y0 + 1).min(h - 1) as usize;
         let y0 = y0 as usize;
-        let px = |i: usize, j: usize| self.data[j * self.width + i];
-        let (a, b) = (px(xi(x0), y0), px(xi(x0 + 1), y0));
-        let (c, e) = (px(xi(x0), y1), px(xi(x0 + 1), y1));
-        std::array::from_fn(|k| {
-            (1.0 - fy) * ((1.0 - fx) * a[k] as f64 + fx * b[k] as f64)
-                + fy * ((1.0 - fx) * c[k] as f64 + fx * e[k] as f64)
-        })
+        let (xa, xb) = (xi(x0), xi(x0 + 1));
+        let row = self.width;
+        BilinearTaps {
+            texels: [y0 * row + xa, y0 * row + xb, y1 * row + xa, y1 * row + xb],
+            weights: [
+                (1.0 - fy) * (1.0 - fx),
+                (1.0 - fy) * fx,
+                fy * (1.0 - fx),
+                fy * fx,
+            ],
+        }
     }
+}
+
+/// Four texels of a bilinear lookup ([`EquirectMap::bilinear_taps`]): their indices in the
+/// map's row-major data and their weights (summing to 1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BilinearTaps {
+    /// (x0, y0), (x1, y0), (x0, y1), (x1, y1).
+    pub texels: [usize; 4],
+    /// Their bilinear weights.
+    pub weights: [f64; 4],
 }
 
 /// The map coordinates (u, v) ∈ [0, 1]² of direction `d` (need not be normalised; +y up, u = ½ at

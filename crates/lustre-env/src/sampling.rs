@@ -9,7 +9,7 @@
 //! cos θ uniform), so the density is exactly p(ω) = P_ij / Ω_j and [`EnvSampler::pdf`] agrees
 //! with [`EnvSampler::sample`] to rounding.
 
-use crate::equirect::EquirectMap;
+use crate::equirect::{direction_uv, EquirectMap};
 use crate::error::{EnvError, Result};
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -221,12 +221,9 @@ impl EnvSampler {
 
     /// The texel holding direction `d` (need not be normalized; zero / non-finite reads +y).
     pub fn texel_of(&self, d: DVec3) -> (usize, usize) {
-        let d = d.try_normalize().unwrap_or(DVec3::Y);
-        let phi = d.x.atan2(-d.z);
-        let u = 0.5 + phi / (2.0 * PI);
-        let theta = d.y.clamp(-1.0, 1.0).acos();
+        let (u, v) = direction_uv(d);
         let i = ((u * self.width as f64) as usize).min(self.width - 1);
-        let j = ((theta / PI * self.height as f64) as usize).min(self.height - 1);
+        let j = ((v * self.height as f64) as usize).min(self.height - 1);
         (i, j)
     }
 

@@ -74,8 +74,14 @@ pub struct BrdfBandwidthView<'a> {
 impl BrdfBandwidthView<'_> {
     /// The bandwidth for incident direction `wi` (as [`BrdfBandwidth::at`]).
     pub fn at(&self, wi: DVec3) -> f64 {
+        self.at_polar(wi.z.clamp(0.0, 1.0).acos(), wi.y.atan2(wi.x))
+    }
+
+    /// [`BrdfBandwidthView::at`] from ωi's θ = acos(clamp(z, 0, 1)) and azimuth atan2(y, x),
+    /// when a caller knows them (a fixed set of directions).
+    pub fn at_polar(&self, theta: f64, phi: f64) -> f64 {
         let o = &self.table.options;
-        let (ti, pi) = grid_cell(wi, o.incident);
+        let (ti, pi) = polar_cell(theta, phi, o.incident);
         self.table.data[(ti * o.incident + pi) * o.out * o.out + self.out_cell]
     }
 }
@@ -83,8 +89,12 @@ impl BrdfBandwidthView<'_> {
 /// The (θ row, φ column) of the `n`² hemisphere grid holding `w` (θ uniform in [0, π/2), φ in
 /// [0, 2π); below the horizon clamps onto it).
 fn grid_cell(w: DVec3, n: usize) -> (usize, usize) {
-    let theta = w.z.clamp(0.0, 1.0).acos();
-    let phi = w.y.atan2(w.x).rem_euclid(2.0 * PI);
+    polar_cell(w.z.clamp(0.0, 1.0).acos(), w.y.atan2(w.x), n)
+}
+
+/// [`grid_cell`] from the direction's θ and azimuth (any multiple of 2π).
+fn polar_cell(theta: f64, phi: f64, n: usize) -> (usize, usize) {
+    let phi = phi.rem_euclid(2.0 * PI);
     (
         ((theta / FRAC_PI_2 * n as f64) as usize).min(n - 1),
         ((phi / (2.0 * PI) * n as f64) as usize).min(n - 1),

@@ -27,14 +27,28 @@ pub struct EnvironmentBandwidth<'a> {
     pub map: &'a EquirectMap,
     /// [`angular_bandwidth`] of the map.
     pub bandwidth: Vec<f64>,
+    /// Per texel, the map's luminance and its bandwidth side by side (what a prediction reads:
+    /// one cache line, a third of the map's bytes).
+    luminance_bandwidth: Vec<[f32; 2]>,
 }
 
 impl<'a> EnvironmentBandwidth<'a> {
     /// Computes the map's bandwidth.
     pub fn new(map: &'a EquirectMap) -> Result<Self> {
+        let bandwidth = angular_bandwidth(map)?;
+        let luminance_bandwidth = map
+            .data
+            .iter()
+            .zip(&bandwidth)
+            .map(|(c, &b)| {
+                let l = Rgb([c[0] as f64, c[1] as f64, c[2] as f64]).luminance();
+                [l as f32, b as f32]
+            })
+            .collect();
         Ok(Self {
             map,
-            bandwidth: angular_bandwidth(map)?,
+            bandwidth,
+            luminance_bandwidth,
         })
     }
 
@@ -45,11 +59,19 @@ impl<'a> EnvironmentBandwidth<'a> {
         self.bandwidth_uv(u, v)
     }
 
-    /// The map's radiance (bilinear, [`EquirectMap::lookup_bilinear`]) and bandwidth
-    /// ([`EnvironmentBandwidth::bandwidth_at`]) in direction `d`, its map coordinates found once.
-    pub fn radiance_and_bandwidth(&self, d: DVec3) -> ([f64; 3], f64) {
+    /// The map's luminance (bilinear, as [`EquirectMap::lookup_bilinear`] reads the radiance)
+    /// and bandwidth ([`EnvironmentBandwidth::bandwidth_at`]) in direction `d`, its map
+    /// coordinates found once.
+    pub fn luminance_and_bandwidth(&self, d: DVec3) -> (f64, f64) {
         let (u, v) = direction_uv(d);
-        (self.map.bilinear_uv(u, v), self.bandwidth_uv(u, v))
+        let taps = self.map.bilinear_taps(u, v);
+        let l = |i: usize| f64::from(self.luminance_bandwidth[taps.texels[i]][0]);
+        let [w00, w10, w01, w11] = taps.weights;
+        let luminance = (w00 * l(0) + w10 * l(1)) + (w01 * l(2) + w11 * l(3));
+        let (w, h) = (self.map.width, self.map.height);
+        let x = ((u * w as f64) as usize).min(w - 1);
+        let y = ((v * h as f64) as usize).min(h - 1);
+        (luminance, f64::from(self.luminance_bandwidth[y * w + x][1]))
     }
 
     fn bandwidth_uv(&self, u: f64, v: f64) -> f64 {
@@ -104,9 +126,35 @@ pub fn incident_direction(k: usize, n_b: usize) -> DVec3 {
 }
 
 /// The n_b directions of a prediction, [`incident_direction`] k = 0 … n_b − 1 (the same for
-/// every pixel: a pass computes them once).
-pub fn incident_directions(n_b: usize) -> Vec<DVec3> {
-    (0..n_b).map(|k| incident_direction(k, n_b)).collect()
+/// every pixel: a pass computes them once, with their polar angles).
+pub fn incident_directions(n_b: usize) -> Vec<Incident> {
+    (0..n_b)
+        .map(|k| Incident::new(incident_direction(k, n_b)))
+        .collect()
+}
+
+/// An incident direction in the shading frame with its polar angles, found once for a set of
+/// directions every pixel shares (the tables' cells need them, `BrdfBandwidthView::at_polar`,
+/// `LuminanceView::at_polar`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Incident {
+    /// The direction (local frame, unit).
+    pub dir: DVec3,
+    /// acos(clamp(z, 0, 1)).
+    pub theta: f64,
+    /// atan2(y, x).
+    pub phi: f64,
+}
+
+impl Incident {
+    /// `dir` with its angles.
+    pub fn new(dir: DVec3) -> Self {
+        Self {
+            dir,
+            theta: dir.z.clamp(0.0, 1.0).acos(),
+            phi: dir.y.atan2(dir.x),
+        }
+    }
 }
 
 /// Predicts one pixel from `n_b` directions. A point seen from below its surface, or degenerate
@@ -122,7 +170,7 @@ pub fn predict(
     predict_with(
         p,
         env,
-        &|wi, wo| bsdf.eval(wi, wo).luminance(),
+        &|wi, wo| bsdf.eval(wi.dir, wo).luminance(),
         brdf_bandwidth,
         &incident_directions(n_b),
     )
@@ -131,14 +179,14 @@ pub fn predict(
 
 /// [`predict`] from the directions `dirs` ([`incident_directions`]), with the BRDF's luminance
 /// ρ(ωi, ωo) (local frame) given as a function: the BSDF's `eval`, or a table of it
-/// (`TabulatedSampler::brdf_luminance`). Also returns the BRDF's largest bandwidth over `dirs`
+/// (`TabulatedSampler::luminance_view`). Also returns the BRDF's largest bandwidth over `dirs`
 /// (found for degenerate points too, ωo clamped onto the horizon). Errors on no direction.
 pub fn predict_with(
     p: &ShadingPoint,
     env: &EnvironmentBandwidth,
-    rho: &dyn Fn(DVec3, DVec3) -> f64,
+    rho: &dyn Fn(&Incident, DVec3) -> f64,
     brdf_bandwidth: &BrdfBandwidth,
-    dirs: &[DVec3],
+    dirs: &[Incident],
 ) -> Result<(PixelPrediction, f64)> {
     let n_b = dirs.len();
     if n_b == 0 {
@@ -153,19 +201,22 @@ pub fn predict_with(
         .iter()
         .all(|v| v.is_finite());
     if !(wo_l.z > 0.0 && finite && n.length_squared() > 0.5) {
-        let brdf_max = dirs.iter().map(|&d| view.at(d)).fold(0.0, f64::max);
+        let brdf_max = dirs
+            .iter()
+            .map(|d| view.at_polar(d.theta, d.phi))
+            .fold(0.0, f64::max);
         return Ok((PixelPrediction::default(), brdf_max));
     }
     let mut paths = Vec::with_capacity(n_b);
     let mut terms = Vec::with_capacity(n_b);
     let mut chi_sum = 0.0;
     let mut brdf_max = 0.0f64;
-    for &wi_l in dirs {
+    for incident in dirs {
+        let wi_l = incident.dir;
         let wi = t * wi_l.x + b * wi_l.y + n * wi_l.z;
-        let (radiance, nu_light) = env.radiance_and_bandwidth(wi);
-        let radiance = Rgb(radiance).luminance();
-        let rho = rho(wi_l, wo_l);
-        let nu_brdf = view.at(wi_l);
+        let (radiance, nu_light) = env.luminance_and_bandwidth(wi);
+        let rho = rho(incident, wo_l);
+        let nu_brdf = view.at_polar(incident.theta, incident.phi);
         brdf_max = brdf_max.max(nu_brdf);
         let s = Surface {
             cos_i: wi_l.z.max(1e-6),
