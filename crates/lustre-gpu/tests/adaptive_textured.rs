@@ -11,7 +11,7 @@
 //! skip) without an adapter.
 
 mod common;
-use common::textures::{scalar, textures, untextured};
+use common::textures::{scalar, textured_gold, textures, untextured};
 use common::{ctx, line_up};
 use lustre_adaptive::buffer::{predict_pixels, BandwidthBuffer, BrdfWeights, BufferOptions};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
@@ -42,17 +42,7 @@ fn textured_line_up() -> Scene {
         texture: uv0(3),
         scale,
     };
-    scene.materials[0] = Material::new(
-        "textured gold",
-        MaterialKind::RoughConductor {
-            eta: Rgb::new(0.143, 0.374, 1.442),
-            k: Rgb::new(3.983, 2.385, 1.603),
-            specular: TexturedRgb::constant(Rgb::ONE),
-            alpha_u: scalar(0, 1),
-            alpha_v: scalar(0, 1),
-            distribution: Distribution::Ggx,
-        },
-    );
+    scene.materials[0] = Material::new("textured gold", textured_gold());
     let mut pbr = Material::new(
         "textured glTF",
         MaterialKind::PbrMetallicRoughness {

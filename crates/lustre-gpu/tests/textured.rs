@@ -13,7 +13,7 @@
 //! Fails (does not skip) without an adapter.
 
 mod common;
-use common::textures::{scalar, textures, untextured};
+use common::textures::{scalar, textured_gold, textures, untextured};
 use common::{ctx, quick_bake};
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::frame_shade::{
@@ -23,7 +23,7 @@ use lustre_gpu::{
     FrameShadePass, FrameShadeScene, FrameShadeTarget, GBufferTarget, GpuViewBuffer,
     LightmapFrameScene, LightmapRenderer, ShadeTarget,
 };
-use lustre_scene::material::{Distribution, NormalMap, TextureRef, TexturedRgb, TexturedScalar};
+use lustre_scene::material::{NormalMap, TextureRef, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind, Scene};
 use lustre_shade::bake::gbuffer::GBuffer;
 use lustre_shade::bake::render::Lightmapped;
@@ -48,17 +48,7 @@ fn textured_room() -> Scene {
         .iter()
         .position(|m| matches!(m.kind, MaterialKind::Spec(_)))
         .expect("the fitted sphere");
-    scene.materials[gold] = Material::new(
-        name(gold, &scene),
-        MaterialKind::RoughConductor {
-            eta: Rgb::new(0.143, 0.374, 1.442),
-            k: Rgb::new(3.983, 2.385, 1.603),
-            specular: TexturedRgb::constant(Rgb::ONE),
-            alpha_u: scalar(0, 1),
-            alpha_v: scalar(0, 1),
-            distribution: Distribution::Ggx,
-        },
-    );
+    scene.materials[gold] = Material::new(name(gold, &scene), textured_gold());
     // (b) The anisotropic sphere: glTF metallic-roughness, textured and normal-mapped.
     let alu = material(&scene, "brushed-aluminium");
     let mut pbr = Material::new(

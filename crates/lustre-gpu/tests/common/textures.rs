@@ -2,7 +2,7 @@
 //! tests of textured materials on the GPU (`textured`, `adaptive_textured`).
 
 use lustre_brdf::rgb::Rgb;
-use lustre_scene::material::{TextureRef, TexturedRgb, TexturedScalar};
+use lustre_scene::material::{Distribution, TextureRef, TexturedRgb, TexturedScalar};
 use lustre_scene::texture::{ColorSpace, Texture};
 use lustre_scene::{Material, MaterialKind};
 use std::f32::consts::TAU;
@@ -136,4 +136,16 @@ pub fn untextured(m: &Material, textures: &[Texture]) -> Material {
     let mut out = Material::new(m.name.clone(), kind);
     out.two_sided = m.two_sided;
     out
+}
+
+/// A rough gold conductor (GGX) whose αu and αv are texture 0's G channel ([`textures`]).
+pub fn textured_gold() -> MaterialKind {
+    MaterialKind::RoughConductor {
+        eta: Rgb::new(0.143, 0.374, 1.442),
+        k: Rgb::new(3.983, 2.385, 1.603),
+        specular: TexturedRgb::constant(Rgb::ONE),
+        alpha_u: scalar(0, 1),
+        alpha_v: scalar(0, 1),
+        distribution: Distribution::Ggx,
+    }
 }
