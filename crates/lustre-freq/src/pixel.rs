@@ -68,17 +68,20 @@ impl<'a> EnvironmentBandwidth<'a> {
         let l = |i: usize| f64::from(self.luminance_bandwidth[taps.texels[i]][0]);
         let [w00, w10, w01, w11] = taps.weights;
         let luminance = (w00 * l(0) + w10 * l(1)) + (w01 * l(2) + w11 * l(3));
-        let (w, h) = (self.map.width, self.map.height);
-        let x = ((u * w as f64) as usize).min(w - 1);
-        let y = ((v * h as f64) as usize).min(h - 1);
-        (luminance, f64::from(self.luminance_bandwidth[y * w + x][1]))
+        let nearest = self.nearest_texel(u, v);
+        (luminance, f64::from(self.luminance_bandwidth[nearest][1]))
     }
 
     fn bandwidth_uv(&self, u: f64, v: f64) -> f64 {
+        self.bandwidth[self.nearest_texel(u, v)]
+    }
+
+    /// The index of the texel holding map coordinates (u, v).
+    fn nearest_texel(&self, u: f64, v: f64) -> usize {
         let (w, h) = (self.map.width, self.map.height);
         let x = ((u * w as f64) as usize).min(w - 1);
         let y = ((v * h as f64) as usize).min(h - 1);
-        self.bandwidth[y * w + x]
+        y * w + x
     }
 }
 

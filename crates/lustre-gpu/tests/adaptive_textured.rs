@@ -11,7 +11,7 @@
 //! skip) without an adapter.
 
 mod common;
-use common::textures::{scalar, textured_gold, textures, untextured};
+use common::textures::{scalar, textured_gltf, textured_gold, textures, untextured};
 use common::{ctx, line_up};
 use lustre_adaptive::buffer::{predict_pixels, BandwidthBuffer, BrdfWeights, BufferOptions};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
@@ -43,18 +43,7 @@ fn textured_line_up() -> Scene {
         scale,
     };
     scene.materials[0] = Material::new("textured gold", textured_gold());
-    let mut pbr = Material::new(
-        "textured glTF",
-        MaterialKind::PbrMetallicRoughness {
-            base_color: TexturedRgb::texture(uv0(1)),
-            metallic: scalar(2, 2),
-            roughness: scalar(2, 1),
-            transmission: TexturedScalar::constant(0.0),
-            ior: 1.5,
-            anisotropy: 0.0,
-            anisotropy_rotation: 0.0,
-        },
-    );
+    let mut pbr = Material::new("textured glTF", textured_gltf());
     pbr.normal_map = Some(normal_map(1.0));
     scene.materials[1] = pbr;
     let mut floor = Material::new(

@@ -13,7 +13,7 @@
 //! Fails (does not skip) without an adapter.
 
 mod common;
-use common::textures::{scalar, textured_gold, textures, untextured};
+use common::textures::{scalar, textured_gltf, textured_gold, textures, untextured};
 use common::{ctx, quick_bake};
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::frame_shade::{
@@ -51,21 +51,7 @@ fn textured_room() -> Scene {
     scene.materials[gold] = Material::new(name(gold, &scene), textured_gold());
     // (b) The anisotropic sphere: glTF metallic-roughness, textured and normal-mapped.
     let alu = material(&scene, "brushed-aluminium");
-    let mut pbr = Material::new(
-        name(alu, &scene),
-        MaterialKind::PbrMetallicRoughness {
-            base_color: TexturedRgb::texture(TextureRef {
-                texture: 1,
-                uv_set: 0,
-            }),
-            metallic: scalar(2, 2),
-            roughness: scalar(2, 1),
-            transmission: TexturedScalar::constant(0.0),
-            ior: 1.5,
-            anisotropy: 0.0,
-            anisotropy_rotation: 0.0,
-        },
-    );
+    let mut pbr = Material::new(name(alu, &scene), textured_gltf());
     pbr.normal_map = Some(NormalMap {
         texture: TextureRef {
             texture: 3,

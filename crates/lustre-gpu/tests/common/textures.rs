@@ -149,3 +149,20 @@ pub fn textured_gold() -> MaterialKind {
         distribution: Distribution::Ggx,
     }
 }
+
+/// A glTF metallic-roughness material with texture 1 as its base colour and texture 2's B and G
+/// channels as its metallic and roughness ([`textures`]); opaque.
+pub fn textured_gltf() -> MaterialKind {
+    MaterialKind::PbrMetallicRoughness {
+        base_color: TexturedRgb::texture(TextureRef {
+            texture: 1,
+            uv_set: 0,
+        }),
+        metallic: scalar(2, 2),
+        roughness: scalar(2, 1),
+        transmission: TexturedScalar::constant(0.0),
+        ior: 1.5,
+        anisotropy: 0.0,
+        anisotropy_rotation: 0.0,
+    }
+}
