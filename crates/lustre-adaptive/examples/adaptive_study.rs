@@ -48,6 +48,9 @@ struct Args {
     weights: Vec<BrdfWeights>,
     /// With `--speed-only`, also the pre-convolved constant-N_p rows at every rate.
     preconvolved: bool,
+    /// Also rows with N_p ∝ the level's footprint (`SampleRule::Footprint`) beside every
+    /// constant-N_p row.
+    footprint: bool,
     /// Times of Fig. IV.15's rows: the least of this many runs (brute force and adaptive alike).
     repeat: usize,
 }
@@ -75,6 +78,7 @@ fn args() -> anyhow::Result<Args> {
         n_bs: vec![lustre_adaptive::buffer::DEFAULT_N_B],
         weights: vec![BufferOptions::default().weights],
         preconvolved: false,
+        footprint: false,
         repeat: 1,
     };
     let mut it = std::env::args().skip(1);
@@ -99,6 +103,7 @@ fn args() -> anyhow::Result<Args> {
             }
             "--speed-only" => a.speed_only = true,
             "--preconvolved" => a.preconvolved = true,
+            "--footprint" => a.footprint = true,
             "--repeat" => a.repeat = v()?.parse::<usize>()?.max(1),
             "--n-b" => {
                 a.n_bs = v()?
@@ -238,17 +243,18 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
     if !a.speed_only {
         rows.push((Lighting::Direct, SampleRule::Absolute, 2.0));
     }
-    rows.extend(
-        a.rates
-            .iter()
-            .map(|&r| (Lighting::Direct, SampleRule::Constant, r)),
-    );
+    let mut rules = vec![SampleRule::Constant];
+    if a.footprint {
+        rules.push(SampleRule::Footprint);
+    }
+    let mut lightings = vec![Lighting::Direct];
     if a.speed_only && a.preconvolved {
-        rows.extend(
-            a.rates
-                .iter()
-                .map(|&r| (Lighting::Preconvolved, SampleRule::Constant, r)),
-        );
+        lightings.push(Lighting::Preconvolved);
+    }
+    for &l in &lightings {
+        for &rule in &rules {
+            rows.extend(a.rates.iter().map(|&r| (l, rule, r)));
+        }
     }
     if !a.speed_only {
         rows.extend([
@@ -266,7 +272,7 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
         .flat_map(|(n_b, w)| rows.iter().map(move |&(l, s, r)| (l, s, r, n_b, w)))
         .collect();
     for (lighting, scale, rate, n_b, weights) in rows {
-        let means: &[f64] = if scale == SampleRule::Constant {
+        let means: &[f64] = if matches!(scale, SampleRule::Constant | SampleRule::Footprint) {
             &[1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0, 256.0]
         } else {
             &[1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0]
@@ -342,6 +348,7 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
                 match scale {
                     SampleRule::Absolute => " (004's absolute V)",
                     SampleRule::Constant => " (constant N_p)",
+                    SampleRule::Footprint => " (N_p ∝ footprint)",
                     SampleRule::Relative => "",
                     SampleRule::RelativeMse => " (N_p ∝ σ)",
                 },

@@ -70,6 +70,13 @@ pub enum BrdfWeights {
 pub enum SampleRule {
     /// The same N_p everywhere (the mean): spatial adaptivity only.
     Constant,
+    /// N_p from the level a pixel is shaded at: N_0 (the mean) at level 0, N_0 · ⅔ · 2^k at
+    /// level k ≥ 1 ([`footprint_samples`]). A pixel shaded at level k carries about 4^k image
+    /// pixels through the up-sampling, each with its noise times the bilinear weights (whose
+    /// squares average ⅔ · ⅔): its noise reaches the image with a weight a_k ≈ 4^k · 4/9. Under
+    /// a fixed total Σ N_p, Σ a_k σ² / N_p is least at N_p ∝ √a_k σ; with σ alike this is
+    /// N_p ∝ ⅔ · 2^k.
+    Footprint,
     /// The bound itself (004: N_p ∝ S_p): pixels under bright light get the samples.
     Absolute,
     /// The bound relative to the pixel's squared radiance as its n_b directions estimate it
@@ -134,8 +141,10 @@ pub struct BandwidthBuffer {
     pub target: f64,
     /// The largest N_p.
     pub max_samples: usize,
-    /// N_p everywhere under [`SampleRule::Constant`].
+    /// N_p everywhere under [`SampleRule::Constant`]; N_0 under [`SampleRule::Footprint`].
     pub constant: Option<usize>,
+    /// Whether N_p grows with the level ([`SampleRule::Footprint`]).
+    pub footprint: bool,
     /// Levels 0..=L.
     pub levels: usize,
     /// Per level k, the min of ℓ over each 2^k block (row-major blocks).
@@ -356,7 +365,7 @@ impl BandwidthBuffer {
                     Lighting::Preconvolved => pred.variance_preconvolved,
                 };
                 let variance = match options.scale {
-                    SampleRule::Absolute | SampleRule::Constant => bound,
+                    SampleRule::Absolute | SampleRule::Constant | SampleRule::Footprint => bound,
                     SampleRule::Relative if pred.radiance > 0.0 => {
                         bound / (pred.radiance * pred.radiance)
                     }
@@ -370,9 +379,10 @@ impl BandwidthBuffer {
         let level: Vec<u8> = per_pixel.iter().map(|v| v.1).collect();
         let variance: Vec<f64> = per_pixel.iter().map(|v| v.2).collect();
         let brdf_max: Vec<f64> = per_pixel.iter().map(|v| v.3).collect();
-        // A constant N_p needs no target (1 stands in).
-        let constant = (options.scale == SampleRule::Constant)
+        // A constant N_p (or N_0) needs no target (1 stands in).
+        let constant = matches!(options.scale, SampleRule::Constant | SampleRule::Footprint)
             .then(|| (options.mean_samples.round() as usize).clamp(1, options.max_samples));
+        let footprint = options.scale == SampleRule::Footprint;
         let target = match constant {
             Some(_) => 1.0,
             None => {
@@ -418,6 +428,7 @@ impl BandwidthBuffer {
             target,
             max_samples: options.max_samples,
             constant,
+            footprint,
             levels,
             min_level,
             max_variance,
@@ -433,12 +444,27 @@ impl BandwidthBuffer {
     /// N_p for the level-`k` block holding pixel (x, y) (its max-filtered variance).
     pub fn samples(&self, k: usize, x: usize, y: usize) -> usize {
         if let Some(n) = self.constant {
-            return n;
+            return if self.footprint {
+                footprint_samples(n, k, self.max_samples)
+            } else {
+                n
+            };
         }
         let bw = self.width.div_ceil(1 << k);
         let v = self.max_variance[k][(y >> k) * bw + (x >> k)];
         samples_for(v, self.target, self.max_samples).unwrap_or(self.max_samples)
     }
+}
+
+/// N_p at level `k` under [`SampleRule::Footprint`] from N_0 = `n0`: N_0 at level 0,
+/// round(N_0 · ⅔ · 2^k) at k ≥ 1, clamped to 1..=`max`.
+pub fn footprint_samples(n0: usize, k: usize, max: usize) -> usize {
+    if k == 0 {
+        return n0.clamp(1, max);
+    }
+    // round(n0 · 2^(k+1) / 3) in integers (no tie: 3 divides neither n0 · 2^(k+1) ± ½).
+    let m = (n0 as u128) << (k + 1).min(64);
+    ((m + 1) / 3).clamp(1, max as u128) as usize
 }
 
 /// Levels as a map to draw: ℓ + 1, and 0 for [`NO_LEVEL`] (the background; in a frame's

@@ -437,7 +437,14 @@ impl AdaptivePass {
             .map(|v| (4.0 * PI * PI * v / buffer.target) as f32)
             .collect();
         let level: Vec<u32> = buffer.level.iter().map(|&l| u32::from(l)).collect();
-        let constant = buffer.constant.map_or(0, |n| n as u32);
+        // Per level: N_p when the rule sets it without the variance (0: from the quotas).
+        let constant = (0..buffer.levels)
+            .map(|k| {
+                buffer
+                    .constant
+                    .map_or(0, |_| buffer.samples(k, 0, 0) as u32)
+            })
+            .collect();
         let lods = match lod {
             Some(f) => buffer.brdf_max.iter().map(|&nu| f(nu) as f32).collect(),
             None => vec![-1.0; g.pixels.len()],
@@ -483,7 +490,7 @@ impl AdaptivePass {
                 count: 1,
                 level: vec![0; pixels],
                 quota: vec![0.0; pixels],
-                constant: n as u32,
+                constant: vec![n as u32],
                 max_samples: n as u32,
                 lods: vec![-1.0; pixels],
             },
@@ -554,7 +561,7 @@ impl AdaptivePass {
             seed: [seed as u32, (seed >> 32) as u32],
             lights: scene.light_count,
             max_samples: levels.max_samples.max(1),
-            constant: levels.constant,
+            constant: 0,
             pyramid_levels: scene.pyramid_levels,
             phase: 0,
             _pad: 0,
@@ -651,6 +658,7 @@ impl AdaptivePass {
                 let p = Params {
                     level: k as u32,
                     phase,
+                    constant: levels.constant[k],
                     ..base
                 };
                 let ub = buffer_init(
@@ -750,7 +758,8 @@ struct Levels {
     count: usize,
     level: Vec<u32>,
     quota: Vec<f32>,
-    constant: u32,
+    /// Per level, N_p when it does not come from the quotas (else 0).
+    constant: Vec<u32>,
     max_samples: u32,
     /// Per pixel, the pre-convolved pyramid level (< 0: direct lighting).
     lods: Vec<f32>,

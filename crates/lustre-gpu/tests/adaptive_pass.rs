@@ -6,7 +6,9 @@
 //! adapter.
 
 use glam::DVec3;
-use lustre_adaptive::buffer::{BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule};
+use lustre_adaptive::buffer::{
+    footprint_samples, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule,
+};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{render_adaptive, render_brute, NOT_SHADED};
 use lustre_adaptive::light::AreaLight;
@@ -250,6 +252,62 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
             )
             .expect_err("no pyramid");
         assert!(e.to_string().contains("pyramid"), "{e}");
+
+        // N_p by the level's footprint: N_0 = 4 at level 0, round(4 · ⅔ · 2^k) at level k, on
+        // both.
+        let fp_buffer = BandwidthBuffer::build(
+            &g,
+            &shading,
+            &env_bw,
+            BufferOptions {
+                scale: SampleRule::Footprint,
+                mean_samples: 4.0,
+                ..options
+            },
+        )
+        .expect("footprint buffer");
+        let cpu_fp =
+            render_adaptive(&g, &shading, &fp_buffer, Lighting::Direct, seed).expect("cpu");
+        let gpu_fp = pass
+            .render(&gpu_ctx, &scene_gpu, &g, &fp_buffer, None, seed)
+            .expect("gpu footprint");
+        let mut by_level = std::collections::BTreeMap::new();
+        for (k, &l) in cpu_fp.shaded_level.iter().enumerate() {
+            if l != NOT_SHADED {
+                let n = cpu_fp.samples[k] as usize;
+                assert_eq!(n, footprint_samples(4, l as usize, fp_buffer.max_samples));
+                by_level.insert(l, n);
+            }
+        }
+        eprintln!("footprint rule: N_p per shaded level {by_level:?}");
+        assert!(by_level.len() >= 3, "{by_level:?}");
+        let level_differ = cpu_fp
+            .shaded_level
+            .iter()
+            .zip(&gpu_fp.frame.shaded_level)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert!(level_differ * 200 < surface, "{level_differ} levels differ");
+        let samples_differ = cpu_fp
+            .samples
+            .iter()
+            .zip(&gpu_fp.frame.samples)
+            .zip(&cpu_fp.shaded_level)
+            .filter(|((a, b), l)| **l != NOT_SHADED && a != b)
+            .count();
+        assert!(
+            samples_differ * 200 < surface,
+            "{samples_differ} N_p differ"
+        );
+        let (rms, over1, over10) = image_difference(&g, &cpu_fp.image, &gpu_fp.frame.image);
+        eprintln!(
+            "footprint rule: relative RMS {rms:.2e}, {:.2} % off by > 1 %, {:.2} % by > 10 %; levels differ on {level_differ}, N_p on {samples_differ}",
+            100.0 * over1,
+            100.0 * over10
+        );
+        assert!(rms < 5e-3, "relative RMS {rms}");
+        assert!(over1 < 0.01, "{over1}");
+        assert!(over10 < 0.002, "{over10}");
 
         // Brute force, 8 samples everywhere.
         let (cpu_b, stats_b) = render_brute(&g, &shading, 8, seed).expect("cpu brute");

@@ -95,8 +95,9 @@ impl BufferView {
 }
 
 /// Every sample rule, in the panel's order.
-pub const SAMPLE_RULES: [SampleRule; 4] = [
+pub const SAMPLE_RULES: [SampleRule; 5] = [
     SampleRule::Constant,
+    SampleRule::Footprint,
     SampleRule::Relative,
     SampleRule::RelativeMse,
     SampleRule::Absolute,
@@ -106,6 +107,7 @@ pub const SAMPLE_RULES: [SampleRule; 4] = [
 pub fn rule_name(rule: SampleRule) -> &'static str {
     match rule {
         SampleRule::Constant => "constant",
+        SampleRule::Footprint => "footprint",
         SampleRule::Relative => "relative",
         SampleRule::RelativeMse => "relative-mse",
         SampleRule::Absolute => "absolute",

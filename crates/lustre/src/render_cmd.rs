@@ -54,6 +54,10 @@ pub enum SampleRuleArg {
     /// --samples at every shaded pixel (spatial adaptivity only; the fastest at equal PSNR in
     /// our measurements).
     Constant,
+    /// --samples at pixels shaded at level 0 and ⅔ · 2^k times as many at level k: a pixel
+    /// shaded at a coarse level carries 4^k pixels through the up-sampling, and its noise with
+    /// them.
+    Footprint,
     /// 004's Eq. IV.9 bound relative to the pixel's squared radiance, N_p ∝ S / L̂².
     Relative,
     /// N_p ∝ √S / L̂ (the allocation minimizing the summed squared relative error).
