@@ -23,6 +23,10 @@ pub struct Distribution1D {
     cdf: Vec<f64>,
     /// Σ weights.
     total: f64,
+    /// guide[g] = the number of cdf entries ≤ g / len() for g in 0..=len(): the cells of u in
+    /// [g / n, (g + 1) / n) lie between guide[g] and guide[g + 1] (a guide table; Devroye 1986
+    /// §III.2.4), so [`Distribution1D::sample`] searches a few entries instead of all.
+    guide: Vec<u32>,
 }
 
 impl Distribution1D {
@@ -50,10 +54,15 @@ impl Distribution1D {
         if let Some(last) = cdf.last_mut() {
             *last = 1.0;
         }
+        let m = weights.len().max(1);
+        let guide = (0..=m)
+            .map(|g| cdf.partition_point(|&c| c <= g as f64 / m as f64) as u32)
+            .collect();
         Distribution1D {
             weights,
             cdf,
             total,
+            guide,
         }
     }
 
@@ -85,10 +94,14 @@ impl Distribution1D {
     /// The cell of `u` ∈ [0, 1) and `u` rescaled to [0, 1) inside that cell.
     pub fn sample(&self, u: f64) -> (usize, f64) {
         let n = self.weights.len();
-        // Largest k with cdf[k] <= u, among cells of positive weight.
-        let k = self
-            .cdf
-            .partition_point(|&c| c <= u)
+        // Largest k with cdf[k] <= u, among cells of positive weight: searched between the
+        // guide's entries one cell of the guide wider on each side than u's own, which holds
+        // whatever u · n rounds to (the same k as a search of the whole cdf).
+        let m = self.guide.len() - 1;
+        let g = ((u * m as f64) as usize).min(m - 1);
+        let lo = self.guide[g.saturating_sub(1)] as usize;
+        let hi = self.guide[(g + 2).min(m)] as usize;
+        let k = (lo + self.cdf[lo..hi].partition_point(|&c| c <= u))
             .saturating_sub(1)
             .min(n.saturating_sub(1));
         let lo = self.cdf[k];

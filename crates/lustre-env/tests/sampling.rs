@@ -220,3 +220,38 @@ fn black_map_is_an_error() {
     let m = EquirectMap::new(8, 4, vec![[0.0; 3]; 32]).unwrap();
     assert!(EnvSampler::new(&m).is_err());
 }
+
+/// The cell a search of the whole cdf finds for `u` (what `Distribution1D::sample` did before
+/// its guide table).
+fn full_search(d: &lustre_env::Distribution1D, u: f64) -> usize {
+    d.cdf()
+        .partition_point(|&c| c <= u)
+        .saturating_sub(1)
+        .min(d.len().saturating_sub(1))
+}
+
+proptest::proptest! {
+    #[test]
+    fn the_guide_table_finds_the_cells_a_full_search_finds(
+        weights in proptest::collection::vec(
+            proptest::prop_oneof![proptest::strategy::Just(0.0), 0.0..1.0f64, 1e3..1e6f64],
+            1..300,
+        ),
+        us in proptest::collection::vec(0.0..1.0f64, 64),
+    ) {
+        let d = lustre_env::Distribution1D::new(weights);
+        let n = d.len() as f64;
+        // Random points, and the guide's own boundaries with their neighbouring floats.
+        let edges = (0..=d.len()).flat_map(|g| {
+            let x = g as f64 / n;
+            [x, f64::from_bits(x.to_bits().saturating_sub(1)), f64::from_bits(x.to_bits() + 1)]
+        });
+        for u in us.into_iter().chain(edges).filter(|u| (0.0..1.0).contains(u)) {
+            proptest::prop_assert_eq!(d.sample(u).0, full_search(&d, u), "u = {}", u);
+        }
+        // The cdf's own entries.
+        for &u in d.cdf().iter().filter(|u| (0.0..1.0).contains(*u)) {
+            proptest::prop_assert_eq!(d.sample(u).0, full_search(&d, u), "u = {}", u);
+        }
+    }
+}
