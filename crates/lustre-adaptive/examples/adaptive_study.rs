@@ -3,7 +3,7 @@
 //!
 //! `cargo run --release -p lustre-adaptive --example adaptive_study -- [--size N]
 //! [--reference N] [--map FILE] [--scene sphere|lineup] [--materials a,b,…] [--out DIR] [--aa]
-//! [--rates 2,1] [--n-b 16,8] [--speed-only [--preconvolved]] [--repeat N]`
+//! [--rates 2,1] [--n-b 16,8] [--speed-only [--preconvolved] [--footprint]] [--repeat N]`
 //! (`--aa`: only Fig. IV.14's anti-aliasing costs, at 1, 4 and 16 sub-pixels per pixel)
 //!
 //! Prints Markdown tables; with `--out`, writes each case's images (reference, brute force and
@@ -13,11 +13,15 @@
 //! is repeated for each);
 //! `--speed-only` prints only the constant-N_p rows, without the sample rules, pre-convolved
 //! shading and Fig. IV.16–IV.17; `--preconvolved` adds pre-convolved constant-N_p rows at
-//! every rate to them. `--repeat N` times every row of Fig. IV.15 (brute force and adaptive) as
-//! the least of N runs, which steadies the speed-ups on a shared machine.
+//! every rate to them, `--footprint` rows with N_p by the level's footprint
+//! (`SampleRule::Footprint`) beside every constant-N_p row. Each adaptive row gives its speed-up
+//! (brute force's time at its PSNR over its time) and, beside it, brute force's samples at its
+//! PSNR over its samples, which does not move between runs. `--repeat N` times every row of
+//! Fig. IV.15 (brute force and adaptive) as the least of N runs, which steadies the speed-ups on
+//! a shared machine.
 
 use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule};
-use lustre_adaptive::compare::{time_at_psnr, Measured};
+use lustre_adaptive::compare::{samples_at_psnr, time_at_psnr, Measured};
 use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute};
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
@@ -230,12 +234,12 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
             },
         ));
     }
-    println!("| renderer | time (s) | bandwidth pass (s) | PSNR (dB) | samples | shaded pixels | brute-force time at equal PSNR (s) | speed-up |");
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|");
+    println!("| renderer | time (s) | bandwidth pass (s) | PSNR (dB) | samples | shaded pixels | brute-force time at equal PSNR (s) | speed-up | brute-force samples at equal PSNR ÷ samples |");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     let curve: Vec<Measured> = brute.iter().map(|(_, m)| m.clone()).collect();
     for m in &curve {
         println!(
-            "| {} | {:.3} | – | {:.2} | {} | {} | | |",
+            "| {} | {:.3} | – | {:.2} | {} | {} | | | |",
             m.label, m.time_s, m.psnr, m.samples, m.shaded
         );
     }
@@ -305,6 +309,7 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
             let (buffer, f) = out.ok_or_else(|| anyhow::anyhow!("--repeat 0"))?;
             let p = psnr(&reference, &f.image, exposure)?;
             let equal = time_at_psnr(&curve, p);
+            let equal_samples = samples_at_psnr(&curve, p);
             let pictured = mean_samples == 32.0
                 && rate == 2.0
                 && lighting == Lighting::Direct
@@ -339,7 +344,7 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
                 );
             }
             println!(
-                "| adaptive{}{}{} mean {} | {:.3} | {:.3} | {:.2} | {} | {} | {} | {} |",
+                "| adaptive{}{}{} mean {} | {:.3} | {:.3} | {:.2} | {} | {} | {} | {} | {} |",
                 if lighting == Lighting::Preconvolved {
                     " pre-convolved"
                 } else {
@@ -375,6 +380,10 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
                 f.stats.shaded,
                 equal.map_or("–".into(), |e| format!("{e:.3}")),
                 equal.map_or("–".into(), |e| format!("{:.1}×", e / time_s)),
+                equal_samples.map_or("–".into(), |e| format!(
+                    "{:.1}×",
+                    e / f.stats.samples.max(1) as f64
+                )),
             );
         }
     }

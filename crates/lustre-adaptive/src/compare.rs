@@ -20,10 +20,21 @@ pub struct Measured {
 /// two measured points around it (the curve's points in any order; PSNR must rise with time).
 /// `None` when `psnr` lies outside the measured range.
 pub fn time_at_psnr(curve: &[Measured], psnr: f64) -> Option<f64> {
+    at_psnr(curve, psnr, |m| m.time_s)
+}
+
+/// The samples `curve` needs to reach `psnr`, read as [`time_at_psnr`] reads time: unlike
+/// wall time it does not move between runs (the renders are seeded), so the ratio of samples at
+/// equal PSNR is the deterministic part of a speed-up.
+pub fn samples_at_psnr(curve: &[Measured], psnr: f64) -> Option<f64> {
+    at_psnr(curve, psnr, |m| m.samples as f64)
+}
+
+fn at_psnr(curve: &[Measured], psnr: f64, cost: impl Fn(&Measured) -> f64) -> Option<f64> {
     let mut pts: Vec<(f64, f64)> = curve
         .iter()
-        .filter(|m| m.psnr.is_finite() && m.time_s > 0.0)
-        .map(|m| (m.psnr, m.time_s.ln()))
+        .filter(|m| m.psnr.is_finite() && cost(m) > 0.0)
+        .map(|m| (m.psnr, cost(m).ln()))
         .collect();
     pts.sort_by(|a, b| a.0.total_cmp(&b.0));
     for pair in pts.windows(2) {
@@ -49,7 +60,7 @@ mod tests {
             label: String::new(),
             time_s,
             psnr,
-            samples: 0,
+            samples: (time_s * 1000.0) as u64,
             shaded: 0,
         }
     }
@@ -62,5 +73,8 @@ mod tests {
         assert!((time_at_psnr(&curve, 28.5).unwrap() - 8f64.sqrt()).abs() < 1e-12);
         assert_eq!(time_at_psnr(&curve, 31.0), None);
         assert_eq!(time_at_psnr(&curve, 20.0), None);
+        // Samples are read the same way.
+        assert!((samples_at_psnr(&curve, 28.5).unwrap() - 1000.0 * 8f64.sqrt()).abs() < 1e-9);
+        assert_eq!(samples_at_psnr(&curve, 31.0), None);
     }
 }
