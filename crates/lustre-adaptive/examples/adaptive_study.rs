@@ -3,7 +3,7 @@
 //!
 //! `cargo run --release -p lustre-adaptive --example adaptive_study -- [--size N]
 //! [--reference N] [--map FILE] [--scene sphere|lineup] [--materials a,b,…] [--out DIR] [--aa]
-//! [--rates 2,1] [--n-b 16,8] [--speed-only [--preconvolved] [--footprint]] [--repeat N]`
+//! [--rates 2,1] [--n-b 16,8] [--speed-only [--preconvolved] [--coverage]] [--repeat N]`
 //! (`--aa`: only Fig. IV.14's anti-aliasing costs, at 1, 4 and 16 sub-pixels per pixel)
 //!
 //! Prints Markdown tables; with `--out`, writes each case's images (reference, brute force and
@@ -13,8 +13,8 @@
 //! is repeated for each);
 //! `--speed-only` prints only the constant-N_p rows, without the sample rules, pre-convolved
 //! shading and Fig. IV.16–IV.17; `--preconvolved` adds pre-convolved constant-N_p rows at
-//! every rate to them, `--footprint` rows with N_p by the level's footprint
-//! (`SampleRule::Footprint`) beside every constant-N_p row. Each adaptive row gives its speed-up
+//! every rate to them, `--coverage` rows with N_p by the level's coverage
+//! (`SampleRule::Coverage`) beside every constant-N_p row. Each adaptive row gives its speed-up
 //! (brute force's time at its PSNR over its time) and, beside it, brute force's samples at its
 //! PSNR over its samples, which does not move between runs. `--repeat N` times every row of
 //! Fig. IV.15 (brute force and adaptive) as the least of N runs, which steadies the speed-ups on
@@ -52,9 +52,9 @@ struct Args {
     weights: Vec<BrdfWeights>,
     /// With `--speed-only`, also the pre-convolved constant-N_p rows at every rate.
     preconvolved: bool,
-    /// Also rows with N_p ∝ the level's footprint (`SampleRule::Footprint`) beside every
+    /// Also rows with N_p by the level's coverage (`SampleRule::Coverage`) beside every
     /// constant-N_p row.
-    footprint: bool,
+    coverage: bool,
     /// Times of Fig. IV.15's rows: the least of this many runs (brute force and adaptive alike).
     repeat: usize,
 }
@@ -82,7 +82,7 @@ fn args() -> anyhow::Result<Args> {
         n_bs: vec![lustre_adaptive::buffer::DEFAULT_N_B],
         weights: vec![BufferOptions::default().weights],
         preconvolved: false,
-        footprint: false,
+        coverage: false,
         repeat: 1,
     };
     let mut it = std::env::args().skip(1);
@@ -107,7 +107,7 @@ fn args() -> anyhow::Result<Args> {
             }
             "--speed-only" => a.speed_only = true,
             "--preconvolved" => a.preconvolved = true,
-            "--footprint" => a.footprint = true,
+            "--coverage" => a.coverage = true,
             "--repeat" => a.repeat = v()?.parse::<usize>()?.max(1),
             "--n-b" => {
                 a.n_bs = v()?
@@ -248,8 +248,8 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
         rows.push((Lighting::Direct, SampleRule::Absolute, 2.0));
     }
     let mut rules = vec![SampleRule::Constant];
-    if a.footprint {
-        rules.push(SampleRule::Footprint);
+    if a.coverage {
+        rules.push(SampleRule::Coverage);
     }
     let mut lightings = vec![Lighting::Direct];
     if a.speed_only && a.preconvolved {
@@ -276,7 +276,7 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
         .flat_map(|(n_b, w)| rows.iter().map(move |&(l, s, r)| (l, s, r, n_b, w)))
         .collect();
     for (lighting, scale, rate, n_b, weights) in rows {
-        let means: &[f64] = if matches!(scale, SampleRule::Constant | SampleRule::Footprint) {
+        let means: &[f64] = if matches!(scale, SampleRule::Constant | SampleRule::Coverage) {
             &[1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0, 256.0]
         } else {
             &[1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0]
@@ -353,7 +353,7 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
                 match scale {
                     SampleRule::Absolute => " (004's absolute V)",
                     SampleRule::Constant => " (constant N_p)",
-                    SampleRule::Footprint => " (N_p ∝ footprint)",
+                    SampleRule::Coverage => " (N_p by coverage)",
                     SampleRule::Relative => "",
                     SampleRule::RelativeMse => " (N_p ∝ σ)",
                 },

@@ -71,12 +71,12 @@ pub enum SampleRule {
     /// The same N_p everywhere (the mean): spatial adaptivity only.
     Constant,
     /// N_p from the level a pixel is shaded at: N_0 (the mean) at level 0, N_0 · ⅔ · 2^k at
-    /// level k ≥ 1 ([`footprint_samples`]). A pixel shaded at level k carries about 4^k image
+    /// level k ≥ 1 ([`coverage_samples`]). A pixel shaded at level k covers about 4^k image
     /// pixels through the up-sampling, each with its noise times the bilinear weights (whose
     /// squares average ⅔ · ⅔): its noise reaches the image with a weight a_k ≈ 4^k · 4/9. Under
     /// a fixed total Σ N_p, Σ a_k σ² / N_p is least at N_p ∝ √a_k σ; with σ alike this is
     /// N_p ∝ ⅔ · 2^k.
-    Footprint,
+    Coverage,
     /// The bound itself (004: N_p ∝ S_p): pixels under bright light get the samples.
     Absolute,
     /// The bound relative to the pixel's squared radiance as its n_b directions estimate it
@@ -141,10 +141,10 @@ pub struct BandwidthBuffer {
     pub target: f64,
     /// The largest N_p.
     pub max_samples: usize,
-    /// N_p everywhere under [`SampleRule::Constant`]; N_0 under [`SampleRule::Footprint`].
+    /// N_p everywhere under [`SampleRule::Constant`]; N_0 under [`SampleRule::Coverage`].
     pub constant: Option<usize>,
-    /// Whether N_p grows with the level ([`SampleRule::Footprint`]).
-    pub footprint: bool,
+    /// Whether N_p grows with the level ([`SampleRule::Coverage`]).
+    pub coverage: bool,
     /// Levels 0..=L.
     pub levels: usize,
     /// Per level k, the min of ℓ over each 2^k block (row-major blocks).
@@ -365,7 +365,7 @@ impl BandwidthBuffer {
                     Lighting::Preconvolved => pred.variance_preconvolved,
                 };
                 let variance = match options.scale {
-                    SampleRule::Absolute | SampleRule::Constant | SampleRule::Footprint => bound,
+                    SampleRule::Absolute | SampleRule::Constant | SampleRule::Coverage => bound,
                     SampleRule::Relative if pred.radiance > 0.0 => {
                         bound / (pred.radiance * pred.radiance)
                     }
@@ -380,9 +380,9 @@ impl BandwidthBuffer {
         let variance: Vec<f64> = per_pixel.iter().map(|v| v.2).collect();
         let brdf_max: Vec<f64> = per_pixel.iter().map(|v| v.3).collect();
         // A constant N_p (or N_0) needs no target (1 stands in).
-        let constant = matches!(options.scale, SampleRule::Constant | SampleRule::Footprint)
+        let constant = matches!(options.scale, SampleRule::Constant | SampleRule::Coverage)
             .then(|| (options.mean_samples.round() as usize).clamp(1, options.max_samples));
-        let footprint = options.scale == SampleRule::Footprint;
+        let coverage = options.scale == SampleRule::Coverage;
         let target = match constant {
             Some(_) => 1.0,
             None => {
@@ -428,7 +428,7 @@ impl BandwidthBuffer {
             target,
             max_samples: options.max_samples,
             constant,
-            footprint,
+            coverage,
             levels,
             min_level,
             max_variance,
@@ -444,8 +444,8 @@ impl BandwidthBuffer {
     /// N_p for the level-`k` block holding pixel (x, y) (its max-filtered variance).
     pub fn samples(&self, k: usize, x: usize, y: usize) -> usize {
         if let Some(n) = self.constant {
-            return if self.footprint {
-                footprint_samples(n, k, self.max_samples)
+            return if self.coverage {
+                coverage_samples(n, k, self.max_samples)
             } else {
                 n
             };
@@ -456,9 +456,9 @@ impl BandwidthBuffer {
     }
 }
 
-/// N_p at level `k` under [`SampleRule::Footprint`] from N_0 = `n0`: N_0 at level 0,
+/// N_p at level `k` under [`SampleRule::Coverage`] from N_0 = `n0`: N_0 at level 0,
 /// round(N_0 · ⅔ · 2^k) at k ≥ 1, clamped to 1..=`max`.
-pub fn footprint_samples(n0: usize, k: usize, max: usize) -> usize {
+pub fn coverage_samples(n0: usize, k: usize, max: usize) -> usize {
     if k == 0 {
         return n0.clamp(1, max);
     }

@@ -1,7 +1,7 @@
 //! Adaptive shading (004 ch. IV) against exact and converged answers, on real data.
 
 use lustre_adaptive::buffer::{
-    footprint_samples, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule, NO_LEVEL,
+    coverage_samples, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule, NO_LEVEL,
 };
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute, NOT_SHADED};
@@ -232,7 +232,7 @@ fn on_a_measured_paint_under_a_real_sky_adaptive_beats_brute_force_at_equal_samp
         );
         assert!(same > 0.97, "levels equal on {same}");
         assert!((p_adaptive - p_eval).abs() < 0.3, "{p_adaptive} vs {p_eval}");
-        // N_p by the level's footprint (N_0 = 16 at level 0, round(16 · ⅔ · 2^k) at level k):
+        // N_p by the level's coverage (N_0 = 16 at level 0, round(16 · ⅔ · 2^k) at level k):
         // every shaded pixel has its level's count. (On this sphere it does not beat the
         // constant rule at equal samples: 33.92 dB with 98,892 samples at N_0 22 against
         // 34.66 dB with 101,024; BENCHMARKS.md "Issue 13, ninth part".)
@@ -240,14 +240,14 @@ fn on_a_measured_paint_under_a_real_sky_adaptive_beats_brute_force_at_equal_samp
             g,
             ctx,
             &env_bw,
-            options(16.0, SampleRule::Footprint, Lighting::Direct),
+            options(16.0, SampleRule::Coverage, Lighting::Direct),
         )
         .expect("buffer");
         let fp = render_adaptive(g, ctx, &fp_buffer, Lighting::Direct, 5).expect("adaptive");
         let mut counted = 0u64;
         for (k, &l) in fp.shaded_level.iter().enumerate() {
             if l != NOT_SHADED {
-                let n = footprint_samples(16, l as usize, fp_buffer.max_samples);
+                let n = coverage_samples(16, l as usize, fp_buffer.max_samples);
                 assert_eq!(fp.samples[k] as usize, n, "pixel {k} at level {l}");
                 counted += n as u64;
             }
@@ -358,7 +358,7 @@ fn buffers_hold_no_nan_on_black_or_degenerate_input_and_bad_parameters_are_named
 }
 
 #[test]
-fn footprint_counts_are_two_thirds_of_two_to_the_level_rounded() {
+fn coverage_counts_are_two_thirds_of_two_to_the_level_rounded() {
     for (n0, k, max, n) in [
         (16, 0, 1024, 16),
         (16, 1, 1024, 21),
@@ -371,7 +371,7 @@ fn footprint_counts_are_two_thirds_of_two_to_the_level_rounded() {
         (1000, 4, 1024, 1024),
         (7, 200, 4096, 4096),
     ] {
-        assert_eq!(footprint_samples(n0, k, max), n, "N_0 {n0}, level {k}");
+        assert_eq!(coverage_samples(n0, k, max), n, "N_0 {n0}, level {k}");
     }
 }
 

@@ -18,7 +18,7 @@ struct Params {
     seed: vec2<u32>,
     lights: u32,
     max_samples: u32,
-    // N_p at this level when > 0 (SampleRule::Constant, or Footprint's N_p for the level); else
+    // N_p at this level when > 0 (SampleRule::Constant, or Coverage's N_p for the level); else
     // from the variance quotas.
     constant: u32,
     // Levels of the pre-convolved pyramid (0: none uploaded).

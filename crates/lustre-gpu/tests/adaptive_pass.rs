@@ -7,7 +7,7 @@
 
 use glam::DVec3;
 use lustre_adaptive::buffer::{
-    footprint_samples, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule,
+    coverage_samples, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule,
 };
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{render_adaptive, render_brute, NOT_SHADED};
@@ -253,33 +253,33 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
             .expect_err("no pyramid");
         assert!(e.to_string().contains("pyramid"), "{e}");
 
-        // N_p by the level's footprint: N_0 = 4 at level 0, round(4 · ⅔ · 2^k) at level k, on
+        // N_p by the level's coverage: N_0 = 4 at level 0, round(4 · ⅔ · 2^k) at level k, on
         // both.
         let fp_buffer = BandwidthBuffer::build(
             &g,
             &shading,
             &env_bw,
             BufferOptions {
-                scale: SampleRule::Footprint,
+                scale: SampleRule::Coverage,
                 mean_samples: 4.0,
                 ..options
             },
         )
-        .expect("footprint buffer");
+        .expect("coverage buffer");
         let cpu_fp =
             render_adaptive(&g, &shading, &fp_buffer, Lighting::Direct, seed).expect("cpu");
         let gpu_fp = pass
             .render(&gpu_ctx, &scene_gpu, &g, &fp_buffer, None, seed)
-            .expect("gpu footprint");
+            .expect("gpu coverage");
         let mut by_level = std::collections::BTreeMap::new();
         for (k, &l) in cpu_fp.shaded_level.iter().enumerate() {
             if l != NOT_SHADED {
                 let n = cpu_fp.samples[k] as usize;
-                assert_eq!(n, footprint_samples(4, l as usize, fp_buffer.max_samples));
+                assert_eq!(n, coverage_samples(4, l as usize, fp_buffer.max_samples));
                 by_level.insert(l, n);
             }
         }
-        eprintln!("footprint rule: N_p per shaded level {by_level:?}");
+        eprintln!("coverage rule: N_p per shaded level {by_level:?}");
         assert!(by_level.len() >= 3, "{by_level:?}");
         let level_differ = cpu_fp
             .shaded_level
@@ -301,7 +301,7 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
         );
         let (rms, over1, over10) = image_difference(&g, &cpu_fp.image, &gpu_fp.frame.image);
         eprintln!(
-            "footprint rule: relative RMS {rms:.2e}, {:.2} % off by > 1 %, {:.2} % by > 10 %; levels differ on {level_differ}, N_p on {samples_differ}",
+            "coverage rule: relative RMS {rms:.2e}, {:.2} % off by > 1 %, {:.2} % by > 10 %; levels differ on {level_differ}, N_p on {samples_differ}",
             100.0 * over1,
             100.0 * over10
         );

@@ -97,7 +97,7 @@ impl BufferView {
 /// Every sample rule, in the panel's order.
 pub const SAMPLE_RULES: [SampleRule; 5] = [
     SampleRule::Constant,
-    SampleRule::Footprint,
+    SampleRule::Coverage,
     SampleRule::Relative,
     SampleRule::RelativeMse,
     SampleRule::Absolute,
@@ -107,7 +107,7 @@ pub const SAMPLE_RULES: [SampleRule; 5] = [
 pub fn rule_name(rule: SampleRule) -> &'static str {
     match rule {
         SampleRule::Constant => "constant",
-        SampleRule::Footprint => "footprint",
+        SampleRule::Coverage => "coverage",
         SampleRule::Relative => "relative",
         SampleRule::RelativeMse => "relative-mse",
         SampleRule::Absolute => "absolute",

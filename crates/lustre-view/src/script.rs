@@ -17,7 +17,7 @@
 //! buffer level           # what the adaptive method shows: image | bandwidth | level | samples
 //!                        #   | shaded (the pixels shaded, by level; up-sampled ones grey)
 //! rate 1                 # the adaptive method's samples per cycle of b_p: 1 | 2
-//! sample-rule relative   # its N_p rule: constant | footprint | relative | relative-mse | absolute
+//! sample-rule relative   # its N_p rule: constant | coverage | relative | relative-mse | absolute
 //! budget 3               # the selected object's own (budget global: back to the global one)
 //! exposure 1.5
 //! fit data:measured/merl/…binary sgd   # fit a measured file (sgd | kurt | beckmann | ggx)
@@ -217,7 +217,7 @@ pub fn parse(text: &str) -> Result<Vec<Command>, String> {
             "sample-rule" => {
                 need(1)?;
                 Command::SampleRule(parse_rule(args[0]).ok_or_else(|| {
-                    err("sample-rule: constant | footprint | relative | relative-mse | absolute")
+                    err("sample-rule: constant | coverage | relative | relative-mse | absolute")
                 })?)
             }
             "samples" => {
@@ -315,7 +315,7 @@ buffer shaded
 rate 1
 rate 2
 sample-rule constant
-sample-rule footprint
+sample-rule coverage
                  sample-rule relative
 sample-rule relative-mse
 sample-rule absolute
@@ -333,7 +333,7 @@ sample-rule absolute
                 Command::Rate(1),
                 Command::Rate(2),
                 Command::SampleRule(SampleRule::Constant),
-                Command::SampleRule(SampleRule::Footprint),
+                Command::SampleRule(SampleRule::Coverage),
                 Command::SampleRule(SampleRule::Relative),
                 Command::SampleRule(SampleRule::RelativeMse),
                 Command::SampleRule(SampleRule::Absolute),
@@ -350,7 +350,7 @@ sample-rule absolute
             ("\n\nrate 3", "line 3"),
             ("rate 1.5", "rate: 1 | 2"),
             ("rate", "1 argument"),
-            ("sample-rule uniform", "constant | footprint | relative"),
+            ("sample-rule uniform", "constant | coverage | relative"),
             ("sample-rule", "1 argument"),
         ] {
             let e = parse(s).unwrap_err();

@@ -147,7 +147,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         .with_context(|| format!("creating {}", args.out.display()))?;
     let rule = match args.sample_rule {
         SampleRuleArg::Constant => SampleRule::Constant,
-        SampleRuleArg::Footprint => SampleRule::Footprint,
+        SampleRuleArg::Coverage => SampleRule::Coverage,
         SampleRuleArg::Relative => SampleRule::Relative,
         SampleRuleArg::RelativeMse => SampleRule::RelativeMse,
         SampleRuleArg::Absolute => SampleRule::Absolute,

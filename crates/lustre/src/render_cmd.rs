@@ -55,9 +55,9 @@ pub enum SampleRuleArg {
     /// our measurements).
     Constant,
     /// --samples at pixels shaded at level 0 and ⅔ · 2^k times as many at level k: a pixel
-    /// shaded at a coarse level carries 4^k pixels through the up-sampling, and its noise with
+    /// shaded at a coarse level covers 4^k pixels through the up-sampling, and its noise with
     /// them.
-    Footprint,
+    Coverage,
     /// 004's Eq. IV.9 bound relative to the pixel's squared radiance, N_p ∝ S / L̂².
     Relative,
     /// N_p ∝ √S / L̂ (the allocation minimizing the summed squared relative error).
