@@ -54,6 +54,48 @@ fn image_difference(g: &GBuffer, cpu: &Image, gpu: &Image) -> (f64, f64, f64) {
     (rms, share(0.01), share(0.1))
 }
 
+/// The GPU frame against its CPU twin: the same pixels shaded at the same levels with the same
+/// N_p (a weight at MIN_WEIGHT's edge may fall the other way in f32: fewer than 1 in 200 may
+/// differ), and images within 5e-3 relative RMS.
+fn assert_same_frame(
+    g: &GBuffer,
+    cpu: &lustre_adaptive::hierarchy::AdaptiveFrame,
+    gpu: &lustre_adaptive::hierarchy::AdaptiveFrame,
+    what: &str,
+) {
+    let surface = g.surface_pixels();
+    let level_differ = cpu
+        .shaded_level
+        .iter()
+        .zip(&gpu.shaded_level)
+        .filter(|(a, b)| a != b)
+        .count();
+    let samples_differ = cpu
+        .samples
+        .iter()
+        .zip(&gpu.samples)
+        .zip(&cpu.shaded_level)
+        .filter(|((a, b), l)| **l != NOT_SHADED && a != b)
+        .count();
+    let (rms, over1, over10) = image_difference(g, &cpu.image, &gpu.image);
+    eprintln!(
+        "{what}: shaded levels differ on {level_differ}, N_p on {samples_differ} of {surface} surface pixels; image relative RMS {rms:.2e}, {:.2} % of pixels off by > 1 %, {:.2} % by > 10 %",
+        100.0 * over1,
+        100.0 * over10
+    );
+    assert!(
+        level_differ * 200 < surface,
+        "{what}: {level_differ} levels differ"
+    );
+    assert!(
+        samples_differ * 200 < surface,
+        "{what}: {samples_differ} N_p differ"
+    );
+    assert!(rms < 5e-3, "{what}: relative RMS {rms}");
+    assert!(over1 < 0.01, "{what}: {over1}");
+    assert!(over10 < 0.002, "{what}: {over10}");
+}
+
 #[test]
 fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
     let tmp = tempfile::tempdir().expect("tempdir");
@@ -161,44 +203,13 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
             gpu.frame.stats.samples,
             cpu.stats.samples
         );
-        // The pyramids and the up-sampling decisions: the same pixels shaded at the same levels with
-        // the same N_p (a weight at MIN_WEIGHT's edge may fall the other way in f32).
-        let level_differ = cpu
-            .shaded_level
-            .iter()
-            .zip(&gpu.frame.shaded_level)
-            .filter(|(a, b)| a != b)
-            .count();
-        let samples_differ = cpu
-            .samples
-            .iter()
-            .zip(&gpu.frame.samples)
-            .zip(&cpu.shaded_level)
-            .filter(|((a, b), l)| **l != NOT_SHADED && a != b)
-            .count();
-        eprintln!(
-            "shaded levels differ on {level_differ}, N_p on {samples_differ} of {surface} surface pixels"
-        );
         assert!(cpu.stats.shaded > 0 && cpu.stats.upsampled > 0);
-        assert!(level_differ * 200 < surface, "{level_differ} levels differ");
-        assert!(
-            samples_differ * 200 < surface,
-            "{samples_differ} N_p differ"
-        );
+        assert_same_frame(&g, &cpu, &gpu.frame, "adaptive");
         assert_eq!(
             gpu.frame.stats.per_level.len(),
             cpu.stats.per_level.len(),
             "levels"
         );
-        let (rms, over1, over10) = image_difference(&g, &cpu.image, &gpu.frame.image);
-        eprintln!(
-            "adaptive image: relative RMS {rms:.2e}, {:.2} % of pixels off by > 1 %, {:.2} % by > 10 %",
-            100.0 * over1,
-            100.0 * over10
-        );
-        assert!(rms < 5e-3, "relative RMS {rms}");
-        assert!(over1 < 0.01, "{over1}");
-        assert!(over10 < 0.002, "{over10}");
         // The background is the G-buffer's, untouched.
         for (k, p) in g.pixels.iter().enumerate() {
             if let GPixel::Background(l) = p {
@@ -281,33 +292,7 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
         }
         eprintln!("coverage rule: N_p per shaded level {by_level:?}");
         assert!(by_level.len() >= 3, "{by_level:?}");
-        let level_differ = cpu_fp
-            .shaded_level
-            .iter()
-            .zip(&gpu_fp.frame.shaded_level)
-            .filter(|(a, b)| a != b)
-            .count();
-        assert!(level_differ * 200 < surface, "{level_differ} levels differ");
-        let samples_differ = cpu_fp
-            .samples
-            .iter()
-            .zip(&gpu_fp.frame.samples)
-            .zip(&cpu_fp.shaded_level)
-            .filter(|((a, b), l)| **l != NOT_SHADED && a != b)
-            .count();
-        assert!(
-            samples_differ * 200 < surface,
-            "{samples_differ} N_p differ"
-        );
-        let (rms, over1, over10) = image_difference(&g, &cpu_fp.image, &gpu_fp.frame.image);
-        eprintln!(
-            "coverage rule: relative RMS {rms:.2e}, {:.2} % off by > 1 %, {:.2} % by > 10 %; levels differ on {level_differ}, N_p on {samples_differ}",
-            100.0 * over1,
-            100.0 * over10
-        );
-        assert!(rms < 5e-3, "relative RMS {rms}");
-        assert!(over1 < 0.01, "{over1}");
-        assert!(over10 < 0.002, "{over10}");
+        assert_same_frame(&g, &cpu_fp, &gpu_fp.frame, "coverage rule");
 
         // Brute force, 8 samples everywhere.
         let (cpu_b, stats_b) = render_brute(&g, &shading, 8, seed).expect("cpu brute");
