@@ -236,6 +236,14 @@ impl<'a, 's> ShadingContext<'a, 's> {
                 _ => env.eval(d),
             }
         };
+        // The light and the environment sampler's density at d (the map's coordinates found
+        // once when the map itself is read).
+        let light_and_pdf = |d: DVec3| -> (Rgb, f64) {
+            match (lod, &self.pyramid) {
+                (Some(l), Some(p)) => (Rgb(p.sample(d, l)), env.pdf(d)),
+                _ => env.eval_and_pdf(d),
+            }
+        };
         let n = n.max(1);
         let (n_f, n_l) = (n.div_ceil(2), n / 2);
         let mut rng = SplitMix64::new(seed);
@@ -262,17 +270,17 @@ impl<'a, 's> ShadingContext<'a, 's> {
                 Some(t) => t.pdf(wi, wo),
                 None => b.pdf(wi, wo),
             };
-            let mix = |p_f: f64, d_world: DVec3| n_f as f64 * p_f + n_l as f64 * env.pdf(d_world);
+            let mix = |p_f: f64, p_l: f64| n_f as f64 * p_f + n_l as f64 * p_l;
             for k in 0..n_f {
                 let (h1, h2) = hammersley(k as u32, n_f as u32);
                 let (u1, u2) = ((h1 + rot[0]).fract(), (h2 + rot[1]).fract());
                 match &tables.sampler {
                     Some(t) => {
                         if let Some(wi) = t.sample(wo, u1, u2) {
-                            let d = to_world(wi);
-                            let den = mix(t.pdf(wi, wo), d);
+                            let (l, p_l) = light_and_pdf(to_world(wi));
+                            let den = mix(t.pdf(wi, wo), p_l);
                             if den > 0.0 {
-                                add(b.eval(wi, wo) * (wi.z.abs() / den) * light(d));
+                                add(b.eval(wi, wo) * (wi.z.abs() / den) * l);
                             }
                         }
                     }
@@ -282,9 +290,10 @@ impl<'a, 's> ShadingContext<'a, 's> {
                             if smp.is_delta() {
                                 add(smp.weight() * light(d) * (1.0 / n_f as f64));
                             } else {
-                                let den = mix(smp.pdf, d);
+                                let (l, p_l) = light_and_pdf(d);
+                                let den = mix(smp.pdf, p_l);
                                 if den > 0.0 {
-                                    add(smp.value * (smp.wi.z.abs() / den) * light(d));
+                                    add(smp.value * (smp.wi.z.abs() / den) * l);
                                 }
                             }
                         }
@@ -296,9 +305,10 @@ impl<'a, 's> ShadingContext<'a, 's> {
                 let (u1, u2) = ((h1 + rot[2]).fract(), (h2 + rot[3]).fract());
                 let (d, _) = env.sample(u1, u2);
                 let wi = to_local(d);
-                let den = mix(brdf_pdf(wi), d);
+                let (l, p_l) = light_and_pdf(d);
+                let den = mix(brdf_pdf(wi), p_l);
                 if den > 0.0 {
-                    add(b.eval(wi, wo) * (wi.z.abs() / den) * light(d));
+                    add(b.eval(wi, wo) * (wi.z.abs() / den) * l);
                 }
             }
             // Area lights: n points per light, stratified over its area, each weighing

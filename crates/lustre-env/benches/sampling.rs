@@ -1,8 +1,10 @@
 //! Importance sampling of a real map: 4,096 directions drawn from royal_esplanade_1k's sampler
-//! (`EnvSampler::sample`, the shading estimators' environment samples), and their densities.
+//! (`EnvSampler::sample`, the shading estimators' environment samples), their densities, and
+//! the light with the density at a direction (the estimator's per-sample reads).
 //! `cargo bench -p lustre-env --bench sampling -- --noplot`
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use lustre_env::equirect::direction_uv;
 use lustre_env::{read_map, shared_data_dir, EnvSampler};
 use std::hint::black_box;
 
@@ -37,6 +39,28 @@ fn sampling(c: &mut Criterion) {
         .collect();
     g.bench_function("pdf", |b| {
         b.iter(|| dirs.iter().map(|&d| sampler.pdf(black_box(d))).sum::<f64>())
+    });
+    // What a shading sample reads at its direction: the light and the sampler's density, with
+    // the map coordinates found twice (two calls) or once (`pdf_uv`).
+    g.bench_function("light_then_pdf", |b| {
+        b.iter(|| {
+            dirs.iter()
+                .map(|&d| {
+                    let d = black_box(d);
+                    map.lookup_bilinear(d)[0] + sampler.pdf(d)
+                })
+                .sum::<f64>()
+        })
+    });
+    g.bench_function("light_and_pdf_one_uv", |b| {
+        b.iter(|| {
+            dirs.iter()
+                .map(|&d| {
+                    let (u, v) = direction_uv(black_box(d));
+                    map.bilinear_uv(u, v)[0] + sampler.pdf_uv(u, v)
+                })
+                .sum::<f64>()
+        })
     });
     g.finish();
 }

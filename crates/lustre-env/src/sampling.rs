@@ -235,6 +235,11 @@ impl EnvSampler {
     /// The texel holding direction `d` (need not be normalized; zero / non-finite reads +y).
     pub fn texel_of(&self, d: DVec3) -> (usize, usize) {
         let (u, v) = direction_uv(d);
+        self.texel_of_uv(u, v)
+    }
+
+    /// The texel holding map coordinates (u, v) ∈ [0, 1]².
+    fn texel_of_uv(&self, u: f64, v: f64) -> (usize, usize) {
         let i = ((u * self.width as f64) as usize).min(self.width - 1);
         let j = ((v * self.height as f64) as usize).min(self.height - 1);
         (i, j)
@@ -242,7 +247,14 @@ impl EnvSampler {
 
     /// Solid-angle density with which [`EnvSampler::sample`] draws `d`.
     pub fn pdf(&self, d: DVec3) -> f64 {
-        let (i, j) = self.texel_of(d);
+        let (u, v) = direction_uv(d);
+        self.pdf_uv(u, v)
+    }
+
+    /// [`EnvSampler::pdf`] at map coordinates (u, v) of [`direction_uv`] (a caller that also
+    /// reads the map there finds them once).
+    pub fn pdf_uv(&self, u: f64, v: f64) -> f64 {
+        let (i, j) = self.texel_of_uv(u, v);
         self.texel_probability(i, j) / self.row_omega[j]
     }
 }

@@ -207,6 +207,16 @@ impl EnvLight {
     pub fn pdf(&self, d: DVec3) -> f64 {
         self.sampler.pdf(self.to_world.transpose() * d)
     }
+
+    /// [`EnvLight::eval`] and [`EnvLight::pdf`] at world direction `d`, its map coordinates
+    /// found once (the same values as the two calls).
+    pub fn eval_and_pdf(&self, d: DVec3) -> (Rgb, f64) {
+        let (u, v) = lustre_env::equirect::direction_uv(self.to_world.transpose() * d);
+        (
+            Rgb(self.map.bilinear_uv(u, v)) * self.scale,
+            self.sampler.pdf_uv(u, v),
+        )
+    }
 }
 
 /// A pinhole camera: position and an orthonormal basis (forward, right, up), vertical field of
