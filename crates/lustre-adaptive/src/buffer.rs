@@ -457,8 +457,9 @@ impl BandwidthBuffer {
 }
 
 /// N_p at level `k` under [`SampleRule::Coverage`] from N_0 = `n0`: N_0 at level 0,
-/// round(N_0 · ⅔ · 2^k) at k ≥ 1, clamped to 1..=`max`.
+/// round(N_0 · ⅔ · 2^k) at k ≥ 1, clamped to 1..=`max` (a `max` of 0 counts as 1).
 pub fn coverage_samples(n0: usize, k: usize, max: usize) -> usize {
+    let max = max.max(1);
     if k == 0 {
         return n0.clamp(1, max);
     }

@@ -370,6 +370,7 @@ fn coverage_counts_are_two_thirds_of_two_to_the_level_rounded() {
         (0, 0, 1024, 1),
         (1000, 4, 1024, 1024),
         (7, 200, 4096, 4096),
+        (5, 2, 0, 1),
     ] {
         assert_eq!(coverage_samples(n0, k, max), n, "N_0 {n0}, level {k}");
     }
