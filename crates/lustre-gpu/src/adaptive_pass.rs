@@ -24,9 +24,11 @@ use crate::error::{invalid, Result};
 use crate::gbuffer::map_read;
 use crate::measured::{
     pack_tabulated, Evaluates, GpuTabulatedDims, MaterialPipelines, PackedBrdfs, EVALUATED,
+    KIND_RECORD,
 };
 use crate::timer::{GpuTimer, Timing};
 use crate::wgsl::{AREA_LIGHT, CUBE_STORAGE, ENV_LIGHT, QMC, TYPES};
+use bytemuck::Zeroable;
 use glam::{DMat3, DVec3};
 use lustre_adaptive::buffer::{BandwidthBuffer, NO_LEVEL};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
@@ -132,7 +134,7 @@ struct Params {
     constant: u32,
     pyramid_levels: u32,
     phase: u32,
-    _pad: u32,
+    first: u32,
     env: GpuEnvDims,
     to_map: [[f32; 4]; 3],
     right: [f32; 4],
@@ -147,6 +149,18 @@ struct PyramidParams {
     level: u32,
     _pad: u32,
 }
+
+/// The most samples (and area-light points) one thread takes per dispatch: a pixel with more is
+/// shaded over several dispatches, each adding its share (the same sum). Lavapipe ends every
+/// loop of a shader invocation once they have run 65,535 iterations in all (llvmpipe's
+/// `LP_MAX_TGSI_LOOP_ITERATIONS`), and a neural BRDF's evaluation and the samplers' searches
+/// take ≈ 190 of them a sample: unchunked, a pixel's samples past the ≈ 350th were dropped
+/// there.
+pub const SAMPLES_PER_DISPATCH: u32 = 64;
+
+/// `tab_base` of a material sampled by its record's own `bsdf_sample` (`NO_TABLE` in
+/// adaptive_pass.wgsl).
+const NO_TABLE: u32 = u32::MAX;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -185,14 +199,15 @@ pub struct AdaptiveScene {
 
 impl AdaptiveScene {
     /// Uploads `shading`'s environment (its texels times its scale, and its sampler), every
-    /// material's BRDF with its tabulated CDFs, and the area lights. Errors, naming the
+    /// material's BRDF with its tabulated CDFs (a transmissive or Dirac model, which has none,
+    /// is sampled by its record's own `bsdf_sample`), and the area lights. Errors, naming the
     /// material, on one the GPU does not evaluate ([`EVALUATED`]; `PackedBrdfs::push` says
-    /// why) or that has no tabulated sampler.
+    /// why).
     ///
     /// `scene`, whose materials are the path scene's in its order, lets the GPU shade the
     /// scene's materials (textured ones read at each pixel's uv, normal-mapped ones in the
-    /// G-buffer's tilted frame) and every analytic reflection model of a spec too (`None`:
-    /// measured and fitted models only).
+    /// G-buffer's tilted frame) and every analytic model of a spec too (`None`: measured and
+    /// fitted models only).
     pub fn from_context(
         ctx: &GpuContext,
         shading: &ShadingContext,
@@ -202,16 +217,6 @@ impl AdaptiveScene {
         let mut materials = vec![];
         for (k, m) in shading.scene.materials.iter().enumerate() {
             let tables = &shading.materials[k];
-            let Some(sampler) = &tables.sampler else {
-                return Err(invalid(
-                    "adaptive pass",
-                    format!(
-                        "material {k} ({}) has no tabulated sampler (transmissive or Dirac): the \
-                         GPU shades reflection BRDFs only",
-                        tables.name
-                    ),
-                ));
-            };
             let mut packed = None;
             let scene_material = scene.and_then(|sc| sc.materials.get(k).map(|m| (sc, m)));
             m.with_bsdf([0.5, 0.5], &mut |b| {
@@ -228,9 +233,27 @@ impl AdaptiveScene {
                         ),
                     )
                 })?;
-            let (words, dims) = pack_tabulated(sampler);
-            let tab_base = brdfs.table.len() as u32;
-            brdfs.table.extend(words);
+            // A transmissive or Dirac model has no tabulated CDFs (`shading::tables`): the
+            // pass samples its record by the model's own `bsdf_sample`.
+            let (tab_base, dims) = match &tables.sampler {
+                Some(sampler) => {
+                    let (words, dims) = pack_tabulated(sampler);
+                    let tab_base = brdfs.table.len() as u32;
+                    brdfs.table.extend(words);
+                    (tab_base, dims)
+                }
+                None if kind == KIND_RECORD => (NO_TABLE, GpuTabulatedDims::zeroed()),
+                None => {
+                    return Err(invalid(
+                        "adaptive pass",
+                        format!(
+                            "material {k} ({}) has neither tabulated CDFs nor a record to \
+                             sample",
+                            tables.name
+                        ),
+                    ))
+                }
+            };
             materials.push(GpuMaterial {
                 kind,
                 base,
@@ -546,6 +569,16 @@ impl AdaptivePass {
             .map(|k| w.div_ceil(1 << k) * h.div_ceil(1 << k))
             .collect();
         let total: usize = sizes.iter().sum();
+        // The largest N_p `samples_at` can give from the quotas (the max-filtered pyramid holds
+        // level 0's maxima).
+        let max_samples = levels.max_samples.max(1);
+        let most_samples = levels
+            .quota
+            .iter()
+            .filter(|q| **q > 0.0)
+            .map(|q| q.min(max_samples as f32).ceil() as u32)
+            .fold(1, u32::max)
+            .min(max_samples);
         let mut min_level = levels.level;
         min_level.resize(total, u32::from(NO_LEVEL));
         let mut quota = levels.quota;
@@ -564,7 +597,7 @@ impl AdaptivePass {
             constant: 0,
             pyramid_levels: scene.pyramid_levels,
             phase: 0,
-            _pad: 0,
+            first: 0,
             env: scene.env,
             to_map: m,
             right: v4(cam.right),
@@ -649,15 +682,29 @@ impl AdaptivePass {
             mapped_at_creation: false,
         });
         enc.clear_buffer(&counts, 0, None);
-        // Per level, coarsest first: its classification and its shading, each a 1-D dispatch
-        // over the level's grid points.
+        // Per level, coarsest first: its classification, then its shading in dispatches of
+        // at most SAMPLES_PER_DISPATCH samples (and area-light points) per pixel, each a 1-D
+        // dispatch over the level's grid points.
+        let dispatches = |k: usize| {
+            let n = if levels.constant[k] > 0 {
+                levels.constant[k]
+            } else {
+                most_samples
+            };
+            let points = u64::from(n.max(1)) * (1 + u64::from(scene.light_count));
+            points.div_ceil(u64::from(SAMPLES_PER_DISPATCH)) as u32
+        };
         let shade_groups: Vec<(wgpu::BindGroup, u32)> = (0..levels.count)
             .rev()
-            .flat_map(|k| [(k, 0u32), (k, 1u32)])
-            .map(|(k, phase)| {
+            .flat_map(|k| {
+                std::iter::once((k, 0u32, 0u32))
+                    .chain((0..dispatches(k)).map(move |c| (k, 1, c * SAMPLES_PER_DISPATCH)))
+            })
+            .map(|(k, phase, first)| {
                 let p = Params {
                     level: k as u32,
                     phase,
+                    first,
                     constant: levels.constant[k],
                     ..base
                 };
@@ -822,5 +869,18 @@ fn entry(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry {
         binding,
         resource: b.as_entire_binding(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shader_takes_the_same_share_per_dispatch_and_the_same_no_table_mark() {
+        let share = format!("const SAMPLES_PER_DISPATCH: u32 = {SAMPLES_PER_DISPATCH}u;");
+        assert!(ADAPTIVE_PASS_WGSL.contains(&share), "{share}");
+        assert_eq!(NO_TABLE, 0xffff_ffff);
+        assert!(ADAPTIVE_PASS_WGSL.contains("const NO_TABLE: u32 = 0xffffffffu;"));
     }
 }

@@ -6,9 +6,12 @@
 // shading lustre_adaptive::shading::ShadingContext::shade (direct or pre-convolved): tabulated-CDF
 // BRDF samples and environment samples combined by the balance heuristic, plus area lights.
 // Materials: measured BRDFs evaluated directly (measured_eval: kinds 0, 1 and 3) or records
-// (kind 2, `base` indexing `fitted`; textured ones read at the pixel's uv by material_prepare).
-// Imports: types, measured, qmc, env_light, cube_storage, area_light, and with records bsdf (or
-// analytic) and textured.
+// (kind 2, `base` indexing `fitted`; textured ones read at the pixel's uv by material_prepare);
+// records of transmissive or Dirac models (no tabulated CDFs: tab_base NO_TABLE) sampled by
+// material_sample. A pixel's samples are shaded SAMPLES_PER_DISPATCH per dispatch (phase 1
+// repeated, each adding its share), within lavapipe's 65,535 loop iterations per invocation.
+// Imports: types, measured, qmc, env_light, cube_storage, area_light, bsdf_sample, and with
+// records bsdf (or analytic) and textured.
 
 struct Params {
     width: u32,
@@ -26,7 +29,9 @@ struct Params {
     // 0: classify level `level`'s new grid points (up-sample, or queue for shading); 1: shade
     // the queue.
     phase: u32,
-    _pad2: u32,
+    // Phase 1: the first sample (or area-light point) of this dispatch's share; each dispatch
+    // takes at most SAMPLES_PER_DISPATCH of a pixel's (adaptive_pass::SAMPLES_PER_DISPATCH).
+    first: u32,
     env: EnvDims,
     // Rows of the rotation taking world directions to the map's.
     to_map0: vec4<f32>,
@@ -122,6 +127,10 @@ fn env_table(i: u32) -> f32 {
 
 const BACKGROUND: u32 = 0xffffffffu;
 const NOT_SHADED: u32 = 255u;
+// adaptive_pass::SAMPLES_PER_DISPATCH.
+const SAMPLES_PER_DISPATCH: u32 = 64u;
+// PassMaterial::tab_base of a model sampled by its own `material_sample` (no tabulated CDFs).
+const NO_TABLE: u32 = 0xffffffffu;
 // hierarchy::MIN_WEIGHT and gbuffer::SAME_SURFACE.
 const MIN_WEIGHT: f32 = 0.05;
 const SAME_SURFACE: f32 = 0.05;
@@ -190,8 +199,9 @@ fn draw_unit(seed: vec2<u32>, k: u32) -> f32 {
 
 // ShadingContext::shade at surfel s with n samples: ⌈n/2⌉ BRDF samples,
 // ⌊n/2⌋ environment samples, then n points per area light, in the CPU's order, through one
-// loop so that the material's evaluation is compiled once.
-fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
+// loop so that the material's evaluation is compiled once; this dispatch's share, the ones
+// numbered first … first + SAMPLES_PER_DISPATCH − 1.
+fn shade(s: Surfel, n_in: u32, seed: vec2<u32>, first: u32) -> vec3<f32> {
     let t = s.t.xyz;
     let b = s.b.xyz;
     let nn = s.n.xyz;
@@ -204,24 +214,52 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
     let rot = vec4<f32>(draw_unit(seed, 0u), draw_unit(seed, 1u), draw_unit(seed, 2u),
                         draw_unit(seed, 3u));
     let total = n_f + n_l + params.lights * n;
+    // Transmissive and Dirac models have no tabulated CDFs: their BSDF samples are the
+    // model's own (the CPU's `Bsdf::sample`), valued by the sample itself.
+    let own = m.tab_base == NO_TABLE;
     var sum = vec3<f32>(0.0);
-    for (var k = 0u; k < total; k++) {
+    let end = min(total, first + SAMPLES_PER_DISPATCH);
+    for (var k = first; k < end; k++) {
         var wi = vec3<f32>(0.0);
         // What multiplies f(wi, wo) (0: no contribution).
         var weight = vec3<f32>(0.0);
+        // The sample's own value, used instead of f(wi, wo) when `valued`.
+        var value = vec3<f32>(0.0);
+        var valued = false;
+        var dirac = false;
         if (k < n_f + n_l) {
             // The BRDF's samples by its tabulated CDFs, then the environment's.
             var d = vec3<f32>(0.0);
             var p_f = 0.0;
             if (k < n_f) {
                 let u = fract(hammersley(k, n_f) + rot.xy);
-                let smp = tabulated_sample(m.tab_base, m.dims, wo, u.x, u.y);
-                if (smp.w == 0.0) {
-                    continue;
+                if (own) {
+                    let smp = material_sample(wo, u);
+                    if (smp.pdf == 0.0) {
+                        continue;
+                    }
+                    wi = smp.wi;
+                    d = t * wi.x + b * wi.y + nn * wi.z;
+                    valued = true;
+                    if (smp.delta != 0u) {
+                        dirac = true;
+                        // A Dirac lobe: its weight f |cos θi| / P, no MIS (env samples never
+                        // reach it).
+                        value = smp.value * (abs(wi.z) / smp.pdf);
+                        weight = incident(d, to_map(d), s.b.w) / f32(n_f);
+                    } else {
+                        value = smp.value;
+                        p_f = smp.pdf;
+                    }
+                } else {
+                    let smp = tabulated_sample(m.tab_base, m.dims, wo, u.x, u.y);
+                    if (smp.w == 0.0) {
+                        continue;
+                    }
+                    wi = smp.xyz;
+                    p_f = smp.w;
+                    d = t * wi.x + b * wi.y + nn * wi.z;
                 }
-                wi = smp.xyz;
-                p_f = smp.w;
-                d = t * wi.x + b * wi.y + nn * wi.z;
             } else {
                 let u = fract(hammersley(k - n_f, n_l) + rot.zw);
                 let e = env_sample(params.env, u.x, u.y);
@@ -229,14 +267,20 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
                 d = params.to_map0.xyz * e.x + params.to_map1.xyz * e.y
                     + params.to_map2.xyz * e.z;
                 wi = vec3<f32>(dot(d, t), dot(d, b), dot(d, nn));
-                p_f = tabulated_pdf(m.tab_base, m.dims, wi, wo);
+                if (own) {
+                    p_f = material_pdf(wi, wo);
+                } else {
+                    p_f = tabulated_pdf(m.tab_base, m.dims, wi, wo);
+                }
             }
-            let dm = to_map(d);
-            let den = f32(n_f) * p_f + f32(n_l) * env_pdf(params.env, dm);
-            if (!(den > 0.0)) {
-                continue;
+            if (!dirac) {
+                let dm = to_map(d);
+                let den = f32(n_f) * p_f + f32(n_l) * env_pdf(params.env, dm);
+                if (!(den > 0.0)) {
+                    continue;
+                }
+                weight = incident(d, dm, s.b.w) * (abs(wi.z) / den);
             }
-            weight = incident(d, dm, s.b.w) * (abs(wi.z) / den);
         } else {
             // Area light l's point j, stratified over its area; its rotation is the pair of
             // draws after the four above.
@@ -260,7 +304,11 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>) -> vec3<f32> {
             weight = light.radiance.xyz * light_texels[area_light_texel(light, uv)].xyz
                 * (abs(wi.z) * g);
         }
-        let v = material_eval(m.kind, m.base, bitcast<f32>(m.offset), wi, wo) * weight;
+        var f = value;
+        if (!valued) {
+            f = material_eval(m.kind, m.base, bitcast<f32>(m.offset), wi, wo);
+        }
+        let v = f * weight;
         if (finite3(v)) {
             sum += v;
         }
@@ -347,8 +395,13 @@ fn main(@builtin(global_invocation_id) gid3: vec3<u32>,
         let x = k % params.width;
         let y = k / params.width;
         let n = samples_at(level, x, y);
-        values[k] = vec4<f32>(shade(surfels[k], n, shading_seed(k)), 1.0);
-        shaded[k] = vec2<u32>(level, n);
+        if (params.first == 0u) {
+            values[k] = vec4<f32>(shade(surfels[k], n, shading_seed(k), 0u), 1.0);
+            shaded[k] = vec2<u32>(level, n);
+        } else if (params.first < n * (1u + params.lights)) {
+            values[k] = vec4<f32>(values[k].xyz + shade(surfels[k], n, shading_seed(k),
+                                                       params.first), 1.0);
+        }
         return;
     }
     let nx = (params.width + (1u << level) - 1u) >> level;

@@ -80,8 +80,15 @@ struct Params {
     incident: u32,
     out: u32,
     lights: u32,
-    _pad: u32,
+    first: u32,
 }
+
+/// The most paths (environment directions and area-light points) one thread takes per
+/// dispatch: a pixel's n_b (1 + lights) paths are taken over several dispatches, their sums
+/// carried between them. Lavapipe ends every loop of a shader invocation once they have run
+/// 65,535 iterations in all (llvmpipe's `LP_MAX_TGSI_LOOP_ITERATIONS`): in one dispatch, n_b =
+/// 1024 lost paths there.
+pub const DIRECTIONS_PER_DISPATCH: u32 = 64;
 
 /// The environment and the materials, uploaded once.
 pub struct BandwidthScene {
@@ -377,6 +384,7 @@ impl BandwidthPass {
             storage_entry(7, true),
             storage_entry(8, true),
             storage_entry(9, true),
+            storage_entry(13, false),
         ];
         let pipelines = MaterialPipelines::new(
             ctx,
@@ -441,16 +449,10 @@ impl BandwidthPass {
             incident: scene.grid.0,
             out: scene.grid.1,
             lights: scene.light_count,
-            _pad: 0,
+            first: 0,
         };
         self.timer.start(ctx)?;
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let params_buf = buffer_init(
-            ctx,
-            "bandwidth params",
-            bytemuck::bytes_of(&params),
-            wgpu::BufferUsages::UNIFORM,
-        );
         let surfel_buf = buffer_init(
             ctx,
             "bandwidth surfels",
@@ -470,26 +472,36 @@ impl BandwidthPass {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let (pipeline, layout) = self.pipelines.get(ctx, scene.evaluates)?;
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("bandwidth pass"),
-            layout,
-            entries: &[
-                entry(0, &params_buf),
-                entry(1, &surfel_buf),
-                entry(2, &scene.environment),
-                entry(3, &scene.materials),
-                entry(4, &scene.table),
-                entry(5, &scene.brdf_bandwidth),
-                entry(6, &out),
-                entry(7, &scene.fitted),
-                entry(8, &scene.lights),
-                entry(9, &scene.light_texels),
-                entry(10, &scene.params),
-                entry(11, &scene.texels),
-                entry(12, &scene.tex_info),
-            ],
+        // Σλ, Σλν, … of each pixel between the dispatches (3 vec4s).
+        let partials = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("bandwidth partial sums"),
+            size: (pixels.len() * 48) as u64,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
         });
+        let (pipeline, layout) = self.pipelines.get(ctx, scene.evaluates)?;
+        let paths = u64::from(n_b) * (1 + u64::from(scene.light_count));
+        let dispatches = paths.div_ceil(u64::from(DIRECTIONS_PER_DISPATCH)) as u32;
+        let groups: Vec<wgpu::BindGroup> = (0..dispatches)
+            .map(|c| {
+                let p = Params {
+                    first: c * DIRECTIONS_PER_DISPATCH,
+                    ..params
+                };
+                let params_buf = buffer_init(
+                    ctx,
+                    "bandwidth params",
+                    bytemuck::bytes_of(&p),
+                    wgpu::BufferUsages::UNIFORM,
+                );
+                bind_group(
+                    ctx,
+                    layout,
+                    scene,
+                    [&params_buf, &surfel_buf, &out, &partials],
+                )
+            })
+            .collect();
         let mut enc = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -501,8 +513,11 @@ impl BandwidthPass {
                 timestamp_writes: None,
             });
             pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups((pixels.len() as u32).div_ceil(64), 1, 1);
+            // Each dispatch continues the sums the one before it left (wgpu orders them).
+            for group in &groups {
+                pass.set_bind_group(0, group, &[]);
+                pass.dispatch_workgroups((pixels.len() as u32).div_ceil(64), 1, 1);
+            }
         }
         ctx.queue.submit([enc.finish()]);
         let timing = self.timer.stop(ctx)?;
@@ -519,9 +534,50 @@ impl BandwidthPass {
     }
 }
 
+/// The bind group of one dispatch: its parameters, the pixels, the predictions and the partial
+/// sums, with `scene`'s buffers.
+fn bind_group(
+    ctx: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+    scene: &BandwidthScene,
+    [params_buf, surfel_buf, out, partials]: [&wgpu::Buffer; 4],
+) -> wgpu::BindGroup {
+    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("bandwidth pass"),
+        layout,
+        entries: &[
+            entry(0, params_buf),
+            entry(1, surfel_buf),
+            entry(2, &scene.environment),
+            entry(3, &scene.materials),
+            entry(4, &scene.table),
+            entry(5, &scene.brdf_bandwidth),
+            entry(6, out),
+            entry(7, &scene.fitted),
+            entry(8, &scene.lights),
+            entry(9, &scene.light_texels),
+            entry(10, &scene.params),
+            entry(11, &scene.texels),
+            entry(12, &scene.tex_info),
+            entry(13, partials),
+        ],
+    })
+}
+
 fn entry(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry {
         binding,
         resource: b.as_entire_binding(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shader_takes_the_same_share_per_dispatch() {
+        let share = format!("const DIRECTIONS_PER_DISPATCH: u32 = {DIRECTIONS_PER_DISPATCH}u;");
+        assert!(BANDWIDTH_PASS_WGSL.contains(&share), "{share}");
     }
 }

@@ -14,8 +14,23 @@ struct Params {
     incident: u32,
     out: u32,
     lights: u32,
-    _pad1: u32,
+    // The first direction (or area-light point) of this dispatch's share: a pixel's
+    // n_b (1 + lights) paths are taken DIRECTIONS_PER_DISPATCH a dispatch, the sums carried
+    // in `partials` between them (bandwidth_pass::DIRECTIONS_PER_DISPATCH).
+    first: u32,
 }
+
+// The sums of a pixel between dispatches: (Σλ, Σλν (2), Σχ), (the variance sums (2), the
+// BRDF's largest bandwidth, the lights' Σ contribution), (their Σ contribution · ν (2), their
+// paths, 0).
+struct Partial {
+    a: vec4<f32>,
+    b: vec4<f32>,
+    c: vec4<f32>,
+}
+
+// bandwidth_pass::DIRECTIONS_PER_DISPATCH.
+const DIRECTIONS_PER_DISPATCH: u32 = 64u;
 
 // A surface pixel in the map's frame: t, b, n, wo (xyz), depth in t.w, curvature in b.w, the
 // material in n.w (bitcast u32), 1 in wo.w for a surface (0: background); its position (xyz)
@@ -61,6 +76,7 @@ struct Prediction {
 @group(0) @binding(8) var<storage, read> lights: array<AreaLight>;
 // Per light texel: RGB and its spatial bandwidth (cycles per metre) in w.
 @group(0) @binding(9) var<storage, read> light_texels: array<vec4<f32>>;
+@group(0) @binding(13) var<storage, read_write> partials: array<Partial>;
 
 fn bsdf_table(i: u32) -> f32 {
     return table[i];
@@ -109,7 +125,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let finite = abs(depth) < 3.0e38 && abs(curvature) < 3.0e38 && depth == depth
         && curvature == curvature && abs(texture) < 3.0e38 && texture == texture;
     if (s.wo.w == 0.0 || !(wo.z > 0.0 && finite && dot(n, n) > 0.5)) {
-        predictions[i] = out;
+        if (params.first == 0u) {
+            predictions[i] = out;
+        }
         return;
     }
     let m = materials[bitcast<u32>(s.n.w)];
@@ -127,7 +145,23 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     var light_sum = 0.0;
     var paths = 0u;
     let total = params.n_b * (1u + params.lights);
-    for (var k = 0u; k < total; k++) {
+    if (params.first >= total) {
+        return;
+    }
+    if (params.first > 0u) {
+        let q = partials[i];
+        weight_sum = q.a.x;
+        nu = q.a.yz;
+        chi_sum = q.a.w;
+        out.variance = q.b.x;
+        out.variance_preconvolved = q.b.y;
+        brdf_max = q.b.z;
+        light_sum = q.b.w;
+        light_nu = q.c.xy;
+        paths = u32(q.c.z);
+    }
+    let end = min(total, params.first + DIRECTIONS_PER_DISPATCH);
+    for (var k = params.first; k < end; k++) {
         let from_env = k < params.n_b;
         var wi_l = vec3<f32>(0.0);
         // An area light's point: the light's radiance, its bandwidth there, the distance, the
@@ -188,6 +222,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             out.variance_preconvolved += 2.0 * nu_brdf * chi * chi;
             paths += 1u;
         }
+    }
+    if (end < total) {
+        partials[i] = Partial(vec4<f32>(weight_sum, nu, chi_sum),
+                              vec4<f32>(out.variance, out.variance_preconvolved, brdf_max,
+                                        light_sum),
+                              vec4<f32>(light_nu, f32(paths), 0.0));
+        return;
     }
     var env_nu = vec2<f32>(0.0);
     if (weight_sum > 0.0) {

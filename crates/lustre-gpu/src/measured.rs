@@ -11,7 +11,9 @@ use crate::frame_shade::{
     pack_material, pack_material_params, GpuBsdf, FLAG_TEXTURED, FLAG_TWO_SIDED, MATERIAL_PARAMS,
 };
 use crate::gbuffer::{pack_textures, PackedTextures};
-use crate::wgsl::{compose, Module, ANALYTIC, BSDF, MEASURED, TEXTURED, TEXTURE_SAMPLE_WGSL};
+use crate::wgsl::{
+    compose, Module, ANALYTIC, BSDF, BSDF_SAMPLE, MEASURED, TEXTURED, TEXTURE_SAMPLE_WGSL,
+};
 use lustre_brdf::measured::merl::{MerlTable, BINS, RES_PHI_D, RES_THETA_D, RES_THETA_H};
 use lustre_brdf::measured::nbrdf::Nbrdf;
 use lustre_brdf::measured::rgl::RglBsdf;
@@ -83,6 +85,10 @@ impl PackedBrdfs {
                 if let MaterialKind::Spec(s) = &m.kind {
                     pack_analytic(b, &mut self.table)
                         .map_err(|e| invalid(name, format!("spec {:?}: {e}", s.spec)))?
+                } else if let MaterialKind::Dielectric { .. } = &m.kind {
+                    // Smooth glass as the CPU shades it (the walkthrough's frame takes it as a
+                    // thin sheet instead: `pack_material`).
+                    pack_analytic(b, &mut self.table).map_err(|e| invalid(name, e.to_string()))?
                 } else {
                     let mut rec = pack_material(m, &mut self.table)?;
                     if rec.flags & FLAG_TEXTURED != 0 {
@@ -370,7 +376,12 @@ fn material_eval_source(binding: u32, textures: u32, evaluates: Evaluates) -> St
                  fn material_prepare(kind: u32, base: u32, uv: vec2<f32>) {{}}\n\n\
                  fn material_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>,\n                 \
                  wo: vec3<f32>) -> vec3<f32> {{\n    \
-                 return measured_eval(kind, base, offset, wi, wo);\n}}\n\n"
+                 return measured_eval(kind, base, offset, wi, wo);\n}}\n\n\
+                 // Measured BRDFs are sampled by their tabulated CDFs, never by these.\n\
+                 fn material_sample(wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {{\n    \
+                 return no_sample();\n}}\n\n\
+                 fn material_pdf(wi: vec3<f32>, wo: vec3<f32>) -> f32 {{\n    \
+                 return 0.0;\n}}\n\n"
             )
         }
         Evaluates::Records => "bsdf_eval",
@@ -402,7 +413,22 @@ fn material_eval_source(binding: u32, textures: u32, evaluates: Evaluates) -> St
          fn material_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>,\n                 \
          wo: vec3<f32>) -> vec3<f32> {{\n    \
          if (kind == {KIND_RECORD}u) {{\n        return {record}(prepared, wi, wo);\n    }}\n    \
-         return measured_eval(kind, base, offset, wi, wo);\n}}\n\n",
+         return measured_eval(kind, base, offset, wi, wo);\n}}\n\n\
+         // The prepared record's own sampling and density (bsdf.wgsl), for the models without \
+         tabulated CDFs\n\
+         // (transmissive or Dirac); a two-sided record seen from below samples its model \
+         mirrored\n\
+         // (TwoSided::sample, TwoSided::pdf).\n\
+         fn material_sample(wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {{\n    \
+         if ((prepared.flags & FLAG_TWO_SIDED) != 0u && wo.z < 0.0) {{\n        \
+         var s = bsdf_sample(prepared, vec3<f32>(wo.xy, -wo.z), u);\n        \
+         s.wi.z = -s.wi.z;\n        \
+         return s;\n    }}\n    \
+         return bsdf_sample(prepared, wo, u);\n}}\n\n\
+         fn material_pdf(wi: vec3<f32>, wo: vec3<f32>) -> f32 {{\n    \
+         if ((prepared.flags & FLAG_TWO_SIDED) != 0u && wo.z < 0.0) {{\n        \
+         return bsdf_pdf(prepared, vec3<f32>(wi.xy, -wi.z), vec3<f32>(wo.xy, -wo.z));\n    }}\n    \
+         return bsdf_pdf(prepared, wi, wo);\n}}\n\n",
         TEXTURE_SAMPLE_WGSL
     )
 }
@@ -457,7 +483,7 @@ impl MaterialPipelines {
             let mut imports = self.imports.clone();
             imports.push(&MEASURED);
             match evaluates {
-                Evaluates::Measured => {}
+                Evaluates::Measured => imports.push(&BSDF_SAMPLE),
                 Evaluates::Records => imports.extend([&BSDF, &TEXTURED]),
                 Evaluates::Analytic => imports.extend([&ANALYTIC, &TEXTURED]),
             }

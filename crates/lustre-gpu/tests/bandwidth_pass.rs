@@ -7,7 +7,9 @@ use lustre_adaptive::buffer::{
     predict_pixels, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule,
 };
 use lustre_freq::pixel::EnvironmentBandwidth;
-use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthPixel, BandwidthScene};
+use lustre_gpu::bandwidth_pass::{
+    BandwidthPass, BandwidthPixel, BandwidthScene, DIRECTIONS_PER_DISPATCH,
+};
 use lustre_gpu::measured::MeasuredBrdf;
 
 mod common;
@@ -166,6 +168,38 @@ fn the_gpu_bandwidth_pass_matches_its_cpu_twin_on_the_line_up() {
             let (rms, worst, share) = compare(pairs, 1e-3 * scale, 1e-2);
             eprintln!(
                 "with the area light, {name}: relative RMS {rms:.2e}, worst {worst:.2e}, {:.2} % of pixels off by > 1 %",
+                100.0 * share
+            );
+            assert!(share < 0.01, "{name}: {:.2} % off by > 1 %", 100.0 * share);
+            assert!(rms < 5e-3, "{name}: relative RMS {rms}");
+        }
+        // n_b = 1024 with the light: 2048 paths a pixel, taken over 32 dispatches
+        // (DIRECTIONS_PER_DISPATCH; in one, lavapipe's loop limit dropped paths).
+        let many = 1024;
+        assert!(2 * many > 16 * DIRECTIONS_PER_DISPATCH as usize);
+        let cpu_many =
+            predict_pixels(&g, &lit, &env_bw, many, BrdfWeights::Evaluated).expect("cpu");
+        let (gpu_many, _) = pass
+            .predict(&gpu_ctx, &scene_lit, &g, &lit, many as u32)
+            .expect("gpu");
+        let mut many_fields: [Vec<(f64, f64)>; 4] = Default::default();
+        for (c, gp) in cpu_many.iter().zip(&gpu_many) {
+            if let (Some(c), Some(gp)) = (c, gp) {
+                let (a, b) = (&c.prediction, &gp.prediction);
+                many_fields[0].push((a.bandwidth.angular, b.bandwidth.angular));
+                many_fields[1].push((a.variance, b.variance));
+                many_fields[2].push((a.radiance, b.radiance));
+                many_fields[3].push((c.brdf_max, gp.brdf_max));
+            }
+        }
+        for (name, pairs) in ["angular bandwidth", "variance sum", "radiance", "BRDF max"]
+            .iter()
+            .zip(&many_fields)
+        {
+            let scale = pairs.iter().map(|(c, _)| c.abs()).fold(0.0, f64::max);
+            let (rms, worst, share) = compare(pairs, 1e-3 * scale, 1e-2);
+            eprintln!(
+                "n_b {many} with the area light, {name}: relative RMS {rms:.2e}, worst {worst:.2e}, {:.2} % of pixels off by > 1 %",
                 100.0 * share
             );
             assert!(share < 0.01, "{name}: {:.2} % off by > 1 %", 100.0 * share);
