@@ -156,7 +156,7 @@ struct PyramidParams {
 /// `LP_MAX_TGSI_LOOP_ITERATIONS`), and a neural BRDF's evaluation and the samplers' searches
 /// take ≈ 190 of them a sample: unchunked, a pixel's samples past the ≈ 350th were dropped
 /// there.
-pub const SAMPLES_PER_DISPATCH: u32 = 64;
+pub const SAMPLES_PER_DISPATCH: u32 = 128;
 
 /// `tab_base` of a material sampled by its record's own `bsdf_sample` (`NO_TABLE` in
 /// adaptive_pass.wgsl).

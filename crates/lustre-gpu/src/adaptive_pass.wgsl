@@ -128,7 +128,7 @@ fn env_table(i: u32) -> f32 {
 const BACKGROUND: u32 = 0xffffffffu;
 const NOT_SHADED: u32 = 255u;
 // adaptive_pass::SAMPLES_PER_DISPATCH.
-const SAMPLES_PER_DISPATCH: u32 = 64u;
+const SAMPLES_PER_DISPATCH: u32 = 128u;
 // PassMaterial::tab_base of a model sampled by its own `material_sample` (no tabulated CDFs).
 const NO_TABLE: u32 = 0xffffffffu;
 // hierarchy::MIN_WEIGHT and gbuffer::SAME_SURFACE.
@@ -215,8 +215,9 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>, first: u32) -> vec3<f32> {
                         draw_unit(seed, 3u));
     let total = n_f + n_l + params.lights * n;
     // Transmissive and Dirac models have no tabulated CDFs: their BSDF samples are the
-    // model's own (the CPU's `Bsdf::sample`), valued by the sample itself.
-    let own = m.tab_base == NO_TABLE;
+    // model's own (the CPU's `Bsdf::sample`), valued by the sample itself. (A variant for
+    // measured BRDFs only has none: MATERIAL_SAMPLES false folds these branches away.)
+    let own = MATERIAL_SAMPLES && m.tab_base == NO_TABLE;
     var sum = vec3<f32>(0.0);
     let end = min(total, first + SAMPLES_PER_DISPATCH);
     for (var k = first; k < end; k++) {
@@ -304,10 +305,10 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>, first: u32) -> vec3<f32> {
             weight = light.radiance.xyz * light_texels[area_light_texel(light, uv)].xyz
                 * (abs(wi.z) * g);
         }
-        var f = value;
-        if (!valued) {
-            f = material_eval(m.kind, m.base, bitcast<f32>(m.offset), wi, wo);
-        }
+        // Evaluated on every path (a Dirac direction evaluates to 0), the sample's own value
+        // taken where it has one.
+        let f = select(material_eval(m.kind, m.base, bitcast<f32>(m.offset), wi, wo), value,
+                       valued);
         let v = f * weight;
         if (finite3(v)) {
             sum += v;
@@ -395,12 +396,16 @@ fn main(@builtin(global_invocation_id) gid3: vec3<u32>,
         let x = k % params.width;
         let y = k / params.width;
         let n = samples_at(level, x, y);
+        if (params.first > 0u && params.first >= n * (1u + params.lights)) {
+            return;
+        }
+        // One call site, so that the shading is compiled once.
+        let v = shade(surfels[k], n, shading_seed(k), params.first);
         if (params.first == 0u) {
-            values[k] = vec4<f32>(shade(surfels[k], n, shading_seed(k), 0u), 1.0);
+            values[k] = vec4<f32>(v, 1.0);
             shaded[k] = vec2<u32>(level, n);
-        } else if (params.first < n * (1u + params.lights)) {
-            values[k] = vec4<f32>(values[k].xyz + shade(surfels[k], n, shading_seed(k),
-                                                       params.first), 1.0);
+        } else {
+            values[k] = vec4<f32>(values[k].xyz + v, 1.0);
         }
         return;
     }

@@ -17,20 +17,20 @@
 //! | 24 [`KIND_LAFORTUNE`] | Lafortune | ρd (3), lobe count; lobe j at 4 + 9j: C (3), n, ρ (3), K, m |
 //! | 25 [`KIND_ASHIKHMIN_SHIRLEY`] | Ashikhmin–Shirley | Rd (3), nu, Rs (3), nv |
 //! | 26 [`KIND_ABC`] | ABC | kD (3), B, A (3), C, ior |
-//! | 27 [`KIND_CT_CHANNELS`] | Cook–Torrance, any NDF per channel (the exponential, and those the fitted layouts do not take: the numeric Smith G1 of an SGD, Beckmann or GGX, mixed distributions) | channel c at 7c: ρd, ρs, α, F0, F1, p, ln κ (p, ln κ: SGD); [21] bit c: a G1 table, bit 3 + c: the closed-form G1; [22 + c] the table's side-table word; [25 + c] the NDF: 0 Beckmann, 1 GGX, 2 exponential, 3 SGD |
+//! | 27 [`KIND_CT_CHANNELS`] | Cook–Torrance, any NDF per channel (the exponential, and those the fitted layouts do not take: the numeric Smith G1 of an SGD, Beckmann or GGX, 004's Eq. V.3 G1 outside the all-SGD layout, mixed distributions) | channel c at 7c: ρd, ρs, α, F0, F1, p, ln κ (p, ln κ: SGD); [21] bit c: a G1 table, bit 3 + c: the closed-form G1, bit 6 + c: Eq. V.3's G1; [22 + c] the table's (or Eq. V.3's λ, ln c, k, θ0) side-table word; [25 + c] the NDF: 0 Beckmann, 1 GGX, 2 exponential, 3 SGD |
 //!
 //! A `TwoSided` wrapper (of a resolved spec: `twosided:…`, or of a two-sided scene material's
 //! spec) packs its model flagged [`FLAG_TWO_SIDED`]: `record_eval` mirrors both directions to
 //! the upper side when ωo lies below, as `TwoSided::eval` does (a pass without analytic records
 //! evaluates the model as is: `measured::Evaluates::Records`). Cook–Torrance's numeric Smith G1
-//! tables ([`G1Table`]) go to the side table ([`pack_g1_table`]). A Cook–Torrance the fitted
+//! tables ([`G1Table`]) and the parameters of 004's Eq. V.3 G1 go to the side table
+//! ([`pack_g1_table`]). A Cook–Torrance the fitted
 //! layouts take (`fit_models::pack_fit`: kinds 16–18, which also sample) is packed there; kind 27
 //! takes the others, with the Lazányi Fresnel as the Schlick form it equals.
 //!
 //! Refused with a named error ([`crate::error::GpuError::Invalid`]): models without a GPU twin
-//! (ALTA and goniometric tables; Cook–Torrance with 004's Eq. V.3 shadowing outside an
-//! all-SGD layout), more than [`LAFORTUNE_MAX_LOBES`] Lafortune lobes, side-table offsets beyond
-//! f32's exact integers.
+//! (ALTA and goniometric tables), more than [`LAFORTUNE_MAX_LOBES`] Lafortune lobes, side-table
+//! offsets beyond f32's exact integers, Eq. V.3 parameters beyond f32.
 
 use crate::error::{invalid, Result};
 use crate::fit_models::{fresnel_params, pack_fit};
@@ -320,14 +320,18 @@ fn pack_ct_channels(ct: &CookTorrance, table: &mut Vec<f32>) -> Result<[[f32; 4]
                 table.extend(pack_g1_table(t));
             }
             G1Model::Closed => flags |= 1 << (3 + c),
-            G1Model::SgdApprox(_) => {
-                return Err(invalid(
-                    &name,
-                    format!(
-                        "channel {c}: 004's Eq. V.3 shadowing is on the GPU in the all-SGD layout \
-                         only (every channel an SGD with κ = 1/(αΓ(1−p, α)))"
-                    ),
-                ))
+            G1Model::SgdApprox(a) => {
+                // 004's Eq. V.3: (λ, ln c, k, θ0) in the side table.
+                flags |= 1 << (6 + c);
+                f[22 + c] = f64::from(table_offset(&name, table)?);
+                let words = [a.lambda, a.ln_c(), a.k, a.theta0];
+                if words.iter().any(|v| !(*v as f32).is_finite()) {
+                    return Err(invalid(
+                        &name,
+                        format!("channel {c}: Eq. V.3's (λ, ln c, k, θ0) = {words:?} beyond f32"),
+                    ));
+                }
+                table.extend(words.map(|v| v as f32));
             }
         }
     }

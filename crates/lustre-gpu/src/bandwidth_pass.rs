@@ -88,7 +88,7 @@ struct Params {
 /// carried between them. Lavapipe ends every loop of a shader invocation once they have run
 /// 65,535 iterations in all (llvmpipe's `LP_MAX_TGSI_LOOP_ITERATIONS`): in one dispatch, n_b =
 /// 1024 lost paths there.
-pub const DIRECTIONS_PER_DISPATCH: u32 = 64;
+pub const DIRECTIONS_PER_DISPATCH: u32 = 128;
 
 /// The environment and the materials, uploaded once.
 pub struct BandwidthScene {

@@ -30,7 +30,7 @@ struct Partial {
 }
 
 // bandwidth_pass::DIRECTIONS_PER_DISPATCH.
-const DIRECTIONS_PER_DISPATCH: u32 = 64u;
+const DIRECTIONS_PER_DISPATCH: u32 = 128u;
 
 // A surface pixel in the map's frame: t, b, n, wo (xyz), depth in t.w, curvature in b.w, the
 // material in n.w (bitcast u32), 1 in wo.w for a surface (0: background); its position (xyz)

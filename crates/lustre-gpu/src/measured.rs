@@ -378,6 +378,7 @@ fn material_eval_source(binding: u32, textures: u32, evaluates: Evaluates) -> St
                  wo: vec3<f32>) -> vec3<f32> {{\n    \
                  return measured_eval(kind, base, offset, wi, wo);\n}}\n\n\
                  // Measured BRDFs are sampled by their tabulated CDFs, never by these.\n\
+                 const MATERIAL_SAMPLES: bool = false;\n\n\
                  fn material_sample(wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {{\n    \
                  return no_sample();\n}}\n\n\
                  fn material_pdf(wi: vec3<f32>, wo: vec3<f32>) -> f32 {{\n    \
@@ -419,6 +420,7 @@ fn material_eval_source(binding: u32, textures: u32, evaluates: Evaluates) -> St
          // (transmissive or Dirac); a two-sided record seen from below samples its model \
          mirrored\n\
          // (TwoSided::sample, TwoSided::pdf).\n\
+         const MATERIAL_SAMPLES: bool = true;\n\n\
          fn material_sample(wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {{\n    \
          if ((prepared.flags & FLAG_TWO_SIDED) != 0u && wo.z < 0.0) {{\n        \
          var s = bsdf_sample(prepared, vec3<f32>(wo.xy, -wo.z), u);\n        \

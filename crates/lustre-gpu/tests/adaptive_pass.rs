@@ -621,7 +621,7 @@ fn transmissive_and_dirac_models_are_sampled_by_their_own_records_on_the_gpu_as_
                 "rms {rms}, {over1}, {over10}"
             );
             assert!(cpu.samples.iter().any(|n| *n > 2 * SAMPLES_PER_DISPATCH) || run == 0);
-            // Brute force through the same estimator, once at 130 samples a pixel (three
+            // Brute force through the same estimator, once at 130 samples a pixel (two
             // dispatches, the last with 2).
             let spp = if run == 1 { 130 } else { 4 };
             let (cpu_b, _) = render_brute(&g, &shading, spp, 11).expect("cpu brute");

@@ -11,6 +11,7 @@ use glam::DVec3;
 use lustre_brdf::catalog::resolve;
 use lustre_brdf::microfacet::fresnel::Fresnel;
 use lustre_brdf::microfacet::ndf::Ndf;
+use lustre_brdf::microfacet::smith::SgdG1Approx;
 use lustre_brdf::models::cook_torrance::{CookTorrance, CtChannel, G1Model};
 use lustre_brdf::sampling::SplitMix64;
 use lustre_brdf::Bsdf;
@@ -174,7 +175,14 @@ fn every_analytic_reflection_model_matches_its_cpu_twin() {
         .map(|(spec, _, _)| resolve(spec).unwrap_or_else(|e| panic!("{spec}: {e}")))
         .collect();
     for (name, m) in constructed_cook_torrance() {
-        cases.push((name, 1e-6, 1e-5));
+        // Eq. V.3 in f32: 1 + λ(1 − e^{c(θ−θ0)^k}) cancels near grazing (measured: RMS
+        // 2.7e-6, worst 7.9e-5 at cos θ 0.002; the all-SGD kind 16 is held to 1e-3).
+        let bounds = if name.contains("Eq. V.3") {
+            (1e-5, 2e-4)
+        } else {
+            (1e-6, 1e-5)
+        };
+        cases.push((name, bounds.0, bounds.1));
         models.push(m);
     }
     // Input: the side table, the records (36 words each), the pairs (6 words each).
@@ -279,6 +287,16 @@ fn constructed_cook_torrance() -> Vec<(String, Box<dyn Bsdf>)> {
         ch(0.3, 0.4, ok(Ndf::sgd(0.2, 0.6)), true, one),
     ];
     mixed[2].g1 = G1Model::None;
+    // 004's Eq. V.3 shadowing outside the all-SGD layout: a published SGD fit (its G1 by Eq.
+    // V.3) with one channel turned Beckmann.
+    let nickel = resolve("sgd:nickel").expect("sgd:nickel");
+    let ct = nickel
+        .as_any()
+        .and_then(|a| a.downcast_ref::<CookTorrance>())
+        .expect("sgd:nickel is a Cook-Torrance");
+    let mut v3 = ct.channels().clone();
+    assert!(v3.iter().all(|c| matches!(c.g1, G1Model::SgdApprox(_))));
+    v3[1].ndf = ok(Ndf::beckmann(0.2));
     [
         (
             "beckmann, numeric G1",
@@ -286,6 +304,7 @@ fn constructed_cook_torrance() -> Vec<(String, Box<dyn Bsdf>)> {
         ),
         ("ggx, numeric G1, Lazányi", [ggx.clone(), ggx.clone(), ggx]),
         ("beckmann / ggx / sgd, Lazányi", mixed),
+        ("sgd:nickel, channel 1 Beckmann (Eq. V.3 G1)", v3),
     ]
     .into_iter()
     .map(|(name, c)| {
@@ -310,20 +329,17 @@ fn specs_without_a_gpu_twin_are_refused_by_name() {
             );
         }
     }
-    // 004's Eq. V.3 shadowing outside the all-SGD layout: a published SGD fit with one channel
-    // turned Beckmann.
+    // 004's Eq. V.3 with parameters beyond f32 (λ = 1e39): named.
     let nickel = resolve("sgd:nickel").expect("sgd:nickel");
     let any = nickel.as_any().expect("as_any");
     let ct = any.downcast_ref::<CookTorrance>().expect("a Cook-Torrance");
     let mut c = ct.channels().clone();
-    c[1] = CtChannel::new(
-        0.1,
-        0.5,
-        Ndf::beckmann(0.2).expect("ndf"),
-        G1Model::Closed,
-        Fresnel::One,
+    c[0].g1 = G1Model::SgdApprox(SgdG1Approx::new(1e39, 1.0, 2.0, 1.0).expect("Eq. V.3"));
+    c[1].ndf = Ndf::beckmann(0.2).expect("ndf");
+    let huge = CookTorrance::new("nickel, λ 1e39", c).expect("model");
+    let m = pack_analytic(&huge, &mut vec![]).expect_err("λ beyond f32");
+    assert!(
+        m.to_string().contains("Eq. V.3") && m.to_string().contains("f32"),
+        "{m}"
     );
-    let mixed = CookTorrance::new("nickel, one channel beckmann", c).expect("model");
-    let m = pack_analytic(&mixed, &mut vec![]).expect_err("Eq. V.3 with a Beckmann channel");
-    assert!(m.to_string().contains("Eq. V.3"), "{m}");
 }

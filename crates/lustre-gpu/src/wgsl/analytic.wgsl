@@ -237,8 +237,9 @@ fn ct_channel_d(code: u32, alpha: f32, p: f32, ln_kap: f32, h: vec3<f32>) -> f32
 // Cook–Torrance per channel (004 Eq. III.1, III.2, Table III.2, cook_torrance::CookTorrance):
 // ρd/π + (ρs/π) F(ωi·h) D(θh) G1(θi) G1(θo)/(cos θi cos θo), F the generalized Schlick
 // (cook_torrance's ct_fresnel), G1 the channel's tabulated Smith G1, the closed form of Beckmann
-// or GGX, or 1. Channel c at float 7c: ρd, ρs, α, F0, F1, p, ln κ; [21] bit c: a G1 table (at
-// side-table word [22 + c]), bit 3 + c: the closed form; [25 + c] the distribution.
+// or GGX, 004's Eq. V.3, or 1. Channel c at float 7c: ρd, ρs, α, F0, F1, p, ln κ; [21] bit c: a
+// G1 table (at side-table word [22 + c]), bit 3 + c: the closed form, bit 6 + c: Eq. V.3 (its
+// λ, ln c, k, θ0 at side-table word [22 + c]); [25 + c] the distribution.
 fn ct_channels_eval(p: array<vec4<f32>, 8>, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
     let ci = wi.z;
     let co = wo.z;
@@ -266,6 +267,14 @@ fn ct_channels_eval(p: array<vec4<f32>, 8>, wi: vec3<f32>, wo: vec3<f32>) -> vec
             } else if ((flags & (1u << (3u + c))) != 0u) {
                 let dist = select(MICROFACET_BECKMANN, MICROFACET_GGX, code == 1u);
                 g = ct_smith_g1(dist, alpha, wi) * ct_smith_g1(dist, alpha, wo);
+            } else if ((flags & (1u << (6u + c))) != 0u) {
+                let base = u32(q[22u + c]);
+                var a: SgdChannel;
+                a.lambda = bsdf_table(base);
+                a.ln_c = bsdf_table(base + 1u);
+                a.k = bsdf_table(base + 2u);
+                a.theta0 = bsdf_table(base + 3u);
+                g = sgd_g1(a, wi) * sgd_g1(a, wo);
             }
             spec = rho_s * ct_fresnel(q[7u * c + 3u], q[7u * c + 4u], cd) * d * g / (ci * co);
         }
