@@ -315,6 +315,36 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
     })
 }
 
+/// `scene`'s materials uploaded with the scene (both passes take them), the default buffer,
+/// and the adaptive frame from `seed` on the CPU and on the GPU, with the uploaded scene and
+/// the pass for more frames.
+fn adaptive_on_both(
+    gpu_ctx: &lustre_gpu::GpuContext,
+    scene: &lustre_scene::Scene,
+    g: &GBuffer,
+    shading: &lustre_adaptive::shading::ShadingContext,
+    seed: u64,
+) -> (
+    AdaptiveScene,
+    AdaptivePass,
+    lustre_adaptive::hierarchy::AdaptiveFrame,
+    lustre_adaptive::hierarchy::AdaptiveFrame,
+) {
+    let scene_gpu = AdaptiveScene::from_context(gpu_ctx, shading, Some(scene))
+        .expect("upload with the scene's materials");
+    let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+    BandwidthScene::from_context(gpu_ctx, shading, &env_bw, Some(scene))
+        .expect("the bandwidth pass takes them too");
+    let buffer =
+        BandwidthBuffer::build(g, shading, &env_bw, BufferOptions::default()).expect("buffer");
+    let cpu = render_adaptive(g, shading, &buffer, Lighting::Direct, seed).expect("cpu");
+    let mut pass = AdaptivePass::new(gpu_ctx).expect("compile");
+    let gpu = pass
+        .render(gpu_ctx, &scene_gpu, g, &buffer, None, seed)
+        .expect("gpu");
+    (scene_gpu, pass, cpu, gpu.frame)
+}
+
 /// The line-up with `spec` as its middle sphere (material 1), uploaded with the scene's
 /// materials: refused, the message naming material 1 and holding every one of `says`.
 fn refused_as_material_1(gpu_ctx: &lustre_gpu::GpuContext, spec: &str, says: &[&str]) {
@@ -590,21 +620,11 @@ fn transmissive_and_dirac_models_are_sampled_by_their_own_records_on_the_gpu_as_
             );
         }
         line_up::with_frame(&scene, (48, 32), |_, g, shading| {
-            let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene))
-                .expect("upload with the scene's materials");
-            let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
-            BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene))
-                .expect("the bandwidth pass takes them too");
-            let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, BufferOptions::default())
-                .expect("buffer");
-            let cpu = render_adaptive(&g, &shading, &buffer, Lighting::Direct, 11).expect("cpu");
-            let mut pass = AdaptivePass::new(&gpu_ctx).expect("compile");
-            let gpu = pass
-                .render(&gpu_ctx, &scene_gpu, &g, &buffer, None, 11)
-                .expect("gpu");
-            assert_eq!(gpu.frame.stats.shaded, cpu.stats.shaded);
-            assert_eq!(gpu.frame.stats.samples, cpu.stats.samples);
-            let (rms, over1, over10) = image_difference(&g, &cpu.image, &gpu.frame.image);
+            let (scene_gpu, mut pass, cpu, gpu) =
+                adaptive_on_both(&gpu_ctx, &scene, &g, &shading, 11);
+            assert_eq!(gpu.stats.shaded, cpu.stats.shaded);
+            assert_eq!(gpu.stats.samples, cpu.stats.samples);
+            let (rms, over1, over10) = image_difference(&g, &cpu.image, &gpu.image);
             eprintln!(
                 "{a}, {b}, {c} on thindielectric{}: relative RMS {rms:.2e}, {:.2} % off by > 1 %, \
                  {:.2} % by > 10 %",
@@ -657,18 +677,7 @@ fn anisotropic_specs_are_sampled_by_their_azimuth_tables_on_the_gpu_as_on_the_cp
             let s = t.sampler.as_ref().expect("a tabulated sampler");
             assert!(s.is_anisotropic(), "material {k} ({})", t.name);
         }
-        let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene))
-            .expect("anisotropic specs on the GPU");
-        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
-        BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene))
-            .expect("the bandwidth pass takes them too");
-        let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, BufferOptions::default())
-            .expect("buffer");
-        let cpu = render_adaptive(&g, &shading, &buffer, Lighting::Direct, 9).expect("cpu");
-        let mut pass = AdaptivePass::new(&gpu_ctx).expect("compile");
-        let gpu = pass
-            .render(&gpu_ctx, &scene_gpu, &g, &buffer, None, 9)
-            .expect("gpu");
+        let (_, _, cpu, gpu) = adaptive_on_both(&gpu_ctx, &scene, &g, &shading, 9);
         // No bias: the frames' mean luminance over the surface pixels.
         let mean = |img: &Image| {
             g.pixels
@@ -678,8 +687,8 @@ fn anisotropic_specs_are_sampled_by_their_azimuth_tables_on_the_gpu_as_on_the_cp
                 .map(|(_, v)| 0.2126 * v[0] as f64 + 0.7152 * v[1] as f64 + 0.0722 * v[2] as f64)
                 .sum::<f64>()
         };
-        let bias = mean(&gpu.frame.image) / mean(&cpu.image) - 1.0;
-        let (rms, over1, over10) = image_difference(&g, &cpu.image, &gpu.frame.image);
+        let bias = mean(&gpu.image) / mean(&cpu.image) - 1.0;
+        let (rms, over1, over10) = image_difference(&g, &cpu.image, &gpu.image);
         eprintln!(
             "anisotropic specs (ward, ashikhmin-shirley, roughconductor; ward floor) through \
              the adaptive pass, 48 × 32: relative RMS {rms:.2e}, {:.2} % off by > 1 %, {:.2} % \
