@@ -189,6 +189,9 @@ pub struct AdaptiveScene {
     texels: wgpu::Buffer,
     tex_info: wgpu::Buffer,
     evaluates: Evaluates,
+    /// A material is sampled by its record's own `bsdf_sample` (no tabulated CDFs): the pass's
+    /// variant compiles every model's sampling.
+    samples_records: bool,
     cube_texels: wgpu::Buffer,
     cube_levels: wgpu::Buffer,
     cube_rings: wgpu::Buffer,
@@ -358,6 +361,7 @@ impl AdaptiveScene {
             texels: init("adaptive textures", bytemuck::cast_slice(&texture_texels)),
             tex_info: init("adaptive texture sizes", bytemuck::cast_slice(&tex_info)),
             evaluates: brdfs.evaluates(),
+            samples_records: materials.iter().any(|m| m.tab_base == NO_TABLE),
             light_count: shading.lights.len() as u32,
             material_count: materials.len() as u32,
         })
@@ -668,7 +672,9 @@ impl AdaptivePass {
                 (group, size)
             })
             .collect();
-        let (shade_pipeline, shade_layout) = self.shade.get(ctx, scene.evaluates)?;
+        let (shade_pipeline, shade_layout) =
+            self.shade
+                .get(ctx, scene.evaluates, scene.samples_records)?;
         let queue = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("adaptive queue"),
             size: (w * h * 4) as u64,

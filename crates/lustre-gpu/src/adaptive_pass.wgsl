@@ -215,8 +215,9 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>, first: u32) -> vec3<f32> {
                         draw_unit(seed, 3u));
     let total = n_f + n_l + params.lights * n;
     // Transmissive and Dirac models have no tabulated CDFs: their BSDF samples are the
-    // model's own (the CPU's `Bsdf::sample`), valued by the sample itself. (A variant for
-    // measured BRDFs only has none: MATERIAL_SAMPLES false folds these branches away.)
+    // model's own (the CPU's `Bsdf::sample`), valued by the sample itself. (A variant whose
+    // materials all have tabulated CDFs has none: MATERIAL_SAMPLES false folds these branches
+    // away.)
     let own = MATERIAL_SAMPLES && m.tab_base == NO_TABLE;
     var sum = vec3<f32>(0.0);
     let end = min(total, first + SAMPLES_PER_DISPATCH);

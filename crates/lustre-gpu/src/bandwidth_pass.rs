@@ -479,7 +479,8 @@ impl BandwidthPass {
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
-        let (pipeline, layout) = self.pipelines.get(ctx, scene.evaluates)?;
+        // The bandwidth pass samples no BRDF.
+        let (pipeline, layout) = self.pipelines.get(ctx, scene.evaluates, false)?;
         let paths = u64::from(n_b) * (1 + u64::from(scene.light_count));
         let dispatches = paths.div_ceil(u64::from(DIRECTIONS_PER_DISPATCH)) as u32;
         let groups: Vec<wgpu::BindGroup> = (0..dispatches)

@@ -367,7 +367,12 @@ impl PackedBrdfs {
 /// ([`Evaluates::Records`]) or analytic.wgsl's `record_eval` ([`Evaluates::Analytic`]). With
 /// [`Evaluates::Measured`] the records and textures are bound but unread and only measured
 /// BRDFs are evaluated.
-fn material_eval_source(binding: u32, textures: u32, evaluates: Evaluates) -> String {
+fn material_eval_source(
+    binding: u32,
+    textures: u32,
+    evaluates: Evaluates,
+    samples: bool,
+) -> String {
     let record = match evaluates {
         Evaluates::Measured => {
             return format!(
@@ -377,12 +382,7 @@ fn material_eval_source(binding: u32, textures: u32, evaluates: Evaluates) -> St
                  fn material_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>,\n                 \
                  wo: vec3<f32>) -> vec3<f32> {{\n    \
                  return measured_eval(kind, base, offset, wi, wo);\n}}\n\n\
-                 // Measured BRDFs are sampled by their tabulated CDFs, never by these.\n\
-                 const MATERIAL_SAMPLES: bool = false;\n\n\
-                 fn material_sample(wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {{\n    \
-                 return no_sample();\n}}\n\n\
-                 fn material_pdf(wi: vec3<f32>, wo: vec3<f32>) -> f32 {{\n    \
-                 return 0.0;\n}}\n\n"
+                 {NO_SAMPLING}"
             )
         }
         Evaluates::Records => "bsdf_eval",
@@ -415,29 +415,52 @@ fn material_eval_source(binding: u32, textures: u32, evaluates: Evaluates) -> St
          wo: vec3<f32>) -> vec3<f32> {{\n    \
          if (kind == {KIND_RECORD}u) {{\n        return {record}(prepared, wi, wo);\n    }}\n    \
          return measured_eval(kind, base, offset, wi, wo);\n}}\n\n\
-         // The prepared record's own sampling and density (bsdf.wgsl), for the models without \
+         {}",
+        TEXTURE_SAMPLE_WGSL,
+        if samples {
+            RECORD_SAMPLING
+        } else {
+            NO_SAMPLING
+        }
+    )
+}
+
+/// `material_sample` / `material_pdf` of a variant with a material that has no tabulated CDFs
+/// (transmissive or Dirac): the prepared record's own sampling and density (bsdf.wgsl's
+/// `bsdf_sample` / `bsdf_pdf`, every model's, compiled into the pass only then).
+const RECORD_SAMPLING: &str =
+    "// The prepared record's own sampling and density (bsdf.wgsl), for the models without \
          tabulated CDFs\n\
          // (transmissive or Dirac); a two-sided record seen from below samples its model \
          mirrored\n\
          // (TwoSided::sample, TwoSided::pdf).\n\
          const MATERIAL_SAMPLES: bool = true;\n\n\
-         fn material_sample(wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {{\n    \
-         if ((prepared.flags & FLAG_TWO_SIDED) != 0u && wo.z < 0.0) {{\n        \
+         fn material_sample(wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {\n    \
+         if ((prepared.flags & FLAG_TWO_SIDED) != 0u && wo.z < 0.0) {\n        \
          var s = bsdf_sample(prepared, vec3<f32>(wo.xy, -wo.z), u);\n        \
          s.wi.z = -s.wi.z;\n        \
-         return s;\n    }}\n    \
-         return bsdf_sample(prepared, wo, u);\n}}\n\n\
-         fn material_pdf(wi: vec3<f32>, wo: vec3<f32>) -> f32 {{\n    \
-         if ((prepared.flags & FLAG_TWO_SIDED) != 0u && wo.z < 0.0) {{\n        \
-         return bsdf_pdf(prepared, vec3<f32>(wi.xy, -wi.z), vec3<f32>(wo.xy, -wo.z));\n    }}\n    \
-         return bsdf_pdf(prepared, wi, wo);\n}}\n\n",
-        TEXTURE_SAMPLE_WGSL
-    )
-}
+         return s;\n    }\n    \
+         return bsdf_sample(prepared, wo, u);\n}\n\n\
+         fn material_pdf(wi: vec3<f32>, wo: vec3<f32>) -> f32 {\n    \
+         if ((prepared.flags & FLAG_TWO_SIDED) != 0u && wo.z < 0.0) {\n        \
+         return bsdf_pdf(prepared, vec3<f32>(wi.xy, -wi.z), vec3<f32>(wo.xy, -wo.z));\n    }\n    \
+         return bsdf_pdf(prepared, wi, wo);\n}\n\n";
 
-/// A pass that evaluates its materials through `material_eval`, compiled in three variants
+/// `material_sample` / `material_pdf` of a variant whose materials all have tabulated CDFs:
+/// never called (`MATERIAL_SAMPLES` false folds their branches away), so that no model's
+/// sampling is compiled into the pass.
+const NO_SAMPLING: &str = "// Every material is sampled by its tabulated CDFs, never by these.\n\
+     const MATERIAL_SAMPLES: bool = false;\n\n\
+     fn material_sample(wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {\n    \
+     return no_sample();\n}\n\n\
+     fn material_pdf(wi: vec3<f32>, wo: vec3<f32>) -> f32 {\n    \
+     return 0.0;\n}\n\n";
+
+/// A pass that evaluates its materials through `material_eval`, compiled in variants
 /// ([`Evaluates`]): for measured BRDFs only (at once), with bsdf.wgsl's records and with
-/// analytic.wgsl's too (each on first need).
+/// analytic.wgsl's too (each on first need), the latter two with or without the records' own
+/// sampling (`material_sample`: every model's sampling code, which llvmpipe takes ≈ 50 s more
+/// to compile, only for a scene with a material without tabulated CDFs).
 pub(crate) struct MaterialPipelines {
     label: &'static str,
     imports: Vec<&'static Module>,
@@ -445,7 +468,8 @@ pub(crate) struct MaterialPipelines {
     binding: u32,
     textures: u32,
     entries: Vec<wgpu::BindGroupLayoutEntry>,
-    compiled: [Option<(wgpu::ComputePipeline, wgpu::BindGroupLayout)>; 3],
+    /// Per [`Evaluates`], without and with the records' own sampling.
+    compiled: [Option<(wgpu::ComputePipeline, wgpu::BindGroupLayout)>; 6],
 }
 
 impl MaterialPipelines {
@@ -468,19 +492,23 @@ impl MaterialPipelines {
             binding,
             textures,
             entries,
-            compiled: [None, None, None],
+            compiled: Default::default(),
         };
-        p.get(ctx, Evaluates::Measured)?;
+        p.get(ctx, Evaluates::Measured, false)?;
         Ok(p)
     }
 
-    /// The variant that evaluates `evaluates`.
+    /// The variant that evaluates `evaluates`, with `material_sample` / `material_pdf` sampling
+    /// the prepared record where `samples` (a material without tabulated CDFs; measured-only
+    /// variants never sample records).
     pub(crate) fn get(
         &mut self,
         ctx: &GpuContext,
         evaluates: Evaluates,
+        samples: bool,
     ) -> Result<&(wgpu::ComputePipeline, wgpu::BindGroupLayout)> {
-        let slot = &mut self.compiled[evaluates as usize];
+        let samples = samples && evaluates != Evaluates::Measured;
+        let slot = &mut self.compiled[2 * evaluates as usize + usize::from(samples)];
         if slot.is_none() {
             let mut imports = self.imports.clone();
             imports.push(&MEASURED);
@@ -491,7 +519,8 @@ impl MaterialPipelines {
             }
             let src = compose(
                 &imports,
-                &(material_eval_source(self.binding, self.textures, evaluates) + self.pass),
+                &(material_eval_source(self.binding, self.textures, evaluates, samples)
+                    + self.pass),
             );
             *slot = Some(compute_pipeline(
                 ctx,
