@@ -57,6 +57,20 @@ pub(crate) fn compute_pipeline(
     source: &str,
     entries: &[wgpu::BindGroupLayoutEntry],
 ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout)> {
+    let ([pipeline], layout) = compute_pipelines(ctx, label, stage, source, entries, ["main"])?;
+    Ok((pipeline, layout))
+}
+
+/// [`compute_pipeline`] for several entry points of one module sharing one bind-group layout,
+/// in the order of `entry_points`.
+pub(crate) fn compute_pipelines<const N: usize>(
+    ctx: &GpuContext,
+    label: &'static str,
+    stage: &'static str,
+    source: &str,
+    entries: &[wgpu::BindGroupLayoutEntry],
+    entry_points: [&str; N],
+) -> Result<([wgpu::ComputePipeline; N], wgpu::BindGroupLayout)> {
     let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
     let module = ctx
         .device
@@ -77,16 +91,17 @@ pub(crate) fn compute_pipeline(
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-    let pipeline = ctx
-        .device
-        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(label),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+    let pipelines = entry_points.map(|entry| {
+        ctx.device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+    });
     scope_result(scope, stage)?;
-    Ok((pipeline, layout))
+    Ok((pipelines, layout))
 }

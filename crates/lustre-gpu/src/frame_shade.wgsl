@@ -6,9 +6,12 @@
 // Dirac-only materials summed over their branches (≤ 2 lookups); each sample read from the
 // mirror buffer of an in-plane reflector triangle, the see-through buffer of a transmissive
 // probe object, the probe of the object (else the nearest; through its bounding planes) or
-// the environment's pyramid. One thread per output pixel box-averages its k×k G-buffer
-// pixels and adds the light-mapped image; progressive frames accumulate per G-buffer pixel in
-// `accum`.
+// the environment's pyramid. `samples_main` runs one thread per G-buffer pixel over samples
+// [first, end) of each: llvmpipe (lavapipe) ends an invocation's loops silently once they have
+// run 65,535 iterations together, and 16 G-buffer pixels × 256 samples did (frame_shade.rs
+// `SAMPLES_PER_DISPATCH`); each dispatch adds its share of the mean into `partial`. `main`
+// then runs one thread per output pixel: it box-averages its k×k G-buffer pixels and adds the
+// light-mapped image; progressive frames accumulate per G-buffer pixel in `accum`.
 
 struct Params {
     origin: vec4<f32>,
@@ -29,6 +32,8 @@ struct Params {
     // x: 1 when see-through buffers are not read (a see-through layer's own shading,
     // frame::shade_see_through_layer), 0 otherwise.
     flags: vec4<u32>,
+    // samples_main's share: samples first..end of each pixel's n (x, y), 0, 0.
+    chunk: vec4<u32>,
 };
 
 @group(0) @binding(0) var<uniform> u: Params;
@@ -75,6 +80,8 @@ struct Params {
 @group(0) @binding(23) var<storage, read> tangents: array<vec4<f32>>;
 // Per SCREEN_TILE² tile of the output (row-major): 1 where covered (read when u.tiles.z = 1).
 @group(0) @binding(24) var<storage, read> tile_mask: array<u32>;
+// Per G-buffer pixel: the view-dependent radiance summed over the dispatches so far.
+@group(0) @binding(25) var<storage, read_write> partial: array<vec4<f32>>;
 var<workgroup> wg_counts: array<atomic<u32>, 2>;
 
 // lustre_shade::mirror::SCREEN_TILE.
@@ -413,12 +420,16 @@ fn r2_bits(f: u32) -> vec2<u32> {
     return vec2<u32>((f * 12664746u) & 0xffffffu, (f * 9560334u) & 0xffffffu);
 }
 
-// warp::integrate_warp: (radiance, lookups).
+// warp::integrate_warp over samples first..min(end, n) of n: (their share of the mean
+// radiance, lookups).
 fn integrate(b: GpuBsdf, kd: vec3<f32>, t: vec3<f32>, bt: vec3<f32>, pt: Point,
-             wo_l: vec3<f32>, n: u32, seed: vec2<u32>) -> vec4<f32> {
+             wo_l: vec3<f32>, n: u32, seed: vec2<u32>, first: u32, end: u32) -> vec4<f32> {
     var sum = vec3<f32>(0.0);
     var lookups = 0u;
     if ((b.flags & FLAG_DELTA_ONLY) != 0u && n >= 2u) {
+        if (first > 0u) {
+            return vec4<f32>(0.0);
+        }
         // Dirac lobes only: the branches at both ends of the lobe choice, each once.
         var seen = vec3<f32>(0.0);
         var have = false;
@@ -440,7 +451,8 @@ fn integrate(b: GpuBsdf, kd: vec3<f32>, t: vec3<f32>, bt: vec3<f32>, pt: Point,
         }
         return vec4<f32>(sum, f32(lookups));
     }
-    var state = seed;
+    // CK's points 0..first took 2·first SplitMix64 draws: the state steps over them at once.
+    var state = add64(seed, mul64(vec2<u32>(2u * first, 0u), vec2<u32>(0x7F4A7C15u, 0x9E3779B9u)));
     let f = u.method.y;
     let ck = u.method.x == METHOD_CK;
     var total = f32(n);
@@ -449,7 +461,7 @@ fn integrate(b: GpuBsdf, kd: vec3<f32>, t: vec3<f32>, bt: vec3<f32>, pt: Point,
         total = f32(n * (f + 1u));
         off = r2_bits(f);
     }
-    for (var i = 0u; i < n; i++) {
+    for (var i = first; i < min(end, n); i++) {
         var uv: vec2<f32>;
         if (ck) {
             let a = ck_draw(&state);
@@ -498,8 +510,9 @@ fn basis_tangent(n: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(1.0 + sgn * n.x * n.x * a, sgn * b, -sgn * n.x);
 }
 
-// frame::view_dependent at G-buffer pixel (gx, gy) seen along d, before its clamp to ≥ 0 (the
-// progressive average is clamped, not its frames).
+// frame::view_dependent at G-buffer pixel (gx, gy) seen along d over this dispatch's samples
+// (u.chunk): their share of the mean, before the finiteness check and the clamp to ≥ 0 of the
+// whole (the progressive average is clamped, not its frames).
 fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> vec3<f32> {
     let base = prim * TRI_STRIDE;
     let r0 = tris[base];
@@ -627,51 +640,77 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
     let seed = pixel_seed(gx, gy, u.seed.xy);
     // The object's own sample budget (r1.w, 0: the frame's; frame::object_samples).
     let own = bitcast<u32>(r1.w);
-    let r = integrate(b, kd, t, bt, pt, wo_l, select(u.sizes.w, own, own > 0u), seed);
-    var c = r.xyz;
-    if (!finite3(c)) {
-        c = vec3<f32>(0.0);
+    let r = integrate(b, kd, t, bt, pt, wo_l, select(u.sizes.w, own, own > 0u), seed,
+                      u.chunk.x, u.chunk.y);
+    if (u.chunk.x == 0u) {
+        atomicAdd(&wg_counts[0], 1u);
     }
-    atomicAdd(&wg_counts[0], 1u);
     atomicAdd(&wg_counts[1], u32(r.w));
-    return c;
+    return r.xyz;
 }
 
-// Output pixel (x, y): its k×k G-buffer pixels.
-fn shade_pixel(x: u32, y: u32, w: u32, k: u32) {
-    if (u.tiles.z != 0u) {
-        let c = x / SCREEN_TILE;
-        let r = y / SCREEN_TILE;
-        if (c >= u.tiles.x || r >= u.tiles.y || tile_mask[r * u.tiles.x + c] == 0u) {
-            let i = y * w + x;
-            out_px[i] = vec4<f32>(lightmapped[i].xyz, 1.0);
-            return;
-        }
+// Whether output pixel (x, y) has a view-dependent part (every pixel unless u.tiles.z = 1).
+fn covered(x: u32, y: u32) -> bool {
+    if (u.tiles.z == 0u) {
+        return true;
     }
-    let gw = f32(u.sizes.x);
-    let gh = f32(u.sizes.y);
-    let a = u.cam.x;
+    let c = x / SCREEN_TILE;
+    let r = y / SCREEN_TILE;
+    return c < u.tiles.x && r < u.tiles.y && tile_mask[r * u.tiles.x + c] != 0u;
+}
+
+// G-buffer pixel (gx, gy): this dispatch's samples, added to `partial`.
+fn shade_samples(gx: u32, gy: u32) {
+    let k = u.sizes.z;
+    if (!covered(gx / k, gy / k)) {
+        return;
+    }
+    let gi = gy * u.sizes.x + gx;
+    var c = vec3<f32>(0.0);
+    let prim = textureLoad(prim_tex, vec2<i32>(i32(gx), i32(gy)), 0).x;
+    if (prim != SKY) {
+        // PathCamera::direction(gx + ½, gy + ½, gw, gh).
+        let a = u.cam.x;
+        let px = (2.0 * (f32(gx) + 0.5) / f32(u.sizes.x) - 1.0) * a * u.cam.y;
+        let py = (1.0 - 2.0 * (f32(gy) + 0.5) / f32(u.sizes.y)) * a;
+        let d = normalize(u.forward.xyz + px * u.right.xyz + py * u.up.xyz);
+        let bd = textureLoad(bary_tex, vec2<i32>(i32(gx), i32(gy)), 0);
+        c = shade_point(prim, vec3<f32>(1.0 - bd.x - bd.y, bd.x, bd.y), d, gx, gy);
+    }
+    if (u.chunk.x == 0u) {
+        partial[gi] = vec4<f32>(c, 1.0);
+    } else {
+        partial[gi] = vec4<f32>(partial[gi].xyz + c, 1.0);
+    }
+}
+
+// Output pixel (x, y): its k×k G-buffer pixels' view-dependent radiance (`partial`, summed
+// by every dispatch of samples_main) and its light-mapped shading.
+fn shade_pixel(x: u32, y: u32, w: u32, k: u32) {
+    let i = y * w + x;
+    if (!covered(x, y)) {
+        out_px[i] = vec4<f32>(lightmapped[i].xyz, 1.0);
+        return;
+    }
     var sum = vec3<f32>(0.0);
     for (var j = 0u; j < k; j++) {
         for (var s = 0u; s < k; s++) {
             let gx = x * k + s;
             let gy = y * k + j;
+            let gi = gy * u.sizes.x + gx;
             let prim = textureLoad(prim_tex, vec2<i32>(i32(gx), i32(gy)), 0).x;
             if (prim == SKY) {
                 if (u.method.x == METHOD_PROGRESSIVE) {
-                    accum[gy * u.sizes.x + gx] = vec4<f32>(0.0);
+                    accum[gi] = vec4<f32>(0.0);
                 }
                 continue;
             }
-            // PathCamera::direction(gx + ½, gy + ½, gw, gh).
-            let px = (2.0 * (f32(gx) + 0.5) / gw - 1.0) * a * u.cam.y;
-            let py = (1.0 - 2.0 * (f32(gy) + 0.5) / gh) * a;
-            let d = normalize(u.forward.xyz + px * u.right.xyz + py * u.up.xyz);
-            let bd = textureLoad(bary_tex, vec2<i32>(i32(gx), i32(gy)), 0);
-            var c = shade_point(prim, vec3<f32>(1.0 - bd.x - bd.y, bd.x, bd.y), d, gx, gy);
+            var c = partial[gi].xyz;
+            if (!finite3(c)) {
+                c = vec3<f32>(0.0);
+            }
             if (u.method.x == METHOD_PROGRESSIVE) {
                 // Frame f joins the running mean of frames 0..f of this G-buffer pixel.
-                let gi = gy * u.sizes.x + gx;
                 let f = f32(u.method.y);
                 if (u.method.y > 0u) {
                     c = (accum[gi].xyz * f + c) / (f + 1.0);
@@ -681,22 +720,30 @@ fn shade_pixel(x: u32, y: u32, w: u32, k: u32) {
             sum += max(c, vec3<f32>(0.0));
         }
     }
-    let i = y * w + x;
     out_px[i] = vec4<f32>(lightmapped[i].xyz + sum / f32(k * k), 1.0);
 }
 
+// One thread per G-buffer pixel: samples u.chunk.x..u.chunk.y of its view-dependent part.
 @compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>,
-        @builtin(local_invocation_index) li: u32) {
-    let k = u.sizes.z;
-    let w = u.sizes.x / k;
-    let h = u.sizes.y / k;
-    if (gid.x < w && gid.y < h) {
-        shade_pixel(gid.x, gid.y, w, k);
+fn samples_main(@builtin(global_invocation_id) gid: vec3<u32>,
+                @builtin(local_invocation_index) li: u32) {
+    if (gid.x < u.sizes.x && gid.y < u.sizes.y) {
+        shade_samples(gid.x, gid.y);
     }
     workgroupBarrier();
     if (li == 0u) {
         atomicAdd(&counts[0], atomicLoad(&wg_counts[0]));
         atomicAdd(&counts[1], atomicLoad(&wg_counts[1]));
+    }
+}
+
+// One thread per output pixel, after every samples_main dispatch.
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let k = u.sizes.z;
+    let w = u.sizes.x / k;
+    let h = u.sizes.y / k;
+    if (gid.x < w && gid.y < h) {
+        shade_pixel(gid.x, gid.y, w, k);
     }
 }
