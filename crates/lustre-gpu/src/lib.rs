@@ -60,7 +60,8 @@ pub use lightmap_shade::{
 };
 pub use packed::{
     CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, GpuSun, PackedScene,
-    LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
+    LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE, MAX_LOBE_LOOKUPS,
+    MAX_TAP_LATTICE_BUDGET,
 };
 pub use probe_capture::{face_camera, mesh_triangles, GpuProbe, GpuProbeCapture};
 pub use pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_USAGE, PYRAMID_WGSL};

@@ -147,6 +147,18 @@ pub const LOBE_SCHEME_LATTICE: u32 = 1;
 /// (`kernel::plan_tap_lattice`; up to `pattern::LATTICE_MAX_TAPS` taps per cell).
 pub const LOBE_SCHEME_TAP_LATTICE: u32 = 2;
 
+/// The most lookups a stored pattern or row lattice may plan for one lobe on the GPU kernel:
+/// llvmpipe (lavapipe) ends all loops of a shader invocation once they have run 65,535
+/// iterations together, silently. Measured on `tests/parity.rs`'s scene (two lobes a
+/// material): patterns of 4,096 and row lattices of 1,024 still at 138–141 dB against the CPU.
+pub const MAX_LOBE_LOOKUPS: u32 = 1024;
+
+/// The largest budget of a tap lattice on the GPU kernel: its cell search
+/// (`regular.wgsl` `lattice_cells`, as `kernel::lattice_cells`) is quadratic in the budget;
+/// on `tests/parity.rs`'s scene 160 came out at 141 dB against the CPU, 256 at 75 dB and 1,024
+/// at 18 dB (llvmpipe's loop limit, as [`MAX_LOBE_LOOKUPS`]).
+pub const MAX_TAP_LATTICE_BUDGET: u32 = 64;
+
 /// Everything `shade.wgsl` reads besides the environment, ready to upload.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PackedScene {

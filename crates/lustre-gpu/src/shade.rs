@@ -7,6 +7,7 @@ use crate::cube::{linear_sampler, CubeLevelRef, GpuCube};
 use crate::error::{invalid, scope_result, wgpu_error, Result};
 use crate::packed::{
     f3, PackedScene, LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
+    MAX_LOBE_LOOKUPS, MAX_TAP_LATTICE_BUDGET,
 };
 use crate::wgsl::{self, compose};
 use bytemuck::{Pod, Zeroable};
@@ -178,6 +179,20 @@ fn check(scene: &PackedScene) -> Result<()> {
             return Err(invalid(
                 format!("lobe {i}"),
                 "sample range outside the pattern array or a non-finite parameter",
+            ));
+        }
+        let most = match l.scheme {
+            LOBE_SCHEME_TAP_LATTICE => MAX_TAP_LATTICE_BUDGET,
+            _ => MAX_LOBE_LOOKUPS,
+        };
+        if l.sample_count > most {
+            return Err(invalid(
+                format!("lobe {i}"),
+                format!(
+                    "{} lookups; the GPU kernel takes at most {most} with this scheme \
+                     (lavapipe ends longer shader loops silently)",
+                    l.sample_count
+                ),
             ));
         }
         if l.mx <= 0.0 || l.my <= 0.0 || l.xi0 <= 0.0 || l.xi0 >= 1.0 {
@@ -562,5 +577,55 @@ mod tests {
         assert_eq!(span("Plane"), std::mem::size_of::<GpuPlane>());
         assert_eq!(span("Material"), std::mem::size_of::<GpuMaterial>());
         assert_eq!(span("Lobe"), std::mem::size_of::<GpuLobe>());
+    }
+
+    /// Budgets beyond what the kernel shades right on lavapipe are refused by name, not
+    /// rendered with samples silently dropped.
+    #[test]
+    fn budgets_beyond_the_loop_limit_are_refused() {
+        use lustre_brdf::models::kurt::{Kurt, KurtLobe};
+        use lustre_brdf::Rgb;
+        use lustre_shade::kernel::{plan_lattice, plan_regular, plan_tap_lattice};
+        let lobe = KurtLobe::new(Rgb::splat(0.5), 0.2, 0.075, 0.3, 0.0).expect("lobe");
+        let m = Kurt::new(Rgb::splat(0.2), vec![lobe], vec![]).expect("material");
+        let scene = |plan| {
+            let s = lustre_shade::scene::Scene {
+                camera: lustre_shade::scene::Camera {
+                    eye: glam::DVec3::new(0.0, 0.0, 4.0),
+                    target: glam::DVec3::ZERO,
+                    up: glam::DVec3::Y,
+                    fov_y_deg: 40.0,
+                },
+                spheres: vec![lustre_shade::scene::Sphere {
+                    center: glam::DVec3::ZERO,
+                    radius: 1.0,
+                    material: 0,
+                    axis: glam::DVec3::Y,
+                }],
+                planes: vec![],
+                materials: vec![m.clone()],
+            };
+            PackedScene::new(&s, &[plan]).expect("packs")
+        };
+        let tap = MAX_TAP_LATTICE_BUDGET as usize;
+        let most = MAX_LOBE_LOOKUPS as usize;
+        for (plan, ok) in [
+            (plan_tap_lattice(&m, tap), true),
+            (plan_tap_lattice(&m, tap + 1), false),
+            (plan_lattice(&m, most), true),
+            (plan_lattice(&m, most + 1), false),
+            (plan_regular(&m, 64, 0.1), true),
+            (plan_regular(&m, 4 * most, 0.1), false),
+        ] {
+            let packed = scene(plan.expect("plan"));
+            match check(&packed) {
+                Ok(()) => assert!(ok, "{:?} passed", packed.lobes[0].sample_count),
+                Err(e) => {
+                    assert!(!ok, "{e}");
+                    let e = e.to_string();
+                    assert!(e.contains("lobe 0") && e.contains("at most"), "{e}");
+                }
+            }
+        }
     }
 }

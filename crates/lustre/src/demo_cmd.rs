@@ -21,7 +21,7 @@ pub struct DemoArgs {
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "480x270")]
     pub size: String,
-    /// Regular samples per lobe.
+    /// Regular samples per lobe (1–1024).
     #[arg(long, default_value_t = 16)]
     pub samples: usize,
     /// Reference samples per pixel (for the printed PSNR).
@@ -73,6 +73,14 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     let (w, h) = parse_size(&args.size)?;
     if args.samples == 0 || args.reference_spp == 0 {
         bail!("--samples and --reference-spp must be > 0");
+    }
+    let most = lustre_gpu::MAX_LOBE_LOOKUPS as usize;
+    if args.samples > most {
+        bail!(
+            "--samples {}: at most {most} a lobe (the GPU kernel's limit; the CPU keeps it too, \
+             so both render the same image)",
+            args.samples
+        );
     }
     if !(args.exposure > 0.0 && args.exposure.is_finite()) {
         bail!("--exposure {}: must be finite and > 0", args.exposure);

@@ -121,6 +121,12 @@ fn bad_inputs_are_clear_errors() {
     assert!(e.contains("WIDTHxHEIGHT"), "{e}");
     let e = run_err(
         lustre()
+            .args(["demo", "--cpu", "--samples", "1025", "--out"])
+            .arg(dir.path().join("a.png")),
+    );
+    assert!(e.contains("--samples 1025") && e.contains("1024"), "{e}");
+    let e = run_err(
+        lustre()
             .args(["compare", "--experiment", "123", "--out"])
             .arg(dir.path()),
     );
