@@ -121,6 +121,36 @@ fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
     let out = FrameShadeTarget::new(&ctx, w as u32, h as u32, k).expect("output");
     let samples = 8;
     let seed = 11;
+    // Every frame of `method` (a progressive method's frames in turn) at k × k supersampling on
+    // the GPU, and its CPU twin: PSNR, the CPU image, the GPU's and the CPU's counts.
+    let both = |k: u32, base: &ShadeTarget, out: &FrameShadeTarget, n: u32, method| {
+        let frames = match method {
+            FrameMethod::Progressive { frames } => frames,
+            _ => 1,
+        };
+        for frame in 0..frames {
+            let opts = FrameShadeOptions {
+                samples: n,
+                method,
+                frame,
+                seed,
+            };
+            pass.shade(&ctx, &gpu_scene, &target, base, &camera, k, &opts, out)
+                .expect("shade");
+        }
+        let gpu = out.read_back(&ctx).expect("readback");
+        let stats = out.stats(&ctx).expect("stats");
+        let opts = GBufferViewOptions {
+            samples: n as usize,
+            method,
+            seed,
+        };
+        let (cpu, cpu_stats) =
+            shade_gbuffer_view_dependent(&lit, &light, &buffers, &camera, &gb, k, &opts)
+                .expect("cpu twin");
+        let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
+        (db, cpu, stats, cpu_stats)
+    };
     for (name, method) in [
         ("regular", FrameMethod::Regular),
         ("CK", FrameMethod::Ck),
@@ -129,37 +159,7 @@ fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
             FrameMethod::Progressive { frames: 4 },
         ),
     ] {
-        let frames = match method {
-            FrameMethod::Progressive { frames } => frames,
-            _ => 1,
-        };
-        for frame in 0..frames {
-            let opts = FrameShadeOptions {
-                samples,
-                method,
-                frame,
-                seed,
-            };
-            pass.shade(&ctx, &gpu_scene, &target, &base, &camera, k, &opts, &out)
-                .expect("shade");
-        }
-        let gpu = out.read_back(&ctx).expect("readback");
-        let stats = out.stats(&ctx).expect("stats");
-        let (cpu, cpu_stats) = shade_gbuffer_view_dependent(
-            &lit,
-            &light,
-            &buffers,
-            &camera,
-            &gb,
-            k,
-            &GBufferViewOptions {
-                samples: samples as usize,
-                method,
-                seed,
-            },
-        )
-        .expect("cpu twin");
-        let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
+        let (db, cpu, stats, cpu_stats) = both(k, &base, &out, samples, method);
         let peak = cpu.data.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
         eprintln!(
             "{name}: GPU vs CPU twin {db:.1} dB ({w}×{h}, n = {samples}, peak {peak:.2}); \
@@ -180,30 +180,7 @@ fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
         .draw(&ctx, &up, &camera, k2, &target, &base2)
         .expect("draw k = 2");
     let out2 = FrameShadeTarget::new(&ctx, w2, h2, k2).expect("output");
-    let opts = FrameShadeOptions {
-        samples,
-        method: FrameMethod::Regular,
-        frame: 0,
-        seed,
-    };
-    pass.shade(&ctx, &gpu_scene, &target, &base2, &camera, k2, &opts, &out2)
-        .expect("shade k = 2");
-    let gpu = out2.read_back(&ctx).expect("readback");
-    let (cpu, _) = shade_gbuffer_view_dependent(
-        &lit,
-        &light,
-        &buffers,
-        &camera,
-        &gb,
-        k2,
-        &GBufferViewOptions {
-            samples: samples as usize,
-            method: FrameMethod::Regular,
-            seed,
-        },
-    )
-    .expect("cpu twin");
-    let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
+    let (db, ..) = both(k2, &base2, &out2, samples, FrameMethod::Regular);
     eprintln!("regular, 2×2 supersampled: GPU vs CPU twin {db:.1} dB ({w2}×{h2})");
     assert!(db >= 90.0, "k = 2: {db} dB");
     // The largest budget on a 4×4 supersampled G-buffer: 16 × 256 samples an output pixel,
@@ -215,35 +192,9 @@ fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
         .draw(&ctx, &up, &camera, k4, &target, &base4)
         .expect("draw k = 4");
     let out4 = FrameShadeTarget::new(&ctx, w4, h4, k4).expect("output");
-    let max = lustre_shade::frame::MAX_SAMPLES;
+    let max = lustre_shade::frame::MAX_SAMPLES as u32;
     for method in [FrameMethod::Regular, FrameMethod::Ck] {
-        let opts4 = FrameShadeOptions {
-            samples: max as u32,
-            method,
-            frame: 0,
-            seed,
-        };
-        pass.shade(
-            &ctx, &gpu_scene, &target, &base4, &camera, k4, &opts4, &out4,
-        )
-        .expect("shade k = 4");
-        let gpu = out4.read_back(&ctx).expect("readback");
-        let stats = out4.stats(&ctx).expect("stats");
-        let (cpu, cpu_stats) = shade_gbuffer_view_dependent(
-            &lit,
-            &light,
-            &buffers,
-            &camera,
-            &gb,
-            k4,
-            &GBufferViewOptions {
-                samples: max,
-                method,
-                seed,
-            },
-        )
-        .expect("cpu twin");
-        let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
+        let (db, _, stats, cpu_stats) = both(k4, &base4, &out4, max, method);
         eprintln!(
             "{method:?}, 4×4 supersampled, n = {max}: GPU vs CPU twin {db:.1} dB ({w4}×{h4}); \
              lookups GPU {} CPU {}",
@@ -259,6 +210,12 @@ fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
             cpu_stats.lookups
         );
     }
+    let opts = FrameShadeOptions {
+        samples,
+        method: FrameMethod::Regular,
+        frame: 0,
+        seed,
+    };
     // Bad input: a sample count of 0 or above the limit, sizes that do not agree.
     for bad in [0, 257] {
         let o = FrameShadeOptions {
