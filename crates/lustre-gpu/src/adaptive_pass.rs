@@ -23,8 +23,8 @@ use crate::cube_storage::{pack_pyramid, PackedPyramid};
 use crate::error::{invalid, Result};
 use crate::gbuffer::map_read;
 use crate::measured::{
-    pack_tabulated, Evaluates, GpuTabulatedDims, MaterialPipelines, PackedBrdfs, EVALUATED,
-    KIND_RECORD,
+    pack_tabulated, sampled_kinds, Evaluates, GpuTabulatedDims, MaterialPipelines, PackedBrdfs,
+    EVALUATED, KIND_RECORD,
 };
 use crate::timer::{GpuTimer, Timing};
 use crate::wgsl::{AREA_LIGHT, CUBE_STORAGE, ENV_LIGHT, QMC, TYPES};
@@ -189,9 +189,9 @@ pub struct AdaptiveScene {
     texels: wgpu::Buffer,
     tex_info: wgpu::Buffer,
     evaluates: Evaluates,
-    /// A material is sampled by its record's own `bsdf_sample` (no tabulated CDFs): the pass's
-    /// variant compiles every model's sampling.
-    samples_records: bool,
+    /// The record kinds (bit mask, `measured::sampled_kinds`) of the materials sampled by their
+    /// record's own model (no tabulated CDFs): the pass's variant compiles their sampling only.
+    samples_records: u32,
     cube_texels: wgpu::Buffer,
     cube_levels: wgpu::Buffer,
     cube_rings: wgpu::Buffer,
@@ -361,7 +361,11 @@ impl AdaptiveScene {
             texels: init("adaptive textures", bytemuck::cast_slice(&texture_texels)),
             tex_info: init("adaptive texture sizes", bytemuck::cast_slice(&tex_info)),
             evaluates: brdfs.evaluates(),
-            samples_records: materials.iter().any(|m| m.tab_base == NO_TABLE),
+            samples_records: materials
+                .iter()
+                .filter(|m| m.tab_base == NO_TABLE)
+                .filter_map(|m| brdfs.fitted.get(m.base as usize))
+                .fold(0, |mask, b| mask | sampled_kinds(b.kind)),
             light_count: shading.lights.len() as u32,
             material_count: materials.len() as u32,
         })

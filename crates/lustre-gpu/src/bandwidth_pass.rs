@@ -480,7 +480,7 @@ impl BandwidthPass {
             mapped_at_creation: false,
         });
         // The bandwidth pass samples no BRDF.
-        let (pipeline, layout) = self.pipelines.get(ctx, scene.evaluates, false)?;
+        let (pipeline, layout) = self.pipelines.get(ctx, scene.evaluates, 0)?;
         let paths = u64::from(n_b) * (1 + u64::from(scene.light_count));
         let dispatches = paths.div_ceil(u64::from(DIRECTIONS_PER_DISPATCH)) as u32;
         let groups: Vec<wgpu::BindGroup> = (0..dispatches)

@@ -367,12 +367,7 @@ impl PackedBrdfs {
 /// ([`Evaluates::Records`]) or analytic.wgsl's `record_eval` ([`Evaluates::Analytic`]). With
 /// [`Evaluates::Measured`] the records and textures are bound but unread and only measured
 /// BRDFs are evaluated.
-fn material_eval_source(
-    binding: u32,
-    textures: u32,
-    evaluates: Evaluates,
-    samples: bool,
-) -> String {
+fn material_eval_source(binding: u32, textures: u32, evaluates: Evaluates, samples: u32) -> String {
     let record = match evaluates {
         Evaluates::Measured => {
             return format!(
@@ -417,34 +412,89 @@ fn material_eval_source(
          return measured_eval(kind, base, offset, wi, wo);\n}}\n\n\
          {}",
         TEXTURE_SAMPLE_WGSL,
-        if samples {
-            RECORD_SAMPLING
+        if samples != 0 {
+            record_sampling(samples)
         } else {
-            NO_SAMPLING
+            NO_SAMPLING.to_string()
         }
     )
 }
 
-/// `material_sample` / `material_pdf` of a variant with a material that has no tabulated CDFs
-/// (transmissive or Dirac): the prepared record's own sampling and density (bsdf.wgsl's
-/// `bsdf_sample` / `bsdf_pdf`, every model's, compiled into the pass only then).
-const RECORD_SAMPLING: &str =
-    "// The prepared record's own sampling and density (bsdf.wgsl), for the models without \
-         tabulated CDFs\n\
-         // (transmissive or Dirac); a two-sided record seen from below samples its model \
-         mirrored\n\
-         // (TwoSided::sample, TwoSided::pdf).\n\
+/// bsdf.wgsl's models by record kind: `bsdf_sample` and `bsdf_pdf` call `{name}_sample` and
+/// `{name}_pdf` on `{name}_unpack(b.p)` (a unit test reads bsdf.wgsl's switch against it).
+const RECORD_MODELS: [(u32, &str); 13] = [
+    (1, "rough_conductor"),
+    (2, "rough_plastic"),
+    (3, "rough_dielectric"),
+    (4, "conductor"),
+    (5, "thin_dielectric"),
+    (6, "pbr_metallic_roughness"),
+    (7, "lambert"),
+    (8, "plastic"),
+    (9, "dielectric"),
+    (16, "sgd"),
+    (17, "cook_torrance"),
+    (18, "cook_torrance"),
+    (19, "kurt"),
+];
+
+/// The record kinds a material of record kind `kind` may be sampled as: its own, and for a
+/// glTF record (kind 6) the smooth and rough dielectrics its textured transmission turns it
+/// into per pixel (textured.wgsl's `textured_bsdf`). As a bit mask.
+pub(crate) fn sampled_kinds(kind: u32) -> u32 {
+    let own = 1u32.checked_shl(kind).unwrap_or(0);
+    if kind == 6 {
+        own | 1 << 3 | 1 << 9
+    } else {
+        own
+    }
+}
+
+/// `material_sample` / `material_pdf` of a variant with materials that have no tabulated CDFs
+/// (transmissive or Dirac), of the record kinds in the bit mask `kinds`: the prepared record's
+/// own sampling and density, as bsdf.wgsl's `bsdf_sample` / `bsdf_pdf` but with only those
+/// kinds' cases, so that llvmpipe compiles only their sampling (every model's took it ≈ 62 s
+/// more).
+fn record_sampling(kinds: u32) -> String {
+    let (mut sample, mut pdf) = (String::new(), String::new());
+    for (k, name) in RECORD_MODELS {
+        if kinds & (1 << k) != 0 {
+            sample += &format!(
+                "        case {k}u: {{\n            \
+                 return {name}_sample({name}_unpack(b.p), wo, u);\n        }}\n"
+            );
+            pdf += &format!(
+                "        case {k}u: {{\n            \
+                 return {name}_pdf({name}_unpack(b.p), wi, wo);\n        }}\n"
+            );
+        }
+    }
+    format!(
+        "// The prepared record's own sampling and density (bsdf.wgsl's, for the record kinds of \
+         this scene's\n\
+         // materials without tabulated CDFs: transmissive or Dirac); a two-sided record seen \
+         from below\n\
+         // samples its model mirrored (TwoSided::sample, TwoSided::pdf).\n\
          const MATERIAL_SAMPLES: bool = true;\n\n\
-         fn material_sample(wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {\n    \
-         if ((prepared.flags & FLAG_TWO_SIDED) != 0u && wo.z < 0.0) {\n        \
-         var s = bsdf_sample(prepared, vec3<f32>(wo.xy, -wo.z), u);\n        \
+         fn record_sample(b: GpuBsdf, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {{\n    \
+         switch b.kind {{\n{sample}        default: {{\n            return no_sample();\n        \
+         }}\n    }}\n}}\n\n\
+         fn record_pdf(b: GpuBsdf, wi: vec3<f32>, wo: vec3<f32>) -> f32 {{\n    \
+         switch b.kind {{\n{pdf}        default: {{\n            return 0.0;\n        }}\n    \
+         }}\n}}\n\n\
+         fn material_sample(wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {{\n    \
+         if ((prepared.flags & FLAG_TWO_SIDED) != 0u && wo.z < 0.0) {{\n        \
+         var s = record_sample(prepared, vec3<f32>(wo.xy, -wo.z), u);\n        \
          s.wi.z = -s.wi.z;\n        \
-         return s;\n    }\n    \
-         return bsdf_sample(prepared, wo, u);\n}\n\n\
-         fn material_pdf(wi: vec3<f32>, wo: vec3<f32>) -> f32 {\n    \
-         if ((prepared.flags & FLAG_TWO_SIDED) != 0u && wo.z < 0.0) {\n        \
-         return bsdf_pdf(prepared, vec3<f32>(wi.xy, -wi.z), vec3<f32>(wo.xy, -wo.z));\n    }\n    \
-         return bsdf_pdf(prepared, wi, wo);\n}\n\n";
+         return s;\n    }}\n    \
+         return record_sample(prepared, wo, u);\n}}\n\n\
+         fn material_pdf(wi: vec3<f32>, wo: vec3<f32>) -> f32 {{\n    \
+         if ((prepared.flags & FLAG_TWO_SIDED) != 0u && wo.z < 0.0) {{\n        \
+         return record_pdf(prepared, vec3<f32>(wi.xy, -wi.z), vec3<f32>(wo.xy, -wo.z));\n    \
+         }}\n    \
+         return record_pdf(prepared, wi, wo);\n}}\n\n"
+    )
+}
 
 /// `material_sample` / `material_pdf` of a variant whose materials all have tabulated CDFs:
 /// never called (`MATERIAL_SAMPLES` false folds their branches away), so that no model's
@@ -458,9 +508,9 @@ const NO_SAMPLING: &str = "// Every material is sampled by its tabulated CDFs, n
 
 /// A pass that evaluates its materials through `material_eval`, compiled in variants
 /// ([`Evaluates`]): for measured BRDFs only (at once), with bsdf.wgsl's records and with
-/// analytic.wgsl's too (each on first need), the latter two with or without the records' own
-/// sampling (`material_sample`: every model's sampling code, which llvmpipe takes ≈ 50 s more
-/// to compile, only for a scene with a material without tabulated CDFs).
+/// analytic.wgsl's too (each on first need), the latter two without or with the records' own
+/// sampling for the record kinds of the scene's materials without tabulated CDFs
+/// (`material_sample`; every model's sampling took llvmpipe ≈ 40–50 s more to compile).
 pub(crate) struct MaterialPipelines {
     label: &'static str,
     imports: Vec<&'static Module>,
@@ -468,8 +518,11 @@ pub(crate) struct MaterialPipelines {
     binding: u32,
     textures: u32,
     entries: Vec<wgpu::BindGroupLayoutEntry>,
-    /// Per [`Evaluates`], without and with the records' own sampling.
-    compiled: [Option<(wgpu::ComputePipeline, wgpu::BindGroupLayout)>; 6],
+    /// Per [`Evaluates`] and mask of the record kinds sampled by their own models, as compiled.
+    compiled: Vec<(
+        (Evaluates, u32),
+        (wgpu::ComputePipeline, wgpu::BindGroupLayout),
+    )>,
 }
 
 impl MaterialPipelines {
@@ -494,43 +547,125 @@ impl MaterialPipelines {
             entries,
             compiled: Default::default(),
         };
-        p.get(ctx, Evaluates::Measured, false)?;
+        p.get(ctx, Evaluates::Measured, 0)?;
         Ok(p)
     }
 
     /// The variant that evaluates `evaluates`, with `material_sample` / `material_pdf` sampling
-    /// the prepared record where `samples` (a material without tabulated CDFs; measured-only
-    /// variants never sample records).
+    /// the prepared record by its own model for the record kinds in the bit mask `samples`
+    /// (materials without tabulated CDFs, [`sampled_kinds`]; 0: none; measured-only variants
+    /// never sample records).
     pub(crate) fn get(
         &mut self,
         ctx: &GpuContext,
         evaluates: Evaluates,
-        samples: bool,
+        samples: u32,
     ) -> Result<&(wgpu::ComputePipeline, wgpu::BindGroupLayout)> {
-        let samples = samples && evaluates != Evaluates::Measured;
-        let slot = &mut self.compiled[2 * evaluates as usize + usize::from(samples)];
-        if slot.is_none() {
-            let mut imports = self.imports.clone();
-            imports.push(&MEASURED);
-            match evaluates {
-                Evaluates::Measured => imports.push(&BSDF_SAMPLE),
-                Evaluates::Records => imports.extend([&BSDF, &TEXTURED]),
-                Evaluates::Analytic => imports.extend([&ANALYTIC, &TEXTURED]),
+        let samples = if evaluates == Evaluates::Measured {
+            0
+        } else {
+            samples
+        };
+        let key = (evaluates, samples);
+        let at = match self.compiled.iter().position(|(k, _)| *k == key) {
+            Some(at) => at,
+            None => {
+                let mut imports = self.imports.clone();
+                imports.push(&MEASURED);
+                match evaluates {
+                    Evaluates::Measured => imports.push(&BSDF_SAMPLE),
+                    Evaluates::Records => imports.extend([&BSDF, &TEXTURED]),
+                    Evaluates::Analytic => imports.extend([&ANALYTIC, &TEXTURED]),
+                }
+                let src = compose(
+                    &imports,
+                    &(material_eval_source(self.binding, self.textures, evaluates, samples)
+                        + self.pass),
+                );
+                let compiled = compute_pipeline(ctx, self.label, self.label, &src, &self.entries)?;
+                self.compiled.push((key, compiled));
+                self.compiled.len() - 1
             }
-            let src = compose(
-                &imports,
-                &(material_eval_source(self.binding, self.textures, evaluates, samples)
-                    + self.pass),
-            );
-            *slot = Some(compute_pipeline(
-                ctx,
-                self.label,
-                self.label,
-                &src,
-                &self.entries,
-            )?);
+        };
+        Ok(&self.compiled[at].1)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::wgsl::{compose, ANALYTIC, BSDF, MEASURED, TEXTURED};
+    use wgpu::naga;
+
+    /// The models `record_sampling` dispatches to are bsdf.wgsl's, kind by kind.
+    #[test]
+    fn record_models_are_bsdf_wgsl_s() {
+        let src = BSDF.source;
+        let start = src.find("fn bsdf_sample(").expect("bsdf_sample");
+        let end = start + src[start..].find("\n}\n").expect("its end");
+        let mut found = vec![];
+        let mut kinds: Vec<u32> = vec![];
+        for line in src[start..end].lines().map(str::trim) {
+            if line.starts_with("default") {
+                kinds.clear();
+            } else if let Some(cases) = line.strip_prefix("case ") {
+                kinds = cases
+                    .trim_end_matches(": {")
+                    .split(", ")
+                    .map(|k| k.trim_end_matches('u').parse().expect("a kind"))
+                    .collect();
+            } else if let Some(call) = line.strip_prefix("return ") {
+                if let Some((name, _)) = call.split_once("_sample(") {
+                    found.extend(kinds.iter().map(|&k| (k, name.to_string())));
+                }
+            }
         }
-        slot.as_ref()
-            .ok_or_else(|| invalid(self.label, "the pipeline was not compiled"))
+        let table: Vec<(u32, String)> = RECORD_MODELS
+            .iter()
+            .map(|&(k, n)| (k, n.to_string()))
+            .collect();
+        assert_eq!(found, table);
+    }
+
+    /// Every sampling variant parses and validates: each record kind alone, a glTF record's
+    /// three, all of them; and a glTF record's mask holds the dielectrics it may turn into.
+    #[test]
+    fn sampling_variants_validate() {
+        assert_eq!(sampled_kinds(3), 1 << 3);
+        assert_eq!(sampled_kinds(6), 1 << 6 | 1 << 3 | 1 << 9);
+        assert_eq!(sampled_kinds(40), 0);
+        let all = RECORD_MODELS.iter().fold(0, |m, &(k, _)| m | 1 << k);
+        let masks = RECORD_MODELS
+            .iter()
+            .map(|&(k, _)| 1 << k)
+            .chain([sampled_kinds(6), all, 0]);
+        for mask in masks {
+            for (evaluates, module) in [
+                (Evaluates::Records, &BSDF),
+                (Evaluates::Analytic, &ANALYTIC),
+            ] {
+                let pass = material_eval_source(0, 1, evaluates, mask)
+                    + "@group(0) @binding(5) var<storage, read> table: array<f32>;\n\
+                       fn bsdf_table(i: u32) -> f32 {\n    return table[i];\n}\n\
+                       @compute @workgroup_size(1)\nfn main() {\n    \
+                       material_prepare(2u, 0u, vec2<f32>(0.5));\n    \
+                       let s = material_sample(vec3<f32>(0.0, 0.0, 1.0), vec2<f32>(0.5));\n    \
+                       let p = material_pdf(s.wi, vec3<f32>(0.0, 0.0, 1.0));\n}\n";
+                let src = compose(&[&MEASURED, module, &TEXTURED], &pass);
+                let m = naga::front::wgsl::parse_str(&src)
+                    .unwrap_or_else(|e| panic!("mask {mask:#x}: {}", e.emit_to_string(&src)));
+                let mut v = naga::valid::Validator::new(
+                    naga::valid::ValidationFlags::all(),
+                    naga::valid::Capabilities::empty(),
+                );
+                if let Err(e) = v.validate(&m) {
+                    panic!("mask {mask:#x}: {}", e.emit_to_string(&src));
+                }
+                assert_eq!(
+                    src.contains("const MATERIAL_SAMPLES: bool = true;"),
+                    mask != 0
+                );
+            }
+        }
     }
 }
