@@ -830,6 +830,7 @@ impl FrameShadeScene {
         let bits = |u: u32| f32::from_bits(u);
         let v4 = |v: DVec3, w: f32| [v.x as f32, v.y as f32, v.z as f32, w];
         let mut tris: Vec<[f32; 4]> = Vec::with_capacity(g.positions.len() * 7);
+        let mut own_samples = 0;
         let mut tangents: Vec<[f32; 4]> = vec![];
         for (prim, t) in g.positions.iter().enumerate() {
             let mesh = lit.mesh_of[prim] as usize;
@@ -874,6 +875,7 @@ impl FrameShadeScene {
                 .hints
                 .samples
                 .map_or(0, |s| s.clamp(1, lustre_shade::frame::MAX_SAMPLES as u32));
+            own_samples = own_samples.max(samples);
             tris.extend([
                 v4(t[0], bits(material)),
                 v4(t[1], bits(samples)),
@@ -971,13 +973,7 @@ impl FrameShadeScene {
             page: [atlas.width, atlas.height],
             probes: probes.len() as u32,
             environment: env_index,
-            own_samples: scene
-                .meshes
-                .iter()
-                .filter_map(|m| m.hints.samples)
-                .map(|s| s.clamp(1, lustre_shade::frame::MAX_SAMPLES as u32))
-                .max()
-                .unwrap_or(0),
+            own_samples,
             materials,
         })
     }
