@@ -18,9 +18,12 @@
 //! (brute force's time at its PSNR over its time) and, beside it, brute force's samples at its
 //! PSNR over its samples, which does not move between runs. `--repeat N` times every row of
 //! Fig. IV.15 (brute force and adaptive) as the least of N runs, which steadies the speed-ups on
-//! a shared machine.
+//! a shared machine. With pre-convolved rows, each case first says where their lookups read the
+//! pyramid (the BRDF's largest bandwidth, the level, the share of pixels at level 0).
 
-use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule};
+use lustre_adaptive::buffer::{
+    level_map, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule, NO_LEVEL,
+};
 use lustre_adaptive::compare::{samples_at_psnr, time_at_psnr, Measured};
 use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute};
@@ -233,6 +236,9 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
                 shaded: st.shaded,
             },
         ));
+    }
+    if a.preconvolved || !a.speed_only {
+        preconvolved_levels(&g, &ctx, &env_bw)?;
     }
     println!("| renderer | time (s) | bandwidth pass (s) | PSNR (dB) | samples | shaded pixels | brute-force time at equal PSNR (s) | speed-up | brute-force samples at equal PSNR ÷ samples |");
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
@@ -585,6 +591,43 @@ fn n_b_study(
         );
     }
     println!();
+    Ok(())
+}
+
+/// Where the pre-convolved lookups read the pyramid (`shading::preconvolved_level` of each
+/// surface pixel's largest BRDF bandwidth ν): ν's and the level's median and 90th percentile,
+/// and the share of pixels at level 0, where the map itself is read (nothing is pre-convolved).
+fn preconvolved_levels(
+    g: &GBuffer,
+    ctx: &ShadingContext,
+    env_bw: &EnvironmentBandwidth,
+) -> anyhow::Result<()> {
+    let buffer = BandwidthBuffer::build(g, ctx, env_bw, BufferOptions::default())?;
+    let mut nu: Vec<f64> = buffer
+        .level
+        .iter()
+        .zip(&buffer.brdf_max)
+        .filter(|(l, _)| **l != NO_LEVEL)
+        .map(|(_, &v)| v)
+        .collect();
+    if nu.is_empty() {
+        return Ok(());
+    }
+    let mut level: Vec<f64> = nu.iter().map(|&v| ctx.level_for(v)).collect();
+    nu.sort_by(f64::total_cmp);
+    level.sort_by(f64::total_cmp);
+    let q = |v: &[f64], p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+    let at_zero = level.iter().filter(|&&l| l == 0.0).count() as f64 / level.len() as f64;
+    println!(
+        "- pre-convolved lookups: the BRDF's largest bandwidth ν median {:.1}, 90th percentile {:.1} cycles/rad (largest {:.1}); pyramid level median {:.2}, 90th percentile {:.2}; {:.1} % of the surface pixels are at level 0 (of {}² faces), where nothing is filtered and the map itself is read, as in direct shading\n",
+        q(&nu, 0.5),
+        q(&nu, 0.9),
+        nu[nu.len() - 1],
+        q(&level, 0.5),
+        q(&level, 0.9),
+        100.0 * at_zero,
+        ctx.pyramid.as_ref().map_or(0, |p| p.base_size())
+    );
     Ok(())
 }
 

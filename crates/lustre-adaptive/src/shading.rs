@@ -15,7 +15,8 @@
 //!
 //! [`Lighting::Preconvolved`] reads the environment's pyramid at the level of the BRDF's largest
 //! bandwidth ν at the pixel (§IV.3.5), [`preconvolved_level`]: the coarsest level whose filter
-//! still passes frequency ν with [`PRECONVOLVED_PASSBAND`] of its amplitude. 004's level, where
+//! still passes frequency ν with [`PRECONVOLVED_PASSBAND`] of its amplitude; where that is level
+//! 0 (nothing to filter), the map itself, as [`Lighting::Direct`] (`hierarchy::render_adaptive`). 004's level, where
 //! the level's Nyquist frequency meets ν (ℓ = log2(face / (π ν))), keeps only ≈ 6 % of ν's
 //! amplitude under the Gaussian 6×6 pyramid and capped PSNR at 34–39 dB (BENCHMARKS.md).
 
@@ -42,7 +43,8 @@ use std::sync::Arc;
 pub enum Lighting {
     /// The full-resolution map, bilinear (Eq. IV.1, variance bound Eq. IV.9).
     Direct,
-    /// The pyramid at the BRDF's bandwidth (§IV.3.5, variance bound Eq. IV.10).
+    /// The pyramid at the BRDF's bandwidth (§IV.3.5, variance bound Eq. IV.10); the map itself
+    /// where that is the pyramid's finest level.
     Preconvolved,
 }
 

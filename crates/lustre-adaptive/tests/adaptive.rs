@@ -126,6 +126,34 @@ fn a_white_furnace_gives_albedo_times_radiance_exactly_and_adaptive_shades_it_co
 }
 
 #[test]
+fn pre_convolved_shading_reads_the_map_itself_where_nothing_is_filtered() {
+    // red-metallic-paint's BRDF bandwidth reaches the table's ceiling (20.4 cycles/rad) on
+    // every pixel, so the pre-convolved level is 0 everywhere: the pre-convolved frame is the
+    // direct one, pixel for pixel, with the same N_p (the constant rule).
+    let scene =
+        lustre_scene::builtin::preview("nbrdf:red-metallic-paint", Some(royal())).expect("scene");
+    Frame { scene, size: 24 }.with(ShadingOptions::default(), |g, ctx| {
+        let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("bandwidth");
+        let o = |l| options(16.0, SampleRule::Constant, l);
+        let b_pre =
+            BandwidthBuffer::build(g, ctx, &env_bw, o(Lighting::Preconvolved)).expect("buffer");
+        let b_direct =
+            BandwidthBuffer::build(g, ctx, &env_bw, o(Lighting::Direct)).expect("buffer");
+        let surface: Vec<usize> = (0..b_pre.level.len())
+            .filter(|&k| b_pre.level[k] != u8::MAX)
+            .collect();
+        assert!(surface.len() > 100);
+        assert!(surface
+            .iter()
+            .all(|&k| ctx.level_for(b_pre.brdf_max[k]) == 0.0));
+        let pre = render_adaptive(g, ctx, &b_pre, Lighting::Preconvolved, 5).expect("pre");
+        let direct = render_adaptive(g, ctx, &b_direct, Lighting::Direct, 5).expect("direct");
+        assert_eq!(pre.shaded_level, direct.shaded_level);
+        assert_eq!(pre.image.data, direct.image.data);
+    });
+}
+
+#[test]
 fn pre_convolved_shading_of_a_constant_sky_is_exact_too() {
     let scene = lustre_scene::builtin::preview(
         "nbrdf:gold-paint",

@@ -436,7 +436,8 @@ impl AdaptivePass {
     /// `buffer`'s levels and quotas, then every level's shading and up-sampling. `lod` is
     /// `None` for `Lighting::Direct`; for `Lighting::Preconvolved`, the pyramid level of a
     /// BRDF bandwidth (`ShadingContext::level_for`), read at each pixel's largest
-    /// (`buffer.brdf_max`); it errors when the scene was uploaded without a pyramid.
+    /// (`buffer.brdf_max`), where a level of 0 reads the map itself; it errors when the scene
+    /// was uploaded without a pyramid.
     pub fn render(
         &mut self,
         ctx: &GpuContext,
@@ -476,8 +477,14 @@ impl AdaptivePass {
                     .map_or(0, |_| buffer.samples(k, 0, 0) as u32)
             })
             .collect();
+        // −1: the map itself (Direct, or a pre-convolved level of 0, as `render_adaptive`).
         let lods = match lod {
-            Some(f) => buffer.brdf_max.iter().map(|&nu| f(nu) as f32).collect(),
+            Some(f) => (buffer.brdf_max.iter())
+                .map(|&nu| match f(nu) {
+                    l if l > 0.0 => l as f32,
+                    _ => -1.0,
+                })
+                .collect(),
             None => vec![-1.0; g.pixels.len()],
         };
         self.run(
