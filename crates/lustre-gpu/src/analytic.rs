@@ -29,8 +29,9 @@
 //! takes the others, with the Lazányi Fresnel as the Schlick form it equals.
 //!
 //! Refused with a named error ([`crate::error::GpuError::Invalid`]): models without a GPU twin
-//! (ALTA and goniometric tables), more than [`LAFORTUNE_MAX_LOBES`] Lafortune lobes, side-table
-//! offsets beyond f32's exact integers, Eq. V.3 parameters beyond f32.
+//! (`.gonio` goniometric tables; ALTA tables are measured BRDFs, `measured::MeasuredBrdf`),
+//! more than [`LAFORTUNE_MAX_LOBES`] Lafortune lobes, side-table offsets beyond f32's exact
+//! integers, Eq. V.3 parameters beyond f32.
 
 use crate::error::{invalid, Result};
 use crate::fit_models::{fresnel_params, pack_fit};
@@ -129,7 +130,7 @@ fn refused(name: &str) -> crate::error::GpuError {
     invalid(
         name,
         "no GPU evaluation of this model (the GPU evaluates lustre's analytic reflection \
-         models, the fitted models and MERL, RGL and neural measured BRDFs)",
+         models, the fitted models and MERL, RGL, ALTA and neural measured BRDFs)",
     )
 }
 

@@ -1,6 +1,7 @@
 //! Side tables of the measured BRDFs the GPU evaluates and samples (`wgsl/measured.wgsl`, read
-//! through a pass's `bsdf_table`): a MERL table's stored values, a neural BRDF's weights, and
-//! the tabulated CDFs of [`lustre_brdf::tabulated::TabulatedSampler`].
+//! through a pass's `bsdf_table`): a MERL table's stored values, a neural BRDF's weights, an RGL
+//! tensor's tables, an ALTA table's samples per search node, and the tabulated CDFs of
+//! [`lustre_brdf::tabulated::TabulatedSampler`].
 
 use crate::analytic::{pack_analytic, KIND_OREN_NAYAR};
 use crate::compute::{compute_pipeline, storage_entry};
@@ -13,6 +14,9 @@ use crate::frame_shade::{
 use crate::gbuffer::{pack_textures, PackedTextures};
 use crate::wgsl::{
     compose, Module, ANALYTIC, BSDF, BSDF_SAMPLE, MEASURED, TEXTURED, TEXTURE_SAMPLE_WGSL,
+};
+use lustre_brdf::measured::alta::{
+    alta_grid_cells, AltaTable, AltaUnit, ALTA_CELL, ALTA_COS_FLOOR, ALTA_HALF_EXTENT, ALTA_SPLIT,
 };
 use lustre_brdf::measured::merl::{MerlTable, BINS, RES_PHI_D, RES_THETA_D, RES_THETA_H};
 use lustre_brdf::measured::nbrdf::Nbrdf;
@@ -148,18 +152,19 @@ impl PackedBrdfs {
 }
 
 /// What the passes that take any material evaluate: neural BRDFs, MERL tables (a `.binary`
-/// file), RGL tensors (a `.bsdf` file), fitted models (SGD, Cook–Torrance, Kurt) and, given the
-/// scene, its materials (textured ones read at each pixel's uv, normal-mapped ones in the
-/// G-buffer's tilted frame) and every reflection model of a spec (`lambert`,
-/// `oren-nayar`, `phong`, `blinn-phong`, `ward`, `ward-duer`, `ward-gmd`, `lafortune` and the
-/// `lafortune:` fits, `ashikhmin-shirley`, `abc` and the `abc:` fits, every Cook–Torrance
-/// (`exponential`, `sgd` and `sgd-numeric:` with the numeric Smith G1, mixed distributions), the
-/// conductors, plastics, dielectrics and `pbr`, each also `twosided:`).
+/// file), RGL tensors (a `.bsdf` file), ALTA goniometric tables (a `.dat` file), fitted models
+/// (SGD, Cook–Torrance, Kurt) and, given the scene, its materials (textured ones read at each
+/// pixel's uv, normal-mapped ones in the G-buffer's tilted frame) and every reflection model of
+/// a spec (`lambert`, `oren-nayar`, `phong`, `blinn-phong`, `ward`, `ward-duer`, `ward-gmd`,
+/// `lafortune` and the `lafortune:` fits, `ashikhmin-shirley`, `abc` and the `abc:` fits, every
+/// Cook–Torrance (`exponential`, `sgd` and `sgd-numeric:` with the numeric Smith G1, mixed
+/// distributions), the conductors, plastics, dielectrics and `pbr`, each also `twosided:`).
 pub const EVALUATED: &str = "neural BRDFs (nbrdf:…), MERL tables (a .binary file), RGL tensors \
-    (a .bsdf file), fitted models (SGD, Cook–Torrance, Kurt) and, given the scene, its \
-    reflection materials (textured and normal-mapped ones too) and the analytic models of a \
-    spec (Lambert, Oren–Nayar, Phong, Blinn–Phong, Ward and its variants, Lafortune, \
-    Ashikhmin–Shirley, ABC, any Cook–Torrance, conductors, plastics, dielectrics, glTF metallic-roughness, two-sided or not)";
+    (a .bsdf file), ALTA goniometric tables (a .dat file), fitted models (SGD, Cook–Torrance, \
+    Kurt) and, given the scene, its reflection materials (textured and normal-mapped ones too) \
+    and the analytic models of a spec (Lambert, Oren–Nayar, Phong, Blinn–Phong, Ward and its \
+    variants, Lafortune, Ashikhmin–Shirley, ABC, any Cook–Torrance, conductors, plastics, \
+    dielectrics, glTF metallic-roughness, two-sided or not)";
 
 /// A measured BRDF the GPU evaluates directly (`measured_eval` of `wgsl/measured.wgsl`).
 #[derive(Clone, Copy, Debug)]
@@ -170,6 +175,8 @@ pub enum MeasuredBrdf<'a> {
     Merl(&'a MerlTable),
     /// An RGL tensor (kind 3).
     Rgl(&'a RglBsdf),
+    /// An ALTA goniometric table (kind 4).
+    Alta(&'a AltaTable),
 }
 
 impl<'a> MeasuredBrdf<'a> {
@@ -186,6 +193,9 @@ impl<'a> MeasuredBrdf<'a> {
         }
         if let Some(m) = any.downcast_ref::<MerlTable>() {
             return Some(Self::Merl(m));
+        }
+        if let Some(a) = any.downcast_ref::<AltaTable>() {
+            return Some(Self::Alta(a));
         }
         any.downcast_ref::<RglBsdf>().map(Self::Rgl)
     }
@@ -206,8 +216,51 @@ impl<'a> MeasuredBrdf<'a> {
                 table.extend(pack_rgl(r));
                 (3, base, 0.0)
             }
+            Self::Alta(a) => {
+                table.extend(pack_alta(a));
+                (4, base, 0.0)
+            }
         }
     }
+}
+
+/// The words of an ALTA table for `alta_eval`: an 8-word header (slice count, 1 when the values
+/// are cosine-weighted, the search grid's cells per axis, cell size, half extent, the cos θv
+/// floor, two pads), per slice 4 words (θl, the first words of its nodes and of its candidates,
+/// counted from the record's start, a pad), then per slice its nodes (first, count; a split
+/// node's count −1 and first its first child) and its candidates (x, y, value)
+/// (`AltaTable::candidates`: every sample that can be among the 6 nearest of a point in a leaf,
+/// so the GPU searches one short list instead of the CPU's rings). Counts and offsets are f32
+/// values (exact below 2²⁴).
+pub fn pack_alta(t: &AltaTable) -> Vec<f32> {
+    let slices = t.candidates();
+    let mut out = vec![
+        slices.len() as f32,
+        f32::from(u8::from(t.unit() == AltaUnit::InvSteradianCosineFactor)),
+        alta_grid_cells() as f32,
+        ALTA_CELL as f32,
+        ALTA_HALF_EXTENT as f32,
+        ALTA_COS_FLOOR as f32,
+        0.0,
+        0.0,
+    ];
+    let heads = out.len();
+    out.resize(heads + 4 * slices.len(), 0.0);
+    for (k, s) in slices.iter().enumerate() {
+        out[heads + 4 * k] = s.theta_l as f32;
+        out[heads + 4 * k + 1] = out.len() as f32;
+        out.extend(s.nodes.iter().flat_map(|&[first, count]| {
+            let count = if count == ALTA_SPLIT {
+                -1.0
+            } else {
+                count as f32
+            };
+            [first as f32, count]
+        }));
+        out[heads + 4 * k + 2] = out.len() as f32;
+        out.extend(s.points.iter().flat_map(|p| p.map(|v| v as f32)));
+    }
+    out
 }
 
 /// The words of a MERL table for `merl_lookup`: its 3 × 90·90·180 stored values (unscaled,
@@ -595,7 +648,21 @@ impl MaterialPipelines {
 mod tests {
     use super::*;
     use crate::wgsl::{compose, ANALYTIC, BSDF, MEASURED, TEXTURED};
+    use lustre_brdf::measured::alta::{ALTA_MAX_DEPTH, NEIGHBOURS};
     use wgpu::naga;
+
+    #[test]
+    fn alta_eval_walks_as_deep_and_keeps_as_many_as_the_cpu() {
+        for c in [
+            format!("const ALTA_MAX_DEPTH: u32 = {ALTA_MAX_DEPTH}u;"),
+            format!("const ALTA_NEIGHBOURS: u32 = {NEIGHBOURS}u;"),
+        ] {
+            assert!(MEASURED.source.contains(&c), "{c}");
+        }
+        assert!(MEASURED
+            .source
+            .contains("var d = array<f32, 6>(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);"));
+    }
 
     /// The models `record_sampling` dispatches to are bsdf.wgsl's, kind by kind.
     #[test]

@@ -1,10 +1,12 @@
 //! `wgsl/measured.wgsl` against its CPU twins: a MERL table (synthesized from the gold-paint
 //! neural BRDF of 004's scenes, with bins marked missing) evaluated by `merl_eval` vs
 //! `MerlTable::eval`, the neural BRDFs of 004's five materials (`nbrdf_eval` vs `Nbrdf::eval`),
+//! the RGL tensors and ALTA goniometric tables of ../shared/data (`rgl_eval`, `alta_eval`),
 //! and tabulated-CDF importance sampling (`tabulated_sample`,
 //! `tabulated_pdf`) vs `TabulatedSampler`. GPU tests fail (never skip) without an adapter.
 
 use glam::DVec3;
+use lustre_brdf::measured::alta::{AltaTable, AltaUnit};
 use lustre_brdf::measured::merl::{MerlTable, NegativeValues, BINS, HEADER_BYTES};
 use lustre_brdf::measured::nbrdf::{synthesize_merl, NbrdfSet};
 use lustre_brdf::measured::rgl::RglBsdf;
@@ -12,7 +14,7 @@ use lustre_brdf::models::ward::Ward;
 use lustre_brdf::sampling::SplitMix64;
 use lustre_brdf::tabulated::{TabulatedOptions, TabulatedSampler};
 use lustre_brdf::{Bsdf, Rgb};
-use lustre_gpu::measured::{pack_merl, pack_nbrdf, pack_rgl, pack_tabulated};
+use lustre_gpu::measured::{pack_alta, pack_merl, pack_nbrdf, pack_rgl, pack_tabulated};
 use lustre_gpu::wgsl::{self, Module};
 use lustre_gpu::GpuContext;
 
@@ -322,6 +324,61 @@ fn rgl_eval_matches_the_cpu_on_the_shared_rgl_measurements() {
         assert!(
             rms < 4e-3 && worst < 0.1,
             "{path:?}: rms {rms:e}, worst {worst:e}"
+        );
+    }
+}
+
+#[test]
+fn alta_eval_matches_the_cpu_on_the_shared_goniometric_measurements() {
+    // The two CEA retro-reflection tables (cosine-weighted values; the gray tape's file names no
+    // unit, so the test gives it, as `#inv-sr-cos` does): `alta_eval` against AltaTable::eval in
+    // f32 against f64, on random pairs, pairs near the mirror direction and pairs near the
+    // retro-reflection direction (ωi ≈ ωo), where the tables are densest.
+    let ctx = ctx();
+    let mut g = SplitMix64::new(23);
+    let n = 6144;
+    let mut pairs = pairs(&mut g, 2 * n / 3);
+    while pairs.len() < n {
+        let wo = upper(&mut g);
+        let jitter = DVec3::new(g.next_f64() - 0.5, g.next_f64() - 0.5, g.next_f64() - 0.5);
+        let wi = (wo + jitter * 0.08 * g.next_f64()).normalize();
+        pairs.push((DVec3::new(wi.x, wi.y, wi.z.abs().max(1e-3)).normalize(), wo));
+    }
+    let dir = lustre_brdf::shared_data_dir().join("measured/goniometric");
+    for (file, unit) in [
+        (
+            "retro-gray-tape.dat",
+            Some(AltaUnit::InvSteradianCosineFactor),
+        ),
+        ("retro-3M-jaune.dat", None),
+    ] {
+        let alta = AltaTable::read(&dir.join(file), unit).expect("ALTA file");
+        let packed = pack_alta(&alta);
+        let mut input = words(&packed);
+        let q = input.len();
+        push_pairs(&mut input, &pairs);
+        let out = run_kernel(
+            &ctx,
+            &[&TABLE, &wgsl::MEASURED],
+            &eval_body(q, "alta_eval(0u, wi, wo)"),
+            &input,
+            3 * n,
+            n as u32,
+            None,
+        );
+        let cpu: Vec<[f64; 3]> = pairs.iter().map(|&(wi, wo)| alta.eval(wi, wo).0).collect();
+        let (rms, worst) = relative_error(&cpu, &out);
+        let lit = cpu.iter().filter(|c| c[0] > 0.0).count();
+        eprintln!(
+            "alta_eval vs AltaTable::eval, {file} ({} rows, {} slices, {} words), {n} pairs ({lit} non-zero): relative error RMS {rms:.2e}, worst {worst:.2e}",
+            alta.len(),
+            alta.theta_l_slices().len(),
+            packed.len()
+        );
+        assert!(lit > n / 2, "{file}: {lit} non-zero values of {n}");
+        assert!(
+            rms < 2e-4 && worst < 1e-2,
+            "{file}: rms {rms:e}, worst {worst:e}"
         );
     }
 }

@@ -49,8 +49,70 @@ pub const NEIGHBOURS: usize = 6;
 /// grazing in the CEA files (their 90° ring has cos θv = 0).
 pub const ALTA_COS_FLOOR: f64 = 0.052_335_956_242_943_835;
 
-const CELL: f64 = 0.05; // bucket size in the (x, y) plane, radians
-const HALF_EXTENT: f64 = FRAC_PI_2 + 1e-6;
+/// The bucket size of a slice's search grid in the (x, y) plane, radians.
+pub const ALTA_CELL: f64 = 0.05;
+/// The grid covers [−ALTA_HALF_EXTENT, ALTA_HALF_EXTENT]² (every (x, y) of a view above the
+/// surface: θv < π/2).
+pub const ALTA_HALF_EXTENT: f64 = FRAC_PI_2 + 1e-6;
+const CELL: f64 = ALTA_CELL;
+const HALF_EXTENT: f64 = ALTA_HALF_EXTENT;
+
+/// Cells per axis of a slice's search grid.
+pub fn alta_grid_cells() -> usize {
+    ((2.0 * HALF_EXTENT) / CELL).ceil() as usize
+}
+
+/// The most candidates a leaf of [`AltaCandidates`] holds unless it is at [`ALTA_MAX_DEPTH`].
+pub const ALTA_LEAF_CANDIDATES: usize = 32;
+/// How many times a grid cell of [`AltaCandidates`] may be split into 4 × 4 children.
+pub const ALTA_MAX_DEPTH: usize = 3;
+/// The `count` of a split node of [`AltaCandidates`] (its `first` is its first child).
+pub const ALTA_SPLIT: u32 = u32::MAX;
+
+/// One θl slice laid out for a search without rings (the GPU twin's, `lustre_gpu`'s
+/// `measured::pack_alta`): nodes covering the (x, y) plane, each listing every sample that can
+/// be among the [`NEIGHBOURS`] nearest of a point inside it. With c a node's centre, h its half
+/// diagonal and d₆ the distance from c to its 6th nearest sample, a point q of the node
+/// (|q − c| ≤ h) has its 6 nearest within d₆ + h of q, so within d₆ + 2h of c: the node lists
+/// the samples within d₆ + 2h (+ 10⁻⁴ rad, for a query's rounding) of its centre. The first
+/// [`alta_grid_cells`]² nodes are the search grid's cells (row-major, [`ALTA_CELL`] from
+/// −[`ALTA_HALF_EXTENT`]); a node whose list would exceed [`ALTA_LEAF_CANDIDATES`] (where the
+/// measurement is dense, around the mirror and retro directions) is split into 4 × 4 children
+/// (row-major, consecutive), at most [`ALTA_MAX_DEPTH`] times. Nodes outside the disc of the
+/// views above the surface (radius π/2) list none.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AltaCandidates {
+    /// The slice's θl (radians).
+    pub theta_l: f64,
+    /// Per node, (first, count): its candidates `points[first .. first + count]`, or, with
+    /// count [`ALTA_SPLIT`], its 16 children `nodes[first .. first + 16]`.
+    pub nodes: Vec<[u32; 2]>,
+    /// The candidates (x, y, value in the file's unit), leaf after leaf.
+    pub points: Vec<[f64; 3]>,
+}
+
+impl AltaCandidates {
+    /// The candidates of the leaf holding (x, y) (clamped to the grid), walked down as
+    /// `alta_eval` walks it.
+    pub fn leaf(&self, x: f64, y: f64) -> &[[f64; 3]] {
+        let n = alta_grid_cells();
+        let cell = |v: f64| (((v + HALF_EXTENT) / CELL).floor().max(0.0) as usize).min(n - 1);
+        let (cx, cy) = (cell(x), cell(y));
+        let mut node = self.nodes[cy * n + cx];
+        let mut x0 = -HALF_EXTENT + cx as f64 * CELL;
+        let mut y0 = -HALF_EXTENT + cy as f64 * CELL;
+        let mut size = CELL;
+        while node[1] == ALTA_SPLIT {
+            size /= 4.0;
+            let sub = |v: f64, o: f64| (((v - o) / size).floor().max(0.0) as usize).min(3);
+            let (sx, sy) = (sub(x, x0), sub(y, y0));
+            x0 += sx as f64 * size;
+            y0 += sy as f64 * size;
+            node = self.nodes[node[0] as usize + 4 * sy + sx];
+        }
+        &self.points[node[0] as usize..(node[0] + node[1]) as usize]
+    }
+}
 
 /// What an ALTA table's values are (`#PARAM_OUT`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -111,6 +173,71 @@ impl Slice {
             starts,
             order,
             n_cells,
+        }
+    }
+
+    /// The slice's [`AltaCandidates`].
+    fn candidates(&self) -> AltaCandidates {
+        let n = self.n_cells;
+        let mut nodes: Vec<[u32; 2]> = vec![[0, 0]; n * n];
+        let mut points: Vec<[f64; 3]> = Vec::new();
+        // (node, corner, size, depth), breadth first.
+        let mut queue: std::collections::VecDeque<(usize, [f64; 2], f64, usize)> = (0..n * n)
+            .map(|k| {
+                let corner = [
+                    -HALF_EXTENT + (k % n) as f64 * CELL,
+                    -HALF_EXTENT + (k / n) as f64 * CELL,
+                ];
+                (k, corner, CELL, 0)
+            })
+            .collect();
+        let mut d2: Vec<f64> = Vec::with_capacity(self.pts.len());
+        let mut sorted: Vec<f64> = Vec::with_capacity(self.pts.len());
+        while let Some((k, corner, size, depth)) = queue.pop_front() {
+            let h = size * std::f64::consts::SQRT_2 / 2.0;
+            let c = [corner[0] + size / 2.0, corner[1] + size / 2.0];
+            if (c[0] * c[0] + c[1] * c[1]).sqrt() - h > FRAC_PI_2 || self.pts.is_empty() {
+                continue;
+            }
+            d2.clear();
+            d2.extend(
+                self.pts
+                    .iter()
+                    .map(|p| (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2)),
+            );
+            sorted.clear();
+            sorted.extend_from_slice(&d2);
+            let m = NEIGHBOURS.min(sorted.len());
+            sorted.select_nth_unstable_by(m - 1, f64::total_cmp);
+            let reach = sorted[m - 1].sqrt() + 2.0 * h + 1e-4;
+            let within = d2.iter().filter(|&&d| d <= reach * reach).count();
+            if within > ALTA_LEAF_CANDIDATES && depth < ALTA_MAX_DEPTH {
+                let first = nodes.len();
+                nodes[k] = [first as u32, ALTA_SPLIT];
+                nodes.extend(std::iter::repeat_n([0, 0], 16));
+                let s = size / 4.0;
+                for j in 0..16 {
+                    let child = [
+                        corner[0] + (j % 4) as f64 * s,
+                        corner[1] + (j / 4) as f64 * s,
+                    ];
+                    queue.push_back((first + j, child, s, depth + 1));
+                }
+                continue;
+            }
+            nodes[k] = [points.len() as u32, within as u32];
+            points.extend(
+                self.pts
+                    .iter()
+                    .zip(&d2)
+                    .filter(|(_, &d)| d <= reach * reach)
+                    .map(|(p, _)| *p),
+            );
+        }
+        AltaCandidates {
+            theta_l: self.theta_l,
+            nodes,
+            points,
         }
     }
 
@@ -366,6 +493,11 @@ impl AltaTable {
         self.rows == 0
     }
 
+    /// Each slice's [`AltaCandidates`], θl increasing.
+    pub fn candidates(&self) -> Vec<AltaCandidates> {
+        self.slices.iter().map(Slice::candidates).collect()
+    }
+
     /// The θl of the slices, increasing (radians).
     pub fn theta_l_slices(&self) -> Vec<f64> {
         self.slices.iter().map(|s| s.theta_l).collect()
@@ -431,6 +563,10 @@ impl Bsdf for AltaTable {
     fn flags(&self) -> BsdfFlags {
         BsdfFlags::isotropic_reflection(false, false)
     }
+
+    fn as_any(&self) -> Option<&dyn std::any::Any> {
+        Some(self)
+    }
 }
 
 #[cfg(test)]
@@ -478,5 +614,84 @@ mod tests {
             );
         }
         assert_eq!(s.value(pts[3][0], pts[3][1]), pts[3][2]);
+    }
+
+    /// Shepard's interpolation over a leaf's candidates alone gives the ring search's value, at
+    /// points spread over the views' disc, cell corners included, and around a dense cluster
+    /// (which splits its cells).
+    #[test]
+    fn leaf_candidates_hold_the_nearest_samples() {
+        let mut rng = SplitMix64::new(9);
+        let mut pts = Vec::new();
+        for _ in 0..400 {
+            let (r, a) = (
+                rng.next_f64() * FRAC_PI_2,
+                rng.next_f64() * std::f64::consts::TAU,
+            );
+            pts.push([r * a.cos(), r * a.sin(), rng.next_f64()]);
+        }
+        // 1° rings of 72 points around (−0.4, 0), as the CEA files' fine grids.
+        for ring in 1..6 {
+            for k in 0..72 {
+                let (r, a) = (ring as f64 * 0.01745, k as f64 * 5f64.to_radians());
+                pts.push([-0.4 + r * a.cos(), r * a.sin(), rng.next_f64()]);
+            }
+        }
+        let s = Slice::new(0.5, pts);
+        let c = s.candidates();
+        let n = alta_grid_cells();
+        assert!(c.nodes.len() > n * n, "no cell was split");
+        let mut checked = 0;
+        for k in 0..30_000 {
+            let (x, y) = match k % 3 {
+                // A cell corner.
+                0 => (
+                    -HALF_EXTENT + (rng.next_f64() * n as f64).floor() * CELL,
+                    -HALF_EXTENT + (rng.next_f64() * n as f64).floor() * CELL,
+                ),
+                // In the cluster.
+                1 => (
+                    -0.4 + 0.2 * (rng.next_f64() - 0.5),
+                    0.2 * (rng.next_f64() - 0.5),
+                ),
+                _ => (
+                    (2.0 * rng.next_f64() - 1.0) * FRAC_PI_2,
+                    (2.0 * rng.next_f64() - 1.0) * FRAC_PI_2,
+                ),
+            };
+            if x * x + y * y >= FRAC_PI_2 * FRAC_PI_2 {
+                continue;
+            }
+            let mut d: Vec<(f64, f64)> = c
+                .leaf(x, y)
+                .iter()
+                .map(|p| ((p[0] - x).powi(2) + (p[1] - y).powi(2), p[2]))
+                .collect();
+            assert!(d.len() >= NEIGHBOURS, "({x}, {y}): {} candidates", d.len());
+            d.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let (num, den) = d[..NEIGHBOURS]
+                .iter()
+                .fold((0.0, 0.0), |(n, w), &(d2, v)| (n + v / d2, w + 1.0 / d2));
+            let v = s.value(x, y);
+            assert!(
+                (v - num / den).abs() < 1e-12,
+                "({x}, {y}): {v} vs {}",
+                num / den
+            );
+            checked += 1;
+        }
+        assert!(checked > 20_000, "{checked}");
+        // The leaves stay short; the longest lie at the rings' centre, where ring 1's 72 points
+        // are all equally near.
+        let leaves: Vec<usize> = (c.nodes.iter())
+            .filter(|e| e[1] != ALTA_SPLIT && e[1] > 0)
+            .map(|e| e[1] as usize)
+            .collect();
+        let longest = leaves.iter().copied().max().unwrap_or(0);
+        let mean = leaves.iter().sum::<usize>() as f64 / leaves.len() as f64;
+        assert!(
+            longest <= 80 && mean < 24.0,
+            "leaves: longest {longest}, mean {mean}"
+        );
     }
 }

@@ -1,6 +1,7 @@
 // module measured: measured BRDFs on the GPU (004 §IV.4.3): MERL tables evaluated from the half/difference
 // angles (lustre_brdf::measured::merl), neural BRDFs (lustre_brdf::measured::nbrdf), RGL
-// tensors (lustre_brdf::measured::rgl, their Marginal2D tables: measured::pack_rgl), and
+// tensors (lustre_brdf::measured::rgl, their Marginal2D tables: measured::pack_rgl), ALTA
+// goniometric tables (lustre_brdf::measured::alta: measured::pack_alta), and
 // importance sampling by numerical inversion of
 // tabulated CDFs (lustre_brdf::tabulated). Both read the pass's side table through
 // `bsdf_table(i)`: the words of measured::pack_merl (3 × 90·90·180 stored values, channel-major,
@@ -364,8 +365,8 @@ fn tabulated_pdf(base: u32, dims: TabulatedDims, wi: vec3<f32>, wo: vec3<f32>) -
 }
 
 // The measured BRDF of a material record (lustre-gpu's measured::MeasuredBrdf::pack): kind 0
-// a neural BRDF, 1 a MERL table read at node offset `offset`, 3 an RGL tensor; f(wi, wo) in
-// 1/sr.
+// a neural BRDF, 1 a MERL table read at node offset `offset`, 3 an RGL tensor, 4 an ALTA table;
+// f(wi, wo) in 1/sr.
 fn measured_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
     if (kind == 1u) {
         return merl_eval(base, offset, wi, wo);
@@ -373,7 +374,141 @@ fn measured_eval(kind: u32, base: u32, offset: f32, wi: vec3<f32>, wo: vec3<f32>
     if (kind == 3u) {
         return rgl_eval(base, wi, wo);
     }
+    if (kind == 4u) {
+        return alta_eval(base, wi, wo);
+    }
     return nbrdf_eval(base, wi, wo);
+}
+
+// An ALTA table (lustre_brdf::measured::alta::AltaTable; measured::pack_alta's words at `base`:
+// slice count, cosine-weighted flag, grid cells per axis, cell size, half extent, cos θv floor,
+// two pads, then per slice (θl, its nodes' and candidates' first words from `base`, a pad), then
+// each slice's nodes (first, count; count −1: split into 4 × 4 children from `first`) and its
+// candidates (x, y, value)). Isotropic, reflection only: θl = θ(wi), (x, y) = θv (cos Δφ,
+// sin Δφ) with θv = θ(wo) and Δφ = φo − φi.
+const ALTA_NEIGHBOURS: u32 = 6u;
+// lustre_brdf::measured::alta::ALTA_MAX_DEPTH: a cell is split at most 3 times.
+const ALTA_MAX_DEPTH: u32 = 3u;
+
+// θ of a direction by atan2 (acos loses the small angles in f32).
+fn alta_theta(w: vec3<f32>) -> f32 {
+    return atan2(length(w.xy), w.z);
+}
+
+// Slice s's value at (x, y): Shepard's inverse-distance weighting (power 2) of its
+// ALTA_NEIGHBOURS nearest samples, which are among the candidates of the leaf holding (x, y)
+// (AltaCandidates::leaf), kept sorted as the CPU's ring search keeps them (a sample enters after
+// those at the same distance; an exact hit returns its value).
+fn alta_slice_value(base: u32, s: u32, x: f32, y: f32) -> f32 {
+    let n = u32(bsdf_table(base + 2u));
+    let cell = bsdf_table(base + 3u);
+    let half = bsdf_table(base + 4u);
+    let h = base + 8u + 4u * s;
+    let nodes = base + u32(bsdf_table(h + 1u));
+    let pts = base + u32(bsdf_table(h + 2u));
+    let last = i32(n) - 1;
+    let cx = u32(clamp(i32(floor((x + half) / cell)), 0, last));
+    let cy = u32(clamp(i32(floor((y + half) / cell)), 0, last));
+    var node = cy * n + cx;
+    var x0 = -half + f32(cx) * cell;
+    var y0 = -half + f32(cy) * cell;
+    var size = cell;
+    var first = bsdf_table(nodes + 2u * node);
+    var count = bsdf_table(nodes + 2u * node + 1u);
+    for (var depth = 0u; depth < ALTA_MAX_DEPTH && count < 0.0; depth++) {
+        size *= 0.25;
+        let sx = u32(clamp(i32(floor((x - x0) / size)), 0, 3));
+        let sy = u32(clamp(i32(floor((y - y0) / size)), 0, 3));
+        x0 += f32(sx) * size;
+        y0 += f32(sy) * size;
+        node = u32(first) + 4u * sy + sx;
+        first = bsdf_table(nodes + 2u * node);
+        count = bsdf_table(nodes + 2u * node + 1u);
+    }
+    if (count < 0.0) {
+        return 0.0;
+    }
+    let start = u32(first);
+    let end = start + u32(count);
+    var d = array<f32, 6>(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    var v = array<f32, 6>(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    var kept = 0u;
+    for (var i = start; i < end; i++) {
+        let p = pts + 3u * i;
+        let dx = bsdf_table(p) - x;
+        let dy = bsdf_table(p + 1u) - y;
+        let d2 = dx * dx + dy * dy;
+        if (kept == ALTA_NEIGHBOURS && d2 >= d[ALTA_NEIGHBOURS - 1u]) {
+            continue;
+        }
+        var j = min(kept, ALTA_NEIGHBOURS - 1u);
+        loop {
+            if (j == 0u || d[j - 1u] <= d2) {
+                break;
+            }
+            d[j] = d[j - 1u];
+            v[j] = v[j - 1u];
+            j -= 1u;
+        }
+        d[j] = d2;
+        v[j] = bsdf_table(p + 2u);
+        kept = min(kept + 1u, ALTA_NEIGHBOURS);
+    }
+    if (kept == 0u) {
+        return 0.0;
+    }
+    if (d[0] < 1e-24) {
+        return v[0];
+    }
+    var num = 0.0;
+    var den = 0.0;
+    for (var k = 0u; k < kept; k++) {
+        num += v[k] / d[k];
+        den += 1.0 / d[k];
+    }
+    return num / den;
+}
+
+// AltaTable::brdf: the value linear in θl between the slices around it (clamped to the first
+// and last), divided by max(cos θv, the floor) for cosine-weighted data; zero below the surface.
+fn alta_eval(base: u32, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    if (!(wi.z > 0.0 && wo.z > 0.0)) {
+        return vec3<f32>(0.0);
+    }
+    let tl = alta_theta(wi);
+    let tv = alta_theta(wo);
+    let dphi = atan2(wo.y, wo.x) - atan2(wi.y, wi.x);
+    let x = tv * cos(dphi);
+    let y = tv * sin(dphi);
+    let count = u32(bsdf_table(base));
+    // k: the slices with θ ≤ θl.
+    var k = 0u;
+    loop {
+        if (k == count || bsdf_table(base + 8u + 4u * k) > tl) {
+            break;
+        }
+        k += 1u;
+    }
+    var lo = 0u;
+    var t = 0.0;
+    if (k == count) {
+        lo = count - 1u;
+    } else if (k > 0u) {
+        lo = k - 1u;
+        let a = bsdf_table(base + 8u + 4u * lo);
+        t = (tl - a) / (bsdf_table(base + 8u + 4u * k) - a);
+    }
+    let hi = select(lo, lo + 1u, t > 0.0);
+    // One call site for both slices (llvmpipe inlines each).
+    var value = 0.0;
+    for (var s = lo; s <= hi; s++) {
+        let w = select(1.0 - t, t, s > lo);
+        value += w * alta_slice_value(base, s, x, y);
+    }
+    if (bsdf_table(base + 1u) != 0.0) {
+        value /= max(wo.z, bsdf_table(base + 5u));
+    }
+    return vec3<f32>(value);
 }
 
 // An RGL table (lustre_brdf::measured::rgl_warp::Marginal2D, measured::pack_rgl's block at word
