@@ -133,21 +133,7 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
             weights: BrdfWeights::Evaluated,
             ..Default::default()
         };
-        let cpu_buffer =
-            BandwidthBuffer::build(&g, &shading, &env_bw, options).expect("cpu buffer");
-        let bw_scene =
-            BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, None).expect("upload");
-        let mut bw_pass = BandwidthPass::new(&gpu_ctx).expect("bandwidth pass");
-        let (estimates, _) = bw_pass
-            .predict(&gpu_ctx, &bw_scene, &g, &shading, n_b as u32)
-            .expect("bandwidth pass");
-        let gpu_buffer = BandwidthBuffer::assemble(&g, &estimates, options).expect("gpu buffer");
-        let differ = cpu_buffer
-            .level
-            .iter()
-            .zip(&gpu_buffer.level)
-            .filter(|(a, b)| a != b)
-            .count();
+        let (cpu_buffer, differ) = levels_on_both(&gpu_ctx, &g, &shading, &env_bw, options);
         let surface = g.surface_pixels();
         eprintln!(
             "bandwidth pass (neural BRDF, MERL, SGD, RGL): levels differ on {differ} of {surface} surface pixels"
@@ -329,6 +315,30 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
 /// `scene`'s materials uploaded with the scene (both passes take them), the default buffer,
 /// and the adaptive frame from `seed` on the CPU and on the GPU, with the uploaded scene and
 /// the pass for more frames.
+/// The bandwidth buffer of `options` on the CPU, and on how many pixels the levels assembled
+/// from the GPU bandwidth pass's predictions (the scene's measured and fitted materials, without
+/// its records) differ from it.
+fn levels_on_both(
+    gpu_ctx: &lustre_gpu::GpuContext,
+    g: &GBuffer,
+    shading: &lustre_adaptive::shading::ShadingContext,
+    env_bw: &EnvironmentBandwidth,
+    options: BufferOptions,
+) -> (BandwidthBuffer, usize) {
+    let cpu_buffer = BandwidthBuffer::build(g, shading, env_bw, options).expect("cpu buffer");
+    let bw_scene = BandwidthScene::from_context(gpu_ctx, shading, env_bw, None).expect("upload");
+    let (estimates, _) = BandwidthPass::new(gpu_ctx)
+        .expect("bandwidth pass")
+        .predict(gpu_ctx, &bw_scene, g, shading, options.n_b as u32)
+        .expect("bandwidth pass");
+    let gpu_buffer = BandwidthBuffer::assemble(g, &estimates, options).expect("gpu buffer");
+    let differ = (cpu_buffer.level.iter())
+        .zip(&gpu_buffer.level)
+        .filter(|(a, b)| a != b)
+        .count();
+    (cpu_buffer, differ)
+}
+
 fn adaptive_on_both(
     gpu_ctx: &lustre_gpu::GpuContext,
     scene: &lustre_scene::Scene,
@@ -813,19 +823,7 @@ fn alta_tables_are_shaded_on_the_gpu_as_on_the_cpu() {
             weights: BrdfWeights::Evaluated,
             ..Default::default()
         };
-        let cpu_buffer =
-            BandwidthBuffer::build(&g, &shading, &env_bw, options).expect("cpu buffer");
-        let bw_scene =
-            BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, None).expect("upload");
-        let (estimates, _) = BandwidthPass::new(&gpu_ctx)
-            .expect("bandwidth pass")
-            .predict(&gpu_ctx, &bw_scene, &g, &shading, 16)
-            .expect("bandwidth pass");
-        let gpu_buffer = BandwidthBuffer::assemble(&g, &estimates, options).expect("gpu buffer");
-        let differ = (cpu_buffer.level.iter())
-            .zip(&gpu_buffer.level)
-            .filter(|(a, b)| a != b)
-            .count();
+        let (_, differ) = levels_on_both(&gpu_ctx, &g, &shading, &env_bw, options);
         let surface = g.surface_pixels();
         let (scene_gpu, mut pass, cpu, gpu) = adaptive_on_both(&gpu_ctx, &scene, &g, &shading, 13);
         let (rms, over1, over10) = image_difference(&g, &cpu.image, &gpu.image);

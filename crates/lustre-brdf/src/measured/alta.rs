@@ -574,18 +574,38 @@ mod tests {
     use super::*;
     use crate::sampling::SplitMix64;
 
+    /// `n` samples uniform in radius and angle over the views' disc, random values.
+    fn disc_samples(rng: &mut SplitMix64, n: usize) -> Vec<[f64; 3]> {
+        (0..n)
+            .map(|_| {
+                let (r, a) = (
+                    rng.next_f64() * FRAC_PI_2,
+                    rng.next_f64() * std::f64::consts::TAU,
+                );
+                [r * a.cos(), r * a.sin(), rng.next_f64()]
+            })
+            .collect()
+    }
+
+    /// Shepard's weighting of the `NEIGHBOURS` nearest of `pts` to (x, y), by sorting them all.
+    fn shepard_by_sorting(pts: &[[f64; 3]], x: f64, y: f64) -> f64 {
+        let mut d: Vec<(f64, f64)> = pts
+            .iter()
+            .map(|p| ((p[0] - x).powi(2) + (p[1] - y).powi(2), p[2]))
+            .collect();
+        assert!(d.len() >= NEIGHBOURS, "({x}, {y}): {} candidates", d.len());
+        d.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (num, den) = d[..NEIGHBOURS]
+            .iter()
+            .fold((0.0, 0.0), |(n, w), &(d2, v)| (n + v / d2, w + 1.0 / d2));
+        num / den
+    }
+
     /// The bucket search finds the same neighbours as a brute-force scan.
     #[test]
     fn bucket_search_matches_brute_force() {
         let mut rng = SplitMix64::new(2);
-        let mut pts = Vec::new();
-        for _ in 0..500 {
-            let (r, a) = (
-                rng.next_f64() * FRAC_PI_2,
-                rng.next_f64() * std::f64::consts::TAU,
-            );
-            pts.push([r * a.cos(), r * a.sin(), rng.next_f64()]);
-        }
+        let mut pts = disc_samples(&mut rng, 500);
         // A dense cluster, as around the retro direction.
         for k in 0..200 {
             let a = k as f64 * 0.1;
@@ -598,20 +618,8 @@ mod tests {
                 rng.next_f64() * std::f64::consts::TAU,
             );
             let (x, y) = (r * a.cos(), r * a.sin());
-            let mut d: Vec<(f64, f64)> = pts
-                .iter()
-                .map(|p| ((p[0] - x).powi(2) + (p[1] - y).powi(2), p[2]))
-                .collect();
-            d.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let (num, den) = d[..NEIGHBOURS]
-                .iter()
-                .fold((0.0, 0.0), |(n, w), &(d2, v)| (n + v / d2, w + 1.0 / d2));
-            let v = s.value(x, y);
-            assert!(
-                (v - num / den).abs() < 1e-12,
-                "({x}, {y}): {v} vs {}",
-                num / den
-            );
+            let (v, want) = (s.value(x, y), shepard_by_sorting(&pts, x, y));
+            assert!((v - want).abs() < 1e-12, "({x}, {y}): {v} vs {want}");
         }
         assert_eq!(s.value(pts[3][0], pts[3][1]), pts[3][2]);
     }
@@ -622,14 +630,7 @@ mod tests {
     #[test]
     fn leaf_candidates_hold_the_nearest_samples() {
         let mut rng = SplitMix64::new(9);
-        let mut pts = Vec::new();
-        for _ in 0..400 {
-            let (r, a) = (
-                rng.next_f64() * FRAC_PI_2,
-                rng.next_f64() * std::f64::consts::TAU,
-            );
-            pts.push([r * a.cos(), r * a.sin(), rng.next_f64()]);
-        }
+        let mut pts = disc_samples(&mut rng, 400);
         // 1° rings of 72 points around (−0.4, 0), as the CEA files' fine grids.
         for ring in 1..6 {
             for k in 0..72 {
@@ -662,22 +663,8 @@ mod tests {
             if x * x + y * y >= FRAC_PI_2 * FRAC_PI_2 {
                 continue;
             }
-            let mut d: Vec<(f64, f64)> = c
-                .leaf(x, y)
-                .iter()
-                .map(|p| ((p[0] - x).powi(2) + (p[1] - y).powi(2), p[2]))
-                .collect();
-            assert!(d.len() >= NEIGHBOURS, "({x}, {y}): {} candidates", d.len());
-            d.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let (num, den) = d[..NEIGHBOURS]
-                .iter()
-                .fold((0.0, 0.0), |(n, w), &(d2, v)| (n + v / d2, w + 1.0 / d2));
-            let v = s.value(x, y);
-            assert!(
-                (v - num / den).abs() < 1e-12,
-                "({x}, {y}): {v} vs {}",
-                num / den
-            );
+            let (v, want) = (s.value(x, y), shepard_by_sorting(c.leaf(x, y), x, y));
+            assert!((v - want).abs() < 1e-12, "({x}, {y}): {v} vs {want}");
             checked += 1;
         }
         assert!(checked > 20_000, "{checked}");
