@@ -75,12 +75,10 @@ pub fn render_adaptive(
         ..Default::default()
     };
     let top = buffer.levels - 1;
-    // Pre-convolved: the pyramid at the BRDF's level, or the map itself where that level is 0
-    // (nothing to filter: the cube's finest level would only resample the map).
     let lod = |k: usize| -> Option<f64> {
         (lighting == Lighting::Preconvolved)
-            .then(|| ctx.level_for(buffer.brdf_max[k]))
-            .filter(|&l| l > 0.0)
+            .then(|| ctx.preconvolved_lod(buffer.brdf_max[k]))
+            .flatten()
     };
     let (right, up) = (g.camera.right, g.camera.up);
     for level in (0..=top).rev() {

@@ -16,7 +16,8 @@
 //! [`Lighting::Preconvolved`] reads the environment's pyramid at the level of the BRDF's largest
 //! bandwidth ν at the pixel (§IV.3.5), [`preconvolved_level`]: the coarsest level whose filter
 //! still passes frequency ν with [`PRECONVOLVED_PASSBAND`] of its amplitude; where that is level
-//! 0 (nothing to filter), the map itself, as [`Lighting::Direct`] (`hierarchy::render_adaptive`). 004's level, where
+//! 0 (nothing to filter), the map itself, as [`Lighting::Direct`]
+//! ([`ShadingContext::preconvolved_lod`]). 004's level, where
 //! the level's Nyquist frequency meets ν (ℓ = log2(face / (π ν))), keeps only ≈ 6 % of ν's
 //! amplitude under the Gaussian 6×6 pyramid and capped PSNR at 34–39 dB (BENCHMARKS.md).
 
@@ -217,6 +218,13 @@ impl<'a, 's> ShadingContext<'a, 's> {
             Some(p) => preconvolved_level(p, nu),
             None => 0.0,
         }
+    }
+
+    /// Where a pre-convolved lookup for a BRDF bandwidth of `nu` reads: the pyramid at
+    /// `Some(level)` ([`ShadingContext::level_for`]), or the map itself (`None`) where that level
+    /// is 0 — nothing to filter, and the cube's finest level would only resample the map.
+    pub fn preconvolved_lod(&self, nu: f64) -> Option<f64> {
+        Some(self.level_for(nu)).filter(|&l| l > 0.0)
     }
 
     /// L_p at `s` from `n` samples (≥ 1), the environment read at `lod` (`None`: the map at full

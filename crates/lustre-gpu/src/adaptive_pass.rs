@@ -434,17 +434,17 @@ impl AdaptivePass {
 
     /// The GPU twin of `render_adaptive(g, shading, buffer, lighting, seed)`: the pyramids of
     /// `buffer`'s levels and quotas, then every level's shading and up-sampling. `lod` is
-    /// `None` for `Lighting::Direct`; for `Lighting::Preconvolved`, the pyramid level of a
-    /// BRDF bandwidth (`ShadingContext::level_for`), read at each pixel's largest
-    /// (`buffer.brdf_max`), where a level of 0 reads the map itself; it errors when the scene
-    /// was uploaded without a pyramid.
+    /// `None` for `Lighting::Direct`; for `Lighting::Preconvolved`, where a BRDF bandwidth
+    /// reads (`ShadingContext::preconvolved_lod`: a pyramid level, or `None` for the map itself),
+    /// asked at each pixel's largest (`buffer.brdf_max`); it errors when the scene was uploaded
+    /// without a pyramid.
     pub fn render(
         &mut self,
         ctx: &GpuContext,
         scene: &AdaptiveScene,
         g: &GBuffer,
         buffer: &BandwidthBuffer,
-        lod: Option<&dyn Fn(f64) -> f64>,
+        lod: Option<&dyn Fn(f64) -> Option<f64>>,
         seed: u64,
     ) -> Result<GpuAdaptiveFrame> {
         if lod.is_some() && scene.pyramid_levels == 0 {
@@ -477,13 +477,10 @@ impl AdaptivePass {
                     .map_or(0, |_| buffer.samples(k, 0, 0) as u32)
             })
             .collect();
-        // −1: the map itself (Direct, or a pre-convolved level of 0, as `render_adaptive`).
+        // −1: the map itself.
         let lods = match lod {
             Some(f) => (buffer.brdf_max.iter())
-                .map(|&nu| match f(nu) {
-                    l if l > 0.0 => l as f32,
-                    _ => -1.0,
-                })
+                .map(|&nu| f(nu).map_or(-1.0, |l| l as f32))
                 .collect(),
             None => vec![-1.0; g.pixels.len()],
         };

@@ -216,23 +216,16 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
         let cpu_pre = render_adaptive(&g, &shading, &pre_buffer, Lighting::Preconvolved, seed)
             .expect("cpu pre-convolved");
         let scene_pre = AdaptiveScene::from_context(&gpu_ctx, &shading, None).expect("upload");
-        let level_for = |nu: f64| shading.level_for(nu);
+        let lod_for = |nu: f64| shading.preconvolved_lod(nu);
         let gpu_pre = pass
-            .render(
-                &gpu_ctx,
-                &scene_pre,
-                &g,
-                &pre_buffer,
-                Some(&level_for),
-                seed,
-            )
+            .render(&gpu_ctx, &scene_pre, &g, &pre_buffer, Some(&lod_for), seed)
             .expect("gpu pre-convolved");
         let (rms, over1, over10) = image_difference(&g, &cpu_pre.image, &gpu_pre.frame.image);
         // Both reads are exercised: the pyramid where the level is above 0, the map elsewhere.
         let surface = (pre_buffer.level.iter()).filter(|&&l| l != u8::MAX).count();
         let filtered = (pre_buffer.level.iter())
             .zip(&pre_buffer.brdf_max)
-            .filter(|(&l, &nu)| l != u8::MAX && shading.level_for(nu) > 0.0)
+            .filter(|(&l, &nu)| l != u8::MAX && shading.preconvolved_lod(nu).is_some())
             .count();
         eprintln!(
             "pre-convolved: relative RMS {rms:.2e}, {:.2} % off by > 1 %, {:.2} % by > 10 %; \
@@ -250,14 +243,7 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
         assert!(over10 < 0.002, "{over10}");
         // The same scene without its pyramid cannot shade pre-convolved.
         let e = pass
-            .render(
-                &gpu_ctx,
-                &scene_gpu,
-                &g,
-                &pre_buffer,
-                Some(&level_for),
-                seed,
-            )
+            .render(&gpu_ctx, &scene_gpu, &g, &pre_buffer, Some(&lod_for), seed)
             .expect_err("no pyramid");
         assert!(e.to_string().contains("pyramid"), "{e}");
 

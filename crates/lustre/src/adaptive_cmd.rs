@@ -202,9 +202,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 .and_then(|p| Some((&p.ctx, p.shading.as_mut()?)))
             {
                 Some((gctx, (scene, pass))) => {
-                    let level_for = |nu: f64| ctx.level_for(nu);
+                    let lod_for = |nu: f64| ctx.preconvolved_lod(nu);
                     let lod = (lighting == Lighting::Preconvolved)
-                        .then_some(&level_for as &dyn Fn(f64) -> f64);
+                        .then_some(&lod_for as &dyn Fn(f64) -> Option<f64>);
                     let out = pass.render(gctx, scene, &g, &buffer, lod, args.seed)?;
                     if let Some(ms) = out.timing.gpu_ms {
                         times.push((

@@ -146,7 +146,7 @@ struct Slice {
 
 impl Slice {
     fn new(theta_l: f64, pts: Vec<[f64; 3]>) -> Self {
-        let n_cells = ((2.0 * HALF_EXTENT) / CELL).ceil() as usize;
+        let n_cells = alta_grid_cells();
         let cell_of = |x: f64, y: f64| -> usize {
             let cx = (((x + HALF_EXTENT) / CELL) as usize).min(n_cells - 1);
             let cy = (((y + HALF_EXTENT) / CELL) as usize).min(n_cells - 1);
