@@ -302,6 +302,9 @@ pub struct AltaTable {
     unit: AltaUnit,
     slices: Vec<Slice>,
     rows: usize,
+    /// [`AltaTable::candidates`], built on first use (0.3 s a table) and kept: a scene
+    /// uploads its tables to the GPU once per pass.
+    candidates: std::sync::OnceLock<Vec<AltaCandidates>>,
 }
 
 impl AltaTable {
@@ -475,6 +478,7 @@ impl AltaTable {
             unit,
             slices,
             rows: n_rows,
+            candidates: std::sync::OnceLock::new(),
         })
     }
 
@@ -493,9 +497,10 @@ impl AltaTable {
         self.rows == 0
     }
 
-    /// Each slice's [`AltaCandidates`], θl increasing.
-    pub fn candidates(&self) -> Vec<AltaCandidates> {
-        self.slices.iter().map(Slice::candidates).collect()
+    /// Each slice's [`AltaCandidates`], θl increasing (built once per table).
+    pub fn candidates(&self) -> &[AltaCandidates] {
+        self.candidates
+            .get_or_init(|| self.slices.iter().map(Slice::candidates).collect())
     }
 
     /// The θl of the slices, increasing (radians).
