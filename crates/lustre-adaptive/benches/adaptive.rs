@@ -8,7 +8,6 @@ use lustre_adaptive::buffer::{BandwidthBuffer, BrdfWeights, BufferOptions, Sampl
 use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::hierarchy::{render_adaptive, render_brute};
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
-use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_shade::baked::read_environment;
 use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::reference::{film_camera, path_scene};
@@ -24,7 +23,7 @@ fn bench(c: &mut Criterion) {
     let cam = film_camera(&scene.cameras[0], size as u32, size as u32).expect("camera");
     let g = GBuffer::render(&tracer, &ps, &cam, size, size).expect("G-buffer");
     let ctx = ShadingContext::new(&ps, ShadingOptions::default(), &|_, _| {}).expect("tables");
-    let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("environment bandwidth");
+    let env_bw = ctx.environment_bandwidth().expect("environment bandwidth");
     let options = |weights| BufferOptions {
         mean_samples: 64.0,
         scale: SampleRule::Constant,

@@ -2,9 +2,13 @@
 //! equal PSNR, the predicted against the measured per-pixel variance, and the effect of n_b.
 //!
 //! `cargo run --release -p lustre-adaptive --example adaptive_study -- [--size N]
-//! [--reference N] [--map FILE] [--scene sphere|lineup] [--materials a,b,…] [--out DIR] [--aa]
+//! [--reference N] [--map FILE] [--scene sphere|lineup|FILE] [--materials a,b,…] [--out DIR] [--aa]
 //! [--rates 2,1] [--n-b 16,8] [--speed-only [--preconvolved] [--coverage]] [--repeat N]`
 //! (`--aa`: only Fig. IV.14's anti-aliasing costs, at 1, 4 and 16 sub-pixels per pixel)
+//!
+//! `--scene FILE` studies a scene file from its first camera, lit by its environment (`--map`
+//! is for the built-in scenes) and its planar emitters as area lights
+//! (`lustre_adaptive::light::scene_lights`).
 //!
 //! Prints Markdown tables; with `--out`, writes each case's images (reference, brute force and
 //! adaptive at equal PSNR, the level and N_p maps). `--rates` sets the sampling rates of the
@@ -27,13 +31,14 @@ use lustre_adaptive::buffer::{
 use lustre_adaptive::compare::{samples_at_psnr, time_at_psnr, Measured};
 use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute};
+use lustre_adaptive::light::scene_lights;
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_shade::baked::read_environment;
 use lustre_shade::image::Image;
 use lustre_shade::metrics::{psnr, rms};
 use lustre_shade::path::{PathOptions, PathTracer};
-use lustre_shade::reference::{film_camera, path_scene};
+use lustre_shade::reference::{path_camera, path_scene};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -168,7 +173,16 @@ fn main() -> anyhow::Result<()> {
                 lustre_scene::builtin::lineup([m(2), m(1), m(0)], m(4), Some(env.clone()))?,
             )]
         }
-        other => anyhow::bail!("unknown scene {other} (sphere, lineup)"),
+        file => {
+            let path = PathBuf::from(file);
+            if !path.is_file() {
+                anyhow::bail!("--scene {file}: neither sphere, lineup nor a scene file");
+            }
+            let name = path
+                .file_stem()
+                .map_or_else(|| file.to_string(), |s| s.to_string_lossy().into_owned());
+            vec![(name, lustre_scene::Scene::load(&path)?)]
+        }
     };
     for (name, scene) in &cases {
         if a.aa {
@@ -183,15 +197,18 @@ fn main() -> anyhow::Result<()> {
 fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()> {
     let (ps, _) = path_scene(scene)?;
     let tracer = PathTracer::new(&ps, PathOptions::default())?;
-    let cam = film_camera(&scene.cameras[0], a.size as u32, a.size as u32)?;
+    let cam = path_camera(scene, None, a.size as u32, a.size as u32)?;
     let t = Instant::now();
     let g = GBuffer::render(&tracer, &ps, &cam, a.size, a.size)?;
     let t_g = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let ctx = ShadingContext::new(&ps, ShadingOptions::default(), &|_, _| {})?;
+    let mut ctx = ShadingContext::new(&ps, ShadingOptions::default(), &|_, _| {})?;
+    // The scene's planar emitters light it besides its environment (none on the built-ins).
+    ctx.lights = scene_lights(&ps)?;
+    ctx.check_lit()?;
     let t_tables = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let env_bw = EnvironmentBandwidth::new(ctx.env.map())?;
+    let env_bw = ctx.environment_bandwidth()?;
     let t_env = t.elapsed().as_secs_f64();
     // The reference: two independent halves, their mean; its noise is half their RMS difference.
     let half = (a.reference / 2).max(1);
@@ -408,8 +425,11 @@ fn study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()
 fn aa_study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result<()> {
     let (ps, _) = path_scene(scene)?;
     let tracer = PathTracer::new(&ps, PathOptions::default())?;
-    let ctx = ShadingContext::new(&ps, ShadingOptions::default(), &|_, _| {})?;
-    let env_bw = EnvironmentBandwidth::new(ctx.env.map())?;
+    let mut ctx = ShadingContext::new(&ps, ShadingOptions::default(), &|_, _| {})?;
+    // The scene's planar emitters light it besides its environment (none on the built-ins).
+    ctx.lights = scene_lights(&ps)?;
+    ctx.check_lit()?;
+    let env_bw = ctx.environment_bandwidth()?;
     println!(
         "## {name}: anti-aliasing, {}² pixels, 32 samples per shaded sub-pixel\n",
         a.size
@@ -419,7 +439,7 @@ fn aa_study(a: &Args, name: &str, scene: &lustre_scene::Scene) -> anyhow::Result
     let mut rows = vec![];
     for k in [1usize, 2, 4] {
         let (w, h) = (a.size * k, a.size * k);
-        let cam = film_camera(&scene.cameras[0], w as u32, h as u32)?;
+        let cam = path_camera(scene, None, w as u32, h as u32)?;
         let g = GBuffer::render(&tracer, &ps, &cam, w, h)?;
         let t = Instant::now();
         let (img, _) = render_brute(&g, &ctx, 32, 7)?;

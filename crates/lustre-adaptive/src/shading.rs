@@ -31,10 +31,12 @@ use lustre_brdf::tabulated::{TabulatedOptions, TabulatedSampler};
 use lustre_brdf::Bsdf;
 use lustre_env::{CubePyramid, MipFilter};
 use lustre_freq::brdf::{brdf_bandwidth, BrdfBandwidth, BrdfBandwidthOptions};
+use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_freq::spatial::texture_bandwidth;
 use lustre_scene::Texture;
 use lustre_shade::baked::environment_pyramid;
 use lustre_shade::path::{EnvLight, PathScene};
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -138,12 +140,13 @@ impl TextureBandwidth {
 }
 
 /// What shading needs: the scene's materials with their tables, the environment and its
-/// pyramid.
+/// pyramid, the area lights.
 pub struct ShadingContext<'a, 's> {
     /// The scene (materials).
     pub scene: &'a PathScene<'s>,
-    /// The scene's environment.
-    pub env: &'a EnvLight,
+    /// The scene's environment; a black one (radiance scale 0) where the scene has none
+    /// ([`ShadingContext::lit_by_environment`]).
+    pub env: Cow<'a, EnvLight>,
     /// Per material of the scene.
     pub materials: Vec<MaterialTables>,
     /// The pre-convolved pyramid (world directions), when built.
@@ -153,14 +156,19 @@ pub struct ShadingContext<'a, 's> {
 }
 
 impl<'a, 's> ShadingContext<'a, 's> {
-    /// Builds every material's tables (`progress(k, n)` after each) and the pyramid. Errors on
-    /// a scene without an environment.
+    /// Builds every material's tables (`progress(k, n)` after each) and the pyramid. A scene
+    /// without an environment gets a black one: its light is then the area lights' alone
+    /// ([`ShadingContext::lights`], e.g. [`crate::light::scene_lights`]; see
+    /// [`ShadingContext::check_lit`]).
     pub fn new(
         scene: &'a PathScene<'s>,
         options: ShadingOptions,
         progress: &dyn Fn(usize, usize),
     ) -> Result<Self> {
-        let env = environment(scene)?;
+        let env = match &scene.environment {
+            Some(e) => Cow::Borrowed(e),
+            None => Cow::Owned(black_environment()?),
+        };
         let n = scene.materials.len();
         let mut materials = Vec::with_capacity(n);
         // One bandwidth map per texture, however many materials use it.
@@ -188,7 +196,7 @@ impl<'a, 's> ShadingContext<'a, 's> {
             progress(k + 1, n);
         }
         let pyramid = if options.pyramid_face > 0 {
-            Some(environment_pyramid(env, options.pyramid_face)?)
+            Some(environment_pyramid(&env, options.pyramid_face)?)
         } else {
             None
         };
@@ -198,6 +206,35 @@ impl<'a, 's> ShadingContext<'a, 's> {
             materials,
             pyramid,
             lights: vec![],
+        })
+    }
+
+    /// Whether the environment lights the scene (false: the scene has none, and only the
+    /// area lights do).
+    pub fn lit_by_environment(&self) -> bool {
+        self.env.scale() > 0.0
+    }
+
+    /// Errors, saying why, when nothing lights the scene: no environment and no area light.
+    pub fn check_lit(&self) -> Result<()> {
+        if self.lit_by_environment() || !self.lights.is_empty() {
+            Ok(())
+        } else {
+            Err(AdaptiveError::Parameter(
+                "nothing lights the scene: it has no environment and no planar emitter \
+                 (adaptive shading lights by the environment and by area lights, 004 ch. IV)"
+                    .into(),
+            ))
+        }
+    }
+
+    /// The bandwidth side of the scene's environment (`lustre_freq`'s prediction): its map,
+    /// scaled as the shading reads it; black where the scene has none. Borrows the scene, not
+    /// the context.
+    pub fn environment_bandwidth(&self) -> Result<EnvironmentBandwidth<'a>> {
+        Ok(match &self.scene.environment {
+            Some(e) => EnvironmentBandwidth::scaled(e.map(), e.scale())?,
+            None => EnvironmentBandwidth::black()?,
         })
     }
 
@@ -235,7 +272,7 @@ impl<'a, 's> ShadingContext<'a, 's> {
     /// every sample X_j weighs f L cos θ / (n_f p_f(X_j) + n_l p_l(X_j)). Dirac lobes are
     /// reached by the BRDF's samples only. Each area light adds n samples of its own area.
     pub fn shade(&self, s: &Surfel, n: usize, lod: Option<f64>, seed: u64) -> Rgb {
-        let env = self.env;
+        let env = &*self.env;
         let f = &s.frame;
         let to_local = |d: DVec3| DVec3::new(d.dot(f.t), d.dot(f.b), d.dot(f.n));
         let to_world = |d: DVec3| f.t * d.x + f.b * d.y + f.n * d.z;
@@ -255,7 +292,13 @@ impl<'a, 's> ShadingContext<'a, 's> {
             }
         };
         let n = n.max(1);
-        let (n_f, n_l) = (n.div_ceil(2), n / 2);
+        // Under a black environment the BRDF's and the environment's samples would find
+        // nothing (area lights are reached by their own samples only).
+        let (n_f, n_l) = if self.lit_by_environment() {
+            (n.div_ceil(2), n / 2)
+        } else {
+            (0, 0)
+        };
         let mut rng = SplitMix64::new(seed);
         let rot = [
             rng.next_f64(),
@@ -376,13 +419,10 @@ pub fn preconvolved_level(pyramid: &CubePyramid, nu: f64) -> f64 {
     (sigma / texel0).log2().clamp(0.0, top)
 }
 
-/// The scene's environment, or an error naming the problem.
-pub fn environment<'a>(scene: &'a PathScene) -> Result<&'a EnvLight> {
-    scene.environment.as_ref().ok_or_else(|| {
-        AdaptiveError::Parameter(
-            "adaptive shading lights the scene by its environment, and it has none".into(),
-        )
-    })
+/// The environment of a scene without one: black (a uniform map, radiance scale 0).
+fn black_environment() -> Result<EnvLight> {
+    let map = lustre_env::EquirectMap::new(8, 4, vec![[1.0; 3]; 32])?;
+    Ok(EnvLight::new(map, glam::DMat3::IDENTITY, 0.0)?)
 }
 
 /// The tables of one BSDF.

@@ -5,11 +5,10 @@ use lustre_adaptive::buffer::{
 };
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute, NOT_SHADED};
-use lustre_adaptive::light::AreaLight;
+use lustre_adaptive::light::{scene_lights, AreaLight};
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_brdf::rgb::Rgb;
 use lustre_env::EquirectMap;
-use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_scene::environment::{Environment, EnvironmentSource};
 use lustre_scene::Scene;
 use lustre_shade::baked::read_environment;
@@ -82,7 +81,7 @@ fn a_white_furnace_gives_albedo_times_radiance_exactly_and_adaptive_shades_it_co
     Frame { scene, size: 64 }.with(ShadingOptions::default(), |g, ctx| {
         let (brute, stats) = render_brute(g, ctx, 128, 1).expect("brute");
         assert_eq!(stats.shaded, g.surface_pixels());
-        let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("bandwidth");
+        let env_bw = ctx.environment_bandwidth().expect("bandwidth");
         let buffer = BandwidthBuffer::build(
             g,
             ctx,
@@ -133,7 +132,7 @@ fn pre_convolved_shading_reads_the_map_itself_where_nothing_is_filtered() {
     let scene =
         lustre_scene::builtin::preview("nbrdf:red-metallic-paint", Some(royal())).expect("scene");
     Frame { scene, size: 24 }.with(ShadingOptions::default(), |g, ctx| {
-        let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("bandwidth");
+        let env_bw = ctx.environment_bandwidth().expect("bandwidth");
         let o = |l| options(16.0, SampleRule::Constant, l);
         let b_pre =
             BandwidthBuffer::build(g, ctx, &env_bw, o(Lighting::Preconvolved)).expect("buffer");
@@ -161,7 +160,7 @@ fn pre_convolved_shading_of_a_constant_sky_is_exact_too() {
     )
     .expect("scene");
     Frame { scene, size: 32 }.with(ShadingOptions::default(), |g, ctx| {
-        let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("bandwidth");
+        let env_bw = ctx.environment_bandwidth().expect("bandwidth");
         let o = options(64.0, SampleRule::Constant, Lighting::Preconvolved);
         let buffer = BandwidthBuffer::build(g, ctx, &env_bw, o).expect("buffer");
         let pre = render_adaptive(g, ctx, &buffer, Lighting::Preconvolved, 3).expect("pre");
@@ -209,7 +208,7 @@ fn on_a_measured_paint_under_a_real_sky_adaptive_beats_brute_force_at_equal_samp
         .expect("reference");
         let exposure = 0.5 / reference.mean();
         let (brute, bstats) = render_brute(g, ctx, 32, 5).expect("brute");
-        let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("bandwidth");
+        let env_bw = ctx.environment_bandwidth().expect("bandwidth");
         let buffer = BandwidthBuffer::build(
             g,
             ctx,
@@ -288,7 +287,8 @@ fn on_a_measured_paint_under_a_real_sky_adaptive_beats_brute_force_at_equal_samp
 
 #[test]
 fn buffers_hold_no_nan_on_black_or_degenerate_input_and_bad_parameters_are_named() {
-    // A black sky cannot be importance-sampled: the context refuses it by name.
+    // A black sky lights nothing: the scene is either refused by name or, taken as one without
+    // an environment, nothing lights it (no emitter either), which the context says.
     let black = lustre_scene::builtin::preview(
         "nbrdf:blue-rubber",
         Some(map_environment(constant_map(0.0))),
@@ -297,7 +297,11 @@ fn buffers_hold_no_nan_on_black_or_degenerate_input_and_bad_parameters_are_named
     match path_scene(&black) {
         Err(e) => assert!(e.to_string().contains("black"), "{e}"),
         Ok((ps, _)) => {
-            assert!(ShadingContext::new(&ps, ShadingOptions::default(), &|_, _| {}).is_err())
+            let ctx = ShadingContext::new(&ps, ShadingOptions::default(), &|_, _| {})
+                .expect("a context without light");
+            assert!(!ctx.lit_by_environment());
+            let e = ctx.check_lit().expect_err("nothing lights it");
+            assert!(e.to_string().contains("nothing lights the scene"), "{e}");
         }
     }
     // A sky that is black but for one texel, and every sample rule: finite everywhere.
@@ -311,7 +315,7 @@ fn buffers_hold_no_nan_on_black_or_degenerate_input_and_bad_parameters_are_named
     )
     .expect("scene");
     Frame { scene, size: 24 }.with(ShadingOptions::default(), |g, ctx| {
-        let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("bandwidth");
+        let env_bw = ctx.environment_bandwidth().expect("bandwidth");
         for rule in [
             SampleRule::Constant,
             SampleRule::Absolute,
@@ -377,7 +381,7 @@ fn buffers_hold_no_nan_on_black_or_degenerate_input_and_bad_parameters_are_named
                 s.frame.n = glam::DVec3::ZERO;
             }
         }
-        let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("bandwidth");
+        let env_bw = ctx.environment_bandwidth().expect("bandwidth");
         let b = BandwidthBuffer::build(&g, ctx, &env_bw, BufferOptions::default()).expect("buffer");
         assert!(b.bandwidth.iter().chain(&b.variance).all(|v| v.is_finite()));
         let f = render_adaptive(&g, ctx, &b, Lighting::Direct, 1).expect("adaptive");
@@ -470,7 +474,7 @@ fn an_area_light_over_a_lambertian_floor_gives_the_form_factor_and_its_texture_r
         let v = ctx.shade(s, 1024, None, 3).luminance();
         eprintln!("area light: {v:.5} vs the form factor's {expected:.5}");
         assert!((v - expected).abs() < 2e-3 * expected, "{v} vs {expected}");
-        let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("bandwidth");
+        let env_bw = ctx.environment_bandwidth().expect("bandwidth");
         let o = options(16.0, SampleRule::Constant, Lighting::Direct);
         let b = BandwidthBuffer::build(g, ctx, &env_bw, o).expect("buffer");
         let (brute, _) = render_brute(g, ctx, 64, 1).expect("brute");
@@ -501,7 +505,7 @@ fn an_area_light_over_a_lambertian_floor_gives_the_form_factor_and_its_texture_r
     let (scene, light) = lit_floor(Some((64, 64, checker)));
     let textured = Frame { scene, size: 33 }.with(ShadingOptions::default(), |g, ctx| {
         ctx.lights = vec![light.clone()];
-        let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("bandwidth");
+        let env_bw = ctx.environment_bandwidth().expect("bandwidth");
         let o = options(16.0, SampleRule::Constant, Lighting::Direct);
         mean_bandwidth(&BandwidthBuffer::build(g, ctx, &env_bw, o).expect("buffer"))
     });
@@ -583,7 +587,7 @@ fn a_textured_material_adds_its_texture_bandwidth_at_the_rate_of_its_uv_mapping(
         Frame { scene, size: 33 }.with(ShadingOptions::default(), |g, ctx| {
             let s = g.surfel(16, 16).expect("the floor");
             let t = ctx.texture_bandwidth(s);
-            let env_bw = EnvironmentBandwidth::new(ctx.env.map()).expect("bandwidth");
+            let env_bw = ctx.environment_bandwidth().expect("bandwidth");
             let o = options(16.0, SampleRule::Constant, Lighting::Direct);
             let b = BandwidthBuffer::build(g, ctx, &env_bw, o).expect("buffer");
             assert!(b.bandwidth.iter().all(|v| v.is_finite()));
@@ -625,4 +629,186 @@ fn a_textured_material_adds_its_texture_bandwidth_at_the_rate_of_its_uv_mapping(
         (centre - expected).abs() < 0.05 * expected,
         "b_p {centre} at the centre vs {expected}"
     );
+}
+
+/// A Lambertian floor (kd 0.5) lit only by `emitter` (a mesh of radiance 3), no environment.
+fn floor_under(emitter: lustre_scene::mesh::Mesh) -> Scene {
+    let (mut scene, _) = lit_floor(None);
+    scene.environment = None;
+    let mut e = emitter;
+    e.emission = Some(Rgb::splat(3.0));
+    scene.meshes.push(e);
+    scene
+}
+
+#[test]
+fn a_scenes_own_planar_emitters_light_it_as_area_lights() {
+    // A 2 × 2 m rectangle emitter 2 m above the origin, facing down, and no environment: the
+    // floor's radiance at the origin is ρ L_e F (the form factor of its four 1 × 1 quarters).
+    let mut rect = lustre_scene::mesh::rectangle("panel", 0);
+    rect.transform(
+        &(glam::DMat4::from_translation(glam::DVec3::new(0.0, 2.0, 0.0))
+            * glam::DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2)),
+    );
+    let frame = Frame {
+        scene: floor_under(rect),
+        size: 33,
+    };
+    frame.with(ShadingOptions::default(), |g, ctx| {
+        assert!(!ctx.lit_by_environment());
+        assert!(ctx.check_lit().is_err(), "no light yet");
+        ctx.lights = scene_lights(ctx.scene).expect("lights");
+        assert_eq!(ctx.lights.len(), 1);
+        let l = &ctx.lights[0];
+        // The rectangle itself: its own area, facing down, every texel covered alike.
+        assert!((l.area() - 4.0).abs() < 1e-5, "area {}", l.area());
+        assert!(l.normal().y < -0.999_999, "normal {}", l.normal());
+        let (_, _, texels) = l.texture();
+        assert!(texels.iter().all(|t| (t[0] - texels[0][0]).abs() < 1e-6));
+        let expected = 0.5 * 3.0 * 4.0 * corner_form_factor(1.0, 1.0, 2.0);
+        let s = g.surfel(16, 16).expect("the floor");
+        let v = ctx.shade(s, 1024, None, 3).luminance();
+        eprintln!("rectangle emitter: {v:.5} vs the form factor's {expected:.5}");
+        assert!((v - expected).abs() < 2e-3 * expected, "{v} vs {expected}");
+        let env_bw = ctx.environment_bandwidth().expect("bandwidth");
+        let o = options(16.0, SampleRule::Constant, Lighting::Direct);
+        let b = BandwidthBuffer::build(g, ctx, &env_bw, o).expect("buffer");
+        let (brute, _) = render_brute(g, ctx, 64, 1).expect("brute");
+        let f = render_adaptive(g, ctx, &b, Lighting::Direct, 1).expect("adaptive");
+        let ratio = f.image.mean() / brute.mean();
+        eprintln!(
+            "rectangle emitter, adaptive / brute mean {ratio:.5}, {} of {} pixels shaded",
+            f.stats.shaded,
+            g.surface_pixels()
+        );
+        assert!((ratio - 1.0).abs() < 0.01, "adaptive / brute mean {ratio}");
+        assert!(f.stats.shaded < g.surface_pixels());
+    });
+    // A disk emitter of radius 1 (Mitsuba's 64-triangle fan) at the same height: drawn into a
+    // square light; on its axis the irradiance form factor of a disk, R² / (R² + h²).
+    let mut disk = lustre_scene::mesh::disk("lamp", 0);
+    disk.transform(
+        &(glam::DMat4::from_translation(glam::DVec3::new(0.0, 2.0, 0.0))
+            * glam::DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2)),
+    );
+    let frame = Frame {
+        scene: floor_under(disk),
+        size: 33,
+    };
+    frame.with(ShadingOptions::default(), |g, ctx| {
+        ctx.lights = scene_lights(ctx.scene).expect("lights");
+        assert_eq!(ctx.lights.len(), 1);
+        let l = &ctx.lights[0];
+        // Its power is the fan's: Σ texels × texel area × radiance = L_e × fan area.
+        let (w, h, texels) = l.texture();
+        let fan = 32.0 * (2.0 * std::f64::consts::PI / 64.0).sin();
+        let power: f64 = texels.iter().map(|t| f64::from(t[1])).sum::<f64>() * l.area()
+            / (w * h) as f64
+            * l.radiance.0[1];
+        assert!(
+            (power - 3.0 * fan).abs() < 1e-6 * fan,
+            "{power} vs {}",
+            3.0 * fan
+        );
+        assert!(
+            (l.area() - 4.0).abs() < 0.01,
+            "square of side 2: {}",
+            l.area()
+        );
+        let expected = 0.5 * 3.0 * 1.0 / (1.0 + 4.0);
+        let s = g.surfel(16, 16).expect("the floor");
+        let v = ctx.shade(s, 1024, None, 3).luminance();
+        eprintln!("disk emitter: {v:.5} vs the disk's form factor {expected:.5}");
+        assert!((v - expected).abs() < 5e-3 * expected, "{v} vs {expected}");
+    });
+    // Two emitters that share no vertex are two lights; a cube is refused by name.
+    let mut a = lustre_scene::mesh::rectangle("a", 0);
+    a.transform(&glam::DMat4::from_translation(glam::DVec3::new(
+        -3.0, 2.0, 0.0,
+    )));
+    let mut scene = floor_under(a);
+    let mut b = lustre_scene::mesh::disk("b", 0);
+    b.transform(&glam::DMat4::from_translation(glam::DVec3::new(
+        3.0, 2.0, 0.0,
+    )));
+    b.emission = Some(Rgb::splat(1.0));
+    scene.meshes.push(b);
+    let (ps, _) = path_scene(&scene).expect("path scene");
+    assert_eq!(scene_lights(&ps).expect("two lights").len(), 2);
+    let mut cube = lustre_scene::mesh::cube("box", 0);
+    cube.transform(&glam::DMat4::from_translation(glam::DVec3::new(
+        0.0, 3.0, 0.0,
+    )));
+    let boxed = floor_under(cube);
+    let (ps, _) = path_scene(&boxed).expect("path scene");
+    let e = scene_lights(&ps).expect_err("a cube emitter");
+    assert!(e.to_string().contains("not planar"), "{e}");
+}
+
+/// Σ over the lights of ∫ L dA per channel (texels × texel area × radiance scale).
+fn light_power(lights: &[AreaLight]) -> [f64; 3] {
+    let mut p = [0.0; 3];
+    for l in lights {
+        let (w, h, texels) = l.texture();
+        for (c, acc) in p.iter_mut().enumerate() {
+            *acc += texels.iter().map(|t| f64::from(t[c])).sum::<f64>() * l.area() / (w * h) as f64
+                * l.radiance.0[c];
+        }
+    }
+    p
+}
+
+/// Σ over the emissive triangles of area × radiance per channel.
+fn emitted_power(ps: &lustre_shade::path::PathScene) -> [f64; 3] {
+    let g = &ps.geometry;
+    let mut p = [0.0; 3];
+    for (i, e) in g.emission.iter().enumerate() {
+        let [a, b, c] = g.positions[i];
+        let area = 0.5 * (b - a).cross(c - a).length();
+        for (acc, v) in p.iter_mut().zip(e.0) {
+            *acc += area * v;
+        }
+    }
+    p
+}
+
+#[test]
+fn the_modern_halls_emitters_and_the_cornell_boxs_panel_become_area_lights() {
+    // The Hall (Bitterli's staircase2): 13 emitters, 5 disk lamps of radius 0.1049 m on the
+    // ceiling facing down, 8 rectangles; the lights keep the triangles' power.
+    let hall = Scene::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/modern_hall.toml"),
+    )
+    .expect("the Hall");
+    let (ps, _) = path_scene(&hall).expect("path scene");
+    let lights = scene_lights(&ps).expect("lights");
+    assert_eq!(lights.len(), 13);
+    let lamps = lights
+        .iter()
+        .filter(|l| l.normal().y < -0.999 && (l.edge_u.length() - 2.0 * 0.104916).abs() < 2e-3)
+        .count();
+    assert_eq!(lamps, 5, "the ceiling lamps");
+    let (drawn, exact) = (light_power(&lights), emitted_power(&ps));
+    eprintln!("the Hall's emitters: power of the lights {drawn:.5?}, of the triangles {exact:.5?}");
+    for c in 0..3 {
+        assert!(
+            (drawn[c] / exact[c] - 1.0).abs() < 1e-6,
+            "{drawn:?} vs {exact:?}"
+        );
+    }
+    // The Cornell box's ceiling panel: one light, the panel's own area, facing down.
+    let cornell =
+        Scene::load(&lustre_env::shared_data_dir().join("scenes/cornell_box/cornell_box.obj"))
+            .expect("the Cornell box");
+    let (ps, _) = path_scene(&cornell).expect("path scene");
+    let lights = scene_lights(&ps).expect("lights");
+    assert_eq!(lights.len(), 1);
+    let (drawn, exact) = (light_power(&lights), emitted_power(&ps));
+    eprintln!(
+        "Cornell panel: {:.5} m² facing {:.3}, power {drawn:.5?} vs the triangles' {exact:.5?}",
+        lights[0].area(),
+        lights[0].normal()
+    );
+    assert!((drawn[0] / exact[0] - 1.0).abs() < 1e-6);
+    assert!(lights[0].normal().y < -0.999);
 }

@@ -17,6 +17,7 @@ use lustre_brdf::sampling::{cosine_hemisphere, hammersley};
 use lustre_brdf::{Bsdf, Rgb};
 use lustre_env::equirect::direction_uv;
 use lustre_env::EquirectMap;
+use std::borrow::Cow;
 use std::f64::consts::PI;
 
 /// An environment map with its angular bandwidth (cycles per radian per pixel); the lighting
@@ -24,9 +25,12 @@ use std::f64::consts::PI;
 #[derive(Clone, Debug)]
 pub struct EnvironmentBandwidth<'a> {
     /// The map.
-    pub map: &'a EquirectMap,
+    pub map: Cow<'a, EquirectMap>,
     /// [`angular_bandwidth`] of the map.
     pub bandwidth: Vec<f64>,
+    /// The radiance scale the map is lit with (1 unless [`EnvironmentBandwidth::scaled`]): the
+    /// luminance read is the map's times it; the bandwidth does not depend on it.
+    pub scale: f64,
     /// Per texel, the map's luminance and its bandwidth side by side (what a prediction reads:
     /// one cache line, a third of the map's bytes).
     luminance_bandwidth: Vec<[f32; 2]>,
@@ -35,19 +39,43 @@ pub struct EnvironmentBandwidth<'a> {
 impl<'a> EnvironmentBandwidth<'a> {
     /// Computes the map's bandwidth.
     pub fn new(map: &'a EquirectMap) -> Result<Self> {
-        let bandwidth = angular_bandwidth(map)?;
+        Self::scaled(map, 1.0)
+    }
+
+    /// [`EnvironmentBandwidth::new`] for the map lit with radiance `scale` (an environment's
+    /// scale; 0 is black). Errors on a negative or non-finite scale.
+    pub fn scaled(map: &'a EquirectMap, scale: f64) -> Result<Self> {
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(FreqError::Parameter(format!(
+                "environment scale {scale} must be finite and ≥ 0"
+            )));
+        }
+        Self::build(Cow::Borrowed(map), scale)
+    }
+
+    /// A black environment (a uniform 8 × 4 map lit with scale 0): what a scene without one
+    /// predicts with (no path from it weighs anything).
+    pub fn black() -> Result<EnvironmentBandwidth<'static>> {
+        let map = EquirectMap::new(8, 4, vec![[1.0; 3]; 32])
+            .map_err(|e| FreqError::Parameter(format!("black environment: {e}")))?;
+        EnvironmentBandwidth::build(Cow::Owned(map), 0.0)
+    }
+
+    fn build(map: Cow<'a, EquirectMap>, scale: f64) -> Result<Self> {
+        let bandwidth = angular_bandwidth(&map)?;
         let luminance_bandwidth = map
             .data
             .iter()
             .zip(&bandwidth)
             .map(|(c, &b)| {
-                let l = Rgb([c[0] as f64, c[1] as f64, c[2] as f64]).luminance();
+                let l = Rgb([c[0] as f64, c[1] as f64, c[2] as f64]).luminance() * scale;
                 [l as f32, b as f32]
             })
             .collect();
         Ok(Self {
             map,
             bandwidth,
+            scale,
             luminance_bandwidth,
         })
     }
@@ -286,6 +314,26 @@ mod tests {
         };
         let b = brdf_bandwidth(&k, o).expect("bandwidth");
         (k, b)
+    }
+
+    #[test]
+    fn an_environments_scale_scales_the_weights_but_not_the_bandwidth() {
+        let (k, bw) = glossy();
+        let sky = map(|x, y| 1.0 + ((x / 4 + y / 4) % 2) as f32);
+        let one = EnvironmentBandwidth::new(&sky).expect("env");
+        let three = EnvironmentBandwidth::scaled(&sky, 3.0).expect("env");
+        let (a, b) = (
+            predict(&point(0.5), &one, &k, &bw, 16).expect("one"),
+            predict(&point(0.5), &three, &k, &bw, 16).expect("three"),
+        );
+        assert!(a.radiance > 0.0 && (b.radiance / a.radiance - 3.0).abs() < 1e-6);
+        assert!((b.variance / a.variance - 9.0).abs() < 1e-5);
+        assert!((b.bandwidth.angular - a.bandwidth.angular).abs() < 1e-9 * a.bandwidth.angular);
+        let black = EnvironmentBandwidth::black().expect("black");
+        let p = predict(&point(0.5), &black, &k, &bw, 16).expect("black");
+        assert_eq!((p.radiance, p.variance, p.weight), (0.0, 0.0, 0.0));
+        assert!(EnvironmentBandwidth::scaled(&sky, -1.0).is_err());
+        assert!(EnvironmentBandwidth::scaled(&sky, f64::NAN).is_err());
     }
 
     #[test]

@@ -16,7 +16,6 @@ use lustre_adaptive::compare::{time_at_psnr, Measured};
 use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::hierarchy::{render_adaptive, render_brute};
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
-use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_gpu::adaptive_pass::{AdaptivePass, AdaptiveScene};
 use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthScene};
 use lustre_gpu::GpuContext;
@@ -132,7 +131,7 @@ fn study(
         },
         &|_, _| {},
     )?;
-    let env_bw = EnvironmentBandwidth::new(ctx.env.map())?;
+    let env_bw = ctx.environment_bandwidth()?;
     let half = (a.reference / 2).max(1);
     let (r1, _) = render_brute(&g, &ctx, half, 1_000_001)?;
     let (r2, _) = render_brute(&g, &ctx, half, 2_000_002)?;

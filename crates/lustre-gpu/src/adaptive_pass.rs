@@ -198,6 +198,9 @@ pub struct AdaptiveScene {
     pyramid_levels: u32,
     light_count: u32,
     material_count: u32,
+    /// Whether the environment lights the scene (`ShadingContext::lit_by_environment`): else
+    /// a pixel takes no BRDF or environment sample, as on the CPU.
+    env_lit: bool,
 }
 
 impl AdaptiveScene {
@@ -305,7 +308,7 @@ impl AdaptiveScene {
             ));
         }
         let (texture_texels, tex_info) = brdfs.textures(scene, limit)?;
-        let env = shading.env;
+        let env = &*shading.env;
         let scale = env.scale() as f32;
         let texels: Vec<[f32; 4]> = env
             .map()
@@ -367,6 +370,7 @@ impl AdaptiveScene {
                 .filter_map(|m| brdfs.fitted.get(m.base as usize))
                 .fold(0, |mask, b| mask | sampled_kinds(b.kind)),
             light_count: shading.lights.len() as u32,
+            env_lit: shading.lit_by_environment(),
             material_count: materials.len() as u32,
         })
     }
@@ -612,7 +616,11 @@ impl AdaptivePass {
             first: 0,
             env: scene.env,
             to_map: m,
-            right: v4(cam.right),
+            right: {
+                let mut r = v4(cam.right);
+                r[3] = if scene.env_lit { 1.0 } else { 0.0 };
+                r
+            },
             up: v4(cam.up),
         };
 

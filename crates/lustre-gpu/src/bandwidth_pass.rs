@@ -134,7 +134,7 @@ impl BandwidthScene {
         // No area light (one unread record), no texture (one unread texel).
         (packed.lights, packed.light_texels) = pack_lights(&[], glam::DMat3::IDENTITY);
         packed.textures = packed.brdfs.textures(None, 0)?;
-        Self::upload(ctx, map, map_bandwidth, packed)
+        Self::upload(ctx, map, 1.0, map_bandwidth, packed)
     }
 
     /// The environment, materials and area lights of an adaptive-shading context: every
@@ -175,12 +175,14 @@ impl BandwidthScene {
         packed.light_count = shading.lights.len() as u32;
         let limit = ctx.device.limits().max_storage_buffer_binding_size as usize;
         packed.textures = packed.brdfs.textures(scene, limit)?;
-        Self::upload(ctx, env.map, &env.bandwidth, packed)
+        Self::upload(ctx, &env.map, env.scale, &env.bandwidth, packed)
     }
 
+    /// `map`'s texels times `scale` with their bandwidth, and the packed materials and lights.
     fn upload(
         ctx: &GpuContext,
         map: &EquirectMap,
+        scale: f64,
         map_bandwidth: &[f64],
         packed: Packed,
     ) -> Result<Self> {
@@ -205,7 +207,10 @@ impl BandwidthScene {
             .data
             .iter()
             .zip(map_bandwidth)
-            .map(|(p, &b)| [p[0], p[1], p[2], b as f32])
+            .map(|(p, &b)| {
+                let k = scale as f32;
+                [p[0] * k, p[1] * k, p[2] * k, b as f32]
+            })
             .collect();
         let storage = wgpu::BufferUsages::STORAGE;
         Ok(Self {

@@ -11,7 +11,7 @@ use lustre_adaptive::buffer::{
 };
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{render_adaptive, render_brute, NOT_SHADED};
-use lustre_adaptive::light::AreaLight;
+use lustre_adaptive::light::{scene_lights, AreaLight};
 use lustre_adaptive::shading::{Lighting, ShadingOptions};
 use lustre_brdf::measured::nbrdf::{synthesize_merl, NbrdfSet};
 use lustre_brdf::rgb::Rgb;
@@ -118,7 +118,7 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
     );
     let (w, h) = (96, 64);
     line_up::with_frame(&scene, (w, h), |_, g, mut shading| {
-        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let env_bw = shading.environment_bandwidth().expect("env bandwidth");
         let gpu_ctx = ctx();
         eprintln!("{}", gpu_ctx.describe());
 
@@ -206,7 +206,7 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
         // Pre-convolved shading (§IV.3.5): the environment's pyramid read at each pixel's BRDF
         // bandwidth, on both.
         shading.pyramid =
-            Some(lustre_shade::baked::environment_pyramid(shading.env, 256).expect("pyramid"));
+            Some(lustre_shade::baked::environment_pyramid(&shading.env, 256).expect("pyramid"));
         let pre_options = BufferOptions {
             lighting: Lighting::Preconvolved,
             ..options
@@ -339,7 +339,7 @@ fn adaptive_on_both(
 ) {
     let scene_gpu = AdaptiveScene::from_context(gpu_ctx, shading, Some(scene))
         .expect("upload with the scene's materials");
-    let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+    let env_bw = shading.environment_bandwidth().expect("env bandwidth");
     BandwidthScene::from_context(gpu_ctx, shading, &env_bw, Some(scene))
         .expect("the bandwidth pass takes them too");
     let buffer =
@@ -471,7 +471,7 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
         assert!(e.contains("material 1"), "{e}");
         let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene))
             .expect("upload with the scene's materials");
-        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let env_bw = shading.environment_bandwidth().expect("env bandwidth");
         let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, BufferOptions::default())
             .expect("buffer");
         let cpu = render_adaptive(&g, &shading, &buffer, Lighting::Direct, 5).expect("cpu");
@@ -493,7 +493,7 @@ fn the_adaptive_pass_names_what_it_cannot_shade() {
         "nbrdf:white-marble",
     );
     line_up::with_frame(&scene, (24, 16), |tracer, mut g, shading| {
-        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let env_bw = shading.environment_bandwidth().expect("env bandwidth");
         let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, None).expect("upload");
         let mut pass = AdaptivePass::new(&gpu_ctx).expect("compile");
         let e = pass
@@ -562,7 +562,7 @@ fn analytic_specs_are_shaded_on_the_gpu_as_on_the_cpu() {
         assert!(e.contains("material 0"), "{e}");
         let scene_gpu = AdaptiveScene::from_context(&gpu_ctx, &shading, Some(&scene))
             .expect("upload with the scene's materials");
-        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let env_bw = shading.environment_bandwidth().expect("env bandwidth");
         BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene))
             .expect("the bandwidth pass takes them too");
         let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, BufferOptions::default())
@@ -761,7 +761,7 @@ fn two_sided_measured_materials_are_shaded_on_the_gpu_as_on_the_cpu() {
     line_up::with_frame(&scene, (48, 32), |_, g, shading| {
         let scene_gpu =
             AdaptiveScene::from_context(&gpu_ctx, &shading, None).expect("two-sided measured");
-        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let env_bw = shading.environment_bandwidth().expect("env bandwidth");
         BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, None)
             .expect("the bandwidth pass takes them too");
         let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, BufferOptions::default())
@@ -803,7 +803,7 @@ fn alta_tables_are_shaded_on_the_gpu_as_on_the_cpu() {
     let scene = line_up::scene(["nbrdf:gold-paint", &gray, &jaune], "nbrdf:white-marble");
     line_up::with_frame(&scene, (48, 32), |_, g, shading| {
         // The bandwidth pass evaluates them too (ρ evaluated on both sides): its levels.
-        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let env_bw = shading.environment_bandwidth().expect("env bandwidth");
         let options = BufferOptions {
             n_b: 16,
             weights: BrdfWeights::Evaluated,
@@ -842,4 +842,64 @@ fn alta_tables_are_shaded_on_the_gpu_as_on_the_cpu() {
             "rms {rms}, {over1}, {over10}"
         );
     });
+}
+
+#[test]
+fn the_modern_halls_own_emitters_light_it_on_the_gpu_as_on_the_cpu() {
+    // A real interior without an environment: its 13 emitters (5 disk lamps, 8 rectangles) as
+    // textured area lights (`scene_lights`), its textured and glass materials; the black
+    // environment takes no sample on either device.
+    let gpu_ctx = ctx();
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/modern_hall.toml");
+    let scene = lustre_scene::Scene::load(&path).expect("the Hall");
+    let (ps, _) = lustre_shade::reference::path_scene(&scene).expect("path scene");
+    let tracer = lustre_shade::path::PathTracer::new(&ps, Default::default()).expect("tracer");
+    let (w, h) = (64, 40);
+    let cam =
+        lustre_shade::reference::path_camera(&scene, None, w as u32, h as u32).expect("camera");
+    let g = GBuffer::render(&tracer, &ps, &cam, w, h).expect("G-buffer");
+    let options = ShadingOptions {
+        pyramid_face: 0,
+        ..Default::default()
+    };
+    let mut shading =
+        lustre_adaptive::shading::ShadingContext::new(&ps, options, &|_, _| {}).expect("tables");
+    shading.lights = scene_lights(&ps).expect("lights");
+    assert!(!shading.lit_by_environment());
+    assert_eq!(shading.lights.len(), 13);
+    let env_bw = shading.environment_bandwidth().expect("env bandwidth");
+    // The bandwidth pass: the same levels.
+    let options = BufferOptions::default();
+    let cpu_buffer = BandwidthBuffer::build(&g, &shading, &env_bw, options).expect("cpu buffer");
+    let bw_scene =
+        BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene)).expect("upload");
+    let (estimates, _) = BandwidthPass::new(&gpu_ctx)
+        .expect("bandwidth pass")
+        .predict(&gpu_ctx, &bw_scene, &g, &shading, options.n_b as u32)
+        .expect("bandwidth pass");
+    let gpu_buffer = BandwidthBuffer::assemble(&g, &estimates, options).expect("gpu buffer");
+    let surface = g.surface_pixels();
+    let differ = (cpu_buffer.level.iter())
+        .zip(&gpu_buffer.level)
+        .filter(|(a, b)| a != b)
+        .count();
+    eprintln!("the Hall under its emitters: levels differ on {differ} of {surface} pixels");
+    assert!(differ * 200 < surface, "{differ} levels differ");
+    // The adaptive frame and brute force.
+    let (scene_gpu, mut pass, cpu, gpu) = adaptive_on_both(&gpu_ctx, &scene, &g, &shading, 5);
+    assert_same_frame(&g, &cpu, &gpu, "the Hall under its emitters");
+    let (cpu_b, _) = render_brute(&g, &shading, 16, 5).expect("cpu brute");
+    let gpu_b = pass
+        .render_brute(&gpu_ctx, &scene_gpu, &g, 16, 5)
+        .expect("gpu brute");
+    let (rms, over1, over10) = image_difference(&g, &cpu_b, &gpu_b.frame.image);
+    eprintln!(
+        "the Hall under its emitters, brute force 16 samples: relative RMS {rms:.2e}, {:.2} % \
+         off by > 1 %, {:.2} % by > 10 %",
+        100.0 * over1,
+        100.0 * over10
+    );
+    assert!(rms < 5e-3 && over1 < 0.01 && over10 < 0.002);
+    assert!(cpu_b.mean() > 0.0, "the emitters light the Hall");
 }

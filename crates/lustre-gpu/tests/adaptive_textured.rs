@@ -18,7 +18,6 @@ use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::render_adaptive;
 use lustre_adaptive::shading::Lighting;
 use lustre_brdf::rgb::Rgb;
-use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_gpu::adaptive_pass::{AdaptivePass, AdaptiveScene};
 use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthScene};
 use lustre_scene::material::{Distribution, NormalMap, TextureRef, TexturedRgb, TexturedScalar};
@@ -107,7 +106,7 @@ fn textured_and_normal_mapped_materials_are_shaded_on_the_gpu_as_on_the_cpu() {
     // Each material's textures matter: the CPU frame without them differs on its pixels.
     let frame = |scene: &Scene| {
         line_up::with_frame(scene, (w, h), |_, g, shading| {
-            let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+            let env_bw = shading.environment_bandwidth().expect("env bandwidth");
             let buffer = BandwidthBuffer::build(&g, &shading, &env_bw, BufferOptions::default())
                 .expect("buffer");
             let img = render_adaptive(&g, &shading, &buffer, Lighting::Direct, 11)
@@ -129,7 +128,7 @@ fn textured_and_normal_mapped_materials_are_shaded_on_the_gpu_as_on_the_cpu() {
     }
 
     line_up::with_frame(&scene, (w, h), |_, g, shading| {
-        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let env_bw = shading.environment_bandwidth().expect("env bandwidth");
         // The bandwidth pass against the CPU's evaluated weights (a textured material's ρ at
         // the pixel, as the GPU evaluates it).
         let n_b = 16;

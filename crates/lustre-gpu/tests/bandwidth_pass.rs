@@ -6,7 +6,6 @@
 use lustre_adaptive::buffer::{
     predict_pixels, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule,
 };
-use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_gpu::bandwidth_pass::{
     BandwidthPass, BandwidthPixel, BandwidthScene, DIRECTIONS_PER_DISPATCH,
 };
@@ -40,7 +39,7 @@ fn the_gpu_bandwidth_pass_matches_its_cpu_twin_on_the_line_up() {
     );
     let (w, h) = (96, 64);
     line_up::with_frame(&scene, (w, h), |_, g, shading| {
-        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let env_bw = shading.environment_bandwidth().expect("env bandwidth");
         let n_b = 16;
         let cpu = predict_pixels(&g, &shading, &env_bw, n_b, BrdfWeights::Evaluated).expect("cpu");
         let gpu_ctx = ctx();
@@ -293,7 +292,7 @@ fn the_textures_bandwidth_reaches_the_gpu_pass_as_the_cpus() {
         "nbrdf:white-marble",
     );
     line_up::with_frame(&scene, (48, 32), |_, g, shading| {
-        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let env_bw = shading.environment_bandwidth().expect("env bandwidth");
         let n_b = 16;
         let gpu_ctx = ctx();
         let scene_gpu =
@@ -372,7 +371,7 @@ fn analytic_specs_in_the_bandwidth_pass_match_the_cpu() {
         "oren-nayar(kd=0.6, sigma=0.5)",
     );
     line_up::with_frame(&scene, (48, 32), |_, g, shading| {
-        let env_bw = EnvironmentBandwidth::new(shading.env.map()).expect("env bandwidth");
+        let env_bw = shading.environment_bandwidth().expect("env bandwidth");
         let n_b = 16;
         let cpu = predict_pixels(&g, &shading, &env_bw, n_b, BrdfWeights::Evaluated).expect("cpu");
         let gpu_ctx = ctx();

@@ -8,8 +8,9 @@
 //! directions per pixel against the environment's bandwidth), and the hierarchical shading.
 //! The shading context (the materials' sampling and bandwidth tables) is built once per scene:
 //! the render thread builds it on the first adaptive frame and again after a material edit. The
-//! environment lights everything, without visibility, as in 004: a scene without an
-//! environment is refused with a message.
+//! environment and the scene's planar emitters (as area lights, `lustre_adaptive::light::
+//! scene_lights`) light everything, without visibility, as in 004: a scene with neither is
+//! refused with a message.
 //!
 //! The buffer views colour b_p, ℓ + 1, N_p and the level each pixel was shaded at on the log
 //! heat map of the CLI's `frame_{bandwidth,level,samples,shaded}.png` (`lustre_plot::heat::
@@ -22,6 +23,7 @@ use crate::AdaptiveDevice;
 use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BufferOptions, SampleRule};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive};
+use lustre_adaptive::light::scene_lights;
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_gpu::adaptive_pass::{AdaptivePass, AdaptiveScene};
@@ -258,8 +260,8 @@ impl GpuPasses {
 
 impl<'a, 's> AdaptiveRenderer<'a, 's> {
     /// Builds the shading context of `scene` (`progress(k, n)` after each material's tables).
-    /// Errors: a scene without an environment (adaptive shading lights by it alone), a
-    /// material whose tables cannot be built.
+    /// Errors: a scene that nothing lights (no environment, no planar emitter), an emitter
+    /// that is not planar, a material whose tables cannot be built.
     ///
     /// With `gpu` (the context and the scene, whose materials are the path scene's in its order), the
     /// bandwidth pass and the shading run there when it takes the scene's materials (each pass
@@ -272,20 +274,25 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
         device: AdaptiveDevice,
     ) -> anyhow::Result<Self> {
         let t = Instant::now();
-        let Some(env) = scene.environment.as_ref() else {
+        // The scene's planar emitters light it besides its environment (004 §IV.5.3).
+        let lights = scene_lights(scene)
+            .map_err(|e| anyhow::anyhow!("adaptive shading's area lights: {e}"))?;
+        if scene.environment.is_none() && lights.is_empty() {
             anyhow::bail!(
-                "the scene has no environment, and adaptive shading lights by the environment \
-                 alone (004 ch. IV): choose another method, or a scene with an environment map"
+                "nothing lights the scene for adaptive shading: it has no environment and no \
+                 planar emitter (004 ch. IV lights by both): choose another method"
             );
-        };
+        }
         let options = ShadingOptions {
             // Direct lighting (the CLI's default) reads the map itself: no pyramid.
             pyramid_face: 0,
             ..ShadingOptions::default()
         };
-        let ctx = ShadingContext::new(scene, options, progress)
+        let mut ctx = ShadingContext::new(scene, options, progress)
             .map_err(|e| anyhow::anyhow!("adaptive shading's material tables: {e}"))?;
-        let env = EnvironmentBandwidth::new(env.map())
+        ctx.lights = lights;
+        let env = ctx
+            .environment_bandwidth()
             .map_err(|e| anyhow::anyhow!("the environment's bandwidth: {e}"))?;
         let gpu = match (gpu, device) {
             (None, _) => GpuPasses::default(),
@@ -418,15 +425,15 @@ mod tests {
     }
 
     #[test]
-    fn a_scene_without_an_environment_is_refused_by_name() {
+    fn a_scene_that_nothing_lights_is_refused_by_name() {
         let mut scene = lustre_scene::builtin::preview("lambert(kd=0.5)", None).unwrap();
         scene.environment = None;
         let (ps, _) = path_scene(&scene).unwrap();
         let e = match AdaptiveRenderer::new(&ps, &|_, _| {}, None, AdaptiveDevice::Auto) {
-            Ok(_) => panic!("a scene without an environment was accepted"),
+            Ok(_) => panic!("a scene without an environment or an emitter was accepted"),
             Err(e) => e.to_string(),
         };
-        assert!(e.contains("the scene has no environment"), "{e}");
+        assert!(e.contains("nothing lights the scene"), "{e}");
     }
 
     #[test]

@@ -14,8 +14,8 @@
 //!   controls for the mean N_p, the rate (1 or 2) and the sample rule, a line with the shaded
 //!   share, the samples and the bandwidth pass's and the shading's times, and the buffer views
 //!   of 004 Fig. IV.13 / IV.22 (the shaded image, b_p, ℓ, N_p, the shaded pixels by level) as
-//!   the CLI's heat maps. It lights by the scene's environment only: a scene without one is
-//!   refused with a message.
+//!   the CLI's heat maps. It lights by the scene's environment and its planar emitters (as
+//!   area lights): a scene with neither is refused with a message.
 //! - Measured materials (`--material SPEC`: `lustre_scene::builtin::preview` of a neural, MERL
 //!   or RGL BRDF or any material specification, under `--env MAP` or the built-in sky;
 //!   `--lineup`: 004 Fig. IV.13's three measured paints on white marble), and any scene without
@@ -51,7 +51,7 @@ pub enum ViewMethod {
     /// A CPU path-traced reference filling in (1 sample per pixel per pass).
     Reference,
     /// 004 ch. IV's adaptive shading on the CPU (bandwidth buffer, hierarchical shading; the
-    /// environment's light without visibility), one frame per view.
+    /// environment's and the planar emitters' light without visibility), one frame per view.
     Adaptive,
 }
 

@@ -17,7 +17,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BufferOptions, SampleRule};
 use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute};
-use lustre_adaptive::light::AreaLight;
+use lustre_adaptive::light::{scene_lights, AreaLight};
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_brdf::rgb::Rgb;
 use lustre_freq::pixel::EnvironmentBandwidth;
@@ -67,9 +67,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         set_named(&mut scene.materials, &material, &field, &value)
             .with_context(|| format!("--set {a}"))?;
     }
-    let lights = match &args.area_light {
-        Some(path) => vec![area_light(&scene, path, args.area_light_radiance)?],
-        None => vec![],
+    let extra_light = match &args.area_light {
+        Some(path) => Some(area_light(&scene, path, args.area_light_radiance)?),
+        None => None,
     };
     let (w, h) = match args.size.as_deref() {
         Some(s) => crate::reference_cmd::parse_size(s)?,
@@ -87,9 +87,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    if ps.environment.is_none() {
+    // The scene's own planar emitters are area lights (004 §IV.5.3), with --area-light's.
+    let mut lights =
+        scene_lights(&ps).with_context(|| format!("{}: its emitters", scene.source.display()))?;
+    lights.extend(extra_light);
+    if ps.environment.is_none() && lights.is_empty() {
         bail!(
-            "{}: adaptive shading lights the scene by its environment, and it has none",
+            "{}: nothing lights the scene: it has no environment and no planar emitter \
+             (adaptive shading lights by the environment and by area lights, 004 ch. IV)",
             scene.source.display()
         );
     }
@@ -121,7 +126,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         "material tables (sampling CDFs, bandwidth)",
         &mut t,
     );
-    let env_bw = EnvironmentBandwidth::new(ctx.env.map())?;
+    let env_bw = ctx.environment_bandwidth()?;
     lap(&mut times, "environment bandwidth", &mut t);
     // The passes run on the GPU where they can (--device auto) or must (--device gpu).
     let mut gpu = match args.device {

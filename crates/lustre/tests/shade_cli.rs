@@ -390,3 +390,52 @@ fn adaptive_and_brute_force_renders_of_a_measured_paint_agree_and_bad_input_is_n
         mean(&adaptive)
     );
 }
+
+#[test]
+fn adaptive_shading_lights_a_scene_file_by_its_own_emitters() {
+    // The Cornell box has no environment: its ceiling panel is the adaptive method's area
+    // light, and the frame agrees with brute force's.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let cornell = lustre_brdf::shared_data_dir().join("scenes/cornell_box/cornell_box.obj");
+    let common = |method: &str, samples: &str, out: &std::path::Path| {
+        let mut cmd = lustre();
+        cmd.arg("render")
+            .arg(&cornell)
+            .args(["--method", method, "--samples", samples, "--size", "48x48"])
+            .args(["--spp", "1", "--device", "cpu", "--out"])
+            .arg(out);
+        cmd
+    };
+    let brute = dir.path().join("brute");
+    run_ok(&mut common("brute", "256", &brute));
+    let adaptive = dir.path().join("adaptive");
+    let stdout = run_ok(
+        common("adaptive", "16", &adaptive)
+            .arg("--compare-reference")
+            .arg(brute.join("frame.exr")),
+    );
+    assert!(stdout.contains("up-sampled"), "{stdout}");
+    let psnr: f64 = stdout
+        .split("PSNR ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no PSNR in {stdout}"));
+    eprintln!("Cornell box, adaptive (16) vs brute force (256): {psnr:.2} dB");
+    assert!(psnr > 35.0, "{psnr} dB");
+    // A scene that nothing lights (a floor, no environment, no emitter) is refused by name.
+    let floor = dir.path().join("floor.obj");
+    std::fs::write(
+        &floor,
+        "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nf 1 3 2\nf 1 4 3\n",
+    )
+    .expect("obj");
+    let e = run_err(
+        lustre()
+            .arg("render")
+            .arg(&floor)
+            .args(["--method", "adaptive", "--size", "16x16", "--out"])
+            .arg(dir.path().join("dark")),
+    );
+    assert!(e.contains("nothing lights the scene"), "{e}");
+}

@@ -376,8 +376,9 @@ fn viewer_refuses_bad_input_and_missing_devices_clearly() {
         assert!(!o.status.success() && all.contains(says), "{args:?}: {all}");
     }
     // The adaptive method on a scene without an environment (a floor and a block under a
-    // rectangle light, baked at tiny settings): said in the view, the script goes on, and the
-    // regular method renders after it.
+    // rectangle light, baked at tiny settings): the light is an area light of the adaptive
+    // method (`scene_lights`), which renders, and the regular method renders after it. (A
+    // scene that nothing lights is refused by name: lustre-view's unit test.)
     std::fs::write(
         d.join("floor.obj"),
         "v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nv -0.5 0 -0.5\nv 0.5 0 -0.5\nv 0.5 1 -0.5\n\
@@ -426,15 +427,11 @@ fn viewer_refuses_bad_input_and_missing_devices_clearly() {
     );
     let all = text(&o);
     assert!(
-        o.status.success()
-            && all.contains("adaptive method: the scene has no environment")
-            && !all.contains("panicked"),
+        o.status.success() && !all.contains("adaptive method:") && !all.contains("panicked"),
         "{all}"
     );
-    assert_eq!(
-        read_json(&d.join("lustre-view/a.json"))["step_ms"],
-        serde_json::Value::Null
-    );
+    let adaptive = read_json(&d.join("lustre-view/a.json"));
+    assert!(adaptive["step_ms"].as_f64().is_some(), "{adaptive}");
     let regular = read_json(&d.join("lustre-view/r.json"));
     assert!(regular["step_ms"].as_f64().is_some(), "{regular}");
     // No display: a message, not a panic or a hang.
