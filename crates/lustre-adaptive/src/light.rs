@@ -3,6 +3,9 @@
 //! directly (no BRDF importance sampling, no visibility, as 004), and its bandwidth propagated
 //! to the pixel through the operators of Fig. IV.9.
 //!
+//! A scene's own emitters become such lights ([`scene_lights`]): each planar group of emissive
+//! triangles, drawn into the texture of the smallest rectangle around it.
+//!
 //! The texture's spatial bandwidth (cycles per metre) comes from
 //! `lustre_freq::spatial::area_light_bandwidth` (zero-padded: the light's border is an edge of
 //! its emission). Seen from a point, a path leaves the light at angle θl to its normal, so its

@@ -1,7 +1,8 @@
 //! `lustre render --method adaptive | brute`: 004 chapter IV (`lustre-adaptive` on the CPU,
 //! `lustre-gpu`'s bandwidth and adaptive passes on the GPU). Measured (or any) materials shaded
-//! directly under the environment, without visibility: the adaptive method renders a bandwidth
-//! buffer and shades hierarchically; brute force shades every pixel with --samples samples.
+//! directly under the environment and the scene's planar emitters (as area lights,
+//! `lustre_adaptive::light::scene_lights`), without visibility: the adaptive method renders a
+//! bandwidth buffer and shades hierarchically; brute force shades every pixel with --samples samples.
 //! The G-buffer, the material tables and the buffer's levels and variance target are the
 //! CPU's; the passes run on the GPU with --device gpu, or with auto where the GPU takes the
 //! scene (measured materials, fitted models, the scene's reflection materials, textured and

@@ -40,8 +40,8 @@ pub enum Method {
     /// Progressive refinement: --frames rotated regular sets, averaged.
     Progressive,
     /// 004 ch. IV: measured materials shaded adaptively by frequency analysis (bandwidth
-    /// buffer, hierarchical shading, --samples the mean N_p), environment light without
-    /// visibility, on the CPU.
+    /// buffer, hierarchical shading, --samples the mean N_p), the environment's and the
+    /// scene's planar emitters' light without visibility, on the CPU or the GPU.
     Adaptive,
     /// The brute force adaptive shading is compared with: --samples importance samples at
     /// every pixel, the same light and estimator, on the CPU.
@@ -154,7 +154,7 @@ pub struct RenderArgs {
     pub rate: f64,
     /// `--method adaptive | brute`: a textured area light (an `.hdr` / `.exr` image, 004
     /// §IV.5.3) as a square facing down above the scene, half as wide as the scene, as high
-    /// above it as it is wide; shaded without visibility.
+    /// above it as it is wide; shaded without visibility, besides the scene's own emitters.
     #[arg(long)]
     pub area_light: Option<PathBuf>,
     /// Radiance scale of --area-light.
