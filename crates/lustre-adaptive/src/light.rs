@@ -154,6 +154,22 @@ impl AreaLight {
     }
 }
 
+/// Errors, saying why, when nothing lights `scene` for adaptive shading: no environment (or a
+/// black one, radiance scale 0) and none of `lights`. A check callers can make before building
+/// the materials' tables ([`crate::shading::ShadingContext::check_lit`] makes it after).
+pub fn check_lit(scene: &lustre_shade::path::PathScene, lights: &[AreaLight]) -> Result<()> {
+    let env_lit = scene.environment.as_ref().is_some_and(|e| e.scale() > 0.0);
+    if env_lit || !lights.is_empty() {
+        Ok(())
+    } else {
+        Err(AdaptiveError::Parameter(
+            "nothing lights the scene: it has no environment and no planar emitter (adaptive \
+             shading lights by the environment and by area lights, 004 ch. IV)"
+                .into(),
+        ))
+    }
+}
+
 /// Texels along the longer side of a scene emitter's light ([`scene_lights`]).
 const EMITTER_TEXELS: usize = 32;
 /// Coverage sub-samples per texel and axis when an emitter is drawn into its light's texture.

@@ -217,15 +217,7 @@ impl<'a, 's> ShadingContext<'a, 's> {
 
     /// Errors, saying why, when nothing lights the scene: no environment and no area light.
     pub fn check_lit(&self) -> Result<()> {
-        if self.lit_by_environment() || !self.lights.is_empty() {
-            Ok(())
-        } else {
-            Err(AdaptiveError::Parameter(
-                "nothing lights the scene: it has no environment and no planar emitter \
-                 (adaptive shading lights by the environment and by area lights, 004 ch. IV)"
-                    .into(),
-            ))
-        }
+        crate::light::check_lit(self.scene, &self.lights)
     }
 
     /// The bandwidth side of the scene's environment (`lustre_freq`'s prediction): its map,

@@ -651,6 +651,15 @@ fn a_textured_material_adds_its_texture_bandwidth_at_the_rate_of_its_uv_mapping(
     );
 }
 
+/// `mesh` (in the plane z = 0, facing +z) turned to face down, 2 m above the origin.
+fn facing_down_at_2m(mut mesh: lustre_scene::mesh::Mesh) -> lustre_scene::mesh::Mesh {
+    mesh.transform(
+        &(glam::DMat4::from_translation(glam::DVec3::new(0.0, 2.0, 0.0))
+            * glam::DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2)),
+    );
+    mesh
+}
+
 /// A Lambertian floor (kd 0.5) lit only by `emitter` (a mesh of radiance 3), no environment.
 fn floor_under(emitter: lustre_scene::mesh::Mesh) -> Scene {
     let (mut scene, _) = lit_floor(None);
@@ -665,11 +674,7 @@ fn floor_under(emitter: lustre_scene::mesh::Mesh) -> Scene {
 fn a_scenes_own_planar_emitters_light_it_as_area_lights() {
     // A 2 × 2 m rectangle emitter 2 m above the origin, facing down, and no environment: the
     // floor's radiance at the origin is ρ L_e F (the form factor of its four 1 × 1 quarters).
-    let mut rect = lustre_scene::mesh::rectangle("panel", 0);
-    rect.transform(
-        &(glam::DMat4::from_translation(glam::DVec3::new(0.0, 2.0, 0.0))
-            * glam::DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2)),
-    );
+    let rect = facing_down_at_2m(lustre_scene::mesh::rectangle("panel", 0));
     let frame = Frame {
         scene: floor_under(rect),
         size: 33,
@@ -691,11 +696,7 @@ fn a_scenes_own_planar_emitters_light_it_as_area_lights() {
     });
     // A disk emitter of radius 1 (Mitsuba's 64-triangle fan) at the same height: drawn into a
     // square light; on its axis the irradiance form factor of a disk, R² / (R² + h²).
-    let mut disk = lustre_scene::mesh::disk("lamp", 0);
-    disk.transform(
-        &(glam::DMat4::from_translation(glam::DVec3::new(0.0, 2.0, 0.0))
-            * glam::DMat4::from_rotation_x(std::f64::consts::FRAC_PI_2)),
-    );
+    let disk = facing_down_at_2m(lustre_scene::mesh::disk("lamp", 0));
     let frame = Frame {
         scene: floor_under(disk),
         size: 33,

@@ -139,6 +139,8 @@ struct Params {
     to_map: [[f32; 4]; 3],
     right: [f32; 4],
     up: [f32; 4],
+    env_lit: u32,
+    _pad: [u32; 3],
 }
 
 #[repr(C)]
@@ -616,12 +618,10 @@ impl AdaptivePass {
             first: 0,
             env: scene.env,
             to_map: m,
-            right: {
-                let mut r = v4(cam.right);
-                r[3] = if scene.env_lit { 1.0 } else { 0.0 };
-                r
-            },
+            right: v4(cam.right),
             up: v4(cam.up),
+            env_lit: u32::from(scene.env_lit),
+            _pad: [0; 3],
         };
 
         self.timer.start(ctx)?;

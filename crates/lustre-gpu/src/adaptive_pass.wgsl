@@ -37,10 +37,15 @@ struct Params {
     to_map0: vec4<f32>,
     to_map1: vec4<f32>,
     to_map2: vec4<f32>,
-    // The camera's right and up (world); in right.w, 1 where the environment lights the
-    // scene, 0 where it is black (no BRDF or environment samples then, as on the CPU).
+    // The camera's right and up (world).
     right: vec4<f32>,
     up: vec4<f32>,
+    // 1 where the environment lights the scene, 0 where it is black (no BRDF or environment
+    // samples then, as on the CPU).
+    env_lit: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 // A pixel of the G-buffer: position (xyz) and depth; the shading frame t, b, n; the direction
@@ -210,7 +215,7 @@ fn shade(s: Surfel, n_in: u32, seed: vec2<u32>, first: u32) -> vec3<f32> {
     let m = materials[bitcast<u32>(s.t.w)];
     material_prepare(m.kind, m.base, vec2<f32>(s.n.w, s.wo.w));
     let n = max(n_in, 1u);
-    let env_lit = params.right.w > 0.5;
+    let env_lit = params.env_lit != 0u;
     let n_f = select(0u, (n + 1u) / 2u, env_lit);
     let n_l = select(0u, n / 2u, env_lit);
     let rot = vec4<f32>(draw_unit(seed, 0u), draw_unit(seed, 1u), draw_unit(seed, 2u),

@@ -133,7 +133,7 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
             weights: BrdfWeights::Evaluated,
             ..Default::default()
         };
-        let (cpu_buffer, differ) = levels_on_both(&gpu_ctx, &g, &shading, &env_bw, options);
+        let (cpu_buffer, differ) = levels_on_both(&gpu_ctx, &g, &shading, &env_bw, options, None);
         let surface = g.surface_pixels();
         eprintln!(
             "bandwidth pass (neural BRDF, MERL, SGD, RGL): levels differ on {differ} of {surface} surface pixels"
@@ -302,17 +302,18 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
 /// and the adaptive frame from `seed` on the CPU and on the GPU, with the uploaded scene and
 /// the pass for more frames.
 /// The bandwidth buffer of `options` on the CPU, and on how many pixels the levels assembled
-/// from the GPU bandwidth pass's predictions (the scene's measured and fitted materials, without
-/// its records) differ from it.
+/// from the GPU bandwidth pass's predictions differ from it (the scene's measured and fitted
+/// materials, and with `scene` its records too).
 fn levels_on_both(
     gpu_ctx: &lustre_gpu::GpuContext,
     g: &GBuffer,
     shading: &lustre_adaptive::shading::ShadingContext,
     env_bw: &EnvironmentBandwidth,
     options: BufferOptions,
+    scene: Option<&lustre_scene::Scene>,
 ) -> (BandwidthBuffer, usize) {
     let cpu_buffer = BandwidthBuffer::build(g, shading, env_bw, options).expect("cpu buffer");
-    let bw_scene = BandwidthScene::from_context(gpu_ctx, shading, env_bw, None).expect("upload");
+    let bw_scene = BandwidthScene::from_context(gpu_ctx, shading, env_bw, scene).expect("upload");
     let (estimates, _) = BandwidthPass::new(gpu_ctx)
         .expect("bandwidth pass")
         .predict(gpu_ctx, &bw_scene, g, shading, options.n_b as u32)
@@ -809,7 +810,7 @@ fn alta_tables_are_shaded_on_the_gpu_as_on_the_cpu() {
             weights: BrdfWeights::Evaluated,
             ..Default::default()
         };
-        let (_, differ) = levels_on_both(&gpu_ctx, &g, &shading, &env_bw, options);
+        let (_, differ) = levels_on_both(&gpu_ctx, &g, &shading, &env_bw, options, None);
         let surface = g.surface_pixels();
         let (scene_gpu, mut pass, cpu, gpu) = adaptive_on_both(&gpu_ctx, &scene, &g, &shading, 13);
         let (rms, over1, over10) = image_difference(&g, &cpu.image, &gpu.image);
@@ -870,20 +871,15 @@ fn the_modern_halls_own_emitters_light_it_on_the_gpu_as_on_the_cpu() {
     assert_eq!(shading.lights.len(), 13);
     let env_bw = shading.environment_bandwidth().expect("env bandwidth");
     // The bandwidth pass: the same levels.
-    let options = BufferOptions::default();
-    let cpu_buffer = BandwidthBuffer::build(&g, &shading, &env_bw, options).expect("cpu buffer");
-    let bw_scene =
-        BandwidthScene::from_context(&gpu_ctx, &shading, &env_bw, Some(&scene)).expect("upload");
-    let (estimates, _) = BandwidthPass::new(&gpu_ctx)
-        .expect("bandwidth pass")
-        .predict(&gpu_ctx, &bw_scene, &g, &shading, options.n_b as u32)
-        .expect("bandwidth pass");
-    let gpu_buffer = BandwidthBuffer::assemble(&g, &estimates, options).expect("gpu buffer");
+    let (_, differ) = levels_on_both(
+        &gpu_ctx,
+        &g,
+        &shading,
+        &env_bw,
+        BufferOptions::default(),
+        Some(&scene),
+    );
     let surface = g.surface_pixels();
-    let differ = (cpu_buffer.level.iter())
-        .zip(&gpu_buffer.level)
-        .filter(|(a, b)| a != b)
-        .count();
     eprintln!("the Hall under its emitters: levels differ on {differ} of {surface} pixels");
     assert!(differ * 200 < surface, "{differ} levels differ");
     // The adaptive frame and brute force.

@@ -23,7 +23,7 @@ use crate::AdaptiveDevice;
 use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BufferOptions, SampleRule};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive};
-use lustre_adaptive::light::scene_lights;
+use lustre_adaptive::light::{check_lit, scene_lights};
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_gpu::adaptive_pass::{AdaptivePass, AdaptiveScene};
@@ -277,12 +277,7 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
         // The scene's planar emitters light it besides its environment (004 §IV.5.3).
         let lights = scene_lights(scene)
             .map_err(|e| anyhow::anyhow!("adaptive shading's area lights: {e}"))?;
-        if scene.environment.is_none() && lights.is_empty() {
-            anyhow::bail!(
-                "nothing lights the scene for adaptive shading: it has no environment and no \
-                 planar emitter (004 ch. IV lights by both): choose another method"
-            );
-        }
+        check_lit(scene, &lights).map_err(|e| anyhow::anyhow!("{e}: choose another method"))?;
         let options = ShadingOptions {
             // Direct lighting (the CLI's default) reads the map itself: no pyramid.
             pyramid_face: 0,

@@ -18,7 +18,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BufferOptions, SampleRule};
 use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute};
-use lustre_adaptive::light::{scene_lights, AreaLight};
+use lustre_adaptive::light::{check_lit, scene_lights, AreaLight};
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_brdf::rgb::Rgb;
 use lustre_freq::pixel::EnvironmentBandwidth;
@@ -92,13 +92,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let mut lights =
         scene_lights(&ps).with_context(|| format!("{}: its emitters", scene.source.display()))?;
     lights.extend(extra_light);
-    if ps.environment.is_none() && lights.is_empty() {
-        bail!(
-            "{}: nothing lights the scene: it has no environment and no planar emitter \
-             (adaptive shading lights by the environment and by area lights, 004 ch. IV)",
-            scene.source.display()
-        );
-    }
+    check_lit(&ps, &lights).with_context(|| scene.source.display().to_string())?;
     let tracer = PathTracer::new(&ps, PathOptions::default())?;
     lap(&mut times, "load, BVH", &mut t);
     let bar = ProgressBar::new(ps.materials.len() as u64);
