@@ -159,6 +159,25 @@ fn gpu_render_matches_cpu_shade_regular() {
             spread: 0.07,
         },
     ];
+    // Six, as `split_suns` now gives a map with several lamps (moonless_golf_1k has five):
+    // the two above and four dimmer ones near the horizon, one of them below it.
+    let six: Vec<Sun> = suns
+        .iter()
+        .copied()
+        .chain(
+            [
+                (0.9, 0.05, 0.4),
+                (-0.8, 0.1, 0.6),
+                (0.2, 0.02, -1.0),
+                (-0.5, -0.05, -0.9),
+            ]
+            .map(|(x, y, z)| Sun {
+                direction: DVec3::new(x, y, z).normalize(),
+                irradiance: [0.6, 0.5, 0.4],
+                spread: 0.008,
+            }),
+        )
+        .collect();
     let env = Environment {
         pyramid: &pyramid,
         irradiance: &irradiance,
@@ -172,6 +191,7 @@ fn gpu_render_matches_cpu_shade_regular() {
         (17, "taps"),
         (7, "sun"),
         (17, "sun"),
+        (17, "six-suns"),
     ] {
         let plans: Vec<MaterialPlan> = scene
             .materials
@@ -181,6 +201,7 @@ fn gpu_render_matches_cpu_shade_regular() {
                     "lattice" => plan_lattice(k, budget),
                     "taps" => plan_tap_lattice(k, budget),
                     "sun" => plan_lattice_sun(k, budget, &suns),
+                    "six-suns" => plan_lattice_sun(k, budget, &six),
                     _ => plan_regular(k, budget, 0.1),
                 }
                 .unwrap_or_else(|e| panic!("{e}"))
