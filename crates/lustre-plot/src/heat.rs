@@ -66,7 +66,8 @@ pub fn heat_map(values: &[f64], width: usize, height: usize, path: &Path) -> Res
 
 /// The colours of a heat map of `values` (8-bit RGB, one triple per value) and its scale: the
 /// inferno colour map over the octaves between the 1st and the 99.9th percentile of the
-/// positive values; zero, negative and non-finite values are black. What [`heat_map`] draws,
+/// positive values; zero, negative and non-finite values are black, and positive values that
+/// span no range (a constant map) take the colour map's middle. What [`heat_map`] draws,
 /// for a caller that shows it itself (the viewer's buffer views).
 pub fn heat_rgb(values: &[f64]) -> (Vec<u8>, HeatScale) {
     let positive = |v: f64| v.is_finite() && v > 0.0;
@@ -84,14 +85,19 @@ pub fn heat_rgb(values: &[f64]) -> (Vec<u8>, HeatScale) {
             high: pick(0.999),
         }
     };
-    let span = (scale.high / scale.low).log2().max(1e-9);
+    let span = (scale.high / scale.low).log2();
+    // Positive values that span no range (a constant map, e.g. a constant sample count) draw at
+    // the colour map's middle, not at its dark end, where they would look like zeros.
+    let flat = span.is_nan() || span <= 1e-9;
     let rgb = values
         .iter()
         .flat_map(|&v| {
-            if positive(v) {
-                colormap((v / scale.low).log2() / span)
-            } else {
+            if !positive(v) {
                 [0, 0, 0]
+            } else if flat {
+                colormap(0.5)
+            } else {
+                colormap((v / scale.low).log2() / span)
             }
         })
         .collect();

@@ -519,4 +519,13 @@ fn heat_colours_in_memory_are_the_png_heat_map() {
     // Not finite or negative: black, not a panic.
     let (rgb, _) = lustre_plot::heat::heat_rgb(&[f64::NAN, -1.0, f64::INFINITY, 2.0]);
     assert_eq!(&rgb[..9], &[0; 9]);
+    // A constant positive map (the adaptive renderer's sample counts under a constant N_p) is
+    // one colour, bright enough to tell from the zeros beside it (it used to draw black).
+    let (rgb, scale) = lustre_plot::heat::heat_rgb(&[16.0, 16.0, 0.0, 16.0]);
+    assert_eq!((scale.low, scale.high), (16.0, 16.0));
+    assert_eq!(&rgb[6..9], &[0, 0, 0]);
+    assert_eq!(&rgb[0..3], &rgb[3..6]);
+    assert_eq!(&rgb[0..3], &rgb[9..12]);
+    let sum: u32 = rgb[0..3].iter().map(|&c| u32::from(c)).sum();
+    assert!(sum > 150, "{:?}", &rgb[0..3]);
 }
