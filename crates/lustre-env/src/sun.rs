@@ -48,6 +48,20 @@ pub struct SunOptions {
     pub fill: SunFill,
 }
 
+impl SunOptions {
+    /// The rule in words, for reports: "threshold T × mean luminance, spread ≤ S°, at least
+    /// P % of ∫Y dω, at most N".
+    pub fn describe(&self) -> String {
+        format!(
+            "threshold {} × mean luminance, spread ≤ {}°, at least {} % of ∫Y dω, at most {}",
+            self.threshold,
+            self.max_spread_deg,
+            100.0 * self.min_share,
+            self.max_suns
+        )
+    }
+}
+
 /// What a sun's texels keep in the residual map.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SunFill {

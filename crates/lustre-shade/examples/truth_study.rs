@@ -561,11 +561,8 @@ fn main() -> Res<()> {
         let _ = writeln!(md, "\n## {map}");
         let _ = writeln!(
             md,
-            "\nSuns split off (threshold {} × mean luminance, spread ≤ {}°, at least {} % of ∫Y dω, at most {}, their texels filled with the sky around them; each shaded as one evaluation of the lobes widened by its spread): {}",
-            SunOptions::default().threshold,
-            SunOptions::default().max_spread_deg,
-            100.0 * SunOptions::default().min_share,
-            SunOptions::default().max_suns,
+            "\nSuns split off ({}, their texels filled with the sky around them; each shaded as one evaluation of the lobes widened by its spread): {}",
+            SunOptions::default().describe(),
             describe_suns(&maps)
         );
         for m in materials

@@ -797,13 +797,9 @@ pub fn describe_suns(setup: &EnvSetup) -> String {
 
 /// The report's line on the suns split off `setup`'s map (for the `lattice + sun` method).
 fn sun_note(setup: &EnvSetup) -> String {
-    let o = SunOptions::default();
     format!(
-        "suns split off (threshold {} × mean luminance, spread ≤ {}°, at least {} % of ∫Y dω, at most {}; `lattice + sun` shades each as one evaluation of the lobes widened by its spread, `kernel::sun_widened`, and reads the residual map with the rest of its budget): {}",
-        o.threshold,
-        o.max_spread_deg,
-        100.0 * o.min_share,
-        o.max_suns,
+        "suns split off ({}; `lattice + sun` shades each as one evaluation of the lobes widened by its spread, `kernel::sun_widened`, and reads the residual map with the rest of its budget): {}",
+        SunOptions::default().describe(),
         describe_suns(setup)
     )
 }
