@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""`lustre bake` and Mitsuba 3 tracing the same number of paths (issue 10 §7).
+"""`lustre bake` and Mitsuba 3 tracing the same number of paths.
 
 Bakes the Modern Hall (the Mitsuba XML) with `lustre bake` at the density, spp and bounces
 asked for; then the same number of paths through the diffuse scene from the scene camera (a

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The walkthrough frame's quality study (issue 11, "What to show"): `lustre render` of a baked
+"""The walkthrough frame's quality study ("What to show"): `lustre render` of a baked
 scene per glossy sample count, regular sampling vs Colbert-Křivánek at equal samples, and
 progressive refinement after 1, 16 and 256 still frames, judged two ways:
 

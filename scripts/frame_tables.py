@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The walkthrough frame's speed in the shape of 000 Tables 4.1 and 4.2 (issue 11, "What to
+"""The walkthrough frame's speed in the shape of 000 Tables 4.1 and 4.2 ("What to
 show"): frames per second at 1680x1050 of the built-in room's benchmark views, the screen full of
 and about half full of view-dependent pixels, on a curved probe object (cameras `curved-full`,
 `curved-half`: Table 4.1, the cube-map approach) and on the planar reflector (`planar-full`,

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""lustre's path tracer and Mitsuba 3 side by side on the Modern Hall (issue 9 §4, §5).
+"""lustre's path tracer and Mitsuba 3 side by side on the Modern Hall.
 
 Renders the Mitsuba XML with `lustre reference` and with Mitsuba 3 (each variant asked for) at
 the same resolution, samples per pixel and maximum depth, one after the other in this process,

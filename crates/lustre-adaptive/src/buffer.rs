@@ -48,7 +48,7 @@ use std::f64::consts::PI;
 pub const NO_LEVEL: u8 = u8::MAX;
 
 /// The default n_b: 8 incident directions per pixel. 004 uses 16; on its five measured
-/// materials' spheres and the line-up (256², royal_esplanade_1k, BENCHMARKS.md "Issue 13, fifth
+/// materials' spheres and the line-up (256², royal_esplanade_1k, BENCHMARKS.md "Adaptive shading, fifth
 /// part") n_b = 8 shaded 17–26 % fewer sphere pixels than 16 (1–11 % on the line-up) at the
 /// same rate and N_p, within −0.06 … +2.25 dB of its PSNR (the prediction's max over the
 /// directions grows with n_b, Fig. IV.17), and its pass took half the time; n_b = 4 lost up to
@@ -61,7 +61,7 @@ pub enum BrdfWeights {
     /// From the material's tabulated CDFs (`TabulatedSampler::brdf_luminance`: the cell's mean
     /// of f) when it has them and no texture varies it; `Bsdf::eval` otherwise.
     Tabulated,
-    /// `Bsdf::eval` (the GPU pass's choice, `lustre_gpu::bandwidth_pass`).
+    /// `Bsdf::eval` (the GPU pass's choice, `lustre_gpu::passes::bandwidth`).
     Evaluated,
 }
 

@@ -262,7 +262,7 @@ fn on_a_measured_paint_under_a_real_sky_adaptive_beats_brute_force_at_equal_samp
         // N_p by the level's coverage (N_0 = 16 at level 0, round(16 · ⅔ · 2^k) at level k):
         // every shaded pixel has its level's count. (On this sphere it does not beat the
         // constant rule at equal samples: 33.92 dB with 98,892 samples at N_0 22 against
-        // 34.66 dB with 101,024; BENCHMARKS.md "Issue 13, ninth part".)
+        // 34.66 dB with 101,024; BENCHMARKS.md "Adaptive shading, ninth part".)
         let fp_buffer = BandwidthBuffer::build(
             g,
             ctx,

@@ -1,4 +1,4 @@
-//! The common battery for the physically based models that real scenes need (issue 9): smooth and
+//! The common battery for the physically based models that real scenes need: smooth and
 //! rough conductor, smooth / rough / thin dielectric, smooth and rough plastic (Mitsuba 3's
 //! formulations), the glTF metallic-roughness BRDF and the two-sided adapter. Chi-square between
 //! `sample` and `pdf` on the part with a density and the frequency of every delta lobe against

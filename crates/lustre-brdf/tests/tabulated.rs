@@ -388,7 +388,7 @@ fn the_tables_luminance_of_f_follows_eval_at_the_bandwidth_pass_directions() {
     // Measured (2026-12-04): 0.8–4.6 % at the directions below 80° but 15.8 % on
     // color-changing-paint3, whose luminance varies inside a cell; 1.5–25 % at 85°; the
     // integrals within 6 % below 80°. What the weights change in the buffer and the image:
-    // `lustre-adaptive/tests/adaptive.rs` and BENCHMARKS.md ("Issue 13, sixth part").
+    // `lustre-adaptive/tests/adaptive.rs` and BENCHMARKS.md ("Adaptive shading, sixth part").
     for (name, rms, worst_albedo, grazing) in results {
         assert!(
             rms < 0.2,

@@ -2,7 +2,7 @@
 //!
 //! A filtered lookup spreads a texel over its footprint: when a source of a few texels holds a
 //! large share of the map's energy and sits in a lobe's tail, the few lookups of a regular
-//! pattern either miss it or smear it over the whole footprint (issue 8's grazing misses are
+//! pattern either miss it or smear it over the whole footprint (the regular-sampling study's grazing misses are
 //! single configurations of this kind). Real-time renderers keep such a source out of the
 //! pre-filtered map and shade it as a directional light; this is that split, energy-exact:
 //!
@@ -23,7 +23,7 @@
 //! A sun is then a directional light of irradiance E (at normal incidence) along its centroid:
 //! L_o = f(ωs, ωo) cos θs E, exact up to the sun's angular spread, which lustre-shade's kernel
 //! folds into the lobe to second order (`kernel::sun_widened`: m'² = m² + spread²/4). Filling with the background
-//! leaves no plateau of T over the sun's disc for the filtered lookups to smear (issue 8's
+//! leaves no plateau of T over the sun's disc for the filtered lookups to smear (the regular-sampling study's
 //! truth harness: the error of `lattice + sun` falls by up to 0.4 points on the maps with a sun
 //! and rises on none; relative RMS over 200 configurations, 256² faces).
 
@@ -80,12 +80,12 @@ impl Default for SunOptions {
             threshold: 64.0,
             // 1.5° until the kernel widened its lobes by the sun's spread; 5° then split
             // royal_esplanade_1k's two bright cloud-lit regions (4.1° and 3.4°) off as well and
-            // lowered the truth harness's error on 3 of its 4 lobes (BENCHMARKS.md, issue 8).
+            // lowered the truth harness's error on 3 of its 4 lobes (BENCHMARKS.md, regular sampling vs the exact integral).
             max_spread_deg: 5.0,
-            // 2 until issue 8's truth harness showed the lamps left in the map carrying the
+            // 2 until the truth harness showed the lamps left in the map carrying the
             // grazing error: moonless_golf_1k's fifth lamp (2.5 % of ∫L dω, at the horizon)
             // and studio_interior's third (3.4 %) are split now; the lamps of 1.1 % and less
-            // raised the error again (BENCHMARKS.md, issue 8, "More suns").
+            // raised the error again (BENCHMARKS.md, "More suns").
             max_suns: 6,
             min_share: 0.015,
             fill: SunFill::Background,

@@ -1,5 +1,5 @@
 //! Timing of one SGD fit, one `metrics::evaluate` and Kurt fits with 1 and 3 lobes on an NBRDF
-//! material (issue 14's goal: an SGD fit ≤ 1 s wall with 2 threads; the times are wall times of
+//! material (the fitting goal: an SGD fit ≤ 1 s wall with 2 threads; the times are wall times of
 //! the whole fit on `RAYON_NUM_THREADS` threads, the default being all cores).
 
 use criterion::{criterion_group, criterion_main, Criterion};

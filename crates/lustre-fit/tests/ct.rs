@@ -154,7 +154,7 @@ fn bad_input_is_an_error() {
 }
 
 /// The SGD fits of a MERL material and an RGL file are those of the code before the speed-ups
-/// of issue 14 (G1 approximation in two phases, cached shadowing, precomputed table
+/// of the fitting speed-ups (G1 approximation in two phases, cached shadowing, precomputed table
 /// coordinates): (ρd, ρs, α, p, F0, F1) per channel recorded from that code, to 1e-6 relative
 /// (1e-9 absolute for values near 0), and the Ngan L2 to 1e-5 relative.
 #[test]

@@ -381,7 +381,7 @@ fn few_levels_report_not_converged() {
     assert_eq!(f.status, FitStatus::NotConverged, "{f:?}");
 }
 
-/// Kurt fits of real data are no worse than with the code before the speed-ups of issue 14
+/// Kurt fits of real data are no worse than with the code before the fitting speed-ups
 /// (the crate's QR-based LM polish on all pairs): the Eq. 3.7 objective of 1 and 2 lobes on an
 /// RGL file and a MERL material at most 0.5 % above the recorded one (measured after the
 /// change: −0.03 %, −3.9 %, +0.004 %, −16 %), and every polish ends with a reason in words.
@@ -452,7 +452,7 @@ fn one_lobe_polish_of_merl_materials_converges() {
     }
 }
 
-/// Issue 14, deliverable 4, on real data (blue-fabric, one lobe): the Eq. 3.7 polish drives the
+/// Eq. 3.7 polish, on real data (blue-fabric, one lobe): the Eq. 3.7 polish drives the
 /// lobe to α = 1, r0 = 1, where f ∝ (cos θi·cos θo)^−1 blows Ngan's L2 up at grazing angles
 /// (4.85 reported before, against 0.646 for the search's result it started from; 0.683 with the
 /// earlier, unconverged polish). Judged by the user's metric (Ngan's L2 and the L1) the reported
@@ -497,7 +497,7 @@ fn kurt_fit_is_never_worse_on_the_users_metric_than_its_search() {
     }
 }
 
-/// Issue 14, deliverable 4 (multi-lobe convergence), on real data: blue-fabric with two lobes.
+/// Multi-lobe convergence, on real data: blue-fabric with two lobes.
 /// The alternation of lobes does not settle in 3 rounds, and the polish stopped at its iteration
 /// limit while its error still fell (docs/results/merl100.md before: NotConverged, Eq. 3.7
 /// 3.8028e-4). The joint polish of all lobes now holds parameters on a bound that the gradient
@@ -524,7 +524,7 @@ fn multi_lobe_polish_converges_where_the_alternation_does_not_settle() {
     assert!(f.objective <= 3.8028e-4, "objective {:.6e}", f.objective);
 }
 
-/// Issue 14, deliverable 3 (physical by construction), on real data: RGL paper_white, whose
+/// Physical by construction, on real data: RGL paper_white, whose
 /// directional albedo stays ≤ 1 in every channel. Its Kurt fits (Ngan's L2 judging, as
 /// `lustre fit --model kurt` and the merl100 example) had a blue albedo of 1.011 (one lobe) and
 /// 1.028 (two lobes) before the albedo bound (docs/results/merl100.md of that run, Ngan L2

@@ -1,4 +1,4 @@
-//! Fitting real measurements robustly (issue 14): unmeasured MERL bins masked by default, the
+//! Fitting real measurements robustly: unmeasured MERL bins masked by default, the
 //! lower-edge bin convention, physical fits, Kurt lobes that never report a worse fit, and the
 //! batch's failure records, on real data from ../shared/data.
 

@@ -10,13 +10,13 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use lustre_brdf::rgb::Rgb;
-use lustre_gpu::frame_shade::FrameShadeOptions;
+use lustre_gpu::passes::frame_shade::FrameShadeOptions;
 use lustre_gpu::{
     FrameShadePass, FrameShadeScene, FrameShadeTarget, GBufferTarget, GpuContext,
     LightmapFrameScene, LightmapRenderer, ShadeTarget,
 };
 use lustre_scene::lightmap::{build_atlas, AtlasOptions};
-use lustre_scene::material::{Distribution, TexturedRgb, TexturedScalar};
+use lustre_scene::material::{MicrofacetType, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind};
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Denoiser};
@@ -41,7 +41,7 @@ fn frame(c: &mut Criterion) {
                     specular: TexturedRgb::constant(Rgb::ONE),
                     alpha_u: TexturedScalar::constant(0.15),
                     alpha_v: TexturedScalar::constant(0.15),
-                    distribution: Distribution::Ggx,
+                    distribution: MicrofacetType::Ggx,
                 },
             );
         }

@@ -8,7 +8,7 @@ use crate::packed::{
     f3, CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, GpuSun, PackedScene,
     LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
 };
-use crate::shade::{GpuEnvironment, GpuRenderer};
+use crate::passes::sphere::{GpuEnvironment, GpuRenderer};
 use lustre_brdf::models::kurt::KurtLobe;
 use lustre_env::CubeMap;
 use lustre_shade::image::Image;

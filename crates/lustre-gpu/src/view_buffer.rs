@@ -8,10 +8,10 @@
 //! `geometry` = level 0 only, two `vec4<f32>` per texel: (position.xyz, 1 if the texel hit a
 //! surface else 0), (normal.xyz, 0).
 
-use crate::compute::buffer_init;
+use crate::bindings::buffer_init;
+use crate::bindings::map_read;
 use crate::context::GpuContext;
 use crate::error::{invalid, wgpu_error, Result};
-use crate::gbuffer::map_read;
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
 use lustre_shade::mirror::{MirrorTexel, ReflectorPlane, ViewBuffer};

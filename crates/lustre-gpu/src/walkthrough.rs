@@ -1,4 +1,4 @@
-//! The walkthrough frame on the GPU (issue 11; 000 §4, Fig. 4.1): the passes of this crate in
+//! The walkthrough frame on the GPU (000 §4, Fig. 4.1): the passes of this crate in
 //! the order a frame needs them, every intermediate staying on the GPU.
 //!
 //! When the scene loads ([`GpuWalkthrough::new`]): every probe object's cube map captured from
@@ -11,8 +11,7 @@
 //! regular, CK or progressive sampling through each material's warp).
 //!
 //! [`GpuFrameSession`] keeps the targets and the per-camera buffers between displayed frames:
-//! at a still camera a progressive refinement adds one QMC frame per step (000 §4.4.2, issue 11
-//! §6) and a regular or CK frame is not re-rendered; motion resets. [`GpuWalkthrough::render`]
+//! at a still camera a progressive refinement adds one QMC frame per step (000 §4.4.2) and a regular or CK frame is not re-rendered; motion resets. [`GpuWalkthrough::render`]
 //! is one fresh session stepped through its frames.
 //!
 //! The CPU frame ([`lustre_shade::frame::render_frame`]) is the same frame from ray casts; each
@@ -21,16 +20,17 @@
 
 use crate::context::GpuContext;
 use crate::error::{invalid, Result};
-use crate::frame_shade::{
-    pack_material, FrameShadeOptions, FrameShadePass, FrameShadeScene, FrameShadeTarget,
+use crate::material::pack_material;
+use crate::passes::frame_shade::{
+    FrameShadeOptions, FrameShadePass, FrameShadeScene, FrameShadeTarget,
 };
-use crate::gbuffer::{GBufferPass, GBufferTarget};
-use crate::lightmap_shade::{LightmapFrameScene, LightmapShadePass, ShadeTarget};
-use crate::probe_capture::{GpuProbe, GpuProbeCapture};
-use crate::pyramid::GpuPyramid;
+use crate::passes::gbuffer::{GBufferPass, GBufferTarget};
+use crate::passes::lightmap_shade::{LightmapFrameScene, LightmapShadePass, ShadeTarget};
+use crate::passes::probe_capture::{GpuProbe, GpuProbeCapture};
+use crate::passes::pyramid::GpuPyramid;
+use crate::passes::view::GpuViewPass;
 use crate::timer::GpuTimer;
 use crate::view_buffer::GpuViewBuffer;
-use crate::view_pass::GpuViewPass;
 use lustre_env::pyramid::CubePyramid;
 use lustre_shade::frame::{view_meshes, FrameMethod, FrameStats, FrameTables, MAX_SAMPLES};
 use lustre_shade::image::Image;
@@ -244,7 +244,7 @@ impl GpuWalkthrough {
         }
     }
 
-    /// Captures the probe of mesh `mesh` again, on request (issue 11: probes are captured when
+    /// Captures the probe of mesh `mesh` again, on request (probes are captured when
     /// the scene loads and on request, not every frame): after its surroundings changed (light
     /// maps, materials) or with other `probe_opts`. A [`GpuFrameSession`] reads the new probe
     /// from its next step on (re-rendering its per-camera inputs, as after a camera move).
@@ -396,7 +396,7 @@ struct Shaded {
     stats: FrameStats,
 }
 
-/// A persistent GPU frame of one [`GpuWalkthrough`] (issue 11 §6; 000 §4.4.2): the targets
+/// A persistent GPU frame of one [`GpuWalkthrough`] (000 §4.4.2): the targets
 /// for a size w×h and supersampling k (G-buffer, light-mapped image, the view-dependent pass's
 /// output and progressive accumulation), the view buffers and the pass inputs built for the
 /// current camera, and what the image holds (samples, method, seed, frames accumulated).

@@ -7,71 +7,101 @@
 //! once and after everything it depends on, then the pass's own source (its bindings, its entry
 //! point, what only it needs). Functions that read the environment take the cube texture and
 //! its sampler as parameters, so one function serves every pass whatever its bindings.
+//!
+//! A module's contract is its header: the first comment block names the module, its CPU twin
+//! and, on `// Requires (the pass defines): fn …` lines, each function the pass that composes it
+//! must define (the buffers a binding-free module reads through: [`PASS_PROVIDED`]); a unit
+//! test holds every module to it. Modules live beside the Rust that owns them: the shared ones
+//! in `wgsl/`, each material kind's in `material/` (some generated from the kinds' registry,
+//! [`Source::Generated`]), the measured BRDFs' beside `measured.rs`.
+
+use crate::material;
+use std::borrow::Cow;
 
 /// One WGSL module: a name (unique), its source and the modules it uses.
 #[derive(Debug)]
 pub struct Module {
-    /// The module's name, `wgsl/<name>.wgsl`.
+    /// The module's name: `<name>.wgsl` beside the Rust file that declares it.
     pub name: &'static str,
     /// The WGSL source: constants, structs and functions only.
-    pub source: &'static str,
+    pub source: Source,
     /// The modules whose declarations the source uses.
     pub deps: &'static [&'static Module],
+}
+
+/// Where a module's text comes from.
+#[derive(Debug)]
+pub enum Source {
+    /// A `.wgsl` file, included at compile time.
+    File(&'static str),
+    /// Generated from Rust tables (the material kinds' codes and dispatch,
+    /// [`crate::material::kinds`]), so that the WGSL and the Rust cannot disagree.
+    Generated(fn() -> String),
+}
+
+impl Module {
+    /// The module's WGSL text.
+    pub fn text(&self) -> Cow<'static, str> {
+        match self.source {
+            Source::File(s) => Cow::Borrowed(s),
+            Source::Generated(f) => Cow::Owned(f()),
+        }
+    }
 }
 
 /// `PI`, the `Material` and `Lobe` records (`packed::GpuMaterial`, `packed::GpuLobe`).
 pub const TYPES: Module = Module {
     name: "types",
-    source: include_str!("wgsl/types.wgsl"),
+    source: Source::File(include_str!("wgsl/types.wgsl")),
     deps: &[],
 };
 
 /// Reflection about a half vector, the tangent-plane mirror, local → world.
 pub const FRAME: Module = Module {
     name: "frame",
-    source: include_str!("wgsl/frame.wgsl"),
+    source: Source::File(include_str!("wgsl/frame.wgsl")),
     deps: &[],
 };
 
 /// The Kurt lobe: Schlick, Beckmann D, the lobe's value (002 Eq. 2–5).
 pub const LOBE: Module = Module {
     name: "lobe",
-    source: include_str!("wgsl/lobe.wgsl"),
+    source: Source::File(include_str!("wgsl/lobe.wgsl")),
     deps: &[&TYPES],
 };
 
 /// Per-sample MIP levels: lobe area, 002 Eq. 16, texel solid angle, footprint level.
 pub const MIP: Module = Module {
     name: "mip",
-    source: include_str!("wgsl/mip.wgsl"),
+    source: Source::File(include_str!("wgsl/mip.wgsl")),
     deps: &[&TYPES, &FRAME],
 };
 
 /// The row lattice: Gaussian quantile, rows, row lengths.
 pub const PATTERN: Module = Module {
     name: "pattern",
-    source: include_str!("wgsl/pattern.wgsl"),
+    source: Source::File(include_str!("wgsl/pattern.wgsl")),
     deps: &[],
 };
 
 /// Regular in-lobe sampling and its weighting: stored-pattern samples, the (tap) row lattice.
 pub const REGULAR: Module = Module {
     name: "regular",
-    source: include_str!("wgsl/regular.wgsl"),
+    source: Source::File(include_str!("wgsl/regular.wgsl")),
     deps: &[&TYPES, &FRAME, &LOBE, &MIP, &PATTERN],
 };
 
 /// Bounding-plane (parallax) correction of cube-map lookups (000 §4.4.1).
 pub const PLANES: Module = Module {
     name: "planes",
-    source: include_str!("wgsl/planes.wgsl"),
+    source: Source::File(include_str!("wgsl/planes.wgsl")),
     deps: &[],
 };
 
 /// Sobol' (0,2) points, SplitMix64 pixel seeds and rotations (000 §4.4.2).
 pub const QMC: Module = Module {
     name: "qmc",
-    source: include_str!("wgsl/qmc.wgsl"),
+    source: Source::File(include_str!("wgsl/qmc.wgsl")),
     deps: &[],
 };
 
@@ -79,7 +109,7 @@ pub const QMC: Module = Module {
 /// rough-conductor lobe's value, pdf and sampling warp (unit Fresnel).
 pub const MICROFACET: Module = Module {
     name: "microfacet",
-    source: include_str!("wgsl/microfacet.wgsl"),
+    source: Source::File(include_str!("wgsl/microfacet.wgsl")),
     deps: &[&TYPES, &FRAME, &PATTERN],
 };
 
@@ -87,172 +117,59 @@ pub const MICROFACET: Module = Module {
 /// levels (`lustre_shade::warp::shade_regular_warp`).
 pub const WARP: Module = Module {
     name: "warp",
-    source: include_str!("wgsl/warp.wgsl"),
+    source: Source::File(include_str!("wgsl/warp.wgsl")),
     deps: &[&TYPES, &FRAME, &MIP, &MICROFACET],
 };
 
 /// The record every BSDF model's sampling returns (`BsdfSample`).
 pub const BSDF_SAMPLE: Module = Module {
     name: "bsdf_sample",
-    source: include_str!("wgsl/bsdf_sample.wgsl"),
+    source: Source::File(include_str!("wgsl/bsdf_sample.wgsl")),
     deps: &[],
 };
 
 /// Dielectric and conductor Fresnel, refraction, `split_uniform`, the cosine lobe.
 pub const FRESNEL: Module = Module {
     name: "fresnel",
-    source: include_str!("wgsl/fresnel.wgsl"),
+    source: Source::File(include_str!("wgsl/fresnel.wgsl")),
     deps: &[&TYPES],
 };
 
-/// Kind 1: the rough conductor.
-pub const ROUGH_CONDUCTOR: Module = Module {
-    name: "rough_conductor",
-    source: include_str!("wgsl/rough_conductor.wgsl"),
-    deps: &[&BSDF_SAMPLE, &FRESNEL, &FRAME, &MICROFACET],
-};
-
-/// Kind 2: the rough plastic (its transmittance table read through the pass's `bsdf_table`).
-pub const ROUGH_PLASTIC: Module = Module {
-    name: "rough_plastic",
-    source: include_str!("wgsl/rough_plastic.wgsl"),
-    deps: &[&BSDF_SAMPLE, &FRESNEL, &FRAME, &MICROFACET],
-};
-
-/// Kind 3: the rough dielectric.
-pub const ROUGH_DIELECTRIC: Module = Module {
-    name: "rough_dielectric",
-    source: include_str!("wgsl/rough_dielectric.wgsl"),
-    deps: &[&BSDF_SAMPLE, &FRESNEL, &FRAME, &MICROFACET],
-};
-
-/// Kind 4: the smooth conductor.
-pub const CONDUCTOR: Module = Module {
-    name: "conductor",
-    source: include_str!("wgsl/conductor.wgsl"),
-    deps: &[&BSDF_SAMPLE, &FRESNEL],
-};
-
-/// Kind 5: the thin dielectric sheet.
-pub const THIN_DIELECTRIC: Module = Module {
-    name: "thin_dielectric",
-    source: include_str!("wgsl/thin_dielectric.wgsl"),
-    deps: &[&BSDF_SAMPLE, &FRESNEL],
-};
-
-/// Kind 6: glTF 2.0 metallic-roughness.
-pub const PBR_METALLIC_ROUGHNESS: Module = Module {
-    name: "pbr_metallic_roughness",
-    source: include_str!("wgsl/pbr_metallic_roughness.wgsl"),
-    deps: &[&BSDF_SAMPLE, &FRESNEL, &FRAME, &MICROFACET],
-};
-
-/// Kind 7: the Lambertian reflector.
-pub const LAMBERT: Module = Module {
-    name: "lambert",
-    source: include_str!("wgsl/lambert.wgsl"),
-    deps: &[&BSDF_SAMPLE, &FRESNEL],
-};
-
-/// Kind 8: the smooth plastic.
-pub const PLASTIC: Module = Module {
-    name: "plastic",
-    source: include_str!("wgsl/plastic.wgsl"),
-    deps: &[&BSDF_SAMPLE, &FRESNEL],
-};
-
-/// Kind 9: the smooth dielectric interface.
-pub const DIELECTRIC: Module = Module {
-    name: "dielectric",
-    source: include_str!("wgsl/dielectric.wgsl"),
-    deps: &[&BSDF_SAMPLE, &FRESNEL],
+/// A visible-normal microfacet lobe beside a cosine lobe: the density and sampled direction of
+/// the rough plastic and the glTF metallic-roughness model.
+pub const GLOSSY_DIFFUSE: Module = Module {
+    name: "glossy_diffuse",
+    source: Source::File(include_str!("wgsl/glossy_diffuse.wgsl")),
+    deps: &[&TYPES, &FRAME, &MICROFACET, &FRESNEL],
 };
 
 /// Component selection, cosine sampling and luminance of the fitted models' mixtures.
 pub const MIXTURE: Module = Module {
     name: "mixture",
-    source: include_str!("wgsl/mixture.wgsl"),
+    source: Source::File(include_str!("wgsl/mixture.wgsl")),
     deps: &[&TYPES, &BSDF_SAMPLE],
 };
 
-/// The Beckmann and GGX Cook-Torrance fits (kinds 17, 18): `cook_torrance_{unpack, eval, pdf,
-/// sample}` (`fit_models::pack_cook_torrance`).
-pub const COOK_TORRANCE: Module = Module {
-    name: "cook_torrance",
-    source: include_str!("wgsl/cook_torrance.wgsl"),
-    deps: &[&TYPES, &FRAME, &MICROFACET, &MIXTURE, &BSDF_SAMPLE],
+/// The CPU's texture lookup (`texture_sample`, `scalar_at`) through the pass's `texture_texel`
+/// and `texture_info`.
+pub const TEXTURE_SAMPLE: Module = Module {
+    name: "texture_sample",
+    source: Source::File(include_str!("wgsl/texture_sample.wgsl")),
+    deps: &[],
 };
 
-/// The SGD Cook-Torrance fits (kind 16): `sgd_{unpack, eval, pdf, sample}`, the f32 upper
-/// incomplete gamma (`fit_models::pack_sgd`).
-pub const SGD: Module = Module {
-    name: "sgd",
-    source: include_str!("wgsl/sgd.wgsl"),
-    deps: &[&COOK_TORRANCE],
-};
-
-/// The Kurt model with reflection and transmission lobes as a whole BSDF (kind 19):
-/// `kurt_{unpack, eval, pdf, sample}` (`fit_models::pack_kurt`).
-pub const KURT: Module = Module {
-    name: "kurt",
-    source: include_str!("wgsl/kurt.wgsl"),
-    deps: &[&TYPES, &FRAME, &LOBE, &MIXTURE, &BSDF_SAMPLE],
-};
-
-/// The `GpuBsdf` record and the dispatch by kind to the models' sample / eval / pdf.
-pub const BSDF: Module = Module {
-    name: "bsdf",
-    source: include_str!("wgsl/bsdf.wgsl"),
-    deps: &[
-        &ROUGH_CONDUCTOR,
-        &ROUGH_PLASTIC,
-        &ROUGH_DIELECTRIC,
-        &CONDUCTOR,
-        &THIN_DIELECTRIC,
-        &PBR_METALLIC_ROUGHNESS,
-        &LAMBERT,
-        &PLASTIC,
-        &DIELECTRIC,
-        &SGD,
-        &COOK_TORRANCE,
-        &KURT,
-    ],
-};
-
-/// lustre's analytic models bsdf.wgsl does not have (Oren–Nayar, Phong, Blinn–Phong, the Ward
-/// variants, Lafortune, Ashikhmin–Shirley, ABC, Cook–Torrance per channel), evaluation only, and
-/// `record_eval`: a record of those passes that take any material (`analytic::pack_analytic`).
-pub const ANALYTIC: Module = Module {
-    name: "analytic",
-    source: include_str!("wgsl/analytic.wgsl"),
-    deps: &[&TYPES, &COOK_TORRANCE, &BSDF],
-};
-
-/// A material's textured parameters and normal map at a pixel: `textured_bsdf` (the record with
-/// its parameters at the pixel), `tangent_space_normal`, `mapped_normal`.
-pub const TEXTURED: Module = Module {
-    name: "textured",
-    source: include_str!("wgsl/textured.wgsl"),
-    deps: &[&BSDF],
-};
-
-/// The CPU's texture lookup (`texture_sample`, `scalar_at`) over a shader's own `texels` and
-/// `tex_info` bindings: prepended to the passes that read textures, not a binding-free module.
-pub const TEXTURE_SAMPLE_WGSL: &str = include_str!("texture_sample.wgsl");
-
-/// Measured BRDFs: MERL tables (trilinear, missing bins left out) and tabulated-CDF importance
-/// sampling (004 §IV.4.3), read from the pass's `bsdf_table`.
-pub const MEASURED: Module = Module {
-    name: "measured",
-    source: include_str!("wgsl/measured.wgsl"),
-    deps: &[&TYPES, &FRESNEL],
+/// A material's diffuse albedo at a hit (`albedo`) through the pass's `material_row`.
+pub const MATERIAL_ALBEDO: Module = Module {
+    name: "material_albedo",
+    source: Source::File(include_str!("wgsl/material_albedo.wgsl")),
+    deps: &[&TEXTURE_SAMPLE],
 };
 
 /// Frequency analysis (004 §IV.3): one-bounce bandwidth of a distant light, the n_b
 /// directions, BRDF bandwidth cells.
 pub const FREQUENCY: Module = Module {
     name: "frequency",
-    source: include_str!("wgsl/frequency.wgsl"),
+    source: Source::File(include_str!("wgsl/frequency.wgsl")),
     deps: &[&TYPES],
 };
 
@@ -260,7 +177,7 @@ pub const FREQUENCY: Module = Module {
 /// its density, read through the pass's `env_texel` and `env_table`.
 pub const ENV_LIGHT: Module = Module {
     name: "env_light",
-    source: include_str!("wgsl/env_light.wgsl"),
+    source: Source::File(include_str!("wgsl/env_light.wgsl")),
     deps: &[&TYPES],
 };
 
@@ -268,19 +185,32 @@ pub const ENV_LIGHT: Module = Module {
 /// trilinear lookups, read through the pass's `cube_texel`, `cube_level` and `cube_ring`.
 pub const CUBE_STORAGE: Module = Module {
     name: "cube_storage",
-    source: include_str!("wgsl/cube_storage.wgsl"),
+    source: Source::File(include_str!("wgsl/cube_storage.wgsl")),
     deps: &[],
 };
 
 /// Textured parallelogram emitters: the record, a point, the texel of a point.
 pub const AREA_LIGHT: Module = Module {
     name: "area_light",
-    source: include_str!("wgsl/area_light.wgsl"),
+    source: Source::File(include_str!("wgsl/area_light.wgsl")),
     deps: &[],
 };
 
+/// The functions a binding-free module may ask its pass to define (its `Requires` lines).
+pub const PASS_PROVIDED: [&str; 9] = [
+    "bsdf_table",
+    "texture_texel",
+    "texture_info",
+    "material_row",
+    "env_texel",
+    "env_table",
+    "cube_texel",
+    "cube_level",
+    "cube_ring",
+];
+
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 33] = [
+pub const ALL: [&Module; 39] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -293,27 +223,33 @@ pub const ALL: [&Module; 33] = [
     &WARP,
     &BSDF_SAMPLE,
     &FRESNEL,
-    &ROUGH_CONDUCTOR,
-    &ROUGH_PLASTIC,
-    &ROUGH_DIELECTRIC,
-    &CONDUCTOR,
-    &THIN_DIELECTRIC,
-    &PBR_METALLIC_ROUGHNESS,
-    &LAMBERT,
-    &PLASTIC,
-    &DIELECTRIC,
+    &GLOSSY_DIFFUSE,
+    &material::kinds::RECORD,
+    &material::textured::PARAMS,
+    &material::rough_conductor::MODULE,
+    &material::rough_plastic::MODULE,
+    &material::rough_dielectric::MODULE,
+    &material::conductor::MODULE,
+    &material::thin_dielectric::MODULE,
+    &material::pbr_metallic_roughness::MODULE,
+    &material::lambert::MODULE,
+    &material::plastic::MODULE,
+    &material::dielectric::MODULE,
     &MIXTURE,
-    &COOK_TORRANCE,
-    &SGD,
-    &KURT,
-    &BSDF,
-    &ANALYTIC,
-    &TEXTURED,
-    &MEASURED,
+    &material::cook_torrance::MODULE,
+    &material::sgd::MODULE,
+    &material::kurt::MODULE,
+    &material::kinds::BSDF,
+    &material::analytic::MODULE,
+    &material::kinds::ANALYTIC,
+    &material::kinds::TEXTURED,
+    &crate::material::measured::MEASURED,
     &FREQUENCY,
     &ENV_LIGHT,
     &CUBE_STORAGE,
     &AREA_LIGHT,
+    &TEXTURE_SAMPLE,
+    &MATERIAL_ALBEDO,
 ];
 
 /// The source of a pass: every module in `imports` and, transitively, the modules they use,
@@ -329,8 +265,9 @@ pub fn compose(imports: &[&Module], pass: &str) -> String {
         out.push_str("// ---------------------------------------------------------------- module ");
         out.push_str(m.name);
         out.push_str(".wgsl\n");
-        out.push_str(m.source);
-        if !m.source.ends_with('\n') {
+        let text = m.text();
+        out.push_str(&text);
+        if !text.ends_with('\n') {
             out.push('\n');
         }
         out.push('\n');
@@ -374,12 +311,34 @@ mod tests {
         assert!(at("qmc") < src.find("// the pass").unwrap_or(0));
     }
 
+    /// Every module that calls a pass-provided function says so in its header, with the
+    /// signature, and names nothing it does not call.
+    #[test]
+    fn module_contracts_are_written_in_their_headers() {
+        for m in ALL {
+            let text = m.text();
+            let header: Vec<&str> = text.lines().take_while(|l| l.starts_with("//")).collect();
+            for f in PASS_PROVIDED {
+                let calls = text
+                    .lines()
+                    .filter(|l| !l.trim_start().starts_with("//"))
+                    .any(|l| l.contains(&format!("{f}(")));
+                let declared = header.iter().any(|l| {
+                    l.starts_with("// Requires (the pass defines): ")
+                        && l.contains(&format!("fn {f}("))
+                });
+                assert_eq!(calls, declared, "{}: {f}", m.name);
+            }
+        }
+    }
+
     #[test]
     fn module_names_are_unique_and_match_their_files() {
         for (i, a) in ALL.iter().enumerate() {
             assert!(ALL[i + 1..].iter().all(|b| b.name != a.name), "{}", a.name);
             // The header names the module.
-            let first = a.source.lines().next().unwrap_or("");
+            let text = a.text();
+            let first = text.lines().next().unwrap_or("");
             assert!(
                 first.starts_with(&format!("// module {}:", a.name)),
                 "{first}"

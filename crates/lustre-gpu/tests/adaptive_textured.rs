@@ -18,9 +18,9 @@ use lustre_adaptive::gbuffer::{GBuffer, GPixel};
 use lustre_adaptive::hierarchy::render_adaptive;
 use lustre_adaptive::shading::Lighting;
 use lustre_brdf::rgb::Rgb;
-use lustre_gpu::adaptive_pass::{AdaptivePass, AdaptiveScene};
-use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthScene};
-use lustre_scene::material::{Distribution, NormalMap, TextureRef, TexturedRgb, TexturedScalar};
+use lustre_gpu::passes::adaptive::{AdaptivePass, AdaptiveScene};
+use lustre_gpu::passes::bandwidth::{BandwidthPass, BandwidthScene};
+use lustre_scene::material::{MicrofacetType, NormalMap, TextureRef, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind, Scene};
 use lustre_shade::image::Image;
 
@@ -54,7 +54,7 @@ fn textured_line_up() -> Scene {
                 factor: 0.6,
                 ..scalar(0, 1)
             },
-            distribution: Distribution::Ggx,
+            distribution: MicrofacetType::Ggx,
             int_ior: 1.5,
             ext_ior: 1.0,
             nonlinear: false,

@@ -1,5 +1,5 @@
 //! lustre's analytic models on the GPU (`wgsl/analytic.wgsl`'s `record_eval`, packed by
-//! `lustre_gpu::analytic::pack_analytic` from what `lustre_brdf::catalog::resolve` returns)
+//! `lustre_gpu::material::analytic::pack_analytic` from what `lustre_brdf::catalog::resolve` returns)
 //! against their CPU twins' `Bsdf::eval`: every reflection model of the catalog, several
 //! parameter sets each (isotropic and anisotropic, rough and near-specular, the published
 //! `lafortune:` and `abc:` fits, `twosided:` seen from below), on random pairs and pairs near
@@ -15,8 +15,8 @@ use lustre_brdf::microfacet::smith::SgdG1Approx;
 use lustre_brdf::models::cook_torrance::{CookTorrance, CtChannel, G1Model};
 use lustre_brdf::sampling::SplitMix64;
 use lustre_brdf::Bsdf;
-use lustre_gpu::analytic::pack_analytic;
-use lustre_gpu::wgsl::{self, Module};
+use lustre_gpu::material::analytic::pack_analytic;
+use lustre_gpu::wgsl::{Module, Source};
 
 mod common;
 use common::ctx;
@@ -25,7 +25,7 @@ use common::kernel::{f32_round, run_kernel};
 /// The side table of the test kernel: the first words of its `input`.
 const TABLE: Module = Module {
     name: "test_table",
-    source: "fn bsdf_table(i: u32) -> f32 {\n    return bitcast<f32>(input[i]);\n}\n",
+    source: Source::File("fn bsdf_table(i: u32) -> f32 {\n    return bitcast<f32>(input[i]);\n}\n"),
     deps: &[],
 };
 
@@ -221,7 +221,7 @@ fn every_analytic_reflection_model_matches_its_cpu_twin() {
     let t = std::time::Instant::now();
     let out = run_kernel(
         &ctx,
-        &[&TABLE, &wgsl::ANALYTIC],
+        &[&TABLE, &lustre_gpu::material::ANALYTIC],
         &body,
         &input,
         3 * count,

@@ -6,10 +6,10 @@
 use lustre_adaptive::buffer::{
     predict_pixels, BandwidthBuffer, BrdfWeights, BufferOptions, SampleRule,
 };
-use lustre_gpu::bandwidth_pass::{
+use lustre_gpu::material::measured::MeasuredBrdf;
+use lustre_gpu::passes::bandwidth::{
     BandwidthPass, BandwidthPixel, BandwidthScene, DIRECTIONS_PER_DISPATCH,
 };
-use lustre_gpu::measured::MeasuredBrdf;
 
 mod common;
 use common::{ctx, line_up};

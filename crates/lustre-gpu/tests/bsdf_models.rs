@@ -16,13 +16,13 @@ use lustre_brdf::models::rough_dielectric::RoughDielectric;
 use lustre_brdf::models::rough_plastic::RoughPlastic;
 use lustre_brdf::models::thin_dielectric::ThinDielectric;
 use lustre_brdf::rgb::Rgb;
-use lustre_gpu::frame_shade::{
-    evaluate_models, pack_conductor, pack_dielectric, pack_lambert, pack_pbr_metallic_roughness,
-    pack_plastic, pack_rough_conductor, pack_rough_dielectric, pack_rough_plastic,
-    pack_thin_dielectric, rough_plastic_table, GpuBsdf, ModelCase, FLAG_DELTA_ONLY,
-    FLAG_DIFFUSE_ONLY, KIND_CONDUCTOR, KIND_DIELECTRIC, KIND_LAMBERT, KIND_PBR_METALLIC_ROUGHNESS,
-    KIND_PLASTIC, KIND_ROUGH_CONDUCTOR, KIND_ROUGH_DIELECTRIC, KIND_ROUGH_PLASTIC,
-    KIND_THIN_DIELECTRIC,
+use lustre_gpu::material::harness::{evaluate_models, ModelCase};
+use lustre_gpu::material::{
+    pack_conductor, pack_dielectric, pack_lambert, pack_pbr_metallic_roughness, pack_plastic,
+    pack_rough_conductor, pack_rough_dielectric, pack_rough_plastic, pack_thin_dielectric,
+    rough_plastic_table, GpuBsdf, FLAG_DELTA_ONLY, FLAG_DIFFUSE_ONLY, KIND_CONDUCTOR,
+    KIND_DIELECTRIC, KIND_LAMBERT, KIND_PBR_METALLIC_ROUGHNESS, KIND_PLASTIC, KIND_ROUGH_CONDUCTOR,
+    KIND_ROUGH_DIELECTRIC, KIND_ROUGH_PLASTIC, KIND_THIN_DIELECTRIC,
 };
 use lustre_gpu::GpuContext;
 

@@ -1,5 +1,5 @@
 //! The fitted models on the GPU (`wgsl/{sgd, cook_torrance, kurt}.wgsl`, packed by
-//! `lustre_gpu::fit_models`) against their CPU twins on real fits: the published SGD fits of
+//! `lustre_gpu::material::fitted`) against their CPU twins on real fits: the published SGD fits of
 //! the shared data, the SGD fits `lustre fit` wrote into docs/results/fits-004, Beckmann and GGX
 //! fits of a MERL material made here with `lustre_fit::ct::fit`, and the Kurt catalog models
 //! (anisotropic `kurt-demo`, transmissive `kurt-glass`). Per model: eval, pdf and sample over a
@@ -13,7 +13,9 @@ use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::fits::sgd::SgdFits;
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::{uniform_sphere, SplitMix64};
-use lustre_gpu::fit_models::{fit_kd, pack_fit, FitParams, KIND_SGD, KURT_MAX_LOBES};
+use lustre_gpu::material::fitted::{fit_kd, pack_fit};
+use lustre_gpu::material::kurt::KURT_MAX_LOBES;
+use lustre_gpu::material::{cook_torrance, kurt, sgd, RecordParams, KIND_SGD};
 use lustre_gpu::wgsl;
 use lustre_shade::warp::{fibonacci_point, integrate_warp};
 use std::collections::BTreeMap;
@@ -116,7 +118,7 @@ const MAT_WORDS: usize = 33;
 fn material_words(cases: &[Case]) -> Vec<u32> {
     let mut input = Vec::new();
     for c in cases {
-        let (kind, p): (u32, FitParams) =
+        let (kind, p): (u32, RecordParams) =
             pack_fit(c.bsdf.as_ref()).unwrap_or_else(|e| panic!("{}: {e}", c.name));
         input.push(kind);
         input.extend(p.iter().flatten().map(|v| v.to_bits()));
@@ -248,7 +250,7 @@ fn fitted_models_match_their_cpu_twins() {
     let start = std::time::Instant::now();
     let out = run_kernel(
         &ctx,
-        &[&wgsl::SGD, &wgsl::COOK_TORRANCE, &wgsl::KURT],
+        &[&sgd::MODULE, &cook_torrance::MODULE, &kurt::MODULE],
         &body,
         &input,
         n * Q_OUT,
@@ -408,7 +410,12 @@ fn regular_warp_albedo_matches_integrate_warp() {
     );
     let out = run_kernel(
         &ctx,
-        &[&wgsl::SGD, &wgsl::COOK_TORRANCE, &wgsl::KURT, &wgsl::WARP],
+        &[
+            &sgd::MODULE,
+            &cook_torrance::MODULE,
+            &kurt::MODULE,
+            &wgsl::WARP,
+        ],
         &body,
         &input,
         n * I_OUT,
@@ -524,7 +531,7 @@ fn upper_gamma_matches_the_cpu() {
     let n = pts.len();
     let body = "output[i] = bitcast<u32>(upper_gamma_f32(bitcast<f32>(input[2u * i]), \
                 bitcast<f32>(input[2u * i + 1u])));";
-    let out = run_kernel(&ctx, &[&wgsl::SGD], body, &input, n, n as u32, None);
+    let out = run_kernel(&ctx, &[&sgd::MODULE], body, &input, n, n as u32, None);
     let mut worst = (0.0f64, 0.0, 0.0);
     for (k, &(s, x, want)) in pts.iter().enumerate() {
         let gpu = f64::from(f32::from_bits(out[k]));

@@ -2,7 +2,7 @@
 //! CPU twin `shade_gbuffer_view_dependent`, on the same read-back G-buffer of the built-in room
 //! (light maps baked small and fast, probes captured on the CPU at 32² and uploaded, the floor's
 //! mirror buffer and the frosted glass's see-through buffer uploaded): regular, CK and 4
-//! progressive frames at ≥ 90 dB on lavapipe (issue 11 §7), and at 4×4 supersampling with the
+//! progressive frames at ≥ 90 dB on lavapipe, and at 4×4 supersampling with the
 //! largest sample budget. The room's fitted gold sphere (`MaterialKind::Spec`, gpu-fits'
 //! models) is given a GPU-shadable stand-in: a rough gold conductor. Fails (does not skip)
 //! without an adapter.
@@ -10,14 +10,13 @@
 mod common;
 use common::{ctx, quick_bake};
 use lustre_brdf::rgb::Rgb;
-use lustre_gpu::frame_shade::{
-    pack_material, FrameShadeOptions, FLAG_NORMAL_MAPPED, FLAG_TEXTURED, KIND_ROUGH_PLASTIC,
-};
+use lustre_gpu::material::{pack_material, FLAG_NORMAL_MAPPED, FLAG_TEXTURED, KIND_ROUGH_PLASTIC};
+use lustre_gpu::passes::frame_shade::FrameShadeOptions;
 use lustre_gpu::{
     FrameShadePass, FrameShadeScene, FrameShadeTarget, GBufferTarget, GpuViewBuffer,
     LightmapFrameScene, LightmapRenderer, ShadeTarget,
 };
-use lustre_scene::material::{Distribution, TexturedRgb, TexturedScalar};
+use lustre_scene::material::{MicrofacetType, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind};
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::spec_albedo;
@@ -51,7 +50,7 @@ fn room() -> lustre_scene::Scene {
                     specular: TexturedRgb::constant(Rgb::ONE),
                     alpha_u: TexturedScalar::constant(0.15),
                     alpha_v: TexturedScalar::constant(0.15),
-                    distribution: Distribution::Ggx,
+                    distribution: MicrofacetType::Ggx,
                 },
             );
         }
@@ -244,9 +243,9 @@ fn materials_the_gpu_cannot_shade_are_named() {
         .find(|m| matches!(m.kind, MaterialKind::Spec(_)))
         .expect("the fitted gold");
     // The fitted gold packs as the SGD model (kind 16); a fit whose normalisation the GPU does
-    // not reproduce (the published chrome, fit_models::pack_sgd) is refused by name.
+    // not reproduce (the published chrome, material::sgd::pack_sgd) is refused by name.
     let packed = pack_material(gold, &mut vec![]).expect("the SGD fit packs");
-    assert_eq!(packed.kind, lustre_gpu::fit_models::KIND_SGD);
+    assert_eq!(packed.kind, lustre_gpu::material::KIND_SGD);
     let chrome = lustre_scene::Material::new(
         "chrome",
         MaterialKind::Spec(
@@ -270,7 +269,7 @@ fn materials_the_gpu_cannot_shade_are_named() {
     }
     let mut grid = vec![1.0f32; 3];
     let r = pack_material(&rough, &mut grid).expect("a textured-roughness rough plastic");
-    assert_ne!(r.flags & lustre_gpu::frame_shade::FLAG_TEXTURED, 0);
+    assert_ne!(r.flags & lustre_gpu::material::FLAG_TEXTURED, 0);
     assert_eq!(
         (r.p[3][0], r.p[3][3]),
         (3.0, 1.0),

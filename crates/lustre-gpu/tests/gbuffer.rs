@@ -3,7 +3,7 @@
 //! - visibility: the GPU's triangle ids against ray casting (`PathTracer::intersect`) at the
 //!   pixel centres; only edge pixels may differ (raster rules vs the watertight ray test);
 //! - shading: `lightmap_shade.wgsl` against `shade_gbuffer` on the GPU's own G-buffer
-//!   (≥ 90 dB on lavapipe, issue 11 item 7);
+//!   (≥ 90 dB on lavapipe);
 //! - the whole frame against the CPU frame at the same sample positions;
 //! - k×k supersampling against the jittered, converged CPU image;
 //! - bad input. Fails (does not skip) without an adapter.

@@ -14,8 +14,8 @@ use lustre_brdf::models::ward::Ward;
 use lustre_brdf::sampling::SplitMix64;
 use lustre_brdf::tabulated::{TabulatedOptions, TabulatedSampler};
 use lustre_brdf::{Bsdf, Rgb};
-use lustre_gpu::measured::{pack_alta, pack_merl, pack_nbrdf, pack_rgl, pack_tabulated};
-use lustre_gpu::wgsl::{self, Module};
+use lustre_gpu::material::measured::{pack_alta, pack_merl, pack_nbrdf, pack_rgl, pack_tabulated};
+use lustre_gpu::wgsl::{Module, Source};
 use lustre_gpu::GpuContext;
 
 mod common;
@@ -25,7 +25,7 @@ use common::kernel::{pairs, run_kernel, upper};
 /// The side table of the test kernel: the first words of its `input`.
 const TABLE: Module = Module {
     name: "test_table",
-    source: "fn bsdf_table(i: u32) -> f32 {\n    return bitcast<f32>(input[i]);\n}\n",
+    source: Source::File("fn bsdf_table(i: u32) -> f32 {\n    return bitcast<f32>(input[i]);\n}\n"),
     deps: &[],
 };
 
@@ -105,7 +105,7 @@ fn nbrdf_eval_matches_the_cpu_on_the_five_materials_of_004() {
         push_pairs(&mut input, &pairs);
         let out = run_kernel(
             &ctx,
-            &[&TABLE, &wgsl::MEASURED],
+            &[&TABLE, &lustre_gpu::material::measured::MEASURED],
             &eval_body(q, "nbrdf_eval(0u, wi, wo)"),
             &input,
             3 * n,
@@ -147,7 +147,7 @@ fn merl_eval_and_tabulated_sampling_match_the_cpu() {
     );
     let out = run_kernel(
         &ctx,
-        &[&TABLE, &wgsl::MEASURED],
+        &[&TABLE, &lustre_gpu::material::measured::MEASURED],
         &eval_body(q, &call),
         &input,
         3 * n,
@@ -207,7 +207,7 @@ fn tabulated_parity(
     );
     let out = run_kernel(
         ctx,
-        &[&TABLE, &wgsl::MEASURED],
+        &[&TABLE, &lustre_gpu::material::measured::MEASURED],
         &body,
         &input,
         6 * n,
@@ -305,7 +305,7 @@ fn rgl_eval_matches_the_cpu_on_the_shared_rgl_measurements() {
         push_pairs(&mut input, &pairs);
         let out = run_kernel(
             &ctx,
-            &[&TABLE, &wgsl::MEASURED],
+            &[&TABLE, &lustre_gpu::material::measured::MEASURED],
             &eval_body(q, "rgl_eval(0u, wi, wo)"),
             &input,
             3 * n,
@@ -359,7 +359,7 @@ fn alta_eval_matches_the_cpu_on_the_shared_goniometric_measurements() {
         push_pairs(&mut input, &pairs);
         let out = run_kernel(
             &ctx,
-            &[&TABLE, &wgsl::MEASURED],
+            &[&TABLE, &lustre_gpu::material::measured::MEASURED],
             &eval_body(q, "alta_eval(0u, wi, wo)"),
             &input,
             3 * n,

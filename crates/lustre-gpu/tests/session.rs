@@ -1,4 +1,4 @@
-//! The persistent GPU frame (`GpuFrameSession`, issue 11 §6) on the built-in room: F still steps
+//! The persistent GPU frame (`GpuFrameSession`) on the built-in room: F still steps
 //! of a progressive refinement give the image of one `GpuWalkthrough::render` with F frames; a
 //! moved camera resets to a fresh first frame; a new size or supersampling reallocates and
 //! renders that size; a still regular frame runs no pass and keeps its image; bad options are

@@ -16,9 +16,8 @@ mod common;
 use common::textures::{scalar, textured_gltf, textured_gold, textures, untextured};
 use common::{ctx, quick_bake};
 use lustre_brdf::rgb::Rgb;
-use lustre_gpu::frame_shade::{
-    pack_material, FrameShadeOptions, FLAG_NORMAL_MAPPED, FLAG_TEXTURED,
-};
+use lustre_gpu::material::{pack_material, FLAG_NORMAL_MAPPED, FLAG_TEXTURED};
+use lustre_gpu::passes::frame_shade::FrameShadeOptions;
 use lustre_gpu::{
     FrameShadePass, FrameShadeScene, FrameShadeTarget, GBufferTarget, GpuViewBuffer,
     LightmapFrameScene, LightmapRenderer, ShadeTarget,

@@ -13,7 +13,7 @@
 mod common;
 use common::{ctx, frame_buffers, quick_bake};
 use lustre_brdf::rgb::Rgb;
-use lustre_gpu::frame_shade::{pack_material, FLAG_TEXTURED};
+use lustre_gpu::material::{pack_material, FLAG_TEXTURED};
 use lustre_gpu::{GpuContext, GpuFrame, GpuFrameOptions, GpuWalkthrough, LightmapFrameScene};
 use lustre_scene::{Material, MaterialKind, ResolvedSpec, Scene};
 use lustre_shade::bake::render::Lightmapped;

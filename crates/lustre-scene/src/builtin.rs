@@ -7,7 +7,7 @@
 use crate::camera::{Camera, CameraPath, FovAxis, Keyframe};
 use crate::environment::{Environment, EnvironmentSource, Sky};
 use crate::material::{
-    Distribution, Material, MaterialKind, ResolvedSpec, TexturedRgb, TexturedScalar,
+    Material, MaterialKind, MicrofacetType, ResolvedSpec, TexturedRgb, TexturedScalar,
 };
 use crate::mesh::Mesh;
 use crate::{Film, Result, Scene, SceneError};
@@ -97,7 +97,7 @@ pub fn room() -> Result<Scene> {
                 diffuse: TexturedRgb::constant(Rgb([0.22, 0.14, 0.09])),
                 specular: Rgb::ONE,
                 alpha: TexturedScalar::constant(0.04),
-                distribution: Distribution::Ggx,
+                distribution: MicrofacetType::Ggx,
                 int_ior: 1.5,
                 ext_ior: 1.0,
                 nonlinear: false,
@@ -117,7 +117,7 @@ pub fn room() -> Result<Scene> {
                 specular: TexturedRgb::constant(Rgb::ONE),
                 alpha_u: TexturedScalar::constant(0.3),
                 alpha_v: TexturedScalar::constant(0.04),
-                distribution: Distribution::Ggx,
+                distribution: MicrofacetType::Ggx,
             },
         ),
         Material::new(
@@ -126,7 +126,7 @@ pub fn room() -> Result<Scene> {
                 int_ior: 1.5,
                 ext_ior: 1.0,
                 alpha: TexturedScalar::constant(0.2),
-                distribution: Distribution::Ggx,
+                distribution: MicrofacetType::Ggx,
                 specular_reflectance: Rgb::ONE,
                 specular_transmittance: Rgb::ONE,
             },

@@ -58,7 +58,7 @@ pub use glam::{Vec2, Vec3, Vec4};
 pub use lightmap::{AtlasSource, LightmapAtlas, SceneLightmap};
 pub use lustre_brdf::Rgb;
 pub use material::{
-    AlphaMask, Distribution, Material, MaterialKind, NormalMap, ResolvedSpec, TextureRef,
+    AlphaMask, Material, MaterialKind, MicrofacetType, NormalMap, ResolvedSpec, TextureRef,
     TexturedRgb, TexturedScalar,
 };
 pub use mesh::{Mesh, ObjectHints};

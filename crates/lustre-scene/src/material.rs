@@ -9,7 +9,8 @@
 use crate::error::{Result, SceneError};
 use crate::texture::Texture;
 use glam::Vec2;
-use lustre_brdf::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
+use lustre_brdf::microfacet::distribution::MicrofacetDistribution;
+pub use lustre_brdf::microfacet::distribution::MicrofacetType;
 use lustre_brdf::models::conductor::{ComplexIor, Conductor};
 use lustre_brdf::models::dielectric::Dielectric;
 use lustre_brdf::models::lambert::Lambert;
@@ -108,15 +109,6 @@ fn lookup(textures: &[Texture], t: TextureRef, uv: &[Vec2; 2]) -> Option<[f32; 4
     Some(tex.sample(p.x, p.y))
 }
 
-/// Microfacet distribution of a rough model.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Distribution {
-    /// Beckmann (Mitsuba's default).
-    Beckmann,
-    /// GGX / Trowbridge–Reitz.
-    Ggx,
-}
-
 /// The scattering model of a material and its (possibly textured) parameters. Parameter meanings
 /// and defaults follow Mitsuba's plugins of the same names; `alpha` is the microfacet roughness
 /// (Mitsuba's `alpha`, not perceptual roughness).
@@ -149,7 +141,7 @@ pub enum MaterialKind {
         /// Microfacet roughness.
         alpha: TexturedScalar,
         /// Microfacet distribution.
-        distribution: Distribution,
+        distribution: MicrofacetType,
         /// Interior index of refraction.
         int_ior: f64,
         /// Exterior index of refraction.
@@ -179,7 +171,7 @@ pub enum MaterialKind {
         /// Roughness along the bitangent.
         alpha_v: TexturedScalar,
         /// Microfacet distribution.
-        distribution: Distribution,
+        distribution: MicrofacetType,
     },
     /// Smooth glass interface.
     Dielectric {
@@ -201,7 +193,7 @@ pub enum MaterialKind {
         /// Microfacet roughness.
         alpha: TexturedScalar,
         /// Microfacet distribution.
-        distribution: Distribution,
+        distribution: MicrofacetType,
         /// Scale of the reflection.
         specular_reflectance: Rgb,
         /// Scale of the transmission.
@@ -591,7 +583,7 @@ impl Material {
                 .texture
                 .and_then(|r| textures.get(r.texture))
                 .map_or([1.0; 4], |t| t.mean());
-            Rgb::new(t.factor[0] * m[0], t.factor[1] * m[1], t.factor[2] * m[2]).map(unit)
+            Rgb::new(t.factor[0] * m[0], t.factor[1] * m[1], t.factor[2] * m[2]).map(clamp_unit)
         };
         let p = match &self.kind {
             MaterialKind::Plastic {
@@ -604,7 +596,7 @@ impl Material {
                 self.kind.clone(),
                 Plastic::new(
                     mean(diffuse),
-                    specular.map(unit),
+                    specular.map(clamp_unit),
                     *int_ior,
                     *ext_ior,
                     *nonlinear,
@@ -621,10 +613,10 @@ impl Material {
             } => Prepared::RoughPlastic(
                 self.kind.clone(),
                 Box::new(RoughPlastic::new(
-                    microfacet_type(*distribution),
+                    *distribution,
                     clamp_alpha(alpha.factor),
                     mean(diffuse),
-                    specular.map(unit),
+                    specular.map(clamp_unit),
                     *int_ior,
                     *ext_ior,
                     *nonlinear,
@@ -666,7 +658,7 @@ impl Material {
         let p = Prepared::Coating(
             self.kind.clone(),
             Box::new(RoughPlasticCoating::new(
-                microfacet_type(*distribution),
+                *distribution,
                 *int_ior,
                 *ext_ior,
                 *nonlinear,
@@ -685,7 +677,7 @@ impl Material {
         uv: &[Vec2; 2],
         sink: S,
     ) -> lustre_brdf::Result<S::Out> {
-        let rgb = |t: &TexturedRgb| t.at(textures, uv).map(unit);
+        let rgb = |t: &TexturedRgb| t.at(textures, uv).map(clamp_unit);
         let alpha = |t: &TexturedScalar| clamp_alpha(t.at(textures, uv));
         match &self.kind {
             MaterialKind::Diffuse { reflectance } => {
@@ -694,9 +686,10 @@ impl Material {
             MaterialKind::Plastic {
                 diffuse, specular, ..
             } => match &*self.coat_prototype(textures)? {
-                Prepared::Plastic(_, p) => {
-                    self.emit(sink, p.with_reflectances(rgb(diffuse), specular.map(unit))?)
-                }
+                Prepared::Plastic(_, p) => self.emit(
+                    sink,
+                    p.with_reflectances(rgb(diffuse), specular.map(clamp_unit))?,
+                ),
                 _ => Err(mismatch()),
             },
             MaterialKind::RoughPlastic {
@@ -705,9 +698,10 @@ impl Material {
                 alpha: a,
                 ..
             } if a.texture.is_none() => match &*self.coat_prototype(textures)? {
-                Prepared::RoughPlastic(_, p) => {
-                    self.emit(sink, p.with_reflectances(rgb(diffuse), specular.map(unit))?)
-                }
+                Prepared::RoughPlastic(_, p) => self.emit(
+                    sink,
+                    p.with_reflectances(rgb(diffuse), specular.map(clamp_unit))?,
+                ),
                 _ => Err(mismatch()),
             },
             MaterialKind::RoughPlastic {
@@ -716,9 +710,10 @@ impl Material {
                 alpha: a,
                 ..
             } => match &*self.coating()? {
-                Prepared::Coating(_, c) => {
-                    self.emit(sink, c.at(alpha(a), rgb(diffuse), specular.map(unit))?)
-                }
+                Prepared::Coating(_, c) => self.emit(
+                    sink,
+                    c.at(alpha(a), rgb(diffuse), specular.map(clamp_unit))?,
+                ),
                 _ => Err(mismatch()),
             },
             MaterialKind::Conductor { eta, k, specular } => {
@@ -734,11 +729,7 @@ impl Material {
             } => self.emit(
                 sink,
                 RoughConductor::new(
-                    MicrofacetDistribution::new(
-                        microfacet_type(*distribution),
-                        alpha(alpha_u),
-                        alpha(alpha_v),
-                    )?,
+                    MicrofacetDistribution::new(*distribution, alpha(alpha_u), alpha(alpha_v))?,
                     ComplexIor::new(*eta, *k)?,
                     rgb(specular),
                 )?,
@@ -751,8 +742,8 @@ impl Material {
             } => self.emit(
                 sink,
                 Dielectric::new(*int_ior, *ext_ior)?.with_tints(
-                    specular_reflectance.map(unit),
-                    specular_transmittance.map(unit),
+                    specular_reflectance.map(clamp_unit),
+                    specular_transmittance.map(clamp_unit),
                 )?,
             ),
             MaterialKind::RoughDielectric {
@@ -765,13 +756,13 @@ impl Material {
             } => self.emit(
                 sink,
                 RoughDielectric::new(
-                    MicrofacetDistribution::isotropic(microfacet_type(*distribution), alpha(a))?,
+                    MicrofacetDistribution::isotropic(*distribution, alpha(a))?,
                     *int_ior,
                     *ext_ior,
                 )?
                 .with_tints(
-                    specular_reflectance.map(unit),
-                    specular_transmittance.map(unit),
+                    specular_reflectance.map(clamp_unit),
+                    specular_transmittance.map(clamp_unit),
                 )?,
             ),
             MaterialKind::ThinDielectric {
@@ -782,8 +773,8 @@ impl Material {
             } => self.emit(
                 sink,
                 ThinDielectric::new(*int_ior, *ext_ior)?.with_tints(
-                    specular_reflectance.map(unit),
-                    specular_transmittance.map(unit),
+                    specular_reflectance.map(clamp_unit),
+                    specular_transmittance.map(clamp_unit),
                 )?,
             ),
             MaterialKind::PbrMetallicRoughness {
@@ -795,7 +786,7 @@ impl Material {
                 ..
             } => {
                 let c = rgb(base_color);
-                let r = unit(roughness.at(textures, uv));
+                let r = clamp_unit(roughness.at(textures, uv));
                 if transmission.at(textures, uv) >= 0.5 {
                     let a = r * r;
                     if a < PBR_ALPHA_MIN {
@@ -814,7 +805,7 @@ impl Material {
                 } else {
                     self.emit(
                         sink,
-                        PbrMetallicRoughness::new(c, unit(metallic.at(textures, uv)), r)?,
+                        PbrMetallicRoughness::new(c, clamp_unit(metallic.at(textures, uv)), r)?,
                     )
                 }
             }
@@ -881,7 +872,9 @@ impl PartialEq for BsdfCache {
     }
 }
 
-fn unit(x: f64) -> f64 {
+/// A colour channel or weight as the models take it: NaN → 0, else clamped to [0, 1] (also the
+/// GPU records' clamp, `lustre_gpu::material`).
+pub fn clamp_unit(x: f64) -> f64 {
     if x.is_nan() {
         0.0
     } else {
@@ -889,18 +882,13 @@ fn unit(x: f64) -> f64 {
     }
 }
 
-fn clamp_alpha(a: f64) -> f64 {
+/// A microfacet roughness as the models take it: NaN → 1, else clamped to [10⁻⁴, 1] (also the
+/// GPU records' clamp, `lustre_gpu::material`).
+pub fn clamp_alpha(a: f64) -> f64 {
     if a.is_nan() {
         1.0
     } else {
         a.clamp(1e-4, 1.0)
-    }
-}
-
-fn microfacet_type(d: Distribution) -> MicrofacetType {
-    match d {
-        Distribution::Beckmann => MicrofacetType::Beckmann,
-        Distribution::Ggx => MicrofacetType::Ggx,
     }
 }
 

@@ -11,7 +11,7 @@
 //! an analytic specification `MODEL(key=value, …)` are fields too (`spec.KEY`).
 
 use crate::error::{Result, SceneError};
-use crate::material::{Distribution, Material, MaterialKind, ResolvedSpec};
+use crate::material::{Material, MaterialKind, MicrofacetType, ResolvedSpec};
 use lustre_brdf::microfacet::fresnel::Fresnel;
 use lustre_brdf::microfacet::ndf::Ndf;
 use lustre_brdf::microfacet::smith::{G1Table, SgdG1Approx};
@@ -92,16 +92,10 @@ fn rgb(name: &str, c: Rgb, range: (f64, f64), textured: bool) -> Field {
     }
 }
 
-fn distribution(d: Distribution) -> Field {
+fn distribution(d: MicrofacetType) -> Field {
     Field {
         name: "distribution".to_string(),
-        value: FieldValue::Choice(
-            match d {
-                Distribution::Beckmann => "beckmann",
-                Distribution::Ggx => "ggx",
-            }
-            .to_string(),
-        ),
+        value: FieldValue::Choice(d.name().to_string()),
         range: UNIT,
         log: false,
         textured: false,
@@ -418,8 +412,8 @@ fn assign(
         _ => Rgb::ZERO,
     };
     let dist = || match v {
-        FieldValue::Choice(s) if s == "ggx" => Distribution::Ggx,
-        _ => Distribution::Beckmann,
+        FieldValue::Choice(s) if s == "ggx" => MicrofacetType::Ggx,
+        _ => MicrofacetType::Beckmann,
     };
     if let K::Spec(s) = kind {
         if let Some(key) = field.strip_prefix("model.") {
@@ -848,7 +842,7 @@ mod tests {
                 diffuse: TexturedRgb::constant(Rgb([0.2, 0.1, 0.1])),
                 specular: Rgb::ONE,
                 alpha: TexturedScalar::constant(0.04),
-                distribution: Distribution::Ggx,
+                distribution: MicrofacetType::Ggx,
                 int_ior: 1.5,
                 ext_ior: 1.0,
                 nonlinear: false,

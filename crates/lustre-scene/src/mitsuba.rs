@@ -23,7 +23,7 @@ use crate::camera::{Camera, FovAxis};
 use crate::environment::{Environment, EnvironmentSource};
 use crate::error::{read_referenced, Result, SceneError};
 use crate::material::{
-    AlphaMask, Distribution, Material, MaterialKind, TexturedRgb, TexturedScalar,
+    AlphaMask, Material, MaterialKind, MicrofacetType, TexturedRgb, TexturedScalar,
 };
 use crate::mesh::{self, Mesh};
 use crate::texture::{srgb_to_linear, ColorSpace};
@@ -581,17 +581,17 @@ impl<'a, 'i> Reader<'a, 'i> {
         Ok(v)
     }
 
-    fn distribution(&mut self, p: &mut Plugin<'a, 'i>) -> Result<Distribution> {
+    fn distribution(&mut self, p: &mut Plugin<'a, 'i>) -> Result<MicrofacetType> {
         let Some(n) = self.get(p, "distribution") else {
-            return Ok(Distribution::Beckmann);
+            return Ok(MicrofacetType::Beckmann);
         };
         let v = self.req_attr(n, "value")?;
         match v.to_ascii_lowercase().as_str() {
-            "beckmann" => Ok(Distribution::Beckmann),
-            "ggx" => Ok(Distribution::Ggx),
+            "beckmann" => Ok(MicrofacetType::Beckmann),
+            "ggx" => Ok(MicrofacetType::Ggx),
             "phong" | "as" => {
                 self.warn(n, format!("distribution {v:?} read as beckmann"));
-                Ok(Distribution::Beckmann)
+                Ok(MicrofacetType::Beckmann)
             }
             _ => Err(self.err(n, format!("unknown microfacet distribution {v:?}"))),
         }

@@ -1,4 +1,4 @@
-//! Bad input of every kind issue 9 §1 lists gives a clear error (or a named warning), never a
+//! Bad input of every kind gives a clear error (or a named warning), never a
 //! panic: missing referenced files (named), NaN/Inf vertices, degenerate triangles (dropped and
 //! counted), out-of-range indices, unknown XML plugins (named, with the line), malformed TOML,
 //! unsupported required glTF extensions.

@@ -67,7 +67,7 @@ fn hall_xml_materials() {
         } => {
             assert!(diffuse.texture.is_some());
             assert_eq!(alpha.factor, 0.1);
-            assert_eq!(*distribution, lustre_scene::Distribution::Ggx);
+            assert_eq!(*distribution, lustre_scene::MicrofacetType::Ggx);
             assert_eq!((*int_ior, *ext_ior, *nonlinear), (1.5, 1.0, true));
         }
         k => panic!("Wood is {k:?}"),

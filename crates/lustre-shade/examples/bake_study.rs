@@ -1,6 +1,6 @@
 //! Light-mapped diffuse shading (000 §4.3, Eq. 4.1: Lo = kd·E/π) of a scene with every material
 //! made diffuse, against the path-traced reference of the same diffuse scene at the scene's
-//! camera (issue 10 §6–§7): PSNR and relative RMS as functions of the bake's spp and texel
+//! camera: PSNR and relative RMS as functions of the bake's spp and texel
 //! density, and the bake's time per stage (unwrap, trace, fill, denoise, write).
 //!
 //! ```sh

@@ -671,7 +671,7 @@ pub fn shade_gbuffer_view_dependent(
 /// Glossy samples per texel of a see-through layer ([`shade_see_through_layer`]).
 pub const SEE_THROUGH_SAMPLES: usize = 8;
 
-/// The see-through layer (issue 11, the Modern Hall's glass rail): what a transmissive probe
+/// The see-through layer (the Modern Hall's glass rail): what a transmissive probe
 /// object's see-through buffer shows, light-mapped plus its own view-dependent part. A surface
 /// seen through glass is seen from the same camera, so the frame's mirror buffers and probes
 /// answer its samples as they answer the surfaces seen directly; see-through buffers are not

@@ -487,7 +487,7 @@ pub fn tap_lattice(mx: f64, my: f64, budget: usize) -> Result<Pattern> {
 }
 
 /// The most taps one cell of a [`tap_lattice`] takes (measured on six truth-harness cases,
-/// BENCHMARKS.md issue 8: 3 and 4 within 0.2 points of each other, 2 worse on the 0.08 / 0.3
+/// BENCHMARKS.md (regular sampling vs the exact integral): 3 and 4 within 0.2 points of each other, 2 worse on the 0.08 / 0.3
 /// lobe).
 pub const LATTICE_MAX_TAPS: usize = 3;
 

@@ -1,4 +1,4 @@
-//! Light-map bake checks (issue 10 §6): a plane under a constant sky (E = πL), a closed diffuse
+//! Light-map bake checks: a plane under a constant sky (E = πL), a closed diffuse
 //! box (total irradiance against the geometric series, one bounce against the direct term by
 //! quadrature), seams across charts, leaks under thin walls, resume and shards bit for bit.
 //! Scenes are built by hand with hand-made light-map uvs and atlases.
@@ -949,7 +949,7 @@ fn single_texels_bake_to_the_tiles_records() {
 
 #[test]
 fn full_transport_bakes_are_keyed_by_every_material_parameter() {
-    use lustre_scene::material::{Distribution, MaterialKind, TexturedRgb, TexturedScalar};
+    use lustre_scene::material::{MaterialKind, MicrofacetType, TexturedRgb, TexturedScalar};
     use lustre_shade::bake::{bake_hash, Transport};
     let metal = |alpha: f64| {
         Material::new(
@@ -960,7 +960,7 @@ fn full_transport_bakes_are_keyed_by_every_material_parameter() {
                 specular: TexturedRgb::constant(Rgb::ONE),
                 alpha_u: TexturedScalar::constant(alpha),
                 alpha_v: TexturedScalar::constant(alpha),
-                distribution: Distribution::Ggx,
+                distribution: MicrofacetType::Ggx,
             },
         )
     };

@@ -1,4 +1,4 @@
-//! The CPU walkthrough frame (issue 11): probes captured from the light-mapped scene with their
+//! The CPU walkthrough frame: probes captured from the light-mapped scene with their
 //! object left out, bounding planes that remove the parallax of a box room, regular sampling
 //! through the material's warp against the converged integral of the same incident light, and
 //! the diffuse-only frame equal to the light-mapped image.
@@ -10,7 +10,7 @@ use glam::{DVec3, Vec2, Vec3};
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
 use lustre_scene::lightmap::{AtlasSource, LightmapAtlas};
-use lustre_scene::material::{Distribution, TexturedRgb, TexturedScalar};
+use lustre_scene::material::{MicrofacetType, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind, Mesh, Scene};
 use lustre_shade::bake::render::{render_lightmapped, Lightmapped};
 use lustre_shade::bake::spec_albedo;
@@ -112,7 +112,7 @@ fn rough_metal(alpha: f64) -> MaterialKind {
         specular: TexturedRgb::constant(Rgb::ONE),
         alpha_u: TexturedScalar::constant(alpha),
         alpha_v: TexturedScalar::constant(alpha),
-        distribution: Distribution::Ggx,
+        distribution: MicrofacetType::Ggx,
     }
 }
 
@@ -382,7 +382,7 @@ fn glossy_floor(alpha: f64) -> MaterialKind {
         diffuse: TexturedRgb::constant(Rgb::splat(0.3)),
         specular: Rgb::ONE,
         alpha: TexturedScalar::constant(alpha),
-        distribution: Distribution::Ggx,
+        distribution: MicrofacetType::Ggx,
         int_ior: 1.5,
         ext_ior: 1.0,
         nonlinear: false,

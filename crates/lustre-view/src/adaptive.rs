@@ -26,8 +26,8 @@ use lustre_adaptive::hierarchy::{box_downsample, render_adaptive};
 use lustre_adaptive::light::{check_lit, scene_lights};
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_freq::pixel::EnvironmentBandwidth;
-use lustre_gpu::adaptive_pass::{AdaptivePass, AdaptiveScene};
-use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthScene};
+use lustre_gpu::passes::adaptive::{AdaptivePass, AdaptiveScene};
+use lustre_gpu::passes::bandwidth::{BandwidthPass, BandwidthScene};
 use lustre_gpu::GpuContext;
 use lustre_plot::heat::heat_rgb;
 use lustre_scene::Scene;
@@ -218,7 +218,7 @@ pub struct AdaptiveRenderer<'a, 's> {
 }
 
 /// lustre-gpu's twins of the bandwidth pass and of the hierarchical shading, where the GPU
-/// takes the scene's materials (`lustre_gpu::measured::EVALUATED`); `why_cpu` says why not.
+/// takes the scene's materials (`lustre_gpu::material::measured::EVALUATED`); `why_cpu` says why not.
 #[derive(Default)]
 struct GpuPasses {
     bandwidth: Option<(BandwidthScene, BandwidthPass)>,

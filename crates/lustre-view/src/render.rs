@@ -22,7 +22,7 @@
 
 use crate::adaptive::{AdaptiveMaps, AdaptiveRenderer, AdaptiveSettings};
 use crate::{AdaptiveDevice, ViewMethod};
-use lustre_gpu::frame_shade::pack_material;
+use lustre_gpu::material::pack_material;
 use lustre_gpu::{
     GpuContext, GpuFrameOptions, GpuFrameSession, GpuFrameTimes, GpuWalkthrough,
     LightmapFrameScene, StepWork, WalkthroughPasses,

@@ -7,7 +7,7 @@
 //! CPU's; the passes run on the GPU with --device gpu, or with auto where the GPU takes the
 //! scene (measured materials, fitted models, the scene's reflection materials, textured and
 //! normal-mapped ones too, and the analytic reflection models of a spec:
-//! `lustre_gpu::measured::EVALUATED`; area lights) and the adapter
+//! `lustre_gpu::material::measured::EVALUATED`; area lights) and the adapter
 //! is not a software rasterizer. Without a scene or --material, 004 Fig. IV.13's line-up (three
 //! spheres of measured paints on white marble).
 
@@ -22,8 +22,8 @@ use lustre_adaptive::light::{check_lit, scene_lights, AreaLight};
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_brdf::rgb::Rgb;
 use lustre_freq::pixel::EnvironmentBandwidth;
-use lustre_gpu::adaptive_pass::{AdaptivePass, AdaptiveScene};
-use lustre_gpu::bandwidth_pass::{BandwidthPass, BandwidthScene};
+use lustre_gpu::passes::adaptive::{AdaptivePass, AdaptiveScene};
+use lustre_gpu::passes::bandwidth::{BandwidthPass, BandwidthScene};
 use lustre_gpu::GpuContext;
 use lustre_scene::builtin::{LINEUP_FLOOR, LINEUP_PAINTS};
 use lustre_scene::material_edit::{parse_assignment, set_named};

@@ -1,4 +1,4 @@
-//! The command line on day one (issue 14): unmeasured MERL bins, `lustre score`, the built-in
+//! The command line on day one: unmeasured MERL bins, `lustre score`, the built-in
 //! published data from any directory, batch folders that keep every fit, and the rough edges.
 
 use std::path::{Path, PathBuf};

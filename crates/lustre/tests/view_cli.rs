@@ -1,4 +1,4 @@
-//! `lustre view` end to end in a real window under Xvfb, rendered on lavapipe (issue 12): the
+//! `lustre view` end to end in a real window under Xvfb, rendered on lavapipe: the
 //! built-in room opened, an input script replayed (walk, look, record the walk, click an object
 //! to select it, change its material's roughness, a refused material swap, select the fitted
 //! gold sphere by material, change its SGD fit's α and ρd, save it as material JSON, then the

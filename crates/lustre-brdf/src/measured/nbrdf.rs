@@ -139,7 +139,7 @@ impl Nbrdf {
 
     /// The network's parameters in one flat list: w1 (6 rows of HIDDEN), b1, w2 (HIDDEN rows
     /// of HIDDEN), b2, w3 (HIDDEN rows of 3), b3 — the layout the GPU reads
-    /// (`lustre_gpu::measured::pack_nbrdf`).
+    /// (`lustre_gpu::material::measured::pack_nbrdf`).
     pub fn parameters(&self) -> Vec<f64> {
         let mut out =
             Vec::with_capacity(6 * HIDDEN + HIDDEN + HIDDEN * HIDDEN + HIDDEN + 3 * HIDDEN + 3);

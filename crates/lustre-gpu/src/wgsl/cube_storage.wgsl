@@ -4,6 +4,9 @@
 // (per level: first texel, face size, first ring entry, 0) and `cube_ring(i: u32) -> vec4<i32>`
 // (per level and face, the 4(n + 1) texels one texel beyond the edges, in `ring_index` order:
 // up to three global texel indices and their count; lustre-gpu's cube_storage::ring_entries).
+// Requires (the pass defines): fn cube_texel(i: u32) -> vec3<f32>.
+// Requires (the pass defines): fn cube_level(i: u32) -> vec4<u32>.
+// Requires (the pass defines): fn cube_ring(i: u32) -> vec4<i32>.
 
 // lustre_env::cube::face_coords: (face, s, t).
 fn face_coords(d: vec3<f32>) -> vec3<f32> {

@@ -9,6 +9,8 @@
 // distribution at `rows`, then per row j the texels' at `cols + j (2 width + 1)`, then the rows'
 // solid angles; a distribution of n cells is its n + 1 cumulative values, then the n
 // probabilities, computed in f64).
+// Requires (the pass defines): fn env_texel(i: u32) -> vec3<f32>.
+// Requires (the pass defines): fn env_table(i: u32) -> f32.
 
 struct EnvDims {
     width: u32,

@@ -2,7 +2,7 @@
 //! tests of textured materials on the GPU (`textured`, `adaptive_textured`).
 
 use lustre_brdf::rgb::Rgb;
-use lustre_scene::material::{Distribution, TextureRef, TexturedRgb, TexturedScalar};
+use lustre_scene::material::{MicrofacetType, TextureRef, TexturedRgb, TexturedScalar};
 use lustre_scene::texture::{ColorSpace, Texture};
 use lustre_scene::{Material, MaterialKind};
 use std::f32::consts::TAU;
@@ -146,7 +146,7 @@ pub fn textured_gold() -> MaterialKind {
         specular: TexturedRgb::constant(Rgb::ONE),
         alpha_u: scalar(0, 1),
         alpha_v: scalar(0, 1),
-        distribution: Distribution::Ggx,
+        distribution: MicrofacetType::Ggx,
     }
 }
 

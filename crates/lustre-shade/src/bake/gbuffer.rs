@@ -1,5 +1,5 @@
 //! The G-buffer of a light-mapped frame and its shading on the CPU: the twins of lustre-gpu's
-//! raster G-buffer pass and light-map shading pass (issue 11 §1–2).
+//! raster G-buffer pass and light-map shading pass.
 //!
 //! A G-buffer of (k·w)×(k·h) pixels holds, per pixel, what the camera ray through the pixel
 //! centre sees: the triangle (index in [`super::diffuse_path_scene`]'s geometry, [`SKY`] for

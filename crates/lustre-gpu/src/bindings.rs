@@ -1,0 +1,176 @@
+//! Building blocks the passes share: initialised buffers, bind-group-layout and bind-group
+//! entries, compiled single-bind-group compute pipelines, and read-back ([`map_read`]).
+
+use crate::context::GpuContext;
+use crate::error::{scope_result, wgpu_error, Result};
+use wgpu::util::DeviceExt;
+
+/// A buffer holding `contents`, for `usage`.
+pub(crate) fn buffer_init(
+    ctx: &GpuContext,
+    label: &str,
+    contents: &[u8],
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage,
+        })
+}
+
+/// A storage buffer of `data`, one zero element when it is empty (bindings are never empty).
+pub(crate) fn storage_buffer<T: bytemuck::Pod + bytemuck::Zeroable>(
+    ctx: &GpuContext,
+    label: &str,
+    data: &[T],
+) -> wgpu::Buffer {
+    let zero = [T::zeroed()];
+    let data = if data.is_empty() { &zero[..] } else { data };
+    buffer_init(
+        ctx,
+        label,
+        bytemuck::cast_slice(data),
+        wgpu::BufferUsages::STORAGE,
+    )
+}
+
+/// The whole of buffer `b` at `binding` of a bind group.
+pub(crate) fn buffer_entry(binding: u32, b: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: b.as_entire_binding(),
+    }
+}
+
+/// A sampled texture of `view_dimension` at `binding`, visible to compute.
+pub(crate) fn texture_entry(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+    view_dimension: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// A uniform buffer at `binding`, visible to compute.
+pub(crate) fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// A storage buffer at `binding`, visible to compute.
+pub(crate) fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// Compiles the WGSL `source` (entry point `main`, one bind group laid out as `entries`);
+/// `label` names the shader in wgpu's messages and `stage` in ours.
+pub(crate) fn compute_pipeline(
+    ctx: &GpuContext,
+    label: &'static str,
+    stage: &'static str,
+    source: &str,
+    entries: &[wgpu::BindGroupLayoutEntry],
+) -> Result<(wgpu::ComputePipeline, wgpu::BindGroupLayout)> {
+    let ([pipeline], layout) = compute_pipelines(ctx, label, stage, source, entries, ["main"])?;
+    Ok((pipeline, layout))
+}
+
+/// [`compute_pipeline`] for several entry points of one module sharing one bind-group layout,
+/// in the order of `entry_points`.
+pub(crate) fn compute_pipelines<const N: usize>(
+    ctx: &GpuContext,
+    label: &'static str,
+    stage: &'static str,
+    source: &str,
+    entries: &[wgpu::BindGroupLayoutEntry],
+    entry_points: [&str; N],
+) -> Result<([wgpu::ComputePipeline; N], wgpu::BindGroupLayout)> {
+    let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let module = ctx
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+    let layout = ctx
+        .device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries,
+        });
+    let pipeline_layout = ctx
+        .device
+        .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+    let pipelines = entry_points.map(|entry| {
+        ctx.device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(label),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+    });
+    scope_result(scope, stage)?;
+    Ok((pipelines, layout))
+}
+
+/// Maps `buffer` (MAP_READ, its copy already submitted), waits, checks `scope` and returns
+/// its bytes.
+pub(crate) fn map_read(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    stage: &'static str,
+    scope: wgpu::ErrorScopeGuard,
+) -> Result<Vec<u8>> {
+    let slice = buffer.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        // The receiver lives until the poll below has returned.
+        let _ = tx.send(r);
+    });
+    ctx.wait()?;
+    scope_result(scope, stage)?;
+    rx.recv()
+        .map_err(|e| wgpu_error(stage, e))?
+        .map_err(|e| wgpu_error(stage, e))?;
+    let out = slice
+        .get_mapped_range()
+        .map_err(|e| wgpu_error(stage, e))?
+        .to_vec();
+    buffer.unmap();
+    Ok(out)
+}
