@@ -10,7 +10,6 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use lustre_brdf::rgb::Rgb;
-use lustre_gpu::passes::frame_shade::FrameShadeOptions;
 use lustre_gpu::{
     FrameShadePass, FrameShadeScene, FrameShadeTarget, GBufferTarget, GpuContext,
     LightmapFrameScene, LightmapRenderer, ShadeTarget,
@@ -20,10 +19,11 @@ use lustre_scene::material::{MicrofacetType, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind};
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Denoiser};
-use lustre_shade::frame::{FrameBuffers, FrameLight, FrameMethod};
+use lustre_shade::frame::{FrameBuffers, FrameLight};
 use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
+use lustre_shade::request::{FrameRequest, Method};
 
 fn fail<T, E: std::fmt::Display>(r: Result<T, E>) -> T {
     r.unwrap_or_else(|e| panic!("{e}"))
@@ -103,13 +103,23 @@ fn frame(c: &mut Criterion) {
     let mut g = c.benchmark_group(format!("frame_shade {w}x{h} ({})", ctx.describe()));
     g.sample_size(10);
     for n in [3u32, 8, 19] {
-        let opts = FrameShadeOptions {
+        let opts = FrameRequest {
+            method: Method::Regular,
             samples: n,
-            method: FrameMethod::Regular,
-            frame: 0,
+            rays: 1,
+            frames: 1,
             seed: 1,
         };
-        fail(pass.shade(&ctx, &gpu_scene, &target, &base, &camera, 1, &opts, &out));
+        fail(pass.shade(
+            &ctx,
+            &gpu_scene,
+            &target,
+            &base,
+            &camera,
+            1,
+            (&opts, 0),
+            &out,
+        ));
         fail(ctx.wait());
         let stats = fail(out.stats(&ctx));
         eprintln!(
@@ -121,7 +131,16 @@ fn frame(c: &mut Criterion) {
         );
         g.bench_with_input(BenchmarkId::new("regular", n), &n, |b, _| {
             b.iter(|| {
-                fail(pass.shade(&ctx, &gpu_scene, &target, &base, &camera, 1, &opts, &out));
+                fail(pass.shade(
+                    &ctx,
+                    &gpu_scene,
+                    &target,
+                    &base,
+                    &camera,
+                    1,
+                    (&opts, 0),
+                    &out,
+                ));
                 fail(ctx.wait());
             })
         });

@@ -58,9 +58,7 @@ pub use packed::{
     LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE, MAX_LOBE_LOOKUPS,
     MAX_TAP_LATTICE_BUDGET,
 };
-pub use passes::frame_shade::{
-    FrameShadeOptions, FrameShadePass, FrameShadeScene, FrameShadeTarget,
-};
+pub use passes::frame_shade::{FrameShadePass, FrameShadeScene, FrameShadeTarget};
 pub use passes::gbuffer::{gbuffer_wgsl, DrawOptions, GBufferPass, GBufferTarget, GpuGeometry};
 pub use passes::lightmap_shade::{
     lightmap_shade_wgsl, GpuLightmapScene, LightmapFrameScene, LightmapRenderer, LightmapShadePass,
@@ -75,6 +73,6 @@ pub use passes::view::{GpuViewPass, ViewRender};
 pub use timer::{GpuTimer, Timing};
 pub use view_buffer::GpuViewBuffer;
 pub use walkthrough::{
-    GpuFrame, GpuFrameOptions, GpuFrameSession, GpuFrameTimes, GpuStep, GpuWalkthrough,
-    SessionIntermediates, StepWork, WalkthroughPasses,
+    GpuFrame, GpuFrameSession, GpuFrameTimes, GpuStep, GpuWalkthrough, SessionIntermediates,
+    StepWork, WalkthroughPasses,
 };

@@ -21,9 +21,7 @@
 use crate::context::GpuContext;
 use crate::error::{invalid, Result};
 use crate::material::pack_material;
-use crate::passes::frame_shade::{
-    FrameShadeOptions, FrameShadePass, FrameShadeScene, FrameShadeTarget,
-};
+use crate::passes::frame_shade::{FrameShadePass, FrameShadeScene, FrameShadeTarget};
 use crate::passes::gbuffer::{GBufferPass, GBufferTarget};
 use crate::passes::lightmap_shade::{LightmapFrameScene, LightmapShadePass, ShadeTarget};
 use crate::passes::probe_capture::{GpuProbe, GpuProbeCapture};
@@ -32,11 +30,12 @@ use crate::passes::view::GpuViewPass;
 use crate::timer::GpuTimer;
 use crate::view_buffer::GpuViewBuffer;
 use lustre_env::pyramid::CubePyramid;
-use lustre_shade::frame::{view_meshes, FrameMethod, FrameStats, FrameTables, MAX_SAMPLES};
+use lustre_shade::frame::{view_meshes, walkthrough_request, FrameStats, FrameTables};
 use lustre_shade::image::Image;
 use lustre_shade::mirror::{Reflector, ScreenTiles};
 use lustre_shade::path::PathCamera;
 use lustre_shade::probe::{LitScene, ProbeOptions};
+use lustre_shade::request::{FrameRequest, Method};
 
 /// The compiled passes of a walkthrough, kept when the scene is uploaded again (a viewer's
 /// material edit): compiling them is most of a walkthrough's set-up on a software adapter.
@@ -134,19 +133,6 @@ pub struct GpuFrame {
     pub reflectors: Vec<Reflector>,
     /// The per-mesh tables the view-dependent pass read.
     pub tables: FrameTables,
-}
-
-/// Options of a GPU frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GpuFrameOptions {
-    /// Glossy samples per G-buffer pixel.
-    pub samples: u32,
-    /// Regular, CK or progressive (its frame count accumulated in this call).
-    pub method: FrameMethod,
-    /// k: the G-buffer is (k·w)×(k·h), box-averaged into the frame (anti-aliasing).
-    pub supersampling: u32,
-    /// Seed of the CK points.
-    pub seed: u64,
 }
 
 /// Milliseconds of a timed interval: the GPU's timestamps where present.
@@ -280,28 +266,23 @@ impl GpuWalkthrough {
     }
 
     /// Renders a w×h frame of `lit` from `camera`: a fresh [`GpuFrameSession`] stepped once,
-    /// or `frames` times for `Progressive { frames }` (still frames accumulated), its image
-    /// read back with its intermediates. Errors: an empty image, a sample count outside
-    /// 1..=`MAX_SAMPLES`, a progressive refinement of 0 frames, no supersampling, a material
-    /// the GPU cannot shade (named).
+    /// or [`FrameRequest::frames`] times for the progressive method (still frames
+    /// accumulated), its image read back with its intermediates. Errors: an empty image, a
+    /// request `walkthrough_request` refuses, a material the GPU cannot shade (named).
     pub fn render(
         &self,
         ctx: &GpuContext,
         lit: &LitScene,
         camera: &PathCamera,
         size: (usize, usize),
-        opts: &GpuFrameOptions,
+        req: &FrameRequest,
     ) -> Result<GpuFrame> {
         let mut session = GpuFrameSession::new();
-        let frames = match opts.method {
-            FrameMethod::Progressive { frames } => frames,
-            _ => 1,
-        };
-        // The first step validates the options (0 frames included).
-        let mut step = session.step(ctx, self, lit, camera, size, opts)?;
+        // The first step validates the request (0 frames included).
+        let mut step = session.step(ctx, self, lit, camera, size, req)?;
         let mut times = step.times;
-        for _ in 1..frames {
-            step = session.step(ctx, self, lit, camera, size, opts)?;
+        for _ in 1..req.accumulated_frames() {
+            step = session.step(ctx, self, lit, camera, size, req)?;
             times.shade_ms += step.times.shade_ms;
         }
         let mut stats = step.stats;
@@ -390,7 +371,7 @@ struct CameraFrame {
 #[derive(Clone, Copy, Debug)]
 struct Shaded {
     samples: u32,
-    method: std::mem::Discriminant<FrameMethod>,
+    method: Method,
     seed: u64,
     frames: u32,
     stats: FrameStats,
@@ -445,9 +426,9 @@ impl GpuFrameSession {
     }
 
     /// Renders, refines or keeps the w×h frame of `lit` from `camera` (type docs) and returns
-    /// what it did. Errors (the session is left as it was): an empty image, no
-    /// supersampling, a sample count outside 1..=`MAX_SAMPLES`, a progressive refinement of
-    /// 0 frames; and the passes' own errors (the next step then re-renders everything).
+    /// what it did. Errors (the session is left as it was): an empty image, a request
+    /// `walkthrough_request` refuses; and the passes' own errors (the next step then
+    /// re-renders everything).
     pub fn step(
         &mut self,
         ctx: &GpuContext,
@@ -455,9 +436,10 @@ impl GpuFrameSession {
         lit: &LitScene,
         camera: &PathCamera,
         (w, h): (usize, usize),
-        opts: &GpuFrameOptions,
+        req: &FrameRequest,
     ) -> Result<GpuStep> {
-        let k = opts.supersampling;
+        walkthrough_request(req).map_err(|e| invalid("frame request", e.to_string()))?;
+        let k = req.supersampling();
         let (gw, gh) = match (u32::try_from(w), u32::try_from(h)) {
             (Ok(a), Ok(b)) if a > 0 && b > 0 && k > 0 => {
                 match (a.checked_mul(k), b.checked_mul(k)) {
@@ -477,23 +459,7 @@ impl GpuFrameSession {
                 ))
             }
         };
-        let max = MAX_SAMPLES as u32;
-        if opts.samples == 0 || opts.samples > max {
-            return Err(invalid(
-                "samples",
-                format!("{} is outside 1..={max}", opts.samples),
-            ));
-        }
-        let wanted = match opts.method {
-            FrameMethod::Progressive { frames: 0 } => {
-                return Err(invalid(
-                    "frames",
-                    "a progressive refinement of 0 frames accumulates nothing",
-                ))
-            }
-            FrameMethod::Progressive { frames } => frames,
-            _ => 1,
-        };
+        let wanted = req.accumulated_frames();
         let mut timer = GpuTimer::new(ctx);
         let mut times = GpuFrameTimes {
             timestamps: walk.timestamps,
@@ -539,8 +505,8 @@ impl GpuFrameSession {
         };
         // The view-dependent pass: frame 0 after any change, the next frame of a still
         // progressive refinement, nothing otherwise.
-        let method = std::mem::discriminant(&opts.method);
-        let same = |s: &Shaded| (s.samples, s.method, s.seed) == (opts.samples, method, opts.seed);
+        let same =
+            |s: &Shaded| (s.samples, s.method, s.seed) == (req.samples, req.method, req.seed);
         let shaded = match self.shaded {
             Some(s) if same(&s) && s.frames == wanted => s,
             previous => {
@@ -565,12 +531,7 @@ impl GpuFrameSession {
                     &targets.lightmapped,
                     camera,
                     k,
-                    &FrameShadeOptions {
-                        samples: opts.samples,
-                        method: opts.method,
-                        frame: f,
-                        seed: opts.seed,
-                    },
+                    (req, f),
                     &targets.out,
                 )?;
                 times.shade_ms = ms(timer.stop(ctx)?);
@@ -578,9 +539,9 @@ impl GpuFrameSession {
                 stats.mirrors = frame.reflectors.len();
                 stats.see_throughs = frame.see_throughs;
                 Shaded {
-                    samples: opts.samples,
-                    method,
-                    seed: opts.seed,
+                    samples: req.samples,
+                    method: req.method,
+                    seed: req.seed,
                     frames: f + 1,
                     stats,
                 }

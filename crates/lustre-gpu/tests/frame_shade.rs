@@ -11,7 +11,6 @@ mod common;
 use common::{ctx, quick_bake};
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::material::{pack_material, FLAG_NORMAL_MAPPED, FLAG_TEXTURED, KIND_ROUGH_PLASTIC};
-use lustre_gpu::passes::frame_shade::FrameShadeOptions;
 use lustre_gpu::{
     FrameShadePass, FrameShadeScene, FrameShadeTarget, GBufferTarget, GpuViewBuffer,
     LightmapFrameScene, LightmapRenderer, ShadeTarget,
@@ -20,13 +19,12 @@ use lustre_scene::material::{MicrofacetType, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind};
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::spec_albedo;
-use lustre_shade::frame::{
-    shade_gbuffer_view_dependent, FrameBuffers, FrameLight, FrameMethod, GBufferViewOptions,
-};
+use lustre_shade::frame::{shade_gbuffer_view_dependent, FrameBuffers, FrameLight};
 use lustre_shade::metrics::psnr;
 use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
+use lustre_shade::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
 
 /// The built-in room, its gold sphere as a rough gold conductor, the brushed-aluminium sphere
 /// with its own sample budget of 3 (the frame asks 8: both sides must honour it).
@@ -122,41 +120,40 @@ fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
     let seed = 11;
     // Every frame of `method` (a progressive method's frames in turn) at k × k supersampling on
     // the GPU, and its CPU twin: PSNR, the CPU image, the GPU's and the CPU's counts.
-    let both = |k: u32, base: &ShadeTarget, out: &FrameShadeTarget, n: u32, method| {
-        let frames = match method {
-            FrameMethod::Progressive { frames } => frames,
-            _ => 1,
-        };
-        for frame in 0..frames {
-            let opts = FrameShadeOptions {
+    let both =
+        |k: u32, base: &ShadeTarget, out: &FrameShadeTarget, n: u32, method: (Method, u32)| {
+            let req = FrameRequest {
+                method: method.0,
                 samples: n,
-                method,
-                frame,
+                rays: 1,
+                frames: method.1,
                 seed,
             };
-            pass.shade(&ctx, &gpu_scene, &target, base, &camera, k, &opts, out)
+            for frame in 0..req.accumulated_frames() {
+                pass.shade(
+                    &ctx,
+                    &gpu_scene,
+                    &target,
+                    base,
+                    &camera,
+                    k,
+                    (&req, frame),
+                    out,
+                )
                 .expect("shade");
-        }
-        let gpu = out.read_back(&ctx).expect("readback");
-        let stats = out.stats(&ctx).expect("stats");
-        let opts = GBufferViewOptions {
-            samples: n as usize,
-            method,
-            seed,
+            }
+            let gpu = out.read_back(&ctx).expect("readback");
+            let stats = out.stats(&ctx).expect("stats");
+            let (cpu, cpu_stats) =
+                shade_gbuffer_view_dependent(&lit, &light, &buffers, &camera, &gb, k, &req)
+                    .expect("cpu twin");
+            let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
+            (db, cpu, stats, cpu_stats)
         };
-        let (cpu, cpu_stats) =
-            shade_gbuffer_view_dependent(&lit, &light, &buffers, &camera, &gb, k, &opts)
-                .expect("cpu twin");
-        let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
-        (db, cpu, stats, cpu_stats)
-    };
     for (name, method) in [
-        ("regular", FrameMethod::Regular),
-        ("CK", FrameMethod::Ck),
-        (
-            "progressive (4 frames)",
-            FrameMethod::Progressive { frames: 4 },
-        ),
+        ("regular", (Method::Regular, 1)),
+        ("CK", (Method::Ck, 1)),
+        ("progressive (4 frames)", (Method::Progressive, 4)),
     ] {
         let (db, cpu, stats, cpu_stats) = both(k, &base, &out, samples, method);
         let peak = cpu.data.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
@@ -179,7 +176,7 @@ fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
         .draw(&ctx, &up, &camera, k2, &target, &base2)
         .expect("draw k = 2");
     let out2 = FrameShadeTarget::new(&ctx, w2, h2, k2).expect("output");
-    let (db, ..) = both(k2, &base2, &out2, samples, FrameMethod::Regular);
+    let (db, ..) = both(k2, &base2, &out2, samples, (Method::Regular, 1));
     eprintln!("regular, 2×2 supersampled: GPU vs CPU twin {db:.1} dB ({w2}×{h2})");
     assert!(db >= 90.0, "k = 2: {db} dB");
     // The largest budget on a 4×4 supersampled G-buffer: 16 × 256 samples an output pixel,
@@ -191,8 +188,8 @@ fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
         .draw(&ctx, &up, &camera, k4, &target, &base4)
         .expect("draw k = 4");
     let out4 = FrameShadeTarget::new(&ctx, w4, h4, k4).expect("output");
-    let max = lustre_shade::frame::MAX_SAMPLES as u32;
-    for method in [FrameMethod::Regular, FrameMethod::Ck] {
+    let max = MAX_WALKTHROUGH_SAMPLES;
+    for method in [(Method::Regular, 1), (Method::Ck, 1)] {
         let (db, _, stats, cpu_stats) = both(k4, &base4, &out4, max, method);
         eprintln!(
             "{method:?}, 4×4 supersampled, n = {max}: GPU vs CPU twin {db:.1} dB ({w4}×{h4}); \
@@ -209,26 +206,36 @@ fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
             cpu_stats.lookups
         );
     }
-    let opts = FrameShadeOptions {
+    let opts = FrameRequest {
+        method: Method::Regular,
         samples,
-        method: FrameMethod::Regular,
-        frame: 0,
+        rays: 1,
+        frames: 1,
         seed,
     };
     // Bad input: a sample count of 0 or above the limit, sizes that do not agree.
     for bad in [0, 257] {
-        let o = FrameShadeOptions {
+        let o = FrameRequest {
             samples: bad,
             ..opts
         };
         let err = pass
-            .shade(&ctx, &gpu_scene, &target, &base, &camera, k, &o, &out)
+            .shade(&ctx, &gpu_scene, &target, &base, &camera, k, (&o, 0), &out)
             .unwrap_err()
             .to_string();
         assert!(err.contains("samples"), "{err}");
     }
     let err = pass
-        .shade(&ctx, &gpu_scene, &target, &base, &camera, k2, &opts, &out)
+        .shade(
+            &ctx,
+            &gpu_scene,
+            &target,
+            &base,
+            &camera,
+            k2,
+            (&opts, 0),
+            &out,
+        )
         .unwrap_err()
         .to_string();
     assert!(err.contains("do not agree"), "{err}");

@@ -12,20 +12,18 @@ use common::{ctx, frame_buffers, quick_bake};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::{
-    GpuContext, GpuFrameOptions, GpuFrameSession, GpuWalkthrough, LightmapFrameScene,
-    SessionIntermediates, StepWork,
+    GpuContext, GpuFrameSession, GpuWalkthrough, LightmapFrameScene, SessionIntermediates, StepWork,
 };
 use lustre_scene::Scene;
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::spec_albedo;
-use lustre_shade::frame::{
-    shade_gbuffer_view_dependent, FrameLight, FrameMethod, GBufferViewOptions,
-};
+use lustre_shade::frame::{shade_gbuffer_view_dependent, FrameLight};
 use lustre_shade::image::Image;
 use lustre_shade::metrics::psnr;
 use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{LitScene, Probe, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
+use lustre_shade::request::{FrameRequest, Method};
 
 const PROBES: ProbeOptions = ProbeOptions {
     face_size: 32,
@@ -52,17 +50,18 @@ fn with_room(f: impl FnOnce(&GpuContext, &Scene, &LitScene, &mut GpuWalkthrough)
     f(&ctx, &scene, &lit, &mut walk);
 }
 
-fn options(method: FrameMethod, supersampling: u32) -> GpuFrameOptions {
-    GpuFrameOptions {
+fn options(method: (Method, u32), supersampling: u32) -> FrameRequest {
+    FrameRequest {
+        method: method.0,
         samples: 8,
-        method,
-        supersampling,
+        rays: supersampling * supersampling,
+        frames: method.1,
         seed: 3,
     }
 }
 
-const fn progressive(frames: u32) -> FrameMethod {
-    FrameMethod::Progressive { frames }
+const fn progressive(frames: u32) -> (Method, u32) {
+    (Method::Progressive, frames)
 }
 
 /// Bit-for-bit equality of two images.
@@ -81,7 +80,7 @@ fn the_session_accumulates_still_frames_and_resets_on_change() {
         let walk = &*walk;
         let (w, h) = (48usize, 32usize);
         let camera = path_camera(scene, None, w as u32, h as u32).expect("camera");
-        let render = |camera: &PathCamera, size, opts: GpuFrameOptions| {
+        let render = |camera: &PathCamera, size, opts: FrameRequest| {
             walk.render(ctx, lit, camera, size, &opts)
                 .expect("GPU frame")
                 .image
@@ -151,7 +150,7 @@ fn the_session_accumulates_still_frames_and_resets_on_change() {
             .expect_err("0 frames")
             .to_string();
         assert!(err.contains("0 frames"), "{err}");
-        let bad = GpuFrameOptions {
+        let bad = FrameRequest {
             samples: 0,
             ..prog4
         };
@@ -224,7 +223,7 @@ fn the_session_accumulates_still_frames_and_resets_on_change() {
 
         // Regular sampling at the still camera: the view-dependent pass alone, once; then
         // nothing runs and the image stays.
-        let regular = options(FrameMethod::Regular, 2);
+        let regular = options((Method::Regular, 1), 2);
         let step = s
             .step(ctx, walk, lit, &moved, small, &regular)
             .expect("step");
@@ -242,14 +241,14 @@ fn the_session_accumulates_still_frames_and_resets_on_change() {
         }
         // Other samples, CK, another seed: shaded again over the same G-buffer.
         for opts in [
-            GpuFrameOptions {
+            FrameRequest {
                 samples: 5,
                 ..regular
             },
-            options(FrameMethod::Ck, 2),
-            GpuFrameOptions {
+            options((Method::Ck, 1), 2),
+            FrameRequest {
                 seed: 4,
-                ..options(FrameMethod::Ck, 2)
+                ..options((Method::Ck, 1), 2)
             },
         ] {
             let step = s.step(ctx, walk, lit, &moved, small, &opts).expect("step");
@@ -279,7 +278,7 @@ fn a_probe_captured_again_is_read_from_the_next_step() {
     with_room(|ctx, scene, lit, walk| {
         let (w, h) = (40usize, 24usize);
         let camera = path_camera(scene, None, w as u32, h as u32).expect("camera");
-        let regular = options(FrameMethod::Regular, 1);
+        let regular = options((Method::Regular, 1), 1);
         let mut s = GpuFrameSession::new();
         s.step(ctx, walk, lit, &camera, (w, h), &regular)
             .expect("step");
@@ -352,9 +351,11 @@ fn twin(
         camera,
         &gb,
         1,
-        &GBufferViewOptions {
+        &FrameRequest {
+            method: Method::Progressive,
             samples: 8,
-            method: progressive(frames),
+            rays: 1,
+            frames,
             seed: 3,
         },
     )

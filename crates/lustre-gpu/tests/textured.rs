@@ -17,7 +17,6 @@ use common::textures::{scalar, textured_gltf, textured_gold, textures, untexture
 use common::{ctx, quick_bake};
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::material::{pack_material, FLAG_NORMAL_MAPPED, FLAG_TEXTURED};
-use lustre_gpu::passes::frame_shade::FrameShadeOptions;
 use lustre_gpu::{
     FrameShadePass, FrameShadeScene, FrameShadeTarget, GBufferTarget, GpuViewBuffer,
     LightmapFrameScene, LightmapRenderer, ShadeTarget,
@@ -27,14 +26,13 @@ use lustre_scene::{Material, MaterialKind, Scene};
 use lustre_shade::bake::gbuffer::GBuffer;
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::spec_albedo;
-use lustre_shade::frame::{
-    shade_gbuffer_view_dependent, FrameBuffers, FrameLight, FrameMethod, GBufferViewOptions,
-};
+use lustre_shade::frame::{shade_gbuffer_view_dependent, FrameBuffers, FrameLight};
 use lustre_shade::image::Image;
 use lustre_shade::metrics::psnr;
 use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
+use lustre_shade::request::{FrameRequest, Method};
 
 /// The room with the four textured materials (module docs).
 fn textured_room() -> Scene {
@@ -113,7 +111,7 @@ fn twin(
     buffers: &FrameBuffers,
     camera: &PathCamera,
     gb: &GBuffer,
-    opts: &GBufferViewOptions,
+    opts: &FrameRequest,
 ) -> (Image, u64) {
     let (ps, _) = path_scene(scene).expect("path scene");
     let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
@@ -189,33 +187,32 @@ fn textured_and_normal_mapped_glossy_materials_match_their_cpu_twin() {
     let samples = 8;
     let seed = 5;
     let mut regular = None;
-    for (name, method) in [("regular", FrameMethod::Regular), ("CK", FrameMethod::Ck)] {
-        let opts = FrameShadeOptions {
+    for (name, method) in [("regular", (Method::Regular, 1)), ("CK", (Method::Ck, 1))] {
+        let opts = FrameRequest {
+            method: method.0,
             samples,
-            method,
-            frame: 0,
+            rays: 1,
+            frames: method.1,
             seed,
         };
         let t0 = std::time::Instant::now();
-        pass.shade(&ctx, &gpu_scene, &target, &base, &camera, 1, &opts, &out)
-            .expect("shade");
+        pass.shade(
+            &ctx,
+            &gpu_scene,
+            &target,
+            &base,
+            &camera,
+            1,
+            (&opts, 0),
+            &out,
+        )
+        .expect("shade");
         let gpu = out.read_back(&ctx).expect("readback");
         let seconds = t0.elapsed().as_secs_f64();
         let stats = out.stats(&ctx).expect("stats");
-        let (cpu, cpu_stats) = shade_gbuffer_view_dependent(
-            &lit,
-            &light,
-            &buffers,
-            &camera,
-            &gb,
-            1,
-            &GBufferViewOptions {
-                samples: samples as usize,
-                method,
-                seed,
-            },
-        )
-        .expect("cpu twin");
+        let (cpu, cpu_stats) =
+            shade_gbuffer_view_dependent(&lit, &light, &buffers, &camera, &gb, 1, &opts)
+                .expect("cpu twin");
         let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
         eprintln!(
             "textured room, {name}: GPU vs CPU twin {db:.1} dB ({w}×{h}, n = {samples}, \
@@ -225,15 +222,17 @@ fn textured_and_normal_mapped_glossy_materials_match_their_cpu_twin() {
         assert!(db >= 90.0, "{name}: {db:.1} dB");
         assert_eq!(stats.glossy_hits, cpu_stats.glossy_hits, "{name}");
         assert!(cpu_stats.glossy_hits > (w * h / 4) as u64, "{name}");
-        if method == FrameMethod::Regular {
+        if method == (Method::Regular, 1) {
             regular = Some(gpu);
         }
     }
     // Each material's textures matter: its means instead (no normal map) change the frame.
     let gpu = regular.expect("the regular frame");
-    let opts = GBufferViewOptions {
-        samples: samples as usize,
-        method: FrameMethod::Regular,
+    let opts = FrameRequest {
+        method: Method::Regular,
+        samples,
+        rays: 1,
+        frames: 1,
         seed,
     };
     for name in ["gold-paint", "brushed-aluminium", "floor", "frosted-glass"] {

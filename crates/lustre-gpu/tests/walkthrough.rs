@@ -14,13 +14,12 @@ mod common;
 use common::{ctx, frame_buffers, quick_bake};
 use lustre_brdf::rgb::Rgb;
 use lustre_gpu::material::{pack_material, FLAG_TEXTURED};
-use lustre_gpu::{GpuContext, GpuFrame, GpuFrameOptions, GpuWalkthrough, LightmapFrameScene};
+use lustre_gpu::{GpuContext, GpuFrame, GpuWalkthrough, LightmapFrameScene};
 use lustre_scene::{Material, MaterialKind, ResolvedSpec, Scene};
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::spec_albedo;
 use lustre_shade::frame::{
     render_frame, shade_gbuffer_view_dependent, shade_see_through_layer, view_meshes, FrameLight,
-    FrameMethod, FrameOptions, GBufferViewOptions,
 };
 use lustre_shade::image::Image;
 use lustre_shade::metrics::psnr;
@@ -28,6 +27,7 @@ use lustre_shade::mirror::ScreenTiles;
 use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
+use lustre_shade::request::{FrameRequest, Method};
 
 const PROBES: ProbeOptions = ProbeOptions {
     face_size: 32,
@@ -46,41 +46,24 @@ fn gpu_and_twin(
     light: &FrameLight,
     camera: &PathCamera,
     (w, h): (usize, usize),
-    method: FrameMethod,
+    method: (Method, u32),
     k: u32,
 ) -> (GpuFrame, u64, f64) {
-    let samples = 8;
+    let req = FrameRequest {
+        method: method.0,
+        samples: 8,
+        rays: k * k,
+        frames: method.1,
+        seed: 3,
+    };
     let frame = walk
-        .render(
-            ctx,
-            lit,
-            camera,
-            (w, h),
-            &GpuFrameOptions {
-                samples,
-                method,
-                supersampling: k,
-                seed: 3,
-            },
-        )
+        .render(ctx, lit, camera, (w, h), &req)
         .expect("GPU frame");
     // The CPU twins on the GPU's intermediates.
     let gb = frame.gbuffer.read_back(ctx).expect("G-buffer read-back");
     let buffers = frame_buffers(ctx, lit, &frame.views, &frame.reflectors, &frame.tables);
-    let (twin, twin_stats) = shade_gbuffer_view_dependent(
-        lit,
-        light,
-        &buffers,
-        camera,
-        &gb,
-        k,
-        &GBufferViewOptions {
-            samples: samples as usize,
-            method,
-            seed: 3,
-        },
-    )
-    .expect("CPU twin");
+    let (twin, twin_stats) =
+        shade_gbuffer_view_dependent(lit, light, &buffers, camera, &gb, k, &req).expect("CPU twin");
     let db = psnr(&frame.image, &twin, 1.0).expect("psnr");
     (frame, twin_stats.glossy_hits, db)
 }
@@ -156,14 +139,10 @@ fn the_gpu_frame_matches_its_cpu_twins_and_the_ray_cast_frame() {
     let (w, h) = (80usize, 48usize);
     let camera = path_camera(&scene, None, w as u32, h as u32).expect("camera");
     for (name, method, k) in [
-        ("regular", FrameMethod::Regular, 1),
-        ("regular, 2×2 supersampled", FrameMethod::Regular, 2),
-        ("CK", FrameMethod::Ck, 1),
-        (
-            "progressive (3 frames)",
-            FrameMethod::Progressive { frames: 3 },
-            1,
-        ),
+        ("regular", (Method::Regular, 1), 1),
+        ("regular, 2×2 supersampled", (Method::Regular, 1), 2),
+        ("CK", (Method::Ck, 1), 1),
+        ("progressive (3 frames)", (Method::Progressive, 3), 1),
     ] {
         let (frame, twin_hits, db) =
             gpu_and_twin(&ctx, &walk, &lit, &light, &camera, (w, h), method, k);
@@ -174,7 +153,7 @@ fn the_gpu_frame_matches_its_cpu_twins_and_the_ray_cast_frame() {
             frame.stats.glossy_hits, frame.times
         );
         assert!(db >= 90.0, "{name}: {db:.1} dB");
-        if !matches!(method, FrameMethod::Progressive { .. }) {
+        if method.0 != Method::Progressive {
             assert_eq!(frame.stats.glossy_hits, twin_hits, "{name}");
         }
         if k == 1 {
@@ -203,10 +182,11 @@ fn the_gpu_frame_matches_its_cpu_twins_and_the_ray_cast_frame() {
             &lit,
             &camera,
             (w, h),
-            &GpuFrameOptions {
+            &FrameRequest {
+                method: Method::Regular,
                 samples: 8,
-                method: FrameMethod::Regular,
-                supersampling: 4,
+                rays: 16,
+                frames: 1,
                 seed: 3,
             },
         )
@@ -217,10 +197,11 @@ fn the_gpu_frame_matches_its_cpu_twins_and_the_ray_cast_frame() {
         &camera,
         w,
         h,
-        &FrameOptions {
+        &FrameRequest {
+            method: Method::Regular,
             samples: 8,
-            method: FrameMethod::Regular,
-            spp: 16,
+            rays: 16,
+            frames: 1,
             seed: 3,
         },
     )
@@ -307,7 +288,7 @@ fn the_gpu_frame_of_the_modern_hall_matches_its_cpu_twins() {
     };
     let (w, h) = (64usize, 36usize);
     let camera = path_camera(&scene, None, w as u32, h as u32).expect("camera");
-    for (name, method) in [("regular", FrameMethod::Regular), ("CK", FrameMethod::Ck)] {
+    for (name, method) in [("regular", (Method::Regular, 1)), ("CK", (Method::Ck, 1))] {
         let (frame, twin_hits, db) =
             gpu_and_twin(&ctx, &walk, &lit, &light, &camera, (w, h), method, 1);
         println!(

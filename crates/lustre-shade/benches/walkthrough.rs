@@ -10,10 +10,11 @@ use lustre_brdf::rgb::Rgb;
 use lustre_scene::lightmap::{build_atlas, AtlasOptions};
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Transport};
-use lustre_shade::frame::{render_frame, FrameLight, FrameMethod, FrameOptions};
+use lustre_shade::frame::{render_frame, FrameLight};
 use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::reference::{path_camera, path_scene};
+use lustre_shade::request::{FrameRequest, Method};
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
@@ -64,15 +65,16 @@ fn bench(c: &mut Criterion) {
     g.sample_size(10);
     g.throughput(Throughput::Elements((w * h) as u64));
     for (name, method, n) in [
-        ("regular-3", FrameMethod::Regular, 3),
-        ("regular-8", FrameMethod::Regular, 8),
-        ("regular-19", FrameMethod::Regular, 19),
-        ("ck-19", FrameMethod::Ck, 19),
+        ("regular-3", (Method::Regular, 1), 3),
+        ("regular-8", (Method::Regular, 1), 8),
+        ("regular-19", (Method::Regular, 1), 19),
+        ("ck-19", (Method::Ck, 1), 19),
     ] {
-        let fopts = FrameOptions {
+        let fopts = FrameRequest {
+            method: method.0,
             samples: n,
-            method,
-            spp: 1,
+            rays: 1,
+            frames: method.1,
             seed: 1,
         };
         g.bench_function(name, |b| {

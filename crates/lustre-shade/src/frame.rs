@@ -31,6 +31,7 @@ use crate::mirror::{
 };
 use crate::path::PathCamera;
 use crate::probe::{LitScene, Probe};
+use crate::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
 use crate::warp::{fibonacci_point, integrate_warp};
 use crate::{Result, ShadeError};
 use glam::DVec3;
@@ -41,57 +42,6 @@ use lustre_brdf::sampling::SplitMix64;
 use lustre_env::pyramid::CubePyramid;
 use lustre_scene::{Material, MaterialKind};
 use rayon::prelude::*;
-
-/// Largest sample count per pixel and lobe the regular methods accept.
-pub const MAX_SAMPLES: usize = 256;
-
-/// How the glossy part is integrated.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FrameMethod {
-    /// A fixed regular point set through the material's warp, MIP-filtered.
-    Regular,
-    /// Colbert–Křivánek: the same number of random points, MIP-filtered.
-    Ck,
-    /// `frames` still frames of the regular set, each rotated, averaged.
-    Progressive {
-        /// Frames accumulated.
-        frames: u32,
-    },
-}
-
-/// Options of a frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FrameOptions {
-    /// Glossy samples per pixel (per camera ray).
-    pub samples: usize,
-    /// Integration method.
-    pub method: FrameMethod,
-    /// Camera rays per pixel (jittered as [`crate::bake::render::render_lightmapped`] does).
-    pub spp: u32,
-    /// Seed of the camera jitter and of the random methods.
-    pub seed: u64,
-}
-
-impl FrameOptions {
-    /// Errors on a sample count of 0 or above [`MAX_SAMPLES`], no camera rays, or no frames.
-    pub fn validate(&self) -> Result<()> {
-        if self.samples == 0 || self.samples > MAX_SAMPLES {
-            return Err(ShadeError::Parameter(format!(
-                "{} glossy samples per pixel is outside 1..={MAX_SAMPLES}",
-                self.samples
-            )));
-        }
-        if self.spp == 0 {
-            return Err(ShadeError::Parameter("0 camera rays per pixel".into()));
-        }
-        if let FrameMethod::Progressive { frames: 0 } = self.method {
-            return Err(ShadeError::Parameter(
-                "progressive refinement of 0 frames".into(),
-            ));
-        }
-        Ok(())
-    }
-}
 
 /// The pre-filtered incident light of a frame: the probes, and the environment's pyramid for
 /// scenes without probes.
@@ -561,13 +511,28 @@ pub fn view_dependent(
 }
 
 /// The glossy samples of triangle `prim`: its object's own budget
-/// (`ObjectHints::samples`, clamped to 1..=`MAX_SAMPLES`) or the frame's `n`.
+/// (`ObjectHints::samples`, clamped to 1..=[`MAX_WALKTHROUGH_SAMPLES`]) or the frame's `n`.
 pub fn object_samples(lit: &LitScene, prim: usize, n: usize) -> usize {
     lit.mesh_of
         .get(prim)
         .and_then(|&m| lit.scene.meshes.get(m as usize))
         .and_then(|m| m.hints.samples)
-        .map_or(n, |s| (s as usize).clamp(1, MAX_SAMPLES))
+        .map_or(n, |s| {
+            (s as usize).clamp(1, MAX_WALKTHROUGH_SAMPLES as usize)
+        })
+}
+
+/// The request validated ([`FrameRequest::validate`]) and of a walkthrough method (regular, CK,
+/// progressive).
+pub fn walkthrough_request(req: &FrameRequest) -> Result<()> {
+    req.validate()?;
+    if !req.method.walkthrough() {
+        return Err(ShadeError::Parameter(format!(
+            "the {} method is not one of the walkthrough's (regular, ck, progressive)",
+            req.method.name()
+        )));
+    }
+    Ok(())
 }
 
 /// Renders a w×h frame of `lit` at `camera` with the incident light `light`.
@@ -577,16 +542,16 @@ pub fn render_frame(
     camera: &PathCamera,
     w: usize,
     h: usize,
-    opts: &FrameOptions,
+    req: &FrameRequest,
 ) -> Result<(Image, FrameStats)> {
-    opts.validate()?;
+    walkthrough_request(req)?;
     if w == 0 || h == 0 {
         return Err(ShadeError::Parameter(format!("image {w}×{h} is empty")));
     }
     let buffers = FrameBuffers::render(lit, light, camera, w, h)?;
     let ps = lit.path_scene;
     let g = &ps.geometry;
-    let n = opts.samples;
+    let n = req.samples as usize;
     let shade = |o: DVec3, d: DVec3, rng: &mut SplitMix64| -> (Rgb, u64, bool) {
         let Some(hit) = lit.tracer.intersect(o, d) else {
             return (
@@ -596,12 +561,15 @@ pub fn render_frame(
             );
         };
         let l = lit.lit.radiance(g, hit.prim, hit.bary, d);
-        let points = match opts.method {
-            FrameMethod::Regular => FramePoints::Regular,
-            FrameMethod::Ck => FramePoints::Ck {
+        let points = match req.method {
+            Method::Ck => FramePoints::Ck {
                 seed: rng.next_u64(),
             },
-            FrameMethod::Progressive { frames } => FramePoints::Progressive { first: 0, frames },
+            Method::Progressive => FramePoints::Progressive {
+                first: 0,
+                frames: req.frames,
+            },
+            _ => FramePoints::Regular,
         };
         let surface = SurfaceHit {
             prim: hit.prim,
@@ -612,8 +580,8 @@ pub fn render_frame(
         let (glossy, lookups, vd) = view_dependent(lit, light, &buffers, &surface, n, points, true);
         (l + glossy, lookups, vd)
     };
-    let seed = opts.seed;
-    let spp = opts.spp;
+    let seed = req.seed;
+    let spp = req.rays;
     let rows: Vec<([f32; 3], u64, u64)> = (0..w * h)
         .into_par_iter()
         .map(|i| {
@@ -655,7 +623,7 @@ pub fn render_frame(
 /// G-buffer pixel centres' (as [`shade_gbuffer`]); CK seeds pixel (x, y) of the G-buffer with
 /// [`pixel_seed`]`(x, y, seed)`; `frame` is the progressive frame shaded (frames `0..=frame`
 /// averaged when `accumulate`, else frame `frame` alone). Errors as [`shade_gbuffer`], and on
-/// a sample count outside 1..=[`MAX_SAMPLES`].
+/// a request [`walkthrough_request`] refuses.
 pub fn shade_gbuffer_view_dependent(
     lit: &LitScene,
     light: &FrameLight,
@@ -663,9 +631,9 @@ pub fn shade_gbuffer_view_dependent(
     camera: &PathCamera,
     gb: &GBuffer,
     k: u32,
-    opts: &GBufferViewOptions,
+    req: &FrameRequest,
 ) -> Result<(Image, FrameStats)> {
-    shade_gbuffer_region(lit, light, buffers, camera, gb, k, opts, None, true)
+    shade_gbuffer_region(lit, light, buffers, camera, gb, k, req, None, true)
 }
 
 /// Glossy samples per texel of a see-through layer ([`shade_see_through_layer`]).
@@ -689,22 +657,14 @@ pub fn shade_see_through_layer(
     gb: &GBuffer,
     tiles: &ScreenTiles,
 ) -> Result<(Image, FrameStats)> {
-    let opts = GBufferViewOptions {
-        samples: SEE_THROUGH_SAMPLES,
-        method: FrameMethod::Regular,
+    let req = FrameRequest {
+        method: Method::Regular,
+        samples: SEE_THROUGH_SAMPLES as u32,
+        rays: 1,
+        frames: 1,
         seed: 0,
     };
-    shade_gbuffer_region(
-        lit,
-        light,
-        buffers,
-        camera,
-        gb,
-        1,
-        &opts,
-        Some(tiles),
-        false,
-    )
+    shade_gbuffer_region(lit, light, buffers, camera, gb, 1, &req, Some(tiles), false)
 }
 
 /// [`shade_gbuffer_view_dependent`] with the view-dependent part only in the output pixels of
@@ -717,19 +677,15 @@ fn shade_gbuffer_region(
     camera: &PathCamera,
     gb: &GBuffer,
     k: u32,
-    opts: &GBufferViewOptions,
+    req: &FrameRequest,
     tiles: Option<&ScreenTiles>,
     see_through: bool,
 ) -> Result<(Image, FrameStats)> {
     let ps = lit.path_scene;
     let g = &ps.geometry;
     let base = shade_gbuffer(lit.lit, g, ps.environment.as_ref(), camera, gb, k)?;
-    let n = opts.samples;
-    if n == 0 || n > MAX_SAMPLES {
-        return Err(ShadeError::Parameter(format!(
-            "{n} glossy samples per pixel is outside 1..={MAX_SAMPLES}"
-        )));
-    }
+    walkthrough_request(req)?;
+    let n = req.samples as usize;
     let ku = k as usize;
     let (w, h) = (base.width, base.height);
     let rows: Vec<([f32; 3], u64, u64)> = (0..w * h)
@@ -756,14 +712,15 @@ fn shade_gbuffer_region(
                         bary: [1.0 - b1 - b2, b1, b2],
                         d,
                     };
-                    let points = match opts.method {
-                        FrameMethod::Regular => FramePoints::Regular,
-                        FrameMethod::Ck => FramePoints::Ck {
-                            seed: pixel_seed(gx, gy, opts.seed),
+                    let points = match req.method {
+                        Method::Ck => FramePoints::Ck {
+                            seed: pixel_seed(gx, gy, req.seed),
                         },
-                        FrameMethod::Progressive { frames } => {
-                            FramePoints::Progressive { first: 0, frames }
-                        }
+                        Method::Progressive => FramePoints::Progressive {
+                            first: 0,
+                            frames: req.frames,
+                        },
+                        _ => FramePoints::Regular,
                     };
                     let (c, l, vd) = view_dependent(
                         lit,
@@ -799,17 +756,6 @@ fn shade_gbuffer_region(
         })
         .collect();
     Ok((Image::from_data(w, h, data)?, stats))
-}
-
-/// Options of [`shade_gbuffer_view_dependent`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GBufferViewOptions {
-    /// Glossy samples per G-buffer pixel.
-    pub samples: usize,
-    /// Integration method (`Progressive { frames }`: frames 0..frames averaged).
-    pub method: FrameMethod,
-    /// Seed of the random method.
-    pub seed: u64,
 }
 
 /// The f-th point of the R2 sequence (Roberts 2018), the per-frame rotation of the set, on the

@@ -25,6 +25,7 @@ pub mod pattern;
 pub mod probe;
 pub mod reference;
 pub mod render;
+pub mod request;
 pub mod scene;
 pub mod truth;
 pub mod warp;

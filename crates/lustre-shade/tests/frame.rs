@@ -14,10 +14,11 @@ use lustre_scene::material::{MicrofacetType, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind, Mesh, Scene};
 use lustre_shade::bake::render::{render_lightmapped, Lightmapped};
 use lustre_shade::bake::spec_albedo;
-use lustre_shade::frame::{render_frame, FrameLight, FrameMethod, FrameOptions, MAX_SAMPLES};
+use lustre_shade::frame::{render_frame, FrameLight};
 use lustre_shade::kernel::corrected_direction;
 use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{capture_cube, capture_probe, LitScene, ProbeOptions};
+use lustre_shade::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
 use std::f64::consts::PI;
 
 const PAGE: u32 = 64;
@@ -295,17 +296,18 @@ fn frame(
     probes: &[lustre_shade::probe::Probe],
     cam: &PathCamera,
     (w, h): (usize, usize),
-    method: FrameMethod,
+    method: (Method, u32),
     n: usize,
 ) -> (lustre_shade::image::Image, lustre_shade::frame::FrameStats) {
     let light = FrameLight {
         probes,
         environment: None,
     };
-    let opts = FrameOptions {
-        samples: n,
-        method,
-        spp: 1,
+    let opts = FrameRequest {
+        method: method.0,
+        samples: n as u32,
+        rays: 1,
+        frames: method.1,
         seed: 3,
     };
     render_frame(lit, &light, cam, w, h, &opts).unwrap()
@@ -314,14 +316,14 @@ fn frame(
 /// Regular sampling and CK at 8 and 19 samples against progressive refinement (256 frames of
 /// 16 samples, the converged integral of the same incident light): regular wins at both counts
 /// and reaches 38 dB at 19 (PSNR of display values with the truth's peak at white).
-fn regular_beats_ck(label: &str, run: impl Fn(FrameMethod, usize) -> lustre_shade::image::Image) {
-    let truth = run(FrameMethod::Progressive { frames: 256 }, 16);
+fn regular_beats_ck(label: &str, run: impl Fn((Method, u32), usize) -> lustre_shade::image::Image) {
+    let truth = run((Method::Progressive, 256), 16);
     let peak = truth.data.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
     let exposure = 1.0 / f64::from(peak);
     for n in [8, 19] {
         let p_reg =
-            lustre_shade::metrics::psnr(&run(FrameMethod::Regular, n), &truth, exposure).unwrap();
-        let p_ck = lustre_shade::metrics::psnr(&run(FrameMethod::Ck, n), &truth, exposure).unwrap();
+            lustre_shade::metrics::psnr(&run((Method::Regular, 1), n), &truth, exposure).unwrap();
+        let p_ck = lustre_shade::metrics::psnr(&run((Method::Ck, 1), n), &truth, exposure).unwrap();
         eprintln!("{label}, n {n}: regular {p_reg:.1} dB, CK {p_ck:.1} dB");
         assert!(p_reg > p_ck, "{label} n {n}: {p_reg} vs {p_ck}");
         if n == 19 {
@@ -350,10 +352,11 @@ fn a_diffuse_frame_is_the_light_mapped_image() {
     scene.materials[1] = Material::diffuse("ball", Rgb::splat(0.5));
     with_lit(&scene, &atlas, &pages, |lit| {
         let cam = camera();
-        let opts = FrameOptions {
+        let opts = FrameRequest {
+            method: Method::Regular,
             samples: 8,
-            method: FrameMethod::Regular,
-            spp: 2,
+            rays: 2,
+            frames: 1,
             seed: 5,
         };
         let light = FrameLight {
@@ -365,12 +368,13 @@ fn a_diffuse_frame_is_the_light_mapped_image() {
         let lm = render_lightmapped(&scene, &atlas, &pages, &cam, 24, 16, 2, 5).unwrap();
         assert_eq!(img.data, lm.data);
         // Bad sample counts are refused.
-        for samples in [0, MAX_SAMPLES + 1] {
-            let bad = FrameOptions { samples, ..opts };
+        for samples in [0, MAX_WALKTHROUGH_SAMPLES + 1] {
+            let bad = FrameRequest { samples, ..opts };
             assert!(render_frame(lit, &light, &cam, 24, 16, &bad).is_err());
         }
-        let bad = FrameOptions {
-            method: FrameMethod::Progressive { frames: 0 },
+        let bad = FrameRequest {
+            method: Method::Progressive,
+            frames: 0,
             ..opts
         };
         assert!(render_frame(lit, &light, &cam, 24, 16, &bad).is_err());
@@ -465,7 +469,7 @@ fn a_glossy_mirror_floor_converges_and_regular_beats_ck() {
                 50.0,
             )
             .unwrap();
-            let (_, stats) = frame(lit, &probes, &cam, (8, 6), FrameMethod::Regular, 4);
+            let (_, stats) = frame(lit, &probes, &cam, (8, 6), (Method::Regular, 1), 4);
             assert_eq!(stats.mirrors, 1);
             regular_beats_ck(&format!("mirror floor, alpha {alpha}"), |method, n| {
                 frame(lit, &probes, &cam, (48, 36), method, n).0
@@ -548,10 +552,11 @@ fn a_glass_pane_transmits_what_lies_behind_it() {
                 probes: &probes,
                 environment: None,
             };
-            let opts = FrameOptions {
+            let opts = FrameRequest {
+                method: Method::Regular,
                 samples: 8,
-                method: FrameMethod::Regular,
-                spp: 1,
+                rays: 1,
+                frames: 1,
                 seed: 1,
             };
             render_frame(lit, &light, &cam, w, h, &opts).unwrap()
@@ -707,7 +712,7 @@ fn a_glossy_object_behind_glass_keeps_its_reflections() {
     let render = |with_pane: bool| {
         let (scene, atlas, pages) = room_with_pane_before_ball(with_pane);
         with_lit(&scene, &atlas, &pages, |lit| {
-            frame(lit, &probes, &cam, (w, h), FrameMethod::Regular, 8)
+            frame(lit, &probes, &cam, (w, h), (Method::Regular, 1), 8)
         })
     };
     let ((with, stats), (without, _)) = (render(true), render(false));
@@ -758,10 +763,10 @@ fn an_objects_own_sample_budget_replaces_the_frames() {
     });
     let probes = [probe];
     let at3 = with_lit(&scene, &atlas, &pages, |lit| {
-        frame(lit, &probes, &camera(), (32, 32), FrameMethod::Regular, 3)
+        frame(lit, &probes, &camera(), (32, 32), (Method::Regular, 1), 3)
     });
     let (img, stats) = with_lit(&hinted, &atlas, &pages, |lit| {
-        frame(lit, &probes, &camera(), (32, 32), FrameMethod::Regular, 16)
+        frame(lit, &probes, &camera(), (32, 32), (Method::Regular, 1), 16)
     });
     assert!(stats.glossy_hits > 50, "{stats:?}");
     assert!(stats.lookups <= 3 * stats.glossy_hits, "{stats:?}");

@@ -24,8 +24,8 @@ use crate::adaptive::{AdaptiveMaps, AdaptiveRenderer, AdaptiveSettings};
 use crate::{AdaptiveDevice, ViewMethod};
 use lustre_gpu::material::pack_material;
 use lustre_gpu::{
-    GpuContext, GpuFrameOptions, GpuFrameSession, GpuFrameTimes, GpuWalkthrough,
-    LightmapFrameScene, StepWork, WalkthroughPasses,
+    GpuContext, GpuFrameSession, GpuFrameTimes, GpuWalkthrough, LightmapFrameScene, StepWork,
+    WalkthroughPasses,
 };
 use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::material_edit;
@@ -34,10 +34,11 @@ use lustre_scene::{Camera, Material, MaterialKind, Scene};
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::spec_albedo;
 use lustre_shade::baked::{environment_pyramid, BakedScene};
-use lustre_shade::frame::{FrameMethod, FrameStats};
+use lustre_shade::frame::FrameStats;
 use lustre_shade::image::Image;
 use lustre_shade::path::{Accumulator, PathCamera, PathOptions, PathScene, PathTracer};
 use lustre_shade::probe::{LitScene, ProbeOptions};
+use lustre_shade::request::{FrameRequest, Method};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, Sender, TryRecvError};
 use std::time::Instant;
@@ -746,16 +747,15 @@ fn serve(
             }
         };
         let method = match settings.method {
-            ViewMethod::Regular => FrameMethod::Regular,
-            ViewMethod::Ck => FrameMethod::Ck,
-            _ => FrameMethod::Progressive {
-                frames: settings.refine_frames.max(1),
-            },
+            ViewMethod::Regular => Method::Regular,
+            ViewMethod::Ck => Method::Ck,
+            _ => Method::Progressive,
         };
-        let opts = GpuFrameOptions {
-            samples: settings.samples,
+        let opts = FrameRequest {
             method,
-            supersampling: settings.supersampling,
+            samples: settings.samples,
+            rays: settings.supersampling * settings.supersampling,
+            frames: settings.refine_frames.max(1),
             seed: settings.seed,
         };
         let step = match session.step(ctx, walk, lit, &camera, size, &opts) {

@@ -11,7 +11,7 @@
 //! is not a software rasterizer. Without a scene or --material, 004 Fig. IV.13's line-up (three
 //! spheres of measured paints on white marble).
 
-use crate::render_cmd::{compare, path_cameras, Device, Method, RenderArgs, SampleRuleArg};
+use crate::render_cmd::{compare, path_cameras, Device, RenderArgs, SampleRuleArg};
 use anyhow::{bail, Context};
 use glam::DVec3;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -31,23 +31,14 @@ use lustre_scene::Scene;
 use lustre_shade::baked::read_environment;
 use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::reference::{path_camera, path_scene};
+use lustre_shade::request::{FrameRequest, Method, MAX_ADAPTIVE_SAMPLES};
 use std::fmt::Write as _;
 use std::time::Instant;
 
 /// Runs the adaptive or brute-force renderer.
-pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
-    let adaptive = args.method == Method::Adaptive;
-    if !(1..=1024).contains(&args.samples) {
-        bail!("--samples {} must be 1..=1024", args.samples);
-    }
-    let k = (f64::from(args.spp)).sqrt().round() as usize;
-    if k * k != args.spp as usize || !(1..=4).contains(&k) {
-        bail!(
-            "--spp {} must be 1, 4, 9 or 16 with --method {:?} (a k × k supersampled G-buffer)",
-            args.spp,
-            args.method
-        );
-    }
+pub fn run(args: &RenderArgs, req: &FrameRequest) -> anyhow::Result<()> {
+    let adaptive = req.method == Method::Adaptive;
+    let k = req.supersampling() as usize;
     let mut times: Vec<(String, f64)> = vec![];
     let mut t = Instant::now();
     let environment = args.env.as_deref().map(read_environment).transpose()?;
@@ -160,8 +151,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         let full = if adaptive {
             let options = BufferOptions {
                 n_b: args.n_b as usize,
-                mean_samples: args.samples as f64,
-                max_samples: 1024,
+                mean_samples: f64::from(req.samples),
+                max_samples: MAX_ADAPTIVE_SAMPLES as usize,
                 lighting,
                 scale: rule,
                 rate: args.rate,
@@ -242,7 +233,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 .and_then(|p| Some((&p.ctx, p.shading.as_mut()?)))
             {
                 Some((gctx, (scene, pass))) => {
-                    let out = pass.render_brute(gctx, scene, &g, args.samples, args.seed)?;
+                    let out =
+                        pass.render_brute(gctx, scene, &g, req.samples as usize, args.seed)?;
                     if let Some(ms) = out.timing.gpu_ms {
                         times.push((
                             format!("{stem}: brute-force shading (GPU timestamps)"),
@@ -258,7 +250,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                     (out.frame.image, st.shaded, st.samples)
                 }
                 None => {
-                    let (img, st) = render_brute(&g, &ctx, args.samples, args.seed)?;
+                    let (img, st) = render_brute(&g, &ctx, req.samples as usize, args.seed)?;
                     lap(&mut times, &format!("{stem}: brute-force shading"), &mut t);
                     (img, st.shaded, st.samples)
                 }

@@ -6,12 +6,11 @@
 //! relative RMS and a false-colour difference.
 
 use anyhow::{bail, Context};
+use clap::builder::TypedValueParser;
 use indicatif::{ProgressBar, ProgressStyle};
 use lustre_brdf::rgb::Rgb;
 use lustre_env::pyramid::CubePyramid;
-use lustre_gpu::{
-    GpuContext, GpuFrameOptions, GpuFrameSession, GpuFrameTimes, GpuWalkthrough, LightmapFrameScene,
-};
+use lustre_gpu::{GpuContext, GpuFrameSession, GpuFrameTimes, GpuWalkthrough, LightmapFrameScene};
 use lustre_scene::camera_path_file::CameraPathFile;
 use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::material_edit::{parse_assignment, set_named};
@@ -20,32 +19,26 @@ use lustre_scene::Scene;
 use lustre_shade::bake::render::Lightmapped;
 use lustre_shade::bake::spec_albedo;
 use lustre_shade::baked::{environment_pyramid, read_environment, BakedScene};
-use lustre_shade::frame::{render_frame, FrameLight, FrameMethod, FrameOptions, FrameStats};
+use lustre_shade::frame::{render_frame, FrameLight, FrameStats};
 use lustre_shade::image::Image;
 use lustre_shade::path::PathCamera;
 use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::reference::film_camera;
+use lustre_shade::request::{FrameRequest, Method};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// How the glossy part is integrated.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Method {
-    /// Regular samples through the material's warp, MIP-filtered.
-    Regular,
-    /// Colbert–Křivánek: random samples, MIP-filtered.
-    Ck,
-    /// Progressive refinement: --frames rotated regular sets, averaged.
-    Progressive,
-    /// 004 ch. IV: measured materials shaded adaptively by frequency analysis (bandwidth
-    /// buffer, hierarchical shading, --samples the mean N_p), the environment's and the
-    /// scene's planar emitters' light without visibility, on the CPU or the GPU.
-    Adaptive,
-    /// The brute force adaptive shading is compared with: --samples importance samples at
-    /// every pixel, the same light and estimator, on the CPU.
-    Brute,
+/// `--method`'s parser: the names of [`Method`], each with its description in the help.
+pub fn method_parser() -> impl TypedValueParser<Value = Method> {
+    clap::builder::PossibleValuesParser::new(
+        Method::ALL
+            .into_iter()
+            .filter(|m| *m != Method::Reference)
+            .map(|m| clap::builder::PossibleValue::new(m.name()).help(m.description())),
+    )
+    .try_map(|s| Method::parse(&s))
 }
 
 /// How `--method adaptive` sets each pixel's sample count.
@@ -107,11 +100,12 @@ pub struct RenderArgs {
     /// Frames per second along --path.
     #[arg(long, default_value_t = 24.0)]
     pub fps: f64,
-    /// Glossy samples per pixel (per camera ray), 1–256.
+    /// Glossy samples per pixel (per camera ray), 1–256; with --method adaptive | brute the
+    /// mean N_p, 1–1024.
     #[arg(long, default_value_t = 16)]
-    pub samples: usize,
+    pub samples: u32,
     /// Integration of the glossy part.
-    #[arg(long, value_enum, default_value_t = Method::Regular)]
+    #[arg(long, default_value = "regular", value_parser = method_parser())]
     pub method: Method,
     /// Still frames accumulated by --method progressive.
     #[arg(long, default_value_t = 64)]
@@ -222,6 +216,25 @@ impl Stages {
     }
 }
 
+/// The frame request of `args` (--method, --samples, --spp, --frames, --seed), validated once
+/// for every method.
+pub fn request(args: &RenderArgs) -> anyhow::Result<FrameRequest> {
+    let req = FrameRequest {
+        method: args.method,
+        samples: args.samples,
+        rays: args.spp,
+        frames: args.frames,
+        seed: args.seed,
+    };
+    req.validate().map_err(|e| {
+        anyhow::anyhow!(
+            "--method {} --samples --spp --frames: {e}",
+            req.method.name()
+        )
+    })?;
+    Ok(req)
+}
+
 /// Runs `lustre render`.
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
@@ -229,21 +242,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         times: vec![],
         t: Instant::now(),
     };
-    let method = match args.method {
-        Method::Adaptive | Method::Brute => return crate::adaptive_cmd::run(args),
-        Method::Regular => FrameMethod::Regular,
-        Method::Ck => FrameMethod::Ck,
-        Method::Progressive => FrameMethod::Progressive {
-            frames: args.frames,
-        },
-    };
-    let opts = FrameOptions {
-        samples: args.samples,
-        method,
-        spp: args.spp,
-        seed: args.seed,
-    };
-    opts.validate()?;
+    let req = request(args)?;
+    if req.method.adaptive() {
+        return crate::adaptive_cmd::run(args, &req);
+    }
     let probe_opts = ProbeOptions {
         face_size: args.probe_size,
         ..ProbeOptions::default()
@@ -355,7 +357,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         environment: env_pyramid.as_ref(),
     };
     // The GPU's anti-aliasing: a k×k supersampled G-buffer, k² nearest to the camera rays asked.
-    let k = ((f64::from(args.spp)).sqrt().round() as u32).max(1);
+    let k = req.supersampling();
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let bar = ProgressBar::new(cameras.len() as u64);
@@ -368,10 +370,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         None => bar.set_message(format!("{w}×{h}, {} camera rays/pixel", args.spp)),
     }
     let mut session = GpuFrameSession::new();
-    let progressive_frames = match method {
-        FrameMethod::Progressive { frames } => frames,
-        _ => 1,
-    };
+    let progressive_frames = req.accumulated_frames();
     for (stem, camera) in &cameras {
         // Each repetition: (frame without its passes, mirror and see-through passes), seconds,
         // and for the GPU the time of each of its passes, and of its first and still frames.
@@ -387,20 +386,14 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                     // refinement then steps the session --frames times at the still camera,
                     // one QMC frame accumulated per step.
                     session.reset();
-                    let gopts = GpuFrameOptions {
-                        samples: args.samples as u32,
-                        method,
-                        supersampling: k,
-                        seed: args.seed,
-                    };
                     let size = (w as usize, h as usize);
                     let passes =
                         |t: &GpuFrameTimes| (t.gbuffer_ms + t.lightmap_ms + t.shade_ms) * 1e-3;
-                    let mut step = session.step(ctx, walk, &lit, camera, size, &gopts)?;
+                    let mut step = session.step(ctx, walk, &lit, camera, size, &req)?;
                     first_frames.push(passes(&step.times));
                     let mut times = step.times;
                     for _ in 1..progressive_frames {
-                        step = session.step(ctx, walk, &lit, camera, size, &gopts)?;
+                        step = session.step(ctx, walk, &lit, camera, size, &req)?;
                         still_frames.push(passes(&step.times));
                         times.shade_ms += step.times.shade_ms;
                     }
@@ -412,7 +405,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 }
                 None => {
                     let (img, stats) =
-                        render_frame(&lit, &light, camera, w as usize, h as usize, &opts)?;
+                        render_frame(&lit, &light, camera, w as usize, h as usize, &req)?;
                     let s = t.elapsed().as_secs_f64();
                     runs.push(((s - stats.mirror_seconds).max(0.0), stats.mirror_seconds));
                     (img, stats)
@@ -445,8 +438,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         }
         // Progressive refinement: the frame above holds all --frames frames; on the GPU also
         // its first frame and the median still (accumulating) frame, the view buffers apart.
-        let progress = match method {
-            FrameMethod::Progressive { frames } if gpu.is_some() => {
+        let frames = req.frames;
+        let progress = match req.method {
+            Method::Progressive if gpu.is_some() => {
                 let (first, _, _) = median(&mut first_frames);
                 st.times.push((format!("{stem}: first frame"), first));
                 let mut line = format!(
@@ -467,7 +461,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 }
                 Some(line)
             }
-            FrameMethod::Progressive { frames } => Some(format!(
+            Method::Progressive => Some(format!(
                 "progressive refinement on the CPU: {frames} frame(s) in one pass over the \
                  pixels, {:.1} ms",
                 m * 1e3

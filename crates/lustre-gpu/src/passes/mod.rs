@@ -14,8 +14,8 @@
 //! | [`probe_capture`] | scene, light maps, environment | probe pyramids (through the three above) |
 //! | [`view`] | scene, light maps, environment, camera | mirror and see-through view buffers |
 //! | [`frame_shade`] | G-buffer, light-mapped image, materials, probe and environment pyramids, view buffers | the frame |
-//! | [`bandwidth`] | G-buffer, materials, environment, area lights | bandwidth and variance sums |
-//! | [`adaptive`] | bandwidth levels, G-buffer, materials, environment, area lights | the adaptive frame |
+//! | [`bandwidth`] | shading points, materials, environment, area lights | bandwidth and variance sums |
+//! | [`adaptive`] | bandwidth levels, shading points, materials, environment, area lights | the adaptive frame |
 //! | [`sphere`] | sphere scene, environment pyramid | the sphere kernel's image |
 
 pub mod adaptive;
@@ -47,6 +47,9 @@ pub enum Resource {
     CubeBase,
     /// Triangle id, barycentrics, depth and shading normal per pixel.
     GBuffer,
+    /// The adaptive method's shading points: per pixel the surface, its normal, material and
+    /// screen-space rates, ray-cast on the CPU (`lustre_adaptive::gbuffer`) (external).
+    ShadingPoints,
     /// Emission plus light-mapped diffuse light per pixel.
     LightmappedImage,
     /// A cube map's filtered MIP pyramid.
@@ -79,6 +82,7 @@ impl Resource {
                 | Resource::AreaLights
                 | Resource::Materials
                 | Resource::CubeBase
+                | Resource::ShadingPoints
                 | Resource::SphereScene
         )
     }

@@ -902,7 +902,7 @@ pub const NODE: crate::passes::Node = crate::passes::Node {
     ],
     inputs: &[
         crate::passes::Resource::Bandwidth,
-        crate::passes::Resource::GBuffer,
+        crate::passes::Resource::ShadingPoints,
         crate::passes::Resource::Materials,
         crate::passes::Resource::Environment,
         crate::passes::Resource::AreaLights,

@@ -577,7 +577,7 @@ pub const NODE: crate::passes::Node = crate::passes::Node {
     name: "bandwidth",
     shaders: &[("bandwidth.wgsl", BANDWIDTH_PASS_WGSL)],
     inputs: &[
-        crate::passes::Resource::GBuffer,
+        crate::passes::Resource::ShadingPoints,
         crate::passes::Resource::Materials,
         crate::passes::Resource::Environment,
         crate::passes::Resource::AreaLights,

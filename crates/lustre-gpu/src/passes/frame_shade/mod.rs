@@ -46,12 +46,13 @@ use crate::view_buffer::GpuViewBuffer;
 use crate::wgsl;
 use glam::DVec3;
 
-use lustre_shade::frame::{FrameBuffers, FrameLight, FrameMethod, FrameStats, FrameTables};
+use lustre_shade::frame::{walkthrough_request, FrameBuffers, FrameLight, FrameStats, FrameTables};
 use lustre_shade::image::Image;
 use lustre_shade::kernel::BoundingPlane;
 use lustre_shade::mirror::ScreenTiles;
 use lustre_shade::path::PathCamera;
 use lustre_shade::probe::LitScene;
+use lustre_shade::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
 use std::sync::OnceLock;
 
 /// Everything the pass reads besides the G-buffer: per-triangle records, materials with their
@@ -281,7 +282,7 @@ impl FrameShadeScene {
             let samples = scene.meshes[mesh]
                 .hints
                 .samples
-                .map_or(0, |s| s.clamp(1, lustre_shade::frame::MAX_SAMPLES as u32));
+                .map_or(0, |s| s.clamp(1, MAX_WALKTHROUGH_SAMPLES));
             own_samples = own_samples.max(samples);
             tris.extend([
                 v4(t[0], bits(material)),
@@ -534,20 +535,6 @@ impl FrameShadeTarget {
     }
 }
 
-/// Options of one call of [`FrameShadePass::shade`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FrameShadeOptions {
-    /// Samples per G-buffer pixel (1..=`lustre_shade::frame::MAX_SAMPLES`).
-    pub samples: u32,
-    /// Regular or CK; `Progressive` shades frame `frame` and averages it into the target's
-    /// accumulation (frame 0 resets it: a camera move).
-    pub method: FrameMethod,
-    /// The progressive frame index.
-    pub frame: u32,
-    /// Seed of the CK points.
-    pub seed: u64,
-}
-
 /// The light-mapped image a run adds to: the first w·h RGBA f32 texels of a buffer.
 struct Lit<'a> {
     buffer: &'a wgpu::Buffer,
@@ -607,8 +594,10 @@ impl FrameShadePass {
     }
 
     /// Shades the (k·w)×(k·h) `gbuffer` seen from `camera`: `lightmapped` (the w×h light-map
-    /// shading of the same G-buffer) plus the view-dependent part, into `out` (submitted, not
-    /// waited for). Errors: mismatched sizes, a sample count outside 1..=MAX_SAMPLES.
+    /// shading of the same G-buffer) plus the view-dependent part of `req`, into `out`
+    /// (submitted, not waited for); the progressive method shades frame `frame` and averages it
+    /// into the target's accumulation (frame 0 resets it: a camera move). Errors: mismatched
+    /// sizes, a request `lustre_shade::frame::walkthrough_request` refuses.
     #[allow(clippy::too_many_arguments)]
     pub fn shade(
         &self,
@@ -618,7 +607,7 @@ impl FrameShadePass {
         lightmapped: &ShadeTarget,
         camera: &PathCamera,
         k: u32,
-        opts: &FrameShadeOptions,
+        (req, frame): (&FrameRequest, u32),
         out: &FrameShadeTarget,
     ) -> Result<()> {
         let lit = Lit {
@@ -626,7 +615,17 @@ impl FrameShadePass {
             width: lightmapped.width,
             height: lightmapped.height,
         };
-        self.dispatch(ctx, scene, gbuffer, lit, camera, k, opts, (None, true), out)
+        self.dispatch(
+            ctx,
+            scene,
+            gbuffer,
+            lit,
+            camera,
+            k,
+            (req, frame),
+            (None, true),
+            out,
+        )
     }
 
     /// The see-through layer of view buffer `view` (index `index` of `scene`'s views, a
@@ -662,10 +661,11 @@ impl FrameShadePass {
             width: w,
             height: h,
         };
-        let opts = FrameShadeOptions {
+        let req = FrameRequest {
+            method: Method::Regular,
             samples: lustre_shade::frame::SEE_THROUGH_SAMPLES as u32,
-            method: FrameMethod::Regular,
-            frame: 0,
+            rays: 1,
+            frames: 1,
             seed: 0,
         };
         self.dispatch(
@@ -675,7 +675,7 @@ impl FrameShadePass {
             lit,
             camera,
             1,
-            &opts,
+            (&req, 0),
             (Some(tiles), false),
             out,
         )?;
@@ -700,17 +700,11 @@ impl FrameShadePass {
         lightmapped: Lit,
         camera: &PathCamera,
         k: u32,
-        opts: &FrameShadeOptions,
+        (req, frame): (&FrameRequest, u32),
         (tiles, see_through): (Option<&ScreenTiles>, bool),
         out: &FrameShadeTarget,
     ) -> Result<()> {
-        let max = lustre_shade::frame::MAX_SAMPLES as u32;
-        if opts.samples == 0 || opts.samples > max {
-            return Err(invalid(
-                "samples",
-                format!("{} is outside 1..={max}", opts.samples),
-            ));
-        }
+        walkthrough_request(req).map_err(|e| invalid("frame request", e.to_string()))?;
         if k == 0
             || gbuffer.width != out.width * k
             || gbuffer.height != out.height * k
@@ -733,16 +727,16 @@ impl FrameShadePass {
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let cam = camera_uniform(camera, gbuffer.width, gbuffer.height, 0.0);
         let mut u: Vec<[u32; 4]> = cam.iter().map(|v| v.map(f32::to_bits)).collect();
-        let method = match opts.method {
-            FrameMethod::Regular => 0,
-            FrameMethod::Ck => 1,
-            FrameMethod::Progressive { .. } => 2,
+        let method = match req.method {
+            Method::Ck => 1,
+            Method::Progressive => 2,
+            _ => 0,
         };
-        u.push([gbuffer.width, gbuffer.height, k, opts.samples]);
-        u.push([method, opts.frame, scene.probes, scene.page[0]]);
+        u.push([gbuffer.width, gbuffer.height, k, req.samples]);
+        u.push([method, frame, scene.probes, scene.page[0]]);
         u.push([
-            opts.seed as u32,
-            (opts.seed >> 32) as u32,
+            req.seed as u32,
+            (req.seed >> 32) as u32,
             scene.environment,
             scene.page[1],
         ]);
@@ -766,7 +760,7 @@ impl FrameShadePass {
         u.push(tile_u);
         u.push([u32::from(!see_through), 0, 0, 0]);
         // The largest n of a pixel: the frame's, or an object's own budget.
-        let n = opts.samples.max(scene.own_samples);
+        let n = req.samples.max(scene.own_samples);
         let chunks: Vec<u32> = (0..n).step_by(SAMPLES_PER_DISPATCH as usize).collect();
         let view = |t: &wgpu::Texture| t.create_view(&wgpu::TextureViewDescriptor::default());
         let (prim, bary) = (view(&gbuffer.prim), view(&gbuffer.bary_depth));
