@@ -1,5 +1,5 @@
 //! `lustre view`: the interactive walkthrough and material editor (000's walkthrough
-//! application; issue 12). A winit window with egui panels over the walkthrough renderer of
+//! application). A winit window with egui panels over the walkthrough renderer of
 //! `lustre render` (lustre-gpu's [`lustre_gpu::GpuFrameSession`]), which runs in its own
 //! thread ([`render`]) so that the window never waits for a frame, a material rebuild or a fit.
 //!

@@ -377,4 +377,56 @@ sample-rule absolute
             assert!(e.contains(says), "{s:?}: {e}");
         }
     }
+
+    #[test]
+    fn more_bad_lines_are_named() {
+        for (s, says) in [
+            ("wait 100001", "0 … 100000"),
+            ("wait -1", "0 … 100000"),
+            ("walk forward", "2 argument"),
+            ("walk up 601", "0 … 600"),
+            ("walk down -0.5", "0 … 600"),
+            ("camera", "takes an argument"),
+            ("material", "takes an argument"),
+            ("screenshot", "takes an argument"),
+            ("save-material", "takes an argument"),
+            ("save-scene", "takes an argument"),
+            ("method", "1 argument"),
+            ("samples 257", "1 … 256"),
+            ("samples 8.5", "1 … 256"),
+            ("budget 257", "global"),
+            ("exposure 0", "positive"),
+            ("exposure", "1 argument"),
+            ("fit", "fit FILE"),
+            ("fit a.binary phong", "sgd | kurt | beckmann | ggx"),
+            ("fit a b c", "fit FILE"),
+            ("record", "record start"),
+            ("record start now", "record start"),
+            ("quit now", "0 argument"),
+            ("\n# a comment\n\nfly", "line 4: \"fly\": unknown command"),
+        ] {
+            let e = parse(s).unwrap_err();
+            assert!(e.contains(says), "{s:?}: {e}");
+        }
+    }
+
+    #[test]
+    fn defaults_edge_values_and_comments() {
+        let s = "fit data:merl/gold.binary\nbudget global\nwait 0\nwalk back 0\n\
+                 select 3.5 -2\nset base.alpha  0.3 0.4\n  # an indented comment\n\n\
+                 look 0 0 # a trailing one\n";
+        assert_eq!(
+            parse(s).unwrap(),
+            vec![
+                Command::Fit("data:merl/gold.binary".into(), "sgd".into()),
+                Command::Budget(None),
+                Command::Wait(0),
+                Command::Walk(Direction::Back, 0.0),
+                Command::Select(3.5, -2.0),
+                Command::Set("base.alpha".into(), "0.3 0.4".into()),
+                Command::Look(0.0, 0.0),
+            ]
+        );
+        assert_eq!(parse("# nothing\n\n").unwrap(), vec![]);
+    }
 }
