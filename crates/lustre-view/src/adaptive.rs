@@ -445,7 +445,7 @@ mod tests {
         let mut r = AdaptiveRenderer::new(&ps, &|_, _| {}, None, AdaptiveDevice::Auto).unwrap();
         let cam = film_camera(&scene.cameras[0], 48, 32).unwrap();
         let settings = FrameSettings {
-            method: crate::ViewMethod::Adaptive,
+            method: crate::Method::Adaptive,
             samples: 4,
             supersampling: 2,
             refine_frames: 1,

@@ -39,43 +39,8 @@ pub mod script;
 
 use std::path::PathBuf;
 
-/// How the glossy part is integrated in the view.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ViewMethod {
-    /// Regular samples through the material's warp (one frame, then still).
-    Regular,
-    /// Colbert–Křivánek random samples.
-    Ck,
-    /// Progressive refinement: rotated regular sets accumulated while the camera is still.
-    Progressive,
-    /// A CPU path-traced reference filling in (1 sample per pixel per pass).
-    Reference,
-    /// 004 ch. IV's adaptive shading on the CPU (bandwidth buffer, hierarchical shading; the
-    /// environment's and the planar emitters' light without visibility), one frame per view.
-    Adaptive,
-}
-
-impl ViewMethod {
-    /// Its name in scripts and the panel.
-    pub fn name(self) -> &'static str {
-        match self {
-            ViewMethod::Regular => "regular",
-            ViewMethod::Ck => "ck",
-            ViewMethod::Progressive => "progressive",
-            ViewMethod::Reference => "reference",
-            ViewMethod::Adaptive => "adaptive",
-        }
-    }
-
-    /// Whether it is one of the GPU walkthrough's methods (regular, CK, progressive), which
-    /// need the scene's light maps and its materials on the GPU.
-    pub fn walkthrough(self) -> bool {
-        matches!(
-            self,
-            ViewMethod::Regular | ViewMethod::Ck | ViewMethod::Progressive
-        )
-    }
-}
+/// How the glossy part is integrated in the view: the method every renderer shares.
+pub use lustre_shade::request::Method;
 
 /// Where the adaptive method's passes run (`--adaptive-device`).
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]

@@ -21,7 +21,7 @@
 //! the scene opens: an edit does not make an adaptive-only scene a walkthrough one.
 
 use crate::adaptive::{AdaptiveMaps, AdaptiveRenderer, AdaptiveSettings};
-use crate::{AdaptiveDevice, ViewMethod};
+use crate::{AdaptiveDevice, Method};
 use lustre_gpu::material::pack_material;
 use lustre_gpu::{
     GpuContext, GpuFrameSession, GpuFrameTimes, GpuWalkthrough, LightmapFrameScene, StepWork,
@@ -38,7 +38,7 @@ use lustre_shade::frame::FrameStats;
 use lustre_shade::image::Image;
 use lustre_shade::path::{Accumulator, PathCamera, PathOptions, PathScene, PathTracer};
 use lustre_shade::probe::{LitScene, ProbeOptions};
-use lustre_shade::request::{FrameRequest, Method};
+use lustre_shade::request::FrameRequest;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, Sender, TryRecvError};
 use std::time::Instant;
@@ -59,7 +59,7 @@ pub enum SceneSource {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameSettings {
     /// The glossy integration.
-    pub method: ViewMethod,
+    pub method: Method,
     /// Glossy samples per G-buffer pixel, 1–256 (the adaptive method: the mean N_p).
     pub samples: u32,
     /// k: a k×k supersampled G-buffer per pixel.
@@ -656,7 +656,7 @@ fn serve(
             continue;
         };
         let t = Instant::now();
-        if settings.method == ViewMethod::Reference {
+        if settings.method == Method::Reference {
             let r = match reference.take() {
                 Some(r) if r.camera == camera && r.size == size => r,
                 _ => Reference {
@@ -689,7 +689,7 @@ fn serve(
             reference = Some(r);
             continue;
         }
-        if settings.method == ViewMethod::Adaptive {
+        if settings.method == Method::Adaptive {
             let key = (camera, size, settings);
             busy = false;
             if adaptive_done == Some(key) {
@@ -746,11 +746,8 @@ fn serve(
                 continue;
             }
         };
-        let method = match settings.method {
-            ViewMethod::Regular => Method::Regular,
-            ViewMethod::Ck => Method::Ck,
-            _ => Method::Progressive,
-        };
+        // The reference and adaptive methods returned above: a walkthrough method here.
+        let method = settings.method;
         let opts = FrameRequest {
             method,
             samples: settings.samples,

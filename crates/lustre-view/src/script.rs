@@ -33,7 +33,7 @@
 //! it, so a `screenshot` captures the result of the commands before it.
 
 use crate::adaptive::{parse_rule, BufferView};
-use crate::ViewMethod;
+use crate::Method;
 use lustre_adaptive::buffer::SampleRule;
 
 /// Which way `walk` moves.
@@ -73,7 +73,7 @@ pub enum Command {
     /// Swap the selected material for a specification.
     Material(String),
     /// The glossy integration.
-    Method(ViewMethod),
+    Method(Method),
     /// Glossy samples per pixel (the adaptive method's mean N_p).
     Samples(u32),
     /// What the adaptive method shows.
@@ -186,11 +186,11 @@ pub fn parse(text: &str) -> Result<Vec<Command>, String> {
             "method" => {
                 need(1)?;
                 Command::Method(match args[0] {
-                    "regular" => ViewMethod::Regular,
-                    "ck" => ViewMethod::Ck,
-                    "progressive" => ViewMethod::Progressive,
-                    "reference" => ViewMethod::Reference,
-                    "adaptive" => ViewMethod::Adaptive,
+                    "regular" => Method::Regular,
+                    "ck" => Method::Ck,
+                    "progressive" => Method::Progressive,
+                    "reference" => Method::Reference,
+                    "adaptive" => Method::Adaptive,
                     _ => {
                         return Err(err(
                             "method: regular | ck | progressive | reference | adaptive",
@@ -324,7 +324,7 @@ sample-rule absolute
         assert_eq!(
             c,
             vec![
-                Command::Method(ViewMethod::Adaptive),
+                Command::Method(Method::Adaptive),
                 Command::Buffer(BufferView::Image),
                 Command::Buffer(BufferView::Bandwidth),
                 Command::Buffer(BufferView::Level),

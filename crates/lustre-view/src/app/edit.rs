@@ -6,7 +6,7 @@
 use super::App;
 use crate::camera::FlyCamera;
 use crate::render::Request;
-use crate::ViewMethod;
+use crate::Method;
 use lustre_scene::material_edit::{self, Field};
 use lustre_scene::MaterialKind;
 
@@ -66,7 +66,7 @@ impl App {
 
     /// Switches to method `m`, unless it is a walkthrough method and the scene is adaptive-only
     /// (said, and the method kept).
-    pub(super) fn choose_method(&mut self, m: ViewMethod) {
+    pub(super) fn choose_method(&mut self, m: Method) {
         match self.walkthrough_refusal(m) {
             Some(why) => {
                 let text = format!("{} method refused: {why}", m.name());
@@ -78,7 +78,7 @@ impl App {
     }
 
     /// Why method `m` cannot show the scene: a walkthrough method on an adaptive-only scene.
-    pub(super) fn walkthrough_refusal(&self, m: ViewMethod) -> Option<String> {
+    pub(super) fn walkthrough_refusal(&self, m: Method) -> Option<String> {
         let why = self.info.as_ref()?.no_walkthrough.as_ref()?;
         m.walkthrough().then(|| why.clone())
     }

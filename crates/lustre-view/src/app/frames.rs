@@ -6,7 +6,7 @@
 use super::{App, HISTORY};
 use crate::camera::FlyCamera;
 use crate::render::{Reply, Request};
-use crate::ViewMethod;
+use crate::Method;
 use std::time::Instant;
 
 impl App {
@@ -31,7 +31,7 @@ impl App {
                     self.note(format!("ready: {text}"), false);
                     if let Some(why) = &info.no_walkthrough {
                         // Adaptive-only: the window starts in the adaptive method.
-                        self.settings.method = ViewMethod::Adaptive;
+                        self.settings.method = Method::Adaptive;
                         self.note(format!("adaptive method only: {why}"), false);
                     }
                     self.info = Some(*info);

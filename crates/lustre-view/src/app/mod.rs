@@ -35,7 +35,7 @@ use crate::camera::FlyCamera;
 use crate::fit::{FitDone, FitJob};
 use crate::render::{FrameReply, FrameSettings, Reply, Request, SceneInfo, SceneSource};
 use crate::script::Command;
-use crate::{ViewArgs, ViewMethod};
+use crate::{Method, ViewArgs};
 use edit::Draft;
 use lustre_shade::path::PathCamera;
 use recording::Recording;
@@ -134,7 +134,7 @@ impl App {
         let unattended = !commands.is_empty() || args.frames.is_some();
         App {
             settings: FrameSettings {
-                method: ViewMethod::Regular,
+                method: Method::Regular,
                 samples: args.samples,
                 supersampling: args.supersampling,
                 refine_frames: 64,

@@ -7,7 +7,7 @@ use super::window::configure;
 use super::{App, HISTORY, LOOK_RADIANS_PER_PIXEL};
 use crate::adaptive::{rule_name, BufferView, SAMPLE_RULES};
 use crate::camera::Movement;
-use crate::ViewMethod;
+use crate::Method;
 use std::collections::VecDeque;
 
 /// Width of the view panel, points.
@@ -114,18 +114,19 @@ impl App {
         ui.separator();
         ui.label("Method");
         for m in [
-            ViewMethod::Regular,
-            ViewMethod::Ck,
-            ViewMethod::Progressive,
-            ViewMethod::Reference,
-            ViewMethod::Adaptive,
+            Method::Regular,
+            Method::Ck,
+            Method::Progressive,
+            Method::Reference,
+            Method::Adaptive,
         ] {
             let text = match m {
-                ViewMethod::Regular => "regular sampling",
-                ViewMethod::Ck => "Colbert–Křivánek",
-                ViewMethod::Progressive => "progressive when still",
-                ViewMethod::Reference => "path-traced reference (CPU)",
-                ViewMethod::Adaptive => "adaptive shading (004 ch. IV)",
+                Method::Regular => "regular sampling",
+                Method::Ck => "Colbert–Křivánek",
+                Method::Progressive => "progressive when still",
+                Method::Reference => "path-traced reference (CPU)",
+                Method::Adaptive => "adaptive shading (004 ch. IV)",
+                Method::Brute => "brute force (CPU)",
             };
             let refused = self.walkthrough_refusal(m);
             let radio = egui::RadioButton::new(self.settings.method == m, text);
@@ -138,7 +139,7 @@ impl App {
                 self.choose_method(m);
             }
         }
-        if self.settings.method == ViewMethod::Adaptive {
+        if self.settings.method == Method::Adaptive {
             self.adaptive_panel(ui);
         } else {
             ui.add(egui::Slider::new(&mut self.settings.samples, 1..=64).text("samples (global)"));

@@ -4,7 +4,7 @@
 use super::App;
 use crate::adaptive::rule_name;
 use crate::render::SceneSource;
-use crate::ViewMethod;
+use crate::Method;
 use anyhow::anyhow;
 use lustre_scene::camera_path_file::CameraPathFile;
 use lustre_scene::material_edit;
@@ -127,7 +127,7 @@ impl App {
                 },
                 "camera": cam_file.file_name().map(|n| n.to_string_lossy().into_owned()),
                 "method": self.settings.method.name(),
-                "adaptive": (self.settings.method == ViewMethod::Adaptive).then(|| {
+                "adaptive": (self.settings.method == Method::Adaptive).then(|| {
                     let a = f.and_then(|f| f.adaptive.as_deref());
                     serde_json::json!({
                         "buffer": self.buffer_view.name(),
