@@ -289,6 +289,23 @@ fn visit<'a>(m: &'a Module, order: &mut Vec<&'a Module>) {
     order.push(m);
 }
 
+/// `src` parsed and validated by naga, or a panic showing naga's message on the source (the
+/// unit tests' check of composed WGSL).
+#[cfg(test)]
+pub(crate) fn validated(src: &str) -> wgpu::naga::Module {
+    use wgpu::naga;
+    let m =
+        naga::front::wgsl::parse_str(src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
+    let mut v = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::empty(),
+    );
+    if let Err(e) = v.validate(&m) {
+        panic!("{}", e.emit_to_string(src));
+    }
+    m
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -435,28 +435,15 @@ pub fn all_sampled() -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::wgsl::{compose, ALL};
+    use crate::wgsl::{compose, validated, ALL};
     use wgpu::naga;
-
-    fn module(src: &str) -> naga::Module {
-        let m = naga::front::wgsl::parse_str(src)
-            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
-        let mut v = naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::empty(),
-        );
-        if let Err(e) = v.validate(&m) {
-            panic!("{}", e.emit_to_string(src));
-        }
-        m
-    }
 
     /// The WGSL constants naga reads from the generated record module are the Rust codes and
     /// flags, each code once.
     #[test]
     fn wgsl_constants_are_the_registry_s() {
         let src = compose(&[&RECORD], "");
-        let m = module(&src);
+        let m = validated(&src);
         let value = |name: &str| -> u32 {
             let (_, c) = m
                 .constants
@@ -551,7 +538,7 @@ mod tests {
             }
         }
         let stub = "fn bsdf_table(i: u32) -> f32 {\n    return f32(i);\n}\n";
-        module(&compose(&[&BSDF, &TEXTURED, &ANALYTIC], stub));
+        validated(&compose(&[&BSDF, &TEXTURED, &ANALYTIC], stub));
         assert_eq!(sampled_kinds(KIND_ROUGH_DIELECTRIC), 1 << 3);
         assert_eq!(
             sampled_kinds(KIND_PBR_METALLIC_ROUGHNESS),

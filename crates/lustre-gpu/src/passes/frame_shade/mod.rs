@@ -889,7 +889,6 @@ mod tests {
     use super::*;
     use crate::material::pack_thin_dielectric;
     use lustre_brdf::models::thin_dielectric::ThinDielectric;
-    use wgpu::naga;
 
     /// The pass and the model-evaluation kernel parse and validate without an adapter; the
     /// uniform block and the material record have the sizes the Rust side writes.
@@ -903,15 +902,7 @@ mod tests {
             ),
             (models.as_str(), &[("GpuBsdf", 144)][..]),
         ] {
-            let m = naga::front::wgsl::parse_str(src)
-                .unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
-            let mut v = naga::valid::Validator::new(
-                naga::valid::ValidationFlags::all(),
-                naga::valid::Capabilities::empty(),
-            );
-            if let Err(e) = v.validate(&m) {
-                panic!("{}", e.emit_to_string(src));
-            }
+            let m = crate::wgsl::validated(src);
             assert!(m.entry_points.iter().any(|p| p.name == "main"));
             if src == frame_shade_wgsl() {
                 assert!(m.entry_points.iter().any(|p| p.name == "samples_main"));

@@ -656,7 +656,6 @@ pub const NODE: crate::passes::Node = crate::passes::Node {
 mod tests {
     use super::*;
     use crate::passes::lightmap_shade::lightmap_shade_wgsl;
-    use wgpu::naga;
 
     /// Both shaders (with the shared texture lookup) parse and validate without an adapter, and
     /// the uniform blocks have the sizes the Rust side writes.
@@ -677,15 +676,7 @@ mod tests {
             ),
             (lightmap_shade_wgsl(), &["main"][..], "Shade", 11 * 16),
         ] {
-            let m = naga::front::wgsl::parse_str(src)
-                .unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
-            let mut v = naga::valid::Validator::new(
-                naga::valid::ValidationFlags::all(),
-                naga::valid::Capabilities::empty(),
-            );
-            if let Err(e) = v.validate(&m) {
-                panic!("{}", e.emit_to_string(src));
-            }
+            let m = crate::wgsl::validated(src);
             for e in entries {
                 assert!(m.entry_points.iter().any(|p| p.name == *e), "{e}");
             }
