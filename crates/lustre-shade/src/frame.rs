@@ -20,16 +20,11 @@
 //!
 //! This is the CPU frame the GPU renderer mirrors and the fallback when there is no adapter.
 
-use crate::accel::Hit;
-use crate::bake::gbuffer::{shade_gbuffer, GBuffer, SKY};
-use crate::bake::render::camera_ray;
-use crate::image::Image;
 use crate::kernel::{corrected_direction, pixel_seed, BoundingPlane};
 use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
 use crate::mirror::{
     render_mirror, render_see_through_with_gbuffer, MirrorBuffer, ScreenTiles, ViewBuffer,
 };
-use crate::path::PathCamera;
 use crate::probe::{LitScene, Probe};
 use crate::warp::{fibonacci_point, integrate_warp};
 use crate::{Result, ShadeError};
@@ -40,6 +35,11 @@ use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
 use lustre_env::pyramid::CubePyramid;
 use lustre_scene::{Material, MaterialKind};
+use lustre_trace::accel::Hit;
+use lustre_trace::bake::gbuffer::{shade_gbuffer, GBuffer, SKY};
+use lustre_trace::bake::render::camera_ray;
+use lustre_trace::image::Image;
+use lustre_trace::path::PathCamera;
 use rayon::prelude::*;
 
 /// Largest sample count per pixel and lobe the regular methods accept.
@@ -66,7 +66,8 @@ pub struct FrameOptions {
     pub samples: usize,
     /// Integration method.
     pub method: FrameMethod,
-    /// Camera rays per pixel (jittered as [`crate::bake::render::render_lightmapped`] does).
+    /// Camera rays per pixel (jittered as
+    /// [`lustre_trace::bake::render::render_lightmapped`] does).
     pub spp: u32,
     /// Seed of the camera jitter and of the random methods.
     pub seed: u64,

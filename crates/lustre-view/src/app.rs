@@ -13,7 +13,7 @@ use anyhow::{anyhow, bail, Context};
 use lustre_scene::camera_path_file::CameraPathFile;
 use lustre_scene::material_edit::{self, Field, FieldValue};
 use lustre_scene::{CameraPath, Keyframe, Material, MaterialKind};
-use lustre_shade::path::PathCamera;
+use lustre_trace::path::PathCamera;
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -130,7 +130,7 @@ fn scene_source(args: &ViewArgs) -> anyhow::Result<SceneSource> {
         .env
         .as_deref()
         .map(|p| {
-            lustre_shade::baked::read_environment(p)
+            lustre_trace::baked::read_environment(p)
                 .with_context(|| format!("--env {}", p.display()))
         })
         .transpose()?;
@@ -1831,7 +1831,7 @@ fn field_ui(ui: &mut egui::Ui, f: &mut Field) -> Option<String> {
                     );
                     commit |= r.drag_stopped() || (r.changed() && !r.dragged());
                 }
-                let shown = |x: f64| (lustre_shade::image::display_value(x, 1.0) * 255.0) as u8;
+                let shown = |x: f64| (lustre_trace::image::display_value(x, 1.0) * 255.0) as u8;
                 let (rect, _) =
                     ui.allocate_exact_size(egui::vec2(14.0, 14.0), egui::Sense::hover());
                 ui.painter().rect_filled(
