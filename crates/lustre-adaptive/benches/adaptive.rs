@@ -8,9 +8,9 @@ use lustre_adaptive::buffer::{BandwidthBuffer, BrdfWeights, BufferOptions, Sampl
 use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::hierarchy::{render_adaptive, render_brute};
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
-use lustre_shade::baked::read_environment;
-use lustre_shade::path::{PathOptions, PathTracer};
-use lustre_shade::reference::{film_camera, path_scene};
+use lustre_trace::baked::read_environment;
+use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::reference::{film_camera, path_scene};
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {

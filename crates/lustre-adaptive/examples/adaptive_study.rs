@@ -34,11 +34,11 @@ use lustre_adaptive::hierarchy::{box_downsample, render_adaptive, render_brute};
 use lustre_adaptive::light::scene_lights;
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_freq::pixel::EnvironmentBandwidth;
-use lustre_shade::baked::read_environment;
-use lustre_shade::image::Image;
-use lustre_shade::metrics::{psnr, rms};
-use lustre_shade::path::{PathOptions, PathTracer};
-use lustre_shade::reference::{path_camera, path_scene};
+use lustre_trace::baked::read_environment;
+use lustre_trace::image::Image;
+use lustre_trace::metrics::{psnr, rms};
+use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::reference::{path_camera, path_scene};
 use std::path::PathBuf;
 use std::time::Instant;
 

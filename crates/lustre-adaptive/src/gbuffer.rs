@@ -9,8 +9,8 @@
 use crate::{AdaptiveError, Result};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
-use lustre_shade::kernel::ShadingFrame;
-use lustre_shade::path::{PathCamera, PathScene, PathTracer};
+use lustre_trace::path::{PathCamera, PathScene, PathTracer};
+use lustre_trace::sampling::ShadingFrame;
 use rayon::prelude::*;
 
 /// Neighbours whose depth differs by more than this fraction of the pixel's own are taken to

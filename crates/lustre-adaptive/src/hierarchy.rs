@@ -21,7 +21,7 @@ use crate::gbuffer::{GBuffer, GPixel, Surfel, SAME_SURFACE};
 use crate::shading::{pixel_seed, Lighting, ShadingContext};
 use crate::{AdaptiveError, Result};
 use lustre_brdf::rgb::Rgb;
-use lustre_shade::image::Image;
+use lustre_trace::image::Image;
 use rayon::prelude::*;
 
 /// Marks a pixel in [`AdaptiveFrame::shaded_level`] that was up-sampled (or is background).

@@ -33,7 +33,7 @@ pub enum AdaptiveError {
     Parameter(String),
     /// From the scene, the path tracer's geometry or the images.
     #[error(transparent)]
-    Shade(#[from] lustre_shade::ShadeError),
+    Trace(#[from] lustre_trace::TraceError),
     /// From the frequency analysis.
     #[error(transparent)]
     Freq(#[from] lustre_freq::FreqError),

@@ -11,11 +11,11 @@ use lustre_brdf::rgb::Rgb;
 use lustre_env::EquirectMap;
 use lustre_scene::environment::{Environment, EnvironmentSource};
 use lustre_scene::Scene;
-use lustre_shade::baked::read_environment;
-use lustre_shade::image::Image;
-use lustre_shade::metrics::{psnr, rms};
-use lustre_shade::path::{PathOptions, PathTracer};
-use lustre_shade::reference::{film_camera, path_scene};
+use lustre_trace::baked::read_environment;
+use lustre_trace::image::Image;
+use lustre_trace::metrics::{psnr, rms};
+use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::reference::{film_camera, path_scene};
 use std::sync::Arc;
 
 fn map_environment(map: EquirectMap) -> Environment {
@@ -765,7 +765,7 @@ fn light_power(lights: &[AreaLight]) -> [f64; 3] {
 }
 
 /// Σ over the emissive triangles of area × radiance per channel.
-fn emitted_power(ps: &lustre_shade::path::PathScene) -> [f64; 3] {
+fn emitted_power(ps: &lustre_trace::path::PathScene) -> [f64; 3] {
     let g = &ps.geometry;
     let mut p = [0.0; 3];
     for (i, e) in g.emission.iter().enumerate() {

@@ -17,13 +17,13 @@ use lustre_gpu::{
 use lustre_scene::lightmap::{build_atlas, AtlasOptions};
 use lustre_scene::material::{MicrofacetType, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind};
-use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Denoiser};
 use lustre_shade::frame::{FrameBuffers, FrameLight};
-use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
-use lustre_shade::reference::{path_camera, path_scene};
 use lustre_shade::request::{FrameRequest, Method};
+use lustre_trace::bake::render::Lightmapped;
+use lustre_trace::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Denoiser};
+use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::reference::{path_camera, path_scene};
 
 fn fail<T, E: std::fmt::Display>(r: Result<T, E>) -> T {
     r.unwrap_or_else(|e| panic!("{e}"))

@@ -13,12 +13,12 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use lustre_gpu::{GBufferTarget, GpuContext, LightmapFrameScene, LightmapRenderer, ShadeTarget};
 use lustre_scene::lightmap::{build_atlas, AtlasOptions};
 use lustre_scene::Scene;
-use lustre_shade::bake::diffuse_path_scene;
-use lustre_shade::bake::gbuffer::{shade_gbuffer, trace_gbuffer};
-use lustre_shade::bake::render::{render_lightmapped, Lightmapped};
-use lustre_shade::bake::{assemble, bake_tiles, BakeOptions, Denoiser};
-use lustre_shade::path::PathTracer;
-use lustre_shade::reference::path_camera;
+use lustre_trace::bake::diffuse_path_scene;
+use lustre_trace::bake::gbuffer::{shade_gbuffer, trace_gbuffer};
+use lustre_trace::bake::render::{render_lightmapped, Lightmapped};
+use lustre_trace::bake::{assemble, bake_tiles, BakeOptions, Denoiser};
+use lustre_trace::path::PathTracer;
+use lustre_trace::reference::path_camera;
 
 fn fail<T, E: std::fmt::Display>(r: Result<T, E>) -> T {
     r.unwrap_or_else(|e| panic!("{e}"))

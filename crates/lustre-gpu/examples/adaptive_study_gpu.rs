@@ -19,11 +19,11 @@ use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_gpu::passes::adaptive::{AdaptivePass, AdaptiveScene};
 use lustre_gpu::passes::bandwidth::{BandwidthPass, BandwidthScene};
 use lustre_gpu::GpuContext;
-use lustre_shade::baked::read_environment;
-use lustre_shade::image::Image;
-use lustre_shade::metrics::{psnr, rms};
-use lustre_shade::path::{PathOptions, PathTracer};
-use lustre_shade::reference::{film_camera, path_scene};
+use lustre_trace::baked::read_environment;
+use lustre_trace::image::Image;
+use lustre_trace::metrics::{psnr, rms};
+use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::reference::{film_camera, path_scene};
 use std::path::PathBuf;
 use std::time::Instant;
 

@@ -24,12 +24,12 @@ use lustre_gpu::{
 };
 use lustre_scene::lightmap::{build_atlas, AtlasOptions, LightmapAtlas};
 use lustre_scene::Scene;
-use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::bake::{assemble, bake_tiles, diffuse_path_scene, BakeOptions, Denoiser};
 use lustre_shade::mirror::{render_mirror, render_see_through};
-use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_cube, probe_placement, LitScene, ProbeOptions};
-use lustre_shade::reference::path_camera;
+use lustre_trace::bake::render::Lightmapped;
+use lustre_trace::bake::{assemble, bake_tiles, diffuse_path_scene, BakeOptions, Denoiser};
+use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::reference::path_camera;
 use std::error::Error;
 use std::time::Instant;
 use wgpu::util::DeviceExt;

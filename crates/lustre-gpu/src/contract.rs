@@ -11,10 +11,10 @@ use crate::packed::{
 use crate::passes::sphere::{GpuEnvironment, GpuRenderer};
 use lustre_brdf::models::kurt::KurtLobe;
 use lustre_env::CubeMap;
-use lustre_shade::image::Image;
 use lustre_shade::kernel::{Environment, LobePlan, MaterialPlan};
 use lustre_shade::pattern::PatternKind;
 use lustre_shade::scene::Scene;
+use lustre_trace::image::Image;
 
 fn level_ref(map: &CubeMap) -> CubeLevelRef<'_> {
     CubeLevelRef {

@@ -31,11 +31,11 @@ use crate::timer::GpuTimer;
 use crate::view_buffer::GpuViewBuffer;
 use lustre_env::pyramid::CubePyramid;
 use lustre_shade::frame::{view_meshes, walkthrough_request, FrameStats, FrameTables};
-use lustre_shade::image::Image;
 use lustre_shade::mirror::{Reflector, ScreenTiles};
-use lustre_shade::path::PathCamera;
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
+use lustre_trace::image::Image;
+use lustre_trace::path::PathCamera;
 
 /// The compiled passes of a walkthrough, kept when the scene is uploaded again (a viewer's
 /// material edit): compiling them is most of a walkthrough's set-up on a software adapter.

@@ -19,8 +19,8 @@ use lustre_brdf::tabulated::TabulatedOptions;
 use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_gpu::passes::adaptive::{AdaptivePass, AdaptiveScene, SAMPLES_PER_DISPATCH};
 use lustre_gpu::passes::bandwidth::{BandwidthPass, BandwidthScene};
-use lustre_shade::image::Image;
-use lustre_shade::reference::film_camera;
+use lustre_trace::image::Image;
+use lustre_trace::reference::film_camera;
 use std::time::Instant;
 
 mod common;
@@ -206,7 +206,7 @@ fn the_gpu_adaptive_pass_matches_its_cpu_twin_on_the_line_up() {
         // Pre-convolved shading (§IV.3.5): the environment's pyramid read at each pixel's BRDF
         // bandwidth, on both.
         shading.pyramid =
-            Some(lustre_shade::baked::environment_pyramid(&shading.env, 256).expect("pyramid"));
+            Some(lustre_trace::baked::environment_pyramid(&shading.env, 256).expect("pyramid"));
         let pre_options = BufferOptions {
             lighting: Lighting::Preconvolved,
             ..options
@@ -854,11 +854,11 @@ fn the_modern_halls_own_emitters_light_it_on_the_gpu_as_on_the_cpu() {
     let path =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/modern_hall.toml");
     let scene = lustre_scene::Scene::load(&path).expect("the Hall");
-    let (ps, _) = lustre_shade::reference::path_scene(&scene).expect("path scene");
-    let tracer = lustre_shade::path::PathTracer::new(&ps, Default::default()).expect("tracer");
+    let (ps, _) = lustre_trace::reference::path_scene(&scene).expect("path scene");
+    let tracer = lustre_trace::path::PathTracer::new(&ps, Default::default()).expect("tracer");
     let (w, h) = (64, 40);
     let cam =
-        lustre_shade::reference::path_camera(&scene, None, w as u32, h as u32).expect("camera");
+        lustre_trace::reference::path_camera(&scene, None, w as u32, h as u32).expect("camera");
     let g = GBuffer::render(&tracer, &ps, &cam, w, h).expect("G-buffer");
     let options = ShadingOptions {
         pyramid_face: 0,

@@ -22,7 +22,7 @@ use lustre_gpu::passes::adaptive::{AdaptivePass, AdaptiveScene};
 use lustre_gpu::passes::bandwidth::{BandwidthPass, BandwidthScene};
 use lustre_scene::material::{MicrofacetType, NormalMap, TextureRef, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind, Scene};
-use lustre_shade::image::Image;
+use lustre_trace::image::Image;
 
 /// Texture `texture` read at uv0.
 fn uv0(texture: usize) -> TextureRef {

@@ -14,15 +14,15 @@ use lustre_gpu::{
     GpuTimer, GpuViewPass, LightmapFrameScene, PYRAMID_USAGE,
 };
 use lustre_scene::Scene;
-use lustre_shade::bake::diffuse_path_scene;
-use lustre_shade::bake::gbuffer::{shade_gbuffer, GBuffer, SKY};
-use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::image::Image;
-use lustre_shade::metrics::psnr;
 use lustre_shade::mirror::{box_levels, render_mirror, render_see_through, ViewBuffer};
-use lustre_shade::path::{PathCamera, PathOptions, PathScene, PathTracer};
 use lustre_shade::probe::{capture_cube, probe_placement, LitScene, ProbeOptions};
-use lustre_shade::reference::path_camera;
+use lustre_trace::bake::diffuse_path_scene;
+use lustre_trace::bake::gbuffer::{shade_gbuffer, GBuffer, SKY};
+use lustre_trace::bake::render::Lightmapped;
+use lustre_trace::image::Image;
+use lustre_trace::metrics::psnr;
+use lustre_trace::path::{PathCamera, PathOptions, PathScene, PathTracer};
+use lustre_trace::reference::path_camera;
 
 fn room() -> Baked {
     quick_bake(lustre_scene::builtin::room().expect("built-in room"), 4.0)

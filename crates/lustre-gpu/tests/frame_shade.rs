@@ -17,14 +17,14 @@ use lustre_gpu::{
 };
 use lustre_scene::material::{MicrofacetType, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind};
-use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::bake::spec_albedo;
 use lustre_shade::frame::{shade_gbuffer_view_dependent, FrameBuffers, FrameLight};
-use lustre_shade::metrics::psnr;
-use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
-use lustre_shade::reference::{path_camera, path_scene};
 use lustre_shade::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
+use lustre_trace::bake::render::Lightmapped;
+use lustre_trace::bake::spec_albedo;
+use lustre_trace::metrics::psnr;
+use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::reference::{path_camera, path_scene};
 
 /// The built-in room, its gold sphere as a rough gold conductor, the brushed-aluminium sphere
 /// with its own sample budget of 3 (the frame asks 8: both sides must honour it).

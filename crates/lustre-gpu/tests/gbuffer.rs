@@ -12,12 +12,12 @@ mod common;
 use common::{ctx, quick_bake, Baked};
 use lustre_gpu::{LightmapFrameScene, LightmapRenderer};
 use lustre_scene::Scene;
-use lustre_shade::bake::diffuse_path_scene;
-use lustre_shade::bake::gbuffer::{render_lightmapped_gbuffer, shade_gbuffer, GBuffer, SKY};
-use lustre_shade::bake::render::{render_lightmapped, Lightmapped};
-use lustre_shade::metrics::psnr;
-use lustre_shade::path::PathCamera;
-use lustre_shade::reference::path_camera;
+use lustre_trace::bake::diffuse_path_scene;
+use lustre_trace::bake::gbuffer::{render_lightmapped_gbuffer, shade_gbuffer, GBuffer, SKY};
+use lustre_trace::bake::render::{render_lightmapped, Lightmapped};
+use lustre_trace::metrics::psnr;
+use lustre_trace::path::PathCamera;
+use lustre_trace::reference::path_camera;
 
 /// A real scene with a small, quick bake (1 path per texel, 2 bounces, no denoiser).
 fn baked(rel: &str, texels_per_metre: f32) -> Baked {

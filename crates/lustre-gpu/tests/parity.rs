@@ -12,14 +12,14 @@ use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::Rgb;
 use lustre_env::{CubeMap, CubePyramid, MipFilter, Sun};
 use lustre_gpu::{GpuContext, GpuRenderer};
-use lustre_shade::image::Image;
 use lustre_shade::kernel::{
     plan_lattice, plan_lattice_sun, plan_regular, plan_tap_lattice, shade_regular, Environment,
     MaterialPlan, Weighting,
 };
-use lustre_shade::metrics::{psnr, rms};
 use lustre_shade::render::render;
 use lustre_shade::scene::{Camera, Plane, Scene, Sphere};
+use lustre_trace::image::Image;
+use lustre_trace::metrics::{psnr, rms};
 
 const W: usize = 128;
 const H: usize = 96;

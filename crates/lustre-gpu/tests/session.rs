@@ -15,15 +15,15 @@ use lustre_gpu::{
     GpuContext, GpuFrameSession, GpuWalkthrough, LightmapFrameScene, SessionIntermediates, StepWork,
 };
 use lustre_scene::Scene;
-use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::bake::spec_albedo;
 use lustre_shade::frame::{shade_gbuffer_view_dependent, FrameLight};
-use lustre_shade::image::Image;
-use lustre_shade::metrics::psnr;
-use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{LitScene, Probe, ProbeOptions};
-use lustre_shade::reference::{path_camera, path_scene};
 use lustre_shade::request::{FrameRequest, Method};
+use lustre_trace::bake::render::Lightmapped;
+use lustre_trace::bake::spec_albedo;
+use lustre_trace::image::Image;
+use lustre_trace::metrics::psnr;
+use lustre_trace::path::{PathCamera, PathOptions, PathTracer};
+use lustre_trace::reference::{path_camera, path_scene};
 
 const PROBES: ProbeOptions = ProbeOptions {
     face_size: 32,

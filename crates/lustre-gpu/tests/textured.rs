@@ -23,16 +23,16 @@ use lustre_gpu::{
 };
 use lustre_scene::material::{NormalMap, TextureRef, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind, Scene};
-use lustre_shade::bake::gbuffer::GBuffer;
-use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::bake::spec_albedo;
 use lustre_shade::frame::{shade_gbuffer_view_dependent, FrameBuffers, FrameLight};
-use lustre_shade::image::Image;
-use lustre_shade::metrics::psnr;
-use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
-use lustre_shade::reference::{path_camera, path_scene};
 use lustre_shade::request::{FrameRequest, Method};
+use lustre_trace::bake::gbuffer::GBuffer;
+use lustre_trace::bake::render::Lightmapped;
+use lustre_trace::bake::spec_albedo;
+use lustre_trace::image::Image;
+use lustre_trace::metrics::psnr;
+use lustre_trace::path::{PathCamera, PathOptions, PathTracer};
+use lustre_trace::reference::{path_camera, path_scene};
 
 /// The room with the four textured materials (module docs).
 fn textured_room() -> Scene {

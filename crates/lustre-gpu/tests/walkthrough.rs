@@ -16,18 +16,18 @@ use lustre_brdf::rgb::Rgb;
 use lustre_gpu::material::{pack_material, FLAG_TEXTURED};
 use lustre_gpu::{GpuContext, GpuFrame, GpuWalkthrough, LightmapFrameScene};
 use lustre_scene::{Material, MaterialKind, ResolvedSpec, Scene};
-use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::bake::spec_albedo;
 use lustre_shade::frame::{
     render_frame, shade_gbuffer_view_dependent, shade_see_through_layer, view_meshes, FrameLight,
 };
-use lustre_shade::image::Image;
-use lustre_shade::metrics::psnr;
 use lustre_shade::mirror::ScreenTiles;
-use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{LitScene, ProbeOptions};
-use lustre_shade::reference::{path_camera, path_scene};
 use lustre_shade::request::{FrameRequest, Method};
+use lustre_trace::bake::render::Lightmapped;
+use lustre_trace::bake::spec_albedo;
+use lustre_trace::image::Image;
+use lustre_trace::metrics::psnr;
+use lustre_trace::path::{PathCamera, PathOptions, PathTracer};
+use lustre_trace::reference::{path_camera, path_scene};
 
 const PROBES: ProbeOptions = ProbeOptions {
     face_size: 32,

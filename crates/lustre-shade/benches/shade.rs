@@ -11,8 +11,9 @@ use lustre_brdf::rgb::Rgb;
 use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter, Sun};
 use lustre_shade::kernel::{
     plan_lattice, plan_lattice_sun, plan_regular, plan_tap_lattice, shade_ck, shade_reference,
-    shade_regular, Environment, ShadingFrame, Weighting,
+    shade_regular, Environment, Weighting,
 };
+use lustre_trace::sampling::ShadingFrame;
 use std::hint::black_box;
 
 const PIXELS: usize = 64;

@@ -8,13 +8,13 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use lustre_brdf::rgb::Rgb;
 use lustre_scene::lightmap::{build_atlas, AtlasOptions};
-use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Transport};
 use lustre_shade::frame::{render_frame, FrameLight};
-use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
-use lustre_shade::reference::{path_camera, path_scene};
 use lustre_shade::request::{FrameRequest, Method};
+use lustre_trace::bake::render::Lightmapped;
+use lustre_trace::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Transport};
+use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::reference::{path_camera, path_scene};
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {

@@ -56,10 +56,11 @@ use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::hammersley;
 use lustre_env::{irradiance_map, spot_map, CubePyramid, MipFilter, SpotMapParams};
 use lustre_shade::kernel::{
-    plan_regular, shade_ck, shade_qmc, shade_regular, Environment, ShadingFrame, Weighting,
+    plan_regular, shade_ck, shade_qmc, shade_regular, Environment, Weighting,
 };
 use lustre_shade::mip;
 use lustre_shade::pattern::{self, ConcentricOptions};
+use lustre_trace::sampling::ShadingFrame;
 use rayon::prelude::*;
 
 /// MIP biases tried for every method.

@@ -38,11 +38,11 @@ use lustre_env::{read_map, shared_data_dir, CubeMap, MipFilter, Sun, SunOptions}
 use lustre_shade::harness::{describe_suns, EnvSetup};
 use lustre_shade::kernel::{
     plan_lattice, plan_lattice_sun, plan_regular, plan_regular_with, plan_tap_lattice,
-    shade_ck_counted, shade_reference, shade_regular_counted, Environment, MaterialPlan,
-    ShadingFrame, Weighting,
+    shade_ck_counted, shade_reference, shade_regular_counted, Environment, MaterialPlan, Weighting,
 };
 use lustre_shade::pattern::ConcentricOptions;
 use lustre_shade::truth::{configurations, supersampling, truth, Configuration};
+use lustre_trace::sampling::ShadingFrame;
 use rayon::prelude::*;
 use std::fmt::Write as _;
 use std::time::Instant;

@@ -14,6 +14,9 @@ pub enum ShadeError {
     /// A BSDF-library error.
     #[error(transparent)]
     Brdf(#[from] lustre_brdf::Error),
+    /// From ray casting, the path tracer, baking or the images (lustre-trace).
+    #[error(transparent)]
+    Trace(#[from] lustre_trace::TraceError),
     /// A file could not be written or read.
     #[error("{}: {source}", path.display())]
     Io {

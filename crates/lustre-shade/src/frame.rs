@@ -20,16 +20,11 @@
 //!
 //! This is the CPU frame the GPU renderer mirrors and the fallback when there is no adapter.
 
-use crate::accel::Hit;
-use crate::bake::gbuffer::{shade_gbuffer, GBuffer, SKY};
-use crate::bake::render::camera_ray;
-use crate::image::Image;
 use crate::kernel::{corrected_direction, pixel_seed, BoundingPlane};
 use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
 use crate::mirror::{
     render_mirror, render_see_through_with_gbuffer, MirrorBuffer, ScreenTiles, ViewBuffer,
 };
-use crate::path::PathCamera;
 use crate::probe::{LitScene, Probe};
 use crate::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
 use crate::warp::{fibonacci_point, integrate_warp};
@@ -41,6 +36,11 @@ use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
 use lustre_env::pyramid::CubePyramid;
 use lustre_scene::{Material, MaterialKind};
+use lustre_trace::accel::Hit;
+use lustre_trace::bake::gbuffer::{shade_gbuffer, GBuffer, SKY};
+use lustre_trace::bake::render::camera_ray;
+use lustre_trace::image::Image;
+use lustre_trace::path::PathCamera;
 use rayon::prelude::*;
 
 /// The pre-filtered incident light of a frame: the probes, and the environment's pyramid for

@@ -25,9 +25,7 @@
 //! largest; never more than the budget per lobe). It writes PNGs, false-colour differences
 //! (002 Fig. 9 style) and a Markdown table.
 
-use crate::image::Image;
 use crate::kernel::{self, Environment, Weighting};
-use crate::metrics;
 use crate::pattern::ConcentricOptions;
 use crate::render::render_with_progress;
 use crate::scene::{Camera, Hit, Plane, Scene, Sphere};
@@ -37,6 +35,8 @@ use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::Rgb;
 use lustre_env::{CubeMap, CubePyramid, EnvSampler, MipFilter, SpotMapParams, Sun, SunOptions};
+use lustre_trace::image::Image;
+use lustre_trace::metrics;
 use std::fmt::Write as _;
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -532,7 +532,7 @@ pub fn render_reference_with(
                 m,
                 env,
                 sampler,
-                kernel::Strategy::Mis,
+                lustre_trace::sampling::Strategy::Mis,
                 spp,
                 pixel_seed(hit, seed),
             )

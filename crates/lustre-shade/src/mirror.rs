@@ -8,12 +8,12 @@
 //!
 //! This is the CPU definition of the mirror pass; the GPU pass renders the same buffer.
 
-use crate::bake::gbuffer::{GBuffer, SKY};
-use crate::path::PathCamera;
 use crate::probe::LitScene;
 use crate::{Result, ShadeError};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
+use lustre_trace::bake::gbuffer::{GBuffer, SKY};
+use lustre_trace::path::PathCamera;
 use rayon::prelude::*;
 
 /// Largest distance of a reflector's vertex from its plane, relative to the mesh's extent, for

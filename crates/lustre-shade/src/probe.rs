@@ -5,16 +5,16 @@
 //!
 //! This is the CPU definition of the probe; the GPU capture renders the same cube.
 
-use crate::accel::Hit;
-use crate::bake::render::Lightmapped;
 use crate::kernel::BoundingPlane;
-use crate::path::{PathScene, PathTracer};
 use crate::{Result, ShadeError};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
 use lustre_env::cube::{face_point, CubeMap, MAX_FACE_SIZE};
 use lustre_env::pyramid::{CubePyramid, MipFilter};
 use lustre_scene::Scene;
+use lustre_trace::accel::Hit;
+use lustre_trace::bake::render::Lightmapped;
+use lustre_trace::path::{PathScene, PathTracer};
 use rayon::prelude::*;
 
 /// The light-mapped scene as rays see it: the diffuse path scene's triangles (for intersection),
@@ -22,7 +22,7 @@ use rayon::prelude::*;
 pub struct LitScene<'a, 's> {
     /// The scene.
     pub scene: &'s Scene,
-    /// Its triangles and materials ([`crate::bake::diffuse_path_scene`]).
+    /// Its triangles and materials ([`lustre_trace::bake::diffuse_path_scene`]).
     pub path_scene: &'a PathScene<'s>,
     /// The tracer over `path_scene`.
     pub tracer: &'a PathTracer<'a, 's>,
@@ -34,7 +34,7 @@ pub struct LitScene<'a, 's> {
 
 impl<'a, 's> LitScene<'a, 's> {
     /// Bundles the parts; the triangles of `path_scene` must be `scene`'s meshes in order (as
-    /// [`crate::reference::path_scene`] lists them).
+    /// [`lustre_trace::reference::path_scene`] lists them).
     pub fn new(
         scene: &'s Scene,
         path_scene: &'a PathScene<'s>,

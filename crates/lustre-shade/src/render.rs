@@ -2,10 +2,10 @@
 //! parallel (rayon). Hit pixels are shaded by a caller-supplied kernel, missed pixels by a
 //! background function (usually `env.pyramid.sample(dir, 0.0)`).
 
-use crate::image::Image;
 use crate::scene::{Hit, Scene};
 use glam::DVec3;
 use lustre_brdf::Rgb;
+use lustre_trace::image::Image;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 

@@ -16,10 +16,10 @@
 //! sphere hit its far side, hits behind the origin are ignored, a ray parallel to a plane misses it,
 //! and a ray grazing a sphere (discriminant ≥ 0) hits it once.
 
-use crate::kernel::ShadingFrame;
 use crate::{Result, ShadeError};
 use glam::DVec3;
 use lustre_brdf::models::kurt::Kurt;
+use lustre_trace::sampling::ShadingFrame;
 
 /// Smallest accepted ray parameter of a hit (world units; rays have unit direction).
 pub const T_MIN: f64 = 1e-9;

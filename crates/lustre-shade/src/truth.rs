@@ -17,7 +17,6 @@
 //! [`configurations`] draws the seeded shading configurations (normal, tangent, view) the truth
 //! harness (`examples/truth_study.rs`) measures every method on.
 
-use crate::kernel::ShadingFrame;
 use glam::DVec3;
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::models::kurt::Kurt;
@@ -25,6 +24,7 @@ use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
 use lustre_env::cube::{face_point, rect_solid_angle};
 use lustre_env::CubeMap;
+use lustre_trace::sampling::ShadingFrame;
 
 /// Largest supersampling factor per texel axis.
 pub const MAX_SUPERSAMPLING: usize = 8;

@@ -35,12 +35,13 @@
 //! frame towards the viewer) the BSDF receives ωo in the given frame and decides the side
 //! itself, as [`crate::truth::truth`] does.
 
-use crate::kernel::{incident, Environment, Lookup, ShadingFrame};
+use crate::kernel::{incident, Environment, Lookup};
 use crate::mip;
 use glam::DVec3;
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::{hammersley, SplitMix64};
+use lustre_trace::sampling::ShadingFrame;
 use std::f64::consts::PI;
 
 /// 1/φ = (√5 − 1)/2, the golden-ratio step of [`fibonacci_point`], rounded to 24 bits

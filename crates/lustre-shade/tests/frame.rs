@@ -12,13 +12,13 @@ use lustre_brdf::sampling::SplitMix64;
 use lustre_scene::lightmap::{AtlasSource, LightmapAtlas};
 use lustre_scene::material::{MicrofacetType, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind, Mesh, Scene};
-use lustre_shade::bake::render::{render_lightmapped, Lightmapped};
-use lustre_shade::bake::spec_albedo;
 use lustre_shade::frame::{render_frame, FrameLight};
 use lustre_shade::kernel::corrected_direction;
-use lustre_shade::path::{PathCamera, PathOptions, PathTracer};
 use lustre_shade::probe::{capture_cube, capture_probe, LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
+use lustre_trace::bake::render::{render_lightmapped, Lightmapped};
+use lustre_trace::bake::spec_albedo;
+use lustre_trace::path::{PathCamera, PathOptions, PathTracer};
 use std::f64::consts::PI;
 
 const PAGE: u32 = 64;
@@ -124,7 +124,7 @@ fn with_lit<R>(
     pages: &[Vec<[f32; 3]>],
     f: impl FnOnce(&LitScene) -> R,
 ) -> R {
-    let (ps, _) = lustre_shade::reference::path_scene(scene).unwrap();
+    let (ps, _) = lustre_trace::reference::path_scene(scene).unwrap();
     let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
     let lm = Lightmapped::new(scene, atlas, pages, &ps.geometry, spec).unwrap();
     let pt = PathTracer::new(&ps, PathOptions::default()).unwrap();
@@ -298,7 +298,7 @@ fn frame(
     (w, h): (usize, usize),
     method: (Method, u32),
     n: usize,
-) -> (lustre_shade::image::Image, lustre_shade::frame::FrameStats) {
+) -> (lustre_trace::image::Image, lustre_shade::frame::FrameStats) {
     let light = FrameLight {
         probes,
         environment: None,
@@ -316,14 +316,14 @@ fn frame(
 /// Regular sampling and CK at 8 and 19 samples against progressive refinement (256 frames of
 /// 16 samples, the converged integral of the same incident light): regular wins at both counts
 /// and reaches 38 dB at 19 (PSNR of display values with the truth's peak at white).
-fn regular_beats_ck(label: &str, run: impl Fn((Method, u32), usize) -> lustre_shade::image::Image) {
+fn regular_beats_ck(label: &str, run: impl Fn((Method, u32), usize) -> lustre_trace::image::Image) {
     let truth = run((Method::Progressive, 256), 16);
     let peak = truth.data.iter().flatten().fold(0.0f32, |a, &b| a.max(b));
     let exposure = 1.0 / f64::from(peak);
     for n in [8, 19] {
         let p_reg =
-            lustre_shade::metrics::psnr(&run((Method::Regular, 1), n), &truth, exposure).unwrap();
-        let p_ck = lustre_shade::metrics::psnr(&run((Method::Ck, 1), n), &truth, exposure).unwrap();
+            lustre_trace::metrics::psnr(&run((Method::Regular, 1), n), &truth, exposure).unwrap();
+        let p_ck = lustre_trace::metrics::psnr(&run((Method::Ck, 1), n), &truth, exposure).unwrap();
         eprintln!("{label}, n {n}: regular {p_reg:.1} dB, CK {p_ck:.1} dB");
         assert!(p_reg > p_ck, "{label} n {n}: {p_reg} vs {p_ck}");
         if n == 19 {

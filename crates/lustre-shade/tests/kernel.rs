@@ -12,8 +12,9 @@ use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter};
 use lustre_shade::kernel::{
     plan_lattice, plan_regular, plan_thesis, shade_ck, shade_qmc, shade_reference,
     shade_reference_with, shade_regular, BoundingPlane, Environment, Lookup, Progressive,
-    ShadingFrame, Weighting,
+    Weighting,
 };
+use lustre_trace::sampling::ShadingFrame;
 use proptest::prelude::*;
 use std::sync::OnceLock;
 

@@ -12,10 +12,11 @@ use lustre_env::{irradiance_map, split_suns, CubeMap, CubePyramid, MipFilter, Su
 use lustre_shade::kernel::{
     lattice_axes, lattice_cells, lattice_taps, plan_lattice, plan_lattice_sun, plan_regular,
     plan_regular_with, plan_tap_lattice, shade_ck_counted, shade_regular_counted, shade_suns,
-    Environment, LatticeGeometry, ShadingFrame, Weighting,
+    Environment, LatticeGeometry, Weighting,
 };
 use lustre_shade::pattern::ConcentricOptions;
 use lustre_shade::truth::{configurations, truth, Configuration};
+use lustre_trace::sampling::ShadingFrame;
 
 fn env_of(size: usize, f: impl Fn(DVec3) -> [f64; 3] + Sync) -> (CubePyramid, CubeMap) {
     let base = CubeMap::from_fn(size, f).expect("cube map");

@@ -9,9 +9,8 @@ use lustre_brdf::numeric::SphereQuadrature;
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::validate::albedo_quadrature;
 use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter};
-use lustre_shade::kernel::{
-    env_sampler, power_heuristic, shade_reference_mis, Environment, ShadingFrame, Strategy,
-};
+use lustre_shade::kernel::{env_sampler, shade_reference_mis, Environment};
+use lustre_trace::sampling::{power_heuristic, ShadingFrame, Strategy};
 use std::f64::consts::PI;
 
 type Env = (CubePyramid, CubeMap);

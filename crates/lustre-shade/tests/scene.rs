@@ -3,9 +3,9 @@
 use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::Rgb;
-use lustre_shade::kernel::ShadingFrame;
 use lustre_shade::render::{render, render_with_progress};
 use lustre_shade::scene::{Camera, Plane, Scene, Sphere};
+use lustre_trace::sampling::ShadingFrame;
 use proptest::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 

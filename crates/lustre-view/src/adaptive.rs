@@ -31,8 +31,8 @@ use lustre_gpu::passes::bandwidth::{BandwidthPass, BandwidthScene};
 use lustre_gpu::GpuContext;
 use lustre_plot::heat::heat_rgb;
 use lustre_scene::Scene;
-use lustre_shade::image::Image;
-use lustre_shade::path::{PathCamera, PathScene, PathTracer};
+use lustre_trace::image::Image;
+use lustre_trace::path::{PathCamera, PathScene, PathTracer};
 use std::time::Instant;
 
 /// Incident directions per pixel of the bandwidth buffer (the CLI's default; 004: 16).
@@ -404,8 +404,8 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use lustre_shade::path::PathOptions;
-    use lustre_shade::reference::{film_camera, path_scene};
+    use lustre_trace::path::PathOptions;
+    use lustre_trace::reference::{film_camera, path_scene};
 
     #[test]
     fn names_round_trip() {

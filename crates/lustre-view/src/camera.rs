@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 use lustre_scene::{Camera, FovAxis};
-use lustre_shade::path::PathCamera;
+use lustre_trace::path::PathCamera;
 
 /// Largest pitch, degrees (looking straight up or down has no heading).
 pub const MAX_PITCH_DEG: f64 = 89.0;
@@ -100,7 +100,7 @@ impl FlyCamera {
 
     /// The renderer's camera, as `lustre render` makes it from [`FlyCamera::to_camera`].
     pub fn path_camera(&self, w: u32, h: u32) -> Option<PathCamera> {
-        lustre_shade::reference::film_camera(&self.to_camera("view"), w.max(1), h.max(1)).ok()
+        lustre_trace::reference::film_camera(&self.to_camera("view"), w.max(1), h.max(1)).ok()
     }
 }
 
@@ -126,7 +126,7 @@ mod tests {
         assert!((back.forward - c.forward).length() < 1e-12);
         // The same rays through the renderer's camera.
         let p = f.path_camera(320, 180).unwrap();
-        let q = lustre_shade::reference::film_camera(&c, 320, 180).unwrap();
+        let q = lustre_trace::reference::film_camera(&c, 320, 180).unwrap();
         assert!(
             (p.direction(10.5, 20.5, 320, 180) - q.direction(10.5, 20.5, 320, 180)).length() < 1e-9
         );

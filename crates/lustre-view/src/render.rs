@@ -31,14 +31,14 @@ use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::material_edit;
 use lustre_scene::mesh::MAX_OBJECT_SAMPLES;
 use lustre_scene::{Camera, Material, MaterialKind, Scene};
-use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::bake::spec_albedo;
-use lustre_shade::baked::{environment_pyramid, BakedScene};
 use lustre_shade::frame::FrameStats;
-use lustre_shade::image::Image;
-use lustre_shade::path::{Accumulator, PathCamera, PathOptions, PathScene, PathTracer};
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::request::FrameRequest;
+use lustre_trace::bake::render::Lightmapped;
+use lustre_trace::bake::spec_albedo;
+use lustre_trace::baked::{environment_pyramid, BakedScene};
+use lustre_trace::image::Image;
+use lustre_trace::path::{Accumulator, PathCamera, PathOptions, PathScene, PathTracer};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, Sender, TryRecvError};
 use std::time::Instant;
@@ -340,7 +340,7 @@ fn run_inner(
                 "applying the material (BVH; adaptive tables on its next frame)".into()
             }
         }));
-        let (ps, warnings) = lustre_shade::reference::path_scene(&scene)?;
+        let (ps, warnings) = lustre_trace::reference::path_scene(&scene)?;
         if first {
             for w in warnings {
                 let _ = tx.send(Reply::Status(format!("warning: {w}")));
@@ -484,7 +484,7 @@ fn start_camera(scene: &Scene) -> Camera {
         return c.clone();
     }
     let (w, h) = (scene.film.width.max(1), scene.film.height.max(1));
-    match lustre_shade::reference::path_camera(scene, None, w, h) {
+    match lustre_trace::reference::path_camera(scene, None, w, h) {
         Ok(p) => Camera {
             name: "automatic".into(),
             position: p.origin,

@@ -28,10 +28,10 @@ use lustre_gpu::GpuContext;
 use lustre_scene::builtin::{LINEUP_FLOOR, LINEUP_PAINTS};
 use lustre_scene::material_edit::{parse_assignment, set_named};
 use lustre_scene::Scene;
-use lustre_shade::baked::read_environment;
-use lustre_shade::path::{PathOptions, PathTracer};
-use lustre_shade::reference::{path_camera, path_scene};
 use lustre_shade::request::{FrameRequest, Method, MAX_ADAPTIVE_SAMPLES};
+use lustre_trace::baked::read_environment;
+use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::reference::{path_camera, path_scene};
 use std::fmt::Write as _;
 use std::time::Instant;
 

@@ -14,7 +14,7 @@ use lustre_scene::lightmap::{
 };
 use lustre_scene::scene_file::{self, SceneFile};
 use lustre_scene::Scene;
-use lustre_shade::bake::{assemble, bake_tiles, ATrousOptions, BakeOptions, Denoiser, Transport};
+use lustre_trace::bake::{assemble, bake_tiles, ATrousOptions, BakeOptions, Denoiser, Transport};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `lustre bake`.

@@ -8,7 +8,8 @@ use lustre_env::{CubeMap, MipFilter};
 use lustre_shade::harness::{self, EnvSetup};
 use lustre_shade::kernel::{self, Weighting};
 use lustre_shade::pattern::ConcentricOptions;
-use lustre_shade::{metrics, render};
+use lustre_shade::render;
+use lustre_trace::metrics;
 use std::path::PathBuf;
 use std::time::Instant;
 

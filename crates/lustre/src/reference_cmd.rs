@@ -3,7 +3,7 @@
 
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
-use lustre_shade::reference::{render_reference, ReferenceOptions};
+use lustre_trace::reference::{render_reference, ReferenceOptions};
 use std::path::PathBuf;
 
 /// Arguments of `lustre reference`.

@@ -16,16 +16,16 @@ use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::material_edit::{parse_assignment, set_named};
 use lustre_scene::Environment;
 use lustre_scene::Scene;
-use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::bake::spec_albedo;
-use lustre_shade::baked::{environment_pyramid, read_environment, BakedScene};
 use lustre_shade::frame::{render_frame, FrameLight, FrameStats};
-use lustre_shade::image::Image;
-use lustre_shade::path::PathCamera;
-use lustre_shade::path::{PathOptions, PathTracer};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
-use lustre_shade::reference::film_camera;
 use lustre_shade::request::{FrameRequest, Method};
+use lustre_trace::bake::render::Lightmapped;
+use lustre_trace::bake::spec_albedo;
+use lustre_trace::baked::{environment_pyramid, read_environment, BakedScene};
+use lustre_trace::image::Image;
+use lustre_trace::path::PathCamera;
+use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::reference::film_camera;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -275,12 +275,12 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let cameras = match &args.path {
         None => vec![(
             "frame".to_string(),
-            lustre_shade::reference::path_camera(&scene, args.camera.as_deref(), w, h)?,
+            lustre_trace::reference::path_camera(&scene, args.camera.as_deref(), w, h)?,
         )],
         Some(p) => path_cameras(&scene, p, args.fps, w, h)?,
     };
     st.lap("load, light maps");
-    let (ps, warnings) = lustre_shade::reference::path_scene(&scene)?;
+    let (ps, warnings) = lustre_trace::reference::path_scene(&scene)?;
     for w in &warnings {
         eprintln!("warning: {w}");
     }
@@ -589,10 +589,10 @@ pub(crate) fn compare(args: &RenderArgs, img: &Image) -> anyhow::Result<()> {
                 img.height
             );
         }
-        let psnr = lustre_shade::metrics::psnr(img, &r, args.exposure)?;
-        let de = lustre_shade::metrics::delta_e(img, &r, args.exposure)?;
-        let rel = lustre_shade::metrics::rms(img, &r)? / r.mean().max(1e-12);
-        let diff = lustre_shade::metrics::false_colour(img, &r, 0.1 * r.mean().max(1e-6))?;
+        let psnr = lustre_trace::metrics::psnr(img, &r, args.exposure)?;
+        let de = lustre_trace::metrics::delta_e(img, &r, args.exposure)?;
+        let rel = lustre_trace::metrics::rms(img, &r)? / r.mean().max(1e-12);
+        let diff = lustre_trace::metrics::false_colour(img, &r, 0.1 * r.mean().max(1e-6))?;
         diff.write_png(&args.out.join("diff.png"), 1.0)?;
         println!(
             "against {}: PSNR {psnr:.2} dB, mean ΔE {de:.2}, relative RMS {:.2} %, mean ratio {:.4}",

@@ -3,7 +3,7 @@
 //! reference comparison, and clear errors for a scene without light maps, bad sample counts and
 //! a reference of another size.
 
-use lustre_shade::image::Image;
+use lustre_trace::image::Image;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 

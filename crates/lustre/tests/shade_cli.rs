@@ -374,7 +374,7 @@ fn adaptive_and_brute_force_renders_of_a_measured_paint_agree_and_bad_input_is_n
             .arg(&lit),
     );
     let mean = |p: &std::path::Path| {
-        lustre_shade::image::Image::read_exr(&p.join("frame.exr"))
+        lustre_trace::image::Image::read_exr(&p.join("frame.exr"))
             .expect("frame")
             .mean()
     };

@@ -21,7 +21,7 @@
 //! `xvfb-run` must be installed (CI installs `xvfb xauth`): without it this test fails.
 
 use lustre_scene::camera_path_file::CameraPathFile;
-use lustre_shade::image::Image;
+use lustre_trace::image::Image;
 use std::path::Path;
 use std::process::{Command, Output};
 

@@ -1,7 +1,7 @@
 // module textured: a material's textured parameters and normal map at a pixel. CPU twins:
 // lustre_scene::Material::with_bsdf_at (the clamps of `unit` and `clamp_alpha`, the glTF
 // metallic-roughness model's choice of BRDF or (rough) dielectric by transmission),
-// Material::normal_map_at and lustre_shade::path's `mapped_normal`. Binding-free: the caller
+// Material::normal_map_at and lustre_trace::path's `mapped_normal`. Binding-free: the caller
 // samples the textures (factor × texel, as `TexturedRgb::at` / `TexturedScalar::at`) and passes
 // the values; which parameter each value is depends on the kind (lustre_gpu::material::scene::
 // pack_material_params): rgb = the Lambert / plastic diffuse reflectance, the conductor's
@@ -20,7 +20,7 @@ fn tangent_space_normal(t: vec4<f32>, scale: f32) -> vec3<f32> {
     return normalize(vec3<f32>(x, y, z));
 }
 
-// lustre_shade::path::mapped_normal: the normal-mapped shading normal and the tangent, from the
+// lustre_trace::path::mapped_normal: the normal-mapped shading normal and the tangent, from the
 // interpolated normal ns, a tangent t, the bitangent's sign hand (glTF: B = hand · ns × T) and the
 // tangent-space normal; ns and t unchanged where the tangent is parallel to ns, (ns, T) where
 // the mapped normal vanishes.

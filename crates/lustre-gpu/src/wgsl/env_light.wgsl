@@ -1,4 +1,4 @@
-// module env_light: a distant environment light (lustre_shade::path::EnvLight): the bilinear
+// module env_light: a distant environment light (lustre_trace::path::EnvLight): the bilinear
 // radiance of an equirect map (lustre_env::EquirectMap::lookup_bilinear), its importance
 // sampling by texels (lustre_env::sampling::EnvSampler: a row by the marginal, a texel by the
 // row's conditional, then uniform in solid angle inside it) and that sampling's density. All in

@@ -1,5 +1,5 @@
 // module frame: vectors in the local shading frame.
-// CPU twins: lustre_brdf::frame::{reflect, mirror_z} and lustre_shade::kernel::ShadingFrame::
+// CPU twins: lustre_brdf::frame::{reflect, mirror_z} and lustre_trace::sampling::ShadingFrame::
 // to_world. Local = (w·t, w·b, w·n).
 
 // 000 Eq. 4.8: the mirror of w about the unit vector h, 2 (w·h) h − w.

@@ -1,8 +1,8 @@
 // module material_albedo: a material's diffuse albedo at a hit, the CPU's
-// `lustre_shade::bake::diffuse_albedo`, for the light-map and view-dependent shading passes.
+// `lustre_trace::bake::diffuse_albedo`, for the light-map and view-dependent shading passes.
 // Requires (the pass defines): fn material_row(i: u32) -> vec4<f32>.
 
-// `lustre_shade::bake::diffuse_albedo` as uploaded: clamp(base factor · texture, 0, 1) · k, with
+// `lustre_trace::bake::diffuse_albedo` as uploaded: clamp(base factor · texture, 0, 1) · k, with
 // k = 1 − clamp(metallic, 0, 1), or 0 where transmission ≥ ½, per pixel when those are textured.
 fn albedo(m: u32, uv0: vec2<f32>, uv1: vec2<f32>) -> vec3<f32> {
     let a = material_row(4u * m);

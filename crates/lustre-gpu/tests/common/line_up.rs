@@ -4,9 +4,9 @@
 use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::shading::{ShadingContext, ShadingOptions};
 use lustre_scene::Scene;
-use lustre_shade::baked::read_environment;
-use lustre_shade::path::{PathOptions, PathTracer};
-use lustre_shade::reference::{film_camera, path_scene};
+use lustre_trace::baked::read_environment;
+use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::reference::{film_camera, path_scene};
 
 /// The line-up of `spheres` (left to right) on `floor`.
 pub fn scene(spheres: [&str; 3], floor: &str) -> Scene {

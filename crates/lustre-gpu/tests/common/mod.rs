@@ -10,10 +10,10 @@ pub mod textures;
 use lustre_gpu::{GpuContext, GpuViewBuffer};
 use lustre_scene::lightmap::{build_atlas, AtlasOptions, LightmapAtlas};
 use lustre_scene::Scene;
-use lustre_shade::bake::{assemble, bake_tiles, BakeOptions, Denoiser};
 use lustre_shade::frame::{thin_sheet, FrameBuffers, FrameTables};
 use lustre_shade::mirror::{MirrorBuffer, Reflector};
 use lustre_shade::probe::LitScene;
+use lustre_trace::bake::{assemble, bake_tiles, BakeOptions, Denoiser};
 
 /// The adapter; panics (the test fails) without one.
 pub fn ctx() -> GpuContext {

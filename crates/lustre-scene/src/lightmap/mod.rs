@@ -1,6 +1,6 @@
 //! Light-map atlases: which page of light-map texels each mesh's `uv1` coordinates address.
 //!
-//! Convention shared by the atlas builder (this crate), the baker (lustre-shade) and the
+//! Convention shared by the atlas builder (this crate), the baker (lustre-trace) and the
 //! real-time renderer: after an atlas is built or validated, every mesh with a light map has
 //! `Mesh::uv1` set, one coordinate per vertex, in [0, 1] over its page, v = 0 at the top row (glTF).
 //! Texel (x, y) of a `width × height` page covers uv ∈ [x/width, (x+1)/width] ×

@@ -106,7 +106,7 @@ fn scene_source(args: &ViewArgs) -> anyhow::Result<SceneSource> {
         .env
         .as_deref()
         .map(|p| {
-            lustre_shade::baked::read_environment(p)
+            lustre_trace::baked::read_environment(p)
                 .with_context(|| format!("--env {}", p.display()))
         })
         .transpose()?;

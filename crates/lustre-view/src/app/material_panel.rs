@@ -157,7 +157,7 @@ fn field_ui(ui: &mut egui::Ui, f: &mut Field) -> Option<String> {
                     );
                     commit |= r.drag_stopped() || (r.changed() && !r.dragged());
                 }
-                let shown = |x: f64| (lustre_shade::image::display_value(x, 1.0) * 255.0) as u8;
+                let shown = |x: f64| (lustre_trace::image::display_value(x, 1.0) * 255.0) as u8;
                 let (rect, _) =
                     ui.allocate_exact_size(egui::vec2(14.0, 14.0), egui::Sense::hover());
                 ui.painter().rect_filled(

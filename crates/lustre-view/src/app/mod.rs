@@ -37,7 +37,7 @@ use crate::render::{FrameReply, FrameSettings, Reply, Request, SceneInfo, SceneS
 use crate::script::Command;
 use crate::{Method, ViewArgs};
 use edit::Draft;
-use lustre_shade::path::PathCamera;
+use lustre_trace::path::PathCamera;
 use recording::Recording;
 use script::Wait;
 use std::collections::VecDeque;

@@ -39,7 +39,7 @@ use lustre_adaptive::light::AreaLight;
 use lustre_adaptive::shading::ShadingContext;
 use lustre_env::{Distribution1D, EnvSampler};
 use lustre_scene::Scene;
-use lustre_shade::image::Image;
+use lustre_trace::image::Image;
 use std::f64::consts::PI;
 
 /// The shading pass's own WGSL (its bindings and entry point).

@@ -47,12 +47,12 @@ use crate::wgsl;
 use glam::DVec3;
 
 use lustre_shade::frame::{walkthrough_request, FrameBuffers, FrameLight, FrameStats, FrameTables};
-use lustre_shade::image::Image;
 use lustre_shade::kernel::BoundingPlane;
 use lustre_shade::mirror::ScreenTiles;
-use lustre_shade::path::PathCamera;
 use lustre_shade::probe::LitScene;
 use lustre_shade::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
+use lustre_trace::image::Image;
+use lustre_trace::path::PathCamera;
 use std::sync::OnceLock;
 
 /// Everything the pass reads besides the G-buffer: per-triangle records, materials with their

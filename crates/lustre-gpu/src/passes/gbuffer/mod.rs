@@ -1,5 +1,5 @@
 //! The raster G-buffer pass, `gbuffer.wgsl`: a scene's triangles, in the order of
-//! [`lustre_shade::bake::diffuse_path_scene`]'s geometry (so triangle ids agree with the CPU),
+//! [`lustre_trace::bake::diffuse_path_scene`]'s geometry (so triangle ids agree with the CPU),
 //! drawn at a [`PathCamera`] into a G-buffer of triangle id (R32Uint, [`SKY`] where nothing
 //! is drawn), barycentrics (b1, b2) and view depth (Rgba32Float), and unit shading normal
 //! (Rgba32Float), with a Depth32Float reverse-Z depth test; alpha-masked materials discard
@@ -11,7 +11,7 @@
 //! Camera model: the projection maps the CPU camera's image position (X, Y) of a W×H image to
 //! NDC (2X/W − 1, 1 − 2Y/H), so a raster pixel centre is the ray
 //! `PathCamera::direction(X + ½, Y + ½, W, H)`; the CPU twin is
-//! [`lustre_shade::bake::gbuffer::trace_gbuffer`] (ray casting at the same centres). Raster
+//! [`lustre_trace::bake::gbuffer::trace_gbuffer`] (ray casting at the same centres). Raster
 //! coverage (top-left rule) and ray casting (watertight test) may disagree on pixels whose
 //! centre lies on an edge, and depth ties between coplanar triangles resolve differently.
 
@@ -21,8 +21,8 @@ use crate::error::{invalid, scope_result, Result};
 use crate::wgsl;
 use glam::DVec3;
 use lustre_scene::Scene;
-use lustre_shade::bake::gbuffer::{GBuffer, SKY};
-use lustre_shade::path::{Geometry, PathCamera};
+use lustre_trace::bake::gbuffer::{GBuffer, SKY};
+use lustre_trace::path::{Geometry, PathCamera};
 use std::sync::OnceLock;
 
 /// The WGSL source of the raster pass: the texture lookup module, then `gbuffer.wgsl`.

@@ -1,5 +1,5 @@
 // Light-mapped diffuse shading of a G-buffer (000 Eq. 4.1): the twin of
-// `lustre_shade::bake::gbuffer::shade_gbuffer`, i.e. of `Lightmapped::radiance` per G-buffer
+// `lustre_trace::bake::gbuffer::shade_gbuffer`, i.e. of `Lightmapped::radiance` per G-buffer
 // pixel and `EnvLight::eval` for sky pixels, in f32. One thread per output pixel averages its
 // k×k G-buffer pixels (box filter). All filtering is by hand with textureLoad so that the
 // texel-centre, clamp and wrap conventions are the CPU's exactly.
@@ -59,7 +59,7 @@ const PI: f32 = 3.14159265358979323846;
 const SKY: u32 = 0xffffffffu;
 const NO_PAGE: u32 = 0xffffffffu;
 
-// `lustre_shade::bake::render::bilinear`: texel centres at (x + ½, y + ½), clamped at the border.
+// `lustre_trace::bake::render::bilinear`: texel centres at (x + ½, y + ½), clamped at the border.
 fn page_bilinear(page: u32, x: f32, y: f32) -> vec3<f32> {
     let w = u.page.x;
     let h = u.page.y;

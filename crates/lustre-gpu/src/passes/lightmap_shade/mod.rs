@@ -3,7 +3,7 @@
 //! light-map page at uv1, kd the material's diffuse albedo (constant or base-colour textured),
 //! the environment (equirect, `EnvLight::eval`'s bilinear lookup) where the G-buffer is sky;
 //! k×k G-buffer pixels box-averaged into one output pixel. The CPU twin is
-//! [`lustre_shade::bake::gbuffer::shade_gbuffer`].
+//! [`lustre_trace::bake::gbuffer::shade_gbuffer`].
 //!
 //! Uploads: light-map pages as one Rgba32Float 2D texture array; the environment as an
 //! Rgba32Float 2D texture; base-colour textures as RGBA f32 texels in a storage buffer; all
@@ -22,11 +22,11 @@ use crate::wgsl;
 use lustre_brdf::rgb::Rgb;
 use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::{MaterialKind, Scene, TexturedRgb, TexturedScalar};
-use lustre_shade::bake::diffuse_path_scene;
-use lustre_shade::bake::gbuffer::{gbuffer_size, GBuffer};
-use lustre_shade::bake::render::Lightmapped;
-use lustre_shade::image::Image;
-use lustre_shade::path::{EnvLight, Geometry, PathCamera};
+use lustre_trace::bake::diffuse_path_scene;
+use lustre_trace::bake::gbuffer::{gbuffer_size, GBuffer};
+use lustre_trace::bake::render::Lightmapped;
+use lustre_trace::image::Image;
+use lustre_trace::path::{EnvLight, Geometry, PathCamera};
 use std::sync::OnceLock;
 
 /// The WGSL source of the shading pass: the albedo and texture modules, then
@@ -82,7 +82,7 @@ pub(crate) fn gpu_scalar(
     ])
 }
 
-/// A material as `lightmap_shade.wgsl` reads it ([`lustre_shade::bake::diffuse_albedo`]):
+/// A material as `lightmap_shade.wgsl` reads it ([`lustre_trace::bake::diffuse_albedo`]):
 /// (base factor, k), (base texture slot bits, uv set bits, two-sided, 1 when metallic or
 /// transmission is textured), then metallic and transmission as [`gpu_scalar`]. Untextured
 /// factors are clamped here; with textured metallic or transmission, k is computed per pixel.
@@ -656,8 +656,8 @@ impl LightmapFrameScene {
         atlas: &LightmapAtlas,
         pages: &[Vec<[f32; 3]>],
     ) -> Result<Self> {
-        let shade_err = |e: lustre_shade::ShadeError| invalid("scene", e.to_string());
-        let (ps, spec, _) = diffuse_path_scene(scene).map_err(shade_err)?;
+        let trace_err = |e: lustre_trace::TraceError| invalid("scene", e.to_string());
+        let (ps, spec, _) = diffuse_path_scene(scene).map_err(trace_err)?;
         if ps.geometry.positions.is_empty() {
             return Err(invalid(
                 "scene",
@@ -665,7 +665,7 @@ impl LightmapFrameScene {
             ));
         }
         let lit =
-            Lightmapped::new(scene, atlas, pages, &ps.geometry, spec.clone()).map_err(shade_err)?;
+            Lightmapped::new(scene, atlas, pages, &ps.geometry, spec.clone()).map_err(trace_err)?;
         let geometry = GpuGeometry::upload(ctx, scene, &ps.geometry)?;
         let shading = GpuLightmapScene::upload(
             ctx,

@@ -12,7 +12,7 @@
 //! supersampling ([`lustre_shade::probe::capture_cube`], s = k) at the same sample positions.
 //! Some face bases are left-handed; the raster pass does not cull, so this does not matter.
 //!
-//! CPU twin: [`lustre_shade::bake::gbuffer::shade_gbuffer`] on the read-back face G-buffers
+//! CPU twin: [`lustre_trace::bake::gbuffer::shade_gbuffer`] on the read-back face G-buffers
 //! ([`GpuProbeCapture::face_gbuffer`]) → the same cube → `CubePyramid::build`.
 
 use crate::context::GpuContext;
@@ -24,10 +24,10 @@ use glam::DVec3;
 use lustre_env::cube::face_point;
 use lustre_env::MipFilter;
 use lustre_scene::Scene;
-use lustre_shade::bake::gbuffer::GBuffer;
 use lustre_shade::kernel::BoundingPlane;
-use lustre_shade::path::PathCamera;
 use lustre_shade::probe::{auto_planes, probe_placement, LitScene, Probe, ProbeOptions};
+use lustre_trace::bake::gbuffer::GBuffer;
+use lustre_trace::path::PathCamera;
 use std::ops::Range;
 
 /// The camera of cube face `face` (0..6: +X, −X, +Y, −Y, +Z, −Z) at `centre`: 90° square, its

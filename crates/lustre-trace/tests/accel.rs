@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 use lustre_brdf::sampling::{uniform_sphere, SplitMix64};
-use lustre_shade::accel::Accel;
+use lustre_trace::accel::Accel;
 
 /// Triangles of the Cornell box OBJ from the shared data.
 pub fn cornell() -> Vec<[DVec3; 3]> {

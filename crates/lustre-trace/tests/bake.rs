@@ -7,8 +7,8 @@ use glam::{DVec3, Vec2, Vec3};
 use lustre_brdf::rgb::Rgb;
 use lustre_scene::lightmap::{AtlasSource, LightmapAtlas};
 use lustre_scene::{Environment, Material, Mesh, Scene};
-use lustre_shade::bake::trace::TexelRecord;
-use lustre_shade::bake::{assemble, bake_texels, bake_tiles, Assembled, BakeOptions, Denoiser};
+use lustre_trace::bake::trace::TexelRecord;
+use lustre_trace::bake::{assemble, bake_texels, bake_tiles, Assembled, BakeOptions, Denoiser};
 use std::f64::consts::PI;
 use std::path::Path;
 
@@ -686,9 +686,9 @@ fn bad_input_is_a_clear_error() {
 
 #[test]
 fn light_mapped_shading_matches_the_path_traced_diffuse_scene() {
-    use lustre_shade::bake::diffuse_path_scene;
-    use lustre_shade::bake::render::render_lightmapped;
-    use lustre_shade::path::{Accumulator, PathCamera, PathOptions, PathTracer};
+    use lustre_trace::bake::diffuse_path_scene;
+    use lustre_trace::bake::render::render_lightmapped;
+    use lustre_trace::path::{Accumulator, PathCamera, PathOptions, PathTracer};
     let (rho, le) = (0.5, 10.0);
     let (scene, at, _) = cornell_like(rho, le);
     let bounces = 4;
@@ -722,11 +722,11 @@ fn light_mapped_shading_matches_the_path_traced_diffuse_scene() {
     pt.render(&cam, &mut acc, 256, 1, &|_, _| {});
     let reference = acc.image();
     let noise = acc.noise_rms().unwrap();
-    let mean = |img: &lustre_shade::image::Image| {
+    let mean = |img: &lustre_trace::image::Image| {
         img.data.iter().map(|p| f64::from(p[1])).sum::<f64>() / img.data.len() as f64
     };
     let (m_lm, m_ref) = (mean(&lm), mean(&reference));
-    let psnr = lustre_shade::metrics::psnr(&lm, &reference, 1.0).unwrap();
+    let psnr = lustre_trace::metrics::psnr(&lm, &reference, 1.0).unwrap();
     eprintln!(
         "light-mapped mean {m_lm:.5} vs path traced {m_ref:.5} (noise RMS per pixel {noise:.4}), PSNR {psnr:.1} dB"
     );
@@ -750,8 +750,8 @@ fn check_partial_texels(
     radius: f64,
 ) -> f64 {
     use lustre_brdf::sampling::SplitMix64;
-    use lustre_shade::bake::diffuse_path_scene;
-    use lustre_shade::path::{PathOptions, PathTracer};
+    use lustre_trace::bake::diffuse_path_scene;
+    use lustre_trace::path::{PathOptions, PathTracer};
     let (ps, _, _) = diffuse_path_scene(scene).unwrap();
     let pt = PathTracer::new(
         &ps,
@@ -876,8 +876,8 @@ fn modern_hall_floor_under_walls_and_steps_does_not_leak() {
     // steps) with a wall, step or other occluder within one texel (1/8 m) of their centre in
     // one of 8 horizontal directions, 1 cm above the surface; spread evenly over the atlas.
     // Baked again at 256 spp (the bake's own estimator and sample placement, little noise).
-    let (ps, _, _) = lustre_shade::bake::diffuse_path_scene(&scene).unwrap();
-    let pt = lustre_shade::path::PathTracer::new(&ps, Default::default()).unwrap();
+    let (ps, _, _) = lustre_trace::bake::diffuse_path_scene(&scene).unwrap();
+    let pt = lustre_trace::path::PathTracer::new(&ps, Default::default()).unwrap();
     let foot: Vec<(u32, u32, u32)> = a.texels[0]
         .iter()
         .enumerate()
@@ -950,7 +950,7 @@ fn single_texels_bake_to_the_tiles_records() {
 #[test]
 fn full_transport_bakes_are_keyed_by_every_material_parameter() {
     use lustre_scene::material::{MaterialKind, MicrofacetType, TexturedRgb, TexturedScalar};
-    use lustre_shade::bake::{bake_hash, Transport};
+    use lustre_trace::bake::{bake_hash, Transport};
     let metal = |alpha: f64| {
         Material::new(
             "metal",

@@ -51,7 +51,7 @@ pub use output::{assemble, Assembled, BakeReport, PageReport};
 pub use tile::{bake_texels, bake_tiles, TilesReport};
 
 use crate::path::{PathScene, Surface};
-use crate::{Result, ShadeError};
+use crate::{Result, TraceError};
 use glam::{DVec3, Vec2};
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::models::lambert::Lambert;
@@ -114,20 +114,20 @@ impl BakeOptions {
     /// Checks the settings; errors name the absurd one.
     pub fn validate(&self) -> Result<()> {
         if self.spp == 0 || self.spp > 1 << 20 {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "--spp {} must be between 1 and {}",
                 self.spp,
                 1 << 20
             )));
         }
         if self.bounces == 0 || self.bounces > 64 {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "--bounces {} must be between 1 and 64",
                 self.bounces
             )));
         }
         if self.tile == 0 || self.tile > MAX_PAGE_SIZE {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "tile side {} must be between 1 and {MAX_PAGE_SIZE}",
                 self.tile
             )));
@@ -250,7 +250,7 @@ pub fn diffuse_path_scene(scene: &Scene) -> Result<(PathScene<'_>, Vec<Rgb>, Vec
         .iter()
         .any(|e| e.is_finite() && e.max_component() > 0.0);
     if !emitters && ps.environment.is_none() {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "{}: the scene has no emitter and no (non-black) environment: the light maps would be black",
             scene.source.display()
         )));
@@ -276,19 +276,19 @@ pub fn diffuse_path_scene(scene: &Scene) -> Result<(PathScene<'_>, Vec<Rgb>, Vec
 pub fn check_atlas(scene: &Scene, atlas: &LightmapAtlas) -> Result<()> {
     let src = scene.source.display();
     if atlas.width == 0 || atlas.height == 0 || atlas.pages == 0 {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "{src}: light-map atlas of {}×{} texels × {} pages is empty",
             atlas.width, atlas.height, atlas.pages
         )));
     }
     if atlas.width > MAX_PAGE_SIZE || atlas.height > MAX_PAGE_SIZE {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "{src}: light-map page {}×{} exceeds the GPU limit {MAX_PAGE_SIZE}² (lower the texel density)",
             atlas.width, atlas.height
         )));
     }
     if atlas.mesh_page.len() != scene.meshes.len() {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "{src}: light-map atlas lists {} meshes, the scene has {}",
             atlas.mesh_page.len(),
             scene.meshes.len()
@@ -297,7 +297,7 @@ pub fn check_atlas(scene: &Scene, atlas: &LightmapAtlas) -> Result<()> {
     for (m, page) in scene.meshes.iter().zip(&atlas.mesh_page) {
         let Some(page) = page else { continue };
         if *page >= atlas.pages {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "{src}: mesh {:?} is on light-map page {page} of {}",
                 m.name, atlas.pages
             )));
@@ -305,14 +305,14 @@ pub fn check_atlas(scene: &Scene, atlas: &LightmapAtlas) -> Result<()> {
         match &m.uv1 {
             Some(uv) if uv.len() == m.positions.len() => {
                 if let Some(k) = uv.iter().position(|v| !v.is_finite()) {
-                    return Err(ShadeError::Parameter(format!(
+                    return Err(TraceError::Parameter(format!(
                         "{src}: mesh {:?}: light-map uv {k} is not finite",
                         m.name
                     )));
                 }
             }
             _ => {
-                return Err(ShadeError::Parameter(format!(
+                return Err(TraceError::Parameter(format!(
                     "{src}: mesh {:?} has a light-map page but no light-map uvs (one per vertex)",
                     m.name
                 )))

@@ -5,7 +5,7 @@
 
 use crate::bake::render::read_pages;
 use crate::bake::{assemble, bake_tiles, BakeOptions, Transport};
-use crate::error::{Result, ShadeError};
+use crate::error::{Result, TraceError};
 use crate::path::EnvLight;
 use glam::DMat3;
 use lustre_env::cube::CubeMap;
@@ -27,8 +27,8 @@ pub struct BakedScene {
     pub warnings: Vec<String>,
 }
 
-fn scene_error(what: &str, e: impl std::fmt::Display) -> ShadeError {
-    ShadeError::Parameter(format!("{what}: {e}"))
+fn scene_error(what: &str, e: impl std::fmt::Display) -> TraceError {
+    TraceError::Parameter(format!("{what}: {e}"))
 }
 
 impl BakedScene {
@@ -39,7 +39,7 @@ impl BakedScene {
             .map_err(|e| scene_error(&format!("loading {}", path.display()), e))?;
         let warnings = scene.warnings.clone();
         let Some(lightmap) = &scene.lightmap else {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "{}: no light maps; bake them first (`lustre bake {} --out DIR`) and use DIR/scene.toml",
                 path.display(),
                 path.display()

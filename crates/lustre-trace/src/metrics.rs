@@ -1,7 +1,7 @@
 //! Image comparison: RMS of linear values, PSNR and CIE76 ΔE of display values, and a
 //! false-colour difference image (002 Fig. 9 style).
 
-use crate::error::{Result, ShadeError};
+use crate::error::{Result, TraceError};
 use crate::image::{display_value, srgb_eotf, Image};
 
 /// D65 reference white (CIE 1931 2°), Y = 1.
@@ -12,7 +12,7 @@ pub const LUMINANCE: [f64; 3] = [0.2126, 0.7152, 0.0722];
 
 fn check_same(a: &Image, b: &Image) -> Result<()> {
     if a.width != b.width || a.height != b.height || a.data.len() != b.data.len() {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "metrics: images differ in size ({}x{} vs {}x{})",
             a.width, a.height, b.width, b.height
         )));
@@ -124,7 +124,7 @@ pub fn ramp(t: f64) -> [f64; 3] {
 pub fn false_colour(a: &Image, b: &Image, max_abs: f64) -> Result<Image> {
     check_same(a, b)?;
     if !(max_abs.is_finite() && max_abs > 0.0) {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "false colour: max_abs = {max_abs} must be finite and > 0"
         )));
     }

@@ -27,8 +27,8 @@
 
 use crate::accel::{Accel, Hit};
 use crate::image::Image;
-use crate::kernel::{power_heuristic, ShadingFrame};
-use crate::{Result, ShadeError};
+use crate::sampling::{power_heuristic, ShadingFrame};
+use crate::{Result, TraceError};
 use glam::{DMat3, DVec3};
 use lustre_brdf::bsdf::{Bsdf, BsdfSample};
 use lustre_brdf::rgb::Rgb;
@@ -143,7 +143,7 @@ impl EnvLight {
     /// Errors: a black map, a non-finite or negative scale, a matrix that is not a rotation.
     pub fn new(map: EquirectMap, to_world: DMat3, scale: f64) -> Result<Self> {
         if !(scale.is_finite() && scale >= 0.0) {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "environment scale {scale} must be finite and ≥ 0"
             )));
         }
@@ -153,7 +153,7 @@ impl EnvLight {
             .iter()
             .all(|v| v.abs() < 1e-6)
         {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "environment rotation {to_world:?} is not orthonormal"
             )));
         }
@@ -240,7 +240,7 @@ impl PathCamera {
     /// `fov_y_deg`. Errors on a degenerate basis or a field of view outside (0, 180).
     pub fn look_at(eye: DVec3, target: DVec3, up: DVec3, fov_y_deg: f64) -> Result<Self> {
         let bad = || {
-            ShadeError::Parameter(format!(
+            TraceError::Parameter(format!(
                 "camera eye {eye}, target {target}, up {up}, fov {fov_y_deg}° is degenerate"
             ))
         };
@@ -286,7 +286,7 @@ pub struct PathOptions {
     /// Bounces before Russian roulette starts (Mitsuba's `rr_depth`, default 5).
     pub rr_depth: u32,
     /// Which techniques run (all three estimate the same image; the single ones are for tests).
-    pub strategy: crate::kernel::Strategy,
+    pub strategy: crate::sampling::Strategy,
 }
 
 impl Default for PathOptions {
@@ -294,7 +294,7 @@ impl Default for PathOptions {
         PathOptions {
             max_depth: 16,
             rr_depth: 5,
-            strategy: crate::kernel::Strategy::Mis,
+            strategy: crate::sampling::Strategy::Mis,
         }
     }
 }
@@ -377,13 +377,13 @@ impl<'a, 's> PathTracer<'a, 's> {
             ("emission", g.emission.len()),
         ] {
             if len != 0 && len != n {
-                return Err(ShadeError::Parameter(format!(
+                return Err(TraceError::Parameter(format!(
                     "geometry: {len} {name} for {n} triangles"
                 )));
             }
         }
         if g.material.len() != n {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "geometry: {} material indices for {n} triangles",
                 g.material.len()
             )));
@@ -393,14 +393,14 @@ impl<'a, 's> PathTracer<'a, 's> {
             .iter()
             .position(|&m| m as usize >= scene.materials.len())
         {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "triangle {k} uses material {} of {}",
                 g.material[k],
                 scene.materials.len()
             )));
         }
         if opts.max_depth == 0 {
-            return Err(ShadeError::Parameter("max_depth must be ≥ 1".into()));
+            return Err(TraceError::Parameter("max_depth must be ≥ 1".into()));
         }
         let accel = Accel::new(&g.positions)?;
         let mut lights = vec![];
@@ -684,7 +684,7 @@ impl<'a, 's> PathTracer<'a, 's> {
         mut st: PathState,
         rng: &mut SplitMix64,
     ) -> Rgb {
-        use crate::kernel::Strategy;
+        use crate::sampling::Strategy;
         let strategy = self.opts.strategy;
         let use_bsdf_hits = strategy != Strategy::Light;
         let mis = strategy == Strategy::Mis;
@@ -766,7 +766,7 @@ impl<'a, 's> PathTracer<'a, 's> {
         st: &mut PathState,
         rng: &mut SplitMix64,
     ) -> Option<(DVec3, DVec3)> {
-        use crate::kernel::Strategy;
+        use crate::sampling::Strategy;
         let use_nee = self.opts.strategy != Strategy::Bsdf;
         let mis = self.opts.strategy == Strategy::Mis;
         let wo_l = frame.to_local(wo);
@@ -894,7 +894,7 @@ impl Accumulator {
     /// An empty w×h accumulator; errors on a zero size.
     pub fn new(width: usize, height: usize) -> Result<Self> {
         if width == 0 || height == 0 {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "image size {width}×{height} is empty"
             )));
         }
@@ -921,7 +921,7 @@ impl Accumulator {
     /// sample count; errors when the sizes differ or `spp` < 2.
     pub fn from_halves(even: &Image, odd: &Image, spp: u32) -> Result<Self> {
         if even.width != odd.width || even.height != odd.height || spp < 2 {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "resume: halves {}×{} and {}×{} with {spp} samples do not fit together",
                 even.width, even.height, odd.width, odd.height
             )));

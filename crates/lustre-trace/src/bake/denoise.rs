@@ -17,7 +17,7 @@
 
 use super::fill::PageBuffer;
 use super::trace::{TexelRecord, NO_CHART};
-use crate::{Result, ShadeError};
+use crate::{Result, TraceError};
 use rayon::prelude::*;
 
 /// The denoiser [`super::assemble`] runs. Open Image Denoise cannot be installed here; it
@@ -72,7 +72,7 @@ impl ATrousOptions {
         if ok {
             Ok(())
         } else {
-            Err(ShadeError::Parameter(format!(
+            Err(TraceError::Parameter(format!(
                 "à-trous parameters {self:?}: iterations ≤ 10, sigmas finite and > 0"
             )))
         }

@@ -4,7 +4,7 @@
 use std::io::Cursor;
 use std::path::Path;
 
-use crate::error::{Result, ShadeError};
+use crate::error::{Result, TraceError};
 
 /// A float RGB image, row-major, row 0 at the top, linear radiance.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,8 +54,8 @@ fn write_png_bytes(path: &Path, width: usize, height: usize, rgb: Vec<u8>) -> Re
     Ok(())
 }
 
-fn encode_error(path: &Path, what: &str, e: impl std::fmt::Display) -> ShadeError {
-    ShadeError::Io {
+fn encode_error(path: &Path, what: &str, e: impl std::fmt::Display) -> TraceError {
+    TraceError::Io {
         path: path.to_path_buf(),
         source: std::io::Error::other(format!("{what} encoding failed: {e}")),
     }
@@ -76,7 +76,7 @@ impl Image {
     pub fn from_data(width: usize, height: usize, data: Vec<[f32; 3]>) -> Result<Self> {
         let n = Self::check_size(width, height)?;
         if data.len() != n {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "image: {width}x{height} needs {n} pixels, got {}",
                 data.len()
             )));
@@ -90,14 +90,14 @@ impl Image {
 
     fn check_size(width: usize, height: usize) -> Result<usize> {
         if width == 0 || height == 0 {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "image: size {width}x{height} must be non-zero"
             )));
         }
         width
             .checked_mul(height)
             .filter(|&n| n <= u32::MAX as usize)
-            .ok_or_else(|| ShadeError::Parameter(format!("image: size {width}x{height} too large")))
+            .ok_or_else(|| TraceError::Parameter(format!("image: size {width}x{height} too large")))
     }
 
     /// The pixel at column `x`, row `y` (row 0 at the top). Panics when out of range.
@@ -176,7 +176,7 @@ impl Image {
     /// Reads an image file (OpenEXR, or anything the `image` crate reads) as linear RGB.
     pub fn read_exr(path: &Path) -> Result<Image> {
         let img = image::open(path)
-            .map_err(|e| ShadeError::Parameter(format!("cannot read {}: {e}", path.display())))?;
+            .map_err(|e| TraceError::Parameter(format!("cannot read {}: {e}", path.display())))?;
         let rgb = img.to_rgb32f();
         let (w, h) = (rgb.width() as usize, rgb.height() as usize);
         Image::from_data(w, h, rgb.pixels().map(|p| p.0).collect())
@@ -196,7 +196,7 @@ impl Image {
     /// halves). Errors when the sizes differ.
     pub fn average(&self, other: &Image) -> Result<Image> {
         if (self.width, self.height) != (other.width, other.height) {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "averaging a {} × {} image with a {} × {} one",
                 self.width, self.height, other.width, other.height
             )));

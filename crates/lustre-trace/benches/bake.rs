@@ -2,14 +2,14 @@
 //! irradiance paths ([`PathTracer::irradiance`], the bake's per-sample estimator, with the
 //! materials made diffuse as the bake makes them) at 4 bounces, from the surface points the
 //! camera sees (256 points), and the validity probes of those points. `cargo bench -p
-//! lustre-shade --bench bake`.
+//! lustre-trace --bench bake`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::DVec3;
 use lustre_brdf::sampling::SplitMix64;
-use lustre_shade::bake::diffuse_path_scene;
-use lustre_shade::path::{PathOptions, PathTracer};
-use lustre_shade::reference::path_camera;
+use lustre_trace::bake::diffuse_path_scene;
+use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::reference::path_camera;
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {

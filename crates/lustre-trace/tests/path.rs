@@ -6,11 +6,11 @@ use glam::DVec3;
 use lustre_brdf::models::lambert::Lambert;
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
-use lustre_shade::kernel::Strategy;
-use lustre_shade::path::{
+use lustre_trace::path::{
     Accumulator, ConstantSurface, EnvLight, Geometry, PathCamera, PathOptions, PathScene,
     PathTracer, Surface,
 };
+use lustre_trace::sampling::Strategy;
 use std::f64::consts::PI;
 
 fn lambert(kd: f64, two_sided: bool) -> Box<dyn Surface> {
@@ -300,7 +300,7 @@ fn resumed_accumulation_equals_one_run_and_noise_estimate_is_honest() {
     pt.render(&cam, &mut small, 16, 99, &|_, _| {});
     let est = small.noise_rms().unwrap();
     let img = small.image();
-    let truth = lustre_shade::image::Image {
+    let truth = lustre_trace::image::Image {
         width: w,
         height: h,
         data: img
@@ -312,7 +312,7 @@ fn resumed_accumulation_equals_one_run_and_noise_estimate_is_honest() {
             })
             .collect(),
     };
-    let actual = lustre_shade::metrics::rms(&img, &truth).unwrap();
+    let actual = lustre_trace::metrics::rms(&img, &truth).unwrap();
     println!("noise estimate {est:.4}, actual error {actual:.4}");
     assert!(
         est > 0.5 * actual && est < 2.0 * actual,

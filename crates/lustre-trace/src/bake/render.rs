@@ -11,7 +11,7 @@ use super::raster::Raster;
 use super::{diffuse_albedo, diffuse_path_scene};
 use crate::image::Image;
 use crate::path::{Geometry, PathCamera, PathOptions, PathTracer};
-use crate::{Result, ShadeError};
+use crate::{Result, TraceError};
 use glam::{DVec3, Vec2};
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
@@ -57,7 +57,7 @@ impl<'a> Lightmapped<'a> {
     ) -> Result<Self> {
         let n = (atlas.width * atlas.height) as usize;
         if pages.len() != atlas.pages as usize || pages.iter().any(|p| p.len() != n) {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "{} light-map pages do not fit an atlas of {} pages of {}×{}",
                 pages.len(),
                 atlas.pages,
@@ -200,7 +200,7 @@ pub fn render_lightmapped(
     seed: u64,
 ) -> Result<Image> {
     if w == 0 || h == 0 || spp == 0 {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "image {w}×{h} at {spp} spp is empty"
         )));
     }
@@ -237,13 +237,13 @@ pub fn render_lightmapped(
 pub fn read_pages(lightmap: &SceneLightmap) -> Result<Vec<Vec<[f32; 3]>>> {
     let atlas = &lightmap.atlas;
     if lightmap.pages.is_empty() {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "the light-map atlas {} has no baked pages (run `lustre bake`)",
             lightmap.atlas_file.display()
         )));
     }
     if lightmap.pages.len() != atlas.pages as usize {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "{} light-map page files for an atlas of {} pages ({})",
             lightmap.pages.len(),
             atlas.pages,
@@ -256,7 +256,7 @@ pub fn read_pages(lightmap: &SceneLightmap) -> Result<Vec<Vec<[f32; 3]>>> {
         .map(|p| {
             let img = Image::read_exr(p)?;
             if img.width != atlas.width as usize || img.height != atlas.height as usize {
-                return Err(ShadeError::Parameter(format!(
+                return Err(TraceError::Parameter(format!(
                     "{}: light-map page is {}×{}, the atlas's pages are {}×{}",
                     p.display(),
                     img.width,
@@ -266,7 +266,7 @@ pub fn read_pages(lightmap: &SceneLightmap) -> Result<Vec<Vec<[f32; 3]>>> {
                 )));
             }
             if img.data.iter().flatten().any(|c| !c.is_finite()) {
-                return Err(ShadeError::Parameter(format!(
+                return Err(TraceError::Parameter(format!(
                     "{}: light-map page has NaN or infinite texels",
                     p.display()
                 )));

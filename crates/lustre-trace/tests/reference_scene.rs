@@ -3,9 +3,9 @@
 //! resumable job's files, bad input.
 
 use lustre_scene::Scene;
-use lustre_shade::image::Image;
-use lustre_shade::path::{Accumulator, PathOptions, PathTracer};
-use lustre_shade::reference::{path_camera, path_scene, render_reference, ReferenceOptions};
+use lustre_trace::image::Image;
+use lustre_trace::path::{Accumulator, PathOptions, PathTracer};
+use lustre_trace::reference::{path_camera, path_scene, render_reference, ReferenceOptions};
 use std::path::PathBuf;
 
 fn data() -> PathBuf {

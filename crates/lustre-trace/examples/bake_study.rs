@@ -4,7 +4,7 @@
 //! density, and the bake's time per stage (unwrap, trace, fill, denoise, write).
 //!
 //! ```sh
-//! cargo run --release -p lustre-shade --example bake_study -- --out DIR \
+//! cargo run --release -p lustre-trace --example bake_study -- --out DIR \
 //!     [--scene FILE] [--size 160x90] [--ref-spp 4096] [--densities 4,8,16] [--spp 16,64,256] \
 //!     [--bounces 4] [--lm-spp 16]
 //! ```
@@ -22,11 +22,11 @@
 
 use lustre_scene::lightmap::{build_atlas, AtlasOptions};
 use lustre_scene::Scene;
-use lustre_shade::bake::render::render_lightmapped;
-use lustre_shade::bake::{assemble, bake_tiles, ATrousOptions, BakeOptions, Denoiser};
-use lustre_shade::image::Image;
-use lustre_shade::metrics::{psnr, rms};
-use lustre_shade::reference::{path_camera, render_reference, ReferenceOptions};
+use lustre_trace::bake::render::render_lightmapped;
+use lustre_trace::bake::{assemble, bake_tiles, ATrousOptions, BakeOptions, Denoiser};
+use lustre_trace::image::Image;
+use lustre_trace::metrics::{psnr, rms};
+use lustre_trace::reference::{path_camera, render_reference, ReferenceOptions};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;

@@ -10,7 +10,7 @@
 //! Charts are the connected components of a mesh's triangles, joined where they share a uv1
 //! coordinate (bit for bit).
 
-use crate::{Result, ShadeError};
+use crate::{Result, TraceError};
 use lustre_brdf::sampling::SplitMix64;
 use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::Scene;
@@ -160,7 +160,7 @@ impl Raster {
     pub fn new(scene: &Scene, atlas: &LightmapAtlas, tile: u32) -> Result<Raster> {
         super::check_atlas(scene, atlas)?;
         if tile == 0 {
-            return Err(ShadeError::Parameter("tile side must be ≥ 1".into()));
+            return Err(TraceError::Parameter("tile side must be ≥ 1".into()));
         }
         let (w, h) = (f64::from(atlas.width), f64::from(atlas.height));
         let mut triangles = vec![];

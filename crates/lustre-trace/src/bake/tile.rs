@@ -14,7 +14,7 @@ use super::raster::Raster;
 use super::trace::{TexelBaker, TexelRecord};
 use super::{bake_hash, diffuse_path_scene, BakeOptions};
 use crate::path::{PathOptions, PathTracer};
-use crate::{Result, ShadeError};
+use crate::{Result, TraceError};
 use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::Scene;
 use rayon::prelude::*;
@@ -199,7 +199,7 @@ pub struct TilesReport {
 /// Checks a `(K, N)` shard.
 pub fn check_shard(shard: Option<(u32, u32)>) -> Result<()> {
     match shard {
-        Some((k, n)) if n == 0 || k >= n => Err(ShadeError::Parameter(format!(
+        Some((k, n)) if n == 0 || k >= n => Err(TraceError::Parameter(format!(
             "shard {k}/{n}: need 0 ≤ K < N"
         ))),
         _ => Ok(()),
@@ -272,7 +272,7 @@ pub fn bake_texels(
         .iter()
         .find(|&&(p, x, y)| p >= atlas.pages || x >= atlas.width || y >= atlas.height)
     {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "texel ({x}, {y}) of page {p} is outside the {}×{} × {} atlas",
             atlas.width, atlas.height, atlas.pages
         )));
@@ -298,7 +298,7 @@ fn bake_tiles_with(
 ) -> Result<TilesReport> {
     let opts = baker.opts;
     let dir = out_dir.join("tiles");
-    std::fs::create_dir_all(&dir).map_err(|e| ShadeError::Io {
+    std::fs::create_dir_all(&dir).map_err(|e| TraceError::Io {
         path: dir.clone(),
         source: e,
     })?;

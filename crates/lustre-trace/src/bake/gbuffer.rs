@@ -13,7 +13,7 @@ use super::diffuse_path_scene;
 use super::render::Lightmapped;
 use crate::image::Image;
 use crate::path::{EnvLight, Geometry, PathCamera, PathOptions, PathTracer};
-use crate::{Result, ShadeError};
+use crate::{Result, TraceError};
 use lustre_brdf::rgb::Rgb;
 use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::Scene;
@@ -48,7 +48,7 @@ impl GBuffer {
     /// mismatch.
     pub fn agreement(&self, other: &GBuffer) -> Result<f64> {
         if (self.width, self.height) != (other.width, other.height) {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "G-buffers of {}×{} and {}×{} cannot be compared",
                 self.width, self.height, other.width, other.height
             )));
@@ -71,7 +71,7 @@ impl GBuffer {
             || self.depth.len() != n
             || self.normal.len() != n
         {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "G-buffer of {}×{} pixels has {} ids, {} barycentrics, {} depths, {} normals",
                 self.width,
                 self.height,
@@ -88,17 +88,17 @@ impl GBuffer {
 /// Checks an output size and supersampling factor; returns the G-buffer size (k·w, k·h).
 pub fn gbuffer_size(w: usize, h: usize, k: u32) -> Result<(usize, usize)> {
     if w == 0 || h == 0 {
-        return Err(ShadeError::Parameter(format!("image {w}×{h} is empty")));
+        return Err(TraceError::Parameter(format!("image {w}×{h} is empty")));
     }
     if k == 0 || k > MAX_SUPERSAMPLING {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "supersampling {k}×{k} must be between 1 and {MAX_SUPERSAMPLING}"
         )));
     }
     let k = k as usize;
     match (w.checked_mul(k), h.checked_mul(k)) {
         (Some(a), Some(b)) if a <= 1 << 15 && b <= 1 << 15 => Ok((a, b)),
-        _ => Err(ShadeError::Parameter(format!(
+        _ => Err(TraceError::Parameter(format!(
             "image {w}×{h} at {k}×{k} supersampling exceeds 32768 pixels a side"
         ))),
     }
@@ -114,7 +114,7 @@ pub fn trace_gbuffer(
     gh: usize,
 ) -> Result<GBuffer> {
     if gw == 0 || gh == 0 {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "G-buffer {gw}×{gh} is empty"
         )));
     }
@@ -172,7 +172,7 @@ pub fn shade_gbuffer(
         || !gb.width.is_multiple_of(ku)
         || !gb.height.is_multiple_of(ku)
     {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "G-buffer {}×{} is not {k}×{k} supersampled (k between 1 and {MAX_SUPERSAMPLING})",
             gb.width, gb.height
         )));
@@ -182,7 +182,7 @@ pub fn shade_gbuffer(
         .iter()
         .find(|&&p| p != SKY && p as usize >= g.positions.len())
     {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "G-buffer names triangle {p}, the scene has {}",
             g.positions.len()
         )));

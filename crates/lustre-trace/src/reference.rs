@@ -12,7 +12,7 @@ use crate::image::Image;
 use crate::path::{
     Accumulator, EnvLight, Geometry, PathCamera, PathOptions, PathScene, PathTracer, Surface,
 };
-use crate::{Result, ShadeError};
+use crate::{Result, TraceError};
 use glam::{DMat3, DVec3, Vec2};
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::models::lambert::Lambert;
@@ -207,7 +207,7 @@ pub fn path_camera(
     let aspect = f64::from(width) / f64::from(height);
     if name.is_none() && scene.cameras.is_empty() {
         let (lo, hi) = scene.bounds().ok_or_else(|| {
-            ShadeError::Parameter(format!("{}: the scene is empty", scene.source.display()))
+            TraceError::Parameter(format!("{}: the scene is empty", scene.source.display()))
         })?;
         let (lo, hi) = (lo.as_dvec3(), hi.as_dvec3());
         let c = 0.5 * (lo + hi);
@@ -220,7 +220,7 @@ pub fn path_camera(
         return PathCamera::look_at(c - DVec3::Z * dist.max(1e-6), c, DVec3::Y, fov);
     }
     let cam = scene.camera(name).ok_or_else(|| {
-        ShadeError::Parameter(match name {
+        TraceError::Parameter(match name {
             Some(n) => format!(
                 "{}: no camera named {n:?} (cameras: {})",
                 scene.source.display(),
@@ -314,14 +314,14 @@ fn commit_halves(
 ) -> Result<()> {
     let write = |state: &ReferenceState| -> Result<()> {
         let json = serde_json::to_string_pretty(state)
-            .map_err(|e| ShadeError::Parameter(format!("state: {e}")))?;
+            .map_err(|e| TraceError::Parameter(format!("state: {e}")))?;
         lustre_brdf::error::write_atomic(json_path, json.as_bytes())?;
         Ok(())
     };
     state.pending = true;
     write(state)?;
     for (next, fin) in moves {
-        std::fs::rename(next, fin).map_err(|e| ShadeError::Io {
+        std::fs::rename(next, fin).map_err(|e| TraceError::Io {
             path: next.clone(),
             source: e,
         })?;
@@ -336,7 +336,7 @@ fn sibling(out: &Path, ext: &str) -> PathBuf {
 }
 
 fn read_exr(path: &Path) -> Result<Image> {
-    Image::read_exr(path).map_err(|e| ShadeError::Parameter(format!("resume: {e}")))
+    Image::read_exr(path).map_err(|e| TraceError::Parameter(format!("resume: {e}")))
 }
 
 /// Renders (or continues) the reference of `scene` with `opts`, writing the files after every
@@ -349,15 +349,15 @@ pub fn render_reference(
 ) -> Result<(ReferenceState, Vec<String>)> {
     let (w, h) = opts.size.unwrap_or((scene.film.width, scene.film.height));
     if w == 0 || h == 0 || w > 1 << 15 || h > 1 << 15 {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "image size {w}×{h} must be between 1 and 32768"
         )));
     }
     if opts.spp == 0 {
-        return Err(ShadeError::Parameter("--spp must be ≥ 1".into()));
+        return Err(TraceError::Parameter("--spp must be ≥ 1".into()));
     }
     if !(opts.exposure.is_finite() && opts.exposure > 0.0) {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "exposure {} must be finite and > 0",
             opts.exposure
         )));
@@ -405,12 +405,12 @@ pub fn render_reference(
     );
     let mut acc = Accumulator::new(w as usize, h as usize)?;
     if opts.resume {
-        let text = std::fs::read_to_string(&json_path).map_err(|e| ShadeError::Io {
+        let text = std::fs::read_to_string(&json_path).map_err(|e| TraceError::Io {
             path: json_path.clone(),
             source: e,
         })?;
         let old: ReferenceState = serde_json::from_str(&text)
-            .map_err(|e| ShadeError::Parameter(format!("resume: {}: {e}", json_path.display())))?;
+            .map_err(|e| TraceError::Parameter(format!("resume: {}: {e}", json_path.display())))?;
         if (
             old.width,
             old.height,
@@ -420,7 +420,7 @@ pub fn render_reference(
             old.diffuse,
         ) != (w, h, opts.max_depth, opts.seed, &state.camera, opts.diffuse)
         {
-            return Err(ShadeError::Parameter(format!(
+            return Err(TraceError::Parameter(format!(
                 "resume: {} was rendered at {}×{}, max depth {}, seed {}, camera {:?}, diffuse {}; asked for {w}×{h}, {}, {}, {:?}, {}",
                 json_path.display(),
                 old.width,
@@ -439,12 +439,12 @@ pub fn render_reference(
         // whose JSON was never written.
         for (next, fin) in [(&even_next, &even_path), (&odd_next, &odd_path)] {
             if old.pending && next.exists() {
-                std::fs::rename(next, fin).map_err(|e| ShadeError::Io {
+                std::fs::rename(next, fin).map_err(|e| TraceError::Io {
                     path: next.clone(),
                     source: e,
                 })?;
             } else if !old.pending && next.exists() {
-                std::fs::remove_file(next).map_err(|e| ShadeError::Io {
+                std::fs::remove_file(next).map_err(|e| TraceError::Io {
                     path: next.clone(),
                     source: e,
                 })?;

@@ -7,7 +7,7 @@
 //! fallback to f64 when an edge function is exactly zero, so a ray through a shared edge or
 //! vertex hits at least one of the triangles that meet there.
 
-use crate::{Result, ShadeError};
+use crate::{Result, TraceError};
 use glam::{DVec3, Vec3A};
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::cwbvh::CwBvh;
@@ -158,7 +158,7 @@ impl Accel {
         let mut tris = Vec::with_capacity(triangles.len());
         for (k, t) in triangles.iter().enumerate() {
             if !t.iter().all(|p| p.is_finite()) {
-                return Err(ShadeError::Parameter(format!(
+                return Err(TraceError::Parameter(format!(
                     "triangle {k} has a non-finite vertex: {t:?}"
                 )));
             }

@@ -1,7 +1,7 @@
 //! Images and metrics against hand-computed values.
 
-use lustre_shade::image::{display_value, srgb_eotf, srgb_oetf, Image};
-use lustre_shade::metrics::{delta_e, false_colour, psnr, ramp, rms, srgb_to_lab};
+use lustre_trace::image::{display_value, srgb_eotf, srgb_oetf, Image};
+use lustre_trace::metrics::{delta_e, false_colour, psnr, ramp, rms, srgb_to_lab};
 
 fn uniform(w: usize, h: usize, v: [f32; 3]) -> Image {
     Image::from_data(w, h, vec![v; w * h]).unwrap()

@@ -1,13 +1,13 @@
 //! Rays per second of the BVH on the Modern Hall (Mitsuba XML through lustre-scene): closest-hit
 //! camera rays (256×256, coherent) and the incoherent rays of a diffuse bounce (cosine-sampled
-//! about the normal at each camera hit), single thread. `cargo bench -p lustre-shade --bench accel`.
+//! about the normal at each camera hit), single thread. `cargo bench -p lustre-trace --bench accel`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::DVec3;
 use lustre_brdf::sampling::{cosine_hemisphere, SplitMix64};
-use lustre_shade::kernel::ShadingFrame;
-use lustre_shade::path::{PathOptions, PathTracer};
-use lustre_shade::reference::{path_camera, path_scene};
+use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::reference::{path_camera, path_scene};
+use lustre_trace::sampling::ShadingFrame;
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {

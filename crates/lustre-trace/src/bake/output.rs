@@ -5,7 +5,7 @@ use super::fill::PageBuffer;
 use super::tile::{read_tile, tile_path, tiles};
 use super::trace::TexelRecord;
 use super::{bake_hash, check_atlas, BakeOptions};
-use crate::{Result, ShadeError};
+use crate::{Result, TraceError};
 use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::Scene;
 use serde::{Deserialize, Serialize};
@@ -109,7 +109,7 @@ pub fn encode_exr_half(width: u32, height: u32, e: &[[f32; 3]]) -> Result<Vec<u8
         // other bytes. One thread keeps a page byte-identical across runs, shards and resumes.
         .non_parallel()
         .to_buffered(Cursor::new(&mut bytes))
-        .map_err(|e| ShadeError::Parameter(format!("EXR encoding: {e}")))?;
+        .map_err(|e| TraceError::Parameter(format!("EXR encoding: {e}")))?;
     Ok(bytes)
 }
 
@@ -143,7 +143,7 @@ pub fn assemble(
             }
             Ok(None) => missing.push(tile_path(out_dir, &r)),
             Err(why) => {
-                return Err(ShadeError::Parameter(format!(
+                return Err(TraceError::Parameter(format!(
                     "{}: {why} (bake it again)",
                     tile_path(out_dir, &r).display()
                 )))
@@ -151,7 +151,7 @@ pub fn assemble(
         }
     }
     if let Some(first) = missing.first() {
-        return Err(ShadeError::Parameter(format!(
+        return Err(TraceError::Parameter(format!(
             "{} tiles are not baked yet (first: {}); bake every shard before assembling",
             missing.len(),
             first.display()
@@ -221,7 +221,7 @@ pub fn assemble(
         pages.push(buf.e);
     }
     let json = serde_json::to_string_pretty(&report)
-        .map_err(|e| ShadeError::Parameter(format!("report: {e}")))?;
+        .map_err(|e| TraceError::Parameter(format!("report: {e}")))?;
     lustre_brdf::error::write_atomic(&out_dir.join(REPORT_FILE), json.as_bytes())?;
     Ok(Assembled {
         pages,
