@@ -228,8 +228,11 @@ pub fn request(args: &RenderArgs) -> anyhow::Result<FrameRequest> {
     };
     req.validate().map_err(|e| {
         anyhow::anyhow!(
-            "--method {} --samples --spp --frames: {e}",
-            req.method.name()
+            "--method {} --samples {} --spp {} --frames {}: {e}",
+            req.method.name(),
+            req.samples,
+            req.rays,
+            req.frames
         )
     })?;
     Ok(req)
