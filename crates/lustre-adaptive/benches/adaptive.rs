@@ -9,7 +9,7 @@ use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::hierarchy::{render_adaptive, render_brute};
 use lustre_adaptive::shading::{Lighting, ShadingContext, ShadingOptions};
 use lustre_trace::baked::read_environment;
-use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{film_camera, path_scene};
 use std::hint::black_box;
 

@@ -37,7 +37,7 @@ use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_trace::baked::read_environment;
 use lustre_trace::image::Image;
 use lustre_trace::metrics::{psnr, rms};
-use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{path_camera, path_scene};
 use std::path::PathBuf;
 use std::time::Instant;

@@ -9,7 +9,7 @@
 use crate::{AdaptiveError, Result};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
-use lustre_trace::path::{PathCamera, PathScene, PathTracer};
+use lustre_trace::path_tracer::{PathCamera, PathScene, PathTracer};
 use lustre_trace::sampling::ShadingFrame;
 use rayon::prelude::*;
 

@@ -157,7 +157,7 @@ impl AreaLight {
 /// Errors, saying why, when nothing lights `scene` for adaptive shading: no environment (or a
 /// black one, radiance scale 0) and none of `lights`. A check callers can make before building
 /// the materials' tables ([`crate::shading::ShadingContext::check_lit`] makes it after).
-pub fn check_lit(scene: &lustre_trace::path::PathScene, lights: &[AreaLight]) -> Result<()> {
+pub fn check_lit(scene: &lustre_trace::path_tracer::PathScene, lights: &[AreaLight]) -> Result<()> {
     let env_lit = scene.environment.as_ref().is_some_and(|e| e.scale() > 0.0);
     if env_lit || !lights.is_empty() {
         Ok(())
@@ -187,7 +187,7 @@ const PLANAR_TOLERANCE: f64 = 1e-3;
 /// channel's ∫ L dA equals the triangles' own. A disk becomes its square with the disk drawn
 /// in it; a rectangle, itself. No emissive triangle: no light. Errors, naming the group, on
 /// one that is not planar or emits on both sides.
-pub fn scene_lights(scene: &lustre_trace::path::PathScene) -> Result<Vec<AreaLight>> {
+pub fn scene_lights(scene: &lustre_trace::path_tracer::PathScene) -> Result<Vec<AreaLight>> {
     let g = &scene.geometry;
     let emissive: Vec<usize> = (0..g.positions.len())
         .filter(|&i| g.emission.get(i).is_some_and(|e| e.max_component() > 0.0))
@@ -231,7 +231,10 @@ pub fn scene_lights(scene: &lustre_trace::path::PathScene) -> Result<Vec<AreaLig
 }
 
 /// One planar emitter (triangles `tris` of `scene`) as a textured rectangle.
-fn emitter_light(scene: &lustre_trace::path::PathScene, tris: &[usize]) -> Result<AreaLight> {
+fn emitter_light(
+    scene: &lustre_trace::path_tracer::PathScene,
+    tris: &[usize],
+) -> Result<AreaLight> {
     let g = &scene.geometry;
     let centroid = tris
         .iter()

@@ -35,7 +35,7 @@ use lustre_freq::pixel::EnvironmentBandwidth;
 use lustre_freq::spatial::texture_bandwidth;
 use lustre_scene::Texture;
 use lustre_trace::baked::environment_pyramid;
-use lustre_trace::path::{EnvLight, PathScene};
+use lustre_trace::path_tracer::{EnvLight, PathScene};
 use std::borrow::Cow;
 use std::collections::HashMap;
 use std::f64::consts::PI;
@@ -82,7 +82,7 @@ pub struct MaterialTables {
     /// The angular bandwidth.
     pub bandwidth: BrdfBandwidth,
     /// The local bandwidth of each texture that varies the BSDF or the shading normal
-    /// ([`lustre_trace::path::Surface::bsdf_textures`]; shared between materials).
+    /// ([`lustre_trace::path_tracer::Surface::bsdf_textures`]; shared between materials).
     pub textures: Vec<Arc<TextureBandwidth>>,
 }
 

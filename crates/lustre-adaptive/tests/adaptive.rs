@@ -14,7 +14,7 @@ use lustre_scene::Scene;
 use lustre_trace::baked::read_environment;
 use lustre_trace::image::Image;
 use lustre_trace::metrics::{psnr, rms};
-use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{film_camera, path_scene};
 use std::sync::Arc;
 
@@ -765,7 +765,7 @@ fn light_power(lights: &[AreaLight]) -> [f64; 3] {
 }
 
 /// Σ over the emissive triangles of area × radiance per channel.
-fn emitted_power(ps: &lustre_trace::path::PathScene) -> [f64; 3] {
+fn emitted_power(ps: &lustre_trace::path_tracer::PathScene) -> [f64; 3] {
     let g = &ps.geometry;
     let mut p = [0.0; 3];
     for (i, e) in g.emission.iter().enumerate() {

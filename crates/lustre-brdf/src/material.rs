@@ -122,7 +122,7 @@ impl CtDistribution {
 /// are not used but must be finite); Fresnel → [`Fresnel::generalized_schlick`]`(f0, f1)`
 /// (Eq. V.5); G1 → for SGD `g1 = [λ, c, k]`: the Eq. V.3 approximation
 /// [`SgdG1Approx::from_lck`], absent: the numeric Smith G1; for Beckmann and GGX always the
-/// closed-form Smith G1 (`g1` must be absent). This is `lustre_fit::ct::CtChannelFit::to_channel`.
+/// closed-form Smith G1 (`g1` must be absent). `lustre_fit::ct` fits channels of this type.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CtChannelParams {

@@ -22,7 +22,7 @@
 //!
 //! A sun is then a directional light of irradiance E (at normal incidence) along its centroid:
 //! L_o = f(ωs, ωo) cos θs E, exact up to the sun's angular spread, which lustre-shade's kernel
-//! folds into the lobe to second order (`kernel::sun_widened`: m'² = m² + spread²/4). Filling with the background
+//! folds into the lobe to second order (`integrator::sun_widened`: m'² = m² + spread²/4). Filling with the background
 //! leaves no plateau of T over the sun's disc for the filtered lookups to smear (the regular-sampling study's
 //! truth harness: the error of `lattice + sun` falls by up to 0.4 points on the maps with a sun
 //! and rises on none; relative RMS over 200 configurations, 256² faces).

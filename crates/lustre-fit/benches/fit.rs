@@ -3,7 +3,7 @@
 //! the whole fit on `RAYON_NUM_THREADS` threads, the default being all cores).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use lustre_fit::ct::{fit, CtOptions, Distribution};
+use lustre_fit::ct::{fit, CtDistribution, CtOptions};
 use lustre_fit::kurt::{self, KurtOptions};
 use lustre_fit::metrics::evaluate;
 use std::hint::black_box;
@@ -20,7 +20,7 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("ct");
     g.sample_size(10);
     g.bench_function("sgd_fit", |b| {
-        b.iter(|| fit(black_box(d), Distribution::Sgd, &CtOptions::default()))
+        b.iter(|| fit(black_box(d), CtDistribution::Sgd, &CtOptions::default()))
     });
     let Ok(model) = lustre_brdf::fits::sgd::load("gold-metallic-paint") else {
         return;

@@ -25,7 +25,7 @@ use lustre_brdf::measured::merl::{
     bin_center, bin_node, table_from_bsdf, BinConvention, RES_PHI_D, RES_THETA_D, RES_THETA_H,
 };
 use lustre_brdf::Bsdf;
-use lustre_fit::ct::{fit, CtOptions, Distribution};
+use lustre_fit::ct::{fit, CtDistribution, CtOptions};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -95,7 +95,7 @@ fn recovery(
         refine: false,
         ..CtOptions::default()
     };
-    let f = fit(table, Distribution::Sgd, &opts)?;
+    let f = fit(table, CtDistribution::Sgd, &opts)?;
     let rel = |a: f64, b: f64| (a - b).abs() / b.abs().max(1e-12);
     let mut worst = [0.0f64; 3];
     for (c, q) in f.channels.iter().zip(p) {

@@ -12,7 +12,7 @@
 
 use lustre_brdf::material::MaterialModel;
 use lustre_brdf::Bsdf;
-use lustre_fit::ct::{fit, CtFit, CtOptions, Distribution};
+use lustre_fit::ct::{fit, CtDistribution, CtFit, CtOptions};
 use lustre_fit::kurt::{self, KurtOptions};
 use lustre_fit::metrics::{albedo, max_albedo, ngan_l2, Metric, MetricJudge};
 use std::time::Instant;
@@ -92,13 +92,13 @@ struct CtResult {
 
 fn ct_one(
     d: &dyn Bsdf,
-    dist: Distribution,
+    dist: CtDistribution,
     amax: &[f64; 3],
 ) -> Result<CtResult, Box<dyn std::error::Error>> {
     let (t0, c0) = (Instant::now(), cpu_seconds());
     let f = fit(d, dist, &CtOptions::default())?;
     let (wall, cpu) = (t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
-    let b = f.to_bsdf(dist.name())?;
+    let b = f.to_bsdf(dist.as_str())?;
     Ok(CtResult {
         e: ngan_l2(d, &b, amax),
         wall,
@@ -308,9 +308,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         };
         let res = (|| -> Result<_, Box<dyn std::error::Error>> {
             Ok((
-                ct_one(d, Distribution::Sgd, &amax)?,
-                ct_one(d, Distribution::Beckmann, &amax)?,
-                ct_one(d, Distribution::Ggx, &amax)?,
+                ct_one(d, CtDistribution::Sgd, &amax)?,
+                ct_one(d, CtDistribution::Beckmann, &amax)?,
+                ct_one(d, CtDistribution::Ggx, &amax)?,
             ))
         })();
         let (s, b, g) = match res {

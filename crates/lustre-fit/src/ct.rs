@@ -48,39 +48,19 @@ use crate::{FitError, FitStatus, Result};
 use levenberg_marquardt::{LeastSquaresProblem, LevenbergMarquardt};
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::frame::{from_half_diff, HalfDiff};
+/// The fit's distribution and per-channel parameters are the material file's own types (one
+/// name each across the workspace): a [`CtFit`] becomes a material with no conversion.
+pub use lustre_brdf::material::{CtChannelParams, CtDistribution};
 use lustre_brdf::measured::merl::{bin_node, MerlCoverage, RES_THETA_D, RES_THETA_H};
 use lustre_brdf::microfacet::fresnel::Fresnel;
 use lustre_brdf::microfacet::ndf::Ndf;
 use lustre_brdf::microfacet::smith::{g1_beckmann, g1_ggx, G1Table, SgdG1Approx};
-use lustre_brdf::models::cook_torrance::{CookTorrance, CtChannel, G1Model};
+use lustre_brdf::models::cook_torrance::CookTorrance;
 use lustre_brdf::numeric::upper_gamma;
 use nalgebra::{DMatrix, DVector, Dyn, Owned};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{FRAC_1_PI, FRAC_PI_2, PI};
-
-/// The microfacet distribution of a fit.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Distribution {
-    /// Shifted gamma distribution (004 Eq. V.2) with the Eq. V.3 shadowing approximation.
-    Sgd,
-    /// Beckmann with its closed-form Smith G1.
-    Beckmann,
-    /// GGX / Trowbridge-Reitz with its closed-form Smith G1.
-    Ggx,
-}
-
-impl Distribution {
-    /// `sgd`, `beckmann` or `ggx`.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Distribution::Sgd => "sgd",
-            Distribution::Beckmann => "beckmann",
-            Distribution::Ggx => "ggx",
-        }
-    }
-}
 
 /// Options of [`fit`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -101,62 +81,19 @@ impl Default for CtOptions {
     }
 }
 
-/// The fitted parameters of one RGB channel.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CtChannelFit {
-    /// Diffuse coefficient ρd.
-    pub rho_d: f64,
-    /// Specular coefficient ρs.
-    pub rho_s: f64,
-    /// Roughness α of the distribution.
-    pub alpha: f64,
-    /// SGD exponent p (0 for Beckmann and GGX).
-    pub p: f64,
-    /// SGD normalization kap = 1/(αΓ(1−p, α)) (0 for Beckmann and GGX).
-    pub kap: f64,
-    /// Eq. V.5 F0.
-    pub f0: f64,
-    /// Eq. V.5 F1.
-    pub f1: f64,
-    /// SGD shadowing approximation (λ, c, k) of Eq. V.3 (θ0 follows from them). `None` for
-    /// Beckmann and GGX (closed-form Smith G1), and for an SGD channel whose Eq. V.3 fit has
-    /// c below the f64 range (the model then uses the numeric Smith G1 of the SGD).
-    pub g1: Option<[f64; 3]>,
-}
-
 /// A Cook-Torrance fit of three channels.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CtFit {
     /// The distribution.
-    pub distribution: Distribution,
+    pub distribution: CtDistribution,
     /// Parameters per channel (r, g, b).
-    pub channels: [CtChannelFit; 3],
+    pub channels: [CtChannelParams; 3],
     /// Whether every final optimization converged.
     pub status: FitStatus,
     /// Residual evaluations of all Levenberg-Marquardt runs together.
     pub iterations: usize,
     /// What the fit changed to stay physical (e.g. an albedo cap), in words; empty otherwise.
     pub notes: Vec<String>,
-}
-
-impl CtChannelFit {
-    /// The channel as a [`CtChannel`] of `distribution`.
-    pub fn to_channel(&self, distribution: Distribution) -> lustre_brdf::Result<CtChannel> {
-        let fresnel = Fresnel::generalized_schlick(self.f0, self.f1)?;
-        let (ndf, g1) = match distribution {
-            Distribution::Sgd => {
-                let ndf = Ndf::sgd_with_kap(self.alpha, self.p, self.kap)?;
-                let g1 = match self.g1 {
-                    Some([l, c, k]) => G1Model::SgdApprox(SgdG1Approx::from_lck(l, c, k)?),
-                    None => G1Model::numeric(&ndf),
-                };
-                (ndf, g1)
-            }
-            Distribution::Beckmann => (Ndf::beckmann(self.alpha)?, G1Model::Closed),
-            Distribution::Ggx => (Ndf::ggx(self.alpha)?, G1Model::Closed),
-        };
-        Ok(CtChannel::new(self.rho_d, self.rho_s, ndf, g1, fresnel))
-    }
 }
 
 impl CtFit {
@@ -331,16 +268,16 @@ fn fresnel_basis(f0: f64, f1: f64, m5: f64, c: f64) -> f64 {
 /// A distribution with its parameters and precomputed normalization.
 #[derive(Clone, Copy, Debug)]
 struct Dist {
-    kind: Distribution,
+    kind: CtDistribution,
     alpha: f64,
     p: f64,
     ln_kap: f64,
 }
 
 impl Dist {
-    fn new(kind: Distribution, alpha: f64, p: f64) -> Dist {
+    fn new(kind: CtDistribution, alpha: f64, p: f64) -> Dist {
         let ln_kap = match kind {
-            Distribution::Sgd => -alpha.ln() - upper_gamma(1.0 - p, alpha).ln(),
+            CtDistribution::Sgd => -alpha.ln() - upper_gamma(1.0 - p, alpha).ln(),
             _ => 0.0,
         };
         Dist {
@@ -361,16 +298,16 @@ impl Dist {
         let s2 = 1.0 - c2;
         let a = self.alpha;
         match self.kind {
-            Distribution::Sgd => {
+            CtDistribution::Sgd => {
                 let x = s2 / c2;
                 let big_a = a + x / a;
                 (self.ln_kap - big_a - self.p * big_a.ln()).exp() * FRAC_1_PI / (c2 * c2)
             }
-            Distribution::Beckmann => {
+            CtDistribution::Beckmann => {
                 let a2 = a * a;
                 (-(s2 / c2) / a2).exp() * FRAC_1_PI / (a2 * c2 * c2)
             }
-            Distribution::Ggx => {
+            CtDistribution::Ggx => {
                 let a2 = a * a;
                 let d = a2 * c2 + s2;
                 a2 * FRAC_1_PI / (d * d)
@@ -382,17 +319,17 @@ impl Dist {
     #[inline]
     fn g1_closed(&self, cos_t: f64) -> Option<f64> {
         match self.kind {
-            Distribution::Beckmann => Some(g1_beckmann(self.alpha, cos_t)),
-            Distribution::Ggx => Some(g1_ggx(self.alpha, cos_t)),
-            Distribution::Sgd => None,
+            CtDistribution::Beckmann => Some(g1_beckmann(self.alpha, cos_t)),
+            CtDistribution::Ggx => Some(g1_ggx(self.alpha, cos_t)),
+            CtDistribution::Sgd => None,
         }
     }
 
     fn ndf(&self) -> lustre_brdf::Result<Ndf> {
         match self.kind {
-            Distribution::Sgd => Ndf::sgd(self.alpha, self.p),
-            Distribution::Beckmann => Ndf::beckmann(self.alpha),
-            Distribution::Ggx => Ndf::ggx(self.alpha),
+            CtDistribution::Sgd => Ndf::sgd(self.alpha, self.p),
+            CtDistribution::Beckmann => Ndf::beckmann(self.alpha),
+            CtDistribution::Ggx => Ndf::ggx(self.alpha),
         }
     }
 }
@@ -437,13 +374,13 @@ fn data_at(data: &dyn Bsdf, theta_h: f64, theta_d: f64, phi_d: f64) -> [f64; 3] 
 /// Step 1 for one channel; returns (ρd, Fr, α, p), success, evaluations.
 fn step1(
     input: &str,
-    kind: Distribution,
+    kind: CtDistribution,
     th: &[f64],
     m: &[f64],
     sw: &[f64],
     valid: &[bool],
 ) -> Result<([f64; 4], bool, usize)> {
-    let sgd = kind == Distribution::Sgd;
+    let sgd = kind == CtDistribution::Sgd;
     let n = th.len();
     let cos: Vec<f64> = th.iter().map(|t| t.cos()).collect();
     let valid: Vec<f64> = m
@@ -648,9 +585,9 @@ impl RefineSet {
 
 /// The shadowing of a channel during refinement: the SGD's numeric table (fixed per round) or
 /// the closed form of Beckmann / GGX.
-fn shadowing_of(kind: Distribution, alpha: f64, p: f64) -> Result<SgdG1> {
+fn shadowing_of(kind: CtDistribution, alpha: f64, p: f64) -> Result<SgdG1> {
     Ok(match kind {
-        Distribution::Sgd => {
+        CtDistribution::Sgd => {
             SgdG1::Table(Box::new(G1Table::new(&Dist::new(kind, alpha, p).ndf()?)))
         }
         _ => SgdG1::One,
@@ -662,7 +599,7 @@ fn shadowing_of(kind: Distribution, alpha: f64, p: f64) -> Result<SgdG1> {
 fn shadowing(d: &Dist, g1: &SgdG1, g: &[f64; 4], s: &[f64; 2]) -> (f64, f64) {
     match (d.kind, g1) {
         // The table at the precomputed coordinates of θi, θo (no logarithm per pair).
-        (Distribution::Sgd, SgdG1::Table(t)) => {
+        (CtDistribution::Sgd, SgdG1::Table(t)) => {
             (t.eval_coord(g[0], s[0]), t.eval_coord(g[1], s[1]))
         }
         _ => (g1_of(d, g1, g[0]), g1_of(d, g1, g[1])),
@@ -671,8 +608,8 @@ fn shadowing(d: &Dist, g1: &SgdG1, g: &[f64; 4], s: &[f64; 2]) -> (f64, f64) {
 
 /// G1(θi), G1(θo) of every pair when they do not change with (α, p) during an LM run: the
 /// SGD's fixed numeric table (`None` for the closed forms of Beckmann and GGX, which follow α).
-fn fixed_shadowing(kind: Distribution, g1: &SgdG1, set: &RefineSet) -> Option<Vec<(f64, f64)>> {
-    if kind != Distribution::Sgd {
+fn fixed_shadowing(kind: CtDistribution, g1: &SgdG1, set: &RefineSet) -> Option<Vec<(f64, f64)>> {
+    if kind != CtDistribution::Sgd {
         return None;
     }
     let d = Dist {
@@ -716,8 +653,8 @@ fn spec_factor(d: &Dist, g1: &SgdG1, set: &RefineSet, fixed: Option<&[(f64, f64)
 
 /// Σ w (f − m)² of channel `ch` on the refinement set with shadowing `g1`.
 fn refine_cost(
-    kind: Distribution,
-    c: &CtChannelFit,
+    kind: CtDistribution,
+    c: &CtChannelParams,
     g1: &SgdG1,
     set: &RefineSet,
     ch: usize,
@@ -751,13 +688,13 @@ fn sgd_g1_fit(table: &G1Table) -> Option<[f64; 3]> {
 /// (a fixed table during the run) once per pair and run; D·G is cached per (α, p), so the
 /// Jacobian columns of the linear parameters cost a few multiplies per point.
 fn refine_round(
-    kind: Distribution,
-    c: &CtChannelFit,
+    kind: CtDistribution,
+    c: &CtChannelParams,
     g1: &SgdG1,
     set: &RefineSet,
     ch: usize,
-) -> (CtChannelFit, bool, usize) {
-    let sgd = kind == Distribution::Sgd;
+) -> (CtChannelParams, bool, usize) {
+    let sgd = kind == CtDistribution::Sgd;
     let n = set.geo.len();
     let m = &set.m[ch];
     let basis: Vec<(f64, f64)> = set
@@ -805,7 +742,7 @@ fn refine_round(
     let out = minimize(&f, n, &x0, REFINE_PATIENCE);
     let x = &out.x;
     let (rho_s, f0, f1) = fresnel_of(x[1], x[3], x[4]);
-    let next = CtChannelFit {
+    let next = CtChannelParams {
         rho_d: pos_of(x[0]),
         rho_s,
         alpha: alpha_of(x[2]),
@@ -821,7 +758,7 @@ fn refine_round(
 /// Steps 1 and 2 for one channel, as a [`Candidate`] (with the shadowing of its (α, p)).
 fn two_slice(
     input: &str,
-    kind: Distribution,
+    kind: CtDistribution,
     ch: usize,
     slices: &Slices,
 ) -> Result<(Candidate, usize)> {
@@ -838,7 +775,7 @@ fn two_slice(
     let g1 = shadowing_of(kind, alpha, p)?;
     let (s2, ok2, e2) = step2(&slices.td, &slices.md[ch], &slices.w_d, rho_d, &d, &g1)?;
     let [rho_s, f0, f1] = s2;
-    let c = CtChannelFit {
+    let c = CtChannelParams {
         rho_d,
         rho_s,
         alpha,
@@ -860,19 +797,19 @@ fn two_slice(
 
 /// A refinement candidate: parameters, the shadowing of its own (α, p), LM success.
 struct Candidate {
-    c: CtChannelFit,
+    c: CtChannelParams,
     g1: SgdG1,
     ok: bool,
 }
 
 impl Candidate {
-    fn new(kind: Distribution, c: CtChannelFit, ok: bool) -> Result<Self> {
+    fn new(kind: CtDistribution, c: CtChannelParams, ok: bool) -> Result<Self> {
         let g1 = shadowing_of(kind, c.alpha, c.p)?;
         Ok(Candidate { c, g1, ok })
     }
 
     /// Refines from this candidate; returns the refined one and the evaluations.
-    fn refine(&self, kind: Distribution, set: &RefineSet, ch: usize) -> Result<(Self, usize)> {
+    fn refine(&self, kind: CtDistribution, set: &RefineSet, ch: usize) -> Result<(Self, usize)> {
         let (next, ok, e) = refine_round(kind, &self.c, &self.g1, set, ch);
         Ok((Candidate::new(kind, next, ok)?, e))
     }
@@ -883,24 +820,24 @@ impl Candidate {
 /// SGD result is never worse than Beckmann on the refinement set.
 fn fit_channel(
     input: &str,
-    kind: Distribution,
+    kind: CtDistribution,
     ch: usize,
     slices: &Slices,
     sets: Option<(&RefineSet, &RefineSet)>,
-) -> Result<(CtChannelFit, bool, usize)> {
+) -> Result<(CtChannelParams, bool, usize)> {
     let (start, mut evals) = two_slice(input, kind, ch, slices)?;
     let (mut c, mut g1, mut ok) = (start.c, start.g1.clone(), start.ok);
     if let Some((set, select)) = sets {
         let (refined, e) = start.refine(kind, set, ch)?;
         evals += e;
         let mut cands = vec![start, refined];
-        if kind == Distribution::Sgd {
+        if kind == CtDistribution::Sgd {
             // A failure here (e.g. a Beckmann α beyond the SGD's range) only drops the candidate.
             let from_beckmann = || -> Result<(Candidate, Candidate, usize)> {
-                let beck = Distribution::Beckmann;
+                let beck = CtDistribution::Beckmann;
                 let (b0, eb) = two_slice(input, beck, ch, slices)?;
                 let (b1, eb1) = b0.refine(beck, set, ch)?;
-                let as_sgd = CtChannelFit {
+                let as_sgd = CtChannelParams {
                     alpha: (b1.c.alpha * b1.c.alpha).clamp(LN_ALPHA.0.exp(), LN_ALPHA.1.exp()),
                     p: 0.0,
                     ..b1.c
@@ -926,7 +863,7 @@ fn fit_channel(
             (c, g1, ok) = (best.c, best.g1, ok && best.ok);
         }
     }
-    if kind == Distribution::Sgd {
+    if kind == CtDistribution::Sgd {
         c.kap = Dist::new(kind, c.alpha, c.p).ln_kap.exp();
         if let SgdG1::Table(t) = &g1 {
             c.g1 = sgd_g1_fit(t);
@@ -1001,14 +938,14 @@ impl Slices {
 /// Fits Cook-Torrance with `distribution` to `data` (module notes). Errors: non-finite slice
 /// data, too few θd samples, or a fit that ends with non-finite parameters (`FitError::Data`
 /// naming the data); `FitStatus::NotConverged` when an optimization stopped at its limit.
-pub fn fit(data: &dyn Bsdf, distribution: Distribution, opts: &CtOptions) -> Result<CtFit> {
+pub fn fit(data: &dyn Bsdf, distribution: CtDistribution, opts: &CtOptions) -> Result<CtFit> {
     fit_masked(data, distribution, opts, None)
 }
 
 /// [`fit`] on the direction pairs `mask` covers (a MERL table's measured bins).
 pub fn fit_masked(
     data: &dyn Bsdf,
-    distribution: Distribution,
+    distribution: CtDistribution,
     opts: &CtOptions,
     mask: Option<&MerlCoverage>,
 ) -> Result<CtFit> {
@@ -1046,7 +983,7 @@ pub fn fit_masked(
             RefineSet::new(data, &NganQuadrature::default(), mask),
         )
     });
-    let fits: Vec<Result<(CtChannelFit, bool, usize)>> = (0..3)
+    let fits: Vec<Result<(CtChannelParams, bool, usize)>> = (0..3)
         .into_par_iter()
         .map(|ch| {
             fit_channel(
@@ -1075,7 +1012,7 @@ pub fn fit_masked(
         }
         channels.push(c);
     }
-    let mut channels: [CtChannelFit; 3] = [channels[0], channels[1], channels[2]];
+    let mut channels: [CtChannelParams; 3] = [channels[0], channels[1], channels[2]];
     let notes = cap_albedo(data, distribution, &mut channels)?;
     Ok(CtFit {
         distribution,
@@ -1094,12 +1031,12 @@ pub fn fit_masked(
 /// data's does not (`metrics::albedo_bound`); returns a note per changed channel.
 fn cap_albedo(
     data: &dyn Bsdf,
-    distribution: Distribution,
-    channels: &mut [CtChannelFit; 3],
+    distribution: CtDistribution,
+    channels: &mut [CtChannelParams; 3],
 ) -> Result<Vec<String>> {
     let data_max = crate::metrics::max_albedo(data, false);
     // The specular albedo per unit ρs: the model with ρd = 0, ρs = 1.
-    let unit: [CtChannelFit; 3] = channels.map(|c| CtChannelFit {
+    let unit: [CtChannelParams; 3] = channels.map(|c| CtChannelParams {
         rho_d: 0.0,
         rho_s: 1.0,
         ..c

@@ -4,7 +4,7 @@ use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::microfacet::fresnel::Fresnel;
 use lustre_brdf::microfacet::ndf::Ndf;
 use lustre_brdf::models::cook_torrance::{CookTorrance, G1Model};
-use lustre_fit::ct::{fit, CtFit, CtOptions, Distribution};
+use lustre_fit::ct::{fit, CtDistribution, CtFit, CtOptions};
 use lustre_fit::metrics::evaluate;
 use lustre_fit::{FitError, FitStatus};
 
@@ -23,7 +23,7 @@ fn rel(a: f64, b: f64) -> f64 {
 /// (ρd, ρs, α, p, f0, f1) to `tol` (relative; F0, F1 absolute).
 fn check_recovery(
     model: &CookTorrance,
-    dist: Distribution,
+    dist: CtDistribution,
     want: [f64; 6],
     tol: f64,
     opts: &CtOptions,
@@ -56,7 +56,7 @@ fn recovers_beckmann_and_ggx() {
     .unwrap();
     let f = check_recovery(
         &b,
-        Distribution::Beckmann,
+        CtDistribution::Beckmann,
         [0.1, 0.3, 0.15, 0.0, 0.3, 0.1],
         1e-5,
         &no_refine(),
@@ -66,7 +66,7 @@ fn recovers_beckmann_and_ggx() {
     // With the refinement the exact solution stays.
     check_recovery(
         &b,
-        Distribution::Beckmann,
+        CtDistribution::Beckmann,
         [0.1, 0.3, 0.15, 0.0, 0.3, 0.1],
         1e-5,
         &CtOptions::default(),
@@ -75,7 +75,7 @@ fn recovers_beckmann_and_ggx() {
         CookTorrance::gray("g", 0.05, 0.6, Ndf::ggx(0.08).unwrap(), G1Model::Closed, fr).unwrap();
     check_recovery(
         &g,
-        Distribution::Ggx,
+        CtDistribution::Ggx,
         [0.05, 0.6, 0.08, 0.0, 0.3, 0.1],
         1e-5,
         &no_refine(),
@@ -92,7 +92,7 @@ fn recovers_sgd() {
     let m = CookTorrance::gray("s", 0.08, 0.4, ndf, G1Model::numeric(&ndf), fr).unwrap();
     let f = check_recovery(
         &m,
-        Distribution::Sgd,
+        CtDistribution::Sgd,
         [0.08, 0.4, 0.02, 0.8, 0.5, 0.2],
         1e-12,
         &no_refine(),
@@ -110,7 +110,7 @@ fn recovers_sgd() {
 #[test]
 fn real_material_beats_the_published_fit() {
     let d = lustre_fit::data::load("nbrdf:gold-metallic-paint").unwrap();
-    let f = fit(d.bsdf.as_ref(), Distribution::Sgd, &CtOptions::default()).unwrap();
+    let f = fit(d.bsdf.as_ref(), CtDistribution::Sgd, &CtOptions::default()).unwrap();
     let ours = evaluate(d.bsdf.as_ref(), &f.to_bsdf("ours").unwrap(), false);
     let published = lustre_brdf::fits::sgd::load("gold-metallic-paint").unwrap();
     let theirs = evaluate(d.bsdf.as_ref(), &published, false);
@@ -133,7 +133,7 @@ fn real_material_beats_the_published_fit() {
 #[test]
 fn bad_input_is_an_error() {
     let m = lustre_brdf::catalog::resolve("lambert(kd=0)").unwrap();
-    match fit(m.as_ref(), Distribution::Sgd, &no_refine()) {
+    match fit(m.as_ref(), CtDistribution::Sgd, &no_refine()) {
         Err(FitError::Data { problem, .. }) => assert!(problem.contains("zero"), "{problem}"),
         other => panic!("{other:?}"),
     }
@@ -143,11 +143,11 @@ fn bad_input_is_an_error() {
         max_theta_d_deg: f64::NAN,
     };
     assert!(matches!(
-        fit(ok.as_ref(), Distribution::Ggx, &bad),
+        fit(ok.as_ref(), CtDistribution::Ggx, &bad),
         Err(FitError::Option(_))
     ));
     // A Lambertian surface fits without NaN (ρs → 0).
-    let f = fit(ok.as_ref(), Distribution::Beckmann, &no_refine()).unwrap();
+    let f = fit(ok.as_ref(), CtDistribution::Beckmann, &no_refine()).unwrap();
     for c in &f.channels {
         assert!((c.rho_d - 0.5).abs() < 1e-4, "{c:?}");
     }
@@ -231,7 +231,7 @@ fn sgd_fits_of_real_data_match_the_recorded_ones() {
                 .to_string()
         };
         let d = lustre_fit::data::load(&spec).unwrap();
-        let f = fit(d.bsdf.as_ref(), Distribution::Sgd, &CtOptions::default()).unwrap();
+        let f = fit(d.bsdf.as_ref(), CtDistribution::Sgd, &CtOptions::default()).unwrap();
         for (c, (got, w)) in f.channels.iter().zip(&want).enumerate() {
             let g = [got.rho_d, got.rho_s, got.alpha, got.p, got.f0, got.f1];
             for k in 0..6 {

@@ -460,12 +460,12 @@ fn one_lobe_polish_of_merl_materials_converges() {
 /// candidate is the converged Ngan-L2 polish (measured 0.225).
 #[test]
 fn kurt_fit_is_never_worse_on_the_users_metric_than_its_search() {
-    use lustre_fit::batch::{FitSettings, Fitter, MeasuredFitter, Metric, ModelChoice};
+    use lustre_fit::batch::{FitOptions, Fitter, MeasuredFitter, Metric, ModelChoice};
     for metric in [Metric::NganL2, Metric::L1] {
-        let settings = |refine| FitSettings {
+        let settings = |refine| FitOptions {
             metric,
             refine,
-            ..FitSettings::new(ModelChoice::Kurt)
+            ..FitOptions::new(ModelChoice::Kurt)
         };
         let fit = |refine| {
             MeasuredFitter

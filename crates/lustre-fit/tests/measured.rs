@@ -6,8 +6,8 @@ use lustre_brdf::measured::merl::{
     table_from_bsdf, BinConvention, MerlTable, BINS, RES_PHI_D, RES_THETA_D,
 };
 use lustre_brdf::measured::nbrdf::synthesize_merl;
-use lustre_fit::batch::{FitSettings, Fitter, MeasuredFitter, Metric, ModelChoice};
-use lustre_fit::ct::{fit, fit_masked, CtOptions, Distribution};
+use lustre_fit::batch::{FitOptions, Fitter, MeasuredFitter, Metric, ModelChoice};
+use lustre_fit::ct::{fit, fit_masked, CtDistribution, CtOptions};
 use lustre_fit::data::{load_with, LoadOptions};
 use lustre_fit::metrics::{
     albedo, evaluate_masked, l1_error_masked, max_albedo, ngan_integral_masked, NganQuadrature,
@@ -71,10 +71,15 @@ fn unmeasured_bins_are_masked_in_fits_and_metrics() {
         d.mask_note()
     );
 
-    let want = fit(&intact, Distribution::Ggx, &two_slice()).expect("intact fit");
-    let masked = fit_masked(d.bsdf.as_ref(), Distribution::Ggx, &two_slice(), Some(cov))
-        .expect("masked fit");
-    let unmasked = fit(d.bsdf.as_ref(), Distribution::Ggx, &two_slice()).expect("hole as data");
+    let want = fit(&intact, CtDistribution::Ggx, &two_slice()).expect("intact fit");
+    let masked = fit_masked(
+        d.bsdf.as_ref(),
+        CtDistribution::Ggx,
+        &two_slice(),
+        Some(cov),
+    )
+    .expect("masked fit");
+    let unmasked = fit(d.bsdf.as_ref(), CtDistribution::Ggx, &two_slice()).expect("hole as data");
     let worst = |f: &lustre_fit::ct::CtFit| {
         f.channels
             .iter()
@@ -121,7 +126,7 @@ fn lower_edge_tables_are_recovered_with_the_lower_edge_convention() {
     let edge = table_from_bsdf("ggx", m.as_ref(), BinConvention::LowerEdge, |_| {})
         .expect("finite, non-negative");
     assert_eq!(edge.convention(), BinConvention::LowerEdge);
-    let fit_with = |t: &MerlTable| fit(t, Distribution::Ggx, &two_slice()).expect("fit");
+    let fit_with = |t: &MerlTable| fit(t, CtDistribution::Ggx, &two_slice()).expect("fit");
     let ok = fit_with(&edge);
     let shifted = fit_with(&edge.clone().with_convention(BinConvention::Centre));
     let c = &ok.channels[0];
@@ -141,9 +146,9 @@ fn lower_edge_tables_are_recovered_with_the_lower_edge_convention() {
 #[test]
 fn fits_stay_physical() {
     for (material, dist) in [
-        ("white-paint", Distribution::Ggx),
-        ("white-paint", Distribution::Sgd),
-        ("gold-metallic-paint", Distribution::Sgd),
+        ("white-paint", CtDistribution::Ggx),
+        ("white-paint", CtDistribution::Sgd),
+        ("gold-metallic-paint", CtDistribution::Sgd),
     ] {
         let d = lustre_fit::data::load(&format!("nbrdf:{material}")).expect("data");
         let f = fit(d.bsdf.as_ref(), dist, &CtOptions::default()).expect("fit");
@@ -168,10 +173,10 @@ fn fits_stay_physical() {
         let mat = MeasuredFitter
             .fit(
                 &format!("nbrdf:{material}"),
-                &FitSettings::new(match dist {
-                    Distribution::Sgd => ModelChoice::Sgd,
-                    Distribution::Beckmann => ModelChoice::Beckmann,
-                    Distribution::Ggx => ModelChoice::Ggx,
+                &FitOptions::new(match dist {
+                    CtDistribution::Sgd => ModelChoice::Sgd,
+                    CtDistribution::Beckmann => ModelChoice::Beckmann,
+                    CtDistribution::Ggx => ModelChoice::Ggx,
                 }),
                 &|_| {},
             )
@@ -191,10 +196,10 @@ fn more_kurt_lobes_never_report_a_worse_fit() {
     // One metric here (each Kurt fit takes seconds); the Ngan L2 path is the same code.
     {
         let metric = Metric::L1;
-        let settings = |lobes| FitSettings {
+        let settings = |lobes| FitOptions {
             lobes,
             metric,
-            ..FitSettings::new(ModelChoice::Kurt)
+            ..FitOptions::new(ModelChoice::Kurt)
         };
         let one = MeasuredFitter
             .fit(&input, &settings(1), &|_| {})
@@ -224,17 +229,17 @@ fn more_kurt_lobes_never_report_a_worse_fit() {
     let e = MeasuredFitter
         .fit(
             &input,
-            &FitSettings {
+            &FitOptions {
                 lobes: 0,
-                ..FitSettings::new(ModelChoice::Kurt)
+                ..FitOptions::new(ModelChoice::Kurt)
             },
             &|_| {},
         )
         .expect_err("0 lobes");
     assert!(e.to_string().contains("at least one lobe"), "{e}");
-    assert!(lustre_fit::batch::check_settings(&FitSettings {
+    assert!(lustre_fit::batch::check_options(&FitOptions {
         lobes: 0,
-        ..FitSettings::new(ModelChoice::Kurt)
+        ..FitOptions::new(ModelChoice::Kurt)
     })
     .is_err());
 }

@@ -21,7 +21,7 @@ use std::borrow::Cow;
 use std::f64::consts::PI;
 
 /// An environment map with its angular bandwidth (cycles per radian per pixel); the lighting
-/// side of a prediction (`lustre_shade::kernel::Environment` is the shading side: pyramids).
+/// side of a prediction (`lustre_shade::integrator::FilteredEnvironment` is the shading side: pyramids).
 #[derive(Clone, Debug)]
 pub struct EnvironmentBandwidth<'a> {
     /// The map.

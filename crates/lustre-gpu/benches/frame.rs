@@ -1,4 +1,4 @@
-//! Lavapipe (or GPU) frame times of the regular-sampling kernel at 1920×1080 for per-lobe sample
+//! Lavapipe (or GPU) frame times of the regular-sampling integrator at 1920×1080 for per-lobe sample
 //! counts n = 3, 5, …, 19 (the shape of 000 Table 4.1): a screen full of specular pixels and a
 //! screen half specular, half diffuse. `draw` = dispatch + wait, without upload or readback;
 //! those are measured separately in the `transfer` group.
@@ -12,7 +12,7 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use glam::DVec3;
 use lustre_gpu::{
-    CameraBasis, CubeLevelRef, GpuContext, GpuEnvironment, GpuLobe, GpuMaterial, GpuPlane,
+    CameraBasis, CubeLevelRef, GpuContext, GpuEnvironment, GpuKurtMaterial, GpuLobe, GpuPlane,
     GpuRenderer, GpuScene, GpuSun, PackedScene, RenderTarget, LOBE_SCHEME_LATTICE,
     LOBE_SCHEME_TAP_LATTICE,
 };
@@ -99,7 +99,7 @@ fn lobe(n: usize, samples: &mut Vec<[f32; 4]>) -> GpuLobe {
 fn scene(n: usize, half: bool) -> PackedScene {
     let mut samples = Vec::new();
     let lobes = vec![lobe(n, &mut samples)];
-    let specular = GpuMaterial {
+    let specular = GpuKurtMaterial {
         kd: [0.1, 0.1, 0.1],
         lobe_start: 0,
         reflection: 1,
@@ -107,7 +107,7 @@ fn scene(n: usize, half: bool) -> PackedScene {
         sun_start: 0,
         sun_count: 0,
     };
-    let diffuse = GpuMaterial {
+    let diffuse = GpuKurtMaterial {
         reflection: 0,
         ..specular
     };
@@ -164,11 +164,11 @@ fn bench(c: &mut Criterion) {
         g.sample_size(10);
         for n in (3..=19).step_by(2) {
             let gs = GpuScene::upload(&ctx, &scene(n, half)).unwrap_or_else(|e| panic!("{e}"));
-            let frame = renderer
+            let bindings = renderer
                 .bind(&gs, &env, &target)
                 .unwrap_or_else(|e| panic!("{e}"));
-            g.bench_with_input(BenchmarkId::from_parameter(n), &frame, |b, frame| {
-                b.iter(|| renderer.draw(frame).unwrap_or_else(|e| panic!("{e}")))
+            g.bench_with_input(BenchmarkId::from_parameter(n), &bindings, |b, bindings| {
+                b.iter(|| renderer.draw(bindings).unwrap_or_else(|e| panic!("{e}")))
             });
         }
         g.finish();
@@ -189,7 +189,7 @@ fn bench(c: &mut Criterion) {
                 packed.lobes[0].sample_count = n as u32;
             }
             if name == "lattice+sun" {
-                // kernel::plan_lattice_sun with two suns: n − 2 cells and two exact evaluations.
+                // integrator::plan_lattice_sun with two suns: n − 2 cells and two exact evaluations.
                 packed.lobes[0].sample_count = n as u32 - 2;
                 packed.materials[0].sun_count = 2;
                 packed.suns = vec![
@@ -208,11 +208,11 @@ fn bench(c: &mut Criterion) {
                 ];
             }
             let gs = GpuScene::upload(&ctx, &packed).unwrap_or_else(|e| panic!("{e}"));
-            let frame = renderer
+            let bindings = renderer
                 .bind(&gs, &env, &small)
                 .unwrap_or_else(|e| panic!("{e}"));
-            g.bench_with_input(BenchmarkId::new(name, n), &frame, |b, frame| {
-                b.iter(|| renderer.draw(frame).unwrap_or_else(|e| panic!("{e}")))
+            g.bench_with_input(BenchmarkId::new(name, n), &bindings, |b, bindings| {
+                b.iter(|| renderer.draw(bindings).unwrap_or_else(|e| panic!("{e}")))
             });
         }
     }

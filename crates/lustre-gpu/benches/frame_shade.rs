@@ -22,7 +22,7 @@ use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
 use lustre_trace::bake::render::Lightmapped;
 use lustre_trace::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Denoiser};
-use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{path_camera, path_scene};
 
 fn fail<T, E: std::fmt::Display>(r: Result<T, E>) -> T {

@@ -17,7 +17,7 @@ use lustre_trace::bake::diffuse_path_scene;
 use lustre_trace::bake::gbuffer::{shade_gbuffer, trace_gbuffer};
 use lustre_trace::bake::render::{render_lightmapped, Lightmapped};
 use lustre_trace::bake::{assemble, bake_tiles, BakeOptions, Denoiser};
-use lustre_trace::path::PathTracer;
+use lustre_trace::path_tracer::PathTracer;
 use lustre_trace::reference::path_camera;
 
 fn fail<T, E: std::fmt::Display>(r: Result<T, E>) -> T {

@@ -22,7 +22,7 @@ use lustre_gpu::GpuContext;
 use lustre_trace::baked::read_environment;
 use lustre_trace::image::Image;
 use lustre_trace::metrics::{psnr, rms};
-use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{film_camera, path_scene};
 use std::path::PathBuf;
 use std::time::Instant;

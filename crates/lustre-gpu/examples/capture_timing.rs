@@ -28,7 +28,7 @@ use lustre_shade::mirror::{render_mirror, render_see_through};
 use lustre_shade::probe::{capture_cube, probe_placement, LitScene, ProbeOptions};
 use lustre_trace::bake::render::Lightmapped;
 use lustre_trace::bake::{assemble, bake_tiles, diffuse_path_scene, BakeOptions, Denoiser};
-use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::path_camera;
 use std::error::Error;
 use std::time::Instant;

@@ -1,19 +1,19 @@
-//! The contract's entry points: lustre-shade's `Scene`, `MaterialPlan`s and `Environment` in,
+//! The contract's entry points: lustre-shade's `AnalyticScene`, `MaterialPlan`s and `FilteredEnvironment` in,
 //! an `Image` out.
 
 use crate::context::GpuContext;
 use crate::cube::CubeLevelRef;
 use crate::error::{invalid, Result};
 use crate::packed::{
-    f3, CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, GpuSun, PackedScene,
+    f3, CameraBasis, GpuKurtMaterial, GpuLobe, GpuPlane, GpuSphere, GpuSun, PackedScene,
     LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
 };
 use crate::passes::sphere::{GpuEnvironment, GpuRenderer};
 use lustre_brdf::models::kurt::KurtLobe;
 use lustre_env::CubeMap;
-use lustre_shade::kernel::{Environment, LobePlan, MaterialPlan};
+use lustre_shade::analytic_scene::AnalyticScene;
+use lustre_shade::integrator::{FilteredEnvironment, LobePlan, MaterialPlan};
 use lustre_shade::pattern::PatternKind;
-use lustre_shade::scene::Scene;
 use lustre_trace::image::Image;
 
 fn level_ref(map: &CubeMap) -> CubeLevelRef<'_> {
@@ -25,7 +25,7 @@ fn level_ref(map: &CubeMap) -> CubeLevelRef<'_> {
 
 impl GpuEnvironment {
     /// Uploads the contract's environment: every pyramid level and the irradiance map.
-    pub fn new(ctx: &GpuContext, env: &Environment<'_>) -> Result<Self> {
+    pub fn new(ctx: &GpuContext, env: &FilteredEnvironment<'_>) -> Result<Self> {
         let levels: Vec<CubeLevelRef> = env.pyramid.levels.iter().map(level_ref).collect();
         GpuEnvironment::from_levels(ctx, &levels, level_ref(env.irradiance))
     }
@@ -34,7 +34,7 @@ impl GpuEnvironment {
 impl PackedScene {
     /// Packs a scene with one plan per material (`plans[i]` shades `scene.materials[i]`; the
     /// plan's own `kurt` supplies kd and the lobe parameters, as `shade_regular` uses it).
-    pub fn new(scene: &Scene, plans: &[MaterialPlan]) -> Result<Self> {
+    pub fn new(scene: &AnalyticScene, plans: &[MaterialPlan]) -> Result<Self> {
         if plans.len() != scene.materials.len() {
             return Err(invalid(
                 "material plans",
@@ -77,7 +77,7 @@ impl PackedScene {
         };
         for (i, plan) in plans.iter().enumerate() {
             let k = &plan.kurt;
-            packed.materials.push(GpuMaterial {
+            packed.materials.push(GpuKurtMaterial {
                 kd: [k.kd.0[0] as f32, k.kd.0[1] as f32, k.kd.0[2] as f32],
                 lobe_start: packed.lobes.len() as u32,
                 reflection: plan.reflection.len() as u32,
@@ -154,9 +154,9 @@ impl GpuRenderer {
     /// renders `width`×`height` pixels and reads them back.
     pub fn render(
         &self,
-        scene: &Scene,
+        scene: &AnalyticScene,
         plans: &[MaterialPlan],
-        env: &Environment<'_>,
+        env: &FilteredEnvironment<'_>,
         width: usize,
         height: usize,
     ) -> Result<Image> {
@@ -173,12 +173,12 @@ mod tests {
     use glam::DVec3;
     use lustre_brdf::models::kurt::Kurt;
     use lustre_brdf::Rgb;
-    use lustre_shade::kernel::plan_regular;
-    use lustre_shade::scene::{Camera, Sphere};
+    use lustre_shade::analytic_scene::{LookAtCamera, Sphere};
+    use lustre_shade::integrator::plan_regular;
 
-    fn scene(materials: Vec<Kurt>) -> Scene {
-        Scene {
-            camera: Camera {
+    fn scene(materials: Vec<Kurt>) -> AnalyticScene {
+        AnalyticScene {
+            camera: LookAtCamera {
                 eye: DVec3::new(0.0, 0.0, 4.0),
                 target: DVec3::ZERO,
                 up: DVec3::Y,

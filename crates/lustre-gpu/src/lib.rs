@@ -10,9 +10,9 @@
 //!   each module's header states what the pass must define.
 //! - [`bindings`](crate::bindings) (crate-private): buffers, bind-group entries, pipelines and read-back.
 //!
-//! The sphere kernel ([`passes::sphere`], `sphere.wgsl`) mirrors
-//! `lustre_shade::kernel::shade_regular` with `Weighting::Pdf002` (002 §4–7, the pseudo code
-//! `EvaluateSpecularLobe`) and the scene ray casting of `lustre_shade::scene`, in f32; its lobe,
+//! The sphere pass ([`passes::sphere`], `sphere.wgsl`) mirrors
+//! `lustre_shade::integrator::shade_regular` with `Weighting::Pdf002` (002 §4–7, the pseudo code
+//! `EvaluateSpecularLobe`) and the scene ray casting of `lustre_shade::analytic_scene`, in f32; its lobe,
 //! MIP-level, lattice and weighting functions are the modules of [`wgsl`], composed in front of
 //! it by [`sphere_wgsl`]. The environment pyramid is one cube texture with all its mip levels,
 //! faces in Vulkan order as lustre-env stores them, sampled trilinearly and seamlessly by the
@@ -30,7 +30,7 @@
 //! [`GpuViewPass::render_see_through`] fill the mirror / see-through view buffers
 //! ([`GpuViewBuffer`]); [`GpuTimer`] times GPU work (timestamps where available).
 //!
-//! Measured (lavapipe on the shared 2-core machine, load ≈ 12): parity with the CPU kernel
+//! Measured (lavapipe on the shared 2-core machine, load ≈ 12): parity with the CPU integrator
 //! 122 dB PSNR (7 samples per lobe) and 129 dB (19) at 128×96; 1920×1080 frames of a screen
 //! full of one-lobe specular pixels 3.9 s (n = 3), 6.0 s (n = 11), 9.7 s (n = 19); half
 //! specular 4.2 s (n = 11); readback 29 ms; upload of a 256² pyramid 243 ms (`benches/frame.rs`).
@@ -54,7 +54,7 @@ pub use cube::{CubeLevelRef, GpuCube};
 pub use error::{GpuError, Result};
 pub use material::GpuBsdf;
 pub use packed::{
-    CameraBasis, GpuLobe, GpuMaterial, GpuPlane, GpuSphere, GpuSun, PackedScene,
+    CameraBasis, GpuKurtMaterial, GpuLobe, GpuPlane, GpuSphere, GpuSun, PackedScene,
     LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE, MAX_LOBE_LOOKUPS,
     MAX_TAP_LATTICE_BUDGET,
 };
@@ -67,7 +67,8 @@ pub use passes::lightmap_shade::{
 pub use passes::probe_capture::{face_camera, mesh_triangles, GpuProbe, GpuProbeCapture};
 pub use passes::pyramid::{GpuPyramid, GpuPyramidBuilder, PYRAMID_USAGE, PYRAMID_WGSL};
 pub use passes::sphere::{
-    sphere_wgsl, Frame, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SPHERE_PASS_WGSL,
+    sphere_wgsl, GpuEnvironment, GpuRenderer, GpuScene, RenderTarget, SphereBindings,
+    SPHERE_PASS_WGSL,
 };
 pub use passes::view::{GpuViewPass, ViewRender};
 pub use timer::{GpuTimer, Timing};

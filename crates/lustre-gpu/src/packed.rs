@@ -80,7 +80,7 @@ pub struct GpuPlane {
 /// A Kurt material (WGSL `Material`): kd and the range of its lobes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuMaterial {
+pub struct GpuKurtMaterial {
     /// Diffuse coefficient.
     pub kd: [f32; 3],
     /// First lobe (reflection lobes, then transmission lobes).
@@ -89,7 +89,7 @@ pub struct GpuMaterial {
     pub reflection: u32,
     /// Number of transmission lobes.
     pub transmission: u32,
-    /// First sun in the sun array (`kernel::MaterialPlan::suns`).
+    /// First sun in the sun array (`integrator::MaterialPlan::suns`).
     pub sun_start: u32,
     /// Number of suns.
     pub sun_count: u32,
@@ -102,7 +102,7 @@ pub struct GpuSun {
     /// Unit direction towards the sun, world space.
     pub direction: [f32; 3],
     /// Energy-weighted RMS angle of its texels around `direction`, radians (the lobes are
-    /// widened by it, `kernel::sun_widened`).
+    /// widened by it, `integrator::sun_widened`).
     pub spread: f32,
     /// ∫ (excess radiance) dω per channel.
     pub irradiance: [f32; 3],
@@ -139,22 +139,22 @@ pub struct GpuLobe {
     pub scheme: u32,
 }
 
-/// `GpuLobe::scheme` of a stored pattern (`kernel::plan_regular`, Pdf002 weights).
+/// `GpuLobe::scheme` of a stored pattern (`integrator::plan_regular`, Pdf002 weights).
 pub const LOBE_SCHEME_PATTERN: u32 = 0;
-/// `GpuLobe::scheme` of ours, the per-pixel row lattice (`kernel::plan_lattice`).
+/// `GpuLobe::scheme` of ours, the per-pixel row lattice (`integrator::plan_lattice`).
 pub const LOBE_SCHEME_LATTICE: u32 = 1;
 /// `GpuLobe::scheme` of the row lattice with anisotropic footprints
-/// (`kernel::plan_tap_lattice`; up to `pattern::LATTICE_MAX_TAPS` taps per cell).
+/// (`integrator::plan_tap_lattice`; up to `pattern::LATTICE_MAX_TAPS` taps per cell).
 pub const LOBE_SCHEME_TAP_LATTICE: u32 = 2;
 
-/// The most lookups a stored pattern or row lattice may plan for one lobe on the GPU kernel:
+/// The most lookups a stored pattern or row lattice may plan for one lobe on the GPU pass:
 /// llvmpipe (lavapipe) ends all loops of a shader invocation once they have run 65,535
 /// iterations together, silently. Measured on `tests/parity.rs`'s scene (two lobes a
 /// material): patterns of 4,096 and row lattices of 1,024 still at 138–141 dB against the CPU.
 pub const MAX_LOBE_LOOKUPS: u32 = 1024;
 
-/// The largest budget of a tap lattice on the GPU kernel: its cell search
-/// (`regular.wgsl` `lattice_cells`, as `kernel::lattice_cells`) is quadratic in the budget;
+/// The largest budget of a tap lattice on the GPU pass: its cell search
+/// (`regular.wgsl` `lattice_cells`, as `integrator::lattice_cells`) is quadratic in the budget;
 /// on `tests/parity.rs`'s scene 160 came out at 141 dB against the CPU, 256 at 75 dB and 1,024
 /// at 18 dB (llvmpipe's loop limit, as [`MAX_LOBE_LOOKUPS`]).
 pub const MAX_TAP_LATTICE_BUDGET: u32 = 64;
@@ -169,7 +169,7 @@ pub struct PackedScene {
     /// Squares.
     pub planes: Vec<GpuPlane>,
     /// Materials.
-    pub materials: Vec<GpuMaterial>,
+    pub materials: Vec<GpuKurtMaterial>,
     /// Lobes of all materials.
     pub lobes: Vec<GpuLobe>,
     /// Half vectors of all patterns (xyz, w = 0), in the lobe's local frame.

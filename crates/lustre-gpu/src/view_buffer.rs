@@ -15,7 +15,7 @@ use crate::error::{invalid, wgpu_error, Result};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
 use lustre_shade::mirror::{MirrorTexel, ReflectorPlane, ViewBuffer};
-use lustre_trace::path::PathCamera;
+use lustre_trace::path_tracer::PathCamera;
 
 /// A view buffer on the GPU (module docs for the layout).
 #[derive(Debug)]

@@ -35,7 +35,7 @@ use lustre_shade::mirror::{Reflector, ScreenTiles};
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
 use lustre_trace::image::Image;
-use lustre_trace::path::PathCamera;
+use lustre_trace::path_tracer::PathCamera;
 
 /// The compiled passes of a walkthrough, kept when the scene is uploaded again (a viewer's
 /// material edit): compiling them is most of a walkthrough's set-up on a software adapter.

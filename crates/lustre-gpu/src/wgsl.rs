@@ -49,7 +49,7 @@ impl Module {
     }
 }
 
-/// `PI`, the `Material` and `Lobe` records (`packed::GpuMaterial`, `packed::GpuLobe`).
+/// `PI`, the `Material` and `Lobe` records (`packed::GpuKurtMaterial`, `packed::GpuLobe`).
 pub const TYPES: Module = Module {
     name: "types",
     source: Source::File(include_str!("wgsl/types.wgsl")),

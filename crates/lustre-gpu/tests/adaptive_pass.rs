@@ -855,7 +855,8 @@ fn the_modern_halls_own_emitters_light_it_on_the_gpu_as_on_the_cpu() {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/modern_hall.toml");
     let scene = lustre_scene::Scene::load(&path).expect("the Hall");
     let (ps, _) = lustre_trace::reference::path_scene(&scene).expect("path scene");
-    let tracer = lustre_trace::path::PathTracer::new(&ps, Default::default()).expect("tracer");
+    let tracer =
+        lustre_trace::path_tracer::PathTracer::new(&ps, Default::default()).expect("tracer");
     let (w, h) = (64, 40);
     let cam =
         lustre_trace::reference::path_camera(&scene, None, w as u32, h as u32).expect("camera");

@@ -20,9 +20,9 @@ use lustre_gpu::wgsl::{Module, Source};
 
 mod common;
 use common::ctx;
-use common::kernel::{f32_round, run_kernel};
+use common::shader::{f32_round, run_shader};
 
-/// The side table of the test kernel: the first words of its `input`.
+/// The side table of the test shader: the first words of its `input`.
 const TABLE: Module = Module {
     name: "test_table",
     source: Source::File("fn bsdf_table(i: u32) -> f32 {\n    return bitcast<f32>(input[i]);\n}\n"),
@@ -124,7 +124,7 @@ const CASES: [(&str, f64, f64); 35] = [
 /// two-sided one). Rounded to f32 (the GPU's input), so the CPU evaluates the same pairs.
 fn pairs(g: &mut SplitMix64, n: usize) -> Vec<(DVec3, DVec3)> {
     let flip = |w: DVec3| DVec3::new(w.x, w.y, -w.z);
-    common::kernel::pairs(g, n)
+    common::shader::pairs(g, n)
         .into_iter()
         .enumerate()
         .map(|(k, (wi, wo))| {
@@ -219,7 +219,7 @@ fn every_analytic_reflection_model_matches_its_cpu_twin() {
     );
     let count = n * cases.len();
     let t = std::time::Instant::now();
-    let out = run_kernel(
+    let out = run_shader(
         &ctx,
         &[&TABLE, &lustre_gpu::material::ANALYTIC],
         &body,

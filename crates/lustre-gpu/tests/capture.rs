@@ -17,11 +17,11 @@ use lustre_scene::Scene;
 use lustre_shade::mirror::{box_levels, render_mirror, render_see_through, ViewBuffer};
 use lustre_shade::probe::{capture_cube, probe_placement, LitScene, ProbeOptions};
 use lustre_trace::bake::diffuse_path_scene;
-use lustre_trace::bake::gbuffer::{shade_gbuffer, GBuffer, SKY};
+use lustre_trace::bake::gbuffer::{shade_gbuffer, VisibilityBuffer, SKY};
 use lustre_trace::bake::render::Lightmapped;
 use lustre_trace::image::Image;
 use lustre_trace::metrics::psnr;
-use lustre_trace::path::{PathCamera, PathOptions, PathScene, PathTracer};
+use lustre_trace::path_tracer::{PathCamera, PathOptions, PathScene, PathTracer};
 use lustre_trace::reference::path_camera;
 
 fn room() -> Baked {
@@ -181,7 +181,7 @@ fn gpu_probes_match_their_twin_and_the_ray_cast_capture() {
 /// returns its agreement with the CPU ray-cast buffer.
 fn check_view(
     gpu: &ViewBuffer,
-    gb: &GBuffer,
+    gb: &VisibilityBuffer,
     lit: &LitScene,
     ps: &PathScene,
     cpu: &ViewBuffer,

@@ -23,7 +23,7 @@ use std::f64::consts::PI;
 
 mod common;
 use common::ctx;
-use common::kernel::{angle, f32_round, run_kernel};
+use common::shader::{angle, f32_round, run_shader};
 
 /// A material under test: its group (the model reported), name and BSDF.
 struct Case {
@@ -91,8 +91,8 @@ fn build_cases() -> Vec<Case> {
         ..Default::default()
     };
     for (model, d) in [
-        ("beckmann", lustre_fit::ct::Distribution::Beckmann),
-        ("ggx", lustre_fit::ct::Distribution::Ggx),
+        ("beckmann", lustre_fit::ct::CtDistribution::Beckmann),
+        ("ggx", lustre_fit::ct::CtDistribution::Ggx),
     ] {
         let fit =
             lustre_fit::ct::fit(data.bsdf.as_ref(), d, &opts).unwrap_or_else(|e| panic!("{e}"));
@@ -248,7 +248,7 @@ fn fitted_models_match_their_cpu_twins() {
         )
     );
     let start = std::time::Instant::now();
-    let out = run_kernel(
+    let out = run_shader(
         &ctx,
         &[&sgd::MODULE, &cook_torrance::MODULE, &kurt::MODULE],
         &body,
@@ -408,7 +408,7 @@ fn regular_warp_albedo_matches_integrate_warp() {
              glossy /= f32(budget);"
         )
     );
-    let out = run_kernel(
+    let out = run_shader(
         &ctx,
         &[
             &sgd::MODULE,
@@ -531,7 +531,7 @@ fn upper_gamma_matches_the_cpu() {
     let n = pts.len();
     let body = "output[i] = bitcast<u32>(upper_gamma_f32(bitcast<f32>(input[2u * i]), \
                 bitcast<f32>(input[2u * i + 1u])));";
-    let out = run_kernel(&ctx, &[&sgd::MODULE], body, &input, n, n as u32, None);
+    let out = run_shader(&ctx, &[&sgd::MODULE], body, &input, n, n as u32, None);
     let mut worst = (0.0f64, 0.0, 0.0);
     for (k, &(s, x, want)) in pts.iter().enumerate() {
         let gpu = f64::from(f32::from_bits(out[k]));

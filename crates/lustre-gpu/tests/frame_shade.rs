@@ -23,7 +23,7 @@ use lustre_shade::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
 use lustre_trace::bake::render::Lightmapped;
 use lustre_trace::bake::spec_albedo;
 use lustre_trace::metrics::psnr;
-use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{path_camera, path_scene};
 
 /// The built-in room, its gold sphere as a rough gold conductor, the brushed-aluminium sphere

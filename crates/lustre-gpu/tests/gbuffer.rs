@@ -13,10 +13,12 @@ use common::{ctx, quick_bake, Baked};
 use lustre_gpu::{LightmapFrameScene, LightmapRenderer};
 use lustre_scene::Scene;
 use lustre_trace::bake::diffuse_path_scene;
-use lustre_trace::bake::gbuffer::{render_lightmapped_gbuffer, shade_gbuffer, GBuffer, SKY};
+use lustre_trace::bake::gbuffer::{
+    render_lightmapped_gbuffer, shade_gbuffer, VisibilityBuffer, SKY,
+};
 use lustre_trace::bake::render::{render_lightmapped, Lightmapped};
 use lustre_trace::metrics::psnr;
-use lustre_trace::path::PathCamera;
+use lustre_trace::path_tracer::PathCamera;
 use lustre_trace::reference::path_camera;
 
 /// A real scene with a small, quick bake (1 path per texel, 2 bounces, no denoiser).
@@ -40,7 +42,7 @@ fn camera(b: &Baked, w: usize, h: usize) -> PathCamera {
 
 /// (fraction of pixels whose ids agree, fraction of sky pixels, largest barycentric and relative
 /// depth difference over agreeing surface pixels, 99th percentile of the barycentric one).
-fn compare_visibility(gpu: &GBuffer, cpu: &GBuffer) -> (f64, f64, f64, f64, f64) {
+fn compare_visibility(gpu: &VisibilityBuffer, cpu: &VisibilityBuffer) -> (f64, f64, f64, f64, f64) {
     let agree = gpu.agreement(cpu).unwrap();
     let sky = cpu.prim.iter().filter(|&&p| p == SKY).count() as f64 / cpu.prim.len() as f64;
     let mut db = Vec::new();

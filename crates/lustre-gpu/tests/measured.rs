@@ -20,9 +20,9 @@ use lustre_gpu::GpuContext;
 
 mod common;
 use common::ctx;
-use common::kernel::{pairs, run_kernel, upper};
+use common::shader::{pairs, run_shader, upper};
 
-/// The side table of the test kernel: the first words of its `input`.
+/// The side table of the test shader: the first words of its `input`.
 const TABLE: Module = Module {
     name: "test_table",
     source: Source::File("fn bsdf_table(i: u32) -> f32 {\n    return bitcast<f32>(input[i]);\n}\n"),
@@ -103,7 +103,7 @@ fn nbrdf_eval_matches_the_cpu_on_the_five_materials_of_004() {
         let mut input = words(&pack_nbrdf(&net));
         let q = input.len();
         push_pairs(&mut input, &pairs);
-        let out = run_kernel(
+        let out = run_shader(
             &ctx,
             &[&TABLE, &lustre_gpu::material::measured::MEASURED],
             &eval_body(q, "nbrdf_eval(0u, wi, wo)"),
@@ -145,7 +145,7 @@ fn merl_eval_and_tabulated_sampling_match_the_cpu() {
         "merl_eval(0u, {:?}, wi, wo)",
         table.convention().offset() as f32
     );
-    let out = run_kernel(
+    let out = run_shader(
         &ctx,
         &[&TABLE, &lustre_gpu::material::measured::MEASURED],
         &eval_body(q, &call),
@@ -205,7 +205,7 @@ fn tabulated_parity(
          for (var c = 0u; c < 6u; c++) {{ output[i * 6u + c] = bitcast<u32>(o[c]); }}",
         dims.view_bins, dims.azimuth_bins, dims.theta_bins, dims.phi_cells, dims.defensive
     );
-    let out = run_kernel(
+    let out = run_shader(
         ctx,
         &[&TABLE, &lustre_gpu::material::measured::MEASURED],
         &body,
@@ -303,7 +303,7 @@ fn rgl_eval_matches_the_cpu_on_the_shared_rgl_measurements() {
         let mut input = words(&pack_rgl(&rgl));
         let q = input.len();
         push_pairs(&mut input, &pairs);
-        let out = run_kernel(
+        let out = run_shader(
             &ctx,
             &[&TABLE, &lustre_gpu::material::measured::MEASURED],
             &eval_body(q, "rgl_eval(0u, wi, wo)"),
@@ -357,7 +357,7 @@ fn alta_eval_matches_the_cpu_on_the_shared_goniometric_measurements() {
         let mut input = words(&packed);
         let q = input.len();
         push_pairs(&mut input, &pairs);
-        let out = run_kernel(
+        let out = run_shader(
             &ctx,
             &[&TABLE, &lustre_gpu::material::measured::MEASURED],
             &eval_body(q, "alta_eval(0u, wi, wo)"),

@@ -2,8 +2,8 @@
 //! Weighting::Pdf002, ours, the row lattice of `plan_lattice`, the lattice with several taps
 //! in its long cells of `plan_tap_lattice`, and the lattice with two suns shaded exactly of
 //! `plan_lattice_sun`) and environment rendered by
-//! `lustre_shade::render` with `kernel::shade_regular` in f64 and by the
-//! WGSL kernel in f32 must agree to PSNR ≥ 45 dB (≥ 90 dB on lavapipe, whose float filtering
+//! `lustre_shade::render` with `integrator::shade_regular` in f64 and by the
+//! WGSL pass in f32 must agree to PSNR ≥ 45 dB (≥ 90 dB on lavapipe, whose float filtering
 //! leaves only f32 rounding). Fails (does not skip) without an adapter. Set
 //! `LUSTRE_GPU_PARITY_DUMP=DIR` to write both images as PNG.
 
@@ -12,12 +12,12 @@ use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::Rgb;
 use lustre_env::{CubeMap, CubePyramid, MipFilter, Sun};
 use lustre_gpu::{GpuContext, GpuRenderer};
-use lustre_shade::kernel::{
-    plan_lattice, plan_lattice_sun, plan_regular, plan_tap_lattice, shade_regular, Environment,
-    MaterialPlan, Weighting,
+use lustre_shade::analytic_scene::{AnalyticScene, LookAtCamera, Plane, Sphere};
+use lustre_shade::integrator::{
+    plan_lattice, plan_lattice_sun, plan_regular, plan_tap_lattice, shade_regular,
+    FilteredEnvironment, MaterialPlan, Weighting,
 };
 use lustre_shade::render::render;
-use lustre_shade::scene::{Camera, Plane, Scene, Sphere};
 use lustre_trace::image::Image;
 use lustre_trace::metrics::{psnr, rms};
 
@@ -34,9 +34,9 @@ fn kurt(kd: [f64; 3], reflection: Vec<KurtLobe>, transmission: Vec<KurtLobe>) ->
 
 /// Three spheres (isotropic glossy; anisotropic two-lobe; thin glossy transmitter) on a floor
 /// square with a rough anisotropic lobe, seen slightly from above.
-fn scene() -> Scene {
-    Scene {
-        camera: Camera {
+fn scene() -> AnalyticScene {
+    AnalyticScene {
+        camera: LookAtCamera {
             eye: DVec3::new(0.3, 1.6, 5.0),
             target: DVec3::new(0.0, 0.6, 0.0),
             up: DVec3::Y,
@@ -118,7 +118,7 @@ fn environment() -> (CubePyramid, CubeMap) {
     (pyramid, irradiance)
 }
 
-fn cpu_render(scene: &Scene, plans: &[MaterialPlan], env: &Environment) -> Image {
+fn cpu_render(scene: &AnalyticScene, plans: &[MaterialPlan], env: &FilteredEnvironment) -> Image {
     render(
         scene,
         W,
@@ -155,7 +155,7 @@ fn gpu_render_matches_cpu_shade_regular() {
         Sun {
             direction: DVec3::new(0.4, -0.2, 0.9).normalize(),
             irradiance: [1.5, 1.5, 2.0],
-            // A 4° source: the lobes are widened by it (`kernel::sun_widened`) on both sides.
+            // A 4° source: the lobes are widened by it (`integrator::sun_widened`) on both sides.
             spread: 0.07,
         },
     ];
@@ -178,7 +178,7 @@ fn gpu_render_matches_cpu_shade_regular() {
             }),
         )
         .collect();
-    let env = Environment {
+    let env = FilteredEnvironment {
         pyramid: &pyramid,
         irradiance: &irradiance,
     };

@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 use lustre_gpu::{
-    CameraBasis, CubeLevelRef, GpuContext, GpuEnvironment, GpuError, GpuLobe, GpuMaterial,
+    CameraBasis, CubeLevelRef, GpuContext, GpuEnvironment, GpuError, GpuKurtMaterial, GpuLobe,
     GpuRenderer, GpuSphere, GpuSun, PackedScene,
 };
 
@@ -143,7 +143,7 @@ fn diffuse_and_single_sample_lobe_match_hand_values() {
                 material: 0,
             }],
             planes: vec![],
-            materials: vec![GpuMaterial {
+            materials: vec![GpuKurtMaterial {
                 kd,
                 lobe_start: 0,
                 reflection: u32::from(!transmission),
@@ -211,7 +211,7 @@ fn invalid_scenes_are_reported() {
     ));
     // A material whose sun range runs past the sun array, and a sun with a NaN irradiance.
     let mut scene = empty_scene(DVec3::ZERO, DVec3::Z, DVec3::Y);
-    scene.materials.push(GpuMaterial {
+    scene.materials.push(GpuKurtMaterial {
         kd: [0.5; 3],
         lobe_start: 0,
         reflection: 0,

@@ -26,12 +26,12 @@ use lustre_scene::{Material, MaterialKind, Scene};
 use lustre_shade::frame::{shade_gbuffer_view_dependent, FrameBuffers, FrameLight};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
-use lustre_trace::bake::gbuffer::GBuffer;
+use lustre_trace::bake::gbuffer::VisibilityBuffer;
 use lustre_trace::bake::render::Lightmapped;
 use lustre_trace::bake::spec_albedo;
 use lustre_trace::image::Image;
 use lustre_trace::metrics::psnr;
-use lustre_trace::path::{PathCamera, PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathCamera, PathOptions, PathTracer};
 use lustre_trace::reference::{path_camera, path_scene};
 
 /// The room with the four textured materials (module docs).
@@ -110,7 +110,7 @@ fn twin(
     light: &FrameLight,
     buffers: &FrameBuffers,
     camera: &PathCamera,
-    gb: &GBuffer,
+    gb: &VisibilityBuffer,
     opts: &FrameRequest,
 ) -> (Image, u64) {
     let (ps, _) = path_scene(scene).expect("path scene");

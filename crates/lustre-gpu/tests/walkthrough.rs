@@ -26,7 +26,7 @@ use lustre_trace::bake::render::Lightmapped;
 use lustre_trace::bake::spec_albedo;
 use lustre_trace::image::Image;
 use lustre_trace::metrics::psnr;
-use lustre_trace::path::{PathCamera, PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathCamera, PathOptions, PathTracer};
 use lustre_trace::reference::{path_camera, path_scene};
 
 const PROBES: ProbeOptions = ProbeOptions {

@@ -2,19 +2,19 @@
 //! its dependencies alone and declares no binding or entry point; the functions new on the GPU
 //! (bounding planes, QMC points and seeds, GGX/Beckmann microfacet evaluation, densities and
 //! sampling warps, regular sampling through the rough conductor's warp on a real pyramid) run
-//! in a small test kernel and are compared with their CPU twins in
-//! lustre-shade and lustre-brdf. The sphere-kernel modules (lobe, mip, pattern, regular) are
+//! in a small test shader and are compared with their CPU twins in
+//! lustre-shade and lustre-brdf. The sphere-pass modules (lobe, mip, pattern, regular) are
 //! checked end to end by `tests/parity.rs`. GPU tests fail (never skip) without an adapter.
 
 use glam::DVec3;
 use lustre_brdf::sampling::{uniform_sphere, SplitMix64};
 use lustre_gpu::wgsl::{self, compose};
 use lustre_gpu::GpuEnvironment;
-use lustre_shade::kernel::{corrected_direction, pixel_seed, sobol02, BoundingPlane};
+use lustre_shade::integrator::{corrected_direction, pixel_seed, sobol02, BoundingPlane};
 
 mod common;
 use common::ctx;
-use common::kernel::{angle, f32_round, run_kernel, validate};
+use common::shader::{angle, f32_round, run_shader, validate};
 
 #[test]
 fn every_module_validates_alone_and_has_no_bindings() {
@@ -164,7 +164,7 @@ fn planes_match_corrected_direction() {
          let out = array<f32, 6>(all.x, all.y, all.z, one.x, one.y, one.z);\n\
          for (var k = 0u; k < 6u; k++) {{ output[i * 6u + k] = bitcast<u32>(out[k]); }}"
     );
-    let out = run_kernel(
+    let out = run_shader(
         &ctx,
         &[&wgsl::PLANES],
         &body,
@@ -244,7 +244,7 @@ fn qmc_matches_sobol02_and_pixel_seed() {
              ps.x, ps.y, bitcast<u32>(rot.x), bitcast<u32>(rot.y),\n\
              bitcast<u32>(q.x), bitcast<u32>(q.y));\n\
          for (var k = 0u; k < 10u; k++) { output[i * 10u + k] = out[k]; }";
-    let out = run_kernel(&ctx, &[&wgsl::QMC], body, &input, n * 10, n as u32, None);
+    let out = run_shader(&ctx, &[&wgsl::QMC], body, &input, n * 10, n as u32, None);
     let f = |w: u32| f64::from(f32::from_bits(w));
     // The CPU's value truncated to 24 bits, as the GPU keeps it.
     let top24 = |v: f64| (v * 16_777_216.0).floor() / 16_777_216.0;
@@ -363,7 +363,7 @@ fn microfacet_matches_the_cpu_distributions() {
              s.x, s.y, s.z, s.w);\n\
          for (var k = 0u; k < {MF_OUT}u; k++) {{ output[i * {MF_OUT}u + k] = bitcast<u32>(out[k]); }}"
     );
-    let out = run_kernel(
+    let out = run_shader(
         &ctx,
         &[&wgsl::MICROFACET],
         &body,
@@ -441,7 +441,7 @@ const WARP_CASE: usize = 16;
 /// `lustre_shade::warp::shade_regular_warp` on a real map's Gaussian pyramid: 240 seeded
 /// configurations, GGX and Beckmann, isotropic and anisotropic, 8, 13 and 19 samples. PSNR
 /// (peak = the brightest CPU value) ≥ 45 dB on any adapter, ≥ 90 dB on a CPU adapter with f32
-/// filtering, as the sphere kernel's parity.
+/// filtering, as the sphere pass's parity.
 #[test]
 fn regular_warp_matches_shade_regular_warp() {
     use lustre_brdf::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
@@ -449,7 +449,7 @@ fn regular_warp_matches_shade_regular_warp() {
     use lustre_brdf::models::rough_conductor::RoughConductor;
     use lustre_brdf::rgb::Rgb;
     use lustre_env::{irradiance_map, read_map, shared_data_dir, CubeMap, CubePyramid, MipFilter};
-    use lustre_shade::kernel::Environment;
+    use lustre_shade::integrator::FilteredEnvironment;
     use lustre_shade::truth::configurations;
     use lustre_shade::warp::shade_regular_warp;
     let ctx = ctx();
@@ -460,7 +460,7 @@ fn regular_warp_matches_shade_regular_warp() {
     let base = CubeMap::from_equirect(&map, 64).unwrap_or_else(|e| panic!("{e}"));
     let pyramid = CubePyramid::build(base, MipFilter::Gauss6).unwrap_or_else(|e| panic!("{e}"));
     let irradiance = irradiance_map(&pyramid, 4).unwrap_or_else(|e| panic!("{e}"));
-    let env = Environment {
+    let env = FilteredEnvironment {
         pyramid: &pyramid,
         irradiance: &irradiance,
     };
@@ -497,7 +497,7 @@ fn regular_warp_matches_shade_regular_warp() {
         face = pyramid.base_size() as f64,
         max_lod = (pyramid.levels.len() - 1) as f64,
     );
-    let out = run_kernel(
+    let out = run_shader(
         &ctx,
         &[&wgsl::WARP],
         &body,

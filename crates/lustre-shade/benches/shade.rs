@@ -9,9 +9,9 @@ use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::rgb::Rgb;
 use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter, Sun};
-use lustre_shade::kernel::{
+use lustre_shade::integrator::{
     plan_lattice, plan_lattice_sun, plan_regular, plan_tap_lattice, shade_ck, shade_reference,
-    shade_regular, Environment, Weighting,
+    shade_regular, FilteredEnvironment, Weighting,
 };
 use lustre_trace::sampling::ShadingFrame;
 use std::hint::black_box;
@@ -43,7 +43,7 @@ fn setup() -> (CubePyramid, CubeMap, Kurt, Vec<(ShadingFrame, DVec3)>) {
 
 fn bench(c: &mut Criterion) {
     let (pyramid, irradiance, kurt, pixels) = setup();
-    let env = Environment {
+    let env = FilteredEnvironment {
         pyramid: &pyramid,
         irradiance: &irradiance,
     };

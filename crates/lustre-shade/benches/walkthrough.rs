@@ -13,7 +13,7 @@ use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
 use lustre_trace::bake::render::Lightmapped;
 use lustre_trace::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Transport};
-use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{path_camera, path_scene};
 use std::hint::black_box;
 

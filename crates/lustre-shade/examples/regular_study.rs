@@ -6,7 +6,7 @@
 //! faces of `--face` texels (default 256), Gauss 6×6 pyramid. Shading points: an orthographic
 //! view of a unit sphere from +z (pixels inside radius 0.97 of a `--res`² grid; normal = sphere
 //! normal, ωo = +z, tangent = normalize(ŷ × n)), so the reflection directions sweep the whole
-//! sphere. Reference: `kernel::shade_qmc` with `--ref` samples (default 16384) per point on
+//! sphere. Reference: `integrator::shade_qmc` with `--ref` samples (default 16384) per point on
 //! level 0; a second reference with another seed estimates the reference's own noise.
 //!
 //! Error: RMS over points and channels of the linear radiance difference, also relative to the
@@ -55,8 +55,8 @@ use lustre_brdf::models::kurt::{lobe_eval, lobe_pdf, lobe_sample_h, Kurt, KurtLo
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::hammersley;
 use lustre_env::{irradiance_map, spot_map, CubePyramid, MipFilter, SpotMapParams};
-use lustre_shade::kernel::{
-    plan_regular, shade_ck, shade_qmc, shade_regular, Environment, Weighting,
+use lustre_shade::integrator::{
+    plan_regular, shade_ck, shade_qmc, shade_regular, FilteredEnvironment, Weighting,
 };
 use lustre_shade::mip;
 use lustre_shade::pattern::{self, ConcentricOptions};
@@ -117,7 +117,7 @@ fn shade_reg(
     lobe: &KurtLobe,
     m: &RegMethod,
     bias: f64,
-    env: &Environment,
+    env: &FilteredEnvironment,
 ) -> Rgb {
     let wo_l = f.to_local(wo);
     let face = env.pyramid.base_size();
@@ -154,7 +154,7 @@ fn shade_ck_bias(
     lobe: &KurtLobe,
     n: usize,
     bias: f64,
-    env: &Environment,
+    env: &FilteredEnvironment,
 ) -> Rgb {
     let wo_l = f.to_local(wo);
     let face = env.pyramid.base_size();
@@ -259,7 +259,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     })?;
     let pyramid = CubePyramid::build(base, MipFilter::Gauss6)?;
     let irradiance = irradiance_map(&pyramid, 8)?;
-    let env = Environment {
+    let env = FilteredEnvironment {
         pyramid: &pyramid,
         irradiance: &irradiance,
     };

@@ -36,9 +36,10 @@ use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::rgb::Rgb;
 use lustre_env::{read_map, shared_data_dir, CubeMap, MipFilter, Sun, SunOptions};
 use lustre_shade::harness::{describe_suns, EnvSetup};
-use lustre_shade::kernel::{
+use lustre_shade::integrator::{
     plan_lattice, plan_lattice_sun, plan_regular, plan_regular_with, plan_tap_lattice,
-    shade_ck_counted, shade_reference, shade_regular_counted, Environment, MaterialPlan, Weighting,
+    shade_ck_counted, shade_reference, shade_regular_counted, FilteredEnvironment, MaterialPlan,
+    Weighting,
 };
 use lustre_shade::pattern::ConcentricOptions;
 use lustre_shade::truth::{configurations, supersampling, truth, Configuration};
@@ -122,7 +123,7 @@ struct Plans {
 
 /// The map without its suns (its pyramid; the irradiance map stays the whole map's) and the suns.
 struct SunEnv<'a> {
-    env: Environment<'a>,
+    env: FilteredEnvironment<'a>,
     suns: &'a [Sun],
 }
 
@@ -144,7 +145,7 @@ fn shade_all(
     c: &Configuration,
     m: &Material,
     p: &Plans,
-    env: &Environment,
+    env: &FilteredEnvironment,
     sun: &SunEnv,
     mc: usize,
     seed: u64,
@@ -216,7 +217,7 @@ fn pct(x: f64) -> String {
 fn study(
     map_name: &str,
     m: &Material,
-    env: &Environment,
+    env: &FilteredEnvironment,
     sun: &SunEnv,
     configs: &[Configuration],
     mc: usize,

@@ -25,7 +25,7 @@ use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::catalog::resolve;
 use lustre_brdf::rgb::Rgb;
 use lustre_env::{irradiance_map, read_map, shared_data_dir, CubeMap, CubePyramid, MipFilter};
-use lustre_shade::kernel::Environment;
+use lustre_shade::integrator::FilteredEnvironment;
 use lustre_shade::truth::{configurations, supersampling_for, truth, Configuration};
 use lustre_shade::warp::{shade_warp, LevelRule, PointSet};
 use rayon::prelude::*;
@@ -116,7 +116,7 @@ impl Acc {
 fn study(
     bsdf: &dyn Bsdf,
     roughness: f64,
-    env: &Environment,
+    env: &FilteredEnvironment,
     configs: &[Configuration],
     budgets: &[usize],
 ) -> Vec<[Acc; NM]> {
@@ -195,7 +195,7 @@ fn main() -> Res<()> {
         let base = CubeMap::from_equirect(&loaded.map, face)?;
         let pyramid = CubePyramid::build(base, MipFilter::Gauss6)?;
         let irradiance = irradiance_map(&pyramid, 8)?;
-        let env = Environment {
+        let env = FilteredEnvironment {
             pyramid: &pyramid,
             irradiance: &irradiance,
         };

@@ -20,7 +20,7 @@
 //!
 //! This is the CPU frame the GPU renderer mirrors and the fallback when there is no adapter.
 
-use crate::kernel::{corrected_direction, pixel_seed, BoundingPlane};
+use crate::integrator::{corrected_direction, pixel_seed, BoundingPlane};
 use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
 use crate::mirror::{
     render_mirror, render_see_through_with_gbuffer, MirrorBuffer, ScreenTiles, ViewBuffer,
@@ -37,10 +37,10 @@ use lustre_brdf::sampling::SplitMix64;
 use lustre_env::pyramid::CubePyramid;
 use lustre_scene::{Material, MaterialKind};
 use lustre_trace::accel::Hit;
-use lustre_trace::bake::gbuffer::{shade_gbuffer, GBuffer, SKY};
+use lustre_trace::bake::gbuffer::{shade_gbuffer, VisibilityBuffer, SKY};
 use lustre_trace::bake::render::camera_ray;
 use lustre_trace::image::Image;
-use lustre_trace::path::PathCamera;
+use lustre_trace::path_tracer::PathCamera;
 use rayon::prelude::*;
 
 /// The pre-filtered incident light of a frame: the probes, and the environment's pyramid for
@@ -629,7 +629,7 @@ pub fn shade_gbuffer_view_dependent(
     light: &FrameLight,
     buffers: &FrameBuffers,
     camera: &PathCamera,
-    gb: &GBuffer,
+    gb: &VisibilityBuffer,
     k: u32,
     req: &FrameRequest,
 ) -> Result<(Image, FrameStats)> {
@@ -654,7 +654,7 @@ pub fn shade_see_through_layer(
     light: &FrameLight,
     buffers: &FrameBuffers,
     camera: &PathCamera,
-    gb: &GBuffer,
+    gb: &VisibilityBuffer,
     tiles: &ScreenTiles,
 ) -> Result<(Image, FrameStats)> {
     let req = FrameRequest {
@@ -675,7 +675,7 @@ fn shade_gbuffer_region(
     light: &FrameLight,
     buffers: &FrameBuffers,
     camera: &PathCamera,
-    gb: &GBuffer,
+    gb: &VisibilityBuffer,
     k: u32,
     req: &FrameRequest,
     tiles: Option<&ScreenTiles>,

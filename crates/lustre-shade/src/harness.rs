@@ -25,10 +25,10 @@
 //! largest; never more than the budget per lobe). It writes PNGs, false-colour differences
 //! (002 Fig. 9 style) and a Markdown table.
 
-use crate::kernel::{self, Environment, Weighting};
+use crate::analytic_scene::{AnalyticHit, AnalyticScene, LookAtCamera, Plane, Sphere};
+use crate::integrator::{self, FilteredEnvironment, Weighting};
 use crate::pattern::ConcentricOptions;
 use crate::render::render_with_progress;
-use crate::scene::{Camera, Hit, Plane, Scene, Sphere};
 use crate::truth;
 use crate::{Result, ShadeError};
 use glam::DVec3;
@@ -67,21 +67,21 @@ pub struct MaterialCase {
 /// Which regular pattern a method uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PatternChoice {
-    /// 002 §5's concentric pattern, the largest within the budget (`kernel::plan_regular`, with ξ0).
+    /// 002 §5's concentric pattern, the largest within the budget (`integrator::plan_regular`, with ξ0).
     Concentric,
-    /// 000 §4.4.3's centre + ring / linear pattern (`kernel::plan_thesis`; ξ0 unused).
+    /// 000 §4.4.3's centre + ring / linear pattern (`integrator::plan_thesis`; ξ0 unused).
     Thesis,
     /// 002 §5's concentric pattern with the rings stretched so the outermost lies at θmax
-    /// (`kernel::plan_regular_with`, `ConcentricOptions { reach: Some(1.0) }`): the printed
+    /// (`integrator::plan_regular_with`, `ConcentricOptions { reach: Some(1.0) }`): the printed
     /// radii stop at ≈ θmax/2; this variant is ours.
     ConcentricReach1,
-    /// Ours: the per-pixel row lattice (`kernel::plan_lattice`), one lookup per equal-mass
+    /// Ours: the per-pixel row lattice (`integrator::plan_lattice`), one lookup per equal-mass
     /// cell at the level of the cell's solid angle; the weighting is its own (the method's
     /// `weighting` is ignored).
     Lattice,
     /// Ours with the map's suns split off ([`lustre_env::split_suns`]): each sun is shaded
     /// exactly as a directional light and counts as one lookup, the lattice reads the residual
-    /// map with the rest of the budget (`kernel::plan_lattice_sun`).
+    /// map with the rest of the budget (`integrator::plan_lattice_sun`).
     LatticeSun,
 }
 
@@ -136,18 +136,20 @@ impl RegularMethod {
         kurt: &Kurt,
         setting: SampleSetting,
         suns: &[Sun],
-    ) -> Result<kernel::MaterialPlan> {
+    ) -> Result<integrator::MaterialPlan> {
         match self.pattern {
-            PatternChoice::Concentric => kernel::plan_regular(kurt, setting.samples, setting.xi0),
-            PatternChoice::Thesis => kernel::plan_thesis(kurt, setting.samples),
-            PatternChoice::ConcentricReach1 => kernel::plan_regular_with(
+            PatternChoice::Concentric => {
+                integrator::plan_regular(kurt, setting.samples, setting.xi0)
+            }
+            PatternChoice::Thesis => integrator::plan_thesis(kurt, setting.samples),
+            PatternChoice::ConcentricReach1 => integrator::plan_regular_with(
                 kurt,
                 setting.samples,
                 setting.xi0,
                 ConcentricOptions { reach: Some(1.0) },
             ),
-            PatternChoice::Lattice => kernel::plan_lattice(kurt, setting.samples),
-            PatternChoice::LatticeSun => kernel::plan_lattice_sun(kurt, setting.samples, suns),
+            PatternChoice::Lattice => integrator::plan_lattice(kurt, setting.samples),
+            PatternChoice::LatticeSun => integrator::plan_lattice_sun(kurt, setting.samples, suns),
         }
     }
 
@@ -348,9 +350,9 @@ impl EnvSetup {
         Self::new(base, MipFilter::Gauss6, 16)
     }
 
-    /// The borrowed view the kernels take.
-    pub fn environment(&self) -> Environment<'_> {
-        Environment {
+    /// The borrowed view the integrators take.
+    pub fn environment(&self) -> FilteredEnvironment<'_> {
+        FilteredEnvironment {
             pyramid: &self.pyramid,
             irradiance: &self.irradiance,
         }
@@ -358,8 +360,8 @@ impl EnvSetup {
 
     /// The view for methods that shade the suns apart: the residual's pyramid, the whole map's
     /// irradiance (the diffuse term is not split).
-    pub fn residual_environment(&self) -> Environment<'_> {
-        Environment {
+    pub fn residual_environment(&self) -> FilteredEnvironment<'_> {
+        FilteredEnvironment {
             pyramid: &self.residual,
             irradiance: &self.irradiance,
         }
@@ -403,9 +405,9 @@ pub fn procedural_sky(d: DVec3) -> [f64; 3] {
 
 /// The evaluation scene: one unit sphere (tangent axis +y) at the origin filling most of the
 /// frame, seen slightly from above, carrying material 0.
-pub fn evaluation_scene(material: Kurt) -> Scene {
-    Scene {
-        camera: Camera {
+pub fn evaluation_scene(material: Kurt) -> AnalyticScene {
+    AnalyticScene {
+        camera: LookAtCamera {
             eye: DVec3::new(0.0, 0.9, 2.86),
             target: DVec3::ZERO,
             up: DVec3::Y,
@@ -424,7 +426,7 @@ pub fn evaluation_scene(material: Kurt) -> Scene {
 
 /// The demo scene of `lustre demo`: an anisotropic brushed metal, a frosted (transmissive) glass
 /// and a red plastic sphere on a dark glossy floor.
-pub fn demo_scene() -> Result<Scene> {
+pub fn demo_scene() -> Result<AnalyticScene> {
     let lobe = KurtLobe::new;
     let metal = Kurt::new(
         Rgb::new(0.04, 0.035, 0.03),
@@ -453,8 +455,8 @@ pub fn demo_scene() -> Result<Scene> {
         material,
         axis: DVec3::Y,
     };
-    Ok(Scene {
-        camera: Camera {
+    Ok(AnalyticScene {
+        camera: LookAtCamera {
             eye: DVec3::new(0.0, 1.5, 4.6),
             target: DVec3::new(0.0, 0.45, 0.0),
             up: DVec3::Y,
@@ -473,12 +475,12 @@ pub fn demo_scene() -> Result<Scene> {
 }
 
 /// The background of every render: the pyramid's level 0 (bilinear).
-pub fn background<'a>(env: &'a Environment<'a>) -> impl Fn(DVec3) -> Rgb + Sync + 'a {
+pub fn background<'a>(env: &'a FilteredEnvironment<'a>) -> impl Fn(DVec3) -> Rgb + Sync + 'a {
     move |d| Rgb(env.pyramid.sample(d, 0.0))
 }
 
 /// A stable per-pixel seed for the reference integrator.
-fn pixel_seed(hit: &Hit, salt: u64) -> u64 {
+fn pixel_seed(hit: &AnalyticHit, salt: u64) -> u64 {
     let p = hit.position;
     let mut h = salt ^ 0x9E37_79B9_7F4A_7C15;
     for v in [p.x, p.y, p.z] {
@@ -490,19 +492,19 @@ fn pixel_seed(hit: &Hit, salt: u64) -> u64 {
 }
 
 /// Renders the reference: Monte Carlo on level 0 with `spp` iterations per pixel, BSDF and
-/// environment importance sampling combined by MIS ([`kernel::shade_reference_mis`]); the
-/// sampler is built from the pyramid ([`kernel::env_sampler`]). A black environment renders
+/// environment importance sampling combined by MIS ([`integrator::shade_reference_mis`]); the
+/// sampler is built from the pyramid ([`integrator::env_sampler`]). A black environment renders
 /// black hits (nothing to sample, nothing to see).
 pub fn render_reference(
-    scene: &Scene,
-    env: &Environment,
+    scene: &AnalyticScene,
+    env: &FilteredEnvironment,
     w: usize,
     h: usize,
     spp: usize,
     seed: u64,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Image {
-    match kernel::env_sampler(env.pyramid) {
+    match integrator::env_sampler(env.pyramid) {
         Ok(sampler) => render_reference_with(scene, env, &sampler, w, h, spp, seed, progress),
         Err(_) => render_with_progress(scene, w, h, |_| Rgb::ZERO, background(env), progress),
     }
@@ -511,8 +513,8 @@ pub fn render_reference(
 /// [`render_reference`] with a prebuilt environment sampler (reused across images).
 #[allow(clippy::too_many_arguments)]
 pub fn render_reference_with(
-    scene: &Scene,
-    env: &Environment,
+    scene: &AnalyticScene,
+    env: &FilteredEnvironment,
     sampler: &EnvSampler,
     w: usize,
     h: usize,
@@ -526,7 +528,7 @@ pub fn render_reference_with(
         h,
         |hit| {
             let m = &scene.materials[hit.material];
-            kernel::shade_reference_mis(
+            integrator::shade_reference_mis(
                 &hit.frame,
                 hit.wo,
                 m,
@@ -741,7 +743,7 @@ pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
 /// against the full texel sum [`truth::truth`] (with [`truth::supersampling`]). 0 when
 /// `count` is 0 or nothing is hit.
 fn exact_check(
-    scene: &Scene,
+    scene: &AnalyticScene,
     tree: &truth::TexelTree,
     kurt: &Kurt,
     tolerance: f64,
@@ -749,7 +751,7 @@ fn exact_check(
     count: usize,
 ) -> f64 {
     use rayon::prelude::*;
-    let hits: Vec<Hit> = (0..n * n)
+    let hits: Vec<AnalyticHit> = (0..n * n)
         .filter_map(|k| {
             let (o, d) = scene.primary(k % n, k / n, n, n);
             scene.intersect(o, d)
@@ -759,7 +761,7 @@ fn exact_check(
         return 0.0;
     }
     let stride = (hits.len() / count).max(1);
-    let picked: Vec<&Hit> = hits.iter().step_by(stride).take(count).collect();
+    let picked: Vec<&AnalyticHit> = hits.iter().step_by(stride).take(count).collect();
     let map = tree.map();
     let sq: f64 = picked
         .par_iter()
@@ -798,7 +800,7 @@ pub fn describe_suns(setup: &EnvSetup) -> String {
 /// The report's line on the suns split off `setup`'s map (for the `lattice + sun` method).
 fn sun_note(setup: &EnvSetup) -> String {
     format!(
-        "suns split off ({}; `lattice + sun` shades each as one evaluation of the lobes widened by its spread, `kernel::sun_widened`, and reads the residual map with the rest of its budget): {}",
+        "suns split off ({}; `lattice + sun` shades each as one evaluation of the lobes widened by its spread, `integrator::sun_widened`, and reads the residual map with the rest of its budget): {}",
         SunOptions::default().describe(),
         describe_suns(setup)
     )
@@ -843,7 +845,7 @@ pub fn run(
     let whole = setup.environment();
     let env = &whole;
     let residual = setup.residual_environment();
-    let sampler = kernel::env_sampler(env.pyramid)?;
+    let sampler = integrator::env_sampler(env.pyramid)?;
     let tree = match opts.reference {
         ReferenceKind::Exact { .. } => Some(truth::TexelTree::new(&env.pyramid.levels[0])),
         ReferenceKind::Mis => None,
@@ -1037,7 +1039,7 @@ pub fn run(
                         n,
                         n,
                         |hit| {
-                            count.add(kernel::shade_regular_counted(
+                            count.add(integrator::shade_regular_counted(
                                 &hit.frame, hit.wo, &plan, env, w,
                             ))
                         },
@@ -1055,7 +1057,7 @@ pub fn run(
                     n,
                     n,
                     |hit| {
-                        count.add(kernel::shade_ck_counted(
+                        count.add(integrator::shade_ck_counted(
                             &hit.frame,
                             hit.wo,
                             kurt,

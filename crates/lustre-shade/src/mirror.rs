@@ -12,8 +12,8 @@ use crate::probe::LitScene;
 use crate::{Result, ShadeError};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
-use lustre_trace::bake::gbuffer::{GBuffer, SKY};
-use lustre_trace::path::PathCamera;
+use lustre_trace::bake::gbuffer::{VisibilityBuffer, SKY};
+use lustre_trace::path_tracer::PathCamera;
 use rayon::prelude::*;
 
 /// Largest distance of a reflector's vertex from its plane, relative to the mesh's extent, for
@@ -283,7 +283,7 @@ pub fn render_see_through_with_gbuffer(
     camera: &PathCamera,
     w: usize,
     h: usize,
-) -> Result<(ViewBuffer, GBuffer)> {
+) -> Result<(ViewBuffer, VisibilityBuffer)> {
     if mesh >= lit.scene.meshes.len() {
         return Err(ShadeError::Parameter(format!(
             "{}: no mesh {mesh} to see through",
@@ -438,7 +438,7 @@ fn render_view(
     w: usize,
     h: usize,
     start: impl Fn(DVec3) -> f64 + Sync,
-) -> Result<(ViewBuffer, GBuffer)> {
+) -> Result<(ViewBuffer, VisibilityBuffer)> {
     if w == 0 || h == 0 {
         return Err(ShadeError::Parameter(format!(
             "view buffer {w}×{h} is empty"
@@ -487,7 +487,7 @@ fn render_view(
             }
         })
         .collect();
-    let gb = GBuffer {
+    let gb = VisibilityBuffer {
         width: w,
         height: h,
         prim: rays.iter().map(|r| r.1).collect(),

@@ -456,7 +456,7 @@ pub fn multi_ring(mx: f64, my: f64, rings: usize, per_ring: usize) -> Result<Pat
 }
 
 /// The row lattice of [`row_lattice`]: `budget` half vectors laid out per pixel (they depend on
-/// the view), so the stored pattern holds no half vectors; `kernel::shade_regular` builds them
+/// the view), so the stored pattern holds no half vectors; `integrator::shade_regular` builds them
 /// with [`lattice_rows`], [`row_length`] and [`gauss_quantile`].
 pub fn row_lattice(mx: f64, my: f64, budget: usize) -> Result<Pattern> {
     check_roughness(mx, my)?;
@@ -475,8 +475,8 @@ pub fn row_lattice(mx: f64, my: f64, budget: usize) -> Result<Pattern> {
     })
 }
 
-/// The row lattice with anisotropic footprints (`kernel::plan_tap_lattice`): like
-/// [`row_lattice`], per pixel, at most `budget` lookups in all; `kernel::shade_regular` gives a
+/// The row lattice with anisotropic footprints (`integrator::plan_tap_lattice`): like
+/// [`row_lattice`], per pixel, at most `budget` lookups in all; `integrator::shade_regular` gives a
 /// cell that is long in ωi up to [`LATTICE_MAX_TAPS`] taps along its long axis.
 pub fn tap_lattice(mx: f64, my: f64, budget: usize) -> Result<Pattern> {
     let p = row_lattice(mx, my, budget)?;

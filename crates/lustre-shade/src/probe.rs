@@ -5,7 +5,7 @@
 //!
 //! This is the CPU definition of the probe; the GPU capture renders the same cube.
 
-use crate::kernel::BoundingPlane;
+use crate::integrator::BoundingPlane;
 use crate::{Result, ShadeError};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
@@ -14,7 +14,7 @@ use lustre_env::pyramid::{CubePyramid, MipFilter};
 use lustre_scene::Scene;
 use lustre_trace::accel::Hit;
 use lustre_trace::bake::render::Lightmapped;
-use lustre_trace::path::{PathScene, PathTracer};
+use lustre_trace::path_tracer::{PathScene, PathTracer};
 use rayon::prelude::*;
 
 /// The light-mapped scene as rays see it: the diffuse path scene's triangles (for intersection),
@@ -153,7 +153,7 @@ impl ProbeOptions {
 }
 
 /// A captured probe: its projection centre, the bounding planes (in coordinates relative to the
-/// centre, as [`crate::kernel::Lookup`] takes them) and the filtered pyramid.
+/// centre, as [`crate::integrator::Lookup`] takes them) and the filtered pyramid.
 #[derive(Clone, Debug)]
 pub struct Probe {
     /// The object's mesh name.

@@ -1,8 +1,8 @@
-//! Rendering a [`Scene`] into an [`Image`]: one primary ray through each pixel centre, rows in
-//! parallel (rayon). Hit pixels are shaded by a caller-supplied kernel, missed pixels by a
+//! Rendering a [`AnalyticScene`] into an [`Image`]: one primary ray through each pixel centre, rows in
+//! parallel (rayon). Pixels that hit are shaded by a caller-supplied integrator, missed pixels by a
 //! background function (usually `env.pyramid.sample(dir, 0.0)`).
 
-use crate::scene::{Hit, Scene};
+use crate::analytic_scene::{AnalyticHit, AnalyticScene};
 use glam::DVec3;
 use lustre_brdf::Rgb;
 use lustre_trace::image::Image;
@@ -13,10 +13,10 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 /// (given the unit ray direction) for the others. Row-parallel; no progress reporting.
 /// A zero width or height gives an empty image.
 pub fn render(
-    scene: &Scene,
+    scene: &AnalyticScene,
     w: usize,
     h: usize,
-    shade: impl Fn(&Hit) -> Rgb + Sync,
+    shade: impl Fn(&AnalyticHit) -> Rgb + Sync,
     background: impl Fn(DVec3) -> Rgb + Sync,
 ) -> Image {
     render_with_progress(scene, w, h, shade, background, &|_| {})
@@ -26,10 +26,10 @@ pub fn render(
 /// the counts arrive in increasing order per call but calls may interleave). Command-line tools
 /// drive a progress bar with it.
 pub fn render_with_progress(
-    scene: &Scene,
+    scene: &AnalyticScene,
     w: usize,
     h: usize,
-    shade: impl Fn(&Hit) -> Rgb + Sync,
+    shade: impl Fn(&AnalyticHit) -> Rgb + Sync,
     background: impl Fn(DVec3) -> Rgb + Sync,
     progress: &(dyn Fn(usize) + Sync),
 ) -> Image {

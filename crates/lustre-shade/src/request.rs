@@ -157,8 +157,13 @@ impl FrameRequest {
     pub fn validate(&self) -> Result<()> {
         let max = self.method.max_samples();
         if !(1..=max).contains(&self.samples) {
+            let mean = if self.method.adaptive() {
+                " (the mean N_p)"
+            } else {
+                ""
+            };
             return Err(ShadeError::Parameter(format!(
-                "{} glossy samples per pixel is outside 1..={max} for the {} method",
+                "{} glossy samples per pixel{mean} is outside 1..={max} for the {} method",
                 self.samples,
                 self.method.name()
             )));

@@ -32,7 +32,7 @@ pub const MAX_SUPERSAMPLING: usize = 8;
 /// The exact integral of `bsdf` against the piecewise-constant cube map `map` for the shading
 /// frame `frame` and the world direction to the viewer `wo`, with every texel split into
 /// `supersample`² sub-squares (1 = texel centres; clamped to 1 ..= [`MAX_SUPERSAMPLING`]).
-/// Two-sided as the kernels: `bsdf.eval` receives local directions and decides the side.
+/// Two-sided as the integrators: `bsdf.eval` receives local directions and decides the side.
 pub fn truth(
     map: &CubeMap,
     frame: &ShadingFrame,
@@ -463,11 +463,11 @@ mod tests {
     }
 
     /// A structured map (gradients and bands): the texel sum agrees with a converged QMC
-    /// estimate of the kernels' reference integrator on the same level 0 (which reads it
+    /// estimate of the integrators' reference integrator on the same level 0 (which reads it
     /// bilinearly) to 0.5 %, anisotropic lobe, oblique view.
     #[test]
     fn matches_converged_qmc_on_a_structured_map() {
-        use crate::kernel::{shade_qmc, Environment};
+        use crate::integrator::{shade_qmc, FilteredEnvironment};
         use lustre_env::{irradiance_map, CubePyramid, MipFilter};
         let base = CubeMap::from_fn(32, |d| {
             let d = d.normalize();
@@ -477,7 +477,7 @@ mod tests {
         .expect("map");
         let pyramid = CubePyramid::build(base, MipFilter::Box2).expect("pyramid");
         let irradiance = irradiance_map(&pyramid, 4).expect("irradiance");
-        let env = Environment {
+        let env = FilteredEnvironment {
             pyramid: &pyramid,
             irradiance: &irradiance,
         };

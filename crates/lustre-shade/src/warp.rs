@@ -31,11 +31,11 @@
 //! 002 and GPU Gems 3 ch. 20; [`shade_warp`] takes any point set and level rule, so that a
 //! comparison can change one thing at a time.
 //!
-//! Sides: as [`crate::kernel::shade_reference`] (and unlike the Kurt kernels, which face the
+//! Sides: as [`crate::integrator::shade_reference`] (and unlike the Kurt integrators, which face the
 //! frame towards the viewer) the BSDF receives ωo in the given frame and decides the side
 //! itself, as [`crate::truth::truth`] does.
 
-use crate::kernel::{incident, Environment, Lookup};
+use crate::integrator::{incident, FilteredEnvironment, Lookup};
 use crate::mip;
 use glam::DVec3;
 use lustre_brdf::bsdf::Bsdf;
@@ -159,7 +159,7 @@ pub fn shade_warp(
     f: &ShadingFrame,
     wo: DVec3,
     bsdf: &dyn Bsdf,
-    env: &Environment,
+    env: &FilteredEnvironment,
     lookup: Option<&Lookup>,
     n: usize,
     points: PointSet,
@@ -206,7 +206,7 @@ pub fn shade_regular_warp(
     f: &ShadingFrame,
     wo: DVec3,
     bsdf: &dyn Bsdf,
-    env: &Environment,
+    env: &FilteredEnvironment,
     lookup: Option<&Lookup>,
     budget: usize,
 ) -> (Rgb, usize) {
@@ -224,13 +224,13 @@ pub fn shade_regular_warp(
 
 /// Colbert & Křivánek (2007) filtered importance sampling for any BSDF: `n` Hammersley points
 /// through the model's warp, their MIP level ([`shade_warp`] with [`PointSet::Hammersley`],
-/// [`LevelRule::Ck`]); for Kurt materials [`crate::kernel::shade_ck_with`] is the per-lobe
+/// [`LevelRule::Ck`]); for Kurt materials [`crate::integrator::shade_ck_with`] is the per-lobe
 /// form.
 pub fn shade_ck_warp(
     f: &ShadingFrame,
     wo: DVec3,
     bsdf: &dyn Bsdf,
-    env: &Environment,
+    env: &FilteredEnvironment,
     lookup: Option<&Lookup>,
     n: usize,
 ) -> (Rgb, usize) {
@@ -275,7 +275,7 @@ mod tests {
         let base = CubeMap::from_fn(16, |_| [1.0, 1.0, 1.0]).expect("map");
         let pyramid = CubePyramid::build(base, MipFilter::Gauss6).expect("pyramid");
         let irradiance = irradiance_map(&pyramid, 4).expect("irradiance");
-        let env = Environment {
+        let env = FilteredEnvironment {
             pyramid: &pyramid,
             irradiance: &irradiance,
         };

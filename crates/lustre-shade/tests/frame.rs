@@ -13,12 +13,12 @@ use lustre_scene::lightmap::{AtlasSource, LightmapAtlas};
 use lustre_scene::material::{MicrofacetType, TexturedRgb, TexturedScalar};
 use lustre_scene::{Material, MaterialKind, Mesh, Scene};
 use lustre_shade::frame::{render_frame, FrameLight};
-use lustre_shade::kernel::corrected_direction;
+use lustre_shade::integrator::corrected_direction;
 use lustre_shade::probe::{capture_cube, capture_probe, LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
 use lustre_trace::bake::render::{render_lightmapped, Lightmapped};
 use lustre_trace::bake::spec_albedo;
-use lustre_trace::path::{PathCamera, PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathCamera, PathOptions, PathTracer};
 use std::f64::consts::PI;
 
 const PAGE: u32 = 64;

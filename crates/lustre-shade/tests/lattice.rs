@@ -9,10 +9,10 @@ use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
 use lustre_brdf::validate::albedo_quadrature;
 use lustre_env::{irradiance_map, split_suns, CubeMap, CubePyramid, MipFilter, SunOptions};
-use lustre_shade::kernel::{
+use lustre_shade::integrator::{
     lattice_axes, lattice_cells, lattice_taps, plan_lattice, plan_lattice_sun, plan_regular,
     plan_regular_with, plan_tap_lattice, shade_ck_counted, shade_regular_counted, shade_suns,
-    Environment, LatticeGeometry, Weighting,
+    FilteredEnvironment, LatticeGeometry, Weighting,
 };
 use lustre_shade::pattern::ConcentricOptions;
 use lustre_shade::truth::{configurations, truth, Configuration};
@@ -41,7 +41,7 @@ fn specular(mx: f64, my: f64, r0: f64, alpha: f64) -> Kurt {
 #[test]
 fn furnace_matches_albedo() {
     let (p, i) = env_of(16, |_| [1.0; 3]);
-    let env = Environment {
+    let env = FilteredEnvironment {
         pyramid: &p,
         irradiance: &i,
     };
@@ -112,7 +112,7 @@ fn lookups_never_exceed_the_budget() {
     .expect("split")
     .suns;
     assert_eq!(suns.len(), 2);
-    let env = Environment {
+    let env = FilteredEnvironment {
         pyramid: &p,
         irradiance: &i,
     };
@@ -228,7 +228,7 @@ fn closer_to_the_truth_than_002() {
         };
         [sky + s, sky + 0.5 * s, 0.8 * sky + 0.3 * s]
     });
-    let env = Environment {
+    let env = FilteredEnvironment {
         pyramid: &p,
         irradiance: &i,
     };
@@ -294,11 +294,11 @@ fn suns_split_off_are_shaded_exactly() {
     let pyramid = CubePyramid::build(map, MipFilter::Gauss6).expect("pyramid");
     let irr = irradiance_map(&pyramid, 8).expect("irradiance");
     let residual = CubePyramid::build(split.residual.clone(), MipFilter::Gauss6).expect("pyramid");
-    let full = Environment {
+    let full = FilteredEnvironment {
         pyramid: &pyramid,
         irradiance: &irr,
     };
-    let rest = Environment {
+    let rest = FilteredEnvironment {
         pyramid: &residual,
         irradiance: &irr,
     };
@@ -413,7 +413,7 @@ fn around_sun(s: DVec3, count: usize, seed: u64) -> Vec<Configuration> {
 
 /// A source of 5° radius (RMS angle ≈ 3.5°, split off under `SunOptions`' 5° limit) under lobes
 /// of m 0.08–0.2: `shade_suns` evaluates each lobe widened by the sun's spread
-/// (`kernel::sun_widened`, m'² = m² + spread²/4), and against the texel truth of the source
+/// (`integrator::sun_widened`, m'² = m² + spread²/4), and against the texel truth of the source
 /// alone that must beat evaluating it as a point (the same sun with spread 0) by a wide margin.
 /// Measured (128², 60 configurations): relative RMS widened / point 9.8 / 19.6 % (m 0.08),
 /// 7.4 / 13.6 % (m 0.1), 7.1 / 13.4 % (0.2 / 0.075).

@@ -9,7 +9,7 @@ use lustre_brdf::numeric::SphereQuadrature;
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::validate::albedo_quadrature;
 use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter};
-use lustre_shade::kernel::{env_sampler, shade_reference_mis, Environment};
+use lustre_shade::integrator::{env_sampler, shade_reference_mis, FilteredEnvironment};
 use lustre_trace::sampling::{power_heuristic, ShadingFrame, Strategy};
 use std::f64::consts::PI;
 
@@ -22,8 +22,8 @@ fn build_env(size: usize, f: impl Fn(DVec3) -> [f64; 3] + Sync) -> Env {
     (pyramid, irr)
 }
 
-fn environment(e: &Env) -> Environment<'_> {
-    Environment {
+fn environment(e: &Env) -> FilteredEnvironment<'_> {
+    FilteredEnvironment {
         pyramid: &e.0,
         irradiance: &e.1,
     }
@@ -64,7 +64,7 @@ fn batches(run: impl Fn(u64) -> f64, batches: u64) -> (f64, f64) {
 
 /// ∫ L f |cos θi| dωi over the sphere on a 1024 × 2048 grid of equal-solid-angle cells
 /// (cos θ × φ), channel 0.
-fn quadrature(f: &ShadingFrame, wo: DVec3, bsdf: &dyn Bsdf, env: &Environment) -> f64 {
+fn quadrature(f: &ShadingFrame, wo: DVec3, bsdf: &dyn Bsdf, env: &FilteredEnvironment) -> f64 {
     let (nz, np) = (1024, 2048);
     let wo_l = f.to_local(wo);
     let d_omega = 4.0 * PI / (nz * np) as f64;

@@ -11,7 +11,7 @@
 use lustre_brdf::catalog::resolve;
 use lustre_brdf::rgb::Rgb;
 use lustre_env::{irradiance_map, read_map, shared_data_dir, CubeMap, CubePyramid, MipFilter};
-use lustre_shade::kernel::Environment;
+use lustre_shade::integrator::FilteredEnvironment;
 use lustre_shade::truth::{configurations, supersampling_for, truth};
 use lustre_shade::warp::{shade_ck_warp, shade_regular_warp, shade_warp, LevelRule, PointSet};
 use rayon::prelude::*;
@@ -92,7 +92,7 @@ fn regular_warp_beats_ck_against_the_exact_integral() {
     let base = CubeMap::from_equirect(&loaded.map, face).expect("cube");
     let pyramid = CubePyramid::build(base, MipFilter::Gauss6).expect("pyramid");
     let irradiance = irradiance_map(&pyramid, 4).expect("irradiance");
-    let env = Environment {
+    let env = FilteredEnvironment {
         pyramid: &pyramid,
         irradiance: &irradiance,
     };

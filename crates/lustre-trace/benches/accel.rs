@@ -5,7 +5,7 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::DVec3;
 use lustre_brdf::sampling::{cosine_hemisphere, SplitMix64};
-use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{path_camera, path_scene};
 use lustre_trace::sampling::ShadingFrame;
 use std::hint::black_box;

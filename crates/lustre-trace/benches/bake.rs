@@ -8,7 +8,7 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::DVec3;
 use lustre_brdf::sampling::SplitMix64;
 use lustre_trace::bake::diffuse_path_scene;
-use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::path_camera;
 use std::hint::black_box;
 

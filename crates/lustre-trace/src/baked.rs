@@ -6,7 +6,7 @@
 use crate::bake::render::read_pages;
 use crate::bake::{assemble, bake_tiles, BakeOptions, Transport};
 use crate::error::{Result, TraceError};
-use crate::path::EnvLight;
+use crate::path_tracer::EnvLight;
 use glam::DMat3;
 use lustre_env::cube::CubeMap;
 use lustre_env::pyramid::{CubePyramid, MipFilter};

@@ -1,7 +1,7 @@
 //! lustre-trace: ray tracing on the CPU, the path-traced reference and light-map baking.
 //!
 //! - [`accel`]: ray casting (obvhs CWBVH, watertight triangles).
-//! - [`path`]: the path tracer (BSDF sampling, next-event estimation of the environment and
+//! - [`path_tracer`]: the path tracer (BSDF sampling, next-event estimation of the environment and
 //!   emitters, MIS).
 //! - [`reference`](mod@reference): path-traced reference images of a scene, resumable.
 //! - [`bake`]: light maps of irradiance (000 §4.3), tiled, resumable, shardable, denoised; the
@@ -16,7 +16,7 @@ pub mod baked;
 pub mod error;
 pub mod image;
 pub mod metrics;
-pub mod path;
+pub mod path_tracer;
 pub mod reference;
 pub mod sampling;
 

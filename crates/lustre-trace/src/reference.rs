@@ -9,7 +9,7 @@
 //! index, so a resumed render equals an uninterrupted one (up to the f32 rounding of the halves).
 
 use crate::image::Image;
-use crate::path::{
+use crate::path_tracer::{
     Accumulator, EnvLight, Geometry, PathCamera, PathOptions, PathScene, PathTracer, Surface,
 };
 use crate::{Result, TraceError};

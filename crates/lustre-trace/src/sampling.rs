@@ -60,11 +60,11 @@ impl ShadingFrame {
     }
 }
 
-/// Which directions an estimator draws: lustre-shade's `kernel::shade_reference_mis` and the
-/// path tracer ([`PathOptions::strategy`](crate::path::PathOptions::strategy)).
+/// Which directions an estimator draws: lustre-shade's `integrator::shade_reference_mis` and the
+/// path tracer ([`PathOptions::strategy`](crate::path_tracer::PathOptions::strategy)).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Strategy {
-    /// BSDF importance sampling only (the estimator of lustre-shade's `kernel::shade_reference`).
+    /// BSDF importance sampling only (the estimator of lustre-shade's `integrator::shade_reference`).
     Bsdf,
     /// Environment importance sampling only (next-event estimation; misses what the sampler
     /// cannot reach, e.g. delta lobes).

@@ -688,7 +688,7 @@ fn bad_input_is_a_clear_error() {
 fn light_mapped_shading_matches_the_path_traced_diffuse_scene() {
     use lustre_trace::bake::diffuse_path_scene;
     use lustre_trace::bake::render::render_lightmapped;
-    use lustre_trace::path::{Accumulator, PathCamera, PathOptions, PathTracer};
+    use lustre_trace::path_tracer::{Accumulator, PathCamera, PathOptions, PathTracer};
     let (rho, le) = (0.5, 10.0);
     let (scene, at, _) = cornell_like(rho, le);
     let bounces = 4;
@@ -751,7 +751,7 @@ fn check_partial_texels(
 ) -> f64 {
     use lustre_brdf::sampling::SplitMix64;
     use lustre_trace::bake::diffuse_path_scene;
-    use lustre_trace::path::{PathOptions, PathTracer};
+    use lustre_trace::path_tracer::{PathOptions, PathTracer};
     let (ps, _, _) = diffuse_path_scene(scene).unwrap();
     let pt = PathTracer::new(
         &ps,
@@ -877,7 +877,7 @@ fn modern_hall_floor_under_walls_and_steps_does_not_leak() {
     // one of 8 horizontal directions, 1 cm above the surface; spread evenly over the atlas.
     // Baked again at 256 spp (the bake's own estimator and sample placement, little noise).
     let (ps, _, _) = lustre_trace::bake::diffuse_path_scene(&scene).unwrap();
-    let pt = lustre_trace::path::PathTracer::new(&ps, Default::default()).unwrap();
+    let pt = lustre_trace::path_tracer::PathTracer::new(&ps, Default::default()).unwrap();
     let foot: Vec<(u32, u32, u32)> = a.texels[0]
         .iter()
         .enumerate()

@@ -6,7 +6,7 @@ use glam::DVec3;
 use lustre_brdf::models::lambert::Lambert;
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
-use lustre_trace::path::{
+use lustre_trace::path_tracer::{
     Accumulator, ConstantSurface, EnvLight, Geometry, PathCamera, PathOptions, PathScene,
     PathTracer, Surface,
 };

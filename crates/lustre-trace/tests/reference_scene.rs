@@ -4,7 +4,7 @@
 
 use lustre_scene::Scene;
 use lustre_trace::image::Image;
-use lustre_trace::path::{Accumulator, PathOptions, PathTracer};
+use lustre_trace::path_tracer::{Accumulator, PathOptions, PathTracer};
 use lustre_trace::reference::{path_camera, path_scene, render_reference, ReferenceOptions};
 use std::path::PathBuf;
 

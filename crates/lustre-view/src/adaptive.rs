@@ -18,7 +18,7 @@
 //! values, zero black). In the shaded-pixel view the
 //! up-sampled surface pixels are grey (the CLI's map leaves them black like the background).
 
-use crate::render::FrameSettings;
+use crate::render::ViewRequest;
 use crate::AdaptiveDevice;
 use lustre_adaptive::buffer::{level_map, BandwidthBuffer, BufferOptions, SampleRule};
 use lustre_adaptive::gbuffer::{GBuffer, GPixel};
@@ -31,14 +31,15 @@ use lustre_gpu::passes::bandwidth::{BandwidthPass, BandwidthScene};
 use lustre_gpu::GpuContext;
 use lustre_plot::heat::heat_rgb;
 use lustre_scene::Scene;
+use lustre_shade::request::{FrameRequest, Method, MAX_ADAPTIVE_SAMPLES};
 use lustre_trace::image::Image;
-use lustre_trace::path::{PathCamera, PathScene, PathTracer};
+use lustre_trace::path_tracer::{PathCamera, PathScene, PathTracer};
 use std::time::Instant;
 
 /// Incident directions per pixel of the bandwidth buffer (the CLI's default; 004: 16).
 pub const N_B: usize = lustre_adaptive::buffer::DEFAULT_N_B;
 /// The largest N_p of a pixel (the CLI's).
-pub const MAX_SAMPLES: usize = 1024;
+pub const MAX_SAMPLES: usize = MAX_ADAPTIVE_SAMPLES as usize;
 /// The colour of up-sampled surface pixels in the shaded-pixel view.
 pub const UPSAMPLED_GREY: [u8; 3] = [110, 110, 110];
 
@@ -123,14 +124,14 @@ pub fn parse_rule(name: &str) -> Option<SampleRule> {
 
 /// The adaptive method's settings (its mean N_p is the frame's sample count).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct AdaptiveSettings {
+pub struct AdaptiveOptions {
     /// Image samples per cycle of b_p: 2 (Nyquist's rate) or 1 (Eq. IV.11 as printed).
     pub rate: u8,
     /// How N_p is set per pixel.
     pub rule: SampleRule,
 }
 
-impl Default for AdaptiveSettings {
+impl Default for AdaptiveOptions {
     /// The CLI's defaults: rate 2, a constant N_p.
     fn default() -> Self {
         Self {
@@ -307,34 +308,29 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
         })
     }
 
-    /// Renders a `size` frame from `camera` with `settings`: a k×k G-buffer per pixel (k =
-    /// `supersampling`, 1..=4), the mean N_p `samples` (1..=1024), its `adaptive` rate and rule
-    /// and `seed`. Returns the frame's image (box-filtered to `size`) and the buffers.
+    /// Renders a `size` frame from `camera` with `settings`: a k×k G-buffer per pixel (k² camera
+    /// rays, k in 1..=4), the mean N_p `samples` (1..=1024), its `adaptive` rate and rule and
+    /// `seed`; the frame request is validated as the adaptive method's. Returns the frame's image
+    /// (box-filtered to `size`) and the buffers.
     pub fn render(
         &mut self,
         gpu: Option<&GpuContext>,
         tracer: &PathTracer,
         camera: &PathCamera,
         size: (usize, usize),
-        settings: &FrameSettings,
+        settings: &ViewRequest,
     ) -> anyhow::Result<(Image, AdaptiveMaps)> {
-        let FrameSettings {
-            samples,
-            supersampling,
-            seed,
-            adaptive: settings,
-            ..
-        } = *settings;
-        if !(1..=4).contains(&supersampling) {
-            anyhow::bail!("k×k G-buffer: k = {supersampling} must be 1 … 4");
-        }
-        if !(1..=MAX_SAMPLES as u32).contains(&samples) {
-            anyhow::bail!("mean N_p {samples} must be 1 … {MAX_SAMPLES}");
-        }
+        let frame = FrameRequest {
+            method: Method::Adaptive,
+            ..settings.frame
+        };
+        frame.validate()?;
+        let FrameRequest { samples, seed, .. } = frame;
+        let settings = settings.adaptive;
         if !matches!(settings.rate, 1 | 2) {
             anyhow::bail!("rate {} must be 1 or 2", settings.rate);
         }
-        let k = supersampling as usize;
+        let k = frame.supersampling() as usize;
         let (gw, gh) = (size.0 * k, size.1 * k);
         let mut t = Instant::now();
         let mut lap = || {
@@ -404,7 +400,7 @@ impl<'a, 's> AdaptiveRenderer<'a, 's> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use lustre_trace::path::PathOptions;
+    use lustre_trace::path_tracer::PathOptions;
     use lustre_trace::reference::{film_camera, path_scene};
 
     #[test]
@@ -444,14 +440,16 @@ mod tests {
         let tracer = PathTracer::new(&ps, PathOptions::default()).unwrap();
         let mut r = AdaptiveRenderer::new(&ps, &|_, _| {}, None, AdaptiveDevice::Auto).unwrap();
         let cam = film_camera(&scene.cameras[0], 48, 32).unwrap();
-        let settings = FrameSettings {
-            method: crate::Method::Adaptive,
-            samples: 4,
-            supersampling: 2,
-            refine_frames: 1,
-            seed: 1,
+        let settings = ViewRequest {
+            frame: FrameRequest {
+                method: Method::Adaptive,
+                samples: 4,
+                rays: 4,
+                frames: 1,
+                seed: 1,
+            },
             generation: 0,
-            adaptive: AdaptiveSettings::default(),
+            adaptive: AdaptiveOptions::default(),
         };
         let (img, maps) = r.render(None, &tracer, &cam, (48, 32), &settings).unwrap();
         assert_eq!((img.width, img.height), (48, 32));
@@ -481,10 +479,13 @@ mod tests {
         for (samples, supersampling, rate, says) in
             [(0, 1, 2, "N_p"), (4, 5, 2, "k×k"), (4, 1, 3, "rate")]
         {
-            let s = FrameSettings {
-                samples,
-                supersampling,
-                adaptive: AdaptiveSettings {
+            let s = ViewRequest {
+                frame: FrameRequest {
+                    samples,
+                    rays: supersampling * supersampling,
+                    ..settings.frame
+                },
+                adaptive: AdaptiveOptions {
                     rate,
                     ..settings.adaptive
                 },

@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 use lustre_scene::{Camera, FovAxis};
-use lustre_trace::path::PathCamera;
+use lustre_trace::path_tracer::PathCamera;
 
 /// Largest pitch, degrees (looking straight up or down has no heading).
 pub const MAX_PITCH_DEG: f64 = 89.0;

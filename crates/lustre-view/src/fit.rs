@@ -5,7 +5,7 @@
 
 use crate::plot::{lobe_slice, LobeSlice};
 use lustre_brdf::material::{self, MaterialFile};
-use lustre_fit::batch::{self, FitSettings, Fitter, MeasuredFitter, ModelChoice};
+use lustre_fit::batch::{self, FitOptions, Fitter, MeasuredFitter, ModelChoice};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{channel, Receiver, TryRecvError};
 use std::time::Instant;
@@ -98,11 +98,11 @@ pub fn fit(input: &str, model: &str, dir: &Path, stage: &dyn Fn(&str)) -> Result
     let t = Instant::now();
     let choice = model_choice(model).ok_or_else(|| format!("unknown model {model:?}"))?;
     let fitted = MeasuredFitter
-        .fit(input, &FitSettings::new(choice), stage)
+        .fit(input, &FitOptions::new(choice), stage)
         .map_err(|e| format!("{input}: {e}"))?;
     stage("writing the material JSON");
     let name = batch::output_name(input);
-    let settings = FitSettings::new(choice);
+    let settings = FitOptions::new(choice);
     let record = fitted.record(input, &settings, t.elapsed().as_secs_f64());
     let file = MaterialFile::new(name.clone(), fitted.model.clone(), Some(record))
         .map_err(|e| e.to_string())?;

@@ -20,7 +20,7 @@
 //! walkthrough the light-mapped scene, the GPU upload and the probes. The mode is chosen when
 //! the scene opens: an edit does not make an adaptive-only scene a walkthrough one.
 
-use crate::adaptive::{AdaptiveMaps, AdaptiveRenderer, AdaptiveSettings};
+use crate::adaptive::{AdaptiveMaps, AdaptiveOptions, AdaptiveRenderer};
 use crate::{AdaptiveDevice, Method};
 use lustre_gpu::material::pack_material;
 use lustre_gpu::{
@@ -38,7 +38,7 @@ use lustre_trace::bake::render::Lightmapped;
 use lustre_trace::bake::spec_albedo;
 use lustre_trace::baked::{environment_pyramid, BakedScene};
 use lustre_trace::image::Image;
-use lustre_trace::path::{Accumulator, PathCamera, PathOptions, PathScene, PathTracer};
+use lustre_trace::path_tracer::{Accumulator, PathCamera, PathOptions, PathScene, PathTracer};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, Sender, TryRecvError};
 use std::time::Instant;
@@ -55,22 +55,17 @@ pub enum SceneSource {
     Unbaked(Box<Scene>),
 }
 
-/// How a frame is rendered.
+/// How a frame is rendered: the frame request (validated once, by
+/// [`FrameRequest::validate`], where a method renders it) and what only the viewer tracks.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FrameSettings {
-    /// The glossy integration.
-    pub method: Method,
-    /// Glossy samples per G-buffer pixel, 1–256 (the adaptive method: the mean N_p).
-    pub samples: u32,
-    /// k: a k×k supersampled G-buffer per pixel.
-    pub supersampling: u32,
-    /// Frames a still camera accumulates (progressive refinement), or samples per pixel the
-    /// reference stops at.
-    pub refine_frames: u32,
-    /// Seed of the CK points, of the reference's paths and of the adaptive method's point sets.
-    pub seed: u64,
+pub struct ViewRequest {
+    /// Method, glossy samples per G-buffer pixel (the adaptive method: the mean N_p), camera
+    /// rays k² of a k×k G-buffer, the frames a still camera accumulates (progressive
+    /// refinement; the reference: the samples per pixel it stops at) and the seed of the CK
+    /// points, the reference's paths and the adaptive method's point sets.
+    pub frame: FrameRequest,
     /// The adaptive method's rate and sample rule.
-    pub adaptive: AdaptiveSettings,
+    pub adaptive: AdaptiveOptions,
     /// The window's count of accepted material edits, echoed in the reply: a frame asked
     /// for after an edit is told apart from the one before it.
     pub generation: u64,
@@ -86,7 +81,7 @@ pub enum Request {
         /// Frame size in pixels.
         size: (usize, usize),
         /// How.
-        settings: FrameSettings,
+        settings: ViewRequest,
     },
     /// Which mesh pixel (x, y) of a `size` frame from `camera` shows.
     Pick {
@@ -151,7 +146,7 @@ pub struct FrameReply {
     /// The camera it was rendered from.
     pub camera: PathCamera,
     /// Settings it was rendered with.
-    pub settings: FrameSettings,
+    pub settings: ViewRequest,
     /// GPU pass times of the step that made it (zero for the reference and adaptive methods).
     pub times: GpuFrameTimes,
     /// Frames (progressive) or samples per pixel (reference) the image holds (adaptive: 1).
@@ -183,7 +178,7 @@ pub enum Reply {
         /// Its size.
         size: (usize, usize),
         /// Its settings.
-        settings: FrameSettings,
+        settings: ViewRequest,
         /// Why.
         error: String,
     },
@@ -541,15 +536,15 @@ fn serve(
         .flat_map(|(k, m)| std::iter::repeat_n(k, m.indices.len()))
         .collect();
     let mut session = GpuFrameSession::new();
-    let mut wanted: Option<(PathCamera, (usize, usize), FrameSettings)> = None;
+    let mut wanted: Option<(PathCamera, (usize, usize), ViewRequest)> = None;
     // The request the last frame sent answered.
-    let mut answered: Option<(PathCamera, (usize, usize), FrameSettings)> = None;
+    let mut answered: Option<(PathCamera, (usize, usize), ViewRequest)> = None;
     let mut busy = false;
     let mut reference: Option<Reference> = None;
     // The adaptive method's shading context, built on this scene's first adaptive frame (or
     // why it cannot be), and the request its last frame answered.
     let mut adaptive: Option<Result<AdaptiveRenderer, String>> = None;
-    let mut adaptive_done: Option<(PathCamera, (usize, usize), FrameSettings)> = None;
+    let mut adaptive_done: Option<(PathCamera, (usize, usize), ViewRequest)> = None;
     loop {
         // Block while there is nothing to refine; otherwise take what has arrived.
         let mut requests = vec![];
@@ -656,7 +651,7 @@ fn serve(
             continue;
         };
         let t = Instant::now();
-        if settings.method == Method::Reference {
+        if settings.frame.method == Method::Reference {
             let r = match reference.take() {
                 Some(r) if r.camera == camera && r.size == size => r,
                 _ => Reference {
@@ -666,12 +661,12 @@ fn serve(
                 },
             };
             let mut r = r;
-            if r.acc.spp >= settings.refine_frames.max(1) {
+            if r.acc.spp >= settings.frame.frames.max(1) {
                 busy = false;
                 reference = Some(r);
                 continue;
             }
-            pt.render(&camera, &mut r.acc, 1, settings.seed, &|_, _| {});
+            pt.render(&camera, &mut r.acc, 1, settings.frame.seed, &|_, _| {});
             let _ = tx.send(Reply::Frame(Box::new(FrameReply {
                 image: r.acc.image(),
                 camera,
@@ -689,7 +684,7 @@ fn serve(
             reference = Some(r);
             continue;
         }
-        if settings.method == Method::Adaptive {
+        if settings.frame.method == Method::Adaptive {
             let key = (camera, size, settings);
             busy = false;
             if adaptive_done == Some(key) {
@@ -739,7 +734,7 @@ fn serve(
                     camera,
                     size,
                     settings,
-                    error: format!("the {} method: {why}", settings.method.name()),
+                    error: format!("the {} method: {why}", settings.frame.method.name()),
                 });
                 wanted = None;
                 busy = false;
@@ -747,13 +742,9 @@ fn serve(
             }
         };
         // The reference and adaptive methods returned above: a walkthrough method here.
-        let method = settings.method;
         let opts = FrameRequest {
-            method,
-            samples: settings.samples,
-            rays: settings.supersampling * settings.supersampling,
-            frames: settings.refine_frames.max(1),
-            seed: settings.seed,
+            frames: settings.frame.frames.max(1),
+            ..settings.frame
         };
         let step = match session.step(ctx, walk, lit, &camera, size, &opts) {
             Ok(s) => s,

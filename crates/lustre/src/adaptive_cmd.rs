@@ -30,7 +30,7 @@ use lustre_scene::material_edit::{parse_assignment, set_named};
 use lustre_scene::Scene;
 use lustre_shade::request::{FrameRequest, Method, MAX_ADAPTIVE_SAMPLES};
 use lustre_trace::baked::read_environment;
-use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{path_camera, path_scene};
 use std::fmt::Write as _;
 use std::time::Instant;

@@ -6,7 +6,7 @@ use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
 use lustre_env::{CubeMap, MipFilter};
 use lustre_shade::harness::{self, EnvSetup};
-use lustre_shade::kernel::{self, Weighting};
+use lustre_shade::integrator::{self, Weighting};
 use lustre_shade::pattern::ConcentricOptions;
 use lustre_shade::render;
 use lustre_trace::metrics;
@@ -78,7 +78,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     let most = lustre_gpu::MAX_LOBE_LOOKUPS as usize;
     if args.samples > most {
         bail!(
-            "--samples {}: at most {most} a lobe (the GPU kernel's limit; the CPU keeps it too, \
+            "--samples {}: at most {most} a lobe (the GPU pass's limit; the CPU keeps it too, \
              so both render the same image)",
             args.samples
         );
@@ -111,7 +111,12 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         .map(|m| {
             // The concentric pattern with its rings reaching θmax: measured better than the
             // printed radii (`lustre compare`, lustre-shade examples/regular_study.rs).
-            kernel::plan_regular_with(m, args.samples, 0.2, ConcentricOptions { reach: Some(1.0) })
+            integrator::plan_regular_with(
+                m,
+                args.samples,
+                0.2,
+                ConcentricOptions { reach: Some(1.0) },
+            )
         })
         .collect::<Result<Vec<_>, _>>()?;
     let t_env = t0.elapsed().as_secs_f64();
@@ -126,7 +131,7 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             w,
             h,
             |hit| {
-                kernel::shade_regular(
+                integrator::shade_regular(
                     &hit.frame,
                     hit.wo,
                     &plans[hit.material],

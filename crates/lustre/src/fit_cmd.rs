@@ -4,7 +4,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use lustre_fit::batch::{self, BatchOptions, FitSettings, Fitter, Metric, ModelChoice, SummaryRow};
+use lustre_fit::batch::{self, BatchOptions, FitOptions, Fitter, Metric, ModelChoice, SummaryRow};
 use std::path::{Path, PathBuf};
 
 /// The model to fit.
@@ -182,7 +182,7 @@ impl FitArgs {
                 bail!("--metric applies to --model kurt only (Cook-Torrance fits minimize Ngan's weighted L2)");
             }
         }
-        let settings = FitSettings {
+        let fit = FitOptions {
             model,
             lobes: self.lobes,
             transmission_lobes: self.transmission_lobes,
@@ -195,9 +195,9 @@ impl FitArgs {
             },
             strict: self.strict,
         };
-        batch::check_settings(&settings)?;
+        batch::check_options(&fit)?;
         Ok(BatchOptions {
-            settings,
+            fit,
             jobs: self.jobs,
             force: self.force,
             out: self.out.clone(),
@@ -410,16 +410,16 @@ mod tests {
         .expect("parses");
         assert_eq!(a.inputs, ["a.gonio", "b.binary"]);
         let o = a.batch_options().expect("valid");
-        assert_eq!(o.settings.model, ModelChoice::Kurt);
-        assert_eq!((o.settings.lobes, o.settings.transmission_lobes), (2, 1));
-        assert_eq!(o.settings.fixed, [("alpha1".to_string(), 0.0)]);
-        assert_eq!(o.settings.ranges, [("mx1".to_string(), 0.01, 0.5)]);
-        assert!(!o.settings.refine && o.force && o.jobs == 3);
+        assert_eq!(o.fit.model, ModelChoice::Kurt);
+        assert_eq!((o.fit.lobes, o.fit.transmission_lobes), (2, 1));
+        assert_eq!(o.fit.fixed, [("alpha1".to_string(), 0.0)]);
+        assert_eq!(o.fit.ranges, [("mx1".to_string(), 0.01, 0.5)]);
+        assert!(!o.fit.refine && o.force && o.jobs == 3);
         let o = parse(&["--model", "ggx", "--out", "o", "x.binary"])
             .expect("parses")
             .batch_options()
             .expect("valid");
-        assert!(o.settings.refine && !o.force && o.jobs >= 1);
+        assert!(o.fit.refine && !o.force && o.jobs >= 1);
         // Errors: no input, no --out, unknown model, zero jobs, Kurt options on a CT model.
         assert!(parse(&["--model", "ggx", "--out", "o"]).is_err());
         assert!(parse(&["--model", "ggx", "x.binary"]).is_err());

@@ -34,7 +34,7 @@ pub enum PlotQuantity {
 
 /// Which regular sample pattern `--pattern` draws.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum PatternChoice {
+pub enum PlotPattern {
     /// 002 §5 concentric circles: one panel per spacing (s1, s2), each with the circle count
     /// closest to `--budget` (or `--circles`), plus the overall choice for the budget.
     Concentric,
@@ -106,7 +106,7 @@ pub struct PlotArgs {
     pub out: PathBuf,
     /// Draw a regular half-vector sample pattern of one lobe instead of material plots.
     #[arg(long, value_enum)]
-    pub pattern: Option<PatternChoice>,
+    pub pattern: Option<PlotPattern>,
     /// Pattern lobe roughness along the tangent.
     #[arg(long, default_value_t = 0.2)]
     pub mx: f64,
@@ -294,16 +294,16 @@ fn concentric_panels(args: &PlotArgs) -> Result<Vec<lustre_plot::PatternPanel>> 
 }
 
 /// `lustre plot --pattern`: draws the chosen patterns for the lobe (`--mx`, `--my`) into `--out`.
-fn run_pattern(args: &PlotArgs, choice: PatternChoice) -> Result<()> {
+fn run_pattern(args: &PlotArgs, choice: PlotPattern) -> Result<()> {
     let (mx, my) = (args.mx, args.my);
     if args.budget == 0 {
         bail!("--budget must be at least 1");
     }
     let mut panels = Vec::new();
-    if matches!(choice, PatternChoice::Concentric | PatternChoice::All) {
+    if matches!(choice, PlotPattern::Concentric | PlotPattern::All) {
         panels.extend(concentric_panels(args).context("--pattern concentric")?);
     }
-    if matches!(choice, PatternChoice::Thesis | PatternChoice::All) {
+    if matches!(choice, PlotPattern::Thesis | PlotPattern::All) {
         let p = pattern::thesis(mx, my, args.budget).context("--pattern thesis")?;
         let name = match p.kind {
             PatternKind::ThesisLinear => "thesis, linear",
@@ -311,7 +311,7 @@ fn run_pattern(args: &PlotArgs, choice: PatternChoice) -> Result<()> {
         };
         panels.push(panel(name.into(), &p));
     }
-    if matches!(choice, PatternChoice::MultiRing | PatternChoice::All) {
+    if matches!(choice, PlotPattern::MultiRing | PlotPattern::All) {
         let per_ring = (args.budget.saturating_sub(1) / args.rings.max(1)).max(1);
         let p =
             pattern::multi_ring(mx, my, args.rings, per_ring).context("--pattern multi-ring")?;
@@ -477,7 +477,7 @@ mod tests {
             array_phi: vec![0.0],
             disc_px: 32,
             out: dir.clone(),
-            pattern: Some(PatternChoice::All),
+            pattern: Some(PlotPattern::All),
             mx: 0.2,
             my: 0.075,
             budget: 17,

@@ -3,9 +3,9 @@
 //! chosen metric) or the Cook-Torrance fit with the chosen distribution, and measures the
 //! fitted model against the data.
 
-use super::{kurt_options, FitSettings, Fitted, Fitter, ModelChoice};
+use super::{kurt_options, FitOptions, Fitted, Fitter, ModelChoice};
 use crate::{ct, data, kurt, metrics, FitError, FitStatus, Result};
-use lustre_brdf::material::{CtChannelParams, CtDistribution, FitErrors, MaterialModel};
+use lustre_brdf::material::{CtDistribution, FitErrors, MaterialModel};
 
 /// The real fitter: [`data::load`] (with its value checks), then [`ct::fit`] or
 /// [`kurt::fit`], then [`metrics::evaluate`] of the fitted model (built from the material JSON
@@ -18,7 +18,7 @@ impl Fitter for MeasuredFitter {
         data::expand_inputs(input)
     }
 
-    fn fit(&self, input: &str, s: &FitSettings, stage: &dyn Fn(&str)) -> Result<Fitted> {
+    fn fit(&self, input: &str, s: &FitOptions, stage: &dyn Fn(&str)) -> Result<Fitted> {
         stage("reading the data");
         let data = data::load_with(input, &data::LoadOptions { strict: s.strict })?;
         let mask = data.coverage.as_ref();
@@ -113,10 +113,10 @@ impl Fitter for MeasuredFitter {
                 (model, status, r)
             }
             m => {
-                let (dist, mdist) = match m {
-                    ModelChoice::Sgd => (ct::Distribution::Sgd, CtDistribution::Sgd),
-                    ModelChoice::Beckmann => (ct::Distribution::Beckmann, CtDistribution::Beckmann),
-                    _ => (ct::Distribution::Ggx, CtDistribution::Ggx),
+                let dist = match m {
+                    ModelChoice::Sgd => CtDistribution::Sgd,
+                    ModelChoice::Beckmann => CtDistribution::Beckmann,
+                    _ => CtDistribution::Ggx,
                 };
                 let opts = ct::CtOptions {
                     refine: s.refine,
@@ -124,22 +124,9 @@ impl Fitter for MeasuredFitter {
                 };
                 stage("two-slice fit and refinement");
                 let f = ct::fit_masked(data.bsdf.as_ref(), dist, &opts, mask)?;
-                let channels = std::array::from_fn(|i| {
-                    let c = &f.channels[i];
-                    CtChannelParams {
-                        rho_d: c.rho_d,
-                        rho_s: c.rho_s,
-                        alpha: c.alpha,
-                        p: c.p,
-                        kap: c.kap,
-                        f0: c.f0,
-                        f1: c.f1,
-                        g1: c.g1,
-                    }
-                });
                 notes.push(format!("{} iterations", f.iterations));
                 notes.extend(f.notes.iter().cloned());
-                let model = MaterialModel::cook_torrance(mdist, channels)?;
+                let model = MaterialModel::cook_torrance(dist, f.channels)?;
                 stage("error metrics");
                 let r = evaluate(&model)?;
                 (model, f.status, r)
@@ -169,12 +156,12 @@ mod tests {
     #[test]
     fn measured_fitter_writes_the_ct_fits_model() {
         let input = "nbrdf:nickel";
-        let s = FitSettings::new(ModelChoice::Ggx);
+        let s = FitOptions::new(ModelChoice::Ggx);
         let f = MeasuredFitter.fit(input, &s, &|_| {}).expect("fit");
         let data = data::load(input).expect("data");
         let direct = ct::fit(
             data.bsdf.as_ref(),
-            ct::Distribution::Ggx,
+            CtDistribution::Ggx,
             &ct::CtOptions::default(),
         )
         .expect("ct fit")

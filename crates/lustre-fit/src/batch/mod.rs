@@ -32,13 +32,13 @@
 //! shards written to other folders, and writes `summary.csv` with the rows in input order: the
 //! same files, byte for byte apart from each fit's wall time, as one unsharded run.
 //!
-//! Every fit records its options ([`FitSettings::to_json`]) in its JSON; a failure record keeps
+//! Every fit records its options ([`FitOptions::to_json`]) in its JSON; a failure record keeps
 //! the best parameters the fit reached, when it reached any ([`FailureFile::model`]).
 //!
 //! The fitting itself is behind the [`Fitter`] trait, so the machinery runs (and is tested)
 //! with any fitter; [`MeasuredFitter`] is the real one.
 //!
-//! The code, one concern per file: `settings` (the model choice and the fit options, checked
+//! The code, one concern per file: `options` (the model choice and the fit options, checked
 //! before any input is read), `dispatch` ([`MeasuredFitter`]: the model choice to the fit that
 //! runs it), `runner` (the job loop and its progress display), `resume` (what the outputs
 //! already in the folder allow to skip or forbid to overwrite), `summary` (`summary.csv`) and
@@ -47,9 +47,9 @@
 //! [`FitError::Option`]: crate::FitError::Option
 
 mod dispatch;
+mod options;
 mod resume;
 mod runner;
-mod settings;
 mod shards;
 mod summary;
 #[cfg(test)]
@@ -57,8 +57,8 @@ mod test_support;
 
 pub use crate::metrics::Metric;
 pub use dispatch::MeasuredFitter;
+pub use options::{check_options, kurt_options, FitOptions, ModelChoice};
 pub use runner::{output_name, run};
-pub use settings::{check_settings, kurt_options, FitSettings, ModelChoice};
 pub use shards::{check_shard, merge, shard_manifest_path, ShardManifest, SHARD_SCHEMA};
 pub use summary::{write_summary, BatchSummary, SummaryRow, SUMMARY_FILE};
 
@@ -74,7 +74,7 @@ pub const FAILURE_SCHEMA: &str = "lustre-fit-failure";
 #[derive(Clone, Debug)]
 pub struct BatchOptions {
     /// What to fit.
-    pub settings: FitSettings,
+    pub fit: FitOptions,
     /// Worker threads (at least 1).
     pub jobs: usize,
     /// Fit every input again, even when a valid output exists.
@@ -111,7 +111,7 @@ pub struct Fitted {
 
 impl Fitted {
     /// The record of this fit of `source` with `settings`, `time_s` seconds in all.
-    pub fn record(&self, source: &str, settings: &FitSettings, time_s: f64) -> FitRecord {
+    pub fn record(&self, source: &str, options: &FitOptions, time_s: f64) -> FitRecord {
         FitRecord {
             source: source.to_string(),
             errors: Some(self.errors),
@@ -120,7 +120,7 @@ impl Fitted {
             time_s,
             status: status_str(self.status).into(),
             message: self.message.clone(),
-            options: settings.to_json(),
+            options: options.to_json(),
         }
     }
 }
@@ -130,7 +130,7 @@ pub trait Fitter: Sync {
     /// Expands one command-line input into the inputs to fit (e.g. `nbrdf:FILE#*`).
     fn expand(&self, input: &str) -> Result<Vec<String>>;
     /// Fits one input; `stage` is told what the fit is doing (for the progress display).
-    fn fit(&self, input: &str, settings: &FitSettings, stage: &dyn Fn(&str)) -> Result<Fitted>;
+    fn fit(&self, input: &str, options: &FitOptions, stage: &dyn Fn(&str)) -> Result<Fitted>;
 }
 
 /// The JSON written for a failed input: no model, only the record of what went wrong.

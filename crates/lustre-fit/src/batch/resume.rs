@@ -3,7 +3,7 @@
 //! with other options (never overwritten silently), and the rows of earlier batches' fits.
 
 use super::runner::Job;
-use super::{is_failure, parse_status, FailureFile, FitSettings, SummaryRow};
+use super::{is_failure, parse_status, FailureFile, FitOptions, SummaryRow};
 use lustre_brdf::material;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
@@ -11,11 +11,11 @@ use std::path::{Path, PathBuf};
 /// A description of the existing fit at `path` when it is a valid fit of the same input with
 /// another model or other options (`None` otherwise: no file, a failure, a corrupted file, a fit
 /// of another input, or the same options).
-pub(super) fn other_options(path: &Path, job: &Job, settings: &FitSettings) -> Option<String> {
+pub(super) fn other_options(path: &Path, job: &Job, options: &FitOptions) -> Option<String> {
     let m = material::read(path).ok()?;
     let f = m.fit.as_ref()?;
     let status = parse_status(&f.status)?;
-    let differs = m.model.kind() != settings.model.as_str() || f.options != settings.to_json();
+    let differs = m.model.kind() != options.model.as_str() || f.options != options.to_json();
     (f.source == job.input && !is_failure(status) && differs)
         .then(|| format!("{}, options {}", m.model.kind(), f.options))
 }
@@ -60,13 +60,13 @@ pub(super) fn earlier_rows(out: &Path, rows: &[SummaryRow]) -> Vec<SummaryRow> {
 }
 
 /// The row of an existing output that can be reused, if any (see the `batch` module notes).
-pub(super) fn reusable(path: &Path, job: &Job, settings: &FitSettings) -> Option<SummaryRow> {
+pub(super) fn reusable(path: &Path, job: &Job, options: &FitOptions) -> Option<SummaryRow> {
     let m = material::read(path).ok()?;
     let f = m.fit.as_ref()?;
     let status = parse_status(&f.status)?;
     let same = f.source == job.input
-        && m.model.kind() == settings.model.as_str()
-        && f.options == settings.to_json()
+        && m.model.kind() == options.model.as_str()
+        && f.options == options.to_json()
         && !is_failure(status)
         && !input_is_newer(&job.input, path);
     same.then(|| SummaryRow::new(&job.name, f, m.model.kind(), status, true))
@@ -87,7 +87,7 @@ fn input_is_newer(input: &str, output: &Path) -> bool {
 #[cfg(test)]
 mod tests {
     use super::super::test_support::{csv_rows, options, Mock};
-    use crate::batch::{run, BatchOptions, FitSettings, ModelChoice};
+    use crate::batch::{run, BatchOptions, FitOptions, ModelChoice};
     use lustre_brdf::material;
     use std::path::Path;
     use std::sync::atomic::Ordering;
@@ -133,9 +133,9 @@ mod tests {
         material::read(&b).expect("b rewritten");
 
         let other = BatchOptions {
-            settings: FitSettings {
+            fit: FitOptions {
                 lobes: 2,
-                ..FitSettings::new(ModelChoice::Kurt)
+                ..FitOptions::new(ModelChoice::Kurt)
             },
             ..options(dir.path())
         };
@@ -171,14 +171,14 @@ mod tests {
         let m = material::read(&a).expect("a material");
         assert_eq!(m.fit.expect("record").options["lobes"], 2);
         // The CT options ignore the lobe settings.
-        let ggx = |lobes| FitSettings {
+        let ggx = |lobes| FitOptions {
             lobes,
-            ..FitSettings::new(ModelChoice::Ggx)
+            ..FitOptions::new(ModelChoice::Ggx)
         };
         assert_eq!(ggx(1).to_json(), ggx(3).to_json());
         assert_ne!(
-            FitSettings::new(ModelChoice::Kurt).to_json(),
-            other.settings.to_json()
+            FitOptions::new(ModelChoice::Kurt).to_json(),
+            other.fit.to_json()
         );
     }
 

@@ -114,8 +114,7 @@ pub fn run(inputs: &[String], opts: &BatchOptions, fitter: &dyn Fitter) -> Resul
             .iter()
             .filter_map(|j| {
                 let path = opts.out.join(format!("{}.json", j.name));
-                other_options(&path, j, &opts.settings)
-                    .map(|old| format!("{} ({old})", path.display()))
+                other_options(&path, j, &opts.fit).map(|old| format!("{} ({old})", path.display()))
             })
             .collect();
         if !conflicts.is_empty() {
@@ -175,7 +174,7 @@ pub fn run(inputs: &[String], opts: &BatchOptions, fitter: &dyn Fitter) -> Resul
             index: k,
             count: n,
             total,
-            options: opts.settings.to_json(),
+            options: opts.fit.to_json(),
             positions: (0..total).filter(|p| p % n == k).collect(),
             rows: rows.clone(),
         };
@@ -221,9 +220,9 @@ fn run_one(
     stage: &(dyn Fn(&str) + Sync),
 ) -> SummaryRow {
     let path = opts.out.join(format!("{}.json", job.name));
-    let settings = &opts.settings;
+    let options = &opts.fit;
     if !opts.force {
-        if let Some(row) = reusable(&path, job, settings) {
+        if let Some(row) = reusable(&path, job, options) {
             return row;
         }
     }
@@ -232,7 +231,7 @@ fn run_one(
         Some(e) => Err((error_status(e), e.to_string())),
         None => {
             match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                fitter.fit(&job.input, settings, stage)
+                fitter.fit(&job.input, options, stage)
             })) {
                 Ok(Ok(f)) => Ok(f),
                 Ok(Err(e)) => Err((error_status(&e), e.to_string())),
@@ -244,7 +243,7 @@ fn run_one(
         }
     };
     let time_s = t0.elapsed().as_secs_f64();
-    let model = settings.model.as_str();
+    let model = options.model.as_str();
     let mut record = FitRecord {
         source: job.input.clone(),
         errors: None,
@@ -253,12 +252,12 @@ fn run_one(
         time_s,
         status: String::new(),
         message: String::new(),
-        options: settings.to_json(),
+        options: options.to_json(),
     };
     let mut kept = None;
     let written = match result {
         Ok(f) => {
-            record = f.record(&job.input, settings, time_s);
+            record = f.record(&job.input, options, time_s);
             let file = MaterialFile::new(job.name.clone(), f.model.clone(), Some(record.clone()));
             match file.and_then(|m| material::write(&path, &m)) {
                 Ok(()) => Ok(f.status),
@@ -322,7 +321,7 @@ fn write_failure(
 mod tests {
     use super::super::test_support::{csv_rows, options, Mock};
     use super::*;
-    use crate::batch::{parse_status, FitSettings, ModelChoice};
+    use crate::batch::{parse_status, FitOptions, ModelChoice};
     use std::sync::atomic::Ordering;
 
     #[test]
@@ -425,9 +424,9 @@ mod tests {
         let dir = tempfile::tempdir().expect("dir");
         let inputs: Vec<String> = vec!["a/m.gonio".into(), "b/m.gonio".into(), "b/M.gonio".into()];
         let opts = BatchOptions {
-            settings: FitSettings {
+            fit: FitOptions {
                 refine: false,
-                ..FitSettings::new(ModelChoice::Kurt)
+                ..FitOptions::new(ModelChoice::Kurt)
             },
             ..options(dir.path())
         };

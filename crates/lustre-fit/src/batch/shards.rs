@@ -25,9 +25,9 @@ pub struct ShardManifest {
     pub count: usize,
     /// The number of inputs of the whole batch (after expansion).
     pub total: usize,
-    /// The fit options ([`FitSettings::to_json`]).
+    /// The fit options ([`FitOptions::to_json`]).
     ///
-    /// [`FitSettings::to_json`]: super::FitSettings::to_json
+    /// [`FitOptions::to_json`]: super::FitOptions::to_json
     pub options: serde_json::Value,
     /// The batch positions of this shard's inputs, one per row.
     pub positions: Vec<usize>,
@@ -205,7 +205,7 @@ pub fn merge(out: &Path, from: &[PathBuf]) -> Result<BatchSummary> {
 mod tests {
     use super::super::test_support::{options, Mock};
     use super::*;
-    use crate::batch::{run, BatchOptions, FitSettings, ModelChoice};
+    use crate::batch::{run, BatchOptions, FitOptions, ModelChoice};
 
     /// Every file of a batch folder (JSON and CSV) with the wall times zeroed: the only field
     /// two runs of the same batch may differ in.
@@ -301,9 +301,9 @@ mod tests {
         // A shard of another batch (other options) is refused, naming it.
         let other = BatchOptions {
             shard: Some((1, 3)),
-            settings: FitSettings {
+            fit: FitOptions {
                 lobes: 2,
-                ..FitSettings::new(ModelChoice::Kurt)
+                ..FitOptions::new(ModelChoice::Kurt)
             },
             ..options(&dir.path().join("other"))
         };

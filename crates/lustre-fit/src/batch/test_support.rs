@@ -1,7 +1,7 @@
 //! Shared by the batch module's unit tests: a mock [`Fitter`] that fails, panics or succeeds
 //! by input name, the batch options the tests start from, and a reader of `summary.csv`.
 
-use super::{BatchOptions, FitSettings, Fitted, Fitter, ModelChoice};
+use super::{BatchOptions, FitOptions, Fitted, Fitter, ModelChoice};
 use crate::{FitError, FitStatus, Result};
 use lustre_brdf::material::{FitErrors, LobeParams, MaterialModel};
 use std::path::Path;
@@ -44,7 +44,7 @@ impl Fitter for Mock {
         }
     }
 
-    fn fit(&self, input: &str, settings: &FitSettings, stage: &dyn Fn(&str)) -> Result<Fitted> {
+    fn fit(&self, input: &str, options: &FitOptions, stage: &dyn Fn(&str)) -> Result<Fitted> {
         stage("mock fit");
         self.fits.fetch_add(1, Ordering::SeqCst);
         let name = Path::new(input)
@@ -66,7 +66,7 @@ impl Fitter for Mock {
         };
         Ok(Fitted {
             model: kurt_model(mx),
-            status: if settings.refine {
+            status: if options.refine {
                 FitStatus::Converged
             } else {
                 FitStatus::NotConverged
@@ -84,7 +84,7 @@ impl Fitter for Mock {
 
 pub(super) fn options(out: &Path) -> BatchOptions {
     BatchOptions {
-        settings: FitSettings::new(ModelChoice::Kurt),
+        fit: FitOptions::new(ModelChoice::Kurt),
         jobs: 2,
         force: false,
         out: out.to_path_buf(),

@@ -16,7 +16,7 @@
 //! | [`frame_shade`] | G-buffer, light-mapped image, materials, probe and environment pyramids, view buffers | the frame |
 //! | [`bandwidth`] | shading points, materials, environment, area lights | bandwidth and variance sums |
 //! | [`adaptive`] | bandwidth levels, shading points, materials, environment, area lights | the adaptive frame |
-//! | [`sphere`] | sphere scene, environment pyramid | the sphere kernel's image |
+//! | [`sphere`] | sphere scene, environment pyramid | the sphere pass's image |
 
 pub mod adaptive;
 pub mod bandwidth;
@@ -64,9 +64,9 @@ pub enum Resource {
     Bandwidth,
     /// The adaptive method's frame.
     AdaptiveFrame,
-    /// The sphere kernel's scene: spheres, planes and lobes ([`crate::PackedScene`]) (external).
+    /// The sphere pass's scene: spheres, planes and lobes ([`crate::PackedScene`]) (external).
     SphereScene,
-    /// The sphere kernel's image.
+    /// The sphere pass's image.
     SphereImage,
 }
 
@@ -114,7 +114,7 @@ pub const WALKTHROUGH: [&Node; 5] = [
 /// 004's adaptive shading of a G-buffer: the bandwidth pass, then the hierarchical shading.
 pub const ADAPTIVE: [&Node; 2] = [&bandwidth::NODE, &adaptive::NODE];
 
-/// The sphere kernel (`lustre demo`): an environment pyramid, then the spheres.
+/// The sphere pass (`lustre demo`): an environment pyramid, then the spheres.
 pub const SPHERE: [&Node; 2] = [&pyramid::NODE, &sphere::NODE];
 
 /// Every pass.

@@ -1,5 +1,5 @@
 // module planes: bounding-plane (parallax) correction of cube-map lookups (000 §4.4.1,
-// Fig. 4.5–4.6). CPU twins: lustre_shade::kernel::{BoundingPlane::intersect,
+// Fig. 4.5–4.6). CPU twins: lustre_shade::integrator::{BoundingPlane::intersect,
 // BoundingPlane::corrected_direction, corrected_direction}. Equations: the secondary ray
 // p + s·ω meets the plane (q, m) at s = ((q − p)·m) / (ω·m), accepted when |ω·m| > 1e-12, s > 0
 // is finite and p lies strictly on the centre's side of the plane; over several planes the

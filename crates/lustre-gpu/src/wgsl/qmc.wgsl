@@ -1,5 +1,5 @@
 // module qmc: the low-discrepancy points and per-pixel seeds of progressive refinement
-// (000 §4.4.2). CPU twins: lustre_shade::kernel::{sobol02, pixel_seed, Progressive::new},
+// (000 §4.4.2). CPU twins: lustre_shade::integrator::{sobol02, pixel_seed, Progressive::new},
 // lustre_brdf::sampling::{radical_inverse2, SplitMix64}. Equations: the Sobol' (0,2)-sequence,
 // x_i = the base-2 radical inverse of i, y_i = the second Sobol' dimension (generator matrix =
 // Pascal's triangle mod 2); SplitMix64 (Steele et al. 2014): s += 0x9E3779B97F4A7C15,
@@ -10,7 +10,7 @@
 // the top 24 bits of the CPU's 32 (or 53) bits, so f32 values are the CPU's rounded down to
 // 2⁻²⁴ and never reach 1.
 
-// sobol02 as integers: (x, y) · 2⁻³² is lustre_shade::kernel::sobol02(i) exactly.
+// sobol02 as integers: (x, y) · 2⁻³² is lustre_shade::integrator::sobol02(i) exactly.
 fn sobol02_bits(i: u32) -> vec2<u32> {
     var r = 0u;
     var v = 1u << 31u;
@@ -70,7 +70,7 @@ fn splitmix64_next(state: ptr<function, vec2<u32>>) -> vec2<u32> {
     return z ^ shr64(z, 31u);
 }
 
-// kernel::pixel_seed: SplitMix64(seed ^ (x << 32 | y)).next_u64().
+// integrator::pixel_seed: SplitMix64(seed ^ (x << 32 | y)).next_u64().
 fn pixel_seed(x: u32, y: u32, seed: vec2<u32>) -> vec2<u32> {
     var state = seed ^ vec2<u32>(y, x);
     return splitmix64_next(&state);

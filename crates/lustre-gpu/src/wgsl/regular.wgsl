@@ -1,17 +1,17 @@
 // module regular: regular in-lobe sampling of one Kurt lobe and its weighting, per pixel.
-// CPU twins: lustre_shade::kernel::{regular_lobe (Weighting::Pdf002), lattice_lobe,
+// CPU twins: lustre_shade::integrator::{regular_lobe (Weighting::Pdf002), lattice_lobe,
 // lattice_axes, lattice_taps, lattice_cells, LatticeGeometry, shade_suns}. Equations: ωi = 2(ωo·h)h − ωo
 // (000 Eq. 4.8), mirrored through the tangent plane for transmission (000 Eq. 3.5); stored
 // patterns: p_o = p_h / (4 h·ωi) with the pattern's PDF constant (002 Eq. 17–18), estimate
 // ks/n Σ L(ωi) f cos θi / p_o (002 Eq. 9), level 002 Eq. 16; row lattice: weight
 // μ F cos θi / (G cos θh) per cell of mass μ, level from its solid angle μ/p(ωi); suns split off
-// the map (kernel::shade_suns): ks f(ωs, ωo) cos θs E per lobe.
+// the map (integrator::shade_suns): ks f(ωs, ωo) cos θs E per lobe.
 //
 // The pyramid is a parameter (`env`, `env_sampler`; `face` = N, `max_lod` = levels − 1), so the
 // module holds no binding; stored patterns live in the pass's buffers, which loops over them
 // and calls `pattern_sample` per half vector.
 
-// One half vector h of a stored pattern of `count` (kernel::regular_lobe with Pdf002), in the
+// One half vector h of a stored pattern of `count` (integrator::regular_lobe with Pdf002), in the
 // frame (t, b, n) facing the viewer, ωo = wo_l local: L(ωi) f cos θi / p_o with unit ks, or 0
 // for a sample with ωo·h ≤ 0 or ωi below the horizon (it still counts in n). `area` is
 // lobe_area(mx, my, ξ0, ωo) (002 Eq. 14–15).
@@ -49,12 +49,12 @@ fn pattern_sample(lobe: Lobe, transmission: bool, wo_l: vec3<f32>, h: vec3<f32>,
 // pattern::LATTICE_MAX_TAPS: the most taps one cell of the tap lattice (scheme 2) takes.
 const LATTICE_MAX_TAPS: u32 = 3u;
 
-// kernel::LatticeGeometry::slope: x e1 + y e2 with e2 = e1 turned by 90°.
+// integrator::LatticeGeometry::slope: x e1 + y e2 with e2 = e1 turned by 90°.
 fn lattice_slope(e1: vec2<f32>, x: f32, y: f32) -> vec2<f32> {
     return vec2<f32>(x * e1.x - y * e1.y, x * e1.y + y * e1.x);
 }
 
-// kernel::LatticeGeometry::stretch: |∂ωi/∂s| along the slope-space unit vector e at h = n/|n|.
+// integrator::LatticeGeometry::stretch: |∂ωi/∂s| along the slope-space unit vector e at h = n/|n|.
 fn lattice_stretch(mx: f32, my: f32, wo_l: vec3<f32>, h: vec3<f32>, len: f32,
                    e: vec2<f32>) -> f32 {
     let dn = vec3<f32>(mx * e.x, my * e.y, 0.0);
@@ -62,7 +62,7 @@ fn lattice_stretch(mx: f32, my: f32, wo_l: vec3<f32>, h: vec3<f32>, len: f32,
     return length(2.0 * (dot(wo_l, dh) * h + dot(wo_l, h) * dh));
 }
 
-// kernel::lattice_taps: the taps of cell i of m in row j of rows (x: the count, 0 for a cell
+// integrator::lattice_taps: the taps of cell i of m in row j of rows (x: the count, 0 for a cell
 // whose centre lies below the horizon; y: 1 along e1, 0 along e2).
 fn lattice_taps(mx: f32, my: f32, e1: vec2<f32>, wo_l: vec3<f32>,
                 i: u32, m: u32, j: u32, rows: u32, max_taps: u32) -> vec2<u32> {
@@ -92,7 +92,7 @@ fn lattice_taps(mx: f32, my: f32, e1: vec2<f32>, wo_l: vec3<f32>,
     return vec2<u32>(u32(clamp(round(t), 1.0, f32(max(max_taps, 1u)))), along);
 }
 
-// kernel::lattice_cells: with one tap per cell, budget cells; otherwise the largest cell count
+// integrator::lattice_cells: with one tap per cell, budget cells; otherwise the largest cell count
 // whose taps fit the budget. x: cells, y: rows.
 fn lattice_cells(mx: f32, my: f32, e1: vec2<f32>, wo_l: vec3<f32>,
                  budget: u32, ratio: f32, max_taps: u32) -> vec2<u32> {
@@ -124,9 +124,9 @@ fn major_axis(half: f32, root: f32, b: f32) -> vec2<f32> {
     return vec2<f32>(b, root - half);
 }
 
-// kernel::lattice_lobe: ours, the row lattice of `budget` lookups: equal-mass cells of the
+// integrator::lattice_lobe: ours, the row lattice of `budget` lookups: equal-mass cells of the
 // slope-space Gaussian, rows along the minor axis of the lobe's image in ωi
-// (kernel::lattice_axes), each cell read once (max_taps = 1) or, for the tap lattice, by up to
+// (integrator::lattice_axes), each cell read once (max_taps = 1) or, for the tap lattice, by up to
 // max_taps taps at its sub-quantiles along its long axis, each at the level of its solid angle
 // μ/p(ωi); weight μ F cos θi / (G cos θh).
 fn lattice_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>,
@@ -139,7 +139,7 @@ fn lattice_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>,
     }
     let mx = lobe.mx;
     let my = lobe.my;
-    // kernel::lattice_axes: JᵀJ of s ↦ ωi at s = 0 and its major eigenvector.
+    // integrator::lattice_axes: JᵀJ of s ↦ ωi at s = 0 and its major eigenvector.
     let ja = 4.0 * mx * mx * (wo_l.x * wo_l.x + wo_l.z * wo_l.z);
     let jc = 4.0 * my * my * (wo_l.y * wo_l.y + wo_l.z * wo_l.z);
     let jb = 4.0 * mx * my * wo_l.x * wo_l.y;
@@ -216,8 +216,8 @@ fn lattice_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>,
     return lobe.ks * sum;
 }
 
-// kernel::shade_suns for one lobe and one sun: ks f(ωs, ωo) cos θs E, the sun at `sun_l` in the
-// frame facing the viewer, the lobe widened by the sun's spread (kernel::sun_widened:
+// integrator::shade_suns for one lobe and one sun: ks f(ωs, ωo) cos θs E, the sun at `sun_l` in the
+// frame facing the viewer, the lobe widened by the sun's spread (integrator::sun_widened:
 // m'² = m² + spread²/4). A reflection lobe takes a sun above the surface, a transmission lobe
 // one below, evaluated on the pair mirrored through the tangent plane (000 Eq. 3.5).
 fn sun_lobe(lobe_in: Lobe, transmission: bool, wo_l: vec3<f32>, sun_l: vec3<f32>,

@@ -1,7 +1,7 @@
 // module types: the constants and the material records every pass shares.
 // CPU twins: lustre_gpu::packed::{GpuMaterial, GpuLobe} (the byte layouts, checked by
 // shade.rs's record_layouts_match_wgsl) packed from lustre_brdf::models::kurt::{Kurt, KurtLobe}
-// and a lustre_shade::kernel::MaterialPlan. No bindings, no entry points.
+// and a lustre_shade::integrator::MaterialPlan. No bindings, no entry points.
 //
 // Conventions (contracts.md): shading frame (t, b, n) with b = n × t; local = (w·t, w·b, w·n);
 // `wi` to the light, `wo` to the viewer.

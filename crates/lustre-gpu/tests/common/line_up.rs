@@ -5,7 +5,7 @@ use lustre_adaptive::gbuffer::GBuffer;
 use lustre_adaptive::shading::{ShadingContext, ShadingOptions};
 use lustre_scene::Scene;
 use lustre_trace::baked::read_environment;
-use lustre_trace::path::{PathOptions, PathTracer};
+use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{film_camera, path_scene};
 
 /// The line-up of `spheres` (left to right) on `floor`.

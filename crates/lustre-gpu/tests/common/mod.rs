@@ -3,8 +3,8 @@
 
 #![allow(dead_code)] // Each test binary uses a subset.
 
-pub mod kernel;
 pub mod line_up;
+pub mod shader;
 pub mod textures;
 
 use lustre_gpu::{GpuContext, GpuViewBuffer};

@@ -12,7 +12,7 @@
 use super::diffuse_path_scene;
 use super::render::Lightmapped;
 use crate::image::Image;
-use crate::path::{EnvLight, Geometry, PathCamera, PathOptions, PathTracer};
+use crate::path_tracer::{EnvLight, Geometry, PathCamera, PathOptions, PathTracer};
 use crate::{Result, TraceError};
 use lustre_brdf::rgb::Rgb;
 use lustre_scene::lightmap::LightmapAtlas;
@@ -25,9 +25,11 @@ pub const SKY: u32 = u32::MAX;
 /// Largest supersampling factor k (k×k G-buffer pixels per output pixel).
 pub const MAX_SUPERSAMPLING: u32 = 8;
 
-/// Per-pixel visibility of a frame.
+/// Per-pixel visibility of a frame (a visibility buffer: triangle, barycentrics, depth; the
+/// walkthrough's G-buffer, from which every attribute is interpolated). lustre-adaptive's
+/// `GBuffer` is the other kind: shaded surface points.
 #[derive(Clone, Debug, PartialEq)]
-pub struct GBuffer {
+pub struct VisibilityBuffer {
     /// Width in pixels.
     pub width: usize,
     /// Height in pixels.
@@ -43,10 +45,10 @@ pub struct GBuffer {
     pub normal: Vec<[f32; 3]>,
 }
 
-impl GBuffer {
+impl VisibilityBuffer {
     /// The fraction of pixels whose primitive ids agree with `other`'s. Errors on a size
     /// mismatch.
-    pub fn agreement(&self, other: &GBuffer) -> Result<f64> {
+    pub fn agreement(&self, other: &VisibilityBuffer) -> Result<f64> {
         if (self.width, self.height) != (other.width, other.height) {
             return Err(TraceError::Parameter(format!(
                 "G-buffers of {}×{} and {}×{} cannot be compared",
@@ -112,7 +114,7 @@ pub fn trace_gbuffer(
     camera: &PathCamera,
     gw: usize,
     gh: usize,
-) -> Result<GBuffer> {
+) -> Result<VisibilityBuffer> {
     if gw == 0 || gh == 0 {
         return Err(TraceError::Parameter(format!(
             "G-buffer {gw}×{gh} is empty"
@@ -144,7 +146,7 @@ pub fn trace_gbuffer(
             }
         })
         .collect();
-    Ok(GBuffer {
+    Ok(VisibilityBuffer {
         width: gw,
         height: gh,
         prim: px.iter().map(|p| p.0).collect(),
@@ -162,7 +164,7 @@ pub fn shade_gbuffer(
     g: &Geometry,
     environment: Option<&EnvLight>,
     camera: &PathCamera,
-    gb: &GBuffer,
+    gb: &VisibilityBuffer,
     k: u32,
 ) -> Result<Image> {
     gb.check()?;
@@ -228,7 +230,7 @@ pub fn render_lightmapped_gbuffer(
     w: usize,
     h: usize,
     k: u32,
-) -> Result<(Image, GBuffer)> {
+) -> Result<(Image, VisibilityBuffer)> {
     let (gw, gh) = gbuffer_size(w, h, k)?;
     let (ps, spec, _) = diffuse_path_scene(scene)?;
     let lit = Lightmapped::new(scene, atlas, pages, &ps.geometry, spec)?;

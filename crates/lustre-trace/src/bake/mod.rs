@@ -6,7 +6,7 @@
 //!   space), the chart of each texel, and the supersample points spread over a texel's footprint
 //!   (stratified, seeded by a hash of (seed, page, x, y, sample)).
 //! - [`trace`]: per sample point, a validity test (leak-proof origins) and one path of
-//!   [`PathTracer::irradiance`](crate::path::PathTracer::irradiance); per texel the mean, the
+//!   [`PathTracer::irradiance`](crate::path_tracer::PathTracer::irradiance); per texel the mean, the
 //!   variance of the mean and the guides (position, normal, albedo).
 //! - [`tile`]: deterministic tiles of [`BakeOptions::tile`]² texels, written atomically to
 //!   `OUT/tiles/` with a header (format, scene/options hash, rectangle) and a CRC; a bake
@@ -50,7 +50,7 @@ pub use denoise::{ATrousOptions, Denoiser};
 pub use output::{assemble, Assembled, BakeReport, PageReport};
 pub use tile::{bake_texels, bake_tiles, TilesReport};
 
-use crate::path::{PathScene, Surface};
+use crate::path_tracer::{PathScene, Surface};
 use crate::{Result, TraceError};
 use glam::{DVec3, Vec2};
 use lustre_brdf::bsdf::Bsdf;

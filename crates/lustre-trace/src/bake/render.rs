@@ -10,7 +10,7 @@
 use super::raster::Raster;
 use super::{diffuse_albedo, diffuse_path_scene};
 use crate::image::Image;
-use crate::path::{Geometry, PathCamera, PathOptions, PathTracer};
+use crate::path_tracer::{Geometry, PathCamera, PathOptions, PathTracer};
 use crate::{Result, TraceError};
 use glam::{DVec3, Vec2};
 use lustre_brdf::rgb::Rgb;

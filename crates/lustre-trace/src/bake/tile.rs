@@ -13,7 +13,7 @@
 use super::raster::Raster;
 use super::trace::{TexelBaker, TexelRecord};
 use super::{bake_hash, diffuse_path_scene, BakeOptions};
-use crate::path::{PathOptions, PathTracer};
+use crate::path_tracer::{PathOptions, PathTracer};
 use crate::{Result, TraceError};
 use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::Scene;

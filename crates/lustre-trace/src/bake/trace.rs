@@ -2,7 +2,7 @@
 
 use super::raster::{texel_seed, Raster};
 use super::{diffuse_albedo, BakeOptions, PROBES, PROBE_BACKFACE_LIMIT};
-use crate::path::{offset, PathScene, PathTracer};
+use crate::path_tracer::{offset, PathScene, PathTracer};
 use glam::{DVec3, Vec2};
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::{cosine_hemisphere, to_world, SplitMix64};

@@ -73,7 +73,7 @@ impl App {
                 self.note(text.clone(), true);
                 self.status = text;
             }
-            None => self.settings.method = m,
+            None => self.settings.frame.method = m,
         }
     }
 

@@ -31,7 +31,7 @@ impl App {
                     self.note(format!("ready: {text}"), false);
                     if let Some(why) = &info.no_walkthrough {
                         // Adaptive-only: the window starts in the adaptive method.
-                        self.settings.method = Method::Adaptive;
+                        self.settings.frame.method = Method::Adaptive;
                         self.note(format!("adaptive method only: {why}"), false);
                     }
                     self.info = Some(*info);

@@ -5,8 +5,9 @@
 use super::App;
 use crate::render::{self, Request, SceneSource};
 use crate::script;
-use crate::ViewArgs;
+use crate::{Method, ViewArgs};
 use anyhow::{anyhow, bail, Context};
+use lustre_shade::request::{FrameRequest, MAX_SUPERSAMPLING};
 use std::sync::mpsc::channel;
 use std::time::{Duration, Instant};
 use winit::event_loop::EventLoop;
@@ -32,12 +33,15 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
     if !(0.1..=1.0).contains(&args.scale) {
         bail!("--scale {}: must be 0.1 … 1", args.scale);
     }
-    if !(1..=256).contains(&args.samples) {
-        bail!("--samples {}: must be 1 … 256", args.samples);
+    if !(1..=MAX_SUPERSAMPLING).contains(&args.supersampling) {
+        bail!(
+            "--supersampling {}: must be 1 … {MAX_SUPERSAMPLING}",
+            args.supersampling
+        );
     }
-    if !(1..=4).contains(&args.supersampling) {
-        bail!("--supersampling {}: must be 1 … 4", args.supersampling);
-    }
+    initial_request(args)
+        .validate()
+        .map_err(|e| anyhow!("--samples {}: {e}", args.samples))?;
     lustre_shade::probe::ProbeOptions {
         face_size: args.probe_size,
         ..Default::default()
@@ -125,6 +129,18 @@ fn scene_source(args: &ViewArgs) -> anyhow::Result<SceneSource> {
         )),
         (None, None) => SceneSource::BuiltinRoom(args.bake_dir.clone()),
     })
+}
+
+/// The frame request the viewer starts with: the regular method, `--samples` glossy samples,
+/// k² camera rays (k = `--supersampling`), 64 frames a still camera accumulates, seed 1.
+pub(super) fn initial_request(args: &ViewArgs) -> FrameRequest {
+    FrameRequest {
+        method: Method::Regular,
+        samples: args.samples,
+        rays: args.supersampling * args.supersampling,
+        frames: 64,
+        seed: 1,
+    }
 }
 
 #[cfg(test)]

@@ -25,7 +25,7 @@ impl App {
         let mesh = self.selected.unwrap_or(0);
         let own = info.object_samples.get(mesh).copied().flatten();
         let mut on = own.is_some();
-        let mut n = own.unwrap_or(self.settings.samples);
+        let mut n = own.unwrap_or(self.settings.frame.samples);
         let mut budget = None;
         let c = ui.checkbox(&mut on, "its own sample budget");
         let r = ui.add_enabled(on, egui::Slider::new(&mut n, 1..=64));

@@ -30,14 +30,15 @@ mod window;
 
 pub use launch::run;
 
-use crate::adaptive::{AdaptiveSettings, BufferView};
+use crate::adaptive::{AdaptiveOptions, BufferView};
 use crate::camera::FlyCamera;
 use crate::fit::{FitDone, FitJob};
-use crate::render::{FrameReply, FrameSettings, Reply, Request, SceneInfo, SceneSource};
+use crate::render::{FrameReply, Reply, Request, SceneInfo, SceneSource, ViewRequest};
 use crate::script::Command;
-use crate::{Method, ViewArgs};
+use crate::ViewArgs;
 use edit::Draft;
-use lustre_trace::path::PathCamera;
+use launch::initial_request;
+use lustre_trace::path_tracer::PathCamera;
 use recording::Recording;
 use script::Wait;
 use std::collections::VecDeque;
@@ -76,15 +77,15 @@ struct App {
     fatal: Option<String>,
     camera: Option<FlyCamera>,
     speed: f64,
-    settings: FrameSettings,
+    settings: ViewRequest,
     scale: f64,
     exposure: f64,
     vsync: bool,
     view_size: (usize, usize),
     view_rect_px: [f32; 4],
-    sent: Option<(PathCamera, (usize, usize), FrameSettings)>,
+    sent: Option<(PathCamera, (usize, usize), ViewRequest)>,
     /// The last request the render thread could not render.
-    failed: Option<(PathCamera, (usize, usize), FrameSettings)>,
+    failed: Option<(PathCamera, (usize, usize), ViewRequest)>,
     frame: Option<FrameReply>,
     /// What the adaptive method shows, and the heat map's range when a buffer is shown.
     buffer_view: BufferView,
@@ -133,14 +134,10 @@ impl App {
     ) -> Self {
         let unattended = !commands.is_empty() || args.frames.is_some();
         App {
-            settings: FrameSettings {
-                method: Method::Regular,
-                samples: args.samples,
-                supersampling: args.supersampling,
-                refine_frames: 64,
-                seed: 1,
+            settings: ViewRequest {
+                frame: initial_request(&args),
                 generation: 0,
-                adaptive: AdaptiveSettings::default(),
+                adaptive: AdaptiveOptions::default(),
             },
             scale: args.scale,
             vsync: !args.no_vsync,

@@ -8,6 +8,7 @@ use super::{App, HISTORY, LOOK_RADIANS_PER_PIXEL};
 use crate::adaptive::{rule_name, BufferView, SAMPLE_RULES};
 use crate::camera::Movement;
 use crate::Method;
+use lustre_shade::request::MAX_SUPERSAMPLING;
 use std::collections::VecDeque;
 
 /// Width of the view panel, points.
@@ -92,7 +93,7 @@ impl App {
                 "{}×{} · {} · {} frame(s) · step {:.1} ms",
                 f.image.width,
                 f.image.height,
-                f.settings.method.name(),
+                f.settings.frame.method.name(),
                 f.frames,
                 f.wall_ms
             ));
@@ -105,7 +106,7 @@ impl App {
                 let hits = f.stats.glossy_hits.max(1);
                 ui.label(format!(
                     "budget {} lookups/pixel · made {:.2} per glossy hit",
-                    f.settings.samples,
+                    f.settings.frame.samples,
                     f.stats.lookups as f64 / hits as f64
                 ));
             }
@@ -129,7 +130,7 @@ impl App {
                 Method::Brute => "brute force (CPU)",
             };
             let refused = self.walkthrough_refusal(m);
-            let radio = egui::RadioButton::new(self.settings.method == m, text);
+            let radio = egui::RadioButton::new(self.settings.frame.method == m, text);
             let clicked = match refused {
                 Some(why) => ui.add_enabled(false, radio).on_disabled_hover_text(why),
                 None => ui.add(radio),
@@ -139,14 +140,19 @@ impl App {
                 self.choose_method(m);
             }
         }
-        if self.settings.method == Method::Adaptive {
+        if self.settings.frame.method == Method::Adaptive {
             self.adaptive_panel(ui);
         } else {
-            ui.add(egui::Slider::new(&mut self.settings.samples, 1..=64).text("samples (global)"));
+            ui.add(
+                egui::Slider::new(&mut self.settings.frame.samples, 1..=64)
+                    .text("samples (global)"),
+            );
         }
-        ui.add(egui::Slider::new(&mut self.settings.supersampling, 1..=4).text("k×k G-buffer"));
+        let mut k = self.settings.frame.supersampling();
+        ui.add(egui::Slider::new(&mut k, 1..=MAX_SUPERSAMPLING).text("k×k G-buffer"));
+        self.settings.frame.rays = k * k;
         ui.add(
-            egui::Slider::new(&mut self.settings.refine_frames, 1..=1024)
+            egui::Slider::new(&mut self.settings.frame.frames, 1..=1024)
                 .logarithmic(true)
                 .text("refine to"),
         );
@@ -212,7 +218,7 @@ impl App {
     /// The adaptive method's controls: mean N_p, rate, sample rule, the buffer shown.
     fn adaptive_panel(&mut self, ui: &mut egui::Ui) {
         ui.add(
-            egui::Slider::new(&mut self.settings.samples, 1..=256)
+            egui::Slider::new(&mut self.settings.frame.samples, 1..=256)
                 .logarithmic(true)
                 .text("mean N_p"),
         );

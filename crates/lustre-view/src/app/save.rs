@@ -126,8 +126,8 @@ impl App {
                     "scale": self.scale,
                 },
                 "camera": cam_file.file_name().map(|n| n.to_string_lossy().into_owned()),
-                "method": self.settings.method.name(),
-                "adaptive": (self.settings.method == Method::Adaptive).then(|| {
+                "method": self.settings.frame.method.name(),
+                "adaptive": (self.settings.frame.method == Method::Adaptive).then(|| {
                     let a = f.and_then(|f| f.adaptive.as_deref());
                     serde_json::json!({
                         "buffer": self.buffer_view.name(),
@@ -147,8 +147,8 @@ impl App {
                         "why_cpu": a.and_then(|a| a.why_cpu.clone()),
                     })
                 }),
-                "samples": self.settings.samples,
-                "supersampling": self.settings.supersampling,
+                "samples": self.settings.frame.samples,
+                "supersampling": self.settings.frame.supersampling(),
                 "exposure": self.exposure,
                 "frames": f.map(|f| f.frames),
                 "set": set,

@@ -143,7 +143,7 @@ impl App {
                 self.wait = settle;
             }
             Command::Samples(n) => {
-                self.settings.samples = n;
+                self.settings.frame.samples = n;
                 self.wait = settle;
             }
             Command::Buffer(v) => {

@@ -168,7 +168,7 @@ const NO_TABLE: u32 = u32::MAX;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct GpuMaterial {
+struct GpuMaterialSlot {
     kind: u32,
     base: u32,
     offset: u32,
@@ -264,7 +264,7 @@ impl AdaptiveScene {
                     ))
                 }
             };
-            materials.push(GpuMaterial {
+            materials.push(GpuMaterialSlot {
                 kind,
                 base,
                 offset: offset.to_bits(),

@@ -140,7 +140,7 @@ fn cube_sample(cube: u32, d: vec3<f32>, lod_in: f32) -> vec3<f32> {
     return cube_trilinear(first, count, d, lod_in);
 }
 
-// kernel::corrected_direction over the cube's planes (planes.wgsl).
+// integrator::corrected_direction over the cube's planes (planes.wgsl).
 fn cube_direction(cube: u32, rel: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     let info = cubes[2u * cube + 1u];
     let first = bitcast<u32>(info.y);

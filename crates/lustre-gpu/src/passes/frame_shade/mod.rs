@@ -47,12 +47,12 @@ use crate::wgsl;
 use glam::DVec3;
 
 use lustre_shade::frame::{walkthrough_request, FrameBuffers, FrameLight, FrameStats, FrameTables};
-use lustre_shade::kernel::BoundingPlane;
+use lustre_shade::integrator::BoundingPlane;
 use lustre_shade::mirror::ScreenTiles;
 use lustre_shade::probe::LitScene;
 use lustre_shade::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
 use lustre_trace::image::Image;
-use lustre_trace::path::PathCamera;
+use lustre_trace::path_tracer::PathCamera;
 use std::sync::OnceLock;
 
 /// Everything the pass reads besides the G-buffer: per-triangle records, materials with their
@@ -890,7 +890,7 @@ mod tests {
     use crate::material::pack_thin_dielectric;
     use lustre_brdf::models::thin_dielectric::ThinDielectric;
 
-    /// The pass and the model-evaluation kernel parse and validate without an adapter; the
+    /// The pass and the model-evaluation shader parse and validate without an adapter; the
     /// uniform block and the material record have the sizes the Rust side writes.
     #[test]
     fn wgsl_parses_and_validates_with_naga() {

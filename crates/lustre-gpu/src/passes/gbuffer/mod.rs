@@ -21,8 +21,8 @@ use crate::error::{invalid, scope_result, Result};
 use crate::wgsl;
 use glam::DVec3;
 use lustre_scene::Scene;
-use lustre_trace::bake::gbuffer::{GBuffer, SKY};
-use lustre_trace::path::{Geometry, PathCamera};
+use lustre_trace::bake::gbuffer::{VisibilityBuffer, SKY};
+use lustre_trace::path_tracer::{Geometry, PathCamera};
 use std::sync::OnceLock;
 
 /// The WGSL source of the raster pass: the texture lookup module, then `gbuffer.wgsl`.
@@ -297,7 +297,7 @@ impl GBufferTarget {
     }
 
     /// Copies the G-buffer to the host.
-    pub fn read_back(&self, ctx: &GpuContext) -> Result<GBuffer> {
+    pub fn read_back(&self, ctx: &GpuContext) -> Result<VisibilityBuffer> {
         let (w, h) = (self.width, self.height);
         let prim: Vec<u32> =
             bytemuck::cast_slice(&read_texture(ctx, &self.prim, w, h, 4)?).to_vec();
@@ -305,7 +305,7 @@ impl GBufferTarget {
         let bd: &[[f32; 4]] = bytemuck::cast_slice(&bd);
         let nn = read_texture(ctx, &self.normal, w, h, 16)?;
         let nn: &[[f32; 4]] = bytemuck::cast_slice(&nn);
-        Ok(GBuffer {
+        Ok(VisibilityBuffer {
             width: w as usize,
             height: h as usize,
             bary: bd

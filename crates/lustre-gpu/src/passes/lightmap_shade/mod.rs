@@ -23,10 +23,10 @@ use lustre_brdf::rgb::Rgb;
 use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::{MaterialKind, Scene, TexturedRgb, TexturedScalar};
 use lustre_trace::bake::diffuse_path_scene;
-use lustre_trace::bake::gbuffer::{gbuffer_size, GBuffer};
+use lustre_trace::bake::gbuffer::{gbuffer_size, VisibilityBuffer};
 use lustre_trace::bake::render::Lightmapped;
 use lustre_trace::image::Image;
-use lustre_trace::path::{EnvLight, Geometry, PathCamera};
+use lustre_trace::path_tracer::{EnvLight, Geometry, PathCamera};
 use std::sync::OnceLock;
 
 /// The WGSL source of the shading pass: the albedo and texture modules, then
@@ -700,7 +700,7 @@ impl LightmapRenderer {
         w: usize,
         h: usize,
         k: u32,
-    ) -> Result<(Image, GBuffer)> {
+    ) -> Result<(Image, VisibilityBuffer)> {
         let (gw, gh) = gbuffer_size(w, h, k).map_err(|e| invalid("image size", e.to_string()))?;
         let target = GBufferTarget::new(ctx, gw as u32, gh as u32)?;
         let out = ShadeTarget::new(ctx, w as u32, h as u32)?;

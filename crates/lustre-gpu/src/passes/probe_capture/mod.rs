@@ -24,10 +24,10 @@ use glam::DVec3;
 use lustre_env::cube::face_point;
 use lustre_env::MipFilter;
 use lustre_scene::Scene;
-use lustre_shade::kernel::BoundingPlane;
+use lustre_shade::integrator::BoundingPlane;
 use lustre_shade::probe::{auto_planes, probe_placement, LitScene, Probe, ProbeOptions};
-use lustre_trace::bake::gbuffer::GBuffer;
-use lustre_trace::path::PathCamera;
+use lustre_trace::bake::gbuffer::VisibilityBuffer;
+use lustre_trace::path_tracer::PathCamera;
 use std::ops::Range;
 
 /// The camera of cube face `face` (0..6: +X, −X, +Y, −Y, +Z, −Z) at `centre`: 90° square, its
@@ -212,7 +212,7 @@ impl GpuProbeCapture {
         face: usize,
         size: usize,
         k: u32,
-    ) -> Result<GBuffer> {
+    ) -> Result<VisibilityBuffer> {
         let gsize = check_capture(centre, size, k)?;
         if face >= 6 {
             return Err(invalid("cube face", format!("{face} is not in 0..6")));

@@ -1,4 +1,4 @@
-//! The sphere kernel's compute pass, `sphere.wgsl`: ray casting and the regular-sampling kernel, one invocation
+//! The sphere pass's compute pass, `sphere.wgsl`: ray casting and the regular-sampling integrator, one invocation
 //! per pixel, into an Rgba32Float storage texture that is read back row by row.
 
 use crate::bindings::{buffer_entry, buffer_init, compute_pipeline, storage_entry, uniform_entry};
@@ -15,7 +15,7 @@ use bytemuck::{Pod, Zeroable};
 /// The pass's own WGSL (`shade.wgsl`): the scene, the bindings and the entry point.
 pub const SPHERE_PASS_WGSL: &str = include_str!("sphere.wgsl");
 
-/// The complete WGSL source of the kernel: the modules of [`crate::wgsl`] it imports, then
+/// The complete WGSL source of the pass: the modules of [`crate::wgsl`] it imports, then
 /// `shade.wgsl`.
 pub fn sphere_wgsl() -> String {
     compose(&[&wgsl::REGULAR], SPHERE_PASS_WGSL)
@@ -189,7 +189,7 @@ fn check(scene: &PackedScene) -> Result<()> {
             return Err(invalid(
                 format!("lobe {i}"),
                 format!(
-                    "{} lookups; the GPU kernel takes at most {most} with this scheme \
+                    "{} lookups; the GPU pass takes at most {most} with this scheme \
                      (lavapipe ends longer shader loops silently)",
                     l.sample_count
                 ),
@@ -326,7 +326,7 @@ impl RenderTarget {
     }
 }
 
-/// The compiled kernel: pipeline, bind group layout and sampler.
+/// The compiled pass: pipeline, bind group layout and sampler.
 #[derive(Debug)]
 pub struct GpuRenderer {
     ctx: GpuContext,
@@ -337,7 +337,7 @@ pub struct GpuRenderer {
 
 /// Everything bound for one dispatch: scene, environment and target.
 #[derive(Debug)]
-pub struct Frame {
+pub struct SphereBindings {
     bind_group: wgpu::BindGroup,
     width: u32,
     height: u32,
@@ -408,7 +408,7 @@ impl GpuRenderer {
         scene: &GpuScene,
         env: &GpuEnvironment,
         target: &RenderTarget,
-    ) -> Result<Frame> {
+    ) -> Result<SphereBindings> {
         let c = &scene.camera;
         let w4 = |v: glam::DVec3| {
             let a = f3(v);
@@ -470,15 +470,15 @@ impl GpuRenderer {
                 ],
             });
         scope_result(scope, "binding the frame")?;
-        Ok(Frame {
+        Ok(SphereBindings {
             bind_group,
             width: target.width,
             height: target.height,
         })
     }
 
-    /// Dispatches the kernel over the frame's target and waits until the GPU has finished.
-    pub fn draw(&self, frame: &Frame) -> Result<()> {
+    /// Dispatches the pass over the bound target and waits until the GPU has finished.
+    pub fn draw(&self, bindings: &SphereBindings) -> Result<()> {
         let scope = self
             .ctx
             .device
@@ -495,10 +495,10 @@ impl GpuRenderer {
                 timestamp_writes: None,
             });
             pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &frame.bind_group, &[]);
+            pass.set_bind_group(0, &bindings.bind_group, &[]);
             pass.dispatch_workgroups(
-                frame.width.div_ceil(WORKGROUP),
-                frame.height.div_ceil(WORKGROUP),
+                bindings.width.div_ceil(WORKGROUP),
+                bindings.height.div_ceil(WORKGROUP),
                 1,
             );
         }
@@ -518,8 +518,8 @@ impl GpuRenderer {
     ) -> Result<Vec<[f32; 3]>> {
         let gpu_scene = GpuScene::upload(&self.ctx, scene)?;
         let target = RenderTarget::new(&self.ctx, width, height)?;
-        let frame = self.bind(&gpu_scene, env, &target)?;
-        self.draw(&frame)?;
+        let bindings = self.bind(&gpu_scene, env, &target)?;
+        self.draw(&bindings)?;
         target.read_back(&self.ctx)
     }
 }
@@ -538,7 +538,7 @@ pub const NODE: crate::passes::Node = crate::passes::Node {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::packed::{GpuLobe, GpuMaterial, GpuPlane, GpuSphere};
+    use crate::packed::{GpuKurtMaterial, GpuLobe, GpuPlane, GpuSphere};
     use wgpu::naga;
 
     fn module() -> naga::Module {
@@ -579,28 +579,28 @@ mod tests {
         assert_eq!(span("Globals"), std::mem::size_of::<Globals>());
         assert_eq!(span("Sphere"), std::mem::size_of::<GpuSphere>());
         assert_eq!(span("Plane"), std::mem::size_of::<GpuPlane>());
-        assert_eq!(span("Material"), std::mem::size_of::<GpuMaterial>());
+        assert_eq!(span("Material"), std::mem::size_of::<GpuKurtMaterial>());
         assert_eq!(span("Lobe"), std::mem::size_of::<GpuLobe>());
     }
 
-    /// Budgets beyond what the kernel shades right on lavapipe are refused by name, not
+    /// Budgets beyond what the pass shades right on lavapipe are refused by name, not
     /// rendered with samples silently dropped.
     #[test]
     fn budgets_beyond_the_loop_limit_are_refused() {
         use lustre_brdf::models::kurt::{Kurt, KurtLobe};
         use lustre_brdf::Rgb;
-        use lustre_shade::kernel::{plan_lattice, plan_regular, plan_tap_lattice};
+        use lustre_shade::integrator::{plan_lattice, plan_regular, plan_tap_lattice};
         let lobe = KurtLobe::new(Rgb::splat(0.5), 0.2, 0.075, 0.3, 0.0).expect("lobe");
         let m = Kurt::new(Rgb::splat(0.2), vec![lobe], vec![]).expect("material");
         let scene = |plan| {
-            let s = lustre_shade::scene::Scene {
-                camera: lustre_shade::scene::Camera {
+            let s = lustre_shade::analytic_scene::AnalyticScene {
+                camera: lustre_shade::analytic_scene::LookAtCamera {
                     eye: glam::DVec3::new(0.0, 0.0, 4.0),
                     target: glam::DVec3::ZERO,
                     up: glam::DVec3::Y,
                     fov_y_deg: 40.0,
                 },
-                spheres: vec![lustre_shade::scene::Sphere {
+                spheres: vec![lustre_shade::analytic_scene::Sphere {
                     center: glam::DVec3::ZERO,
                     radius: 1.0,
                     material: 0,

@@ -1,6 +1,6 @@
-// The sphere kernel: the scene ray casting of lustre_shade::scene and the regular-sampling kernel
-// of lustre-shade (kernel::shade_regular with Weighting::Pdf002 for stored patterns, and ours,
-// the per-pixel row lattice of kernel::plan_lattice), in f32. One invocation shades one pixel.
+// The sphere pass: the scene ray casting of lustre_shade::analytic_scene and the regular-sampling integrator
+// of lustre-shade (integrator::shade_regular with Weighting::Pdf002 for stored patterns, and ours,
+// the per-pixel row lattice of integrator::plan_lattice), in f32. One invocation shades one pixel.
 // The lobe, MIP-level, lattice and weighting functions come from the modules in wgsl/ (composed
 // in front of this file by shade.rs); this file holds the scene, the bindings and the entry point.
 //
@@ -194,9 +194,9 @@ fn intersect(o: vec3<f32>, d: vec3<f32>) -> Hit {
     return Hit(true, best, o + best * d, t_axis, cross(n, t_axis), n, material);
 }
 
-// ---------------------------------------------------------------- kernel (kernel.rs) --------
+// ---------------------------------------------------------------- integrator (integrator.rs) --------
 
-// kernel::regular_lobe with Weighting::Pdf002: one lobe by the 002 pseudo code
+// integrator::regular_lobe with Weighting::Pdf002: one lobe by the 002 pseudo code
 // (EvaluateSpecularLobe), in the frame facing the viewer, over the lobe's stored half vectors
 // (regular.wgsl's pattern_sample per sample; skipped samples still count in n).
 fn shade_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>,
@@ -216,7 +216,7 @@ fn shade_lobe(lobe: Lobe, transmission: bool, wo_l: vec3<f32>,
     return lobe.ks * sum / f32(count);
 }
 
-// kernel::shade_regular_with (Pdf002, no bounding planes): the frame faces the viewer (flipped to
+// integrator::shade_regular_with (Pdf002, no bounding planes): the frame faces the viewer (flipped to
 // (t, −b, −n) when ωo·n < 0); nothing when ωo lies in the tangent plane; diffuse = kd ·
 // irradiance(n) (the map stores E/π) plus every reflection and transmission lobe.
 fn shade(hit: Hit, wo: vec3<f32>) -> vec3<f32> {
@@ -245,7 +245,7 @@ fn shade(hit: Hit, wo: vec3<f32>) -> vec3<f32> {
             c += shade_lobe(lobe, k >= m.reflection, wo_l, t, b, n);
         }
     }
-    // kernel::shade_suns: the suns of a lattice + sun plan, exactly, after the lobes.
+    // integrator::shade_suns: the suns of a lattice + sun plan, exactly, after the lobes.
     for (var s = 0u; s < m.sun_count; s++) {
         let sun = suns[m.sun_start + s];
         let sun_l = vec3<f32>(dot(sun.direction, t), dot(sun.direction, b), dot(sun.direction, n));

@@ -24,7 +24,7 @@ use crate::passes::probe_capture::mesh_triangles;
 use crate::view_buffer::{level_sizes, GpuViewBuffer};
 use lustre_shade::mirror::{mirror_camera, Reflector, ReflectorPlane};
 use lustre_shade::probe::LitScene;
-use lustre_trace::path::PathCamera;
+use lustre_trace::path_tracer::PathCamera;
 
 /// The WGSL source of the geometry step.
 pub const VIEW_GEOMETRY_WGSL: &str = include_str!("view_geometry.wgsl");

@@ -1,8 +1,8 @@
-//! Per-pixel shading kernels: the specular integral of 002 Eq. 8 / 000 Eq. 4.3,
+//! Per-pixel integrators: the specular integral of 002 Eq. 8 / 000 Eq. 4.3,
 //!
 //! L_o(ωo) = ∫ L_i(ωi) f(ωi, ωo) |cos θi| dωi,
 //!
-//! evaluated against a pre-filtered cube-map pyramid ([`Environment`]) by four integrators:
+//! evaluated against a pre-filtered cube-map pyramid ([`FilteredEnvironment`]) by four integrators:
 //!
 //! - [`shade_regular`]: the regular half-vector patterns of 002 §5–7 (pseudo code
 //!   `EvaluateSpecularLobe`), with the weightings of [`Weighting`] (002 Eq. 17–18; 000 Eq. 4.24,
@@ -56,7 +56,7 @@ fn facing(f: &ShadingFrame, wo: DVec3) -> (ShadingFrame, DVec3) {
 /// The pre-filtered incident light: a cube-map MIP pyramid for the lobes and an irradiance map
 /// storing E(n)/π for the diffuse term (so that diffuse radiance = kd · lookup(n)).
 #[derive(Clone, Copy, Debug)]
-pub struct Environment<'a> {
+pub struct FilteredEnvironment<'a> {
     /// The radiance pyramid (002 §3).
     pub pyramid: &'a CubePyramid,
     /// Irradiance over π, looked up bilinearly at the normal.
@@ -152,7 +152,12 @@ pub struct Lookup<'a> {
 /// Radiance from `env` along the world direction `wi` at MIP level `lod`, through the optional
 /// bounding-plane correction.
 #[inline]
-pub(crate) fn incident(env: &Environment, lookup: Option<&Lookup>, wi: DVec3, lod: f64) -> Rgb {
+pub(crate) fn incident(
+    env: &FilteredEnvironment,
+    lookup: Option<&Lookup>,
+    wi: DVec3,
+    lod: f64,
+) -> Rgb {
     let d = match lookup {
         Some(l) => corrected_direction(l.planes, l.position, wi),
         None => wi,
@@ -162,7 +167,7 @@ pub(crate) fn incident(env: &Environment, lookup: Option<&Lookup>, wi: DVec3, lo
 
 /// Diffuse radiance kd · E(n)/π (000 Eq. 3.6's kd/π term integrated against the irradiance map).
 #[inline]
-fn diffuse(kd: Rgb, env: &Environment, n: DVec3) -> Rgb {
+fn diffuse(kd: Rgb, env: &FilteredEnvironment, n: DVec3) -> Rgb {
     kd * Rgb(env.irradiance.bilinear(n))
 }
 
@@ -247,7 +252,7 @@ pub fn plan_lattice(kurt: &Kurt, budget_per_lobe: usize) -> Result<MaterialPlan>
 /// Ours with the environment's suns split off ([`lustre_env::split_suns`]): every lobe planned
 /// with the row lattice of `budget_per_lobe − suns.len()` lookups, and each sun evaluated
 /// exactly per lobe ([`shade_suns`], one evaluation each, charged against the budget), so a
-/// pixel still makes at most `budget_per_lobe` per lobe. Shade it with an [`Environment`] whose
+/// pixel still makes at most `budget_per_lobe` per lobe. Shade it with a [`FilteredEnvironment`] whose
 /// pyramid is the split's residual (the irradiance map stays the whole map's). Errors as
 /// [`plan_regular`], or a budget that leaves the lattice no lookup.
 pub fn plan_lattice_sun(kurt: &Kurt, budget_per_lobe: usize, suns: &[Sun]) -> Result<MaterialPlan> {
@@ -304,7 +309,7 @@ pub fn shade_regular(
     f: &ShadingFrame,
     wo: DVec3,
     plan: &MaterialPlan,
-    env: &Environment,
+    env: &FilteredEnvironment,
     w: Weighting,
 ) -> Rgb {
     shade_regular_with(f, wo, plan, env, w, None)
@@ -316,7 +321,7 @@ pub fn shade_regular_counted(
     f: &ShadingFrame,
     wo: DVec3,
     plan: &MaterialPlan,
-    env: &Environment,
+    env: &FilteredEnvironment,
     w: Weighting,
 ) -> (Rgb, usize) {
     shade_regular_full(f, wo, plan, env, w, None)
@@ -346,7 +351,7 @@ pub fn shade_regular_with(
     f: &ShadingFrame,
     wo: DVec3,
     plan: &MaterialPlan,
-    env: &Environment,
+    env: &FilteredEnvironment,
     w: Weighting,
     lookup: Option<&Lookup>,
 ) -> Rgb {
@@ -358,7 +363,7 @@ fn shade_regular_full(
     f: &ShadingFrame,
     wo: DVec3,
     plan: &MaterialPlan,
-    env: &Environment,
+    env: &FilteredEnvironment,
     w: Weighting,
     lookup: Option<&Lookup>,
 ) -> (Rgb, usize) {
@@ -462,7 +467,7 @@ pub fn sun_widened(lobe: &KurtLobe, spread: f64) -> KurtLobe {
 struct Pixel<'a> {
     frame: ShadingFrame,
     wo_l: DVec3,
-    env: &'a Environment<'a>,
+    env: &'a FilteredEnvironment<'a>,
     lookup: Option<&'a Lookup<'a>>,
 }
 
@@ -797,7 +802,7 @@ pub fn shade_ck(
     wo: DVec3,
     kurt: &Kurt,
     n_samples: usize,
-    env: &Environment,
+    env: &FilteredEnvironment,
 ) -> Rgb {
     shade_ck_with(f, wo, kurt, n_samples, env, None)
 }
@@ -809,7 +814,7 @@ pub fn shade_ck_counted(
     wo: DVec3,
     kurt: &Kurt,
     n_samples: usize,
-    env: &Environment,
+    env: &FilteredEnvironment,
 ) -> (Rgb, usize) {
     shade_ck_full(f, wo, kurt, n_samples, env, None)
 }
@@ -826,7 +831,7 @@ pub fn shade_ck_with(
     wo: DVec3,
     kurt: &Kurt,
     n_samples: usize,
-    env: &Environment,
+    env: &FilteredEnvironment,
     lookup: Option<&Lookup>,
 ) -> Rgb {
     shade_ck_full(f, wo, kurt, n_samples, env, lookup).0
@@ -838,7 +843,7 @@ fn shade_ck_full(
     wo: DVec3,
     kurt: &Kurt,
     n_samples: usize,
-    env: &Environment,
+    env: &FilteredEnvironment,
     lookup: Option<&Lookup>,
 ) -> (Rgb, usize) {
     let (frame, wo_l) = facing(f, wo);
@@ -901,7 +906,7 @@ pub fn shade_reference(
     f: &ShadingFrame,
     wo: DVec3,
     bsdf: &dyn Bsdf,
-    env: &Environment,
+    env: &FilteredEnvironment,
     n_samples: usize,
     seed: u64,
 ) -> Rgb {
@@ -913,7 +918,7 @@ pub fn shade_reference_with(
     f: &ShadingFrame,
     wo: DVec3,
     bsdf: &dyn Bsdf,
-    env: &Environment,
+    env: &FilteredEnvironment,
     n_samples: usize,
     seed: u64,
     lookup: Option<&Lookup>,
@@ -937,7 +942,7 @@ fn reference_sample(
     f: &ShadingFrame,
     wo_l: DVec3,
     bsdf: &dyn Bsdf,
-    env: &Environment,
+    env: &FilteredEnvironment,
     lookup: Option<&Lookup>,
     u1: f64,
     u2: f64,
@@ -990,7 +995,7 @@ pub fn shade_reference_mis(
     f: &ShadingFrame,
     wo: DVec3,
     bsdf: &dyn Bsdf,
-    env: &Environment,
+    env: &FilteredEnvironment,
     sampler: &EnvSampler,
     strategy: Strategy,
     n_samples: usize,
@@ -1093,7 +1098,7 @@ impl Progressive {
         f: &ShadingFrame,
         wo: DVec3,
         bsdf: &dyn Bsdf,
-        env: &Environment,
+        env: &FilteredEnvironment,
         n: usize,
     ) {
         let wo_l = f.to_local(wo);
@@ -1133,7 +1138,7 @@ pub fn shade_qmc(
     f: &ShadingFrame,
     wo: DVec3,
     bsdf: &dyn Bsdf,
-    env: &Environment,
+    env: &FilteredEnvironment,
     n: usize,
     seed: u64,
 ) -> Rgb {

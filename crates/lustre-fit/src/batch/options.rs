@@ -1,5 +1,5 @@
 //! What a batch is asked to fit: the model ([`ModelChoice`]), the options that determine a
-//! fit's result ([`FitSettings`], recorded in every JSON and compared on resume), the Kurt
+//! fit's result ([`FitOptions`], recorded in every JSON and compared on resume), the Kurt
 //! options they give, and the checks made before any input is read.
 
 use super::Metric;
@@ -48,7 +48,7 @@ impl Metric {
 
 /// The options that determine a fit's result; recorded in the JSON and compared on resume.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FitSettings {
+pub struct FitOptions {
     /// The model.
     pub model: ModelChoice,
     /// Kurt: number of reflection lobes.
@@ -69,11 +69,11 @@ pub struct FitSettings {
     pub strict: bool,
 }
 
-impl FitSettings {
+impl FitOptions {
     /// Default settings for `model`: one lobe, no transmission lobe, nothing fixed, refine,
     /// Ngan's L2, unmeasured bins masked.
     pub fn new(model: ModelChoice) -> Self {
-        FitSettings {
+        FitOptions {
             model,
             lobes: 1,
             transmission_lobes: 0,
@@ -106,7 +106,7 @@ impl FitSettings {
 }
 
 /// The Kurt options of `s` (search grid and levels at their defaults).
-pub fn kurt_options(s: &FitSettings) -> kurt::KurtOptions {
+pub fn kurt_options(s: &FitOptions) -> kurt::KurtOptions {
     kurt::KurtOptions {
         lobes: s.lobes,
         transmission_lobes: s.transmission_lobes,
@@ -120,7 +120,7 @@ pub fn kurt_options(s: &FitSettings) -> kurt::KurtOptions {
 /// Checks what can be checked before any input is read: for Kurt, that every `--fix` and
 /// `--range` name is one of [`kurt::parameter_names`] and that there is a lobe to fit; for
 /// Cook-Torrance, that no Kurt-only option is set.
-pub fn check_settings(s: &FitSettings) -> Result<()> {
+pub fn check_options(s: &FitOptions) -> Result<()> {
     if s.model == ModelChoice::Kurt && s.lobes == 0 && s.transmission_lobes == 0 {
         return Err(FitError::Option(
             "--lobes 0 without transmission lobes fits no lobe (only kd, a diffuse model): \

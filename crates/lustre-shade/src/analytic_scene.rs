@@ -2,7 +2,7 @@
 //!
 //! The formulas are part of the shared contract (the GPU renderer mirrors them in WGSL):
 //!
-//! - **Camera.** For pixel (x, y) of a W×H image: fwd = normalize(target − eye),
+//! - **LookAtCamera.** For pixel (x, y) of a W×H image: fwd = normalize(target − eye),
 //!   right = normalize(fwd × up), up' = right × fwd, a = tan(fov_y/2),
 //!   px = (2(x+½)/W − 1)·a·W/H, py = (1 − 2(y+½)/H)·a, dir = normalize(fwd + px·right + py·up').
 //! - **Sphere frame.** n = (p − c)/r, t = normalize(axis × n); where |axis × n| < 1e-6 (at the
@@ -26,7 +26,7 @@ pub const T_MIN: f64 = 1e-9;
 
 /// A pinhole camera (vertical field of view in degrees).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Camera {
+pub struct LookAtCamera {
     /// Centre of projection.
     pub eye: DVec3,
     /// The point the camera looks at (centre pixel direction).
@@ -45,7 +45,7 @@ pub struct Sphere {
     pub center: DVec3,
     /// Radius, > 0.
     pub radius: f64,
-    /// Index into [`Scene::materials`].
+    /// Index into [`AnalyticScene::materials`].
     pub material: usize,
     /// Tangent axis (unit length expected; see the module docs for the degenerate case).
     pub axis: DVec3,
@@ -63,15 +63,15 @@ pub struct Plane {
     pub tangent: DVec3,
     /// Half the side of the square (may be infinite for an unbounded plane).
     pub half_size: f64,
-    /// Index into [`Scene::materials`].
+    /// Index into [`AnalyticScene::materials`].
     pub material: usize,
 }
 
-/// Camera, geometry and the Kurt materials the geometry refers to.
+/// LookAtCamera, geometry and the Kurt materials the geometry refers to.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Scene {
+pub struct AnalyticScene {
     /// The viewpoint.
-    pub camera: Camera,
+    pub camera: LookAtCamera,
     /// Spheres.
     pub spheres: Vec<Sphere>,
     /// Square planes.
@@ -82,18 +82,18 @@ pub struct Scene {
 
 /// A ray–surface hit, ready for shading.
 #[derive(Clone, Copy, Debug)]
-pub struct Hit {
+pub struct AnalyticHit {
     /// World position.
     pub position: DVec3,
     /// Orthonormal shading frame (b = n × t), n facing the viewer.
     pub frame: ShadingFrame,
     /// Unit direction to the viewer (−ray direction).
     pub wo: DVec3,
-    /// Index into [`Scene::materials`].
+    /// Index into [`AnalyticScene::materials`].
     pub material: usize,
 }
 
-impl Camera {
+impl LookAtCamera {
     /// The camera basis (fwd, right, up') of the contract, or `None` when it is degenerate (eye at
     /// the target, up parallel to the view direction, non-finite values).
     pub fn basis(&self) -> Option<(DVec3, DVec3, DVec3)> {
@@ -188,7 +188,7 @@ impl Plane {
     }
 }
 
-impl Scene {
+impl AnalyticScene {
     /// Checks the scene: a usable camera, finite geometry, positive radii and sizes, non-zero
     /// normals and material indices in range. Names the offending item.
     pub fn validate(&self) -> Result<()> {
@@ -243,8 +243,8 @@ impl Scene {
     }
 
     /// The primary ray (origin, unit direction) through the centre of pixel (x, y) of a w×h
-    /// image, by the contract's camera formula. A degenerate camera (see [`Scene::validate`])
-    /// gives a NaN direction, which [`Scene::intersect`] treats as a miss.
+    /// image, by the contract's camera formula. A degenerate camera (see [`AnalyticScene::validate`])
+    /// gives a NaN direction, which [`AnalyticScene::intersect`] treats as a miss.
     pub fn primary(&self, x: usize, y: usize, w: usize, h: usize) -> (DVec3, DVec3) {
         let c = &self.camera;
         let Some((fwd, right, up)) = c.basis() else {
@@ -259,7 +259,7 @@ impl Scene {
 
     /// The nearest hit of the ray o + t·d (t > [`T_MIN`]), with the shading frame facing the
     /// viewer. `d` need not be normalized; a zero or non-finite ray misses.
-    pub fn intersect(&self, o: DVec3, d: DVec3) -> Option<Hit> {
+    pub fn intersect(&self, o: DVec3, d: DVec3) -> Option<AnalyticHit> {
         let d = d.try_normalize()?;
         if !o.is_finite() {
             return None;
@@ -289,7 +289,7 @@ impl Scene {
             frame.n = -frame.n;
             frame.b = frame.n.cross(frame.t);
         }
-        Some(Hit {
+        Some(AnalyticHit {
             position: o + t * d,
             frame,
             wo,

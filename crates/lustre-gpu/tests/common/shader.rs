@@ -1,4 +1,4 @@
-//! A test kernel around the binding-free WGSL modules: `body` runs once per invocation after
+//! A test shader around the binding-free WGSL modules: `body` runs once per invocation after
 //! the modules it imports, reading and writing u32 storage arrays, validated by naga first.
 
 use glam::DVec3;
@@ -28,7 +28,7 @@ pub fn validate(src: &str) -> naga::Module {
 /// Runs `body` (WGSL statements using `i`, `input: array<u32>`, `output: array<u32>` and, with
 /// `env`, its pyramid `env_pyramid: texture_cube<f32>` and the trilinear `env_sampler`) once
 /// per invocation i < `count` after the modules `imports`, and reads `output` back.
-pub fn run_kernel(
+pub fn run_shader(
     ctx: &GpuContext,
     imports: &[&Module],
     body: &str,
@@ -57,11 +57,11 @@ pub fn run_kernel(
     let dev = &ctx.device;
     let scope = dev.push_error_scope(wgpu::ErrorFilter::Validation);
     let module = dev.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("test kernel"),
+        label: Some("test shader"),
         source: wgpu::ShaderSource::Wgsl(src.into()),
     });
     let pipeline = dev.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("test kernel"),
+        label: Some("test shader"),
         layout: None,
         module: &module,
         entry_point: Some("main"),
@@ -108,7 +108,7 @@ pub fn run_kernel(
         });
     }
     let bind_group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("test kernel"),
+        label: Some("test shader"),
         layout: &pipeline.get_bind_group_layout(0),
         entries: &entries,
     });
@@ -131,7 +131,7 @@ pub fn run_kernel(
     });
     ctx.wait().unwrap_or_else(|e| panic!("{e}"));
     if let Some(e) = pollster::block_on(scope.pop()) {
-        panic!("test kernel: {e}");
+        panic!("test shader: {e}");
     }
     rx.recv()
         .unwrap_or_else(|e| panic!("{e}"))

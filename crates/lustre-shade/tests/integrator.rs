@@ -9,9 +9,9 @@ use lustre_brdf::numeric::SphereQuadrature;
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::validate::albedo_quadrature;
 use lustre_env::{irradiance_map, CubeMap, CubePyramid, MipFilter};
-use lustre_shade::kernel::{
+use lustre_shade::integrator::{
     plan_lattice, plan_regular, plan_thesis, shade_ck, shade_qmc, shade_reference,
-    shade_reference_with, shade_regular, BoundingPlane, Environment, Lookup, Progressive,
+    shade_reference_with, shade_regular, BoundingPlane, FilteredEnvironment, Lookup, Progressive,
     Weighting,
 };
 use lustre_trace::sampling::ShadingFrame;
@@ -27,8 +27,8 @@ fn build_env(size: usize, f: impl Fn(DVec3) -> [f64; 3] + Sync) -> Env {
     (pyramid, irr)
 }
 
-fn environment(e: &Env) -> Environment<'_> {
-    Environment {
+fn environment(e: &Env) -> FilteredEnvironment<'_> {
+    FilteredEnvironment {
         pyramid: &e.0,
         irradiance: &e.1,
     }

@@ -1,10 +1,10 @@
-//! Scene geometry: camera rays, ray–sphere / ray–plane intersections, tangent frames, render.
+//! AnalyticScene geometry: camera rays, ray–sphere / ray–plane intersections, tangent frames, render.
 
 use glam::DVec3;
 use lustre_brdf::models::kurt::{Kurt, KurtLobe};
 use lustre_brdf::Rgb;
+use lustre_shade::analytic_scene::{AnalyticScene, LookAtCamera, Plane, Sphere};
 use lustre_shade::render::{render, render_with_progress};
-use lustre_shade::scene::{Camera, Plane, Scene, Sphere};
 use lustre_trace::sampling::ShadingFrame;
 use proptest::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -18,9 +18,9 @@ fn material() -> Kurt {
     .expect("kurt")
 }
 
-fn scene(spheres: Vec<Sphere>, planes: Vec<Plane>) -> Scene {
-    Scene {
-        camera: Camera {
+fn scene(spheres: Vec<Sphere>, planes: Vec<Plane>) -> AnalyticScene {
+    AnalyticScene {
+        camera: LookAtCamera {
             eye: DVec3::new(0.0, 0.0, 5.0),
             target: DVec3::ZERO,
             up: DVec3::Y,
@@ -52,7 +52,7 @@ fn assert_frame(f: &ShadingFrame) {
 #[test]
 fn centre_pixel_looks_along_fwd_and_corners_are_symmetric() {
     let mut s = scene(vec![], vec![]);
-    s.camera = Camera {
+    s.camera = LookAtCamera {
         eye: DVec3::new(1.0, 2.0, 3.0),
         target: DVec3::new(-2.0, 0.5, -1.0),
         up: DVec3::new(0.1, 1.0, 0.0),
@@ -280,7 +280,7 @@ proptest! {
         let f = sp.frame_at(sp.center + 0.7 * n);
         prop_assert!((f.n - n).length() < 1e-12);
         assert_frame(&f);
-        // Hit from a random outside point towards the sphere point: consistent and facing.
+        // AnalyticHit from a random outside point towards the sphere point: consistent and facing.
         let s = scene(vec![sp], vec![]);
         let o = sp.center + 3.0 * n + DVec3::new(0.1, 0.2, -0.1);
         if let Some(hit) = s.intersect(o, sp.center - o) {
