@@ -91,26 +91,6 @@ pub struct FrameShadeScene {
 
 const NONE: u32 = u32::MAX;
 
-/// ∂p/∂u and ∂p/∂v of triangle `t` with texture coordinates `uv` (pbrt-v4 Eq. 6.7), as the CPU's
-/// `PathTracer::shading_point` takes them: (e1, 0) where the uvs are missing or degenerate.
-fn surface_derivatives(t: &[DVec3; 3], uv: Option<&[[f64; 2]; 3]>) -> (DVec3, DVec3) {
-    let e1 = t[1] - t[0];
-    let e2 = t[2] - t[0];
-    match uv {
-        Some(uvt) => {
-            let (du1, dv1) = (uvt[1][0] - uvt[0][0], uvt[1][1] - uvt[0][1]);
-            let (du2, dv2) = (uvt[2][0] - uvt[0][0], uvt[2][1] - uvt[0][1]);
-            let det = du1 * dv2 - dv1 * du2;
-            if det.abs() > 1e-12 {
-                ((e1 * dv2 - e2 * dv1) / det, (e2 * du1 - e1 * du2) / det)
-            } else {
-                (e1, DVec3::ZERO)
-            }
-        }
-        None => (e1, DVec3::ZERO),
-    }
-}
-
 /// Concatenates GPU buffers into one (on the GPU), returning it and each part's offset in
 /// elements of `elem` bytes.
 fn concat(
@@ -251,7 +231,7 @@ impl FrameShadeScene {
             let normals = g.normals.get(prim);
             let nz = [DVec3::ZERO; 3];
             let n = normals.unwrap_or(&nz);
-            let (dpdu, dpdv) = surface_derivatives(t, g.uvs.get(prim));
+            let (dpdu, dpdv) = g.surface_derivatives(prim);
             // A normal-mapped material's tangent block (`mapped_normal`'s inputs): the corners'
             // tangents (xyz, w: the bitangent's sign; w = 0: derive T from ∂p/∂u), ∂p/∂v.
             let mapped = material != NONE
