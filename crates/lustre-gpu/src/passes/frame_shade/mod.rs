@@ -29,7 +29,7 @@
 //! on the GPU across calls in the target's accumulation buffer; frame 0 resets it).
 
 use crate::bindings::{
-    buffer_entry, buffer_init, compute_pipelines, map_read, storage_buffer, storage_entry,
+    buffer_entry, buffer_init, compute_pipelines, read_buffer, storage_buffer, storage_entry,
     texture_entry, uniform_entry,
 };
 use crate::context::GpuContext;
@@ -472,27 +472,9 @@ impl FrameShadeTarget {
         })
     }
 
-    fn read(&self, ctx: &GpuContext, b: &wgpu::Buffer) -> Result<Vec<u8>> {
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("frame readback"),
-            size: b.size(),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut enc = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("frame readback"),
-            });
-        enc.copy_buffer_to_buffer(b, 0, &staging, 0, b.size());
-        ctx.queue.submit([enc.finish()]);
-        map_read(ctx, &staging, "frame readback", scope)
-    }
-
     /// Copies the frame to the host.
     pub fn read_back(&self, ctx: &GpuContext) -> Result<Image> {
-        let bytes = self.read(ctx, &self.out)?;
+        let bytes = read_buffer(ctx, &self.out, "frame readback")?;
         let px: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
         Image::from_data(
             self.width as usize,
@@ -505,7 +487,7 @@ impl FrameShadeTarget {
     /// The counts of the last call (one progressive frame): G-buffer pixels with a
     /// view-dependent part, lookups.
     pub fn stats(&self, ctx: &GpuContext) -> Result<FrameStats> {
-        let bytes = self.read(ctx, &self.counts)?;
+        let bytes = read_buffer(ctx, &self.counts, "frame readback")?;
         let c: &[u32] = bytemuck::cast_slice(&bytes);
         Ok(FrameStats {
             glossy_hits: u64::from(c[0]),
