@@ -148,6 +148,28 @@ pub(crate) fn compute_pipelines<const N: usize>(
     Ok((pipelines, layout))
 }
 
+/// The bytes of the whole of `buffer` (COPY_SRC): copied into a staging buffer and mapped
+/// ([`map_read`]), `label` naming the staging buffer, the copy and the stage in errors.
+pub(crate) fn read_buffer(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    label: &'static str,
+) -> Result<Vec<u8>> {
+    let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: buffer.size(),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut enc = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
+    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+    ctx.queue.submit([enc.finish()]);
+    map_read(ctx, &staging, label, scope)
+}
+
 /// Maps `buffer` (MAP_READ, its copy already submitted), waits, checks `scope` and returns
 /// its bytes.
 pub(crate) fn map_read(

@@ -9,7 +9,7 @@
 //! surface else 0), (normal.xyz, 0).
 
 use crate::bindings::buffer_init;
-use crate::bindings::map_read;
+use crate::bindings::read_buffer;
 use crate::context::GpuContext;
 use crate::error::{invalid, wgpu_error, Result};
 use glam::DVec3;
@@ -128,21 +128,7 @@ impl GpuViewBuffer {
     /// Copies the buffer back into a CPU view buffer (f32 values widened).
     pub fn read_back(&self, ctx: &GpuContext) -> Result<ViewBuffer> {
         let read = |b: &wgpu::Buffer| -> Result<Vec<[f32; 4]>> {
-            let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-            let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("view buffer readback"),
-                size: b.size(),
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-                mapped_at_creation: false,
-            });
-            let mut enc = ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                    label: Some("view buffer readback"),
-                });
-            enc.copy_buffer_to_buffer(b, 0, &staging, 0, b.size());
-            ctx.queue.submit([enc.finish()]);
-            let bytes = map_read(ctx, &staging, "view buffer readback", scope)?;
+            let bytes = read_buffer(ctx, b, "view buffer readback")?;
             Ok(bytemuck::cast_slice(&bytes).to_vec())
         };
         let radiance = read(&self.radiance)?;

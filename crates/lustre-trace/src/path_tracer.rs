@@ -128,6 +128,32 @@ pub struct Geometry {
     pub emission: Vec<Rgb>,
 }
 
+impl Geometry {
+    /// ∂p/∂u and ∂p/∂v of triangle `prim` from its texture coordinates (pbrt-v4 Eq. 6.7):
+    /// with e1 = p1 − p0, e2 = p2 − p0 and the uv differences (du1, dv1), (du2, dv2) of corners
+    /// 1 and 2 from corner 0, det = du1 dv2 − dv1 du2 and
+    /// ∂p/∂u = (dv2 e1 − dv1 e2)/det, ∂p/∂v = (du1 e2 − du2 e1)/det;
+    /// (e1, 0) where the triangle has no uvs or they are degenerate (|det| ≤ 1e-12).
+    pub fn surface_derivatives(&self, prim: usize) -> (DVec3, DVec3) {
+        let t = &self.positions[prim];
+        let e1 = t[1] - t[0];
+        let e2 = t[2] - t[0];
+        match self.uvs.get(prim) {
+            Some(uvt) => {
+                let (du1, dv1) = (uvt[1][0] - uvt[0][0], uvt[1][1] - uvt[0][1]);
+                let (du2, dv2) = (uvt[2][0] - uvt[0][0], uvt[2][1] - uvt[0][1]);
+                let det = du1 * dv2 - dv1 * du2;
+                if det.abs() > 1e-12 {
+                    ((e1 * dv2 - e2 * dv1) / det, (e2 * du1 - e1 * du2) / det)
+                } else {
+                    (e1, DVec3::ZERO)
+                }
+            }
+            None => (e1, DVec3::ZERO),
+        }
+    }
+}
+
 /// An environment light: an equirect map (lustre's convention), a rotation taking map
 /// directions to world directions, and a scale.
 #[derive(Clone, Debug)]
@@ -530,25 +556,9 @@ impl<'a, 's> PathTracer<'a, 's> {
         let b = h.bary;
         let p = t[0] * b[0] + t[1] * b[1] + t[2] * b[2];
         let p = if p.is_finite() { p } else { o + d * h.t };
-        let e1 = t[1] - t[0];
-        let e2 = t[2] - t[0];
         let (ng, ns) = self.normals(h.prim, b);
         let uv = self.uv_at(h.prim, b);
-        // Tangents along ∂p/∂u and ∂p/∂v (pbrt-v4 Eq. 6.7), e1 / none when the uvs are
-        // degenerate.
-        let (dpdu, dpdv) = match g.uvs.get(h.prim) {
-            Some(uvt) => {
-                let (du1, dv1) = (uvt[1][0] - uvt[0][0], uvt[1][1] - uvt[0][1]);
-                let (du2, dv2) = (uvt[2][0] - uvt[0][0], uvt[2][1] - uvt[0][1]);
-                let det = du1 * dv2 - dv1 * du2;
-                if det.abs() > 1e-12 {
-                    ((e1 * dv2 - e2 * dv1) / det, (e2 * du1 - e1 * du2) / det)
-                } else {
-                    (e1, DVec3::ZERO)
-                }
-            }
-            None => (e1, DVec3::ZERO),
-        };
+        let (dpdu, dpdv) = g.surface_derivatives(h.prim);
         let k = g.material[h.prim] as usize;
         let frame = match self.normal_mapped[k]
             .then(|| self.scene.materials[k].normal_map(uv))

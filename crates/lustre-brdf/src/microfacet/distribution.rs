@@ -20,10 +20,7 @@
 //! domain (as Mitsuba does, but iterated to convergence with a bisection safeguard instead of a
 //! fixed three Newton steps).
 
-use crate::bsdf::LobeFlags;
 use crate::error::{check_range, Error, Result};
-use crate::frame::reflect;
-use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -182,42 +179,6 @@ impl MicrofacetDistribution {
             return 0.0;
         }
         self.d(m) * self.g1(v, m) * vm / v.z
-    }
-
-    /// A glossy lobe of this distribution (reflection about a visible normal) mixed with a
-    /// cosine-weighted diffuse lobe, the glossy one picked with probability `ps`: the sampling
-    /// of rough plastic and of the glTF BRDF. Returns the direction and its lobe; `None` below
-    /// the horizon.
-    pub fn sample_with_diffuse(
-        &self,
-        ps: f64,
-        wo: DVec3,
-        u1: f64,
-        u2: f64,
-    ) -> Option<(DVec3, LobeFlags)> {
-        if wo.z.is_nan() || wo.z <= 0.0 {
-            return None;
-        }
-        let (wi, kind) = if u1 < ps {
-            let u1 = (u1 / ps).clamp(0.0, 1.0 - f64::EPSILON);
-            let m = self.sample_visible(wo, u1, u2)?;
-            (reflect(wo, m), LobeFlags::GLOSSY_REFLECTION)
-        } else {
-            let u1 = ((u1 - ps) / (1.0 - ps)).clamp(0.0, 1.0 - f64::EPSILON);
-            (cosine_hemisphere(u1, u2), LobeFlags::DIFFUSE_REFLECTION)
-        };
-        (wi.z > 0.0).then_some((wi, kind))
-    }
-
-    /// The solid-angle density of [`Self::sample_with_diffuse`]:
-    /// ps · D(h) G1(wo, h) / (4 cos θo) + (1 − ps) cos θi / π.
-    pub fn pdf_with_diffuse(&self, ps: f64, wi: DVec3, wo: DVec3) -> f64 {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
-            return 0.0;
-        }
-        let h = (wi + wo).normalize();
-        let spec = self.d(h) * self.g1(wo, h) / (4.0 * wo.z);
-        ps * spec + (1.0 - ps) * cosine_hemisphere_pdf(wi)
     }
 
     /// Draws a microfacet normal visible from `v` (which must lie above the surface; `None`

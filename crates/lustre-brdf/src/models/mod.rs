@@ -7,6 +7,7 @@ pub mod conductor;
 pub mod conductor_presets;
 pub mod cook_torrance;
 pub mod dielectric;
+mod glossy_diffuse;
 pub mod kurt;
 pub mod lafortune;
 pub mod lambert;

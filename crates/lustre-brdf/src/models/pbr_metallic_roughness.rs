@@ -19,6 +19,7 @@
 use crate::bsdf::{Bsdf, BsdfFlags, BsdfSample, LobeFlags};
 use crate::error::{check_range, check_rgb, Result};
 use crate::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
+use crate::models::glossy_diffuse::{self, GlossyDiffuse};
 use crate::rgb::Rgb;
 use glam::DVec3;
 use std::f64::consts::FRAC_1_PI;
@@ -62,6 +63,12 @@ impl PbrMetallicRoughness {
     /// α = max(roughness², 1e-3).
     pub fn alpha(&self) -> f64 {
         self.distribution.alpha_u()
+    }
+}
+
+impl GlossyDiffuse for PbrMetallicRoughness {
+    fn distribution(&self) -> &MicrofacetDistribution {
+        &self.distribution
     }
 
     fn prob_specular(&self, wo: DVec3) -> f64 {
@@ -110,18 +117,11 @@ impl Bsdf for PbrMetallicRoughness {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        let ps = self.prob_specular(wo);
-        let (wi, kind) = self.distribution.sample_with_diffuse(ps, wo, u1, u2)?;
-        let pdf = self.pdf(wi, wo);
-        (pdf > 0.0 && pdf.is_finite()).then(|| BsdfSample::new(wi, self.eval(wi, wo), pdf, kind))
+        glossy_diffuse::sample(self, wo, u1, u2)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
-            return 0.0;
-        }
-        self.distribution
-            .pdf_with_diffuse(self.prob_specular(wo), wi, wo)
+        glossy_diffuse::pdf(self, wi, wo)
     }
 
     /// Reciprocal. Energy conserving only as a pure metal (a rough conductor with F ≤ 1): the

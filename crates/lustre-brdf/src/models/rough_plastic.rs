@@ -24,6 +24,7 @@ use crate::frame::reflect;
 use crate::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
 use crate::microfacet::fresnel::fresnel_dielectric;
 use crate::models::dielectric::{refract, relative_ior};
+use crate::models::glossy_diffuse::{self, GlossyDiffuse};
 use crate::rgb::Rgb;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -182,6 +183,12 @@ impl RoughPlastic {
     pub fn internal_reflectance(&self) -> f64 {
         self.internal_reflectance
     }
+}
+
+impl GlossyDiffuse for RoughPlastic {
+    fn distribution(&self) -> &MicrofacetDistribution {
+        &self.distribution
+    }
 
     fn prob_specular(&self, wo: DVec3) -> f64 {
         let t = self.transmittance(wo.z);
@@ -232,18 +239,11 @@ impl Bsdf for RoughPlastic {
     }
 
     fn sample(&self, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
-        let ps = self.prob_specular(wo);
-        let (wi, kind) = self.distribution.sample_with_diffuse(ps, wo, u1, u2)?;
-        let pdf = self.pdf(wi, wo);
-        (pdf > 0.0 && pdf.is_finite()).then(|| BsdfSample::new(wi, self.eval(wi, wo), pdf, kind))
+        glossy_diffuse::sample(self, wo, u1, u2)
     }
 
     fn pdf(&self, wi: DVec3, wo: DVec3) -> f64 {
-        if !(wi.z > 0.0 && wo.z > 0.0) {
-            return 0.0;
-        }
-        self.distribution
-            .pdf_with_diffuse(self.prob_specular(wo), wi, wo)
+        glossy_diffuse::pdf(self, wi, wo)
     }
 
     /// Reciprocal (T(cos θi) T(cos θo) and the coating are symmetric); energy conserving for

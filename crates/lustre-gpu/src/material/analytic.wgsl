@@ -14,17 +14,6 @@
 // ward::COS_MIN: directions this close to the surface plane give 0 (Ward, Lafortune, A–S, ABC).
 const ANALYTIC_COS_MIN: f32 = 1e-9;
 
-// The 32 floats of a record, float k at [k].
-fn analytic_floats(p: array<vec4<f32>, 8>) -> array<f32, 32> {
-    var f: array<f32, 32>;
-    for (var i = 0u; i < 8u; i++) {
-        for (var j = 0u; j < 4u; j++) {
-            f[4u * i + j] = p[i][j];
-        }
-    }
-    return f;
-}
-
 // frame::half_vector, or 0 when the directions are opposite (|ωi + ωo|² ≤ 1e-24).
 fn analytic_half(wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
     let h = wi + wo;
@@ -110,7 +99,7 @@ fn lafortune_eval(p: array<vec4<f32>, 8>, wi: vec3<f32>, wo: vec3<f32>) -> vec3<
     if (wi.z < ANALYTIC_COS_MIN || wo.z < ANALYTIC_COS_MIN) {
         return vec3<f32>(0.0);
     }
-    var q = analytic_floats(p);
+    var q = mix_floats(p);
     var f = p[0].xyz * (1.0 / PI);
     for (var j = 0u; j < min(u32(p[0].w), 3u); j++) {
         let k = 4u + 9u * j;
@@ -257,7 +246,7 @@ fn ct_channels_eval(p: array<vec4<f32>, 8>, wi: vec3<f32>, wo: vec3<f32>) -> vec
     if (!(ci > 0.0 && co > 0.0)) {
         return vec3<f32>(0.0);
     }
-    var q = analytic_floats(p);
+    var q = mix_floats(p);
     let hv = wi + wo;
     let h = hv / length(hv);
     let cd = dot(wi, h);

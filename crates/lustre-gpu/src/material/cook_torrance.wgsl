@@ -153,12 +153,7 @@ fn ct_same(a: vec3<f32>, b: vec3<f32>) -> vec3<u32> {
 }
 
 fn cook_torrance_unpack(p: array<vec4<f32>, 8>) -> CookTorrance {
-    var f: array<f32, 32>;
-    for (var i = 0u; i < 8u; i++) {
-        for (var j = 0u; j < 4u; j++) {
-            f[4u * i + j] = p[i][j];
-        }
-    }
+    var f = mix_floats(p);
     let flags = u32(f[15]);
     var m: CookTorrance;
     m.dist = select(MICROFACET_BECKMANN, MICROFACET_GGX, (flags & 8u) != 0u);
@@ -172,30 +167,57 @@ fn cook_torrance_unpack(p: array<vec4<f32>, 8>) -> CookTorrance {
     return m;
 }
 
-fn cook_torrance_eval(m: CookTorrance, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+// The half vector of cook_torrance_eval and sgd_eval: h, ωi·h and cos θi cos θo; `above`
+// false where ωi or ωo is not above the surface (f = 0, the other fields 0).
+struct CtHalf {
+    h: vec3<f32>,
+    cos_d: f32,
+    cos_io: f32,
+    above: bool,
+}
+
+fn ct_half(wi: vec3<f32>, wo: vec3<f32>) -> CtHalf {
     let ci = wi.z;
     let co = wo.z;
     if (!(ci > 0.0 && co > 0.0)) {
-        return vec3<f32>(0.0);
+        return CtHalf(vec3<f32>(0.0), 0.0, 0.0, false);
     }
     let hv = wi + wo;
     let h = hv / length(hv);
-    let cd = dot(wi, h);
-    var f = vec3<f32>(0.0);
-    var chs = m.ch;
-    for (var c = 0u; c < 3u; c++) {
-        let q = chs[c];
-        var spec = 0.0;
-        if (q.rho_s != 0.0) {
-            var g = 1.0;
-            if (q.smith == 1u) {
-                g = ct_smith_g1(m.dist, q.alpha, wi) * ct_smith_g1(m.dist, q.alpha, wo);
-            }
-            spec = q.rho_s * ct_fresnel(q.f0, q.f1, cd) * ct_d(m.dist, q.alpha, h) * g / (ci * co);
-        }
-        f[c] = (q.rho_d + spec) / PI;
+    return CtHalf(h, dot(wi, h), ci * co, true);
+}
+
+// One channel of cook_torrance_eval and sgd_eval (004 Eq. III.1):
+// (ρd + ρs F(ωi·h) D g_i g_o / (cos θi cos θo))/π, the specular term 0 where ρs = 0; g_i and
+// g_o the shadowing, multiplied in that order (sgd: G1(ωi) and G1(ωo); cook_torrance: its
+// product G1(ωi) G1(ωo), or 1, and 1).
+fn ct_channel(rho_d: f32, rho_s: f32, f0: f32, f1: f32, d: f32, g_i: f32, g_o: f32,
+              e: CtHalf) -> f32 {
+    var spec = 0.0;
+    if (rho_s != 0.0) {
+        spec = rho_s * ct_fresnel(f0, f1, e.cos_d) * d * g_i * g_o / e.cos_io;
     }
-    return f;
+    return (rho_d + spec) / PI;
+}
+
+// One channel of cook_torrance_eval.
+fn cook_torrance_channel(dist: u32, q: CtChannel, e: CtHalf, wi: vec3<f32>,
+                         wo: vec3<f32>) -> f32 {
+    var g = 1.0;
+    if (q.smith == 1u) {
+        g = ct_smith_g1(dist, q.alpha, wi) * ct_smith_g1(dist, q.alpha, wo);
+    }
+    return ct_channel(q.rho_d, q.rho_s, q.f0, q.f1, ct_d(dist, q.alpha, e.h), g, 1.0, e);
+}
+
+fn cook_torrance_eval(m: CookTorrance, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    let e = ct_half(wi, wo);
+    if (!e.above) {
+        return vec3<f32>(0.0);
+    }
+    return vec3<f32>(cook_torrance_channel(m.dist, m.ch[0], e, wi, wo),
+                     cook_torrance_channel(m.dist, m.ch[1], e, wi, wo),
+                     cook_torrance_channel(m.dist, m.ch[2], e, wi, wo));
 }
 
 // CookTorrance::pdf, shared with sgd: lobe l draws h with density D_l(h) cos θh of `dist`
@@ -249,18 +271,29 @@ fn ct_sample_direction(lobes: CtLobes, dist: u32, wo: vec3<f32>, u: vec2<f32>) -
     return vec4<f32>(reflect_about(wo, h), 1.0);
 }
 
-fn cook_torrance_sample(m: CookTorrance, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
+// cook_torrance_sample and sgd_sample but the value: ωi from ct_sample_direction and its density
+// ct_mixture_pdf (value 0, for the kind to fill in), or no sample where ωo, ωi or the density
+// fails its check.
+fn ct_sample(lobes: CtLobes, dist: u32, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
     if (!(wo.z > 0.0)) {
         return mix_no_sample();
     }
-    let d = ct_sample_direction(m.lobes, m.dist, wo, u);
+    let d = ct_sample_direction(lobes, dist, wo, u);
     let wi = d.xyz;
     if (d.w == 0.0 || !(wi.z > 0.0) || !mix_finite3(wi)) {
         return mix_no_sample();
     }
-    let pdf = cook_torrance_pdf(m, wi, wo);
+    let pdf = ct_mixture_pdf(lobes, dist, wi, wo);
     if (!(pdf > 0.0 && pdf <= 3.4028235e38)) {
         return mix_no_sample();
     }
-    return BsdfSample(wi, pdf, cook_torrance_eval(m, wi, wo), 0u);
+    return BsdfSample(wi, pdf, vec3<f32>(0.0), 0u);
+}
+
+fn cook_torrance_sample(m: CookTorrance, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
+    var s = ct_sample(m.lobes, m.dist, wo, u);
+    if (s.pdf > 0.0) {
+        s.value = cook_torrance_eval(m, s.wi, wo);
+    }
+    return s;
 }

@@ -23,12 +23,7 @@ struct Kurt {
 }
 
 fn kurt_unpack(p: array<vec4<f32>, 8>) -> Kurt {
-    var f: array<f32, 32>;
-    for (var i = 0u; i < 8u; i++) {
-        for (var j = 0u; j < 4u; j++) {
-            f[4u * i + j] = p[i][j];
-        }
-    }
+    var f = mix_floats(p);
     let counts = u32(f[3]);
     var m: Kurt;
     m.kd = vec3<f32>(f[0], f[1], f[2]);

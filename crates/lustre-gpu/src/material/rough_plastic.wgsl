@@ -3,7 +3,7 @@
 // roughplastic): f = R_s F(ωo·h) D G / (4 cos θi cos θo) + ρ' T(cos θi) T(cos θo) / (π η²),
 // ρ' = ρ/(1 − Fdr) (or ρ/(1 − ρ Fdr) when nonlinear); sampling picks the glossy lobe with
 // p_s = (1 − T(cos θo)) w_s / ((1 − T) w_s + T (1 − w_s)) (w_s the specular weight), else the
-// cosine lobe (microfacet sample_with_diffuse / pdf_with_diffuse).
+// cosine lobe (lustre_brdf::models::glossy_diffuse::{sample, pdf}).
 // The 64-entry external transmittance table T(μ) (μ = i/63, linearly interpolated) does not fit
 // the record: it lives in the pass's table buffer, read through `bsdf_table(i)`, which every
 // pass that imports this module defines.

@@ -189,12 +189,7 @@ fn half_to_f32(h: u32) -> f32 {
 }
 
 fn sgd_unpack(p: array<vec4<f32>, 8>) -> Sgd {
-    var f: array<f32, 32>;
-    for (var i = 0u; i < 8u; i++) {
-        for (var j = 0u; j < 4u; j++) {
-            f[4u * i + j] = p[i][j];
-        }
-    }
+    var f = mix_floats(p);
     var m: Sgd;
     for (var c = 0u; c < 3u; c++) {
         let b = 10u * c;
@@ -212,27 +207,19 @@ fn sgd_unpack(p: array<vec4<f32>, 8>) -> Sgd {
     return m;
 }
 
+// One channel of sgd_eval.
+fn sgd_channel(q: SgdChannel, e: CtHalf, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
+    return ct_channel(q.rho_d, q.rho_s, q.f0, q.f1, sgd_d(q, e.h), sgd_g1(q, wi), sgd_g1(q, wo),
+                      e);
+}
+
 fn sgd_eval(m: Sgd, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
-    let ci = wi.z;
-    let co = wo.z;
-    if (!(ci > 0.0 && co > 0.0)) {
+    let e = ct_half(wi, wo);
+    if (!e.above) {
         return vec3<f32>(0.0);
     }
-    let hv = wi + wo;
-    let h = hv / length(hv);
-    let cd = dot(wi, h);
-    var f = vec3<f32>(0.0);
-    var chs = m.ch;
-    for (var c = 0u; c < 3u; c++) {
-        let q = chs[c];
-        var spec = 0.0;
-        if (q.rho_s != 0.0) {
-            spec = q.rho_s * ct_fresnel(q.f0, q.f1, cd) * sgd_d(q, h) * sgd_g1(q, wi)
-                * sgd_g1(q, wo) / (ci * co);
-        }
-        f[c] = (q.rho_d + spec) / PI;
-    }
-    return f;
+    return vec3<f32>(sgd_channel(m.ch[0], e, wi, wo), sgd_channel(m.ch[1], e, wi, wo),
+                     sgd_channel(m.ch[2], e, wi, wo));
 }
 
 fn sgd_pdf(m: Sgd, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
@@ -240,17 +227,9 @@ fn sgd_pdf(m: Sgd, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
 }
 
 fn sgd_sample(m: Sgd, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
-    if (!(wo.z > 0.0)) {
-        return mix_no_sample();
+    var s = ct_sample(m.lobes, MICROFACET_GGX, wo, u);
+    if (s.pdf > 0.0) {
+        s.value = sgd_eval(m, s.wi, wo);
     }
-    let d = ct_sample_direction(m.lobes, MICROFACET_GGX, wo, u);
-    let wi = d.xyz;
-    if (d.w == 0.0 || !(wi.z > 0.0) || !mix_finite3(wi)) {
-        return mix_no_sample();
-    }
-    let pdf = sgd_pdf(m, wi, wo);
-    if (!(pdf > 0.0 && pdf <= 3.4028235e38)) {
-        return mix_no_sample();
-    }
-    return BsdfSample(wi, pdf, sgd_eval(m, wi, wo), 0u);
+    return s;
 }

@@ -1,7 +1,7 @@
 // module glossy_diffuse: a visible-normal microfacet reflection lobe picked with probability ps
 // beside a cosine lobe — the density and the sampled direction the rough plastic and the glTF
-// metallic-roughness model share. CPU twins: the `pdf` and `sample` of
-// lustre_brdf::models::rough_plastic::RoughPlastic and
+// metallic-roughness model share. CPU twin: lustre_brdf::models::glossy_diffuse::{pdf, sample},
+// the `pdf` and `sample` of lustre_brdf::models::rough_plastic::RoughPlastic and
 // lustre_brdf::models::pbr_metallic_roughness::PbrMetallicRoughness (the same mixture, each
 // with its own ps).
 

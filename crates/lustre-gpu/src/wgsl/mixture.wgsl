@@ -1,4 +1,5 @@
-// module mixture: component selection and the diffuse component of the fitted models' mixtures.
+// module mixture: component selection and the diffuse component of the fitted models' mixtures,
+// the 32 floats of their records.
 // CPU twins: lustre_brdf::bsdf::{select_component, sample_diffuse_mixture} and
 // lustre_brdf::sampling::{cosine_hemisphere, cosine_hemisphere_pdf}. Selection: component i
 // with probability wᵢ/Σw, the uniform number rescaled to (u Σw − Σ_{j<i} wⱼ)/wᵢ and reused by
@@ -62,6 +63,17 @@ fn mix_ln_one_minus(u: f32) -> f32 {
 // Rgb::luminance (Rec. 709 weights).
 fn mix_luminance(c: vec3<f32>) -> f32 {
     return 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+}
+
+// The 32 floats of a fitted model's record, float k at [k].
+fn mix_floats(p: array<vec4<f32>, 8>) -> array<f32, 32> {
+    var f: array<f32, 32>;
+    for (var i = 0u; i < 8u; i++) {
+        for (var j = 0u; j < 4u; j++) {
+            f[4u * i + j] = p[i][j];
+        }
+    }
+    return f;
 }
 
 // A failed sample (the CPU's None).

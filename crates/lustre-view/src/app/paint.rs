@@ -2,6 +2,7 @@
 //! for a screenshot, into a texture that is read back from the GPU as RGBA8.
 
 use super::window::Gfx;
+use lustre_gpu::context::record_texture_readback;
 use std::sync::mpsc::channel;
 
 /// Draws egui into the surface (and, for a screenshot, into a texture read back as RGBA8).
@@ -112,43 +113,13 @@ fn paint_surface(
         g.renderer.render(&mut pass, jobs, &screen);
     }
     let (w, h) = (g.config.width, g.config.height);
-    let row = 4 * w;
-    let padded =
-        row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let readback = target.as_ref().map(|t| {
-        let buffer = g.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("screenshot readback"),
-            size: u64::from(padded) * u64::from(h),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        enc.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture: t,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(padded),
-                    rows_per_image: Some(h),
-                },
-            },
-            wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-        );
-        buffer
-    });
+    let readback = target
+        .as_ref()
+        .map(|t| record_texture_readback(&g.device, &mut enc, t, (w, h), 4, "screenshot readback"));
     g.queue
         .submit(extra.into_iter().chain(std::iter::once(enc.finish())));
     g.queue.present(frame);
-    let Some(buffer) = readback else {
+    let Some((buffer, padded)) = readback else {
         return Ok(Some((0, 0, vec![])));
     };
     let bgra = matches!(

@@ -29,7 +29,7 @@
 //! on the GPU across calls in the target's accumulation buffer; frame 0 resets it).
 
 use crate::bindings::{
-    buffer_entry, buffer_init, compute_pipelines, map_read, storage_buffer, storage_entry,
+    buffer_entry, buffer_init, compute_pipelines, read_buffer, storage_buffer, storage_entry,
     texture_entry, uniform_entry,
 };
 use crate::context::GpuContext;
@@ -90,26 +90,6 @@ pub struct FrameShadeScene {
 }
 
 const NONE: u32 = u32::MAX;
-
-/// ∂p/∂u and ∂p/∂v of triangle `t` with texture coordinates `uv` (pbrt-v4 Eq. 6.7), as the CPU's
-/// `PathTracer::shading_point` takes them: (e1, 0) where the uvs are missing or degenerate.
-fn surface_derivatives(t: &[DVec3; 3], uv: Option<&[[f64; 2]; 3]>) -> (DVec3, DVec3) {
-    let e1 = t[1] - t[0];
-    let e2 = t[2] - t[0];
-    match uv {
-        Some(uvt) => {
-            let (du1, dv1) = (uvt[1][0] - uvt[0][0], uvt[1][1] - uvt[0][1]);
-            let (du2, dv2) = (uvt[2][0] - uvt[0][0], uvt[2][1] - uvt[0][1]);
-            let det = du1 * dv2 - dv1 * du2;
-            if det.abs() > 1e-12 {
-                ((e1 * dv2 - e2 * dv1) / det, (e2 * du1 - e1 * du2) / det)
-            } else {
-                (e1, DVec3::ZERO)
-            }
-        }
-        None => (e1, DVec3::ZERO),
-    }
-}
 
 /// Concatenates GPU buffers into one (on the GPU), returning it and each part's offset in
 /// elements of `elem` bytes.
@@ -251,7 +231,7 @@ impl FrameShadeScene {
             let normals = g.normals.get(prim);
             let nz = [DVec3::ZERO; 3];
             let n = normals.unwrap_or(&nz);
-            let (dpdu, dpdv) = surface_derivatives(t, g.uvs.get(prim));
+            let (dpdu, dpdv) = g.surface_derivatives(prim);
             // A normal-mapped material's tangent block (`mapped_normal`'s inputs): the corners'
             // tangents (xyz, w: the bitangent's sign; w = 0: derive T from ∂p/∂u), ∂p/∂v.
             let mapped = material != NONE
@@ -492,27 +472,9 @@ impl FrameShadeTarget {
         })
     }
 
-    fn read(&self, ctx: &GpuContext, b: &wgpu::Buffer) -> Result<Vec<u8>> {
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("frame readback"),
-            size: b.size(),
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        let mut enc = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("frame readback"),
-            });
-        enc.copy_buffer_to_buffer(b, 0, &staging, 0, b.size());
-        ctx.queue.submit([enc.finish()]);
-        map_read(ctx, &staging, "frame readback", scope)
-    }
-
     /// Copies the frame to the host.
     pub fn read_back(&self, ctx: &GpuContext) -> Result<Image> {
-        let bytes = self.read(ctx, &self.out)?;
+        let bytes = read_buffer(ctx, &self.out, "frame readback")?;
         let px: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
         Image::from_data(
             self.width as usize,
@@ -525,7 +487,7 @@ impl FrameShadeTarget {
     /// The counts of the last call (one progressive frame): G-buffer pixels with a
     /// view-dependent part, lookups.
     pub fn stats(&self, ctx: &GpuContext) -> Result<FrameStats> {
-        let bytes = self.read(ctx, &self.counts)?;
+        let bytes = read_buffer(ctx, &self.counts, "frame readback")?;
         let c: &[u32] = bytemuck::cast_slice(&bytes);
         Ok(FrameStats {
             glossy_hits: u64::from(c[0]),

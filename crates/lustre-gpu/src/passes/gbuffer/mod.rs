@@ -16,7 +16,7 @@
 //! centre lies on an edge, and depth ties between coplanar triangles resolve differently.
 
 use crate::bindings::{buffer_init, map_read};
-use crate::context::GpuContext;
+use crate::context::{record_texture_readback, GpuContext};
 use crate::error::{invalid, scope_result, Result};
 use crate::wgsl;
 use glam::DVec3;
@@ -332,45 +332,23 @@ pub(crate) fn read_texture(
     h: u32,
     bpp: u32,
 ) -> Result<Vec<u8>> {
-    let row = w * bpp;
-    let padded =
-        row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("gbuffer readback"),
-        size: u64::from(padded) * u64::from(h),
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
     let mut enc = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("gbuffer readback"),
         });
-    enc.copy_texture_to_buffer(
-        wgpu::TexelCopyTextureInfo {
-            texture,
-            mip_level: 0,
-            origin: wgpu::Origin3d::ZERO,
-            aspect: wgpu::TextureAspect::All,
-        },
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded),
-                rows_per_image: Some(h),
-            },
-        },
-        wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
+    let (buffer, padded) = record_texture_readback(
+        &ctx.device,
+        &mut enc,
+        texture,
+        (w, h),
+        bpp,
+        "gbuffer readback",
     );
     ctx.queue.submit([enc.finish()]);
     let out = map_read(ctx, &buffer, "G-buffer readback", scope)?;
-    let (row, padded) = (row as usize, padded as usize);
+    let (row, padded) = ((w * bpp) as usize, padded as usize);
     Ok((0..h as usize)
         .flat_map(|y| out[y * padded..y * padded + row].iter().copied())
         .collect())
