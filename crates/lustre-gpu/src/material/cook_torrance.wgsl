@@ -203,6 +203,10 @@ fn ct_channel(rho_d: f32, rho_s: f32, f0: f32, f1: f32, d: f32, g_i: f32, g_o: f
 // One channel of cook_torrance_eval.
 fn cook_torrance_channel(dist: u32, q: CtChannel, e: CtHalf, wi: vec3<f32>,
                          wo: vec3<f32>) -> f32 {
+    if (q.rho_s == 0.0) {
+        // No specular term: D and G are not evaluated.
+        return ct_channel(q.rho_d, 0.0, q.f0, q.f1, 0.0, 1.0, 1.0, e);
+    }
     var g = 1.0;
     if (q.smith == 1u) {
         g = ct_smith_g1(dist, q.alpha, wi) * ct_smith_g1(dist, q.alpha, wo);

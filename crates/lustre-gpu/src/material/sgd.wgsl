@@ -209,6 +209,10 @@ fn sgd_unpack(p: array<vec4<f32>, 8>) -> Sgd {
 
 // One channel of sgd_eval.
 fn sgd_channel(q: SgdChannel, e: CtHalf, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
+    if (q.rho_s == 0.0) {
+        // No specular term: D and G are not evaluated.
+        return ct_channel(q.rho_d, 0.0, q.f0, q.f1, 0.0, 1.0, 1.0, e);
+    }
     return ct_channel(q.rho_d, q.rho_s, q.f0, q.f1, sgd_d(q, e.h), sgd_g1(q, wi), sgd_g1(q, wo),
                       e);
 }
