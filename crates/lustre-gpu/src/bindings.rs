@@ -1,5 +1,6 @@
 //! Building blocks the passes share: initialised buffers, bind-group-layout and bind-group
-//! entries, compiled single-bind-group compute pipelines, and read-back ([`map_read`]).
+//! entries, compiled single-bind-group compute pipelines, and read-back ([`map_read`], [`read_buffer`],
+//! [`record_texture_readback`]).
 
 use crate::context::GpuContext;
 use crate::error::{scope_result, wgpu_error, Result};
@@ -195,4 +196,48 @@ pub(crate) fn map_read(
         .to_vec();
     buffer.unmap();
     Ok(out)
+}
+
+/// Records on `enc` the copy of level 0 of `texture`, `w`×`h` texels of `bpp` bytes, into a new
+/// MAP_READ buffer labelled `label` whose rows are padded to
+/// [`wgpu::COPY_BYTES_PER_ROW_ALIGNMENT`]: returns the buffer and its row length in bytes.
+pub fn record_texture_readback(
+    device: &wgpu::Device,
+    enc: &mut wgpu::CommandEncoder,
+    texture: &wgpu::Texture,
+    (w, h): (u32, u32),
+    bpp: u32,
+    label: &str,
+) -> (wgpu::Buffer, u32) {
+    let row = w * bpp;
+    let padded =
+        row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: u64::from(padded) * u64::from(h),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    enc.copy_texture_to_buffer(
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d::ZERO,
+            aspect: wgpu::TextureAspect::All,
+        },
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(h),
+            },
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    (buffer, padded)
 }

@@ -49,6 +49,7 @@ pub mod view_buffer;
 pub mod walkthrough;
 pub mod wgsl;
 
+pub use bindings::record_texture_readback;
 pub use context::GpuContext;
 pub use cube::{CubeLevelRef, GpuCube};
 pub use error::{GpuError, Result};

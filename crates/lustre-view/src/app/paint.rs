@@ -2,7 +2,7 @@
 //! for a screenshot, into a texture that is read back from the GPU as RGBA8.
 
 use super::window::Gfx;
-use lustre_gpu::context::record_texture_readback;
+use lustre_gpu::record_texture_readback;
 use std::sync::mpsc::channel;
 
 /// Draws egui into the surface (and, for a screenshot, into a texture read back as RGBA8).

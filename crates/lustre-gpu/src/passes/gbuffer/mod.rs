@@ -15,8 +15,9 @@
 //! coverage (top-left rule) and ray casting (watertight test) may disagree on pixels whose
 //! centre lies on an edge, and depth ties between coplanar triangles resolve differently.
 
+use crate::bindings::record_texture_readback;
 use crate::bindings::{buffer_init, map_read};
-use crate::context::{record_texture_readback, GpuContext};
+use crate::context::GpuContext;
 use crate::error::{invalid, scope_result, Result};
 use crate::wgsl;
 use glam::DVec3;
