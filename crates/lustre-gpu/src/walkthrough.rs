@@ -197,6 +197,12 @@ impl GpuWalkthrough {
             capture_ms.push((mesh.name.clone(), ms(timer.stop(ctx)?)));
             probes.push(probe);
         }
+        for (i, site) in lit.scene.probes.iter().enumerate() {
+            timer.start(ctx)?;
+            let probe = capture.capture_room_probe(ctx, &scene, lit, i, probe_opts)?;
+            capture_ms.push((site.name.clone(), ms(timer.stop(ctx)?)));
+            probes.push(probe);
+        }
         let environment = match (probes.is_empty(), environment) {
             (true, Some(e)) => Some(GpuPyramid::upload(ctx, e)?),
             _ => None,
@@ -245,7 +251,7 @@ impl GpuWalkthrough {
         let i = self
             .probes
             .iter()
-            .position(|p| p.mesh as usize == mesh)
+            .position(|p| p.mesh == Some(mesh as u32))
             .ok_or_else(|| {
                 let name = lit.scene.meshes.get(mesh).map_or("", |m| m.name.as_str());
                 invalid(
@@ -658,7 +664,7 @@ fn render_camera(
         see_through_gbuffers.push(render.gbuffer);
     }
     times.views_ms = ms(timer.stop(ctx)?);
-    let probe_meshes: Vec<u32> = walk.probes.iter().map(|p| p.mesh).collect();
+    let probe_meshes: Vec<Option<u32>> = walk.probes.iter().map(|p| p.mesh).collect();
     let tables = FrameTables::new(lit, &probe_meshes, in_plane);
     let scene = FrameShadeScene::new(
         ctx,

@@ -103,7 +103,7 @@ fn check_probe(
         assert_eq!(probe.centre, centre);
         assert!(!probe.planes.is_empty(), "{label}: no bounding planes");
         let host = probe.read_back(ctx).unwrap();
-        assert_eq!((host.mesh, host.centre), (mesh as u32, centre));
+        assert_eq!((host.mesh, host.centre), (Some(mesh as u32), centre));
         assert_eq!(host.planes, probe.planes);
         let gpu = host.pyramid;
         // The twin: the same G-buffer faces shaded on the CPU, the CPU pyramid.
@@ -389,6 +389,7 @@ fn clip_plane_discards_between_eye_and_plane_and_bad_input_errs() {
     let opts = DrawOptions {
         skip: None,
         plane: Some((DVec3::new(0.0, y0, 0.0), DVec3::Y)),
+        through_glass: false,
     };
     let r = pass
         .render_view(&ctx, &up, &cam, 64, 48, &opts, 0, None)
@@ -453,6 +454,7 @@ fn clip_plane_discards_between_eye_and_plane_and_bad_input_errs() {
     let degenerate = DrawOptions {
         skip: None,
         plane: Some((DVec3::ZERO, DVec3::ZERO)),
+        through_glass: false,
     };
     let e = pass
         .render_view(&ctx, &up, &cam, 8, 8, &degenerate, 0, None)

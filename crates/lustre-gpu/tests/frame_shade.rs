@@ -298,3 +298,100 @@ fn materials_the_gpu_cannot_shade_are_named() {
         FLAG_TEXTURED | FLAG_NORMAL_MAPPED
     );
 }
+
+/// The sunroom (scenes/sunroom: no hints, a sky through its windows) with the automatic set-up:
+/// its room probe (a parallax box, no mesh) is chosen per point by the GPU as by the CPU
+/// (`probe::choose_probe`), beside three mirrors, three object probes and the pane's
+/// see-through buffer: regular sampling at ≥ 90 dB against the CPU twin, the same glossy pixels.
+#[test]
+fn gpu_reads_the_automatic_room_probes_as_its_cpu_twin() {
+    let ctx = ctx();
+    let mut scene =
+        lustre_scene::Scene::load(std::path::Path::new("../../scenes/sunroom/scene.xml"))
+            .expect("sunroom");
+    let setup = {
+        let (ps, _) = path_scene(&scene).expect("path scene");
+        let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
+        lustre_trace::setup::auto_setup(&scene, &pt, &lustre_trace::setup::SetupOptions::default())
+    };
+    lustre_trace::setup::apply(&mut scene, &setup);
+    assert!(!scene.probes.is_empty(), "room probes placed");
+    let common::Baked {
+        scene,
+        atlas,
+        pages,
+    } = quick_bake(scene, 4.0);
+    let (ps, _) = path_scene(&scene).expect("path scene");
+    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
+    let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
+    let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit");
+    let popts = ProbeOptions {
+        face_size: 32,
+        supersample: 1,
+        plane_rays: 16,
+    };
+    let probes = lustre_shade::probe::capture_probes(&lit, &popts, &mut |_, _| {}).expect("probes");
+    assert!(probes.iter().any(|p| p.mesh.is_none()), "a room probe");
+    let light = FrameLight {
+        probes: &probes,
+        environment: None,
+    };
+    let (w, h, k) = (64usize, 48usize, 1u32);
+    let camera = path_camera(&scene, None, w as u32, h as u32).expect("camera");
+    let renderer = LightmapRenderer::new(&ctx).expect("passes");
+    let up = LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages).expect("upload");
+    let target = GBufferTarget::new(&ctx, w as u32, h as u32).expect("gbuffer");
+    let base = ShadeTarget::new(&ctx, w as u32, h as u32).expect("target");
+    renderer
+        .draw(&ctx, &up, &camera, k, &target, &base)
+        .expect("draw");
+    let gb = target.read_back(&ctx).expect("gbuffer readback");
+    let mut buffers = FrameBuffers::render(&lit, &light, &camera, w, h).expect("buffers");
+    assert_eq!(buffers.mirrors.len(), 3, "floor, mirror, picture");
+    assert_eq!(buffers.see_throughs.len(), 1, "the pane");
+    for m in &mut buffers.mirrors {
+        m.view = GpuViewBuffer::upload(&ctx, &m.view)
+            .and_then(|g| g.read_back(&ctx))
+            .expect("mirror round trip");
+    }
+    for v in &mut buffers.see_throughs {
+        *v = GpuViewBuffer::upload(&ctx, v)
+            .and_then(|g| g.read_back(&ctx))
+            .expect("see-through round trip");
+    }
+    let gpu_scene = FrameShadeScene::upload(&ctx, &lit, &light, &buffers).expect("frame scene");
+    let pass = FrameShadePass::new(&ctx).expect("compile");
+    let out = FrameShadeTarget::new(&ctx, w as u32, h as u32, k).expect("output");
+    let req = FrameRequest {
+        method: Method::Regular,
+        samples: 8,
+        rays: 1,
+        frames: 1,
+        seed: 3,
+    };
+    pass.shade(
+        &ctx,
+        &gpu_scene,
+        &target,
+        &base,
+        &camera,
+        k,
+        (&req, 0),
+        &out,
+    )
+    .expect("shade");
+    let gpu = out.read_back(&ctx).expect("readback");
+    let stats = out.stats(&ctx).expect("stats");
+    let (cpu, cpu_stats) =
+        shade_gbuffer_view_dependent(&lit, &light, &buffers, &camera, &gb, k, &req)
+            .expect("cpu twin");
+    let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
+    eprintln!(
+        "sunroom, room probes: GPU vs CPU twin {db:.1} dB; glossy pixels GPU {} CPU {}",
+        stats.glossy_hits, cpu_stats.glossy_hits
+    );
+    assert!(db >= 90.0, "{db} dB");
+    assert_eq!(stats.glossy_hits, cpu_stats.glossy_hits);
+    assert!(cpu_stats.glossy_hits > (w * h / 4) as u64, "glossy pixels");
+}

@@ -283,7 +283,7 @@ fn a_probe_captured_again_is_read_from_the_next_step() {
         s.step(ctx, walk, lit, &camera, (w, h), &regular)
             .expect("step");
         let before = s.image(ctx).expect("image");
-        let mesh = walk.probes[0].mesh as usize;
+        let mesh = walk.probes[0].mesh.expect("an object probe") as usize;
         let ms = walk
             .recapture_probe(ctx, lit, mesh, &PROBES)
             .expect("captured again");
@@ -315,7 +315,7 @@ fn a_probe_captured_again_is_read_from_the_next_step() {
             .expect("step");
         assert_eq!(step.work, StepWork::Unchanged);
         let plain = (0..scene.meshes.len())
-            .find(|m| !walk.probes.iter().any(|p| p.mesh as usize == *m))
+            .find(|m| !walk.probes.iter().any(|p| p.mesh == Some(*m as u32)))
             .expect("a mesh without a probe");
         let err = walk
             .recapture_probe(ctx, lit, plain, &PROBES)

@@ -1,4 +1,5 @@
-//! Plots of BSDF lobes for lustre: polar lobes in the plane of incidence (004 Fig. V.11,
+//! Plots of BSDF lobes for lustre (and the top view of a scene's real-time set-up,
+//! [`top_view`]): polar lobes in the plane of incidence (004 Fig. V.11,
 //! 000 Fig. 3.12) and transfer-probability disc arrays (000 Fig. 2.6 and 3.11).
 //!
 //! Every function works on any [`lustre_brdf::Bsdf`] through `&dyn Bsdf`, so measured tables and
@@ -14,6 +15,7 @@ pub mod font;
 pub mod heat;
 pub mod pattern;
 pub mod polar;
+pub mod top_view;
 
 pub use array::{
     direction_pixel, disc_direction, transfer_array, transfer_array_compare, transfer_disc,
@@ -24,6 +26,7 @@ pub use pattern::{pattern_plot, PatternOptions, PatternPanel};
 pub use polar::{
     polar_curve, polar_plot, Channels, PolarCurve, PolarOptions, PolarSample, Quantity,
 };
+pub use top_view::{top_view, TopItem, TopKind};
 
 use std::path::{Path, PathBuf};
 

@@ -48,6 +48,7 @@ pub mod material_edit;
 pub mod mesh;
 pub mod mitsuba;
 pub mod obj;
+pub mod probe_site;
 pub mod scene_file;
 pub mod texture;
 
@@ -62,6 +63,7 @@ pub use material::{
     TexturedRgb, TexturedScalar,
 };
 pub use mesh::{Mesh, ObjectHints};
+pub use probe_site::ProbeSite;
 pub use texture::{ColorSpace, Texture};
 
 use std::path::{Path, PathBuf};
@@ -123,6 +125,8 @@ pub struct Scene {
     pub cameras: Vec<Camera>,
     /// Camera paths.
     pub camera_paths: Vec<CameraPath>,
+    /// Room-scale reflection probes (a scene file's `[[probe]]` sections).
+    pub probes: Vec<ProbeSite>,
     /// The film size the file asks for.
     pub film: Film,
     /// The file the scene was read from.
@@ -146,6 +150,7 @@ impl Scene {
             environment: None,
             cameras: Vec::new(),
             camera_paths: Vec::new(),
+            probes: Vec::new(),
             film: Film::default(),
             source: source.into(),
             warnings: Vec::new(),
@@ -290,6 +295,7 @@ impl Scene {
             self.cameras.push(c);
         }
         self.camera_paths.extend(other.camera_paths);
+        self.probes.extend(other.probes);
         if self.environment.is_none() {
             self.environment = other.environment;
         }

@@ -49,6 +49,29 @@ pub struct ObjectHints {
     pub samples: Option<u32>,
 }
 
+/// Largest distance of a vertex from a mesh's plane, relative to the mesh's extent, for a
+/// triangle to lie in the plane ([`Mesh::dominant_plane`]).
+pub const PLANARITY_TOLERANCE: f64 = 1e-3;
+
+/// Smallest share of a mesh's area that must lie in its dominant plane for it to be a planar
+/// reflector. A floor mesh with a thin riser along one edge still counts (the riser's
+/// triangles are shaded like any other glossy surface); a curved or folded mesh does not.
+pub const PLANAR_AREA_SHARE: f64 = 0.99;
+
+/// The plane most of a mesh lies in ([`Mesh::dominant_plane`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshPlane {
+    /// A point on the plane (the area-weighted centroid of the triangles parallel to it).
+    pub point: DVec3,
+    /// The unit normal (the area-weighted mean of theirs).
+    pub normal: DVec3,
+    /// Per triangle (in the mesh's order): whether all its corners lie within
+    /// [`PLANARITY_TOLERANCE`] × the mesh's extent of the plane.
+    pub in_plane: Vec<bool>,
+    /// The share of the mesh's area in the plane.
+    pub area_share: f64,
+}
+
 /// The largest per-object sample budget ([`ObjectHints::samples`]).
 pub const MAX_OBJECT_SAMPLES: u32 = 256;
 
@@ -80,6 +103,66 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// The plane of the mesh's largest triangle, refined as the area-weighted mean normal and
+    /// centroid of the triangles parallel to it (cos > 0.999), with the triangles within
+    /// [`PLANARITY_TOLERANCE`] × the mesh's extent of it. `None` without a triangle of non-zero
+    /// area. What the mirror pass reflects in, and what the automatic set-up calls planar
+    /// (an area share ≥ [`PLANAR_AREA_SHARE`]).
+    pub fn dominant_plane(&self) -> Option<MeshPlane> {
+        let p: Vec<DVec3> = self.positions.iter().map(|v| v.as_dvec3()).collect();
+        let tris: Vec<[DVec3; 3]> = self
+            .indices
+            .iter()
+            .map(|t| t.map(|i| p.get(i as usize).copied().unwrap_or(DVec3::NAN)))
+            .collect();
+        let cross: Vec<DVec3> = tris
+            .iter()
+            .map(|[a, b, c]| (*b - *a).cross(*c - *a))
+            .collect();
+        let largest = cross
+            .iter()
+            .filter(|c| c.is_finite())
+            .max_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
+            .and_then(|c| c.try_normalize())?;
+        let (mut n, mut c, mut a_par) = (DVec3::ZERO, DVec3::ZERO, 0.0);
+        for (t, x) in tris.iter().zip(&cross) {
+            let a = x.length();
+            if a > 0.0 && x.dot(largest) > 0.999 * a {
+                n += *x;
+                c += (t[0] + t[1] + t[2]) / 3.0 * a;
+                a_par += a;
+            }
+        }
+        let normal = n.try_normalize()?;
+        let point = c / a_par;
+        let (lo, hi) = p.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &v| (lo.min(v), hi.max(v)),
+        );
+        let tol = PLANARITY_TOLERANCE * (hi - lo).length().max(1e-12);
+        let in_plane: Vec<bool> = tris
+            .iter()
+            .map(|t| t.iter().all(|v| (*v - point).dot(normal).abs() <= tol))
+            .collect();
+        let total: f64 = cross
+            .iter()
+            .map(|x| x.length())
+            .filter(|a| a.is_finite())
+            .sum();
+        let inside: f64 = cross
+            .iter()
+            .zip(&in_plane)
+            .filter(|(_, &k)| k)
+            .map(|(x, _)| x.length())
+            .sum();
+        Some(MeshPlane {
+            point,
+            normal,
+            in_plane,
+            area_share: inside / total.max(1e-300),
+        })
+    }
+
     /// A mesh with positions and triangles only (no normals, UVs or emission).
     pub fn new(
         name: impl Into<String>,

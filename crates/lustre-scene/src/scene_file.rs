@@ -43,6 +43,12 @@
 //! probe = true                              # a reflection probe for this object,
 //! probe_centre = [-1.8, 5.2, -1.5]          # optional: captured here (else its bounds' centre)
 //!
+//! [[probe]]                                 # a room probe (`lustre bake` places them
+//! name = "room-1"                           # when the file lists none): captured at centre,
+//! centre = [0.0, 1.5, 0.0]                  # lookups corrected against the box (optional;
+//! box_min = [-4.0, 0.0, -3.0]               # else measured by ray casting from the centre)
+//! box_max = [4.0, 3.0, 3.0]
+//!
 //! [lightmap]                                # light-map UVs and baked pages (`lustre bake`)
 //! atlas = "lightmap.glb"                    # the atlas: light-mapped meshes with TEXCOORD_1
 //! pages = ["lightmap_000.exr"]              # one per atlas page; [] before baking
@@ -67,6 +73,7 @@ use crate::environment::{Environment, EnvironmentSource, Sky};
 use crate::error::{Result, SceneError};
 use crate::material::{Material, MaterialKind, ResolvedSpec};
 use crate::mesh::{self, ObjectHints};
+use crate::probe_site::{ProbeSite, MAX_PROBE_SITES};
 use crate::{Film, Scene};
 use glam::{DMat3, DMat4, DVec3};
 use lustre_brdf::Rgb;
@@ -116,6 +123,9 @@ pub struct SceneFile {
     /// Real-time hints by mesh name.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub objects: BTreeMap<String, ObjectHints>,
+    /// Room-scale reflection probes.
+    #[serde(default, rename = "probe", skip_serializing_if = "Vec::is_empty")]
+    pub probes: Vec<ProbeSite>,
     /// The light map: atlas and baked pages.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lightmap: Option<LightmapEntry>,
@@ -289,6 +299,7 @@ impl SceneFile {
             material_params: BTreeMap::new(),
             emitters: Vec::new(),
             objects: BTreeMap::new(),
+            probes: Vec::new(),
             lightmap: None,
         }
     }
@@ -424,6 +435,19 @@ impl SceneFile {
                 if !hints.probe {
                     return Err(format!("objects.{name}: probe_centre without probe = true"));
                 }
+            }
+        }
+        if self.probes.len() > MAX_PROBE_SITES {
+            return Err(format!(
+                "{} probes: at most {MAX_PROBE_SITES}",
+                self.probes.len()
+            ));
+        }
+        let mut probe_names = std::collections::HashSet::new();
+        for p in &self.probes {
+            p.validate()?;
+            if !probe_names.insert(p.name.as_str()) {
+                return Err(format!("probe name {:?} is given twice", p.name));
             }
         }
         let mut names = std::collections::HashSet::new();
@@ -786,6 +810,7 @@ pub fn build(path: &Path, file: &SceneFile) -> Result<Scene> {
             scene.push_mesh(path, m)?;
         }
     }
+    scene.probes = file.probes.clone();
     for (name, hints) in &file.objects {
         let mut found = false;
         for m in scene.meshes.iter_mut().filter(|m| &m.name == name) {

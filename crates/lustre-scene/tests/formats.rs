@@ -251,6 +251,18 @@ fn full_file() -> SceneFile {
             ..Default::default()
         },
     );
+    f.probes.push(lustre_scene::ProbeSite {
+        name: "hall".into(),
+        centre: [0.0, 2.0, 0.0],
+        box_min: Some([-5.0, 0.0, -4.0]),
+        box_max: Some([5.0, 6.0, 4.0]),
+    });
+    f.probes.push(lustre_scene::ProbeSite {
+        name: "landing".into(),
+        centre: [-1.8, 5.2, -1.5],
+        box_min: None,
+        box_max: None,
+    });
     f
 }
 
@@ -281,6 +293,20 @@ fn scene_file_round_trip() {
         let e = bad.validate().unwrap_err();
         assert!(e.contains(says), "{e}");
     }
+    // Room probes: a name given twice, a box without its other corner, a centre outside its
+    // box, each refused by name.
+    let mut twice = f.clone();
+    twice.probes[1].name = "hall".into();
+    assert!(twice
+        .validate()
+        .unwrap_err()
+        .contains("\"hall\" is given twice"));
+    let mut half = f.clone();
+    half.probes[0].box_max = None;
+    assert!(half.validate().unwrap_err().contains("go together"));
+    let mut out = f.clone();
+    out.probes[0].centre = [0.0, 7.0, 0.0];
+    assert!(out.validate().unwrap_err().contains("outside its box"));
     // An invalid file is not written.
     let mut bad = f.clone();
     bad.cameras[0].fov_deg = f64::NAN;
@@ -330,6 +356,8 @@ fn scene_file_builds_the_modern_hall() {
     assert!(m011.hints.planar_reflector && m011.hints.lightmap_texels_per_metre == Some(64.0));
     let m018 = s.meshes.iter().find(|m| m.name == "Mesh018").unwrap();
     assert!(m018.hints.probe && m018.hints.diffuse_only);
+    let names: Vec<&str> = s.probes.iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(names, ["hall", "landing"], "the room probes");
     assert_eq!(m018.emission, Some(Rgb::new(0.1, 0.2, 0.3)));
     // The added rectangle: 1 × 1 m at y = 5 facing down.
     let added = s.meshes.last().unwrap();

@@ -1,7 +1,8 @@
 //! The walkthrough frame on the CPU (000 §4, Fig. 4.1): at every camera hit, the light-mapped
 //! diffuse term kd·E/π (000 Eq. 4.1) plus the view-dependent rest of the material integrated
-//! against pre-filtered incident light: the probe of the object hit (or the nearest probe),
-//! looked up through its bounding planes (000 §4.4.1), or the environment when the scene has no
+//! against pre-filtered incident light: the probe of the object hit (else the room probe whose
+//! box holds the point, else the nearest probe: [`choose_probe`]), looked up through its
+//! bounding planes (000 §4.4.1), or the environment when the scene has no
 //! probe. The rest of the material, f − kd/π, is integrated by pushing a regular point set
 //! (a Fibonacci lattice) through the material's own sampling warp, each sample read at the MIP
 //! level of its cell, the solid angle 1/(n·pdf) ([`footprint_level`], the level the truth
@@ -25,7 +26,7 @@ use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
 use crate::mirror::{
     render_mirror, render_see_through_with_gbuffer, MirrorBuffer, ScreenTiles, ViewBuffer,
 };
-use crate::probe::{LitScene, Probe};
+use crate::probe::{choose_probe, transmits, LitScene, Probe};
 use crate::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
 use crate::warp::{fibonacci_point, integrate_warp};
 use crate::{Result, ShadeError};
@@ -102,7 +103,7 @@ impl FrameBuffers {
     ) -> Result<Self> {
         let meshes = &lit.scene.meshes;
         let probe_of_mesh: Vec<Option<usize>> = (0..meshes.len())
-            .map(|m| light.probes.iter().position(|p| p.mesh as usize == m))
+            .map(|m| light.probes.iter().position(|p| p.mesh == Some(m as u32)))
             .collect();
         let (reflectors, transmissive) = view_meshes(lit);
         let t_mirror = std::time::Instant::now();
@@ -184,9 +185,14 @@ pub struct FrameTables {
 }
 
 impl FrameTables {
-    /// The tables of `lit` for probes of meshes `probe_meshes` and mirrors of the reflectors
-    /// `in_plane` ((mesh, in-plane triangles), in [`view_meshes`]' order).
-    pub fn new(lit: &LitScene, probe_meshes: &[u32], in_plane: Vec<(usize, Vec<bool>)>) -> Self {
+    /// The tables of `lit` for probes of meshes `probe_meshes` (`None`: a room probe) and
+    /// mirrors of the reflectors `in_plane` ((mesh, in-plane triangles), in [`view_meshes`]'
+    /// order).
+    pub fn new(
+        lit: &LitScene,
+        probe_meshes: &[Option<u32>],
+        in_plane: Vec<(usize, Vec<bool>)>,
+    ) -> Self {
         let n = lit.scene.meshes.len();
         let mut mirror_of_mesh = vec![None; n];
         for (i, (m, _)) in in_plane.iter().enumerate() {
@@ -199,7 +205,7 @@ impl FrameTables {
         }
         FrameTables {
             probe_of_mesh: (0..n)
-                .map(|m| probe_meshes.iter().position(|&p| p as usize == m))
+                .map(|m| probe_meshes.iter().position(|&p| p == Some(m as u32)))
                 .collect(),
             mirror_of_mesh,
             in_plane: in_plane.into_iter().map(|(_, v)| v).collect(),
@@ -228,17 +234,7 @@ pub fn view_meshes(lit: &LitScene) -> (Vec<usize>, Vec<usize>) {
         .filter(|&m| meshes[m].hints.planar_reflector)
         .collect();
     let transmissive = (0..meshes.len())
-        .filter(|&m| {
-            meshes[m].hints.probe
-                && lit
-                    .scene
-                    .materials
-                    .get(meshes[m].material)
-                    .is_some_and(|mat| {
-                        mat.bsdf_at(&lit.scene.textures, &[Vec2::ZERO; 2])
-                            .is_ok_and(|b| b.flags().transmission)
-                    })
-        })
+        .filter(|&m| meshes[m].hints.probe && transmits(lit.scene, meshes[m].material))
         .collect();
     (reflectors, transmissive)
 }
@@ -368,16 +364,19 @@ pub fn view_dependent(
         frame
     };
     let wo_local = frame.to_local(wo);
-    // The incident light: this object's probe, else the nearest, else the environment.
+    // The incident light: this object's probe, else the probe whose box holds the point (the
+    // nearest of them), else the nearest, else the environment.
     let probe = buffers.probe_of_mesh[mesh]
-        .map(|i| &light.probes[i])
         .or_else(|| {
-            light.probes.iter().min_by(|a, b| {
-                a.centre
-                    .distance_squared(p)
-                    .total_cmp(&b.centre.distance_squared(p))
-            })
-        });
+            choose_probe(
+                light
+                    .probes
+                    .iter()
+                    .map(|q| (q.centre, &q.planes[..], q.mesh.is_none())),
+                p,
+            )
+        })
+        .map(|i| &light.probes[i]);
     let env_light: Option<(&CubePyramid, &[BoundingPlane], DVec3)> = match probe {
         Some(pr) => Some((&pr.pyramid, &pr.planes, p - pr.centre)),
         None => light.environment.map(|env| (env, &[][..], DVec3::ZERO)),

@@ -12,18 +12,10 @@ use crate::probe::LitScene;
 use crate::{Result, ShadeError};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
+use lustre_scene::mesh::{MeshPlane, PLANARITY_TOLERANCE, PLANAR_AREA_SHARE};
 use lustre_trace::bake::gbuffer::{VisibilityBuffer, SKY};
 use lustre_trace::path_tracer::PathCamera;
 use rayon::prelude::*;
-
-/// Largest distance of a reflector's vertex from its plane, relative to the mesh's extent, for
-/// a triangle to lie in the plane.
-pub const PLANARITY_TOLERANCE: f64 = 1e-3;
-
-/// Smallest share of a reflector's area that must lie in its plane. A floor mesh with a thin
-/// riser along one edge still counts (the riser's triangles are shaded like any other glossy
-/// surface); a curved or folded mesh does not.
-pub const PLANAR_AREA_SHARE: f64 = 0.99;
 
 /// The plane of a planar reflector.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,63 +50,20 @@ impl ReflectorPlane {
                 lit.scene.source.display()
             ))
         })?;
-        let p: Vec<DVec3> = mesh.positions.iter().map(|v| v.as_dvec3()).collect();
-        let tris: Vec<[DVec3; 3]> = mesh
-            .indices
-            .iter()
-            .map(|t| t.map(|i| p.get(i as usize).copied().unwrap_or(DVec3::NAN)))
-            .collect();
-        let cross: Vec<DVec3> = tris
-            .iter()
-            .map(|[a, b, c]| (*b - *a).cross(*c - *a))
-            .collect();
-        let no_area = || {
+        let MeshPlane {
+            point,
+            normal,
+            in_plane,
+            area_share,
+        } = mesh.dominant_plane().ok_or_else(|| {
             ShadeError::Parameter(format!(
                 "planar reflector {:?} has no triangle of non-zero area",
                 mesh.name
             ))
-        };
-        let largest = cross
-            .iter()
-            .filter(|c| c.is_finite())
-            .max_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
-            .and_then(|c| c.try_normalize())
-            .ok_or_else(no_area)?;
-        let (mut n, mut c, mut a_par) = (DVec3::ZERO, DVec3::ZERO, 0.0);
-        for (t, x) in tris.iter().zip(&cross) {
-            let a = x.length();
-            if a > 0.0 && x.dot(largest) > 0.999 * a {
-                n += *x;
-                c += (t[0] + t[1] + t[2]) / 3.0 * a;
-                a_par += a;
-            }
-        }
-        let normal = n.try_normalize().ok_or_else(no_area)?;
-        let point = c / a_par;
-        let (lo, hi) = p.iter().fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &v| (lo.min(v), hi.max(v)),
-        );
-        let tol = PLANARITY_TOLERANCE * (hi - lo).length().max(1e-12);
-        let in_plane: Vec<bool> = tris
-            .iter()
-            .map(|t| t.iter().all(|v| (*v - point).dot(normal).abs() <= tol))
-            .collect();
-        let total: f64 = cross
-            .iter()
-            .map(|x| x.length())
-            .filter(|a| a.is_finite())
-            .sum();
-        let inside: f64 = cross
-            .iter()
-            .zip(&in_plane)
-            .filter(|(_, &k)| k)
-            .map(|(x, _)| x.length())
-            .sum();
-        let area_share = inside / total.max(1e-300);
+        })?;
         if area_share.is_nan() || area_share < PLANAR_AREA_SHARE {
             return Err(ShadeError::Parameter(format!(
-                "planar reflector {:?} is not planar: only {:.1} % of its area lies in one plane (within {tol:.4})",
+                "planar reflector {:?} is not planar: only {:.1} % of its area lies in one plane (within {PLANARITY_TOLERANCE} of its extent)",
                 mesh.name,
                 100.0 * area_share
             )));

@@ -1,7 +1,10 @@
 //! Reflection probes (000 §4.4): the incident light of a curved glossy object, captured as a
 //! cube map at the object's centre from the light-mapped scene with the object itself left out,
 //! filtered into 002's Gaussian 6×6 pyramid, and looked up through bounding planes that correct
-//! for the parallax between the centre and the shaded point (000 §4.4.1, Fig. 4.5–4.6).
+//! for the parallax between the centre and the shaded point (000 §4.4.1, Fig. 4.5–4.6). Room
+//! probes ([`lustre_scene::ProbeSite`]) are the same captured at a point of the free space, with
+//! the room's box as their planes; [`choose_probe`] says which probe a point without its own
+//! reads. Probe rays look through transmitting surfaces ([`LitScene::hit`]).
 //!
 //! This is the CPU definition of the probe; the GPU capture renders the same cube.
 
@@ -15,6 +18,7 @@ use lustre_scene::Scene;
 use lustre_trace::accel::Hit;
 use lustre_trace::bake::render::Lightmapped;
 use lustre_trace::path_tracer::{PathScene, PathTracer};
+use lustre_trace::setup::{axis_distances, mesh_prims, Surroundings, AXES};
 use rayon::prelude::*;
 
 /// The light-mapped scene as rays see it: the diffuse path scene's triangles (for intersection),
@@ -30,6 +34,18 @@ pub struct LitScene<'a, 's> {
     pub lit: &'a Lightmapped<'s>,
     /// Mesh index of every triangle, in the path scene's order.
     pub mesh_of: Vec<u32>,
+    /// Per triangle: its material transmits ([`transmits`]); the rays of probes and view
+    /// buffers pass through it (a window shows the sky behind it, not a black pane).
+    pub see_through: Vec<bool>,
+}
+
+/// Whether material `m` of `scene` transmits light (glass, frosted or smooth): the objects that
+/// get a see-through pass, and the surfaces probe and view-buffer rays pass through.
+pub fn transmits(scene: &Scene, m: usize) -> bool {
+    scene.materials.get(m).is_some_and(|mat| {
+        mat.bsdf_at(&scene.textures, &[glam::Vec2::ZERO; 2])
+            .is_ok_and(|b| b.flags().transmission)
+    })
 }
 
 impl<'a, 's> LitScene<'a, 's> {
@@ -55,23 +71,32 @@ impl<'a, 's> LitScene<'a, 's> {
                 path_scene.geometry.positions.len()
             )));
         }
+        let glass: Vec<bool> = (0..scene.materials.len())
+            .map(|m| transmits(scene, m))
+            .collect();
+        let see_through = path_scene
+            .geometry
+            .material
+            .iter()
+            .map(|&m| glass.get(m as usize).copied().unwrap_or(false))
+            .collect();
         Ok(LitScene {
             scene,
             path_scene,
             tracer,
             lit,
             mesh_of,
+            see_through,
         })
     }
 
-    /// The first surface along o + t d, ignoring the triangles of mesh `skip`.
+    /// The first surface along o + t d that does not transmit, ignoring the triangles of mesh
+    /// `skip`: what probes and view buffers see (glass is looked through; the camera's own rays
+    /// see it and shade it with its see-through buffer).
     pub fn hit(&self, o: DVec3, d: DVec3, skip: Option<u32>) -> Option<Hit> {
-        match skip {
-            Some(m) => self
-                .tracer
-                .intersect_filtered(o, d, |p| self.mesh_of[p] == m),
-            None => self.tracer.intersect(o, d),
-        }
+        let m = skip.unwrap_or(u32::MAX);
+        self.tracer
+            .intersect_filtered(o, d, |p| self.see_through[p] || self.mesh_of[p] == m)
     }
 
     /// Radiance arriving at `o` from direction `d` (towards −`d`): the light-mapped surface
@@ -156,10 +181,10 @@ impl ProbeOptions {
 /// centre, as [`crate::integrator::Lookup`] takes them) and the filtered pyramid.
 #[derive(Clone, Debug)]
 pub struct Probe {
-    /// The object's mesh name.
+    /// The object's mesh name, or the room probe's name.
     pub name: String,
-    /// The object's mesh index.
-    pub mesh: u32,
+    /// The object's mesh index; `None` for a room probe.
+    pub mesh: Option<u32>,
     /// The projection centre (world space).
     pub centre: DVec3,
     /// Bounding planes relative to `centre`.
@@ -217,48 +242,36 @@ pub fn capture_cube(
 }
 
 /// The automatic bounding planes of a probe at `centre` (000 §4.4.1 lets the user place them; a
-/// room's walls are what they model): along each of ±x, ±y, ±z, `rays` rays in a 30° cone
-/// around the axis (a fixed golden-angle spiral) measure the distance to the surroundings
-/// projected on the axis, and a plane perpendicular to the axis is placed at the median. A
-/// direction where fewer than half the rays hit (open sky) gets no plane. Planes are relative to
-/// `centre`.
+/// room's walls are what they model): along each of ±x, ±y, ±z, a plane perpendicular to the
+/// axis at the median distance to the surroundings measured by `rays` rays in a 30° cone
+/// ([`lustre_trace::setup::axis_distances`]); a direction where fewer than half the rays hit
+/// (open sky) gets no plane. Planes are relative to `centre`; the triangles of mesh `skip` are
+/// left out.
 pub fn auto_planes(
     lit: &LitScene,
     centre: DVec3,
     skip: Option<u32>,
     rays: u32,
 ) -> Result<Vec<BoundingPlane>> {
-    let axes = [
-        DVec3::X,
-        DVec3::NEG_X,
-        DVec3::Y,
-        DVec3::NEG_Y,
-        DVec3::Z,
-        DVec3::NEG_Z,
-    ];
-    let cos_max = 30f64.to_radians().cos();
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let skip = skip.and_then(|m| mesh_prims(lit.scene).get(m as usize).cloned());
+    let dist = axis_distances(lit.tracer, centre, skip, rays);
     let mut planes = vec![];
-    for axis in axes {
-        let (t, b) = axis.any_orthonormal_pair();
-        let mut dist: Vec<f64> = (0..rays)
-            .filter_map(|k| {
-                let u = (k as f64 + 0.5) / rays as f64;
-                let cos = 1.0 - u * (1.0 - cos_max);
-                let sin = (1.0 - cos * cos).max(0.0).sqrt();
-                let phi = k as f64 * golden;
-                let d = axis * cos + (t * phi.cos() + b * phi.sin()) * sin;
-                lit.distance(centre, d, skip).map(|s| s * cos)
-            })
-            .collect();
-        if dist.len() * 2 < rays as usize {
-            continue;
+    for (axis, d) in AXES.iter().zip(dist) {
+        if let Some(t) = d {
+            planes.push(BoundingPlane::new(*axis * t, -*axis)?);
         }
-        dist.sort_by(f64::total_cmp);
-        let median = dist[dist.len() / 2];
-        if median > 0.0 && median.is_finite() {
-            planes.push(BoundingPlane::new(axis * median, -axis)?);
-        }
+    }
+    Ok(planes)
+}
+
+/// The bounding planes of a box (world corners `lo`, `hi`) relative to `centre`, normals
+/// inwards: the parallax box of a room probe.
+pub fn box_planes(centre: DVec3, lo: DVec3, hi: DVec3) -> Result<Vec<BoundingPlane>> {
+    let mut planes = vec![];
+    for axis in AXES {
+        let corner = if axis.max_element() > 0.0 { hi } else { lo };
+        let t = (corner - centre).dot(axis);
+        planes.push(BoundingPlane::new(axis * t, -axis)?);
     }
     Ok(planes)
 }
@@ -274,11 +287,121 @@ pub fn capture_probe(lit: &LitScene, mesh: usize, opts: &ProbeOptions) -> Result
     let planes = auto_planes(lit, centre, skip, opts.plane_rays)?;
     Ok(Probe {
         name,
-        mesh: mesh as u32,
+        mesh: Some(mesh as u32),
         centre,
         planes,
         pyramid,
     })
+}
+
+/// Where room probe `index` of the scene ([`lustre_scene::Scene::probes`]) is captured, and its
+/// bounding planes: its parallax box, else [`auto_planes`] from its centre. Errors: no such
+/// probe, a centre inside a solid.
+pub fn room_placement(
+    lit: &LitScene,
+    index: usize,
+    plane_rays: u32,
+) -> Result<(String, DVec3, Vec<BoundingPlane>)> {
+    let site = lit.scene.probes.get(index).ok_or_else(|| {
+        ShadeError::Parameter(format!(
+            "{}: no room probe {index} (the scene lists {})",
+            lit.scene.source.display(),
+            lit.scene.probes.len()
+        ))
+    })?;
+    let centre = DVec3::from_array(site.centre);
+    let backs = Surroundings::at(lit.tracer, lit.scene, centre, None).inside_fraction();
+    if backs > 0.5 {
+        return Err(ShadeError::Parameter(format!(
+            "{}: room probe {:?} at {centre} is inside a solid ({:.0} % of its rays hit back faces)",
+            lit.scene.source.display(),
+            site.name,
+            backs * 100.0
+        )));
+    }
+    let planes = match site.parallax_box() {
+        Some((lo, hi)) => box_planes(centre, DVec3::from_array(lo), DVec3::from_array(hi))?,
+        None => auto_planes(lit, centre, None, plane_rays)?,
+    };
+    Ok((site.name.clone(), centre, planes))
+}
+
+/// Captures room probe `index`: the cube at its centre (nothing left out), its Gaussian 6×6
+/// pyramid and [`room_placement`]'s planes.
+pub fn capture_room_probe(lit: &LitScene, index: usize, opts: &ProbeOptions) -> Result<Probe> {
+    opts.validate()?;
+    let (name, centre, planes) = room_placement(lit, index, opts.plane_rays)?;
+    let cube = capture_cube(lit, centre, None, opts)?;
+    let pyramid = CubePyramid::build(cube, MipFilter::Gauss6)?;
+    Ok(Probe {
+        name,
+        mesh: None,
+        centre,
+        planes,
+        pyramid,
+    })
+}
+
+/// Every probe of the scene, in the order the renderers list them: the object probes (meshes
+/// hinted `probe`, in mesh order), then the room probes. `each(name, seconds)` after each.
+pub fn capture_probes(
+    lit: &LitScene,
+    opts: &ProbeOptions,
+    each: &mut dyn FnMut(&Probe, f64),
+) -> Result<Vec<Probe>> {
+    let mut probes = vec![];
+    for (m, mesh) in lit.scene.meshes.iter().enumerate() {
+        if mesh.hints.probe {
+            let t = std::time::Instant::now();
+            let p = capture_probe(lit, m, opts)?;
+            each(&p, t.elapsed().as_secs_f64());
+            probes.push(p);
+        }
+    }
+    for i in 0..lit.scene.probes.len() {
+        let t = std::time::Instant::now();
+        let p = capture_room_probe(lit, i, opts)?;
+        each(&p, t.elapsed().as_secs_f64());
+        probes.push(p);
+    }
+    Ok(probes)
+}
+
+/// Whether a scene has probes (object or room).
+pub fn has_probes(scene: &Scene) -> bool {
+    !scene.probes.is_empty() || scene.meshes.iter().any(|m| m.hints.probe)
+}
+
+/// Whether `rel` (relative to a probe's centre) lies beyond bounding plane `b`, by more than
+/// 10⁻³ of the plane's distance from the centre: a floor on its room box's lower face is inside
+/// (in f64 here as in f32 on the GPU).
+pub fn outside_plane(b: &BoundingPlane, rel: DVec3) -> bool {
+    (rel - b.point).dot(b.normal) < -1e-3 * b.point.length()
+}
+
+/// The probe a point `p` of a mesh without its own probe reads, among `probes` (centre, planes
+/// relative to it, whether it is a room probe): a room probe whose planes enclose `p`, else an
+/// object probe whose planes enclose it, else any; the nearest centre within the first of these
+/// groups that has one (000 §4.4 reads the nearest probe; a room's box makes it the room's, and
+/// an object probe, captured for its own object, serves others only where no room holds them).
+pub fn choose_probe<'p>(
+    probes: impl IntoIterator<Item = (DVec3, &'p [BoundingPlane], bool)>,
+    p: DVec3,
+) -> Option<usize> {
+    let mut best: Option<(u8, f64, usize)> = None;
+    for (i, (centre, planes, room)) in probes.into_iter().enumerate() {
+        let rel = p - centre;
+        let rank = match (planes.iter().any(|b| outside_plane(b, rel)), room) {
+            (false, true) => 0u8,
+            (false, false) => 1,
+            (true, _) => 2,
+        };
+        let d2 = rel.length_squared();
+        if best.is_none_or(|(r, d, _)| (rank, d2) < (r, d)) {
+            best = Some((rank, d2, i));
+        }
+    }
+    best.map(|b| b.2)
 }
 
 /// Where the probe of mesh `mesh` is captured: its name and the mesh's `probe_centre` hint, else
@@ -297,8 +420,8 @@ pub fn probe_placement(lit: &LitScene, mesh: usize) -> Result<(String, DVec3)> {
         Some([x, y, z]) => DVec3::new(x, y, z),
         None => 0.5 * (lo + hi),
     };
-    let skip = Some(mesh as u32);
-    let backs = inside_fraction(lit, centre, skip);
+    let skip = mesh_prims(lit.scene).get(mesh).cloned();
+    let backs = Surroundings::at(lit.tracer, lit.scene, centre, skip).inside_fraction();
     if backs > 0.5 {
         return Err(ShadeError::Parameter(format!(
             "{}: the probe of {name:?} at {centre} is inside a solid ({:.0} % of its rays hit back faces)",
@@ -309,31 +432,49 @@ pub fn probe_placement(lit: &LitScene, mesh: usize) -> Result<(String, DVec3)> {
     Ok((name, centre))
 }
 
-/// The fraction of 26 rays (the cube's face, edge and corner directions) from `p` that hit a
-/// back face of a one-sided geometric surface: near 1 inside a closed solid.
-fn inside_fraction(lit: &LitScene, p: DVec3, skip: Option<u32>) -> f64 {
-    let g = &lit.path_scene.geometry;
-    let mut backs = 0;
-    let mut total = 0;
-    for x in -1i32..=1 {
-        for y in -1i32..=1 {
-            for z in -1i32..=1 {
-                if (x, y, z) == (0, 0, 0) {
-                    continue;
-                }
-                let d = DVec3::new(x as f64, y as f64, z as f64).normalize();
-                total += 1;
-                if let Some(h) = lit.hit(p, d, skip) {
-                    let tri = &g.positions[h.prim];
-                    let ng = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
-                    let m = g.material[h.prim] as usize;
-                    let two_sided = lit.scene.materials.get(m).is_some_and(|m| m.two_sided);
-                    if !two_sided && ng.dot(d) > 0.0 {
-                        backs += 1;
-                    }
-                }
-            }
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_box_that_holds_the_point_wins_over_a_nearer_centre() {
+        // A room box [0, 4]³ probed at its middle; a small object probe just outside it, whose
+        // centre is nearer to the point.
+        let room_c = DVec3::splat(2.0);
+        let room = box_planes(room_c, DVec3::ZERO, DVec3::splat(4.0)).unwrap();
+        assert_eq!(room.len(), 6);
+        let obj_c = DVec3::new(4.6, 3.5, 3.5);
+        let obj = box_planes(obj_c, DVec3::new(4.2, 3.0, 3.0), DVec3::new(5.0, 4.0, 4.0)).unwrap();
+        let probes = [(room_c, &room[..], true), (obj_c, &obj[..], false)];
+        let p = DVec3::new(3.9, 3.5, 3.5);
+        assert!(obj_c.distance(p) < room_c.distance(p));
+        assert_eq!(choose_probe(probes, p), Some(0));
+        // Inside two rooms: the nearer centre; inside neither: the nearer centre.
+        let both = [
+            (room_c, &room[..], true),
+            (DVec3::splat(3.0), &room[..], true),
+        ];
+        assert_eq!(choose_probe(both, DVec3::splat(3.5)), Some(1));
+        // Inside a room and an object probe's planes: the room, though the object's is nearer;
+        // inside an object probe's planes only: that one before a nearer probe outside.
+        let obj_in_room = box_planes(obj_c, DVec3::ZERO, DVec3::splat(5.0)).unwrap();
+        let mixed = [(room_c, &room[..], true), (obj_c, &obj_in_room[..], false)];
+        assert_eq!(choose_probe(mixed, DVec3::new(3.9, 3.5, 3.5)), Some(0));
+        let away = DVec3::new(4.5, 3.6, 3.6);
+        let near_c = DVec3::new(4.6, 3.6, 3.6);
+        let elsewhere = box_planes(near_c, DVec3::splat(6.0), DVec3::splat(7.0)).unwrap();
+        let mixed = [
+            (near_c, &elsewhere[..], true),
+            (obj_c, &obj_in_room[..], false),
+        ];
+        assert_eq!(choose_probe(mixed, away), Some(1));
+        let far = DVec3::new(9.0, 3.5, 3.5);
+        assert_eq!(choose_probe(probes, far), Some(1));
+        // Planes point inwards, at the box's faces relative to the centre.
+        for b in &room {
+            assert!((b.point.length() - 2.0).abs() < 1e-12);
+            assert!((b.normal + b.point / 2.0).length() < 1e-12);
         }
+        assert_eq!(choose_probe(std::iter::empty(), p), None);
     }
-    f64::from(backs) / f64::from(total)
 }

@@ -7,6 +7,7 @@
 //! - [`bake`]: light maps of irradiance (000 §4.3), tiled, resumable, shardable, denoised; the
 //!   light-mapped G-buffer and rendering.
 //! - [`baked`]: a scene's light maps and environment pyramid, baked or read back.
+//! - [`setup`]: the automatic real-time set-up (mirrors, object probes, room probes).
 //! - [`sampling`]: the shading frame and the MIS weight shared with lustre-shade's kernels.
 //! - [`image`], [`metrics`]: float images, RMS / PSNR / CIE Lab ΔE, false-colour differences.
 
@@ -19,5 +20,6 @@ pub mod metrics;
 pub mod path_tracer;
 pub mod reference;
 pub mod sampling;
+pub mod setup;
 
 pub use error::{Result, TraceError};

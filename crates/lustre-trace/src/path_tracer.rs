@@ -391,6 +391,11 @@ pub(crate) fn offset(p: DVec3, ng: DVec3, w: DVec3) -> DVec3 {
 }
 
 impl<'a, 's> PathTracer<'a, 's> {
+    /// The scene it traces.
+    pub fn scene(&self) -> &'a PathScene<'s> {
+        self.scene
+    }
+
     /// Builds the BVH and the emitter distribution. Errors: mismatched array lengths, a
     /// material index out of range, a non-finite vertex, `max_depth` = 0.
     pub fn new(scene: &'a PathScene<'s>, opts: PathOptions) -> Result<Self> {

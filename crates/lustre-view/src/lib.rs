@@ -27,6 +27,8 @@
 //!   entry, a fitted material JSON, a measured file); **Fit** a measured file in a background
 //!   thread and apply the result; the polar lobe plot of measurement and fit; save the material
 //!   JSON and the scene file.
+//! - The real-time set-up ([`setup_overlay`]): "show set-up" draws the room probes' parallax
+//!   boxes (cyan), the object probes (yellow) and the planar reflectors (magenta) over the frame.
 //! - Unattended runs: `--script FILE` ([`script`]), `--frames N --screenshot FILE`.
 
 pub mod adaptive;
@@ -36,6 +38,7 @@ pub mod fit;
 pub mod plot;
 pub mod render;
 pub mod script;
+pub mod setup_overlay;
 
 use std::path::PathBuf;
 

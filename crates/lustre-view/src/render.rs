@@ -136,6 +136,8 @@ pub struct SceneInfo {
     /// Why the walkthrough methods (regular, CK, progressive) cannot show the scene (no light
     /// maps, a material the GPU walkthrough does not take); `None` when they can.
     pub no_walkthrough: Option<String>,
+    /// The real-time set-up's probes and reflectors.
+    pub setup: crate::setup_overlay::SetupOverlay,
 }
 
 /// A rendered frame.
@@ -357,7 +359,7 @@ fn run_inner(
         };
         let walk = match &lit {
             Ok((lit, atlas, pages)) => {
-                let has_probes = scene.meshes.iter().any(|m| m.hints.probe);
+                let has_probes = lustre_shade::probe::has_probes(&scene);
                 let env = match (&ps.environment, has_probes) {
                     (Some(e), false) => Some(environment_pyramid(e, probe_size)?),
                     _ => None,
@@ -470,6 +472,7 @@ fn info(scene: &Scene, name: &str, ctx: &GpuContext) -> SceneInfo {
         adapter: ctx.describe(),
         extent,
         no_walkthrough: None,
+        setup: crate::setup_overlay::SetupOverlay::of(scene),
     }
 }
 

@@ -13,8 +13,10 @@ use lustre_scene::lightmap::{
     build_atlas_with_progress, write_atlas_glb, AtlasOptions, LightmapAtlas,
 };
 use lustre_scene::scene_file::{self, SceneFile};
-use lustre_scene::Scene;
+use lustre_scene::{ObjectHints, Scene};
 use lustre_trace::bake::{assemble, bake_tiles, ATrousOptions, BakeOptions, Denoiser, Transport};
+use lustre_trace::path_tracer::{PathOptions, PathTracer};
+use lustre_trace::setup::{auto_setup, has_realtime_hints, Setup, SetupOptions};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `lustre bake`.
@@ -52,10 +54,24 @@ pub struct BakeArgs {
     pub transport: TransportArg,
     #[command(flatten)]
     pub shard: crate::shard::ShardArgs,
+    /// The real-time set-up written into scene.toml: `auto` adds mirrors, object probes and
+    /// room probes where the scene's own hints say nothing (`lustre_trace::setup`); `manual`
+    /// keeps only the scene's hints.
+    #[arg(long, value_enum, default_value_t = SetupArg::Auto)]
+    pub setup: SetupArg,
     /// Assemble the tiles that the shards (`--shard K/N` runs with the same scene and options)
     /// baked into --out: fill, denoise, dilate, the page EXRs and the updated scene file.
     #[arg(long, conflicts_with_all = ["shard", "shard_count"])]
     pub merge: bool,
+}
+
+/// `--setup`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SetupArg {
+    /// The automatic set-up where the scene's hints say nothing (a hand-written hint wins).
+    Auto,
+    /// The scene's own hints only.
+    Manual,
 }
 
 /// `--transport`.
@@ -161,13 +177,26 @@ pub fn prepare(args: &BakeArgs) -> anyhow::Result<(Scene, LightmapAtlas)> {
     Ok((scene, atlas))
 }
 
+/// The automatic real-time set-up of `scene` (`lustre_trace::setup::auto_setup`), its report
+/// printed.
+pub fn decide_setup(scene: &Scene) -> anyhow::Result<Setup> {
+    let (ps, _) = lustre_trace::reference::path_scene(scene)?;
+    let tracer = PathTracer::new(&ps, PathOptions::default())?;
+    let setup = auto_setup(scene, &tracer, &SetupOptions::default());
+    println!("{}", setup.report);
+    Ok(setup)
+}
+
 /// Writes `out/scene.toml`: the input scene (its scene file with absolute paths, or a file whose
-/// geometry is the input) with a `[lightmap]` section naming the atlas and the baked pages.
+/// geometry is the input) with a `[lightmap]` section naming the atlas and the baked pages,
+/// and `setup`'s hints for the meshes the file has none for (its room probes when it lists
+/// none).
 pub fn write_scene_file(
     input: &Path,
     atlas: &LightmapAtlas,
     pages: &[PathBuf],
     out: &Path,
+    setup: Option<&Setup>,
 ) -> anyhow::Result<PathBuf> {
     // Canonical (no `..`, no symlinks), so the scene file works from any directory and reads
     // cleanly; the input was just loaded, so it exists.
@@ -195,7 +224,21 @@ pub fn write_scene_file(
                 .unwrap_or_default()
         })
         .collect();
-    let file = base.with_lightmap(ATLAS_FILE, names, atlas);
+    let mut file = base.with_lightmap(ATLAS_FILE, names, atlas);
+    if let Some(setup) = setup {
+        for (name, hints) in &setup.objects {
+            let entry = file.objects.entry(name.clone()).or_default();
+            if !has_realtime_hints(entry) {
+                *entry = ObjectHints {
+                    lightmap_texels_per_metre: entry.lightmap_texels_per_metre,
+                    ..*hints
+                };
+            }
+        }
+        if file.probes.is_empty() {
+            file.probes = setup.probes.clone();
+        }
+    }
     let path = out.join(SCENE_FILE);
     scene_file::write(&path, &file).with_context(|| format!("writing {}", path.display()))?;
     Ok(path)
@@ -273,6 +316,11 @@ pub fn merge_phase(
 
 /// Runs `lustre bake`.
 pub fn run(args: &BakeArgs) -> anyhow::Result<()> {
+    bake(args).map(|_| ())
+}
+
+/// `lustre bake`: returns the scene file written (`None` for a shard, which writes none).
+pub fn bake(args: &BakeArgs) -> anyhow::Result<Option<PathBuf>> {
     let opts = args.options();
     opts.validate().context("bake settings")?;
     let shard = match args.shard.resolve()? {
@@ -293,17 +341,21 @@ pub fn run(args: &BakeArgs) -> anyhow::Result<()> {
             args.scene.display(),
             args.out.display()
         );
-        return Ok(());
+        return Ok(None);
     }
     let files = merge_phase(&scene, &atlas, &opts, &args.out)?;
     for f in &files {
         println!("wrote {}", f.display());
     }
-    let scene_path = write_scene_file(&args.scene, &atlas, &files, &args.out)?;
+    let setup = match args.setup {
+        SetupArg::Auto => Some(decide_setup(&scene)?),
+        SetupArg::Manual => None,
+    };
+    let scene_path = write_scene_file(&args.scene, &atlas, &files, &args.out, setup.as_ref())?;
     println!(
         "wrote {} and {}",
         args.out.join(ATLAS_FILE).display(),
         scene_path.display()
     );
-    Ok(())
+    Ok(Some(scene_path))
 }

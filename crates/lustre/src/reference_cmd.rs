@@ -9,8 +9,9 @@ use std::path::PathBuf;
 /// Arguments of `lustre reference`.
 #[derive(clap::Args, Debug)]
 pub struct ReferenceArgs {
-    /// The scene: a lustre scene file (.toml), glTF (.gltf/.glb), OBJ or Mitsuba XML.
-    pub scene: PathBuf,
+    /// The scene: a lustre scene file (.toml), glTF (.gltf/.glb), OBJ or Mitsuba XML; the
+    /// built-in room (the one `lustre render` shows without a scene) when absent.
+    pub scene: Option<PathBuf>,
     /// Camera name (the scene's first camera by default).
     #[arg(long)]
     pub camera: Option<String>,
@@ -67,14 +68,23 @@ pub fn run(args: &ReferenceArgs) -> anyhow::Result<()> {
         Some(e) if e.eq_ignore_ascii_case("exr") => {}
         _ => bail!("--out {}: must be an .exr file", args.out.display()),
     }
-    let scene = lustre_scene::Scene::load(&args.scene)
-        .with_context(|| format!("loading {}", args.scene.display()))?;
+    let (scene, name) = match &args.scene {
+        Some(path) => (
+            lustre_scene::Scene::load(path)
+                .with_context(|| format!("loading {}", path.display()))?,
+            path.display().to_string(),
+        ),
+        None => (
+            lustre_scene::builtin::room().context("the built-in room")?,
+            "the built-in room".to_string(),
+        ),
+    };
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
     eprintln!(
         "{}: {} triangles, {} emitting meshes, {} materials{}",
-        args.scene.display(),
+        name,
         scene.triangle_count(),
         scene.emitters().len(),
         scene.materials.len(),
@@ -104,7 +114,7 @@ pub fn run(args: &ReferenceArgs) -> anyhow::Result<()> {
         bar.set_position(done as u64);
         bar.set_message(format!("tile {t}/{n}"));
     })
-    .with_context(|| format!("rendering {}", args.scene.display()))?;
+    .with_context(|| format!("rendering {name}"))?;
     bar.finish_and_clear();
     for w in &warnings {
         eprintln!("warning: {w}");

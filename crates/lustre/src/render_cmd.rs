@@ -17,7 +17,7 @@ use lustre_scene::material_edit::{parse_assignment, set_named};
 use lustre_scene::Environment;
 use lustre_scene::Scene;
 use lustre_shade::frame::{render_frame, FrameLight, FrameStats};
-use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
+use lustre_shade::probe::{capture_probes, has_probes, LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
 use lustre_trace::bake::render::Lightmapped;
 use lustre_trace::bake::spec_albedo;
@@ -74,10 +74,17 @@ pub enum Device {
 /// Arguments of `lustre render`.
 #[derive(clap::Args, Debug)]
 pub struct RenderArgs {
-    /// A scene with baked light maps: the scene.toml `lustre bake --out DIR` writes. Without
-    /// one, the built-in room (its light maps baked into OUT/bake on the first run, reused
-    /// after).
+    /// A scene: a scene.toml with baked light maps (what `lustre bake --out DIR` writes), or
+    /// any scene lustre reads (.xml, .gltf, .glb, .obj, a .toml without light maps), baked into
+    /// OUT/bake on first use (16 texels per unit, fewer where that would pass 2²⁰ texels; 64
+    /// paths per texel, 32 bounces, full transport, the automatic real-time set-up) and reused
+    /// while the scene is unchanged. Without one, the
+    /// built-in room (baked into OUT/bake the same way).
     pub scene: Option<PathBuf>,
+    /// Ignore the scene's real-time hints (probes, mirrors, room probes) and decide them
+    /// automatically, as `lustre bake` does for a scene without hints.
+    #[arg(long)]
+    pub auto_setup: bool,
     /// Render this material (any material specification, `lustre list`) on a sphere under the
     /// environment instead of a scene: the material preview.
     #[arg(long, conflicts_with = "scene")]
@@ -177,6 +184,115 @@ fn load_baked(path: &Path) -> anyhow::Result<Baked> {
     Ok((b.scene, b.atlas, b.pages))
 }
 
+/// A scene file with light maps as it is; any other scene baked into `out/bake` first (reused
+/// while the scene and the bake's options are unchanged: a fingerprint in
+/// `out/bake/source.txt`).
+fn load_or_bake(path: &Path, out: &Path) -> anyhow::Result<Baked> {
+    let scene = Scene::load(path).with_context(|| format!("loading {}", path.display()))?;
+    if scene.lightmap.is_some() {
+        return load_baked(path);
+    }
+    let dir = out.join("bake");
+    let density = first_use_density(&scene);
+    let args = crate::bake_cmd::BakeArgs {
+        scene: path.to_path_buf(),
+        out: dir.clone(),
+        spp: 64,
+        bounces: 32,
+        texels_per_metre: Some(density),
+        seed: 0,
+        tile: 64,
+        no_denoise: false,
+        transport: crate::bake_cmd::TransportArg::Full,
+        shard: crate::shard::ShardArgs::default(),
+        setup: crate::bake_cmd::SetupArg::Auto,
+        merge: false,
+    };
+    let key = fingerprint(path, &scene, &format!("{:?}", args.options()));
+    let stamp = dir.join("source.txt");
+    let toml = dir.join(crate::bake_cmd::SCENE_FILE);
+    if toml.is_file() && std::fs::read_to_string(&stamp).is_ok_and(|k| k == key) {
+        eprintln!(
+            "light maps: reusing {} (the scene is unchanged)",
+            dir.display()
+        );
+        return load_baked(&toml);
+    }
+    // Tiles of another scene or other options must not be resumed.
+    let tiles = dir.join("tiles");
+    if tiles.exists() && !std::fs::read_to_string(&stamp).is_ok_and(|k| k == key) {
+        std::fs::remove_dir_all(&tiles)
+            .with_context(|| format!("removing the stale tiles in {}", tiles.display()))?;
+    }
+    eprintln!(
+        "{} has no light maps: baking them into {} ({density} texels per scene unit, 64 paths per texel, 32 bounces, full transport; reused on the next run)",
+        path.display(),
+        dir.display()
+    );
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    // The stamp first: a bake stopped half-way resumes its tiles on the next run.
+    lustre_scene::scene_file::write_atomic(&stamp, key.as_bytes())?;
+    std::fs::remove_file(&toml).or_else(|e| match e.kind() {
+        std::io::ErrorKind::NotFound => Ok(()),
+        _ => Err(e),
+    })?;
+    let written = crate::bake_cmd::bake(&args)?
+        .with_context(|| format!("baking {} wrote no scene file", path.display()))?;
+    load_baked(&written)
+}
+
+/// Texels per scene unit of a first-use bake: 16 (6 cm texels in a scene in metres), fewer where
+/// the scene's surface would need more than 2²⁰ texels at 16 (a scene in centimetres, a large
+/// building), rounded down to a power of two.
+fn first_use_density(scene: &Scene) -> f32 {
+    let area: f64 = scene.meshes.iter().map(|m| m.area()).sum();
+    let fit = (f64::from(1u32 << 20) / area.max(1e-12)).sqrt();
+    if fit >= 16.0 {
+        16.0
+    } else {
+        (2f64.powf(fit.log2().floor())) as f32
+    }
+}
+
+/// A fingerprint of `scene` as loaded from `path` and of the bake's `options`: the file's
+/// canonical path and modification time, every mesh (name, vertices, triangles, material,
+/// hints), the materials, the room probes and the environment's description.
+fn fingerprint(path: &Path, scene: &Scene, options: &str) -> String {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    std::fs::canonicalize(path)
+        .unwrap_or_else(|_| path.to_path_buf())
+        .hash(&mut h);
+    std::fs::metadata(path)
+        .and_then(|m| m.modified())
+        .ok()
+        .hash(&mut h);
+    for m in &scene.meshes {
+        m.name.hash(&mut h);
+        for p in &m.positions {
+            p.to_array().map(f32::to_bits).hash(&mut h);
+        }
+        m.indices.hash(&mut h);
+        m.material.hash(&mut h);
+        format!("{:?}{:?}", m.hints, m.emission).hash(&mut h);
+    }
+    format!("{:?}", scene.materials).hash(&mut h);
+    format!("{:?}", scene.probes).hash(&mut h);
+    scene
+        .environment
+        .as_ref()
+        .map(|e| {
+            let source = match &e.source {
+                lustre_scene::EnvironmentSource::Map { path, .. } => format!("map {path:?}"),
+                other => format!("{other:?}"),
+            };
+            format!("{source} {:?} {}", e.to_local, e.intensity)
+        })
+        .hash(&mut h);
+    options.hash(&mut h);
+    format!("lustre-bake-cache-1 {:016x}\n", h.finish())
+}
+
 /// The built-in room with its light maps, baked into `out/bake` (tiles reused on the next run).
 fn builtin(out: &Path, environment: Option<Environment>) -> anyhow::Result<Baked> {
     let bar = ProgressBar::new(0);
@@ -256,7 +372,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     probe_opts.validate()?;
     let environment = args.env.as_deref().map(read_environment).transpose()?;
     let (mut scene, atlas, pages) = match (&args.scene, &args.material) {
-        (Some(path), _) => load_baked(path)?,
+        (Some(path), _) => load_or_bake(path, &args.out)?,
         (None, Some(spec)) => preview(spec, environment)?,
         (None, None) => builtin(&args.out, environment)?,
     };
@@ -265,6 +381,11 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
             parse_assignment(a).map_err(|e| anyhow::anyhow!("--set {e}"))?;
         set_named(&mut scene.materials, &material, &field, &value)
             .with_context(|| format!("--set {a}"))?;
+    }
+    if args.auto_setup {
+        lustre_trace::setup::clear_hints(&mut scene);
+        let setup = crate::bake_cmd::decide_setup(&scene)?;
+        lustre_trace::setup::apply(&mut scene, &setup);
     }
     let name = match (&args.scene, &args.material) {
         (Some(p), _) => p.display().to_string(),
@@ -294,7 +415,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let lit = LitScene::new(&scene, &ps, &pt, &lm)?;
     st.lap("BVH");
 
-    let has_probes = scene.meshes.iter().any(|m| m.hints.probe);
+    let has_probes = has_probes(&scene);
     let env_pyramid = match (has_probes, &ps.environment) {
         (false, Some(env)) => {
             if args.material.is_none() {
@@ -336,12 +457,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         }
         st.t = Instant::now();
     } else {
-        for (m, mesh) in scene.meshes.iter().enumerate() {
-            if !mesh.hints.probe {
-                continue;
-            }
-            let probe = capture_probe(&lit, m, &probe_opts)
-                .with_context(|| format!("probe of {:?}", mesh.name))?;
+        probes = capture_probes(&lit, &probe_opts, &mut |probe, secs| {
             eprintln!(
                 "probe {:?} at ({:.2}, {:.2}, {:.2}): {} bounding planes, {}² faces",
                 probe.name,
@@ -351,9 +467,10 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
                 probe.planes.len(),
                 args.probe_size
             );
-            st.lap(format!("probe {}", probe.name));
-            probes.push(probe);
-        }
+            st.times.push((format!("probe {}", probe.name), secs));
+        })
+        .context("capturing the probes")?;
+        st.t = Instant::now();
     }
     let light = FrameLight {
         probes: &probes,

@@ -163,3 +163,88 @@ fn sharded_bake_merges_to_the_unsharded_pages() {
     let tiles = std::fs::read_dir(whole.join("tiles")).unwrap().count();
     assert!(tiles >= 3, "{tiles} tiles: too few to shard");
 }
+
+/// The sunroom (scenes/sunroom: no hints): `--setup auto` (the default) writes the floor, the
+/// mirror and the picture as planar reflectors, probes for the pane, the sphere and the table,
+/// and a room probe with its box, and says so in one line; `--setup manual` writes none of it;
+/// `lustre scene setup --svg` prints the same choices and draws them.
+#[test]
+fn bake_writes_the_automatic_set_up_and_scene_setup_draws_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let sunroom = std::path::Path::new("../../scenes/sunroom/scene.xml");
+    let mut tomls = vec![];
+    for setup in ["auto", "manual"] {
+        let out = dir.path().join(setup);
+        let o = lustre()
+            .arg("bake")
+            .arg(sunroom)
+            .arg("--out")
+            .arg(&out)
+            .args(["--spp", "1", "--bounces", "1", "--texels-per-metre", "2"])
+            .args(["--setup", setup])
+            .output()
+            .unwrap();
+        let all = format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(o.status.success(), "{all}");
+        assert_eq!(
+            all.contains("real-time set-up: 3 mirror pass(es)"),
+            setup == "auto",
+            "{all}"
+        );
+        tomls.push(std::fs::read_to_string(out.join("scene.toml")).unwrap());
+    }
+    let auto = &tomls[0];
+    for mirror in ["Floor", "Mirror", "Picture"] {
+        assert!(
+            auto.contains(&format!("[objects.{mirror}]\nplanar_reflector = true")),
+            "{auto}"
+        );
+    }
+    for probe in ["WindowPane", "GoldSphere", "Table"] {
+        assert!(
+            auto.contains(&format!("[objects.{probe}]\nprobe = true")),
+            "{auto}"
+        );
+    }
+    assert!(
+        auto.contains("[[probe]]\nname = \"room-1\"") && auto.contains("box_min"),
+        "{auto}"
+    );
+    assert!(
+        !tomls[1].contains("[objects.") && !tomls[1].contains("[[probe]]"),
+        "{}",
+        tomls[1]
+    );
+    // The baked file loads with its probes.
+    let baked = lustre_scene::Scene::load(&dir.path().join("auto/scene.toml")).unwrap();
+    assert!(!baked.probes.is_empty());
+    // `lustre scene setup`: the same choices, and the top view.
+    let base = dir.path().join("top");
+    let o = lustre()
+        .args(["scene", "setup"])
+        .arg(sunroom)
+        .arg("--top-view")
+        .arg(&base)
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success() && out.contains("Floor: planar reflector"),
+        "{out}"
+    );
+    let drawing = std::fs::read_to_string(dir.path().join("top.svg")).unwrap();
+    assert!(
+        drawing.contains("<svg") && drawing.contains("room-1"),
+        "{drawing}"
+    );
+    let png = image::open(dir.path().join("top.png")).unwrap().to_rgb8();
+    // Cyan (the room box), magenta (the reflectors) and yellow (the probes) are drawn.
+    let has = |f: &dyn Fn(&image::Rgb<u8>) -> bool| png.pixels().any(f);
+    assert!(has(&|p| p[0] < 80 && p[1] > 140 && p[2] > 180));
+    assert!(has(&|p| p[0] > 180 && p[1] < 100 && p[2] > 160));
+    assert!(has(&|p| p[0] > 170 && p[1] > 130 && p[2] < 60));
+}

@@ -44,6 +44,7 @@ fn bake(scene: &Path, out: &Path) {
         .arg("--out")
         .arg(out)
         .args(["--spp", "4", "--bounces", "2", "--texels-per-metre", "8"])
+        .args(["--setup", "manual"])
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -180,14 +181,39 @@ fn render_writes_a_frame_times_and_a_comparison() {
 #[test]
 fn render_refuses_bad_input_and_says_what_it_renders() {
     let dir = tempfile::tempdir().unwrap();
-    // No probe objects: the environment only, and it says so.
+    // A scene without light maps is baked on first use (with the automatic set-up: the gold
+    // block gets a probe, the open floor no room probe), reused while it is unchanged, and
+    // baked again once it changes.
     let scene = write_scene(dir.path(), "");
-    let o = render(&scene, &dir.path().join("x"), &[]);
+    let x = dir.path().join("x");
+    let o = render(&scene, &x, &[]);
     let all = text(&o);
     assert!(
-        !o.status.success() && all.contains("no light maps") && all.contains("lustre bake"),
+        o.status.success()
+            && all.contains("has no light maps: baking them")
+            && all.contains("real-time set-up: 0 mirror pass(es), 1 object probe(s) (block)")
+            && all.contains("0 room probe(s)"),
         "{all}"
     );
+    let toml = std::fs::read_to_string(x.join("bake/scene.toml")).unwrap();
+    assert!(toml.contains("[objects.block]\nprobe = true"), "{toml}");
+    let o = render(&scene, &x, &[]);
+    let all = text(&o);
+    assert!(o.status.success() && all.contains("reusing"), "{all}");
+    let scene = write_scene(dir.path(), "[objects.block]\ndiffuse_only = true\n");
+    let o = render(&scene, &x, &[]);
+    let all = text(&o);
+    assert!(
+        o.status.success() && all.contains("baking them") && !all.contains("reusing"),
+        "{all}"
+    );
+    let toml = std::fs::read_to_string(x.join("bake/scene.toml")).unwrap();
+    assert!(
+        toml.contains("[objects.block]\ndiffuse_only = true"),
+        "{toml}"
+    );
+    let scene = write_scene(dir.path(), "");
+    // No probe objects (baked with --setup manual): the environment only, and it says so.
     let baked = dir.path().join("baked");
     bake(&scene, &baked);
     let o = render(

@@ -81,6 +81,8 @@ struct App {
     scale: f64,
     exposure: f64,
     vsync: bool,
+    /// Draw the real-time set-up (probe boxes, reflectors) over the frame.
+    show_setup: bool,
     view_size: (usize, usize),
     view_rect_px: [f32; 4],
     sent: Option<(PathCamera, (usize, usize), ViewRequest)>,
@@ -141,6 +143,7 @@ impl App {
             },
             scale: args.scale,
             vsync: !args.no_vsync,
+            show_setup: false,
             args,
             size,
             source,

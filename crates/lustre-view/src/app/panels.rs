@@ -7,6 +7,7 @@ use super::window::configure;
 use super::{App, HISTORY, LOOK_RADIANS_PER_PIXEL};
 use crate::adaptive::{rule_name, BufferView, SAMPLE_RULES};
 use crate::camera::Movement;
+use crate::setup_overlay::OverlayKind;
 use crate::Method;
 use lustre_shade::request::MAX_SUPERSAMPLING;
 use std::collections::VecDeque;
@@ -167,6 +168,10 @@ impl App {
         {
             self.upload_frame();
         }
+        ui.checkbox(
+            &mut self.show_setup,
+            "show set-up (room probes cyan, object probes yellow, reflectors magenta)",
+        );
         if ui.checkbox(&mut self.vsync, "vsync").changed() {
             if let Some(g) = &mut self.gfx {
                 configure(g, self.vsync);
@@ -284,6 +289,24 @@ impl App {
                 egui::Color32::WHITE,
             );
             self.view_rect_px = [min_px.x, min_px.y, size_px.x, size_px.y];
+            if let (true, Some(info)) = (self.show_setup, &self.info) {
+                let painter = ui.painter().with_clip_rect(r.intersect(rect));
+                let to_screen = |p: [f64; 2]| {
+                    r.min + egui::vec2(p[0] as f32, p[1] as f32) / (ppp * self.scale as f32)
+                };
+                let (iw, ih) = (
+                    f64::from(f.image.width as u32),
+                    f64::from(f.image.height as u32),
+                );
+                for (a, b, kind) in info.setup.segments(&f.camera, iw, ih) {
+                    let colour = match kind {
+                        OverlayKind::RoomProbe => egui::Color32::from_rgb(0, 220, 255),
+                        OverlayKind::ObjectProbe => egui::Color32::from_rgb(255, 220, 0),
+                        OverlayKind::Reflector => egui::Color32::from_rgb(255, 60, 220),
+                    };
+                    painter.line_segment([to_screen(a), to_screen(b)], (1.5, colour));
+                }
+            }
         } else {
             ui.painter().text(
                 rect.center(),

@@ -156,6 +156,22 @@ fn cube_direction(cube: u32, rel: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     return corrected_lookup(best, rel, wi);
 }
 
+// Whether `rel` (relative to cube `cube`'s centre) lies outside one of its bounding planes
+// (probe::outside_plane: by more than 10⁻³ of the plane's distance).
+fn cube_outside(cube: u32, rel: vec3<f32>) -> bool {
+    let info = cubes[2u * cube + 1u];
+    let first = bitcast<u32>(info.y);
+    let count = bitcast<u32>(info.z);
+    for (var k = 0u; k < count; k++) {
+        let point = planes[2u * (first + k)].xyz;
+        let normal = planes[2u * (first + k) + 1u].xyz;
+        if (dot(rel - point, normal) < -1e-3 * length(point)) {
+            return true;
+        }
+    }
+    return false;
+}
+
 // mip::ck_level_at: ½ log2(Ωs/Ωp(ω)) + 1, clamped.
 fn ck_level_at(pdf: f32, total: f32, face: f32, dir: vec3<f32>) -> f32 {
     let top = log2(max(face, 1.0));
@@ -626,15 +642,23 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
         bt = -bt;
     }
     let wo_l = vec3<f32>(dot(wo, t), dot(wo, bt), dot(wo, n));
-    // The incident light: the object's probe, else the nearest, else the environment.
+    // The incident light: the object's probe, else a room probe whose planes enclose the
+    // point, else an object probe whose planes do, else any; the nearest of the first group
+    // that has one (probe::choose_probe); else the environment.
     var cube = bitcast<u32>(r3.w);
     if (cube == NONE) {
         var best = BIG;
+        var best_rank = 3u;
         for (var c = 0u; c < u.method.z; c++) {
             let dc = cubes[2u * c].xyz - p;
             let d2 = dot(dc, dc);
-            if (d2 < best) {
+            var rank = 2u;
+            if (!cube_outside(c, -dc)) {
+                rank = select(1u, 0u, bitcast<u32>(cubes[2u * c + 1u].w) != 0u);
+            }
+            if (rank < best_rank || (rank == best_rank && d2 < best)) {
                 best = d2;
+                best_rank = rank;
                 cube = c;
             }
         }

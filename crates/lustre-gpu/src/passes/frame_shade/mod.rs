@@ -275,27 +275,28 @@ impl FrameShadeScene {
             ]);
         }
         // Cube maps: the probes, then the environment when there is no probe.
-        let mut pyramids: Vec<(&GpuPyramid, DVec3, &[BoundingPlane])> = probes
+        // (pyramid, centre, planes, a room probe).
+        let mut pyramids: Vec<(&GpuPyramid, DVec3, &[BoundingPlane], bool)> = probes
             .iter()
-            .map(|p| (&p.pyramid, p.centre, &p.planes[..]))
+            .map(|p| (&p.pyramid, p.centre, &p.planes[..], p.mesh.is_none()))
             .collect();
         let env_index = match environment {
             Some(e) if probes.is_empty() => {
-                pyramids.push((e, DVec3::ZERO, &[]));
+                pyramids.push((e, DVec3::ZERO, &[], false));
                 0
             }
             _ => NONE,
         };
         let level_buffers: Vec<&wgpu::Buffer> = pyramids
             .iter()
-            .flat_map(|(p, _, _)| p.levels.iter())
+            .flat_map(|(p, ..)| p.levels.iter())
             .collect();
         let (cube_texels, offsets) = concat(ctx, "frame cube texels", &level_buffers, 16);
         let mut cube_levels: Vec<[u32; 4]> = vec![];
         let mut cubes: Vec<[f32; 4]> = vec![];
         let mut planes: Vec<[f32; 4]> = vec![];
         let mut ring = vec![];
-        for (p, centre, pl) in &pyramids {
+        for (p, centre, pl, room) in &pyramids {
             let first = cube_levels.len() as u32;
             for &n in &p.sizes {
                 let texel = offsets[cube_levels.len()];
@@ -307,7 +308,7 @@ impl FrameShadeScene {
                 bits(p.sizes.len() as u32),
                 bits((planes.len() / 2) as u32),
                 bits(pl.len() as u32),
-                0.0,
+                bits(u32::from(*room)),
             ]);
             for b in *pl {
                 planes.push(v4(b.point, 0.0));

@@ -16,6 +16,8 @@ struct Camera {
     // x: tan(fov_y / 2), y: aspect W / H, z: near plane (view depth), w: unused.
     params: vec4<f32>,
     // Triangles [x, y) are left out (a probe's or a see-through object's mesh); x = y: none.
+    // z = 1: triangles of transmitting materials are left out too (probes and view buffers
+    // look through glass: lustre_shade::probe::LitScene::hit).
     skip: vec4<u32>,
     // The clip plane (unit normal xyz, offset w: s(p) = n·p + w) and (s(eye), tolerance, 0, 0):
     // a fragment with s(p) of the eye's sign but nearer the plane than the eye lies between the
@@ -32,7 +34,7 @@ struct Camera {
 @group(0) @binding(0) var<storage, read> tris: array<vec4<f32>>;
 @group(0) @binding(1) var<uniform> cam: Camera;
 // Per material: (opacity factor, threshold, texture bits (i32: −2 not masked, −1 untextured),
-// channel bits).
+// channel bits in 0..3 | 256 when the material transmits).
 @group(0) @binding(2) var<storage, read> masks: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> texels: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read> tex_info: array<vec4<u32>>;
@@ -80,7 +82,8 @@ fn vs_main(@builtin(vertex_index) vi: u32) -> VsOut {
     out.normal = tris[prim * STRIDE + 3u + corner].xyz;
     out.depth = z;
     out.world = world;
-    if prim >= cam.skip.x && prim < cam.skip.y {
+    let glass = (bitcast<u32>(masks[bitcast<u32>(tris[prim * STRIDE + 7u].z)].w) & 256u) != 0u;
+    if (prim >= cam.skip.x && prim < cam.skip.y) || (cam.skip.z != 0u && glass) {
         // A left-out triangle: all corners on one point outside the view, nothing rasterised.
         out.clip = vec4<f32>(-2.0, -2.0, 0.0, 1.0);
     }
@@ -105,7 +108,7 @@ fn present(prim: u32, b: vec2<f32>) -> bool {
     if t >= 0 {
         let p = tris[prim * STRIDE + 6u];
         let uv = p.xy * (1.0 - b.x - b.y) + p.zw * b.x + q.xy * b.y;
-        a = mask.x * texture_sample(u32(t), uv)[bitcast<u32>(mask.w)];
+        a = mask.x * texture_sample(u32(t), uv)[bitcast<u32>(mask.w) & 3u];
     }
     return clamp(a, 0.0, 1.0) >= mask.y;
 }

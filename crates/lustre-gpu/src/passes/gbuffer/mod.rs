@@ -180,9 +180,19 @@ impl GpuGeometry {
         // names) clamped to [0, 1], present at ≥ the cutoff (½ without one).
         let mut slots = Vec::new();
         let mut masks: Vec<[f32; 4]> = Vec::with_capacity(scene.materials.len().max(1));
-        for m in &scene.materials {
+        for (k, m) in scene.materials.iter().enumerate() {
+            let glass = if lustre_shade::probe::transmits(scene, k) {
+                256u32
+            } else {
+                0
+            };
             masks.push(match &m.alpha_mask {
-                None => [0.0, 0.0, f32::from_bits(-2i32 as u32), 0.0],
+                None => [
+                    0.0,
+                    0.0,
+                    f32::from_bits(-2i32 as u32),
+                    f32::from_bits(glass),
+                ],
                 Some(a) => {
                     let t = match a.opacity.texture {
                         Some(r) => texture_slot(scene, &m.name, r.texture, &mut slots)?,
@@ -192,7 +202,7 @@ impl GpuGeometry {
                         a.opacity.factor as f32,
                         a.cutoff.unwrap_or(0.5),
                         f32::from_bits(t as u32),
-                        f32::from_bits(u32::from(a.opacity.channel.min(3))),
+                        f32::from_bits(u32::from(a.opacity.channel.min(3)) | glass),
                     ]
                 }
             });
@@ -367,6 +377,9 @@ pub struct DrawOptions {
     /// within 10⁻⁴ of the scene's diagonal of the plane, are discarded, as the CPU mirror pass
     /// starts its rays on the plane. An eye on the plane clips nothing.
     pub plane: Option<(DVec3, DVec3)>,
+    /// Leave out the triangles of transmitting materials too (probes and view buffers look
+    /// through glass, as `LitScene::hit`).
+    pub through_glass: bool,
 }
 
 /// The camera uniform of `gbuffer.wgsl`: [`camera_uniform`], the skipped triangle range and the
@@ -383,7 +396,12 @@ fn draw_uniform(
         .map(|v| v.map(f32::to_bits))
         .collect();
     let skip = opts.skip.clone().unwrap_or(0..0);
-    u.push([skip.start, skip.end.max(skip.start), 0, 0]);
+    u.push([
+        skip.start,
+        skip.end.max(skip.start),
+        u32::from(opts.through_glass),
+        0,
+    ]);
     let (plane, eye) = match opts.plane {
         Some((point, normal)) => {
             let n = normal

@@ -25,7 +25,9 @@ use lustre_env::cube::face_point;
 use lustre_env::MipFilter;
 use lustre_scene::Scene;
 use lustre_shade::integrator::BoundingPlane;
-use lustre_shade::probe::{auto_planes, probe_placement, LitScene, Probe, ProbeOptions};
+use lustre_shade::probe::{
+    auto_planes, probe_placement, room_placement, LitScene, Probe, ProbeOptions,
+};
 use lustre_trace::bake::gbuffer::VisibilityBuffer;
 use lustre_trace::path_tracer::PathCamera;
 use std::ops::Range;
@@ -68,10 +70,10 @@ pub fn mesh_triangles(scene: &Scene, mesh: usize) -> Result<Range<u32>> {
 /// A probe captured on the GPU: what [`Probe`] holds, with the pyramid on the GPU.
 #[derive(Debug)]
 pub struct GpuProbe {
-    /// The object's mesh name.
+    /// The object's mesh name, or the room probe's name.
     pub name: String,
-    /// The object's mesh index.
-    pub mesh: u32,
+    /// The object's mesh index; `None` for a room probe.
+    pub mesh: Option<u32>,
     /// The projection centre (world space).
     pub centre: DVec3,
     /// Bounding planes relative to `centre` ([`auto_planes`], on the CPU).
@@ -141,7 +143,41 @@ impl GpuProbeCapture {
             auto_planes(lit, centre, Some(mesh as u32), opts.plane_rays).map_err(shade_err)?;
         Ok(GpuProbe {
             name,
-            mesh: mesh as u32,
+            mesh: Some(mesh as u32),
+            centre,
+            planes,
+            pyramid,
+        })
+    }
+
+    /// Room probe `index` of the scene as [`lustre_shade::probe::capture_room_probe`] makes
+    /// it, captured and filtered on the GPU (nothing left out); placement and planes from
+    /// [`room_placement`] (the CPU's). Errors: those of `room_placement` (no such probe, a
+    /// centre inside a solid), bad options, device limits.
+    pub fn capture_room_probe(
+        &self,
+        ctx: &GpuContext,
+        scene: &LightmapFrameScene,
+        lit: &LitScene,
+        index: usize,
+        opts: &ProbeOptions,
+    ) -> Result<GpuProbe> {
+        let shade_err = |e: lustre_shade::ShadeError| invalid("probe", e.to_string());
+        opts.validate().map_err(shade_err)?;
+        let (name, centre, planes) =
+            room_placement(lit, index, opts.plane_rays).map_err(shade_err)?;
+        let pyramid = self.capture(
+            ctx,
+            scene,
+            centre,
+            None,
+            opts.face_size,
+            opts.supersample,
+            MipFilter::Gauss6,
+        )?;
+        Ok(GpuProbe {
+            name,
+            mesh: None,
             centre,
             planes,
             pyramid,
@@ -187,7 +223,11 @@ impl GpuProbeCapture {
             usage: PYRAMID_USAGE,
             mapped_at_creation: false,
         });
-        let opts = DrawOptions { skip, plane: None };
+        let opts = DrawOptions {
+            skip,
+            plane: None,
+            through_glass: true,
+        };
         for f in 0..6 {
             let cam = face_camera(centre, f);
             self.gbuffer
@@ -218,7 +258,11 @@ impl GpuProbeCapture {
             return Err(invalid("cube face", format!("{face} is not in 0..6")));
         }
         let target = GBufferTarget::new(ctx, gsize, gsize)?;
-        let opts = DrawOptions { skip, plane: None };
+        let opts = DrawOptions {
+            skip,
+            plane: None,
+            through_glass: true,
+        };
         self.gbuffer.draw_with(
             ctx,
             &scene.geometry,

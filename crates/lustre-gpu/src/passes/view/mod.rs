@@ -105,6 +105,7 @@ impl GpuViewPass {
         let opts = DrawOptions {
             skip: Some(mesh_triangles(lit.scene, mesh)?),
             plane: Some((plane.point, plane.normal)),
+            through_glass: true,
         };
         let view = self.render_view(ctx, scene, &cam, w, h, &opts, mesh as u32, Some(plane))?;
         Ok((reflector, view))
@@ -127,6 +128,7 @@ impl GpuViewPass {
         let opts = DrawOptions {
             skip: Some(mesh_triangles(lit.scene, mesh)?),
             plane: None,
+            through_glass: true,
         };
         self.render_view(ctx, scene, camera, w, h, &opts, mesh as u32, None)
     }
