@@ -56,6 +56,62 @@ fn room() -> lustre_scene::Scene {
     scene
 }
 
+/// Probes at 32² faces, one ray per texel, 16 plane rays: small and fast.
+const PROBES: ProbeOptions = ProbeOptions {
+    face_size: 32,
+    supersample: 1,
+    plane_rays: 16,
+};
+
+/// The view buffers through the GPU layout and back, so both sides read the same f32s.
+fn round_trip(ctx: &lustre_gpu::GpuContext, buffers: &mut FrameBuffers) {
+    for m in &mut buffers.mirrors {
+        m.view = GpuViewBuffer::upload(ctx, &m.view)
+            .and_then(|g| g.read_back(ctx))
+            .expect("mirror round trip");
+    }
+    for v in &mut buffers.see_throughs {
+        *v = GpuViewBuffer::upload(ctx, v)
+            .and_then(|g| g.read_back(ctx))
+            .expect("see-through round trip");
+    }
+}
+
+/// The frame's G-buffer and light-map shading drawn on the GPU (kept there), and the G-buffer
+/// read back for the CPU twin.
+struct Drawn {
+    renderer: LightmapRenderer,
+    up: LightmapFrameScene,
+    target: GBufferTarget,
+    base: ShadeTarget,
+    gb: lustre_trace::bake::gbuffer::VisibilityBuffer,
+}
+
+fn draw(
+    ctx: &lustre_gpu::GpuContext,
+    scene: &lustre_scene::Scene,
+    atlas: &lustre_scene::LightmapAtlas,
+    pages: &[Vec<[f32; 3]>],
+    camera: &lustre_trace::path_tracer::PathCamera,
+    (w, h, k): (usize, usize, u32),
+) -> Drawn {
+    let renderer = LightmapRenderer::new(ctx).expect("passes");
+    let up = LightmapFrameScene::upload(ctx, scene, atlas, pages).expect("upload");
+    let target = GBufferTarget::new(ctx, w as u32, h as u32).expect("gbuffer");
+    let base = ShadeTarget::new(ctx, w as u32, h as u32).expect("target");
+    renderer
+        .draw(ctx, &up, camera, k, &target, &base)
+        .expect("draw");
+    let gb = target.read_back(ctx).expect("gbuffer readback");
+    Drawn {
+        renderer,
+        up,
+        target,
+        base,
+        gb,
+    }
+}
+
 #[test]
 fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
     let ctx = ctx();
@@ -69,11 +125,7 @@ fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
     let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
     let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit");
-    let popts = ProbeOptions {
-        face_size: 32,
-        supersample: 1,
-        plane_rays: 16,
-    };
+    let popts = PROBES;
     let probes: Vec<_> = (0..scene.meshes.len())
         .filter(|&m| scene.meshes[m].hints.probe)
         .map(|m| capture_probe(&lit, m, &popts).expect("probe"))
@@ -86,29 +138,19 @@ fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
     let (w, h, k) = (96usize, 64usize, 1u32);
     let camera = path_camera(&scene, None, w as u32, h as u32).expect("camera");
     // The GPU G-buffer and light-map shading, kept on the GPU.
-    let renderer = LightmapRenderer::new(&ctx).expect("passes");
-    let up = LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages).expect("upload");
-    let target = GBufferTarget::new(&ctx, w as u32, h as u32).expect("gbuffer");
-    let base = ShadeTarget::new(&ctx, w as u32, h as u32).expect("target");
-    renderer
-        .draw(&ctx, &up, &camera, k, &target, &base)
-        .expect("draw");
-    let gb = target.read_back(&ctx).expect("gbuffer readback");
+    let Drawn {
+        renderer,
+        up,
+        target,
+        base,
+        gb,
+    } = draw(&ctx, &scene, &atlas, &pages, &camera, (w, h, k));
     // The view buffers, through the GPU layout and back (so both sides read the same f32s).
     let mut buffers = FrameBuffers::render(&lit, &light, &camera, w, h).expect("buffers");
     assert_eq!(buffers.mirrors.len(), 1, "the floor");
     assert_eq!(buffers.see_throughs.len(), 1, "the frosted glass");
 
-    for m in &mut buffers.mirrors {
-        m.view = GpuViewBuffer::upload(&ctx, &m.view)
-            .and_then(|g| g.read_back(&ctx))
-            .expect("mirror round trip");
-    }
-    for v in &mut buffers.see_throughs {
-        *v = GpuViewBuffer::upload(&ctx, v)
-            .and_then(|g| g.read_back(&ctx))
-            .expect("see-through round trip");
-    }
+    round_trip(&ctx, &mut buffers);
     let gpu_scene = FrameShadeScene::upload(&ctx, &lit, &light, &buffers).expect("frame scene");
     assert!(gpu_scene
         .materials
@@ -326,11 +368,7 @@ fn gpu_reads_the_automatic_room_probes_as_its_cpu_twin() {
     let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
     let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit");
-    let popts = ProbeOptions {
-        face_size: 32,
-        supersample: 1,
-        plane_rays: 16,
-    };
+    let popts = PROBES;
     let probes = lustre_shade::probe::capture_probes(&lit, &popts, &mut |_, _| {}).expect("probes");
     assert!(probes.iter().any(|p| p.mesh.is_none()), "a room probe");
     let light = FrameLight {
@@ -339,27 +377,13 @@ fn gpu_reads_the_automatic_room_probes_as_its_cpu_twin() {
     };
     let (w, h, k) = (64usize, 48usize, 1u32);
     let camera = path_camera(&scene, None, w as u32, h as u32).expect("camera");
-    let renderer = LightmapRenderer::new(&ctx).expect("passes");
-    let up = LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages).expect("upload");
-    let target = GBufferTarget::new(&ctx, w as u32, h as u32).expect("gbuffer");
-    let base = ShadeTarget::new(&ctx, w as u32, h as u32).expect("target");
-    renderer
-        .draw(&ctx, &up, &camera, k, &target, &base)
-        .expect("draw");
-    let gb = target.read_back(&ctx).expect("gbuffer readback");
+    let Drawn {
+        target, base, gb, ..
+    } = draw(&ctx, &scene, &atlas, &pages, &camera, (w, h, k));
     let mut buffers = FrameBuffers::render(&lit, &light, &camera, w, h).expect("buffers");
     assert_eq!(buffers.mirrors.len(), 3, "floor, mirror, picture");
     assert_eq!(buffers.see_throughs.len(), 1, "the pane");
-    for m in &mut buffers.mirrors {
-        m.view = GpuViewBuffer::upload(&ctx, &m.view)
-            .and_then(|g| g.read_back(&ctx))
-            .expect("mirror round trip");
-    }
-    for v in &mut buffers.see_throughs {
-        *v = GpuViewBuffer::upload(&ctx, v)
-            .and_then(|g| g.read_back(&ctx))
-            .expect("see-through round trip");
-    }
+    round_trip(&ctx, &mut buffers);
     let gpu_scene = FrameShadeScene::upload(&ctx, &lit, &light, &buffers).expect("frame scene");
     let pass = FrameShadePass::new(&ctx).expect("compile");
     let out = FrameShadeTarget::new(&ctx, w as u32, h as u32, k).expect("output");
