@@ -20,6 +20,7 @@
 //! sample-rule relative   # its N_p rule: constant | coverage | relative | relative-mse | absolute
 //! budget 3               # the selected object's own (budget global: back to the global one)
 //! exposure 1.5
+//! setup on               # draw the real-time set-up over the frame (setup off: hide it)
 //! fit data:measured/merl/…binary sgd   # fit a measured file (sgd | kurt | beckmann | ggx)
 //! record start           # record the camera path …
 //! record stop walk.json  # … and write it (lustre render --path walk.json)
@@ -86,6 +87,8 @@ pub enum Command {
     Budget(Option<u32>),
     /// Display exposure.
     Exposure(f64),
+    /// Draw the real-time set-up (probe boxes, reflectors) over the frame, or not.
+    ShowSetup(bool),
     /// Fit a measured file with a model, apply it to the selected material.
     Fit(String, String),
     /// Start recording the camera path.
@@ -250,6 +253,11 @@ pub fn parse(text: &str) -> Result<Vec<Command>, String> {
                 }
                 Command::Exposure(e)
             }
+            "setup" => match args.as_slice() {
+                ["on"] => Command::ShowSetup(true),
+                ["off"] => Command::ShowSetup(false),
+                _ => return Err(err("setup on | off")),
+            },
             "fit" => {
                 let (file, model) = match args.as_slice() {
                     [f] => (f.to_string(), "sgd".to_string()),
@@ -302,6 +310,10 @@ mod tests {
         assert_eq!(c[9], Command::Budget(Some(3)));
         assert_eq!(c[11], Command::Fit("a.binary".into(), "kurt".into()));
         assert_eq!(c[17], Command::Quit);
+        assert_eq!(
+            parse("setup on\nsetup off").unwrap(),
+            vec![Command::ShowSetup(true), Command::ShowSetup(false)]
+        );
     }
 
     #[test]
@@ -397,6 +409,8 @@ sample-rule absolute
             ("budget 257", "global"),
             ("exposure 0", "positive"),
             ("exposure", "1 argument"),
+            ("setup", "setup on | off"),
+            ("setup maybe", "setup on | off"),
             ("fit", "fit FILE"),
             ("fit a.binary phong", "sgd | kurt | beckmann | ggx"),
             ("fit a b c", "fit FILE"),

@@ -787,3 +787,64 @@ fn viewer_opens_the_line_up_and_an_unbaked_measured_scene_adaptive_only() {
     );
     check_adaptive_view(d, "file", "file", &["gold.toml"]);
 }
+
+/// The viewer on the sunroom baked with the automatic set-up (room probe included, captured by
+/// the viewer's walkthrough as by `lustre render`): `setup on` draws the room box (cyan), the
+/// object probes (yellow) and the reflectors (magenta) over the frame; without it none of the
+/// three colours is there.
+#[test]
+fn viewer_shows_the_automatic_set_up() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sunroom = std::fs::canonicalize("../../scenes/sunroom/scene.xml").unwrap();
+    let o = lustre()
+        .current_dir(d)
+        .arg("bake")
+        .arg(&sunroom)
+        .args(["--out", "sun", "--spp", "1", "--bounces", "1"])
+        .args(["--texels-per-metre", "2"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", text(&o));
+    std::fs::write(
+        d.join("setup.txt"),
+        "screenshot plain.png\nsetup on\nscreenshot setup.png\nquit\n",
+    )
+    .unwrap();
+    let o = view_in_xvfb(
+        d,
+        &[
+            "sun/scene.toml",
+            "--size",
+            "640x400",
+            "--probe-size",
+            "16",
+            "--script",
+            "setup.txt",
+            "--timeout",
+            "300",
+        ],
+    );
+    let all = text(&o);
+    assert!(o.status.success() && !all.contains("panicked"), "{all}");
+    let count = |file: &str, f: &dyn Fn(&image::Rgba<u8>) -> bool| {
+        let img = image::open(d.join("lustre-view").join(file))
+            .unwrap()
+            .to_rgba8();
+        img.pixels().filter(|p| f(p)).count()
+    };
+    let cyan = |p: &image::Rgba<u8>| p[0] < 40 && p[1] > 190 && p[2] > 230;
+    let magenta = |p: &image::Rgba<u8>| p[0] > 230 && p[1] < 90 && p[2] > 200;
+    let yellow = |p: &image::Rgba<u8>| p[0] > 230 && p[1] > 200 && p[2] < 40;
+    for (name, f) in [
+        ("cyan", &cyan as &dyn Fn(&image::Rgba<u8>) -> bool),
+        ("magenta", &magenta),
+        ("yellow", &yellow),
+    ] {
+        let (before, after) = (count("plain.png", f), count("setup.png", f));
+        assert!(
+            after > 50 && after > 10 * before,
+            "{name}: {before} → {after}"
+        );
+    }
+}

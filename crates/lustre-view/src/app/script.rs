@@ -169,6 +169,7 @@ impl App {
                 self.exposure = e;
                 self.upload_frame();
             }
+            Command::ShowSetup(on) => self.show_setup = on,
             Command::Fit(file, model) => {
                 self.start_fit(&file, &model);
                 self.wait = settle;
