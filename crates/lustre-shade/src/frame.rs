@@ -241,14 +241,9 @@ pub fn view_meshes(lit: &LitScene) -> (Vec<usize>, Vec<usize>) {
 
 /// Per mesh: the index of its first triangle in the path scene.
 fn first_prims(lit: &LitScene) -> Vec<usize> {
-    lit.scene
-        .meshes
-        .iter()
-        .scan(0, |acc, m| {
-            let first = *acc;
-            *acc += m.indices.len();
-            Some(first)
-        })
+    lustre_trace::setup::mesh_prims(lit.scene)
+        .into_iter()
+        .map(|r| r.start)
         .collect()
 }
 

@@ -191,22 +191,13 @@ fn appearance(scene: &Scene, material: usize) -> Appearance {
     }
 }
 
-/// World bounds (low, high) of mesh `m`, or of every mesh.
+/// World bounds (low, high) of mesh `m` (`Mesh::bounds`), or of every mesh (`Scene::bounds`).
 fn bounds(scene: &Scene, m: Option<usize>) -> Option<(DVec3, DVec3)> {
-    let mut lo = DVec3::splat(f64::INFINITY);
-    let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    let meshes = match m {
-        Some(i) => &scene.meshes[i..=i],
-        None => &scene.meshes[..],
+    let b = match m {
+        Some(i) => scene.meshes[i].bounds(),
+        None => scene.bounds(),
     };
-    for p in meshes.iter().flat_map(|m| &m.positions) {
-        let p = p.as_dvec3();
-        if p.is_finite() {
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
-    }
-    (lo.cmple(hi).all()).then_some((lo, hi))
+    b.map(|(lo, hi)| (lo.as_dvec3(), hi.as_dvec3()))
 }
 
 /// The triangle range of each mesh in the path scene (meshes in order).

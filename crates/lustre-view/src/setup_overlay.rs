@@ -61,18 +61,12 @@ impl SetupOverlay {
                 (false, true) => OverlayKind::ObjectProbe,
                 _ => continue,
             };
-            let mut lo = DVec3::splat(f64::INFINITY);
-            let mut hi = DVec3::splat(f64::NEG_INFINITY);
-            for p in &m.positions {
-                lo = lo.min(p.as_dvec3());
-                hi = hi.max(p.as_dvec3());
-            }
-            if lo.cmple(hi).all() && lo.is_finite() && hi.is_finite() {
+            if let Some((lo, hi)) = m.bounds() {
                 boxes.push(OverlayBox {
                     name: m.name.clone(),
                     kind,
-                    lo,
-                    hi,
+                    lo: lo.as_dvec3(),
+                    hi: hi.as_dvec3(),
                 });
             }
         }
