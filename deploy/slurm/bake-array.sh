@@ -1,24 +1,45 @@
 #!/bin/bash
-# `lustre bake` of one scene in N shards on SLURM: an array job bakes the tiles (each task's
-# SLURM_ARRAY_TASK_ID minus SLURM_ARRAY_TASK_MIN is its shard), and a job that depends on the
-# whole array assembles them. Submit from a login node:
+# `lustre bake` of one scene in N shards on SLURM: an array job bakes the tiles (array task K
+# runs shard K/N), and a job that depends on the whole array assembles them. Submit from a login
+# node:
 #
 #   deploy/slurm/bake-array.sh SCENE OUT_DIR SHARDS [BAKE OPTION...]
-#   e.g. deploy/slurm/bake-array.sh /scratch/hall/scene.xml /scratch/hall/bake 16 --spp 1024
+#   e.g. LUSTRE_CPUS=16 LUSTRE_MEM=16G deploy/slurm/bake-array.sh /scratch/hall/scene.xml \
+#          /scratch/hall/bake 16 --spp 1024
 #
-# OUT_DIR must be on a file system every node sees. A resubmitted shard resumes from its tiles.
+# Prints the array's job id, then the merge's. OUT_DIR must be on a file system every node sees.
+# Resources per task come from the environment (every one optional; see common.sh):
+#   LUSTRE_CPUS (default 1), LUSTRE_MEM (default 2G), LUSTRE_TIME (default: the partition's),
+#   LUSTRE_PARTITION, LUSTRE_SBATCH_ARGS (more sbatch options), LUSTRE (the executable,
+#   default `lustre`), LUSTRE_TASKS (array indices to submit, default all: `0-(SHARDS-1)`).
+# A request no node can satisfy is refused before anything is submitted. A lost or cancelled
+# task: resubmit just it (`LUSTRE_TASKS=3 deploy/slurm/bake-array.sh …` with the same
+# arguments); it resumes from its tiles, and the new merge job waits for it (the first merge job
+# is cancelled by SLURM, its dependency being unsatisfiable).
 set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+. "$here/common.sh"
 if [ $# -lt 3 ]; then
   echo "usage: $0 SCENE OUT_DIR SHARDS [BAKE OPTION...]" >&2
   exit 2
 fi
 scene=$1 out=$2 shards=$3
 shift 3
+lustre_check_shards "$shards"
+lustre_resources
 mkdir -p "$out"
-opts=$(printf "'%s' " "$@")
-array=$(sbatch --parsable --job-name=lustre-bake --array="0-$((shards - 1))" \
-  --cpus-per-task=8 --mem=8G --output="$out/slurm-%A_%a.log" \
-  --wrap="lustre bake '$scene' --out '$out' $opts --shard-count $shards")
-sbatch --parsable --job-name=lustre-bake-merge --dependency="afterok:$array" \
-  --cpus-per-task=8 --mem=8G --output="$out/slurm-merge-%j.log" \
-  --wrap="lustre bake '$scene' --out '$out' $opts --merge"
+opts=$(lustre_quote "$@")
+bake="RAYON_NUM_THREADS=$cpus $(lustre_quote "$lustre") bake $(lustre_quote "$scene") --out $(lustre_quote "$out") $opts"
+array=$(lustre_submit --job-name=lustre-bake --array="$tasks" --output="$out/slurm-%A_%a.log" <<EOF
+#!/bin/bash
+set -euo pipefail
+$bake --shard "\$SLURM_ARRAY_TASK_ID/$shards"
+EOF
+)
+echo "$array"
+lustre_submit --job-name=lustre-bake-merge --dependency="afterok:$array" --kill-on-invalid-dep=yes \
+  --output="$out/slurm-merge-%j.log" <<EOF
+#!/bin/bash
+set -euo pipefail
+$bake --merge
+EOF

@@ -1,24 +1,42 @@
 #!/bin/bash
 # `lustre fit` over a measurement database in N shards on SLURM: an array job runs the shards
-# (each task's SLURM_ARRAY_TASK_ID minus SLURM_ARRAY_TASK_MIN is its shard), and a job that
-# depends on the whole array merges them. Submit from a login node:
+# (array task K runs shard K/N), and a job that depends on the whole array merges them. Submit
+# from a login node:
 #
 #   deploy/slurm/fit-array.sh OUT_DIR MODEL SHARDS INPUT...
-#   e.g. deploy/slurm/fit-array.sh /scratch/fits/sgd sgd 8 /scratch/merl/*.binary
+#   e.g. LUSTRE_CPUS=4 deploy/slurm/fit-array.sh /scratch/fits/sgd sgd 8 /scratch/merl/*.binary
 #
-# OUT_DIR must be on a file system every node sees. A shard whose inputs fail still exits 0
-# (the failure is a row of the merged summary), so `afterok` holds; a resubmitted shard resumes
-# from the fits already in OUT_DIR.
+# Prints the array's job id, then the merge's. OUT_DIR must be on a file system every node sees.
+# Resources per task come from the environment (see common.sh): LUSTRE_CPUS (default 1: the
+# fits run in parallel on that many threads), LUSTRE_MEM (default 2G), LUSTRE_TIME,
+# LUSTRE_PARTITION, LUSTRE_SBATCH_ARGS, LUSTRE, LUSTRE_TASKS. A request no node can satisfy is
+# refused before anything is submitted. A shard whose inputs fail still exits 0 (the failure is
+# a row of the merged summary), so `afterok` holds; a lost or cancelled task is resubmitted alone
+# (`LUSTRE_TASKS=K`, same arguments) and resumes from the fits already in OUT_DIR.
 set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+. "$here/common.sh"
 if [ $# -lt 4 ]; then
   echo "usage: $0 OUT_DIR MODEL SHARDS INPUT..." >&2
   exit 2
 fi
 out=$1 model=$2 shards=$3
 shift 3
+lustre_check_shards "$shards"
+lustre_resources
 mkdir -p "$out"
-array=$(sbatch --parsable --job-name=lustre-fit --array="0-$((shards - 1))" \
-  --cpus-per-task=4 --mem=4G --output="$out/slurm-%A_%a.log" \
-  --wrap="lustre fit --model $model --shard-count $shards --jobs 4 --out '$out' $(printf "'%s' " "$@")")
-sbatch --parsable --job-name=lustre-fit-merge --dependency="afterok:$array" \
-  --output="$out/slurm-merge-%j.log" --wrap="lustre fit --merge --out '$out'"
+exe=$(lustre_quote "$lustre")
+array=$(lustre_submit --job-name=lustre-fit --array="$tasks" --output="$out/slurm-%A_%a.log" <<EOF
+#!/bin/bash
+set -euo pipefail
+$exe fit --model $(lustre_quote "$model") --jobs $cpus --out $(lustre_quote "$out") \
+  --shard "\$SLURM_ARRAY_TASK_ID/$shards" -- $(lustre_quote "$@")
+EOF
+)
+echo "$array"
+lustre_submit --job-name=lustre-fit-merge --dependency="afterok:$array" --kill-on-invalid-dep=yes \
+  --output="$out/slurm-merge-%j.log" <<EOF
+#!/bin/bash
+set -euo pipefail
+$exe fit --merge --out $(lustre_quote "$out")
+EOF

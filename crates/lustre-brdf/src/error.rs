@@ -126,3 +126,99 @@ pub fn write_atomic(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
     tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
     Ok(())
 }
+
+/// An exclusive hold on a job's part of an output folder (a shard, a merge), released when
+/// dropped or when the process dies (an advisory `flock` on `path`, which works across the
+/// machines of an NFS share): two processes writing the same part are refused, not interleaved.
+/// The lock file stays; it records who holds it.
+#[derive(Debug)]
+pub struct OutputLock {
+    _file: std::fs::File,
+}
+
+/// Holds `path` for `what` (e.g. "shard 1/3"), or, when another process holds it, an error
+/// naming `what`, the lock file and its holder (host and process). The folder must exist.
+pub fn lock_output(path: &std::path::Path, what: &str) -> Result<OutputLock> {
+    use std::io::{Read, Seek, Write};
+    let mut file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(path)
+        .map_err(|e| Error::io(path, e))?;
+    match file.try_lock() {
+        Ok(()) => {}
+        Err(std::fs::TryLockError::WouldBlock) => {
+            let mut holder = String::new();
+            // Best effort: the holder wrote its name after locking.
+            let _ = file.read_to_string(&mut holder);
+            let holder = holder.trim();
+            return Err(Error::format(
+                path,
+                format!(
+                    "{what} is being written by another process{}; wait for it to finish (or \
+                     stop it) before running {what} again into this folder",
+                    if holder.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" ({holder})")
+                    }
+                ),
+            ));
+        }
+        Err(std::fs::TryLockError::Error(e)) => return Err(Error::io(path, e)),
+    }
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .ok()
+        .map(|h| h.trim().to_string())
+        .filter(|h| !h.is_empty())
+        .unwrap_or_else(|| "this machine".into());
+    let me = format!("{what}: process {} on {host}\n", std::process::id());
+    file.set_len(0)
+        .and_then(|()| file.rewind())
+        .and_then(|()| file.write_all(me.as_bytes()))
+        .map_err(|e| Error::io(path, e))?;
+    Ok(OutputLock { _file: file })
+}
+
+/// Whether another process holds the lock at `path` (see [`lock_output`]); `false` when the
+/// file does not exist.
+pub fn output_locked(path: &std::path::Path) -> Result<bool> {
+    let file = match std::fs::File::open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(false),
+        Err(e) => return Err(Error::io(path, e)),
+    };
+    match file.try_lock_shared() {
+        Ok(()) => Ok(false),
+        Err(std::fs::TryLockError::WouldBlock) => Ok(true),
+        Err(std::fs::TryLockError::Error(e)) => Err(Error::io(path, e)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_output_lock_refuses_a_second_holder_until_dropped() {
+        let dir = tempfile::tempdir().expect("dir");
+        let path = dir.path().join("shard-0-of-2.lock");
+        assert!(!output_locked(&path).expect("no file"));
+        let held = lock_output(&path, "shard 0/2").expect("first");
+        assert!(output_locked(&path).expect("held"));
+        let e = lock_output(&path, "shard 0/2")
+            .expect_err("second")
+            .to_string();
+        assert!(
+            e.contains("shard 0/2 is being written by another process")
+                && e.contains(&format!("process {}", std::process::id()))
+                && e.contains("shard-0-of-2.lock"),
+            "{e}"
+        );
+        drop(held);
+        assert!(!output_locked(&path).expect("released"));
+        let _again = lock_output(&path, "shard 0/2").expect("after release");
+    }
+}

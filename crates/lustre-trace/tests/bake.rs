@@ -588,12 +588,15 @@ fn resume_and_shards_are_bit_identical_and_bad_tiles_are_rebaked() {
     let exr = std::fs::read(&a.files[0]).unwrap();
     // Interrupted: some tiles missing, one corrupt, one truncated, one of another bake.
     let tiles = whole.join("tiles");
+    // The tile files (the folder also holds the bake's lock file, all.lock).
     let mut names: Vec<_> = std::fs::read_dir(&tiles)
         .unwrap()
         .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "bin"))
         .collect();
     names.sort();
     assert_eq!(names.len(), 25, "36×36 texels in 8×8 tiles");
+    assert!(tiles.join("all.lock").is_file());
     std::fs::remove_file(&names[3]).unwrap();
     std::fs::remove_file(&names[12]).unwrap();
     let mut bytes = std::fs::read(&names[6]).unwrap();

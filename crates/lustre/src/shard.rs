@@ -5,6 +5,10 @@
 //! array the process runs in: `JOB_COMPLETION_INDEX` (a Kubernetes Indexed Job), else
 //! `SLURM_ARRAY_TASK_ID` minus `SLURM_ARRAY_TASK_MIN` (a SLURM array, which may start at 1).
 //! Without either option the command does all the work itself, even inside a job array.
+//!
+//! `SLURM_ARRAY_TASK_MIN` makes an array numbered from 1 work, but an array resubmitted for some
+//! of its tasks (`--array=3`) starts at that task, which would then read as shard 0: the SLURM
+//! templates in `deploy/slurm` therefore pass `--shard $SLURM_ARRAY_TASK_ID/N` (arrays from 0).
 
 use anyhow::{bail, Context, Result};
 

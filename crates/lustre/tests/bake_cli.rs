@@ -160,8 +160,51 @@ fn sharded_bake_merges_to_the_unsharded_pages() {
             "{f} differs"
         );
     }
-    let tiles = std::fs::read_dir(whole.join("tiles")).unwrap().count();
+    let tiles = std::fs::read_dir(whole.join("tiles"))
+        .unwrap()
+        .filter(|e| {
+            e.as_ref()
+                .is_ok_and(|e| e.path().extension().is_some_and(|x| x == "bin"))
+        })
+        .count();
     assert!(tiles >= 3, "{tiles} tiles: too few to shard");
+
+    // Refusals that leave the merged folder as it is.
+    let page = shared.join("lightmap_000.exr");
+    let modified = || std::fs::metadata(&page).and_then(|m| m.modified()).unwrap();
+    let (page_bytes, page_time) = (std::fs::read(&page).unwrap(), modified());
+    // More shards than tiles.
+    let many = format!("0/{}", tiles + 1);
+    let (ok, t) = bake(&shared, &["--shard", &many], &[]);
+    assert!(
+        !ok && t.contains(&format!("{} shards for {tiles} tiles", tiles + 1)),
+        "{t}"
+    );
+    // The same shard run twice at once (a resubmitted task while the first still runs), and a
+    // merge while a shard runs: the test holds shard 1/3's lock as a running bake would.
+    let held =
+        lustre_brdf::error::lock_output(&shared.join("tiles/shard-1-of-3.lock"), "shard 1/3")
+            .unwrap();
+    let (ok, t) = bake(&shared, &["--shard", "1/3"], &[]);
+    assert!(
+        !ok && t.contains("shard 1/3 is being written by another process"),
+        "{t}"
+    );
+    let (ok, t) = bake(&shared, &["--merge"], &[]);
+    assert!(!ok && t.contains("still baking"), "{t}");
+    drop(held);
+    // A merge with a tile missing (a shard not finished).
+    let tile0 = std::fs::read_dir(shared.join("tiles"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|x| x == "bin"))
+        .unwrap();
+    std::fs::remove_file(&tile0).unwrap();
+    let (ok, t) = bake(&shared, &["--merge"], &[]);
+    assert!(!ok && t.contains("not baked yet"), "{t}");
+    assert_eq!(std::fs::read(&page).unwrap(), page_bytes);
+    assert_eq!(modified(), page_time, "a refused run rewrote the page");
 }
 
 /// The sunroom (scenes/sunroom: no hints): `--setup auto` (the default) writes the floor, the

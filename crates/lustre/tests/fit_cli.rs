@@ -305,6 +305,53 @@ fn sharded_batch_merges_to_the_unsharded_result() {
         .expect("runs");
     assert!(o.status.success(), "{}", text(&o));
     assert_eq!(batch_files(&merged), batch_files(&whole));
+    // Refusals that leave the merged folder as it is: more shards than inputs, the same shard
+    // twice at once (the test holds shard 1/2's lock as a running fit would), a merge while a
+    // shard runs.
+    let summary = shared.join("summary.csv");
+    let before = (std::fs::read(&summary).expect("summary"), mtime(&summary));
+    let o = lustre()
+        .args(["fit", "--model", "kurt", "--shard", "0/4", "--out"])
+        .arg(&shared)
+        .args(&inputs)
+        .output()
+        .expect("runs");
+    assert!(
+        !o.status.success() && text(&o).contains("4 shards for 3 inputs"),
+        "{}",
+        text(&o)
+    );
+    let held = lustre_brdf::error::lock_output(&shared.join("shards/fit-1-of-2.lock"), "shard 1/2")
+        .expect("lock");
+    let o = lustre()
+        .args([
+            "fit", "--model", "kurt", "--jobs", "1", "--shard", "1/2", "--out",
+        ])
+        .arg(&shared)
+        .args(&inputs)
+        .output()
+        .expect("runs");
+    assert!(
+        !o.status.success() && text(&o).contains("shard 1/2 is being written by another process"),
+        "{}",
+        text(&o)
+    );
+    let o = lustre()
+        .args(["fit", "--merge", "--out"])
+        .arg(&shared)
+        .output()
+        .expect("runs");
+    assert!(
+        !o.status.success() && text(&o).contains("still fitting"),
+        "{}",
+        text(&o)
+    );
+    drop(held);
+    assert_eq!(
+        (std::fs::read(&summary).expect("summary"), mtime(&summary)),
+        before,
+        "a refused run rewrote summary.csv"
+    );
     // --shard-count outside a job array is a clear error.
     let o = lustre()
         .args(["fit", "--model", "kurt", "--shard-count", "2", "--out"])

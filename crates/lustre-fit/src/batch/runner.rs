@@ -100,8 +100,23 @@ pub fn run(inputs: &[String], opts: &BatchOptions, fitter: &dyn Fitter) -> Resul
         }
     }
     let total = jobs.len();
+    // One process per shard: a resubmitted task while the first still runs is refused.
+    let mut _held = None;
     if let Some((k, n)) = opts.shard {
         check_shard(k, n)?;
+        if n > total {
+            return Err(FitError::Option(format!(
+                "{n} shards for {total} inputs: shards {total} to {} would fit nothing; use at \
+                 most {total} shards",
+                n - 1
+            )));
+        }
+        let dir = opts.out.join("shards");
+        std::fs::create_dir_all(&dir).map_err(|e| lustre_brdf::Error::io(&dir, e))?;
+        _held = Some(lustre_brdf::error::lock_output(
+            &dir.join(format!("fit-{k}-of-{n}.lock")),
+            &format!("shard {k}/{n}"),
+        )?);
         jobs = jobs
             .into_iter()
             .enumerate()

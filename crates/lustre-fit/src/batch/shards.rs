@@ -109,6 +109,41 @@ fn read_manifests(dir: &Path) -> Result<Vec<(PathBuf, ShardManifest)>> {
         .collect()
 }
 
+/// Refuses while a shard still runs into one of `dirs` (it holds `DIR/shards/fit-K-of-N.lock`),
+/// and holds the merge's own lock in the first: the guard to keep while merging.
+fn lock_merge(dirs: &[PathBuf]) -> Result<lustre_brdf::error::OutputLock> {
+    for d in dirs {
+        let shards = d.join("shards");
+        let Ok(list) = std::fs::read_dir(&shards) else {
+            continue;
+        };
+        let mut locks: Vec<PathBuf> = list
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| {
+                p.extension().is_some_and(|e| e == "lock")
+                    && p.file_stem().is_some_and(|s| s != "merge")
+            })
+            .collect();
+        locks.sort();
+        for l in &locks {
+            if lustre_brdf::error::output_locked(l)? {
+                let holder = std::fs::read_to_string(l).unwrap_or_default();
+                return Err(FitError::Option(format!(
+                    "{}: still fitting ({}); merge once every shard has finished",
+                    l.display(),
+                    holder.trim()
+                )));
+            }
+        }
+    }
+    let shards = dirs[0].join("shards");
+    std::fs::create_dir_all(&shards).map_err(|e| lustre_brdf::Error::io(&shards, e))?;
+    Ok(lustre_brdf::error::lock_output(
+        &shards.join("merge.lock"),
+        "the merge",
+    )?)
+}
+
 /// Assembles the shards of a batch into `out` (`lustre fit --merge`): reads the manifests in
 /// `out/shards/` and in every folder of `from` (shards run into separate folders), checks that
 /// the N shards are all there, once, with the same batch size and options, copies the JSON of
@@ -119,6 +154,7 @@ pub fn merge(out: &Path, from: &[PathBuf]) -> Result<BatchSummary> {
     std::fs::create_dir_all(out).map_err(|e| lustre_brdf::Error::io(out, e))?;
     let mut dirs = vec![out.to_path_buf()];
     dirs.extend(from.iter().filter(|d| d.as_path() != out).cloned());
+    let _held = lock_merge(&dirs)?;
     let mut found: Vec<(PathBuf, PathBuf, ShardManifest)> = Vec::new();
     for d in &dirs {
         match read_manifests(d) {

@@ -2,7 +2,7 @@
 
 use super::denoise::{atrous, Denoiser};
 use super::fill::PageBuffer;
-use super::tile::{read_tile, tile_path, tiles};
+use super::tile::{lock_merge, read_tile, tile_path, tiles};
 use super::trace::TexelRecord;
 use super::{bake_hash, check_atlas, BakeOptions};
 use crate::{Result, TraceError};
@@ -127,6 +127,7 @@ pub fn assemble(
 ) -> Result<Assembled> {
     opts.validate()?;
     check_atlas(scene, atlas)?;
+    let _held = lock_merge(out_dir)?;
     let t0 = Instant::now();
     let hash = bake_hash(scene, atlas, opts);
     let (w, h) = (atlas.width, atlas.height);

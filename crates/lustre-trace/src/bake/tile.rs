@@ -219,11 +219,68 @@ pub fn bake_tiles(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<TilesReport> {
     check_shard(shard)?;
+    opts.validate()?;
     let t0 = Instant::now();
+    let all = tiles(atlas, opts.tile).len();
+    if let Some((_, n)) = shard.filter(|&(_, n)| n as usize > all) {
+        return Err(TraceError::Parameter(format!(
+            "{n} shards for {all} tiles: shards {all} to {} would bake nothing; use at most {all} \
+             shards (or smaller tiles)",
+            n - 1
+        )));
+    }
+    let dir = out_dir.join("tiles");
+    std::fs::create_dir_all(&dir).map_err(|e| TraceError::Io {
+        path: dir.clone(),
+        source: e,
+    })?;
+    // One process per shard: a resubmitted task while the first still runs is refused.
+    let (lock, what) = match shard {
+        Some((k, n)) => (
+            dir.join(format!("shard-{k}-of-{n}.lock")),
+            format!("shard {k}/{n}"),
+        ),
+        None => (dir.join("all.lock"), "the bake".to_string()),
+    };
+    let _held = lustre_brdf::error::lock_output(&lock, &what)?;
     let hash = bake_hash(scene, atlas, opts);
     with_baker(scene, atlas, opts, |baker, warnings| {
         bake_tiles_with(baker, warnings, atlas, out_dir, shard, hash, t0, progress)
     })
+}
+
+/// Refuses while a process bakes tiles into `out_dir` (a shard or a whole bake holds its lock
+/// in `out_dir/tiles/`), and holds the merge's own lock: the guard to keep while assembling.
+pub(super) fn lock_merge(out_dir: &Path) -> Result<lustre_brdf::error::OutputLock> {
+    let dir = out_dir.join("tiles");
+    let io = |e| TraceError::Io {
+        path: dir.clone(),
+        source: e,
+    };
+    std::fs::create_dir_all(&dir).map_err(io)?;
+    let mut locks: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .map_err(io)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension().is_some_and(|e| e == "lock")
+                && p.file_stem().is_some_and(|s| s != "merge")
+        })
+        .collect();
+    locks.sort();
+    for l in &locks {
+        if lustre_brdf::error::output_locked(l)? {
+            let holder = std::fs::read_to_string(l).unwrap_or_default();
+            return Err(TraceError::Parameter(format!(
+                "{}: still baking ({}); merge once every shard has finished",
+                l.display(),
+                holder.trim()
+            )));
+        }
+    }
+    Ok(lustre_brdf::error::lock_output(
+        &dir.join("merge.lock"),
+        "the merge",
+    )?)
 }
 
 /// Sets up the path tracer and coverage of a bake and hands the per-texel estimator to `f`
@@ -297,11 +354,6 @@ fn bake_tiles_with(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<TilesReport> {
     let opts = baker.opts;
-    let dir = out_dir.join("tiles");
-    std::fs::create_dir_all(&dir).map_err(|e| TraceError::Io {
-        path: dir.clone(),
-        source: e,
-    })?;
     let mine: Vec<TileRect> = tiles(atlas, opts.tile)
         .into_iter()
         .filter(|r| shard.is_none_or(|(k, n)| r.index % n == k))
