@@ -66,6 +66,57 @@ lustre_resources() {
     echo "  set LUSTRE_CPUS, LUSTRE_MEM, LUSTRE_TIME or LUSTRE_PARTITION to fit them; nothing was submitted" >&2
     exit 1
   fi
+  lustre_check_time
+}
+
+# Seconds in a SLURM time ("minutes", "minutes:seconds", "hours:minutes:seconds", "days-hours",
+# "days-hours:minutes", "days-hours:minutes:seconds"); -1 for no limit; empty if unreadable.
+lustre_seconds() {
+  local t=$1 d=0 h=0 m=0 sec=0
+  case "$t" in
+  infinite | UNLIMITED | INFINITE) echo -1; return ;;
+  *[!0-9:-]* | '') return ;;
+  esac
+  local IFS=:
+  if [[ $t == *-* ]]; then
+    d=${t%%-*}
+    read -r -a p <<<"${t#*-}"
+    case ${#p[@]} in
+    1) h=${p[0]} ;;
+    2) h=${p[0]} m=${p[1]} ;;
+    3) h=${p[0]} m=${p[1]} sec=${p[2]} ;;
+    *) return ;;
+    esac
+  else
+    read -r -a p <<<"$t"
+    case ${#p[@]} in
+    1) m=${p[0]} ;;
+    2) m=${p[0]} sec=${p[1]} ;;
+    3) h=${p[0]} m=${p[1]} sec=${p[2]} ;;
+    *) return ;;
+    esac
+  fi
+  echo $(((10#$d * 24 + 10#$h) * 3600 + 10#$m * 60 + 10#$sec))
+}
+
+# Refuses LUSTRE_TIME above the partition's time limit (sbatch --test-only accepts it, and the
+# job would wait forever with reason PartitionConfig).
+lustre_check_time() {
+  [ -n "${LUSTRE_TIME:-}" ] || return 0
+  local want limit part
+  want=$(lustre_seconds "$LUSTRE_TIME")
+  if [ -n "${LUSTRE_PARTITION:-}" ]; then
+    part=$LUSTRE_PARTITION
+    limit=$(sinfo -h -p "$part" -o %l 2>/dev/null | head -1)
+  else
+    read -r part limit < <(sinfo -h -o '%P %l' 2>/dev/null | grep '^[^ ]*\* ' | head -1)
+    part=${part%\*}
+  fi
+  limit=$(lustre_seconds "${limit:-}")
+  if [ -n "$want" ] && [ -n "$limit" ] && [ "$limit" -ge 0 ] && [ "$want" -gt "$limit" ]; then
+    echo "$0: LUSTRE_TIME=$LUSTRE_TIME is longer than partition $part allows ($(sinfo -h -p "$part" -o %l | head -1)); nothing was submitted" >&2
+    exit 1
+  fi
 }
 
 # sbatch with the resources, the job script on standard input; prints the job id.

@@ -9,9 +9,10 @@
 #
 # Needs Debian's `slurm-wlm` and `munge` (apt-get install slurm-wlm munge) and root (slurmd
 # starts jobs as the submitting user). The node is this machine as `slurmd -C` sees it (all its
-# CPUs and memory) in one partition `lustre`; ports are picked free. `start` waits until the node
-# is idle (at most 60 s) and fails with the daemons' logs otherwise; `stop` stops every daemon it
-# started (their pid files are in DIR) and leaves DIR with the logs.
+# CPUs and memory) in the default partition `lustre` and in `short` (a 10-minute limit); ports
+# are picked free. `start` waits until the node is idle (at most 60 s) and fails with the
+# daemons' logs otherwise; `stop` stops every daemon it started (their pid files are in DIR) and
+# leaves DIR with the logs.
 set -euo pipefail
 
 usage() {
@@ -109,6 +110,8 @@ KillWait=5
 MinJobAge=300
 $node
 PartitionName=lustre Nodes=$name Default=YES MaxTime=INFINITE State=UP
+# A partition with a time limit, for trying a request longer than it.
+PartitionName=short Nodes=$name MaxTime=00:10:00 State=UP
 EOF
   export SLURM_CONF="$dir/slurm.conf"
   slurmctld -f "$SLURM_CONF" -i

@@ -424,6 +424,23 @@ fn slurm_arrays_bake_and_fit_like_one_machine_and_a_cancelled_task_resumes() {
         "{}",
         text(&o)
     );
+    // Longer than the partition's limit (test-cluster.sh's `short`: 10 min), which sbatch
+    // --test-only accepts and SLURM would leave pending forever.
+    let o = cluster
+        .cmd("bash")
+        .arg(repo().join("deploy/slurm/fit-array.sh"))
+        .arg(w.join("never"))
+        .args(["sgd", "2", "a.binary", "b.binary"])
+        .env("LUSTRE_PARTITION", "short")
+        .env("LUSTRE_TIME", "1:00:00")
+        .output()
+        .expect("runs");
+    assert!(
+        !o.status.success()
+            && text(&o).contains("LUSTRE_TIME=1:00:00 is longer than partition short allows"),
+        "{}",
+        text(&o)
+    );
     // Shard lists and counts outside the array: refused as well.
     for (shards, tasks) in [("0", ""), ("3", "5"), ("x", "")] {
         let o = cluster
