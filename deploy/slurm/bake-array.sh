@@ -12,10 +12,11 @@
 #   LUSTRE_CPUS (default 1), LUSTRE_MEM (default 2G), LUSTRE_TIME (default: the partition's),
 #   LUSTRE_PARTITION, LUSTRE_SBATCH_ARGS (more sbatch options), LUSTRE (the executable,
 #   default `lustre`), LUSTRE_TASKS (array indices to submit, default all: `0-(SHARDS-1)`).
-# A request no node can satisfy is refused before anything is submitted. A lost or cancelled
-# task: resubmit just it (`LUSTRE_TASKS=3 deploy/slurm/bake-array.sh …` with the same
-# arguments); it resumes from its tiles, and the new merge job waits for it (the first merge job
-# is cancelled by SLURM, its dependency being unsatisfiable).
+# A request no node can satisfy, or more shards than the atlas has tiles, is refused before
+# anything is submitted. A lost or cancelled task: resubmit just it (`LUSTRE_TASKS=3
+# deploy/slurm/bake-array.sh …` with the same arguments); it resumes from its tiles, and the new
+# merge job waits for it (the first merge job is cancelled by SLURM, its dependency being
+# unsatisfiable).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 . "$here/common.sh"
@@ -27,6 +28,16 @@ scene=$1 out=$2 shards=$3
 shift 3
 lustre_check_shards "$shards"
 lustre_resources
+# The scene, the options and the shard count checked here first (`lustre bake --plan` loads the
+# scene and builds its atlas, writing nothing).
+if command -v "$lustre" >/dev/null 2>&1; then
+  if ! "$lustre" bake "$scene" --out "$out" "$@" --shard "0/$shards" --plan >&2; then
+    echo "$0: nothing was submitted" >&2
+    exit 1
+  fi
+else
+  echo "$0: note: $lustre is not on this node's PATH; the scene and shard count are checked by the tasks" >&2
+fi
 mkdir -p "$out"
 opts=$(lustre_quote "$@")
 bake="RAYON_NUM_THREADS=$cpus $(lustre_quote "$lustre") bake $(lustre_quote "$scene") --out $(lustre_quote "$out") $opts"

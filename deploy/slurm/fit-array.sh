@@ -9,10 +9,11 @@
 # Prints the array's job id, then the merge's. OUT_DIR must be on a file system every node sees.
 # Resources per task come from the environment (see common.sh): LUSTRE_CPUS (default 1: the
 # fits run in parallel on that many threads), LUSTRE_MEM (default 2G), LUSTRE_TIME,
-# LUSTRE_PARTITION, LUSTRE_SBATCH_ARGS, LUSTRE, LUSTRE_TASKS. A request no node can satisfy is
-# refused before anything is submitted. A shard whose inputs fail still exits 0 (the failure is
-# a row of the merged summary), so `afterok` holds; a lost or cancelled task is resubmitted alone
-# (`LUSTRE_TASKS=K`, same arguments) and resumes from the fits already in OUT_DIR.
+# LUSTRE_PARTITION, LUSTRE_SBATCH_ARGS, LUSTRE, LUSTRE_TASKS. A request no node can satisfy, or
+# more shards than inputs, is refused before anything is submitted. A shard whose inputs fail
+# still exits 0 (the failure is a row of the merged summary), so `afterok` holds; a lost or
+# cancelled task is resubmitted alone (`LUSTRE_TASKS=K`, same arguments) and resumes from the
+# fits already in OUT_DIR.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 . "$here/common.sh"
@@ -24,6 +25,17 @@ out=$1 model=$2 shards=$3
 shift 3
 lustre_check_shards "$shards"
 lustre_resources
+# More shards than inputs is refused before submitting (an input such as nbrdf:FILE#* expands to
+# several; then the tasks check).
+case "$*" in
+*'#*'*) ;;
+*)
+  if [ "$shards" -gt $# ]; then
+    echo "$0: $shards shards for $# inputs: shards $# to $((shards - 1)) would fit nothing; use at most $# shards; nothing was submitted" >&2
+    exit 1
+  fi
+  ;;
+esac
 mkdir -p "$out"
 exe=$(lustre_quote "$lustre")
 array=$(lustre_submit --job-name=lustre-fit --array="$tasks" --output="$out/slurm-%A_%a.log" <<EOF

@@ -59,6 +59,14 @@ start)
   fi
   mkdir -p "$dir"
   dir=$(cd "$dir" && pwd)
+  case "$dir" in
+  *[[:space:]]* | *'"'* | *"'"*)
+    echo "$0: $dir: slurm.conf cannot hold a path with spaces or quotes; give another DIR" >&2
+    exit 2
+    ;;
+  esac
+  # A daemon that fails to start stops the ones started before it.
+  trap 'echo "$0: starting the cluster failed; logs in $dir" >&2; stop' ERR
   chmod 700 "$dir"
   mkdir -p "$dir/state" "$dir/spool" "$dir/munge"
   chmod 700 "$dir/munge"
@@ -119,6 +127,7 @@ EOF
   for _ in $(seq 600); do
     state=$(sinfo -h -n "$name" -o %t 2>/dev/null || true)
     if [ "$state" = idle ]; then
+      trap - ERR
       echo "export SLURM_CONF=$SLURM_CONF"
       echo "# one-node SLURM cluster up: node $name, $cpus CPUs, partition lustre" >&2
       exit 0

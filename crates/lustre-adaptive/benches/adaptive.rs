@@ -16,7 +16,7 @@ use std::hint::black_box;
 fn bench(c: &mut Criterion) {
     let size = 128;
     let map = lustre_env::shared_data_dir().join("envmaps/royal_esplanade_1k.hdr");
-    let env = read_environment(&map).expect("royal_esplanade_1k");
+    let env = read_environment(&map).expect("royal_esplanade_1k").0;
     let scene = lustre_scene::builtin::preview("nbrdf:gold-paint", Some(env)).expect("scene");
     let (ps, _) = path_scene(&scene).expect("path scene");
     let tracer = PathTracer::new(&ps, PathOptions::default()).expect("tracer");

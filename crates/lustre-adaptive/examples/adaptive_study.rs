@@ -143,7 +143,7 @@ fn args() -> anyhow::Result<Args> {
 
 fn main() -> anyhow::Result<()> {
     let a = args()?;
-    let env = read_environment(&a.map)?;
+    let env = read_environment(&a.map)?.0;
     println!(
         "# Adaptive shading vs brute force (CPU, {} threads)\n\n- map {}, {}² pixels{}\n",
         rayon::current_num_threads(),

@@ -35,7 +35,7 @@ fn constant_map(v: f32) -> EquirectMap {
 
 fn royal() -> Environment {
     let path = lustre_env::shared_data_dir().join("envmaps/royal_esplanade_1k.hdr");
-    read_environment(&path).expect("royal_esplanade_1k.hdr")
+    read_environment(&path).expect("royal_esplanade_1k.hdr").0
 }
 
 /// Everything one frame needs.

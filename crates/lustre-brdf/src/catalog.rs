@@ -443,10 +443,38 @@ fn resolve_model(mut p: Params) -> Result<Box<dyn Bsdf>> {
             let (kd, ks) = (p.get_rgb("kd", 0.2), p.get_rgb("ks", 0.2));
             let ax = p.get("ax", 0.1);
             let ay = p.get("ay", ax);
+            // Errors name the spec's parameters (the models call them rho_d, rho_s, alpha, beta).
+            let spec_names = |e: Error| match e {
+                Error::Parameter {
+                    name,
+                    value,
+                    reason,
+                } => {
+                    let (model_name, channel) = name.split_once('.').unwrap_or((&name, ""));
+                    let spec = match model_name {
+                        "rho_d" => "kd",
+                        "rho_s" => "ks",
+                        "alpha" => "ax",
+                        "beta" => "ay",
+                        other => other,
+                    };
+                    let name = if channel.is_empty() {
+                        spec.to_string()
+                    } else {
+                        format!("{spec}.{channel}")
+                    };
+                    Error::Parameter {
+                        name,
+                        value,
+                        reason,
+                    }
+                }
+                e => e,
+            };
             match model.as_str() {
-                "ward" => Box::new(Ward::new(kd, ks, ax, ay)?),
-                "ward-duer" => Box::new(WardDuer::new(kd, ks, ax, ay)?),
-                _ => Box::new(WardGmd::new(kd, ks, ax, ay)?),
+                "ward" => Box::new(Ward::new(kd, ks, ax, ay).map_err(spec_names)?),
+                "ward-duer" => Box::new(WardDuer::new(kd, ks, ax, ay).map_err(spec_names)?),
+                _ => Box::new(WardGmd::new(kd, ks, ax, ay).map_err(spec_names)?),
             }
         }
         "lafortune" => {
@@ -627,6 +655,17 @@ mod tests {
         assert!(resolve("lambert(kd=0.5").is_err());
         assert!(resolve("no-such-model").is_err());
         assert!(resolve("phong(kd=0.1, ks=0.5, n=-3)").is_err());
+        // Errors name the spec's own parameters.
+        let err = |spec: &str| match resolve(spec) {
+            Ok(_) => panic!("{spec} resolved"),
+            Err(e) => e.to_string(),
+        };
+        let e = err("ward(kd=0.2, ks=0.1, ax=0)");
+        assert!(e.contains("parameter ax = 0"), "{e}");
+        let e = err("ward-duer(kd=0.2, ks=0.1, ax=0.1, ay=20)");
+        assert!(e.contains("parameter ay = 20"), "{e}");
+        let e = err("ward-gmd(kd=2, ks=0.1)");
+        assert!(e.contains("parameter kd.r = 2"), "{e}");
         let l = resolve("lambert(kd_r=0.2, kd_g=0.4, kd_b=0.6)").expect("rgb keys");
         let v = l.eval(DVec3::Z, DVec3::Z);
         assert!((v[2] - 0.6 / std::f64::consts::PI).abs() < 1e-12);

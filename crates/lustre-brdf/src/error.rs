@@ -24,7 +24,7 @@ pub enum Error {
         problem: String,
     },
     /// A model parameter is out of its valid range.
-    #[error("invalid parameter {name} = {value}: {reason}")]
+    #[error("invalid parameter {name} = {}: {reason}", plain_number(*value))]
     Parameter {
         /// The parameter.
         name: String,
@@ -68,20 +68,37 @@ impl Error {
     }
 }
 
-/// Checks that a parameter is finite and within [lo, hi].
+/// The largest reflectance parameter (kd, ks, ρ) a model takes: an albedo of 10⁶ amplifies light
+/// a million times and is no material; larger values overflow the albedo sums to ∞.
+pub const MAX_REFLECTANCE: f64 = 1e6;
+
+/// A number as a person reads it in a message: plain between 10⁻⁴ and 10⁶, else in exponent
+/// form (`1e300`, not 301 digits); the largest finite values as ∞.
+pub fn plain_number(v: f64) -> String {
+    if v >= f64::MAX {
+        "∞".into()
+    } else if v <= -f64::MAX {
+        "-∞".into()
+    } else if v != 0.0 && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// Checks that a parameter is finite and within [lo, hi] (either end may be ±`f64::MAX` or ±∞
+/// for none); the message prints the limits in plain form.
 pub fn check_range(name: &str, value: f64, lo: f64, hi: f64) -> Result<f64> {
     if !value.is_finite() {
         return Err(Error::param(name, value, "not a finite number"));
     }
-    if value < lo && hi == f64::INFINITY {
-        return Err(Error::param(name, value, format!("must be ≥ {lo}")));
-    }
     if value < lo || value > hi {
-        return Err(Error::param(
-            name,
-            value,
-            format!("must lie in [{lo}, {hi}]"),
-        ));
+        let reason = match (lo <= -f64::MAX, hi >= f64::MAX) {
+            (false, true) => format!("must be ≥ {}", plain_number(lo)),
+            (true, false) => format!("must be ≤ {}", plain_number(hi)),
+            _ => format!("must lie in [{}, {}]", plain_number(lo), plain_number(hi)),
+        };
+        return Err(Error::param(name, value, reason));
     }
     Ok(value)
 }
@@ -200,6 +217,23 @@ pub fn output_locked(path: &std::path::Path) -> Result<bool> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn limits_and_values_print_in_plain_form() {
+        let e = check_range("x", -1.0, 0.0, f64::MAX)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "invalid parameter x = -1: must be ≥ 0");
+        let e = check_range("rho", 1e300, 0.0, 1.0).unwrap_err().to_string();
+        assert_eq!(e, "invalid parameter rho = 1e300: must lie in [0, 1]");
+        let e = check_range("f", 2e7, -f64::MAX, 1e6)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "invalid parameter f = 2e7: must be ≤ 1e6");
+        let e = check_range("a", 1e-5, 1e-4, 10.0).unwrap_err().to_string();
+        assert_eq!(e, "invalid parameter a = 1e-5: must lie in [0.0001, 10]");
+        assert!(check_range("ok", 5.0, 0.0, f64::INFINITY).is_ok());
+    }
 
     #[test]
     fn an_output_lock_refuses_a_second_holder_until_dropped() {

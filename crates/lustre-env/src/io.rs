@@ -20,6 +20,21 @@ pub struct LoadedMap {
     pub negative: usize,
 }
 
+impl LoadedMap {
+    /// The warning every command prints for a map whose texels were sanitized (`None` when
+    /// none was): `FILE: N non-finite and M negative texels were set to 0`.
+    pub fn sanitized_warning(&self, path: &Path) -> Option<String> {
+        (self.nonfinite + self.negative > 0).then(|| {
+            format!(
+                "{}: {} non-finite and {} negative texels were set to 0",
+                path.display(),
+                self.nonfinite,
+                self.negative
+            )
+        })
+    }
+}
+
 /// The Radiance magic (`#?RADIANCE` or `#?RGBE`, both start with `#?`).
 const HDR_MAGIC: &[u8] = b"#?";
 /// The OpenEXR magic number 20000630 (little endian).

@@ -71,7 +71,7 @@ fn args() -> anyhow::Result<Args> {
 
 fn main() -> anyhow::Result<()> {
     let a = args()?;
-    let env = read_environment(&a.map)?;
+    let env = read_environment(&a.map)?.0;
     let gpu = GpuContext::new()?;
     println!(
         "# Adaptive shading vs brute force, GPU and CPU side by side\n\n- GPU: {}\n- CPU: {} threads\n- map {}, {}² pixels, reference {} samples per pixel (CPU, two halves)\n",

@@ -77,6 +77,20 @@ struct Reader<'a> {
 /// external buffers and images.
 pub fn from_slice(path: &Path, bytes: &[u8]) -> Result<Scene> {
     let fmt = |p: String| SceneError::format(path, p);
+    let glb = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    if glb && !bytes.starts_with(b"glTF") {
+        let head: Vec<String> = bytes.iter().take(4).map(|b| format!("{b:02x}")).collect();
+        return Err(fmt(format!(
+            "not a binary glTF (GLB) file: it starts with {}, not the magic \"glTF\"",
+            if head.is_empty() {
+                "nothing (empty)".to_string()
+            } else {
+                head.join(" ")
+            }
+        )));
+    }
     check_glb_header(bytes).map_err(fmt)?;
     let unvalidated = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| fmt(format!("not a valid glTF file: {e}")))?;
@@ -91,12 +105,25 @@ pub fn from_slice(path: &Path, bytes: &[u8]) -> Result<Scene> {
     // gltf-json 1.4.1's validation indexes the POSITION accessor before checking that it
     // exists (a panic): check that reference first.
     let root = unvalidated.as_json();
+    // glTF 2.x only: a 1.0 file (or a future 3.0) has another layout.
+    let version = root.asset.version.trim();
+    if version.split('.').next() != Some("2") {
+        return Err(fmt(format!(
+            "glTF version {version:?}: lustre reads glTF 2.x files only"
+        )));
+    }
     for (mi, mesh) in root.meshes.iter().enumerate() {
         for (pi, prim) in mesh.primitives.iter().enumerate() {
             for (sem, index) in &prim.attributes {
                 if index.value() >= root.accessors.len() {
+                    // The attribute's name as the file spells it (POSITION, TEXCOORD_1, ...).
+                    let name = serde_json::to_value(sem)
+                        .ok()
+                        .and_then(|v| v.as_str().map(str::to_string))
+                        .unwrap_or_else(|| "an attribute".into());
                     return Err(fmt(format!(
-                        "mesh {mi} primitive {pi}: attribute {sem:?} names accessor {} of {}",
+                        "mesh {mi} primitive {pi}: {name} names accessor {}, but the file has {} \
+                         accessor(s)",
                         index.value(),
                         root.accessors.len()
                     )));

@@ -216,6 +216,23 @@ impl Scene {
                 ),
             )),
         }?;
+        if scene.triangle_count() == 0 {
+            return Err(SceneError::format(
+                path,
+                format!(
+                    "no geometry: {} mesh(es) with no triangle lustre can use (a face needs 3 or \
+                     more vertices){}",
+                    scene.meshes.len(),
+                    if scene.warnings.is_empty() {
+                        String::new()
+                    } else {
+                        let first: Vec<&str> =
+                            scene.warnings.iter().take(3).map(String::as_str).collect();
+                        format!("; {}", first.join("; "))
+                    }
+                ),
+            ));
+        }
         scene.check_materials()?;
         Ok(scene)
     }

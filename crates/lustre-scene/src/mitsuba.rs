@@ -1121,6 +1121,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                     });
                 }
                 let loaded = lustre_env::read_map(&full)?;
+                self.scene.warnings.extend(loaded.sanitized_warning(&full));
                 let scale = self.float(&mut p, "scale", 1.0)?;
                 if scale.is_nan() || scale < 0.0 {
                     return Err(self.err(n, format!("envmap scale {scale} must be ≥ 0")));

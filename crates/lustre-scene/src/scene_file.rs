@@ -699,6 +699,7 @@ pub fn build(path: &Path, file: &SceneFile) -> Result<Scene> {
                 });
             }
             let loaded = lustre_env::read_map(&full)?;
+            scene.warnings.extend(loaded.sanitized_warning(&full));
             EnvironmentSource::Map {
                 path: full,
                 map: Arc::new(loaded.map),

@@ -407,7 +407,36 @@ fn gltf_attribute_naming_a_missing_accessor_is_an_error() {
         .replace("\"POSITION\":0", "\"POSITION\":9");
     let p = write(d.path(), "bad.gltf", &text);
     let msg = Scene::load(&p).unwrap_err().to_string();
-    assert!(msg.contains("names accessor 9 of 2"), "{msg}");
+    assert!(
+        msg.contains("POSITION names accessor 9, but the file has 2 accessor(s)"),
+        "{msg}"
+    );
+}
+
+/// A glTF of another major version, and a .glb without the GLB magic: named, not parsed as
+/// something else.
+#[test]
+fn gltf_of_another_version_and_glb_without_magic_are_errors() {
+    let d = dir();
+    let p = gltf_triangle(d.path(), TRI, [0, 1, 2], "");
+    let text = std::fs::read_to_string(&p).unwrap();
+    assert!(text.contains("\"version\":\"2.0\""), "{text}");
+    let p = write(
+        d.path(),
+        "v3.gltf",
+        &text.replace("\"version\":\"2.0\"", "\"version\":\"3.0\""),
+    );
+    let msg = Scene::load(&p).unwrap_err().to_string();
+    assert!(
+        msg.contains("glTF version \"3.0\": lustre reads glTF 2.x files only"),
+        "{msg}"
+    );
+    let p = write(d.path(), "text.glb", &text);
+    let msg = Scene::load(&p).unwrap_err().to_string();
+    assert!(
+        msg.contains("text.glb") && msg.contains("not a binary glTF (GLB)"),
+        "{msg}"
+    );
 }
 
 #[test]

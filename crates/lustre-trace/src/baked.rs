@@ -114,17 +114,22 @@ impl BakedScene {
     }
 }
 
-/// An equirect `.hdr` / `.exr` map as a scene's environment.
-pub fn read_environment(path: &Path) -> Result<Environment> {
+/// An equirect `.hdr` / `.exr` map as a scene's environment, with the warning for texels set to
+/// 0 (non-finite or negative; [`lustre_env::io::LoadedMap::sanitized_warning`]).
+pub fn read_environment(path: &Path) -> Result<(Environment, Option<String>)> {
     let loaded = lustre_env::io::read_map(path)?;
-    Ok(Environment {
-        source: EnvironmentSource::Map {
-            path: path.to_path_buf(),
-            map: Arc::new(loaded.map),
+    let warning = loaded.sanitized_warning(path);
+    Ok((
+        Environment {
+            source: EnvironmentSource::Map {
+                path: path.to_path_buf(),
+                map: Arc::new(loaded.map),
+            },
+            to_local: DMat3::IDENTITY,
+            intensity: 1.0,
         },
-        to_local: DMat3::IDENTITY,
-        intensity: 1.0,
-    })
+        warning,
+    ))
 }
 
 /// The Gaussian 6×6 pyramid of the path scene's environment at `face` texels per cube face:

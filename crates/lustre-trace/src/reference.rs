@@ -205,6 +205,8 @@ pub fn path_camera(
     height: u32,
 ) -> Result<PathCamera> {
     let aspect = f64::from(width) / f64::from(height);
+    // `auto` names the framing camera a scene without cameras gets (what a run's record says).
+    let name = name.filter(|n| !(scene.cameras.is_empty() && *n == "auto"));
     if name.is_none() && scene.cameras.is_empty() {
         let (lo, hi) = scene.bounds().ok_or_else(|| {
             TraceError::Parameter(format!("{}: the scene is empty", scene.source.display()))
@@ -221,6 +223,11 @@ pub fn path_camera(
     }
     let cam = scene.camera(name).ok_or_else(|| {
         TraceError::Parameter(match name {
+            Some(n) if scene.cameras.is_empty() => format!(
+                "{}: no camera named {n:?}: the scene has no camera (leave out the camera, or \
+                 give `auto`, for a view framing the whole scene)",
+                scene.source.display()
+            ),
             Some(n) => format!(
                 "{}: no camera named {n:?} (cameras: {})",
                 scene.source.display(),
@@ -288,11 +295,15 @@ pub struct ReferenceState {
     /// The diffuse scene ([`ReferenceOptions::diffuse`]).
     #[serde(default)]
     pub diffuse: bool,
-    /// Estimated RMS noise of the mean (linear, all channels): RMS(even − odd)/2.
+    /// Estimated RMS noise of the mean (linear, all channels): RMS(even − odd)/2; `null` in
+    /// the JSON when undefined (e.g. a black image's relative noise), read back as NaN.
+    #[serde(with = "nan_as_null")]
     pub noise_rms: f64,
-    /// `noise_rms` / mean pixel value.
+    /// `noise_rms` / mean pixel value (`null` when undefined).
+    #[serde(with = "nan_as_null")]
     pub noise_relative: f64,
-    /// Mean pixel value (all channels).
+    /// Mean pixel value (all channels; `null` when undefined).
+    #[serde(with = "nan_as_null")]
     pub mean: f64,
     /// Seconds of rendering, summed over runs.
     pub seconds: f64,
@@ -300,6 +311,24 @@ pub struct ReferenceState {
     /// to `OUT.even.exr` / `OUT.odd.exr` (see [`commit_halves`]).
     #[serde(default)]
     pub pending: bool,
+}
+
+/// A number that JSON writes as `null` when it is not finite (serde_json's own choice) and that
+/// reads `null` back as NaN, so that a checkpoint whose noise is undefined still resumes.
+mod nan_as_null {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &f64, s: S) -> std::result::Result<S::Ok, S::Error> {
+        if v.is_finite() {
+            s.serialize_f64(*v)
+        } else {
+            s.serialize_none()
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+    }
 }
 
 /// Makes the halves just written to their `.next` files the job's state, so that a kill at any
@@ -485,4 +514,35 @@ pub fn render_reference(
     state.noise_rms = acc.noise_rms().unwrap_or(f64::NAN);
     state.noise_relative = state.noise_rms / state.mean;
     Ok((state, warnings))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A checkpoint of a black image (mean 0: the relative noise undefined) is written with
+    /// `null` and reads back, so that it resumes.
+    #[test]
+    fn an_undefined_noise_round_trips_through_the_checkpoint() {
+        let state = ReferenceState {
+            scene: "s.toml".into(),
+            camera: "auto".into(),
+            width: 4,
+            height: 4,
+            spp: 2,
+            max_depth: 3,
+            seed: 1,
+            diffuse: false,
+            noise_rms: 0.0,
+            noise_relative: f64::NAN,
+            mean: 0.0,
+            seconds: 0.5,
+            pending: false,
+        };
+        let json = serde_json::to_string(&state).expect("json");
+        assert!(json.contains("\"noise_relative\":null"), "{json}");
+        let back: ReferenceState = serde_json::from_str(&json).expect("reads back");
+        assert!(back.noise_relative.is_nan());
+        assert_eq!((back.noise_rms, back.mean, back.spp), (0.0, 0.0, 2));
+    }
 }

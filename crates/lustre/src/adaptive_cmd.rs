@@ -41,7 +41,15 @@ pub fn run(args: &RenderArgs, req: &FrameRequest) -> anyhow::Result<()> {
     let k = req.supersampling() as usize;
     let mut times: Vec<(String, f64)> = vec![];
     let mut t = Instant::now();
-    let environment = args.env.as_deref().map(read_environment).transpose()?;
+    let environment = match args.env.as_deref().map(read_environment).transpose()? {
+        Some((env, warning)) => {
+            if let Some(w) = warning {
+                eprintln!("warning: {w}");
+            }
+            Some(env)
+        }
+        None => None,
+    };
     let mut scene = match (&args.scene, &args.material) {
         (Some(path), _) => {
             if environment.is_some() {
@@ -67,6 +75,7 @@ pub fn run(args: &RenderArgs, req: &FrameRequest) -> anyhow::Result<()> {
         Some(s) => crate::reference_cmd::parse_size(s)?,
         None => (scene.film.width, scene.film.height),
     };
+    crate::render_cmd::check_reference(args, w, h)?;
     let (gw, gh) = (w as usize * k, h as usize * k);
     let cameras = match &args.path {
         None => vec![(
@@ -286,6 +295,9 @@ pub fn run(args: &RenderArgs, req: &FrameRequest) -> anyhow::Result<()> {
 fn area_light(scene: &Scene, path: &std::path::Path, radiance: f64) -> anyhow::Result<AreaLight> {
     let loaded =
         lustre_env::read_map(path).with_context(|| format!("--area-light {}", path.display()))?;
+    if let Some(w) = loaded.sanitized_warning(path) {
+        eprintln!("warning: {w}");
+    }
     let (lo, hi) = scene
         .bounds()
         .ok_or_else(|| anyhow::anyhow!("--area-light: the scene has no geometry to light"))?;

@@ -5,7 +5,8 @@
 //!
 //! On many machines: `--shard K/N` (or `--shard-count N` inside a Kubernetes Indexed Job or a
 //! SLURM array) bakes only the tiles whose index mod N is K into the shared `--out`; the same
-//! command with `--merge` instead assembles them once all tiles are there (deploy/README.md).
+//! command with `--merge` instead assembles them once all tiles are there; `--plan` says how many
+//! tiles (shards at most) there are (docs: guide/scale-out.md).
 
 use anyhow::{bail, Context};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -14,7 +15,9 @@ use lustre_scene::lightmap::{
 };
 use lustre_scene::scene_file::{self, SceneFile};
 use lustre_scene::{ObjectHints, Scene};
-use lustre_trace::bake::{assemble, bake_tiles, ATrousOptions, BakeOptions, Denoiser, Transport};
+use lustre_trace::bake::{
+    assemble, bake_tiles, check_shard_tiles, ATrousOptions, BakeOptions, Denoiser, Transport,
+};
 use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::setup::{auto_setup, has_realtime_hints, Setup, SetupOptions};
 use std::path::{Path, PathBuf};
@@ -63,6 +66,11 @@ pub struct BakeArgs {
     /// baked into --out: fill, denoise, dilate, the page EXRs and the updated scene file.
     #[arg(long, conflicts_with_all = ["shard", "shard_count"])]
     pub merge: bool,
+    /// Print the atlas and its tiles (the most shards the bake splits into) and check the
+    /// options and the shard count, writing nothing: what the SLURM script runs before it
+    /// submits an array.
+    #[arg(long, conflicts_with = "merge")]
+    pub plan: bool,
 }
 
 /// `--setup`.
@@ -114,13 +122,21 @@ pub const SCENE_FILE: &str = "scene.toml";
 /// [`lustre_scene::lightmap::build_atlas`] (the scene's valid TEXCOORD_1, or generated charts). Writes the atlas .glb into `out`. The same inputs
 /// give the same atlas, so shards and the merge may each call this.
 pub fn prepare(args: &BakeArgs) -> anyhow::Result<(Scene, LightmapAtlas)> {
+    let (scene, atlas) = load_atlas(args)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let glb = args.out.join(ATLAS_FILE);
+    write_atlas_glb(&scene, &atlas, &glb).with_context(|| format!("writing {}", glb.display()))?;
+    Ok((scene, atlas))
+}
+
+/// The scene and its light-map atlas, as [`prepare`] finds them, writing nothing.
+fn load_atlas(args: &BakeArgs) -> anyhow::Result<(Scene, LightmapAtlas)> {
     let mut scene =
         Scene::load(&args.scene).with_context(|| format!("loading {}", args.scene.display()))?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
     let existing = scene.lightmap.as_ref().map(|l| l.atlas.clone());
     let atlas = match existing {
         Some(a) if args.texels_per_metre.is_none() => {
@@ -172,8 +188,6 @@ pub fn prepare(args: &BakeArgs) -> anyhow::Result<(Scene, LightmapAtlas)> {
             atlas
         }
     };
-    let glb = args.out.join(ATLAS_FILE);
-    write_atlas_glb(&scene, &atlas, &glb).with_context(|| format!("writing {}", glb.display()))?;
     Ok((scene, atlas))
 }
 
@@ -331,6 +345,21 @@ pub fn bake(args: &BakeArgs) -> anyhow::Result<Option<PathBuf>> {
         }
         None => None,
     };
+    if args.plan {
+        let (_, atlas) = load_atlas(args)?;
+        let tiles = check_shard_tiles(&atlas, &opts, shard)
+            .with_context(|| format!("planning {}", args.scene.display()))?;
+        println!(
+            "plan: {} page(s) of {}×{} texels in {tiles} tiles of {}² texels: at most {tiles} \
+             shards{}",
+            atlas.pages,
+            atlas.width,
+            atlas.height,
+            opts.tile,
+            shard.map_or(String::new(), |(k, n)| format!("; shard {k}/{n} is valid"))
+        );
+        return Ok(None);
+    }
     let (scene, atlas) = prepare(args)?;
     if !args.merge {
         bake_phase(&scene, &atlas, &opts, &args.out, shard)?;

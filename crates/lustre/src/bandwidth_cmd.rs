@@ -40,6 +40,9 @@ pub fn run(args: &BandwidthArgs) -> anyhow::Result<()> {
             let loaded = lustre_env::read_map(path).with_context(|| {
                 format!("--map {}: cannot read the environment", path.display())
             })?;
+            if let Some(w) = loaded.sanitized_warning(path) {
+                eprintln!("warning: {w}");
+            }
             let map = loaded.map;
             let b = angular_bandwidth(&map)
                 .with_context(|| format!("--map {}: bandwidth", path.display()))?;

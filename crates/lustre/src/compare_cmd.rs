@@ -73,13 +73,8 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
         let path = PathBuf::from(&args.map);
         let loaded = lustre_env::read_map(&path)
             .with_context(|| format!("--map {}: cannot read the environment", path.display()))?;
-        if loaded.nonfinite + loaded.negative > 0 {
-            eprintln!(
-                "warning: {}: {} non-finite and {} negative texels were set to 0",
-                path.display(),
-                loaded.nonfinite,
-                loaded.negative
-            );
+        if let Some(w) = loaded.sanitized_warning(&path) {
+            eprintln!("warning: {w}");
         }
         let base = CubeMap::from_equirect(&loaded.map, args.face_size)
             .with_context(|| format!("--map {}: cube-map conversion", path.display()))?;

@@ -28,8 +28,8 @@ pub struct DemoArgs {
     /// Reference samples per pixel (for the printed PSNR).
     #[arg(long, default_value_t = 512)]
     pub reference_spp: usize,
-    /// Exposure of the PNG and of the PSNR.
-    #[arg(long, default_value_t = 1.0)]
+    /// Exposure of the PNG and of the PSNR: finite and > 0.
+    #[arg(long, default_value_t = 1.0, value_parser = crate::render_cmd::parse_exposure)]
     pub exposure: f64,
     /// Render on the CPU (lustre-shade) instead of the GPU (lustre-gpu; without an adapter the
     /// demo falls back to the CPU).
@@ -82,9 +82,6 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
              so both render the same image)",
             args.samples
         );
-    }
-    if !(args.exposure > 0.0 && args.exposure.is_finite()) {
-        bail!("--exposure {}: must be finite and > 0", args.exposure);
     }
     let gpu = if args.cpu {
         None

@@ -46,10 +46,10 @@ pub struct FitArgs {
     /// The model to fit.
     #[arg(long, value_enum, required_unless_present = "merge")]
     pub model: Option<ModelArg>,
-    /// Kurt: number of reflection lobes.
+    /// Kurt: number of reflection lobes (at most 8).
     #[arg(long, default_value_t = 1)]
     pub lobes: usize,
-    /// Kurt: number of transmission lobes.
+    /// Kurt: number of transmission lobes (at most 8).
     #[arg(long = "transmission-lobes", default_value_t = 0)]
     pub transmission_lobes: usize,
     /// Kurt: hold a parameter at a value (repeatable), e.g. `--fix alpha1=0`.
@@ -72,7 +72,8 @@ pub struct FitArgs {
     #[arg(long)]
     pub strict: bool,
     /// Append -TEXT to every output name: keeps fits with other options beside earlier ones.
-    #[arg(long, value_name = "TEXT")]
+    /// Letters, digits, `.`, `_`, `-` and `+` only (it is part of a file name).
+    #[arg(long, value_name = "TEXT", value_parser = parse_suffix)]
     pub suffix: Option<String>,
     /// Inputs fitted in parallel.
     #[arg(long, default_value_t = default_jobs(), value_parser = parse_jobs)]
@@ -346,6 +347,18 @@ fn plot_row(out: &Path, r: &SummaryRow) -> Result<()> {
     ])
     .context("plot arguments")?;
     crate::plot_cmd::run(&cli.args)
+}
+
+/// Parses `--suffix`: a part of a file name (no folder separator, which would drop the input's
+/// name from the output's).
+fn parse_suffix(s: &str) -> std::result::Result<String, String> {
+    let ok = |c: char| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-' | '+');
+    if s.is_empty() || !s.chars().all(ok) || s.chars().all(|c| c == '.') {
+        return Err(format!(
+            "{s:?}: a suffix is part of a file name: letters, digits, '.', '_', '-' and '+' only"
+        ));
+    }
+    Ok(s.to_string())
 }
 
 #[cfg(test)]

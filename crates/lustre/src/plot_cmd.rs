@@ -113,17 +113,21 @@ pub struct PlotArgs {
     /// Pattern lobe roughness along the bitangent.
     #[arg(long, default_value_t = 0.075)]
     pub my: f64,
-    /// Pattern sample budget.
-    #[arg(long, default_value_t = 17)]
+    /// Pattern sample budget (at most 4096, as `lustre render --samples`).
+    #[arg(long, default_value_t = 17,
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(0..=4096))]
     pub budget: usize,
     /// Pattern threshold ξ0 of 002 §5 (the concentric patterns).
     #[arg(long, default_value_t = 0.1)]
     pub xi0: f64,
-    /// Concentric patterns: this many circles nc instead of the largest count within the budget.
-    #[arg(long)]
+    /// Concentric patterns: this many circles nc (1 to 64) instead of the largest count within
+    /// the budget.
+    #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=64))]
     pub circles: Option<usize>,
-    /// Multi-ring pattern: the number of rings (the budget less the centre is spread over them).
-    #[arg(long, default_value_t = 3)]
+    /// Multi-ring pattern: the number of rings, 1 to 64 (the budget less the centre is spread
+    /// over them).
+    #[arg(long, default_value_t = 3,
+          value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=64))]
     pub rings: usize,
     /// Refuse MERL tables with unmeasured (negative) bins instead of masking them.
     #[arg(long)]
@@ -151,11 +155,16 @@ pub fn run(args: &PlotArgs) -> Result<()> {
         .map(|s| Ok::<_, anyhow::Error>((s.to_string(), resolve(s, args.strict)?)))
         .transpose()?;
     let mut written = Vec::new();
+    let existed = args.out.exists();
     let result = draw(args, &materials, compare.as_ref(), &mut written);
     if result.is_err() {
-        // No half-finished set of figures: remove what this run wrote before the failure.
+        // No half-finished set of figures: remove what this run wrote before the failure, and
+        // the folder when this run made it (remove_dir leaves a folder that is not empty).
         for p in &written {
             let _ = std::fs::remove_file(p);
+        }
+        if !existed {
+            let _ = std::fs::remove_dir(&args.out);
         }
         return result;
     }

@@ -133,8 +133,8 @@ pub struct RenderArgs {
     /// Probe cube face size in texels.
     #[arg(long, default_value_t = 128)]
     pub probe_size: usize,
-    /// Exposure of the PNG (and of the comparison's display values).
-    #[arg(long, default_value_t = 1.0)]
+    /// Exposure of the PNG (and of the comparison's display values): finite and > 0.
+    #[arg(long, default_value_t = 1.0, value_parser = parse_exposure)]
     pub exposure: f64,
     /// Seed of the camera jitter and of the random method.
     #[arg(long, default_value_t = 1)]
@@ -207,6 +207,7 @@ fn load_or_bake(path: &Path, out: &Path) -> anyhow::Result<Baked> {
         shard: crate::shard::ShardArgs::default(),
         setup: crate::bake_cmd::SetupArg::Auto,
         merge: false,
+        plan: false,
     };
     let key = fingerprint(path, &scene, &format!("{:?}", args.options()));
     let stamp = dir.join("source.txt");
@@ -370,7 +371,15 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         ..ProbeOptions::default()
     };
     probe_opts.validate()?;
-    let environment = args.env.as_deref().map(read_environment).transpose()?;
+    let environment = match args.env.as_deref().map(read_environment).transpose()? {
+        Some((env, warning)) => {
+            if let Some(w) = warning {
+                eprintln!("warning: {w}");
+            }
+            Some(env)
+        }
+        None => None,
+    };
     let (mut scene, atlas, pages) = match (&args.scene, &args.material) {
         (Some(path), _) => load_or_bake(path, &args.out)?,
         (None, Some(spec)) => preview(spec, environment)?,
@@ -396,6 +405,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         Some(s) => crate::reference_cmd::parse_size(s)?,
         None => (scene.film.width, scene.film.height),
     };
+    check_reference(args, w, h)?;
     let cameras = match &args.path {
         None => vec![(
             "frame".to_string(),
@@ -695,6 +705,25 @@ fn report(
     compare(args, img)
 }
 
+/// With --compare-reference: reads the reference and checks that it is a W×H frame, before
+/// anything is rendered or written (a bad reference leaves no frame behind).
+pub(crate) fn check_reference(args: &RenderArgs, w: u32, h: u32) -> anyhow::Result<()> {
+    if let Some(reference) = &args.compare_reference {
+        let r = Image::read_exr(reference)
+            .with_context(|| format!("--compare-reference {}", reference.display()))?;
+        if (r.width, r.height) != (w as usize, h as usize) {
+            bail!(
+                "--compare-reference {}: the reference is {}×{}, the frame {w}×{h}; nothing \
+                 was rendered",
+                reference.display(),
+                r.width,
+                r.height
+            );
+        }
+    }
+    Ok(())
+}
+
 /// With --compare-reference: PSNR, ΔE and relative RMS against it, and diff.png.
 pub(crate) fn compare(args: &RenderArgs, img: &Image) -> anyhow::Result<()> {
     if let Some(reference) = &args.compare_reference {
@@ -766,4 +795,12 @@ pub(crate) fn path_cameras(
             Ok((format!("frame_{k:04}"), film_camera(&c, w, h)?))
         })
         .collect()
+}
+
+/// Parses `--exposure`: a finite number > 0 (0 or NaN would write a black image).
+pub fn parse_exposure(s: &str) -> std::result::Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("{s:?}: expected a finite number > 0, e.g. 1 or 4")),
+    }
 }

@@ -169,6 +169,20 @@ fn sharded_bake_merges_to_the_unsharded_pages() {
         .count();
     assert!(tiles >= 3, "{tiles} tiles: too few to shard");
 
+    // --plan: the tile count (the most shards), writing nothing; too many shards refused.
+    let planned = dir.path().join("planned");
+    let (ok, t) = bake(&planned, &["--plan", "--shard", "0/3"], &[]);
+    assert!(
+        ok && t.contains(&format!(
+            "in {tiles} tiles of 8² texels: at most {tiles} shards"
+        )),
+        "{t}"
+    );
+    let too_many = format!("0/{}", tiles + 1);
+    let (ok, t) = bake(&planned, &["--plan", "--shard", &too_many], &[]);
+    assert!(!ok && t.contains("shards for"), "{t}");
+    assert!(!planned.exists(), "--plan wrote {}", planned.display());
+
     // Refusals that leave the merged folder as it is.
     let page = shared.join("lightmap_000.exr");
     let modified = || std::fs::metadata(&page).and_then(|m| m.modified()).unwrap();

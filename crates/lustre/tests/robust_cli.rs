@@ -201,6 +201,7 @@ fn rough_edges() {
     );
     let left: Vec<_> = std::fs::read_dir(&p).map_or(Vec::new(), |d| d.flatten().collect());
     assert!(left.is_empty(), "{left:?}");
+    assert!(!p.exists(), "a failed plot left its (empty) folder");
     // An OS error once, and no stack trace for a user's error even with RUST_BACKTRACE=1.
     let t = fails(
         lustre()
@@ -263,4 +264,188 @@ fn batch_folders_keep_every_fit() {
         names,
         ["nickel-beckmann", "no-such-material-beckmann", "nickel"]
     );
+}
+
+/// Inputs that used to be accepted silently (or wrongly) and their messages (issue 44): each is
+/// refused, names the problem in plain words, and leaves nothing behind.
+#[test]
+fn silent_acceptances_are_refused_in_plain_words() {
+    let dir = tempfile::tempdir().expect("dir");
+    let d = dir.path();
+    // An exposure of 0 or NaN gave a black PNG with exit 0.
+    for e in ["0", "NaN", "-1", "inf"] {
+        let out = d.join(format!("exposure-{e}"));
+        let t = fails(
+            lustre()
+                .args(["render", "--material", "sgd:nickel", "--device", "cpu"])
+                .args(["--size", "8x8", "--exposure", e, "--out"])
+                .arg(&out),
+        );
+        assert!(
+            t.contains("--exposure") && t.contains("finite number > 0"),
+            "{t}"
+        );
+        assert!(!out.exists(), "{e}: {} written", out.display());
+    }
+    let t = fails(
+        lustre()
+            .args(["demo", "--exposure", "0", "--out"])
+            .arg(d.join("d.png")),
+    );
+    assert!(t.contains("finite number > 0"), "{t}");
+    // A suffix with a folder separator dropped the input's name (a/b wrote b.json).
+    let t = fails(
+        lustre()
+            .args(["fit", "--model", "sgd", "--suffix", "a/b", "--out"])
+            .arg(d.join("fits"))
+            .arg("nbrdf:nickel"),
+    );
+    assert!(t.contains("part of a file name"), "{t}");
+    // Count options have upper bounds.
+    let t = fails(
+        lustre()
+            .args(["fit", "--model", "kurt", "--lobes", "1000", "--out"])
+            .arg(d.join("fits"))
+            .arg("nbrdf:nickel"),
+    );
+    assert!(t.contains("at most 8"), "{t}");
+    let t = fails(
+        lustre()
+            .args([
+                "plot",
+                "--pattern",
+                "multi-ring",
+                "--rings",
+                "1000000",
+                "--out",
+            ])
+            .arg(d.join("plot")),
+    );
+    assert!(t.contains("1000000") && t.contains("1..=64"), "{t}");
+    // A file with no usable geometry is an error, not an empty scene.
+    std::fs::write(d.join("text.obj"), "hello world\n").expect("write");
+    std::fs::write(d.join("two.obj"), "v 0 0 0\nv 1 0 0\nf 1 2\n").expect("write");
+    for f in ["text.obj", "two.obj"] {
+        let t = fails(lustre().args(["scene", "info"]).arg(d.join(f)));
+        assert!(t.contains(f) && t.contains("no geometry"), "{t}");
+    }
+    // Non-finite and negative texels of a map: reported the same way by every command.
+    let mut img = image::Rgb32FImage::from_pixel(8, 4, image::Rgb([0.5, 0.5, 0.5]));
+    img.put_pixel(1, 1, image::Rgb([f32::NAN, 0.5, 0.5]));
+    img.put_pixel(2, 2, image::Rgb([-1.0, 0.5, 0.5]));
+    let map = d.join("bad.exr");
+    image::DynamicImage::ImageRgb32F(img)
+        .save(&map)
+        .expect("exr");
+    let note = "1 non-finite and 1 negative texels were set to 0";
+    let t = ok(lustre()
+        .args(["bandwidth", "--map"])
+        .arg(&map)
+        .arg("--out")
+        .arg(d.join("bw.png")));
+    assert!(t.contains(&format!("bad.exr: {note}")), "{t}");
+    let t = ok(lustre()
+        .args([
+            "render",
+            "--material",
+            "sgd:nickel",
+            "--device",
+            "cpu",
+            "--size",
+            "8x8",
+        ])
+        .arg("--env")
+        .arg(&map)
+        .arg("--out")
+        .arg(d.join("env-frame")));
+    assert!(t.contains(&format!("bad.exr: {note}")), "{t}");
+    // A reference of another size: refused before rendering, no frame left behind.
+    let out = d.join("cmp");
+    let t = fails(
+        lustre()
+            .args([
+                "render",
+                "--material",
+                "sgd:nickel",
+                "--device",
+                "cpu",
+                "--size",
+                "8x8",
+            ])
+            .arg("--compare-reference")
+            .arg(&map)
+            .arg("--out")
+            .arg(&out),
+    );
+    assert!(t.contains("the reference is 8×4, the frame 8×8"), "{t}");
+    assert!(
+        !out.join("frame.exr").exists() && !out.join("frame.png").exists(),
+        "a refused comparison left a frame"
+    );
+    // Model errors name the spec's own parameters, and numbers print in plain form.
+    let t = fails(lustre().args(["info", "ward(kd=0.2, ks=0.1, ax=0)"]));
+    assert!(t.contains("ax = 0") && !t.contains("alpha"), "{t}");
+    let t = fails(lustre().args(["info", "lambert(kd=1e300)"]));
+    assert!(
+        t.contains("kd.r = 1e300: must lie in [0, 1e6]") && !t.contains("00000000"),
+        "{t}"
+    );
+    // `--camera` on a scene without cameras: `auto` (what the record says) is the framing view.
+    let cornell = lustre_brdf::shared_data_dir().join("scenes/cornell_box/cornell_box.obj");
+    let t = fails(
+        lustre()
+            .arg("reference")
+            .arg(&cornell)
+            .args(["--camera", "nosuch", "--size", "8x8", "--spp", "2", "--out"])
+            .arg(d.join("r.exr")),
+    );
+    assert!(
+        t.contains("the scene has no camera") && !t.contains("(cameras: )"),
+        "{t}"
+    );
+    let out = d.join("auto.exr");
+    ok(lustre()
+        .arg("reference")
+        .arg(&cornell)
+        .args(["--camera", "auto", "--size", "8x8", "--spp", "2", "--out"])
+        .arg(&out));
+    let record = std::fs::read_to_string(out.with_extension("json")).expect("record");
+    assert!(record.contains("\"camera\": \"auto\""), "{record}");
+}
+
+/// `lustre fit --merge` reads every shard's fits before it writes: an empty (cut short) fit is
+/// refused by name and nothing is copied.
+#[test]
+fn a_merge_refuses_a_damaged_shard_fit_and_copies_nothing() {
+    let dir = tempfile::tempdir().expect("dir");
+    let d = dir.path();
+    let parts = [d.join("p0"), d.join("p1")];
+    for (k, p) in parts.iter().enumerate() {
+        ok(lustre()
+            .args(["fit", "--model", "sgd", "--jobs", "1", "--shard"])
+            .arg(format!("{k}/2"))
+            .arg("--out")
+            .arg(p)
+            .args(["nbrdf:nickel", "nbrdf:gold-paint"]));
+    }
+    let damaged = parts[1].join("gold-paint.json");
+    std::fs::write(&damaged, "").expect("truncate");
+    let merged = d.join("merged");
+    let t = fails(
+        lustre()
+            .args(["fit", "--merge", "--out"])
+            .arg(&merged)
+            .args(&parts),
+    );
+    assert!(
+        t.contains("gold-paint.json") && t.contains("not a fit"),
+        "{t}"
+    );
+    let copied: Vec<_> = std::fs::read_dir(&merged)
+        .map_or(Vec::new(), |r| r.flatten().collect())
+        .into_iter()
+        .filter(|e| e.path().extension().is_some_and(|x| x == "json"))
+        .collect();
+    assert!(copied.is_empty(), "{copied:?}");
+    assert!(!merged.join("summary.csv").exists());
 }

@@ -48,6 +48,11 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
 /// Bins along θh.
+/// The largest value a MERL table may hold (BRDF values in sr⁻¹): beyond it the table is read
+/// as wrongly scaled, not as data. Models tabulated at grazing bins reach 10¹² (SGD nickel); the
+/// albedo sums over a table stay finite far beyond 10³⁰.
+pub const MAX_MEASURED_VALUE: f64 = 1e30;
+
 pub const RES_THETA_H: usize = 90;
 /// Bins along θd.
 pub const RES_THETA_D: usize = 90;
@@ -431,6 +436,24 @@ impl MerlTable {
                 ),
             ));
         }
+        let huge: Vec<usize> = values
+            .iter()
+            .enumerate()
+            .filter(|(_, v)| **v > MAX_MEASURED_VALUE)
+            .map(|(n, _)| n)
+            .collect();
+        if let Some(&first) = huge.first() {
+            return Err(Error::format(
+                path,
+                format!(
+                    "{} values above {} (a table scaled wrongly?); the first at {} is {}",
+                    huge.len(),
+                    crate::error::plain_number(MAX_MEASURED_VALUE),
+                    describe(first),
+                    crate::error::plain_number(values[first])
+                ),
+            ));
+        }
         let negatives = values.iter().filter(|v| **v < 0.0).count();
         let mut missing = Vec::new();
         if negatives > 0 {
@@ -780,6 +803,21 @@ mod tests {
         assert_eq!(phi_d_index(PI), 179);
         assert_eq!(phi_d_index(-PI), 0);
         assert_eq!(nearest_bin(deg(1.0), deg(45.5), deg(-10.5)), (9, 45, 169));
+    }
+
+    /// A table of absurdly large (finite) values is refused, not read into ∞ albedos.
+    #[test]
+    fn absurdly_large_values_are_refused() {
+        let mut values = vec![0.5; 3 * BINS];
+        values[7] = 1e300;
+        let e = MerlTable::from_stored("huge", values)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.contains("1 values above 1e30") && e.contains("is 1e300"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -74,7 +74,7 @@ impl KurtLobe {
 
     /// Checks the ranges documented on [`KurtLobe::new`].
     pub fn validate(&self) -> Result<()> {
-        check_rgb("ks", self.ks, 0.0, f64::INFINITY)?;
+        check_rgb("ks", self.ks, 0.0, crate::error::MAX_REFLECTANCE)?;
         check_range("mx", self.mx, MIN_ROUGHNESS, MAX_ROUGHNESS)?;
         check_range("my", self.my, MIN_ROUGHNESS, MAX_ROUGHNESS)?;
         check_range("r0", self.r0, 0.0, 1.0)?;
@@ -204,7 +204,7 @@ impl Kurt {
 
     /// Checks kd and every lobe.
     pub fn validate(&self) -> Result<()> {
-        check_rgb("kd", self.kd, 0.0, f64::INFINITY)?;
+        check_rgb("kd", self.kd, 0.0, crate::error::MAX_REFLECTANCE)?;
         self.reflection
             .iter()
             .chain(&self.transmission)

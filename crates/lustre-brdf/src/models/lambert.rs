@@ -19,7 +19,7 @@ pub struct Lambert {
 impl Lambert {
     /// A Lambertian BRDF; rejects negative or non-finite channels.
     pub fn new(kd: Rgb) -> Result<Self> {
-        check_rgb("kd", kd, 0.0, f64::INFINITY)?;
+        check_rgb("kd", kd, 0.0, crate::error::MAX_REFLECTANCE)?;
         Ok(Lambert { kd })
     }
 }

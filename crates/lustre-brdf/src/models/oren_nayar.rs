@@ -27,7 +27,7 @@ pub struct OrenNayar {
 impl OrenNayar {
     /// A validated model (ρ finite and ≥ 0, σ in [0, π/2]).
     pub fn new(rho: Rgb, sigma: f64) -> Result<Self> {
-        check_rgb("rho", rho, 0.0, f64::INFINITY)?;
+        check_rgb("rho", rho, 0.0, crate::error::MAX_REFLECTANCE)?;
         check_range("sigma", sigma, 0.0, FRAC_PI_2)?;
         Ok(OrenNayar { rho, sigma })
     }

@@ -26,8 +26,8 @@ pub const MAX_EXPONENT: f64 = 1e7;
 /// Validates the parameters shared by [`Phong`] and [`crate::models::blinn_phong::BlinnPhong`]:
 /// ρd and ρs finite and ≥ 0, n in [0, [`MAX_EXPONENT`]].
 pub(crate) fn check_params(rho_d: Rgb, rho_s: Rgb, n: f64) -> Result<()> {
-    check_rgb("rho_d", rho_d, 0.0, f64::INFINITY)?;
-    check_rgb("rho_s", rho_s, 0.0, f64::INFINITY)?;
+    check_rgb("rho_d", rho_d, 0.0, crate::error::MAX_REFLECTANCE)?;
+    check_rgb("rho_s", rho_s, 0.0, crate::error::MAX_REFLECTANCE)?;
     check_range("n", n, 0.0, MAX_EXPONENT)?;
     Ok(())
 }

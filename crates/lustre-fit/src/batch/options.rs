@@ -117,10 +117,20 @@ pub fn kurt_options(s: &FitOptions) -> kurt::KurtOptions {
     }
 }
 
+/// The most Kurt lobes of either kind a fit takes.
+pub const MAX_LOBES: usize = 8;
+
 /// Checks what can be checked before any input is read: for Kurt, that every `--fix` and
 /// `--range` name is one of [`kurt::parameter_names`] and that there is a lobe to fit; for
 /// Cook-Torrance, that no Kurt-only option is set.
 pub fn check_options(s: &FitOptions) -> Result<()> {
+    if s.lobes > MAX_LOBES || s.transmission_lobes > MAX_LOBES {
+        return Err(FitError::Option(format!(
+            "--lobes {} / --transmission-lobes {}: at most {MAX_LOBES} each (the search's cost \
+             grows steeply with the lobes; measured materials are fitted with 1 to 3)",
+            s.lobes, s.transmission_lobes
+        )));
+    }
     if s.model == ModelChoice::Kurt && s.lobes == 0 && s.transmission_lobes == 0 {
         return Err(FitError::Option(
             "--lobes 0 without transmission lobes fits no lobe (only kd, a diffuse model): \

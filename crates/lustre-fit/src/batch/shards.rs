@@ -144,6 +144,26 @@ fn lock_merge(dirs: &[PathBuf]) -> Result<lustre_brdf::error::OutputLock> {
     )?)
 }
 
+/// Checks that `bytes` (the file `path`) hold a fit's JSON: an object with a lustre `schema` and
+/// its `fit` record (a material or a [`super::FailureFile`]).
+fn check_fit_file(path: &Path, bytes: &[u8]) -> Result<()> {
+    let v: serde_json::Value = serde_json::from_slice(bytes).map_err(|e| {
+        FitError::Option(format!(
+            "{}: not a fit ({} bytes: {e}); run its shard again",
+            path.display(),
+            bytes.len()
+        ))
+    })?;
+    let schema = v.get("schema").and_then(|s| s.as_str()).unwrap_or("");
+    if !schema.starts_with("lustre-") || !v.get("fit").is_some_and(|f| f.is_object()) {
+        return Err(FitError::Option(format!(
+            "{}: not a lustre fit (no lustre schema and fit record); run its shard again",
+            path.display()
+        )));
+    }
+    Ok(())
+}
+
 /// Assembles the shards of a batch into `out` (`lustre fit --merge`): reads the manifests in
 /// `out/shards/` and in every folder of `from` (shards run into separate folders), checks that
 /// the N shards are all there, once, with the same batch size and options, copies the JSON of
@@ -212,17 +232,24 @@ pub fn merge(out: &Path, from: &[PathBuf]) -> Result<BatchSummary> {
             missing.join(", ")
         )));
     }
+    // Every shard's fits are read and checked before anything is written: a damaged one (empty,
+    // cut short, not a fit) refuses the merge and names the file.
+    let mut copies: Vec<(PathBuf, Vec<u8>)> = Vec::new();
     let mut placed: Vec<(usize, SummaryRow)> = Vec::with_capacity(total);
     for (dir, _, m) in by_index.iter().flatten().map(|&i| &found[i]) {
         for (&pos, row) in m.positions.iter().zip(&m.rows) {
+            let name = format!("{}.json", row.name);
+            let src = dir.join(&name);
+            let bytes = std::fs::read(&src).map_err(|e| lustre_brdf::Error::io(&src, e))?;
+            check_fit_file(&src, &bytes)?;
             if dir.as_path() != out {
-                let name = format!("{}.json", row.name);
-                let src = dir.join(&name);
-                let bytes = std::fs::read(&src).map_err(|e| lustre_brdf::Error::io(&src, e))?;
-                lustre_brdf::error::write_atomic(&out.join(&name), &bytes)?;
+                copies.push((out.join(&name), bytes));
             }
             placed.push((pos, row.clone()));
         }
+    }
+    for (path, bytes) in &copies {
+        lustre_brdf::error::write_atomic(path, bytes)?;
     }
     placed.sort_by_key(|(p, _)| *p);
     let mut rows: Vec<SummaryRow> = placed.into_iter().map(|(_, r)| r).collect();

@@ -11,7 +11,7 @@ use lustre_trace::reference::{film_camera, path_scene};
 /// The line-up of `spheres` (left to right) on `floor`.
 pub fn scene(spheres: [&str; 3], floor: &str) -> Scene {
     let map = lustre_env::shared_data_dir().join("envmaps/royal_esplanade_1k.hdr");
-    let env = read_environment(&map).expect("royal_esplanade_1k.hdr");
+    let env = read_environment(&map).expect("royal_esplanade_1k.hdr").0;
     lustre_scene::builtin::lineup(spheres, floor, Some(env)).expect("line-up")
 }
 

@@ -48,7 +48,7 @@ pub mod trace;
 
 pub use denoise::{ATrousOptions, Denoiser};
 pub use output::{assemble, Assembled, BakeReport, PageReport};
-pub use tile::{bake_texels, bake_tiles, TilesReport};
+pub use tile::{bake_texels, bake_tiles, check_shard_tiles, TilesReport};
 
 use crate::path_tracer::{PathScene, Surface};
 use crate::{Result, TraceError};

@@ -218,17 +218,8 @@ pub fn bake_tiles(
     shard: Option<(u32, u32)>,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<TilesReport> {
-    check_shard(shard)?;
-    opts.validate()?;
     let t0 = Instant::now();
-    let all = tiles(atlas, opts.tile).len();
-    if let Some((_, n)) = shard.filter(|&(_, n)| n as usize > all) {
-        return Err(TraceError::Parameter(format!(
-            "{n} shards for {all} tiles: shards {all} to {} would bake nothing; use at most {all} \
-             shards (or smaller tiles)",
-            n - 1
-        )));
-    }
+    check_shard_tiles(atlas, opts, shard)?;
     let dir = out_dir.join("tiles");
     std::fs::create_dir_all(&dir).map_err(|e| TraceError::Io {
         path: dir.clone(),
@@ -247,6 +238,27 @@ pub fn bake_tiles(
     with_baker(scene, atlas, opts, |baker, warnings| {
         bake_tiles_with(baker, warnings, atlas, out_dir, shard, hash, t0, progress)
     })
+}
+
+/// Checks the options and a `(K, N)` shard against the atlas's tiles; returns the number of
+/// tiles (the most shards a bake splits into). More shards than tiles is an error: the extra
+/// shards would bake nothing.
+pub fn check_shard_tiles(
+    atlas: &LightmapAtlas,
+    opts: &BakeOptions,
+    shard: Option<(u32, u32)>,
+) -> Result<usize> {
+    check_shard(shard)?;
+    opts.validate()?;
+    let all = tiles(atlas, opts.tile).len();
+    if let Some((_, n)) = shard.filter(|&(_, n)| n as usize > all) {
+        return Err(TraceError::Parameter(format!(
+            "{n} shards for {all} tiles: shards {all} to {} would bake nothing; use at most {all} \
+             shards (or smaller tiles)",
+            n - 1
+        )));
+    }
+    Ok(all)
 }
 
 /// Refuses while a process bakes tiles into `out_dir` (a shard or a whole bake holds its lock
@@ -366,6 +378,8 @@ fn bake_tiles_with(
         ..TilesReport::default()
     };
     let t1 = Instant::now();
+    // Tiles of another bake (other scene or options) or damaged ones: baked again, reported once.
+    let mut rebaked: Vec<String> = Vec::new();
     for (done, r) in mine.iter().enumerate() {
         match read_tile(out_dir, hash, r) {
             Ok(Some(_)) => {
@@ -374,10 +388,7 @@ fn bake_tiles_with(
                 continue;
             }
             Ok(None) => {}
-            Err(why) => report.warnings.push(format!(
-                "{}: {why}; baking it again",
-                tile_path(out_dir, r).display()
-            )),
+            Err(why) => rebaked.push(format!("{}: {why}", tile_path(out_dir, r).display())),
         }
         let texels: Vec<_> = (0..r.w * r.h)
             .into_par_iter()
@@ -397,5 +408,20 @@ fn bake_tiles_with(
         progress(done + 1, mine.len());
     }
     report.trace_seconds = t1.elapsed().as_secs_f64();
+    if !rebaked.is_empty() {
+        let shown: Vec<&str> = rebaked.iter().take(3).map(String::as_str).collect();
+        let more = rebaked.len() - shown.len();
+        report.warnings.push(format!(
+            "{} tile(s) made by another bake (other scene or options) or damaged, baked again: \
+             {}{}",
+            rebaked.len(),
+            shown.join("; "),
+            if more > 0 {
+                format!("; and {more} more")
+            } else {
+                String::new()
+            }
+        ));
+    }
     Ok(report)
 }

@@ -110,8 +110,12 @@ fn scene_source(args: &ViewArgs) -> anyhow::Result<SceneSource> {
         .env
         .as_deref()
         .map(|p| {
-            lustre_trace::baked::read_environment(p)
-                .with_context(|| format!("--env {}", p.display()))
+            let (env, warning) = lustre_trace::baked::read_environment(p)
+                .with_context(|| format!("--env {}", p.display()))?;
+            if let Some(w) = warning {
+                eprintln!("warning: {w}");
+            }
+            anyhow::Ok(env)
         })
         .transpose()?;
     Ok(match (&args.scene, &args.material) {
