@@ -36,6 +36,9 @@ pub enum Error {
     /// A name (material, model) was not found.
     #[error("{0}")]
     NotFound(String),
+    /// A job needs more memory or disk than the machine has ([`crate::budget`]).
+    #[error("{0}")]
+    Budget(String),
 }
 
 /// Result alias for this crate.
@@ -117,9 +120,85 @@ pub fn check_rgb(name: &str, c: crate::rgb::Rgb, lo: f64, hi: f64) -> Result<cra
     Ok(c)
 }
 
-/// Reads the whole file at `path`; a failure is an [`Error::Io`] naming the file.
+/// The largest input file a reader takes (4 GiB: a MERL table is 35 MB, the largest RGL and
+/// EXR files in the shared data under 300 MB).
+pub const MAX_INPUT_BYTES: u64 = 4 << 30;
+
+/// Reads the whole input file at `path`, the one way every reader reads: only a regular file
+/// (a folder, FIFO, device or socket is refused before it is opened, so a FIFO never blocks
+/// and `/dev/zero` never fills memory), of at most [`MAX_INPUT_BYTES`], checked from its size
+/// before reading and again while reading. The error says what is wrong, without the path
+/// (each crate's error adds it).
+pub fn read_input(path: &std::path::Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    check_input(path)?;
+    let file = std::fs::File::open(path)?;
+    let mut bytes = Vec::new();
+    file.take(MAX_INPUT_BYTES + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > MAX_INPUT_BYTES {
+        return Err(too_big(bytes.len() as u64));
+    }
+    Ok(bytes)
+}
+
+/// Checks that `path` is a regular file (after symbolic links) of at most [`MAX_INPUT_BYTES`],
+/// for readers that hand the path to a library; the error as in [`read_input`].
+pub fn check_input(path: &std::path::Path) -> std::io::Result<()> {
+    let meta = std::fs::metadata(path)?;
+    let ft = meta.file_type();
+    if !ft.is_file() {
+        let what = if ft.is_dir() {
+            "a folder"
+        } else {
+            special_kind(&ft)
+        };
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            format!("{what}, not a regular file"),
+        ));
+    }
+    if meta.len() > MAX_INPUT_BYTES {
+        return Err(too_big(meta.len()));
+    }
+    Ok(())
+}
+
+fn too_big(n: u64) -> std::io::Error {
+    std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        format!(
+            "{} is over the {} an input file may have",
+            crate::budget::bytes(n),
+            crate::budget::bytes(MAX_INPUT_BYTES)
+        ),
+    )
+}
+
+#[cfg(unix)]
+fn special_kind(ft: &std::fs::FileType) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    if ft.is_fifo() {
+        "a FIFO (named pipe)"
+    } else if ft.is_char_device() {
+        "a character device"
+    } else if ft.is_block_device() {
+        "a block device"
+    } else if ft.is_socket() {
+        "a socket"
+    } else {
+        "a special file"
+    }
+}
+
+#[cfg(not(unix))]
+fn special_kind(_ft: &std::fs::FileType) -> &'static str {
+    "a special file"
+}
+
+/// Reads the whole input file at `path` ([`read_input`]); a failure is an [`Error::Io`]
+/// naming the file.
 pub fn read_file(path: &std::path::Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|e| Error::io(path, e))
+    read_input(path).map_err(|e| Error::io(path, e))
 }
 
 /// Writes `bytes` to `path` atomically: a temporary file in the same folder, then a rename.
@@ -129,7 +208,15 @@ pub fn write_atomic(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(|e| Error::io(&dir, e))?;
+    if !dir.is_dir() {
+        return Err(Error::format(
+            &dir,
+            "no such folder (the output's folder must exist)",
+        ));
+    }
+    // tempfile's own error names its hidden `.tmpXXXX` file; the user named the folder.
+    let mut tmp = tempfile::NamedTempFile::new_in(&dir)
+        .map_err(|e| Error::io(&dir, std::io::Error::from(e.kind())))?;
     tmp.write_all(bytes).map_err(|e| Error::io(path, e))?;
     // tempfile creates 0600 files; an output is an ordinary file (0644 before the umask).
     #[cfg(unix)]
@@ -233,6 +320,53 @@ mod tests {
         let e = check_range("a", 1e-5, 1e-4, 10.0).unwrap_err().to_string();
         assert_eq!(e, "invalid parameter a = 1e-5: must lie in [0.0001, 10]");
         assert!(check_range("ok", 5.0, 0.0, f64::INFINITY).is_ok());
+    }
+
+    #[test]
+    fn an_atomic_write_names_the_folder_not_its_temporary_file() {
+        // A folder whose own name has no ".tmp" in it.
+        let dir = tempfile::Builder::new()
+            .prefix("atomic")
+            .tempdir()
+            .expect("dir");
+        let missing = dir.path().join("no-such-folder");
+        let e = write_atomic(&missing.join("out.json"), b"{}")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no-such-folder: no such folder"), "{e}");
+        assert!(!e.contains(".tmp"), "{e}");
+        let f = dir.path().join("out.json");
+        write_atomic(&f, b"{}").expect("write");
+        assert_eq!(std::fs::read(&f).expect("read"), b"{}");
+    }
+
+    #[test]
+    fn only_regular_files_are_read() {
+        let dir = tempfile::tempdir().expect("dir");
+        let e = read_file(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("a folder, not a regular file"), "{e}");
+        let e = read_file(std::path::Path::new("/dev/zero"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e == "/dev/zero: a character device, not a regular file",
+            "{e}"
+        );
+        let fifo = dir.path().join("pipe");
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .expect("mkfifo");
+        assert!(made.success());
+        // Refused before opening: opening a FIFO with no writer would block.
+        let e = read_file(&fifo).unwrap_err().to_string();
+        assert!(
+            e.ends_with("pipe: a FIFO (named pipe), not a regular file"),
+            "{e}"
+        );
+        let f = dir.path().join("f");
+        std::fs::write(&f, b"abc").expect("write");
+        assert_eq!(read_file(&f).expect("read"), b"abc");
     }
 
     #[test]

@@ -9,6 +9,7 @@
 //! classic models).
 
 pub mod bsdf;
+pub mod budget;
 pub mod catalog;
 pub mod embedded;
 pub mod error;

@@ -451,6 +451,10 @@ pub struct FitRecord {
     /// The fitting options (model, lobes, fixed parameters, ranges, refinement).
     #[serde(default)]
     pub options: serde_json::Value,
+    /// Fingerprint of the input's data file when it is a file (`crc32:HEX:LENGTH`, see
+    /// `lustre_fit::batch`): a resumed batch reuses this fit only for the same bytes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub input_hash: Option<String>,
 }
 
 impl FitRecord {

@@ -35,6 +35,7 @@ fn record() -> FitRecord {
         status: "converged".into(),
         message: String::new(),
         options: serde_json::json!({"model": "kurt", "lobes": 2}),
+        input_hash: Some("crc32:0123abcd:35".into()),
     }
 }
 

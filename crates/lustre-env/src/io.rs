@@ -60,7 +60,7 @@ fn format_err(path: &Path, problem: impl Into<String>) -> EnvError {
 
 /// Reads an environment map, `.hdr` or `.exr`, chosen by the file's magic bytes.
 pub fn read_map(path: &Path) -> Result<LoadedMap> {
-    let bytes = std::fs::read(path).map_err(|source| EnvError::Io {
+    let bytes = lustre_brdf::error::read_input(path).map_err(|source| EnvError::Io {
         path: path.to_path_buf(),
         source,
     })?;

@@ -169,11 +169,13 @@ impl CameraPathFile {
 
     /// Reads and parses the camera path file `file`.
     pub fn read(file: &Path) -> Result<CameraPath> {
-        let text = std::fs::read_to_string(file).map_err(|e| SceneError::Io {
+        let bytes = lustre_brdf::error::read_input(file).map_err(|e| SceneError::Io {
             path: file.to_path_buf(),
             source: e,
         })?;
-        Self::parse(file, &text)
+        let text = std::str::from_utf8(&bytes)
+            .map_err(|e| SceneError::format(file, format!("not UTF-8 text: {e}")))?;
+        Self::parse(file, text)
     }
 
     /// Writes `path` to `file` atomically.

@@ -109,7 +109,7 @@ pub(crate) fn read_referenced(
     referrer: &std::path::Path,
     path: &std::path::Path,
 ) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|e| {
+    lustre_brdf::error::read_input(path).map_err(|e| {
         if e.kind() == std::io::ErrorKind::NotFound {
             SceneError::MissingFile {
                 path: referrer.to_path_buf(),

@@ -70,7 +70,7 @@ use std::path::{Path, PathBuf};
 
 /// Reads a whole file; failures name it.
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|e| SceneError::Io {
+    lustre_brdf::error::read_input(path).map_err(|e| SceneError::Io {
         path: path.to_path_buf(),
         source: e,
     })

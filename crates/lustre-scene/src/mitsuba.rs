@@ -210,7 +210,7 @@ pub fn from_str(path: &Path, text: &str) -> Result<Scene> {
 
 /// Reads a Mitsuba scene file.
 pub fn read(path: &Path) -> Result<Scene> {
-    let bytes = std::fs::read(path).map_err(|e| SceneError::Io {
+    let bytes = lustre_brdf::error::read_input(path).map_err(|e| SceneError::Io {
         path: path.to_path_buf(),
         source: e,
     })?;

@@ -149,7 +149,8 @@ fn mitsuba_envmap_is_converted_to_lustre_convention() {
     let d = tempfile::tempdir().unwrap();
     let map = common::data().join("envmaps/venice_sunset_1k.hdr");
     let body = format!(
-        "<emitter type=\"envmap\"><string name=\"filename\" value=\"{}\"/><float name=\"scale\" value=\"2\"/></emitter>",
+        // A sphere for it to light: a scene with no geometry is refused.
+        "<shape type=\"sphere\"/><emitter type=\"envmap\"><string name=\"filename\" value=\"{}\"/><float name=\"scale\" value=\"2\"/></emitter>",
         map.display()
     );
     let s = load_xml(d.path(), &body, "0.5.0");

@@ -120,6 +120,9 @@ pub const MAX_REFERENCE_SAMPLES: u32 = 1 << 20;
 pub const MAX_SUPERSAMPLING: u32 = 4;
 /// Most progressive frames.
 pub const MAX_FRAMES: u32 = 4096;
+/// Most camera rays per pixel (the CPU walkthrough's jittered rays; the GPU takes the k×k
+/// nearest, k ≤ [`MAX_SUPERSAMPLING`]).
+pub const MAX_RAYS: u32 = 1024;
 
 /// One frame to render.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -168,8 +171,11 @@ impl FrameRequest {
                 self.method.name()
             )));
         }
-        if self.rays == 0 {
-            return Err(ShadeError::Parameter("0 camera rays per pixel".into()));
+        if self.rays == 0 || self.rays > MAX_RAYS {
+            return Err(ShadeError::Parameter(format!(
+                "{} camera rays per pixel is outside 1..={MAX_RAYS}",
+                self.rays
+            )));
         }
         if self.method == Method::Progressive && !(1..=MAX_FRAMES).contains(&self.frames) {
             return Err(ShadeError::Parameter(format!(

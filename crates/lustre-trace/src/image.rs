@@ -175,6 +175,10 @@ impl Image {
 
     /// Reads an image file (OpenEXR, or anything the `image` crate reads) as linear RGB.
     pub fn read_exr(path: &Path) -> Result<Image> {
+        lustre_brdf::error::check_input(path).map_err(|e| TraceError::Io {
+            path: path.to_path_buf(),
+            source: e,
+        })?;
         let img = image::open(path)
             .map_err(|e| TraceError::Parameter(format!("cannot read {}: {e}", path.display())))?;
         let rgb = img.to_rgb32f();

@@ -311,6 +311,42 @@ pub struct ReferenceState {
     /// to `OUT.even.exr` / `OUT.odd.exr` (see [`commit_halves`]).
     #[serde(default)]
     pub pending: bool,
+    /// Fingerprint of what the image depends on ([`scene_hash`]), hex: a resume of another scene,
+    /// or of the same file edited, is refused.
+    #[serde(default)]
+    pub scene_hash: String,
+}
+
+/// A 64-bit fingerprint of everything a reference image depends on in `scene`: the geometry
+/// (positions, indices, normals, uvs, materials, emission), every material's parameters, the
+/// textures (size and mean), the environment (radiance in 4096 directions) and the cameras.
+pub fn scene_hash(scene: &Scene) -> u64 {
+    let mut h = crate::bake::Fnv::new();
+    for m in &scene.meshes {
+        h.u64(m.positions.len() as u64);
+        for p in &m.positions {
+            p.to_array().into_iter().for_each(|c| h.f32(c));
+        }
+        for t in &m.indices {
+            t.iter().for_each(|&i| h.u64(u64::from(i)));
+        }
+        for n in m.normals.iter().flatten() {
+            n.to_array().into_iter().for_each(|c| h.f32(c));
+        }
+        for uv in m.uv0.iter().flatten() {
+            uv.to_array().into_iter().for_each(|c| h.f32(c));
+        }
+        h.u64(m.material as u64);
+        h.bytes(format!("{:?}", m.emission).as_bytes());
+    }
+    h.bytes(format!("{:?}", scene.materials).as_bytes());
+    for t in &scene.textures {
+        h.u64(u64::from(t.width) << 32 | u64::from(t.height));
+        t.mean().into_iter().for_each(|c| h.f64(c));
+    }
+    h.bytes(format!("{:?}", scene.cameras).as_bytes());
+    crate::bake::hash_environment(&mut h, scene);
+    h.0
 }
 
 /// A number that JSON writes as `null` when it is not finite (serde_json's own choice) and that
@@ -348,7 +384,11 @@ fn commit_halves(
         Ok(())
     };
     state.pending = true;
-    write(state)?;
+    if let Err(e) = write(state) {
+        // The JSON still names the previous pass: the `.next` halves are not part of the job.
+        state.pending = false;
+        return Err(e);
+    }
     for (next, fin) in moves {
         std::fs::rename(next, fin).map_err(|e| TraceError::Io {
             path: next.clone(),
@@ -365,7 +405,11 @@ fn sibling(out: &Path, ext: &str) -> PathBuf {
 }
 
 fn read_exr(path: &Path) -> Result<Image> {
-    Image::read_exr(path).map_err(|e| TraceError::Parameter(format!("resume: {e}")))
+    // One prefix: "invalid parameter: resume: cannot read …", not the parameter error twice.
+    Image::read_exr(path).map_err(|e| match e {
+        TraceError::Parameter(m) => TraceError::Parameter(format!("resume: {m}")),
+        other => other,
+    })
 }
 
 /// Renders (or continues) the reference of `scene` with `opts`, writing the files after every
@@ -382,8 +426,18 @@ pub fn render_reference(
             "image size {w}×{h} must be between 1 and 32768"
         )));
     }
-    if opts.spp == 0 {
-        return Err(TraceError::Parameter("--spp must be ≥ 1".into()));
+    if opts.spp == 0 || opts.spp > 1 << 24 {
+        return Err(TraceError::Parameter(format!(
+            "--spp {} must be between 1 and {}",
+            opts.spp,
+            1 << 24
+        )));
+    }
+    if opts.max_depth == 0 || opts.max_depth > 1024 {
+        return Err(TraceError::Parameter(format!(
+            "--max-depth {} must be between 1 and 1024",
+            opts.max_depth
+        )));
     }
     if !(opts.exposure.is_finite() && opts.exposure > 0.0) {
         return Err(TraceError::Parameter(format!(
@@ -427,6 +481,7 @@ pub fn render_reference(
         mean: f64::NAN,
         seconds: 0.0,
         pending: false,
+        scene_hash: format!("{:016x}", scene_hash(scene)),
     };
     let (even_next, odd_next) = (
         sibling(&opts.out, "even.next.exr"),
@@ -464,6 +519,25 @@ pub fn render_reference(
                 opts.diffuse
             )));
         }
+        if old.scene_hash != state.scene_hash {
+            return Err(TraceError::Parameter(format!(
+                "resume: {} was rendered from {} {}; this scene ({}) differs (fingerprint {}): \
+                 render it without --resume, or into another --out",
+                json_path.display(),
+                if old.scene.is_empty() {
+                    "a scene"
+                } else {
+                    &old.scene
+                },
+                if old.scene_hash.is_empty() {
+                    "by an older lustre that recorded no fingerprint".to_string()
+                } else {
+                    format!("with fingerprint {}", old.scene_hash)
+                },
+                state.scene,
+                state.scene_hash
+            )));
+        }
         // Finish a commit that was interrupted after its JSON, or drop the halves of a pass
         // whose JSON was never written.
         for (next, fin) in [(&even_next, &even_path), (&odd_next, &odd_path)] {
@@ -498,13 +572,25 @@ pub fn render_reference(
         state.noise_rms = acc.noise_rms().unwrap_or(f64::NAN);
         state.noise_relative = state.noise_rms / state.mean;
         let (a, b) = acc.halves();
-        a.write_exr(&even_next)?;
-        b.write_exr(&odd_next)?;
-        commit_halves(
-            &mut state,
-            &json_path,
-            [(&even_next, &even_path), (&odd_next, &odd_path)],
-        )?;
+        let committed = a
+            .write_exr(&even_next)
+            .and_then(|()| b.write_exr(&odd_next))
+            .and_then(|()| {
+                commit_halves(
+                    &mut state,
+                    &json_path,
+                    [(&even_next, &even_path), (&odd_next, &odd_path)],
+                )
+            });
+        if let Err(e) = committed {
+            if !state.pending {
+                // Uncommitted halves (a full disk, a failed write): leave none behind.
+                for next in [&even_next, &odd_next] {
+                    let _ = std::fs::remove_file(next);
+                }
+            }
+            return Err(e);
+        }
         img.write_exr(&opts.out)?;
         img.write_png(&sibling(&opts.out, "png"), opts.exposure)?;
     }
@@ -538,6 +624,7 @@ mod tests {
             mean: 0.0,
             seconds: 0.5,
             pending: false,
+            scene_hash: "0123456789abcdef".into(),
         };
         let json = serde_json::to_string(&state).expect("json");
         assert!(json.contains("\"noise_relative\":null"), "{json}");

@@ -75,6 +75,7 @@ pub fn run(args: &RenderArgs, req: &FrameRequest) -> anyhow::Result<()> {
         Some(s) => crate::reference_cmd::parse_size(s)?,
         None => (scene.film.width, scene.film.height),
     };
+    crate::render_cmd::check_side(w, h)?;
     crate::render_cmd::check_reference(args, w, h)?;
     let (gw, gh) = (w as usize * k, h as usize * k);
     let cameras = match &args.path {
@@ -84,6 +85,28 @@ pub fn run(args: &RenderArgs, req: &FrameRequest) -> anyhow::Result<()> {
         )],
         Some(p) => path_cameras(&scene, p, args.fps, gw as u32, gh as u32)?,
     };
+    let need = crate::budget::scene(
+        lustre_brdf::budget::Budget::new(
+            format!(
+                "lustre render --method {} at {w}×{h}, {k}×{k} samples a pixel",
+                format!("{:?}", req.method).to_lowercase()
+            ),
+            "lower --size or --spp",
+        ),
+        &scene,
+    )
+    .memory(
+        "G-buffer and shading buffers",
+        gw as u64 * gh as u64,
+        crate::budget::ADAPTIVE_SAMPLE,
+    )
+    .disk(
+        &args.out,
+        "frames",
+        u64::from(w) * u64::from(h) * cameras.len() as u64,
+        crate::budget::RENDER_PIXEL_DISK,
+    );
+    crate::budget::check(&need, args.force)?;
     let (ps, warnings) = path_scene(&scene)?;
     for w in &warnings {
         eprintln!("warning: {w}");

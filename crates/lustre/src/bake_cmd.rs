@@ -71,6 +71,9 @@ pub struct BakeArgs {
     /// submits an array.
     #[arg(long, conflicts_with = "merge")]
     pub plan: bool,
+    /// Run even when the job's memory or disk estimate exceeds what the machine has.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// `--setup`.
@@ -123,11 +126,64 @@ pub const SCENE_FILE: &str = "scene.toml";
 /// give the same atlas, so shards and the merge may each call this.
 pub fn prepare(args: &BakeArgs) -> anyhow::Result<(Scene, LightmapAtlas)> {
     let (scene, atlas) = load_atlas(args)?;
+    crate::budget::check(&bake_budget(args, &scene, &atlas)?, args.force)?;
+    let created = !args.out.exists();
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let glb = args.out.join(ATLAS_FILE);
-    write_atlas_glb(&scene, &atlas, &glb).with_context(|| format!("writing {}", glb.display()))?;
+    if let Err(e) = write_atlas_glb(&scene, &atlas, &glb) {
+        if created {
+            // A folder this run made and could not fill is not left behind.
+            let _ = std::fs::remove_dir_all(&args.out);
+        }
+        return Err(e).with_context(|| format!("writing {}", glb.display()));
+    }
     Ok((scene, atlas))
+}
+
+/// The memory and disk of a bake, a shard or a merge of `atlas`: the tile files (a shard's
+/// share of them), the page EXRs, and in memory the tile records of every thread (a bake) or of
+/// every page with the denoiser's buffers (a merge).
+fn bake_budget(
+    args: &BakeArgs,
+    scene: &Scene,
+    atlas: &LightmapAtlas,
+) -> anyhow::Result<lustre_brdf::budget::Budget> {
+    use crate::budget::{BAKE_MERGE_TEXEL, BAKE_PAGE_TEXEL_DISK};
+    use lustre_trace::bake::tile::RECORD;
+    let texels = u64::from(atlas.width) * u64::from(atlas.height) * u64::from(atlas.pages);
+    let shards = match args.shard.resolve()? {
+        Some((_, n)) => n as u64,
+        None => 1,
+    };
+    let threads = rayon::current_num_threads() as u64;
+    let tile = u64::from(args.tile);
+    let job = format!(
+        "lustre bake of {} page(s) of {}×{} texels{}",
+        atlas.pages,
+        atlas.width,
+        atlas.height,
+        match args.shard.resolve()? {
+            Some((k, n)) => format!(", shard {k}/{n}"),
+            None if args.merge => ", merge".into(),
+            None => String::new(),
+        }
+    );
+    let mut b = crate::budget::scene(
+        lustre_brdf::budget::Budget::new(job, "lower --texels-per-metre or --tile"),
+        scene,
+    );
+    if !args.merge {
+        b = b
+            .memory("tiles in flight", threads * tile * tile, RECORD as u64)
+            .disk(&args.out, "tile files", texels / shards, RECORD as u64);
+    }
+    if args.shard.resolve()?.is_none() {
+        b = b
+            .memory("pages and denoiser", texels, BAKE_MERGE_TEXEL)
+            .disk(&args.out, "page EXRs", texels, BAKE_PAGE_TEXEL_DISK);
+    }
+    Ok(b)
 }
 
 /// The scene and its light-map atlas, as [`prepare`] finds them, writing nothing.
@@ -346,9 +402,10 @@ pub fn bake(args: &BakeArgs) -> anyhow::Result<Option<PathBuf>> {
         None => None,
     };
     if args.plan {
-        let (_, atlas) = load_atlas(args)?;
+        let (scene, atlas) = load_atlas(args)?;
         let tiles = check_shard_tiles(&atlas, &opts, shard)
             .with_context(|| format!("planning {}", args.scene.display()))?;
+        println!("budget: {}", bake_budget(args, &scene, &atlas)?.summary());
         println!(
             "plan: {} page(s) of {}×{} texels in {tiles} tiles of {}² texels: at most {tiles} \
              shards{}",

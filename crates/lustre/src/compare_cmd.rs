@@ -50,6 +50,9 @@ pub struct CompareArgs {
     /// Output directory (images and compare.md).
     #[arg(long)]
     pub out: PathBuf,
+    /// Run even when the job's memory or disk estimate exceeds what the machine has.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Runs `lustre compare`.
@@ -63,6 +66,35 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
     if args.face_size == 0 {
         bail!("--face-size must be > 0");
     }
+    if args.size == 0 {
+        bail!("--size must be > 0");
+    }
+    if args.reference_spp > 1 << 24 || args.check_pixels > 1 << 20 {
+        bail!(
+            "--reference-spp {} and --check-pixels {}: at most {} and {}",
+            args.reference_spp,
+            args.check_pixels,
+            1 << 24,
+            1 << 20
+        );
+    }
+    let (face, size) = (args.face_size as u64, args.size as u64);
+    let need = lustre_brdf::budget::Budget::new(
+        format!("lustre compare at {size}×{size} with {face}×{face} cube faces"),
+        "lower --size or --face-size",
+    )
+    .memory(
+        "environment (map, pyramids, sampling)",
+        face.saturating_mul(face).saturating_mul(6),
+        crate::budget::COMPARE_ENV_TEXEL,
+    )
+    .memory(
+        "images",
+        size.saturating_mul(size),
+        crate::budget::COMPARE_PIXEL,
+    )
+    .disk(&args.out, "PNGs", size.saturating_mul(size), 64);
+    crate::budget::check(&need, args.force)?;
     let env = if args.map == "spots" {
         eprintln!(
             "environment: tiny-spot map, {0}×{0} faces, Gaussian 6×6 pyramid",

@@ -25,7 +25,7 @@ pub struct DemoArgs {
     /// Regular samples per lobe (1–1024).
     #[arg(long, default_value_t = 16)]
     pub samples: usize,
-    /// Reference samples per pixel (for the printed PSNR).
+    /// Reference samples per pixel (for the printed PSNR; at most 2²⁰).
     #[arg(long, default_value_t = 512)]
     pub reference_spp: usize,
     /// Exposure of the PNG and of the PSNR: finite and > 0.
@@ -35,6 +35,9 @@ pub struct DemoArgs {
     /// demo falls back to the CPU).
     #[arg(long)]
     pub cpu: bool,
+    /// Run even when the job's memory or disk estimate exceeds what the machine has.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Parses `WxH` (both > 0).
@@ -72,8 +75,19 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
         );
     }
     let (w, h) = parse_size(&args.size)?;
+    crate::render_cmd::check_side(
+        u32::try_from(w).unwrap_or(u32::MAX),
+        u32::try_from(h).unwrap_or(u32::MAX),
+    )?;
     if args.samples == 0 || args.reference_spp == 0 {
         bail!("--samples and --reference-spp must be > 0");
+    }
+    if args.reference_spp > 1 << 20 {
+        bail!(
+            "--reference-spp {}: at most {}",
+            args.reference_spp,
+            1 << 20
+        );
     }
     let most = lustre_gpu::MAX_LOBE_LOOKUPS as usize;
     if args.samples > most {
@@ -83,6 +97,19 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
             args.samples
         );
     }
+    let pixels = (w as u64).saturating_mul(h as u64);
+    let need = lustre_brdf::budget::Budget::new(format!("lustre demo at {w}×{h}"), "lower --size")
+        .memory(
+            "images",
+            pixels,
+            if args.cpu {
+                crate::budget::DEMO_PIXEL_CPU
+            } else {
+                crate::budget::DEMO_PIXEL_GPU
+            },
+        )
+        .disk(&args.out, "PNG", pixels, 3);
+    crate::budget::check(&need, args.force)?;
     let gpu = if args.cpu {
         None
     } else {

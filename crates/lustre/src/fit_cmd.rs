@@ -75,14 +75,15 @@ pub struct FitArgs {
     /// Letters, digits, `.`, `_`, `-` and `+` only (it is part of a file name).
     #[arg(long, value_name = "TEXT", value_parser = parse_suffix)]
     pub suffix: Option<String>,
-    /// Inputs fitted in parallel.
+    /// Inputs fitted in parallel (1–256).
     #[arg(long, default_value_t = default_jobs(), value_parser = parse_jobs)]
     pub jobs: usize,
     /// Also draw the measured-vs-model plots of `lustre plot` (polar + arrays) per input, into
     /// DIR/plots/NAME/.
     #[arg(long)]
     pub plots: bool,
-    /// Fit every input again, even where a valid output exists (also one with other options).
+    /// Fit every input again, even where a valid output exists (also one with other options);
+    /// also runs a batch whose memory estimate exceeds what the machine has.
     #[arg(long)]
     pub force: bool,
     /// Output folder: NAME.json per input and summary.csv (created if missing).
@@ -109,10 +110,15 @@ fn default_jobs() -> usize {
 /// Parses a thread count ≥ 1.
 fn parse_jobs(s: &str) -> std::result::Result<usize, String> {
     match s.trim().parse::<usize>() {
-        Ok(n) if n >= 1 => Ok(n),
-        _ => Err(format!("{s:?}: expected a whole number ≥ 1")),
+        Ok(n) if (1..=MAX_JOBS).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "{s:?}: expected a whole number from 1 to {MAX_JOBS}"
+        )),
     }
 }
+
+/// The most inputs fitted at once (`--jobs`).
+const MAX_JOBS: usize = 256;
 
 /// Parses `NAME=VALUE` with a finite value.
 fn parse_fix(s: &str) -> std::result::Result<(String, f64), String> {
@@ -221,6 +227,25 @@ pub fn run_with(args: &FitArgs, fitter: &dyn Fitter) -> Result<()> {
         return merge(args);
     }
     let opts = args.batch_options()?;
+    // The inputs fitted at once, each its table and working arrays (2× its file).
+    let largest = args
+        .inputs
+        .iter()
+        .filter_map(|i| std::fs::metadata(i).ok())
+        .map(|m| m.len().saturating_mul(2))
+        .max()
+        .unwrap_or(0)
+        .max(crate::budget::FIT_INPUT);
+    let at_once = args.jobs.min(args.inputs.len().max(1)) as u64;
+    let need = lustre_brdf::budget::Budget::new(
+        format!(
+            "lustre fit of {} input(s), {at_once} at once",
+            args.inputs.len()
+        ),
+        "lower --jobs",
+    )
+    .memory("inputs being fitted", at_once, largest);
+    crate::budget::check(&need, args.force)?;
     let summary = batch::run(&args.inputs, &opts, fitter)
         .with_context(|| format!("fitting into {}", args.out.display()))?;
     for r in summary.batch_rows() {

@@ -3,6 +3,7 @@
 mod adaptive_cmd;
 mod bake_cmd;
 mod bandwidth_cmd;
+mod budget;
 mod compare_cmd;
 mod demo_cmd;
 mod fit_cmd;

@@ -351,26 +351,14 @@ fn run_pattern(args: &PlotArgs, choice: PlotPattern) -> Result<()> {
     Ok(())
 }
 
-/// Resolves a spec with a message that names it and a few known materials.
+/// Resolves a spec; the catalog's error names the spec and what a spec may be (`lustre list`
+/// lists every name).
 fn resolve(spec: &str, strict: bool) -> Result<Box<dyn Bsdf>> {
     if spec.trim().is_empty() {
         bail!("empty material spec");
     }
-    catalog::resolve_with(spec, &catalog::ResolveOptions { strict }).with_context(|| {
-        let known = catalog::list();
-        let shown = known
-            .iter()
-            .take(12)
-            .cloned()
-            .collect::<Vec<_>>()
-            .join(", ");
-        let more = if known.len() > 12 {
-            format!(", … ({} in all)", known.len())
-        } else {
-            String::new()
-        };
-        format!("cannot resolve material spec '{spec}' (built-in names: {shown}{more})")
-    })
+    catalog::resolve_with(spec, &catalog::ResolveOptions { strict })
+        .with_context(|| format!("cannot resolve material spec '{spec}' (lustre list names all)"))
 }
 
 /// A file-name-safe short form of a spec: the last path component, other characters as '-'.

@@ -40,6 +40,9 @@ pub struct ReferenceArgs {
     /// Output OpenEXR file (OUT.png, OUT.json, OUT.even.exr, OUT.odd.exr are written beside it).
     #[arg(long)]
     pub out: PathBuf,
+    /// Run even when the job's memory or disk estimate exceeds what the machine has.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Parses `WxH`.
@@ -81,6 +84,23 @@ pub fn run(args: &ReferenceArgs) -> anyhow::Result<()> {
     };
     for w in &scene.warnings {
         eprintln!("warning: {w}");
+    }
+    let (w, h) = size.unwrap_or((scene.film.width, scene.film.height));
+    let pixels = u64::from(w) * u64::from(h);
+    let need = crate::budget::scene(
+        lustre_brdf::budget::Budget::new(format!("lustre reference at {w}×{h}"), "lower --size"),
+        &scene,
+    )
+    .memory("image buffers", pixels, crate::budget::REFERENCE_PIXEL)
+    .disk(
+        &args.out,
+        "EXR halves and images",
+        pixels,
+        crate::budget::REFERENCE_PIXEL_DISK,
+    );
+    crate::budget::check(&need, args.force)?;
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
     eprintln!(
         "{}: {} triangles, {} emitting meshes, {} materials{}",

@@ -133,6 +133,9 @@ pub struct RenderArgs {
     /// Probe cube face size in texels.
     #[arg(long, default_value_t = 128)]
     pub probe_size: usize,
+    /// Run even when the job's memory or disk estimate exceeds what the machine has.
+    #[arg(long)]
+    pub force: bool,
     /// Exposure of the PNG (and of the comparison's display values): finite and > 0.
     #[arg(long, default_value_t = 1.0, value_parser = parse_exposure)]
     pub exposure: f64,
@@ -184,10 +187,25 @@ fn load_baked(path: &Path) -> anyhow::Result<Baked> {
     Ok((b.scene, b.atlas, b.pages))
 }
 
+/// The longest image side `lustre render` and `lustre demo` draw, on the GPU (its texture
+/// limit) and on the CPU alike, so that both devices accept the same frames.
+pub const MAX_SIDE: u32 = 16384;
+
+/// Refuses a frame side above [`MAX_SIDE`].
+pub fn check_side(w: u32, h: u32) -> anyhow::Result<()> {
+    if w > MAX_SIDE || h > MAX_SIDE {
+        anyhow::bail!(
+            "--size {w}x{h}: each side must be at most {MAX_SIDE} (the GPU's texture limit; the \
+             CPU keeps it too)"
+        );
+    }
+    Ok(())
+}
+
 /// A scene file with light maps as it is; any other scene baked into `out/bake` first (reused
 /// while the scene and the bake's options are unchanged: a fingerprint in
 /// `out/bake/source.txt`).
-fn load_or_bake(path: &Path, out: &Path) -> anyhow::Result<Baked> {
+fn load_or_bake(path: &Path, out: &Path, force: bool) -> anyhow::Result<Baked> {
     let scene = Scene::load(path).with_context(|| format!("loading {}", path.display()))?;
     if scene.lightmap.is_some() {
         return load_baked(path);
@@ -208,6 +226,7 @@ fn load_or_bake(path: &Path, out: &Path) -> anyhow::Result<Baked> {
         setup: crate::bake_cmd::SetupArg::Auto,
         merge: false,
         plan: false,
+        force,
     };
     let key = fingerprint(path, &scene, &format!("{:?}", args.options()));
     let stamp = dir.join("source.txt");
@@ -381,7 +400,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         None => None,
     };
     let (mut scene, atlas, pages) = match (&args.scene, &args.material) {
-        (Some(path), _) => load_or_bake(path, &args.out)?,
+        (Some(path), _) => load_or_bake(path, &args.out, args.force)?,
         (None, Some(spec)) => preview(spec, environment)?,
         (None, None) => builtin(&args.out, environment)?,
     };
@@ -405,6 +424,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         Some(s) => crate::reference_cmd::parse_size(s)?,
         None => (scene.film.width, scene.film.height),
     };
+    check_side(w, h)?;
     check_reference(args, w, h)?;
     let cameras = match &args.path {
         None => vec![(
@@ -413,6 +433,34 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         )],
         Some(p) => path_cameras(&scene, p, args.fps, w, h)?,
     };
+    let pixels = u64::from(w) * u64::from(h);
+    let probes_n =
+        (scene.probes.len() + scene.meshes.iter().filter(|m| m.hints.probe).count()) as u64;
+    let face = args.probe_size as u64;
+    let page_texels: u64 = pages.iter().map(|p| p.len() as u64).sum();
+    let k = u64::from(req.supersampling());
+    let mut need = crate::budget::scene(
+        lustre_brdf::budget::Budget::new(
+            format!("lustre render at {w}×{h}"),
+            "lower --size (or --probe-size)",
+        ),
+        &scene,
+    )
+    .memory("light-map pages", page_texels, 12)
+    // Each probe: six faces of colour and distance with their MIP pyramid (4/3), 16 B a texel.
+    .memory("probes", probes_n * 6 * face * face * 4 / 3, 16)
+    .memory("frame buffers", pixels, crate::budget::RENDER_PIXEL);
+    if args.device != Device::Cpu {
+        // The supersampled G-buffer: k² samples of 64 B per pixel.
+        need = need.memory("G-buffer", pixels * k * k, 64);
+    }
+    let need = need.disk(
+        &args.out,
+        "frames",
+        pixels * cameras.len() as u64,
+        crate::budget::RENDER_PIXEL_DISK,
+    );
+    crate::budget::check(&need, args.force)?;
     st.lap("load, light maps");
     let (ps, warnings) = lustre_trace::reference::path_scene(&scene)?;
     for w in &warnings {

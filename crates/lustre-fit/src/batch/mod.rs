@@ -121,6 +121,7 @@ impl Fitted {
             status: status_str(self.status).into(),
             message: self.message.clone(),
             options: options.to_json(),
+            input_hash: None,
         }
     }
 }

@@ -68,20 +68,29 @@ pub(super) fn reusable(path: &Path, job: &Job, options: &FitOptions) -> Option<S
         && m.model.kind() == options.model.as_str()
         && f.options == options.to_json()
         && !is_failure(status)
-        && !input_is_newer(&job.input, path);
+        && f.input_hash == input_hash(&job.input);
     same.then(|| SummaryRow::new(&job.name, f, m.model.kind(), status, true))
 }
 
-/// Whether the input's data file (the path of a file input, the network file of
-/// `nbrdf:FILE#NAME`) was modified after `output` was written.
-fn input_is_newer(input: &str, output: &Path) -> bool {
+/// The data file of an input: the path of a file input, the network file of
+/// `nbrdf:FILE#NAME`; `None` for a built-in (`nbrdf:NAME`).
+fn input_file(input: &str) -> Option<&Path> {
     let spec = input.strip_prefix("nbrdf:").unwrap_or(input);
     let file = spec.rsplit_once('#').map_or(spec, |(f, _)| f);
-    let mtime = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
-    match (mtime(Path::new(file)), mtime(output)) {
-        (Some(i), Some(o)) => i > o,
-        _ => false,
-    }
+    let p = Path::new(file);
+    p.is_file().then_some(p)
+}
+
+/// The fingerprint of an input's data file, `crc32:HEX:LENGTH` (`None` for a built-in input,
+/// or a file that cannot be read: its fit fails and is not reused).
+pub(super) fn input_hash(input: &str) -> Option<String> {
+    let file = input_file(input)?;
+    let bytes = lustre_brdf::error::read_input(file).ok()?;
+    Some(format!(
+        "crc32:{:08x}:{}",
+        crc32fast::hash(&bytes),
+        bytes.len()
+    ))
 }
 
 #[cfg(test)]
@@ -193,6 +202,7 @@ mod tests {
         run(&inputs, &options(&out), &mock).expect("batch");
         run(&inputs, &options(&out), &mock).expect("batch");
         assert_eq!(mock.fits.load(Ordering::SeqCst), 1);
+        // A newer file with the same bytes is the same input: reused.
         let later = mtime(&out.join("t.json")) + std::time::Duration::from_secs(5);
         std::fs::File::options()
             .write(true)
@@ -200,11 +210,24 @@ mod tests {
             .and_then(|f| f.set_modified(later))
             .expect("touch");
         let s = run(&inputs, &options(&out), &mock).expect("batch");
+        assert_eq!((mock.fits.load(Ordering::SeqCst), s.resumed()), (1, 1));
+        // Other bytes, even with an older time stamp, are refitted.
+        std::fs::write(&data, b"datb").expect("edit");
+        let earlier = mtime(&out.join("t.json")) - std::time::Duration::from_secs(60);
+        std::fs::File::options()
+            .write(true)
+            .open(&data)
+            .and_then(|f| f.set_modified(earlier))
+            .expect("back-date");
+        let s = run(&inputs, &options(&out), &mock).expect("batch");
         assert_eq!(
             mock.fits.load(Ordering::SeqCst),
             2,
-            "the newer input is refitted"
+            "the edited input is refitted"
         );
         assert_eq!(s.resumed(), 0);
+        let m = lustre_brdf::material::read(&out.join("t.json")).expect("fit");
+        let h = m.fit.and_then(|f| f.input_hash).expect("hash recorded");
+        assert_eq!(h, format!("crc32:{:08x}:4", crc32fast::hash(b"datb")));
     }
 }

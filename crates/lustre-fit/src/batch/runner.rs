@@ -241,6 +241,8 @@ fn run_one(
             return row;
         }
     }
+    // Before the fit reads it: the bytes fitted, not those of a later edit.
+    let input_hash = super::resume::input_hash(&job.input);
     let t0 = Instant::now();
     let result = match &job.expand_error {
         Some(e) => Err((error_status(e), e.to_string())),
@@ -268,11 +270,15 @@ fn run_one(
         status: String::new(),
         message: String::new(),
         options: options.to_json(),
+        input_hash: input_hash.clone(),
     };
     let mut kept = None;
     let written = match result {
         Ok(f) => {
-            record = f.record(&job.input, options, time_s);
+            record = FitRecord {
+                input_hash,
+                ..f.record(&job.input, options, time_s)
+            };
             let file = MaterialFile::new(job.name.clone(), f.model.clone(), Some(record.clone()));
             match file.and_then(|m| material::write(&path, &m)) {
                 Ok(()) => Ok(f.status),

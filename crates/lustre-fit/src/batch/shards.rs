@@ -84,7 +84,7 @@ fn read_manifests(dir: &Path) -> Result<Vec<(PathBuf, ShardManifest)>> {
     paths
         .into_iter()
         .map(|p| {
-            let bytes = std::fs::read(&p).map_err(|e| lustre_brdf::Error::io(&p, e))?;
+            let bytes = lustre_brdf::error::read_file(&p)?;
             let m: ShardManifest = serde_json::from_slice(&bytes).map_err(|e| {
                 FitError::Option(format!(
                     "{}: not a lustre fit shard manifest: {e}",
@@ -240,7 +240,7 @@ pub fn merge(out: &Path, from: &[PathBuf]) -> Result<BatchSummary> {
         for (&pos, row) in m.positions.iter().zip(&m.rows) {
             let name = format!("{}.json", row.name);
             let src = dir.join(&name);
-            let bytes = std::fs::read(&src).map_err(|e| lustre_brdf::Error::io(&src, e))?;
+            let bytes = lustre_brdf::error::read_file(&src)?;
             check_fit_file(&src, &bytes)?;
             if dir.as_path() != out {
                 copies.push((out.join(&name), bytes));

@@ -212,7 +212,9 @@ pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => std::path::PathBuf::from("."),
     };
-    let mut tmp = tempfile::NamedTempFile::new_in(&dir).map_err(io(path))?;
+    // tempfile's own error names its hidden `.tmpXXXX` file; name the folder instead.
+    let mut tmp = tempfile::NamedTempFile::new_in(&dir)
+        .map_err(|e| io(&dir)(std::io::Error::from(e.kind())))?;
     tmp.write_all(bytes).map_err(io(path))?;
     #[cfg(unix)]
     {

@@ -428,6 +428,12 @@ pub fn bake_hash(scene: &Scene, atlas: &LightmapAtlas, opts: &BakeOptions) -> u6
             h.f64(c);
         }
     }
+    hash_environment(&mut h, scene);
+    h.0
+}
+
+/// Adds the scene's environment (its radiance in 4096 fixed directions) to `h`.
+pub(crate) fn hash_environment(h: &mut Fnv, scene: &Scene) {
     if let Some(env) = &scene.environment {
         let n = 4096;
         for k in 0..n {
@@ -441,5 +447,4 @@ pub fn bake_hash(scene: &Scene, atlas: &LightmapAtlas, opts: &BakeOptions) -> u6
             }
         }
     }
-    h.0
 }

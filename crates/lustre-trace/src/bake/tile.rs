@@ -25,7 +25,8 @@ use std::time::Instant;
 /// First bytes of a tile file (the format version is its last character).
 pub const MAGIC: &[u8; 8] = b"LBAKTIL1";
 const HEADER: usize = 8 + 8 + 6 * 4;
-const RECORD: usize = 17 * 4;
+/// Bytes of one texel record in a tile file (17 little-endian 4-byte values).
+pub const RECORD: usize = 17 * 4;
 
 /// A tile: its global index, page and texel rectangle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
