@@ -301,6 +301,30 @@ pub fn output_locked(path: &std::path::Path) -> Result<bool> {
     }
 }
 
+/// The first shard lock (`*.lock` other than `merge.lock`, by name) in `dir` that another
+/// process holds, with its holder's line: what a merge refuses to start beside. `None` when
+/// every shard has finished (or `dir` does not exist).
+pub fn held_shard_lock(dir: &std::path::Path) -> Result<Option<(PathBuf, String)>> {
+    let Ok(list) = std::fs::read_dir(dir) else {
+        return Ok(None);
+    };
+    let mut locks: Vec<PathBuf> = list
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension().is_some_and(|e| e == "lock")
+                && p.file_stem().is_some_and(|s| s != "merge")
+        })
+        .collect();
+    locks.sort();
+    for l in locks {
+        if output_locked(&l)? {
+            let holder = std::fs::read_to_string(&l).unwrap_or_default();
+            return Ok(Some((l, holder.trim().to_string())));
+        }
+    }
+    Ok(None)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -29,7 +29,6 @@ use lustre_scene::builtin::{LINEUP_FLOOR, LINEUP_PAINTS};
 use lustre_scene::material_edit::{parse_assignment, set_named};
 use lustre_scene::Scene;
 use lustre_shade::request::{FrameRequest, Method, MAX_ADAPTIVE_SAMPLES};
-use lustre_trace::baked::read_environment;
 use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{path_camera, path_scene};
 use std::fmt::Write as _;
@@ -41,15 +40,7 @@ pub fn run(args: &RenderArgs, req: &FrameRequest) -> anyhow::Result<()> {
     let k = req.supersampling() as usize;
     let mut times: Vec<(String, f64)> = vec![];
     let mut t = Instant::now();
-    let environment = match args.env.as_deref().map(read_environment).transpose()? {
-        Some((env, warning)) => {
-            if let Some(w) = warning {
-                eprintln!("warning: {w}");
-            }
-            Some(env)
-        }
-        None => None,
-    };
+    let environment = crate::render_cmd::env_arg(args)?;
     let mut scene = match (&args.scene, &args.material) {
         (Some(path), _) => {
             if environment.is_some() {

@@ -187,6 +187,21 @@ fn load_baked(path: &Path) -> anyhow::Result<Baked> {
     Ok((b.scene, b.atlas, b.pages))
 }
 
+/// The environment of `--env`, its sanitizing warning (non-finite or negative texels) printed.
+pub fn env_arg(args: &RenderArgs) -> anyhow::Result<Option<Environment>> {
+    Ok(
+        match args.env.as_deref().map(read_environment).transpose()? {
+            Some((env, warning)) => {
+                if let Some(w) = warning {
+                    eprintln!("warning: {w}");
+                }
+                Some(env)
+            }
+            None => None,
+        },
+    )
+}
+
 /// The longest image side `lustre render` and `lustre demo` draw, on the GPU (its texture
 /// limit) and on the CPU alike, so that both devices accept the same frames.
 pub const MAX_SIDE: u32 = 16384;
@@ -390,15 +405,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         ..ProbeOptions::default()
     };
     probe_opts.validate()?;
-    let environment = match args.env.as_deref().map(read_environment).transpose()? {
-        Some((env, warning)) => {
-            if let Some(w) = warning {
-                eprintln!("warning: {w}");
-            }
-            Some(env)
-        }
-        None => None,
-    };
+    let environment = env_arg(args)?;
     let (mut scene, atlas, pages) = match (&args.scene, &args.material) {
         (Some(path), _) => load_or_bake(path, &args.out, args.force)?,
         (None, Some(spec)) => preview(spec, environment)?,

@@ -3,40 +3,11 @@
 //! `--force` runs them anyway, special files are refused before they are opened, and a
 //! resumable job refuses the checkpoint of another scene.
 
+mod common;
+
+use common::{fails, lustre, ok};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn lustre() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_lustre"));
-    c.env("RUST_BACKTRACE", "0");
-    c
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
-
-fn ok(c: &mut Command) -> String {
-    let o = c.output().expect("runs");
-    let t = text(&o);
-    assert!(o.status.success(), "{c:?}: {t}");
-    t
-}
-
-fn fails(c: &mut Command) -> String {
-    let o = c.output().expect("runs");
-    let t = text(&o);
-    assert!(!o.status.success(), "{c:?} should fail: {t}");
-    assert!(
-        !t.contains("panicked") && !t.contains("memory allocation"),
-        "{t}"
-    );
-    t
-}
+use std::process::Command;
 
 fn cornell() -> PathBuf {
     lustre_brdf::shared_data_dir().join("scenes/cornell_box/cornell_box.obj")

@@ -1,37 +1,10 @@
 //! The command line on day one: unmeasured MERL bins, `lustre score`, the built-in
 //! published data from any directory, batch folders that keep every fit, and the rough edges.
 
+mod common;
+
+use common::{fails, lustre, ok};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn lustre() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_lustre"));
-    c.env("RUST_BACKTRACE", "0");
-    c
-}
-
-fn text(o: &Output) -> String {
-    format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    )
-}
-
-fn ok(c: &mut Command) -> String {
-    let o = c.output().expect("runs");
-    let t = text(&o);
-    assert!(o.status.success(), "{c:?}: {t}");
-    t
-}
-
-fn fails(c: &mut Command) -> String {
-    let o = c.output().expect("runs");
-    let t = text(&o);
-    assert!(!o.status.success(), "{c:?} should fail: {t}");
-    assert!(!t.contains("panicked"), "{t}");
-    t
-}
 
 /// A MERL table of a published SGD fit at the bins' lower edges with a block of bins marked
 /// unmeasured (negative), written by `lustre merl synth --from`.

@@ -113,27 +113,11 @@ fn read_manifests(dir: &Path) -> Result<Vec<(PathBuf, ShardManifest)>> {
 /// and holds the merge's own lock in the first: the guard to keep while merging.
 fn lock_merge(dirs: &[PathBuf]) -> Result<lustre_brdf::error::OutputLock> {
     for d in dirs {
-        let shards = d.join("shards");
-        let Ok(list) = std::fs::read_dir(&shards) else {
-            continue;
-        };
-        let mut locks: Vec<PathBuf> = list
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| {
-                p.extension().is_some_and(|e| e == "lock")
-                    && p.file_stem().is_some_and(|s| s != "merge")
-            })
-            .collect();
-        locks.sort();
-        for l in &locks {
-            if lustre_brdf::error::output_locked(l)? {
-                let holder = std::fs::read_to_string(l).unwrap_or_default();
-                return Err(FitError::Option(format!(
-                    "{}: still fitting ({}); merge once every shard has finished",
-                    l.display(),
-                    holder.trim()
-                )));
-            }
+        if let Some((l, holder)) = lustre_brdf::error::held_shard_lock(&d.join("shards"))? {
+            return Err(FitError::Option(format!(
+                "{}: still fitting ({holder}); merge once every shard has finished",
+                l.display()
+            )));
         }
     }
     let shards = dirs[0].join("shards");

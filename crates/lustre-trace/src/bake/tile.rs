@@ -271,24 +271,11 @@ pub(super) fn lock_merge(out_dir: &Path) -> Result<lustre_brdf::error::OutputLoc
         source: e,
     };
     std::fs::create_dir_all(&dir).map_err(io)?;
-    let mut locks: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .map_err(io)?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.extension().is_some_and(|e| e == "lock")
-                && p.file_stem().is_some_and(|s| s != "merge")
-        })
-        .collect();
-    locks.sort();
-    for l in &locks {
-        if lustre_brdf::error::output_locked(l)? {
-            let holder = std::fs::read_to_string(l).unwrap_or_default();
-            return Err(TraceError::Parameter(format!(
-                "{}: still baking ({}); merge once every shard has finished",
-                l.display(),
-                holder.trim()
-            )));
-        }
+    if let Some((l, holder)) = lustre_brdf::error::held_shard_lock(&dir)? {
+        return Err(TraceError::Parameter(format!(
+            "{}: still baking ({holder}); merge once every shard has finished",
+            l.display()
+        )));
     }
     Ok(lustre_brdf::error::lock_output(
         &dir.join("merge.lock"),
