@@ -19,6 +19,14 @@ pub const REFERENCE_PIXEL_DISK: u64 = 63;
 /// conversions for the EXR and PNG, the mirror and see-through buffers; measured ≈ 55 B on
 /// the CPU at 2048², counted as 96 B (the GPU's supersampled G-buffer is counted apart).
 pub const RENDER_PIXEL: u64 = 96;
+/// The GPU's host-side cost: the driver, compiled pipelines, staging buffers. On lavapipe
+/// (software Vulkan: its device memory is host memory) the walkthrough of a preview measured
+/// ≈ 450 MB at 256²; counted as 512 MB, conservative on a discrete GPU whose buffers live in
+/// its own memory.
+pub const GPU_DEVICE: u64 = 512 << 20;
+/// The GPU walkthrough per G-buffer sample (k² a pixel): the G-buffer, the frame's storage and
+/// read-back; measured ≈ 155 B on lavapipe at 1024² with 2×2 samples, counted as 192 B.
+pub const GBUFFER_SAMPLE: u64 = 192;
 /// `lustre render` on disk per pixel and frame: frame.exr (12 B) and frame.png (3 B).
 pub const RENDER_PIXEL_DISK: u64 = 15;
 /// The adaptive and brute-force renderers, per G-buffer sample: position, normal, frame,
@@ -36,8 +44,11 @@ pub const COMPARE_PIXEL: u64 = 512;
 /// each), the PNG conversion (3 B); measured ≈ 24 B at 3840×2160, counted as 40 B.
 pub const DEMO_PIXEL_CPU: u64 = 40;
 /// `lustre demo` on the GPU, per pixel: as on the CPU, with the frame's storage and read-back
-/// buffers (32 B).
+/// buffers (32 B); plus [`DEMO_GPU_DEVICE`].
 pub const DEMO_PIXEL_GPU: u64 = 72;
+/// `lustre demo`'s GPU host-side cost (one sphere pass, lighter than the walkthrough's
+/// [`GPU_DEVICE`]): the whole demo measured 194–221 MB on lavapipe at 1920×1080; counted as 160 MB.
+pub const DEMO_GPU_DEVICE: u64 = 160 << 20;
 /// `lustre bake --merge` (and an unsharded bake's assembly), per atlas texel: the decoded tile
 /// records (68 B), the denoiser's guide and two ping-pong buffers (≈ 60 B), the dilated page
 /// (12 B); counted as 160 B.

@@ -100,6 +100,11 @@ pub fn run(args: &DemoArgs) -> anyhow::Result<()> {
     let pixels = (w as u64).saturating_mul(h as u64);
     let need = lustre_brdf::budget::Budget::new(format!("lustre demo at {w}×{h}"), "lower --size")
         .memory(
+            "GPU device",
+            u64::from(!args.cpu),
+            crate::budget::DEMO_GPU_DEVICE,
+        )
+        .memory(
             "images",
             pixels,
             if args.cpu {

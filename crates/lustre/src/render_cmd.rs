@@ -389,8 +389,20 @@ pub fn request(args: &RenderArgs) -> anyhow::Result<FrameRequest> {
     Ok(req)
 }
 
-/// Runs `lustre render`.
+/// Runs `lustre render`; a failed run leaves no empty output folder behind (a folder it made
+/// keeps only what can be reused, e.g. the light maps of OUT/bake).
 pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
+    let existed = args.out.exists();
+    let result = render_frames(args);
+    if result.is_err() && !existed {
+        // Removes the folder only when it is empty.
+        let _ = std::fs::remove_dir(&args.out);
+    }
+    result
+}
+
+/// `lustre render`'s work: load (or bake), check the budget, capture, render, write.
+fn render_frames(args: &RenderArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let mut st = Stages {
         times: vec![],
@@ -458,8 +470,9 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     .memory("probes", probes_n * 6 * face * face * 4 / 3, 16)
     .memory("frame buffers", pixels, crate::budget::RENDER_PIXEL);
     if args.device != Device::Cpu {
-        // The supersampled G-buffer: k² samples of 64 B per pixel.
-        need = need.memory("G-buffer", pixels * k * k, 64);
+        need = need
+            .memory("GPU device", 1, crate::budget::GPU_DEVICE)
+            .memory("G-buffer", pixels * k * k, crate::budget::GBUFFER_SAMPLE);
     }
     let need = need.disk(
         &args.out,
