@@ -1,4 +1,4 @@
-//! Every input bounded and every output whole (issue 44): the budget check refuses jobs larger
+//! Every input bounded and every output whole: the budget check refuses jobs larger
 //! than the machine (with both numbers and the option to change) before anything is written,
 //! `--force` runs them anyway, special files are refused before they are opened, and a
 //! resumable job refuses the checkpoint of another scene.
@@ -31,7 +31,7 @@ fn assert_refused(t: &str, job: &str, option: &str) {
 fn jobs_larger_than_the_machine_are_refused_before_they_start() {
     let dir = tempfile::tempdir().expect("dir");
     let d = dir.path();
-    // The aborts of the issue ("memory allocation of N bytes failed", exit 134).
+    // Jobs that used to abort ("memory allocation of N bytes failed", exit 134).
     // Frame sides are bounded on both devices (the GPU's texture limit).
     let png = d.join("demo.png");
     let t = fails(
@@ -87,7 +87,7 @@ fn jobs_larger_than_the_machine_are_refused_before_they_start() {
     let t = fails(lustre().args(["compare", "--size", "0", "--out"]).arg(&out));
     assert!(t.contains("--size must be > 0"), "{t}");
 
-    // The runaways: a 20000² reference (6.9 GB and growing in the issue) on a machine of
+    // The runaways: a 20000² reference (it used to grow past 6.9 GB) on a machine of
     // 4 GB, and a bake of 14 GB of tiles on a disk with 1 GB free.
     let exr = d.join("r.exr");
     let t = fails(

@@ -239,7 +239,7 @@ fn batch_folders_keep_every_fit() {
     );
 }
 
-/// Inputs that used to be accepted silently (or wrongly) and their messages (issue 44): each is
+/// Inputs that used to be accepted silently (or wrongly) and their messages: each is
 /// refused, names the problem in plain words, and leaves nothing behind.
 #[test]
 fn silent_acceptances_are_refused_in_plain_words() {
