@@ -152,10 +152,8 @@ fn bake_budget(
     use crate::budget::{BAKE_MERGE_TEXEL, BAKE_PAGE_TEXEL_DISK};
     use lustre_trace::bake::tile::RECORD;
     let texels = u64::from(atlas.width) * u64::from(atlas.height) * u64::from(atlas.pages);
-    let shards = match args.shard.resolve()? {
-        Some((_, n)) => n as u64,
-        None => 1,
-    };
+    let shard = args.shard.resolve()?;
+    let shards = shard.map_or(1, |(_, n)| n as u64);
     let threads = rayon::current_num_threads() as u64;
     let tile = u64::from(args.tile);
     let job = format!(
@@ -163,7 +161,7 @@ fn bake_budget(
         atlas.pages,
         atlas.width,
         atlas.height,
-        match args.shard.resolve()? {
+        match shard {
             Some((k, n)) => format!(", shard {k}/{n}"),
             None if args.merge => ", merge".into(),
             None => String::new(),
@@ -178,7 +176,7 @@ fn bake_budget(
             .memory("tiles in flight", threads * tile * tile, RECORD as u64)
             .disk(&args.out, "tile files", texels / shards, RECORD as u64);
     }
-    if args.shard.resolve()?.is_none() {
+    if shard.is_none() {
         b = b
             .memory("pages and denoiser", texels, BAKE_MERGE_TEXEL)
             .disk(&args.out, "page EXRs", texels, BAKE_PAGE_TEXEL_DISK);
