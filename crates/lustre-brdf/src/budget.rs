@@ -19,9 +19,12 @@ pub const BASE_MEMORY: u64 = 64 << 20;
 /// Bytes in a MiB, for messages.
 const MIB: f64 = (1u64 << 20) as f64;
 
-/// A byte count as a person reads it: `512 KB`, `3.4 MB`, `6.9 GB`, `1.2 TB` (powers of 1024,
+/// A byte count as a person reads it: `200 B`, `512 KB`, `3.4 MB`, `6.9 GB`, `1.2 TB` (powers of 1024,
 /// one decimal above 10 units shown as whole numbers).
 pub fn bytes(n: u64) -> String {
+    if n < 1024 {
+        return format!("{n} B");
+    }
     let n = n as f64;
     let (v, unit) = if n >= 1024.0 * 1024.0 * MIB {
         (n / (1024.0 * 1024.0 * MIB), "TB")
@@ -251,6 +254,7 @@ mod tests {
 
     #[test]
     fn byte_counts_print_in_plain_units() {
+        assert_eq!(bytes(200), "200 B");
         assert_eq!(bytes(512 << 10), "512 KB");
         assert_eq!(bytes(3 << 20), "3.0 MB");
         assert_eq!(bytes(7_400_000_000), "6.9 GB");

@@ -585,6 +585,17 @@ fn resolve_model(mut p: Params) -> Result<Box<dyn Bsdf>> {
             let (m, r) = (p.get("metallic", 0.0), p.get("roughness", 0.5));
             Box::new(PbrMetallicRoughness::new(c, m, r)?)
         }
+        other if std::path::Path::new(other).exists() => {
+            // A path the user named: say what is wrong with the file, not the catalog's names.
+            let path = std::path::Path::new(other);
+            return Err(match crate::error::check_input(path) {
+                Err(e) => Error::io(path, e),
+                Ok(()) => Error::format(
+                    path,
+                    "unknown extension (material files end in .binary, .bsdf, .dat, .gonio or .json)",
+                ),
+            });
+        }
         other => {
             return Err(Error::NotFound(format!(
                 "unknown material {other:?}: not a built-in ({}), a model ({}), a published fit \

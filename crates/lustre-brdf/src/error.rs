@@ -217,7 +217,10 @@ pub fn write_atomic(path: &std::path::Path, bytes: &[u8]) -> Result<()> {
     // tempfile's own error names its hidden `.tmpXXXX` file; the user named the folder.
     let mut tmp = tempfile::NamedTempFile::new_in(&dir)
         .map_err(|e| Error::io(&dir, std::io::Error::from(e.kind())))?;
-    tmp.write_all(bytes).map_err(|e| Error::io(path, e))?;
+    // The file itself, not the NamedTempFile, whose errors append the hidden name.
+    tmp.as_file_mut()
+        .write_all(bytes)
+        .map_err(|e| Error::io(path, e))?;
     // tempfile creates 0600 files; an output is an ordinary file (0644 before the umask).
     #[cfg(unix)]
     {

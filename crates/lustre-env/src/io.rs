@@ -58,6 +58,40 @@ fn format_err(path: &Path, problem: impl Into<String>) -> EnvError {
     }
 }
 
+/// The width and height an environment map's header declares, read from its first bytes only
+/// (at most 1 MB), so that a job can count the map's memory before it decodes it. The file is
+/// checked as [`read_map`] checks it (a regular file of at most 4 GB); a header this cannot
+/// read is an error, as it would be for [`read_map`].
+pub fn map_size(path: &Path) -> Result<(usize, usize)> {
+    use std::io::Read;
+    let io = |source| EnvError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    lustre_brdf::error::check_input(path).map_err(io)?;
+    let mut head = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(1 << 20).read_to_end(&mut head))
+        .map_err(io)?;
+    if head.starts_with(&EXR_MAGIC) {
+        let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(&head), false)
+            .map_err(|e| format_err(path, format!("bad OpenEXR header: {e}")))?;
+        let header = meta
+            .headers
+            .first()
+            .ok_or_else(|| format_err(path, "an OpenEXR file without a layer"))?;
+        Ok((header.layer_size.width(), header.layer_size.height()))
+    } else if head.starts_with(HDR_MAGIC) {
+        let decoder = image::codecs::hdr::HdrDecoder::new(Cursor::new(&head))
+            .map_err(|e| format_err(path, format!("bad Radiance header: {e}")))?;
+        let meta = decoder.metadata();
+        Ok((meta.width as usize, meta.height as usize))
+    } else {
+        // read_map says what is wrong with it.
+        read_map(path).map(|m| (m.map.width, m.map.height))
+    }
+}
+
 /// Reads an environment map, `.hdr` or `.exr`, chosen by the file's magic bytes.
 pub fn read_map(path: &Path) -> Result<LoadedMap> {
     let bytes = lustre_brdf::error::read_input(path).map_err(|source| EnvError::Io {

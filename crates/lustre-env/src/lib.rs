@@ -18,7 +18,7 @@ pub mod sun;
 pub use cube::CubeMap;
 pub use equirect::EquirectMap;
 pub use error::{EnvError, Result};
-pub use io::{parse_exr, parse_hdr, read_map, shared_data_dir, LoadedMap};
+pub use io::{map_size, parse_exr, parse_hdr, read_map, shared_data_dir, LoadedMap};
 pub use irradiance::irradiance_map;
 pub use pyramid::{CubePyramid, MipFilter};
 pub use sampling::{Distribution1D, EnvSample, EnvSampler};

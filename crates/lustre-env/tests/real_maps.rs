@@ -1,6 +1,6 @@
 //! Readers and conversions on the real maps of the shared data (`envmaps/`).
 
-use lustre_env::{read_map, shared_data_dir, CubeMap, CubePyramid, EnvError, MipFilter};
+use lustre_env::{map_size, read_map, shared_data_dir, CubeMap, CubePyramid, EnvError, MipFilter};
 use std::path::PathBuf;
 
 fn envmaps() -> PathBuf {
@@ -24,6 +24,9 @@ fn reads_every_hdr_and_exr_map() {
         }
         let m = read_map(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(m.map.width, 2 * m.map.height, "{name}");
+        // The header alone gives the size the decoder finds.
+        let size = map_size(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(size, (m.map.width, m.map.height), "{name}");
         let s = m.map.integral();
         eprintln!(
             "{name}: {}×{}, ∫L = {s:?}, nonfinite {}, negative {}",

@@ -205,6 +205,30 @@ fn bad_input_is_a_clear_error() {
     }
     assert!(lustre_gpu::GBufferTarget::new(&ctx, 0, 4).is_err());
     assert!(lustre_gpu::ShadeTarget::new(&ctx, 4, 0).is_err());
+    // Targets beyond the device's storage limit say both sizes in plain units and what to
+    // lower (16384² at 4×4 samples: 64 GB, more than any device's binding).
+    let limit = ctx.device.limits().max_storage_buffer_binding_size;
+    let e = match lustre_gpu::FrameShadeTarget::new(&ctx, 16384, 16384, 4) {
+        Ok(_) => panic!("a 64 GB target was made"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        e.contains("16384×16384 at 4×4 samples a pixel needs a storage buffer of 64 GB")
+            && e.contains(&format!(
+                "more than this GPU's {}",
+                lustre_brdf::budget::bytes(limit)
+            ))
+            && e.contains("a smaller image or fewer camera rays"),
+        "{e}"
+    );
+    let side = 1 << 14;
+    if u64::from(side) * u64::from(side) * 16 > limit {
+        let e = match lustre_gpu::ShadeTarget::new(&ctx, side, side) {
+            Ok(_) => panic!("a target beyond the limit was made"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains("needs a storage buffer of 4.0 GB"), "{e}");
+    }
 }
 
 /// Sky pixels: the equirect lookup of a real map, rotated and scaled, against `EnvLight::eval`.

@@ -158,14 +158,9 @@ pub(crate) fn write_png_svg<F: Figure>(fig: &F, out_base: &Path) -> Result<PlotF
 }
 
 pub(crate) fn write_png<F: Figure>(fig: &F, path: &Path) -> Result<()> {
+    // Checked before drawing: a missing folder is named before any work.
     let dir = parent_dir(path);
-    let tmp = builder()
-        .suffix(".png")
-        .tempfile_in(&dir)
-        .map_err(|source| PlotError::Io {
-            path: dir.clone(),
-            source,
-        })?;
+    drop(temp_in(&dir, ".png")?);
     let draw_err = |message: String| PlotError::Draw {
         path: path.to_path_buf(),
         message,
@@ -191,8 +186,9 @@ pub(crate) fn write_png<F: Figure>(fig: &F, path: &Path) -> Result<()> {
     } else {
         None
     };
+    let mut rgb = vec![255u8; 3 * w as usize * h as usize];
     {
-        let area = BitMapBackend::new(tmp.path(), (w, h)).into_drawing_area();
+        let area = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
         area.fill(&WHITE).map_err(de).map_err(draw_err)?;
         match &small {
             Some(buf) => {
@@ -210,17 +206,18 @@ pub(crate) fn write_png<F: Figure>(fig: &F, path: &Path) -> Result<()> {
         }
         area.present().map_err(de).map_err(draw_err)?;
     }
-    // The encoder wrote through its own handle; flushing the inode through ours makes the rename
-    // publish complete data.
-    tmp.as_file().sync_all().map_err(|source| PlotError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    tmp.persist(path).map_err(|e| PlotError::Io {
-        path: path.to_path_buf(),
-        source: e.error,
-    })?;
-    Ok(())
+    // Encoded in memory and written as one atomic file, so a write error is the operating
+    // system's, naming the file.
+    let mut png = Vec::new();
+    image::ImageEncoder::write_image(
+        image::codecs::png::PngEncoder::new(&mut png),
+        &rgb,
+        w,
+        h,
+        image::ExtendedColorType::Rgb8,
+    )
+    .map_err(|e| draw_err(format!("encoding the PNG: {e}")))?;
+    write_bytes_atomic(path, &png)
 }
 
 /// Box-filters an RGB image of (w·k)×(h·k) pixels down to w×h.
@@ -277,6 +274,24 @@ fn builder() -> tempfile::Builder<'static, 'static> {
     b
 }
 
+/// A temporary file in `dir`; errors name `dir` (the folder the user gave), not the hidden file.
+fn temp_in(dir: &Path, suffix: &str) -> Result<tempfile::NamedTempFile> {
+    let io = |source| PlotError::Io {
+        path: dir.to_path_buf(),
+        source,
+    };
+    if !dir.is_dir() {
+        return Err(io(std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            "no such folder (the output's folder must exist)",
+        )));
+    }
+    builder()
+        .suffix(suffix)
+        .tempfile_in(dir)
+        .map_err(|e| io(std::io::Error::from(e.kind())))
+}
+
 /// Writes bytes atomically: a temporary file in the same folder, then a rename.
 pub(crate) fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     use std::io::Write;
@@ -285,8 +300,10 @@ pub(crate) fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         path: p.to_path_buf(),
         source,
     };
-    let mut tmp = builder().tempfile_in(&dir).map_err(|e| io(&dir, e))?;
-    tmp.write_all(bytes).map_err(|e| io(path, e))?;
+    let mut tmp = temp_in(&dir, "")?;
+    tmp.as_file_mut()
+        .write_all(bytes)
+        .map_err(|e| io(path, e))?;
     tmp.as_file().sync_all().map_err(|e| io(path, e))?;
     tmp.persist(path).map_err(|e| io(path, e.error))?;
     Ok(())

@@ -97,7 +97,8 @@ fn check_angle(name: &str, deg: f64, lo: f64, hi: f64) -> Result<()> {
         Ok(())
     } else {
         Err(PlotError::Input(format!(
-            "{name} = {deg}° must lie in [{lo}°, {hi}°]"
+            "{name} = {}° must lie in [{lo}°, {hi}°]",
+            lustre_brdf::error::plain_number(deg)
         )))
     }
 }

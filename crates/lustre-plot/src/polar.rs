@@ -136,6 +136,9 @@ impl PolarCurve {
     }
 }
 
+/// The most incidence angles (one panel each) and materials (one curve each) of a polar plot.
+pub const MAX_PANELS: usize = 16;
+
 /// Samples `bsdf` in the plane of incidence for light at (θi, φi = `opts.phi_i_deg`).
 ///
 /// The light direction is ωi = (θi, φi); the outgoing direction at signed angle ψ is
@@ -186,6 +189,13 @@ pub fn polar_plot(
         return Err(PlotError::Input(
             "a polar plot needs at least one BSDF and one θi".into(),
         ));
+    }
+    if thetas_deg.len() > MAX_PANELS || bsdfs.len() > MAX_PANELS {
+        return Err(PlotError::Input(format!(
+            "a polar plot takes at most {MAX_PANELS} θi and {MAX_PANELS} materials (got {} and {})",
+            thetas_deg.len(),
+            bsdfs.len()
+        )));
     }
     for &t in thetas_deg {
         check_angle("θi", t, 0.0, 90.0)?;

@@ -96,11 +96,17 @@ pub const THESIS_SWITCH_RATIO: f64 = 4.0;
 /// Largest number of circles [`concentric_for_budget`] tries.
 pub const MAX_CIRCLES: usize = 64;
 
+/// The smallest lobe roughness a pattern takes (as a GGX material's α).
+pub const MIN_ROUGHNESS: f64 = 1e-6;
+/// The largest lobe roughness a pattern takes (as a GGX material's α).
+pub const MAX_ROUGHNESS: f64 = 10.0;
+
 fn check_roughness(mx: f64, my: f64) -> Result<()> {
     for (name, m) in [("mx", mx), ("my", my)] {
-        if !(m.is_finite() && m > 0.0) {
+        if !(m.is_finite() && (MIN_ROUGHNESS..=MAX_ROUGHNESS).contains(&m)) {
             return Err(ShadeError::Parameter(format!(
-                "pattern: roughness {name} = {m} must be finite and > 0"
+                "pattern roughness {name} = {} must lie in [{MIN_ROUGHNESS:e}, {MAX_ROUGHNESS}]",
+                lustre_brdf::error::plain_number(m)
             )));
         }
     }
@@ -110,7 +116,8 @@ fn check_roughness(mx: f64, my: f64) -> Result<()> {
 fn check_xi0(xi0: f64) -> Result<()> {
     if !(xi0 > 0.0 && xi0 < 1.0) {
         return Err(ShadeError::Parameter(format!(
-            "pattern: threshold xi0 = {xi0} must lie in (0, 1)"
+            "pattern threshold xi0 = {} must lie in (0, 1)",
+            lustre_brdf::error::plain_number(xi0)
         )));
     }
     Ok(())

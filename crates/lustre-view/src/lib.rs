@@ -117,7 +117,7 @@ pub struct ViewArgs {
     /// With --frames: save a screenshot of the window here before closing.
     #[arg(long, requires = "frames")]
     pub screenshot: Option<PathBuf>,
-    /// Unattended runs (--script, --frames) fail after this many seconds.
+    /// Unattended runs (--script, --frames) fail after this many seconds (at most a week).
     #[arg(long, default_value_t = 900.0)]
     pub timeout: f64,
 }

@@ -59,7 +59,10 @@ pub fn run(args: &RenderArgs, req: &FrameRequest) -> anyhow::Result<()> {
             .with_context(|| format!("--set {a}"))?;
     }
     let extra_light = match &args.area_light {
-        Some(path) => Some(area_light(&scene, path, args.area_light_radiance)?),
+        Some(path) => {
+            crate::budget::map(path, "--area-light", args.force)?;
+            Some(area_light(&scene, path, args.area_light_radiance)?)
+        }
         None => None,
     };
     let (w, h) = match args.size.as_deref() {

@@ -36,8 +36,8 @@ pub struct BakeArgs {
     /// Diffuse bounces (1 = direct light only).
     #[arg(long, default_value_t = 4)]
     pub bounces: u32,
-    /// Light-map texel density, texels per metre (scene unit); the atlas builder's default
-    /// when absent.
+    /// Light-map texel density, texels per metre (scene unit); when absent 32, halved while
+    /// the scene's surface would need more than 2²⁴ texels (a scene in millimetres).
     #[arg(long)]
     pub texels_per_metre: Option<f32>,
     /// Seed of the per-texel sample streams.
@@ -207,6 +207,16 @@ fn load_atlas(args: &BakeArgs) -> anyhow::Result<(Scene, LightmapAtlas)> {
                     bail!("--texels-per-metre {d}: must be finite and > 0");
                 }
                 aopts.texels_per_metre = d;
+            } else {
+                let d = density_within(&scene, aopts.texels_per_metre, DEFAULT_MAX_TEXELS);
+                if d < aopts.texels_per_metre {
+                    eprintln!(
+                        "atlas: {d} texels per scene unit, not {}: the scene's surface is large \
+                         in its units (--texels-per-metre chooses)",
+                        aopts.texels_per_metre
+                    );
+                    aopts.texels_per_metre = d;
+                }
             }
             let bar = ProgressBar::new(0);
             bar.set_style(
@@ -385,6 +395,21 @@ pub fn merge_phase(
 /// Runs `lustre bake`.
 pub fn run(args: &BakeArgs) -> anyhow::Result<()> {
     bake(args).map(|_| ())
+}
+
+/// The most light-map texels a bake without `--texels-per-metre` covers the scene's surface
+/// with: 2²⁴ (16 M texels; 192 MB of irradiance).
+pub const DEFAULT_MAX_TEXELS: u64 = 1 << 24;
+
+/// The density `start` texels per scene unit, halved while the scene's surface would need more
+/// than `max_texels` texels (a scene in centimetres or millimetres, a large site).
+pub fn density_within(scene: &Scene, start: f32, max_texels: u64) -> f32 {
+    let area: f64 = scene.meshes.iter().map(|m| m.area()).sum();
+    let mut d = start;
+    while d > f32::MIN_POSITIVE && area * f64::from(d) * f64::from(d) > max_texels as f64 {
+        d /= 2.0;
+    }
+    d
 }
 
 /// `lustre bake`: returns the scene file written (`None` for a shard, which writes none).

@@ -24,6 +24,9 @@ pub struct BandwidthArgs {
     /// The heat map to write (PNG).
     #[arg(long, value_name = "FILE.png")]
     pub out: PathBuf,
+    /// Read a map larger than the available memory anyway (see "Limits and the budget check").
+    #[arg(long)]
+    pub force: bool,
 }
 
 fn percentile(values: &[f64], p: f64) -> f64 {
@@ -37,6 +40,7 @@ pub fn run(args: &BandwidthArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let (what, values, width, height) = match (&args.map, &args.material) {
         (Some(path), None) => {
+            crate::budget::map(path, "--map", args.force)?;
             let loaded = lustre_env::read_map(path).with_context(|| {
                 format!("--map {}: cannot read the environment", path.display())
             })?;

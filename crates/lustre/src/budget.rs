@@ -63,19 +63,43 @@ pub const SCENE_TRIANGLE: u64 = 512;
 /// table of 35 MB peaks at ≈ 60 MB a fit).
 pub const FIT_INPUT: u64 = 32 << 20;
 
-/// The memory of a loaded scene and what the tracer builds on it: triangles and textures.
+/// An environment map, per texel: the decoder's image and the f32 RGB map, the sampling
+/// tables and the filtered copies built from it; measured 51 B (`render --env`) and 59 B
+/// (`bandwidth --map`) at 8192×4096, counted as 64 B.
+pub const ENV_MAP_TEXEL: u64 = 64;
+
+/// Checks the memory of the environment map at `path` from its header, before it is decoded
+/// (a 67 MB file may declare 65536×32768 texels: 137 GB decoded).
+pub fn map(path: &std::path::Path, option: &str, force: bool) -> anyhow::Result<()> {
+    let (w, h) = lustre_env::map_size(path)
+        .map_err(|e| anyhow::anyhow!("{option} {}: {e}", path.display()))?;
+    let need = Budget::new(
+        format!("reading the environment map {} ({w}×{h})", path.display()),
+        format!("give {option} a smaller map"),
+    )
+    .memory("the map", (w as u64) * (h as u64), ENV_MAP_TEXEL);
+    check(&need, force)
+}
+
+/// The memory of a loaded scene and what the tracer builds on it: triangles, textures and its
+/// environment map.
 pub fn scene(b: Budget, scene: &Scene) -> Budget {
     let texels: u64 = scene
         .textures
         .iter()
         .map(|t| u64::from(t.width) * u64::from(t.height) * u64::from(t.channels) * 4)
         .sum();
+    let env_texels = match scene.environment.as_ref().map(|e| &e.source) {
+        Some(lustre_scene::EnvironmentSource::Map { map, .. }) => (map.width * map.height) as u64,
+        _ => 0,
+    };
     b.memory(
         "scene and BVH",
         scene.triangle_count() as u64,
         SCENE_TRIANGLE,
     )
     .memory("textures", texels, 1)
+    .memory("environment map", env_texels, ENV_MAP_TEXEL)
 }
 
 /// Parses a byte count: a whole number with an optional K, M, G or T suffix (powers of 1024).
@@ -124,6 +148,13 @@ pub fn check(b: &Budget, force: bool) -> anyhow::Result<()> {
             b.summary()
         );
     }
+    Ok(())
+}
+
+/// Refuses `b` when it is over what this machine offers, and prints nothing otherwise: an early
+/// check of part of a job, before work whose own check follows.
+pub fn refuse(b: &Budget) -> anyhow::Result<()> {
+    b.check_against(&machine(b)?, false)?;
     Ok(())
 }
 

@@ -103,6 +103,7 @@ pub fn run(args: &CompareArgs) -> anyhow::Result<()> {
         EnvSetup::spots(args.face_size, args.seed).context("building the spot map")?
     } else {
         let path = PathBuf::from(&args.map);
+        crate::budget::map(&path, "--map", args.force)?;
         let loaded = lustre_env::read_map(&path)
             .with_context(|| format!("--map {}: cannot read the environment", path.display()))?;
         if let Some(w) = loaded.sanitized_warning(&path) {

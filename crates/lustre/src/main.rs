@@ -8,6 +8,7 @@ mod compare_cmd;
 mod demo_cmd;
 mod fit_cmd;
 mod merl_cmd;
+mod output;
 mod plot_cmd;
 mod reference_cmd;
 mod render_cmd;
@@ -155,15 +156,15 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         std::env::set_var("LUSTRE_DATA", d);
     }
     match cli.command {
-        Command::Plot(args) => plot_cmd::run(&args),
-        Command::Fit(args) => fit_cmd::run(&args),
+        Command::Plot(args) => output::in_folder(&args.out, || plot_cmd::run(&args)),
+        Command::Fit(args) => output::in_folder(&args.out, || fit_cmd::run(&args)),
         Command::Merl(args) => merl_cmd::run(&args),
         Command::Demo(args) => demo_cmd::run(&args),
-        Command::Compare(args) => compare_cmd::run(&args),
+        Command::Compare(args) => output::in_folder(&args.out, || compare_cmd::run(&args)),
         Command::Reference(args) => reference_cmd::run(&args),
-        Command::Render(args) => render_cmd::run(&args),
+        Command::Render(args) => output::in_folder(&args.out, || render_cmd::run(&args)),
         Command::View(args) => lustre_view::run(&args),
-        Command::Bake(args) => bake_cmd::run(&args),
+        Command::Bake(args) => output::in_folder(&args.out, || bake_cmd::run(&args)),
         Command::Bandwidth(args) => bandwidth_cmd::run(&args),
         Command::Scene(args) => scene_cmd::run(&args),
         Command::Score(args) => score_cmd::run(&args),

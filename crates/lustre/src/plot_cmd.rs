@@ -60,7 +60,7 @@ pub struct PlotArgs {
     /// Which figures to draw.
     #[arg(long, value_enum, default_value_t = PlotKind::All)]
     pub kind: PlotKind,
-    /// Incidence angles θi (degrees) of the polar panels.
+    /// Incidence angles θi (degrees) of the polar panels, at most 16.
     #[arg(
         long = "theta-i",
         value_delimiter = ',',
@@ -107,10 +107,10 @@ pub struct PlotArgs {
     /// Draw a regular half-vector sample pattern of one lobe instead of material plots.
     #[arg(long, value_enum)]
     pub pattern: Option<PlotPattern>,
-    /// Pattern lobe roughness along the tangent.
+    /// Pattern lobe roughness along the tangent (1e-6 to 10).
     #[arg(long, default_value_t = 0.2)]
     pub mx: f64,
-    /// Pattern lobe roughness along the bitangent.
+    /// Pattern lobe roughness along the bitangent (1e-6 to 10).
     #[arg(long, default_value_t = 0.075)]
     pub my: f64,
     /// Pattern sample budget (at most 4096, as `lustre render --samples`).
@@ -155,16 +155,12 @@ pub fn run(args: &PlotArgs) -> Result<()> {
         .map(|s| Ok::<_, anyhow::Error>((s.to_string(), resolve(s, args.strict)?)))
         .transpose()?;
     let mut written = Vec::new();
-    let existed = args.out.exists();
     let result = draw(args, &materials, compare.as_ref(), &mut written);
     if result.is_err() {
-        // No half-finished set of figures: remove what this run wrote before the failure, and
-        // the folder when this run made it (remove_dir leaves a folder that is not empty).
+        // No half-finished set of figures: remove what this run wrote before the failure (the
+        // folder goes too when this run made it: `crate::output::in_folder`).
         for p in &written {
             let _ = std::fs::remove_file(p);
-        }
-        if !existed {
-            let _ = std::fs::remove_dir(&args.out);
         }
         return result;
     }
@@ -307,6 +303,15 @@ fn run_pattern(args: &PlotArgs, choice: PlotPattern) -> Result<()> {
     let (mx, my) = (args.mx, args.my);
     if args.budget == 0 {
         bail!("--budget must be at least 1");
+    }
+    for (name, m) in [("--mx", mx), ("--my", my)] {
+        lustre_brdf::error::check_range(name, m, pattern::MIN_ROUGHNESS, pattern::MAX_ROUGHNESS)?;
+    }
+    if !(args.xi0 > 0.0 && args.xi0 < 1.0) {
+        bail!(
+            "--xi0 {}: must lie in (0, 1)",
+            lustre_brdf::error::plain_number(args.xi0)
+        );
     }
     let mut panels = Vec::new();
     if matches!(choice, PlotPattern::Concentric | PlotPattern::All) {

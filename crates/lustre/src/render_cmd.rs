@@ -189,6 +189,9 @@ fn load_baked(path: &Path) -> anyhow::Result<Baked> {
 
 /// The environment of `--env`, its sanitizing warning (non-finite or negative texels) printed.
 pub fn env_arg(args: &RenderArgs) -> anyhow::Result<Option<Environment>> {
+    if let Some(p) = &args.env {
+        crate::budget::map(p, "--env", args.force)?;
+    }
     Ok(
         match args.env.as_deref().map(read_environment).transpose()? {
             Some((env, warning)) => {
@@ -220,7 +223,8 @@ pub fn check_side(w: u32, h: u32) -> anyhow::Result<()> {
 /// A scene file with light maps as it is; any other scene baked into `out/bake` first (reused
 /// while the scene and the bake's options are unchanged: a fingerprint in
 /// `out/bake/source.txt`).
-fn load_or_bake(path: &Path, out: &Path, force: bool) -> anyhow::Result<Baked> {
+fn load_or_bake(path: &Path, render: &RenderArgs, k: u32) -> anyhow::Result<Baked> {
+    let (out, force) = (&render.out, render.force);
     let scene = Scene::load(path).with_context(|| format!("loading {}", path.display()))?;
     if scene.lightmap.is_some() {
         return load_baked(path);
@@ -253,6 +257,12 @@ fn load_or_bake(path: &Path, out: &Path, force: bool) -> anyhow::Result<Baked> {
         );
         return load_baked(&toml);
     }
+    // A frame the machine cannot hold is refused before the bake; the full check (all frames
+    // of a path, the baked pages) follows it.
+    if !force {
+        let size = frame_size(render, &scene)?;
+        crate::budget::refuse(&frame_budget(render, &scene, 0, 1, size, k))?;
+    }
     // Tiles of another scene or other options must not be resumed.
     let tiles = dir.join("tiles");
     if tiles.exists() && !std::fs::read_to_string(&stamp).is_ok_and(|k| k == key) {
@@ -280,13 +290,7 @@ fn load_or_bake(path: &Path, out: &Path, force: bool) -> anyhow::Result<Baked> {
 /// the scene's surface would need more than 2²⁰ texels at 16 (a scene in centimetres, a large
 /// building), rounded down to a power of two.
 fn first_use_density(scene: &Scene) -> f32 {
-    let area: f64 = scene.meshes.iter().map(|m| m.area()).sum();
-    let fit = (f64::from(1u32 << 20) / area.max(1e-12)).sqrt();
-    if fit >= 16.0 {
-        16.0
-    } else {
-        (2f64.powf(fit.log2().floor())) as f32
-    }
+    crate::bake_cmd::density_within(scene, 16.0, 1 << 20)
 }
 
 /// A fingerprint of `scene` as loaded from `path` and of the bake's `options`: the file's
@@ -389,20 +393,58 @@ pub fn request(args: &RenderArgs) -> anyhow::Result<FrameRequest> {
     Ok(req)
 }
 
-/// Runs `lustre render`; a failed run leaves no empty output folder behind (a folder it made
-/// keeps only what can be reused, e.g. the light maps of OUT/bake).
-pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
-    let existed = args.out.exists();
-    let result = render_frames(args);
-    if result.is_err() && !existed {
-        // Removes the folder only when it is empty.
-        let _ = std::fs::remove_dir(&args.out);
+/// The memory and disk of `frames` frames of `w`×`h` (k×k G-buffer samples a pixel on the
+/// GPU) of `scene` with `page_texels` light-map texels.
+fn frame_budget(
+    args: &RenderArgs,
+    scene: &Scene,
+    page_texels: u64,
+    frames: u64,
+    (w, h): (u32, u32),
+    k: u32,
+) -> lustre_brdf::budget::Budget {
+    let pixels = u64::from(w) * u64::from(h);
+    let probes_n =
+        (scene.probes.len() + scene.meshes.iter().filter(|m| m.hints.probe).count()) as u64;
+    let face = args.probe_size as u64;
+    let k = u64::from(k);
+    let mut need = crate::budget::scene(
+        lustre_brdf::budget::Budget::new(
+            format!("lustre render at {w}×{h}"),
+            "lower --size (or --probe-size)",
+        ),
+        scene,
+    )
+    .memory("light-map pages", page_texels, 12)
+    // Each probe: six faces of colour and distance with their MIP pyramid (4/3), 16 B a texel.
+    .memory("probes", probes_n * 6 * face * face * 4 / 3, 16)
+    .memory("frame buffers", pixels, crate::budget::RENDER_PIXEL);
+    if args.device != Device::Cpu {
+        need = need
+            .memory("GPU device", 1, crate::budget::GPU_DEVICE)
+            .memory("G-buffer", pixels * k * k, crate::budget::GBUFFER_SAMPLE);
     }
-    result
+    need.disk(
+        &args.out,
+        "frames",
+        pixels * frames,
+        crate::budget::RENDER_PIXEL_DISK,
+    )
 }
 
-/// `lustre render`'s work: load (or bake), check the budget, capture, render, write.
-fn render_frames(args: &RenderArgs) -> anyhow::Result<()> {
+/// The frame size: `--size`, else the scene's film.
+fn frame_size(args: &RenderArgs, scene: &Scene) -> anyhow::Result<(u32, u32)> {
+    let (w, h) = match args.size.as_deref() {
+        Some(s) => crate::reference_cmd::parse_size(s)?,
+        None => (scene.film.width, scene.film.height),
+    };
+    check_side(w, h)?;
+    Ok((w, h))
+}
+
+/// Runs `lustre render`: load (or bake), check the budget, capture, render, write (a failed run
+/// leaves no empty folder: `crate::output::in_folder`).
+pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let mut st = Stages {
         times: vec![],
@@ -419,7 +461,7 @@ fn render_frames(args: &RenderArgs) -> anyhow::Result<()> {
     probe_opts.validate()?;
     let environment = env_arg(args)?;
     let (mut scene, atlas, pages) = match (&args.scene, &args.material) {
-        (Some(path), _) => load_or_bake(path, &args.out, args.force)?,
+        (Some(path), _) => load_or_bake(path, args, req.supersampling())?,
         (None, Some(spec)) => preview(spec, environment)?,
         (None, None) => builtin(&args.out, environment)?,
     };
@@ -439,11 +481,7 @@ fn render_frames(args: &RenderArgs) -> anyhow::Result<()> {
         (None, Some(spec)) => format!("the preview of {spec}"),
         (None, None) => "the built-in room".to_string(),
     };
-    let (w, h) = match args.size.as_deref() {
-        Some(s) => crate::reference_cmd::parse_size(s)?,
-        None => (scene.film.width, scene.film.height),
-    };
-    check_side(w, h)?;
+    let (w, h) = frame_size(args, &scene)?;
     check_reference(args, w, h)?;
     let cameras = match &args.path {
         None => vec![(
@@ -452,33 +490,14 @@ fn render_frames(args: &RenderArgs) -> anyhow::Result<()> {
         )],
         Some(p) => path_cameras(&scene, p, args.fps, w, h)?,
     };
-    let pixels = u64::from(w) * u64::from(h);
-    let probes_n =
-        (scene.probes.len() + scene.meshes.iter().filter(|m| m.hints.probe).count()) as u64;
-    let face = args.probe_size as u64;
     let page_texels: u64 = pages.iter().map(|p| p.len() as u64).sum();
-    let k = u64::from(req.supersampling());
-    let mut need = crate::budget::scene(
-        lustre_brdf::budget::Budget::new(
-            format!("lustre render at {w}×{h}"),
-            "lower --size (or --probe-size)",
-        ),
+    let need = frame_budget(
+        args,
         &scene,
-    )
-    .memory("light-map pages", page_texels, 12)
-    // Each probe: six faces of colour and distance with their MIP pyramid (4/3), 16 B a texel.
-    .memory("probes", probes_n * 6 * face * face * 4 / 3, 16)
-    .memory("frame buffers", pixels, crate::budget::RENDER_PIXEL);
-    if args.device != Device::Cpu {
-        need = need
-            .memory("GPU device", 1, crate::budget::GPU_DEVICE)
-            .memory("G-buffer", pixels * k * k, crate::budget::GBUFFER_SAMPLE);
-    }
-    let need = need.disk(
-        &args.out,
-        "frames",
-        pixels * cameras.len() as u64,
-        crate::budget::RENDER_PIXEL_DISK,
+        page_texels,
+        cameras.len() as u64,
+        (w, h),
+        req.supersampling(),
     );
     crate::budget::check(&need, args.force)?;
     st.lap("load, light maps");

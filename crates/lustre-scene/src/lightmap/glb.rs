@@ -80,13 +80,6 @@ impl Builder {
     }
 }
 
-fn io(path: &Path) -> impl Fn(std::io::Error) -> SceneError + '_ {
-    move |e| SceneError::Io {
-        path: path.to_path_buf(),
-        source: e,
-    }
-}
-
 /// Writes atomically to `path` a binary glTF with every light-mapped mesh of `scene` (world
 /// space; POSITION, NORMAL, TANGENT, TEXCOORD_0 where present, TEXCOORD_1 = the light-map UVs;
 /// node and mesh named after the mesh; page in the node's extras; see the module documentation).
@@ -202,30 +195,7 @@ pub fn write_atlas_glb(scene: &Scene, atlas: &LightmapAtlas, path: &Path) -> Res
         out.extend_from_slice(b"BIN\0");
         out.extend_from_slice(&bin);
     }
-    write_atomic(path, &out)
-}
-
-/// Writes `bytes` to `path` through a temporary file in the same folder, renamed into place.
-pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    use std::io::Write;
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    // tempfile's own error names its hidden `.tmpXXXX` file; name the folder instead.
-    let mut tmp = tempfile::NamedTempFile::new_in(&dir)
-        .map_err(|e| io(&dir)(std::io::Error::from(e.kind())))?;
-    tmp.write_all(bytes).map_err(io(path))?;
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        tmp.as_file()
-            .set_permissions(std::fs::Permissions::from_mode(0o644))
-            .map_err(io(path))?;
-    }
-    tmp.as_file().sync_all().map_err(io(path))?;
-    tmp.persist(path).map_err(|e| io(path)(e.error))?;
-    Ok(())
+    crate::scene_file::write_atomic(path, &out)
 }
 
 /// The JSON chunk of a GLB (or the text of a `.gltf`).

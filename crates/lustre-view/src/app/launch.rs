@@ -27,6 +27,9 @@ fn parse_size(s: &str) -> anyhow::Result<(u32, u32)> {
     Ok((w, h))
 }
 
+/// The longest `--timeout` of an unattended run: a week.
+const MAX_TIMEOUT_S: f64 = 7.0 * 86400.0;
+
 /// Runs the viewer (see the crate docs).
 pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
     let size = parse_size(&args.size)?;
@@ -48,13 +51,17 @@ pub fn run(args: &ViewArgs) -> anyhow::Result<()> {
     }
     .validate()
     .map_err(|e| anyhow!("--probe-size: {e}"))?;
-    if !(args.timeout.is_finite() && args.timeout > 0.0) {
-        bail!("--timeout {}: must be positive", args.timeout);
+    if !(args.timeout > 0.0 && args.timeout <= MAX_TIMEOUT_S) {
+        bail!(
+            "--timeout {}: must be positive and at most {MAX_TIMEOUT_S} s (a week)",
+            lustre_brdf::error::plain_number(args.timeout)
+        );
     }
     let commands = match &args.script {
         Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .with_context(|| format!("reading the script {}", p.display()))?;
+            let bytes = lustre_brdf::error::read_file(p).context("--script")?;
+            let text = String::from_utf8(bytes)
+                .map_err(|_| anyhow!("--script {}: not UTF-8 text", p.display()))?;
             script::parse(&text).map_err(|e| anyhow!("{}: {e}", p.display()))?
         }
         None => vec![],

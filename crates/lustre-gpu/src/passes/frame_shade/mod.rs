@@ -447,10 +447,21 @@ impl FrameShadeTarget {
         let bytes = u64::from(w) * u64::from(h) * 16;
         let accum = bytes * u64::from(k) * u64::from(k);
         let limit = ctx.device.limits().max_storage_buffer_binding_size;
-        if w == 0 || h == 0 || k == 0 || accum > limit {
+        if w == 0 || h == 0 || k == 0 {
             return Err(invalid(
                 "image size",
-                format!("{w}×{h} at {k}×{k} must be non-empty and fit {limit} bytes of storage"),
+                format!("{w}×{h} at {k}×{k} samples is empty"),
+            ));
+        }
+        if accum > limit {
+            return Err(invalid(
+                "image size",
+                format!(
+                    "{w}×{h} at {k}×{k} samples a pixel needs a storage buffer of {}, more than \
+                     this GPU's {}: render a smaller image or fewer camera rays a pixel",
+                    lustre_brdf::budget::bytes(accum),
+                    lustre_brdf::budget::bytes(limit)
+                ),
             ));
         }
         let buffer = |label: &str, size: u64| {

@@ -576,10 +576,18 @@ impl ShadeTarget {
     pub fn new(ctx: &GpuContext, w: u32, h: u32) -> Result<Self> {
         let bytes = u64::from(w) * u64::from(h) * 16;
         let limit = ctx.device.limits().max_storage_buffer_binding_size;
-        if w == 0 || h == 0 || bytes > limit {
+        if w == 0 || h == 0 {
+            return Err(invalid("image size", format!("{w}×{h} is empty")));
+        }
+        if bytes > limit {
             return Err(invalid(
                 "image size",
-                format!("{w}×{h} must be non-empty and fit {limit} bytes of storage"),
+                format!(
+                    "{w}×{h} needs a storage buffer of {}, more than this GPU's {}: render a \
+                     smaller image",
+                    lustre_brdf::budget::bytes(bytes),
+                    lustre_brdf::budget::bytes(limit)
+                ),
             ));
         }
         let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
