@@ -49,6 +49,19 @@ pub struct MeasuredData {
 }
 
 impl MeasuredData {
+    /// Any BSDF as fitting data, named `name`: reflection (and transmission when it
+    /// transmits), no coverage mask.
+    pub fn from_bsdf(name: &str, bsdf: Box<dyn Bsdf>) -> Self {
+        MeasuredData {
+            name: name.to_string(),
+            source: name.to_string(),
+            transmission: bsdf.flags().transmission,
+            bsdf,
+            coverage: None,
+            missing: 0,
+        }
+    }
+
     /// Whether the pair was measured (always true without a coverage mask).
     pub fn covers(&self, wi: DVec3, wo: DVec3) -> bool {
         self.coverage.as_ref().is_none_or(|c| c.covers(wi, wo))

@@ -5,14 +5,20 @@
 //! - [`kurt`]: the hierarchical brute-force search of Kurt et al. lobes with the L1
 //!   transfer-probability metric (000 §3.4.1, Eq. 3.7), multi-lobe and transmission.
 //! - [`metrics`]: Ngan's normalized L2 (004 §V.5.3), the L1 of Eq. 3.7 and albedos.
+//! - [`gltf`]: the glTF 2.0 metallic-roughness material fitted to data, for export;
+//!   [`mitsuba`]: Mitsuba 3's rough conductor and rough plastic fitted alike; [`linear`]: the
+//!   closed-form colour of models linear in it.
 //! - [`data`]: measured inputs (MERL, NBRDF, RGL, goniometric) as fitting data.
 //! - [`batch`]: the batch runner behind `lustre fit` (material JSON, CSV, resume).
 
 pub mod batch;
 pub mod ct;
 pub mod data;
+pub mod gltf;
 pub mod kurt;
+pub mod linear;
 pub mod metrics;
+pub mod mitsuba;
 
 use serde::{Deserialize, Serialize};
 

@@ -41,6 +41,8 @@ pub mod camera;
 pub mod camera_path_file;
 pub mod environment;
 pub mod error;
+pub mod export;
+pub mod glb_write;
 pub mod gltf_io;
 pub mod lightmap;
 pub mod material;

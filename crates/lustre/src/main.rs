@@ -6,6 +6,7 @@ mod bandwidth_cmd;
 mod budget;
 mod compare_cmd;
 mod demo_cmd;
+mod export_cmd;
 mod fit_cmd;
 mod merl_cmd;
 mod output;
@@ -66,6 +67,9 @@ enum Command {
     /// Local bandwidth maps (004 Fig. IV.6 and IV.8): an environment map's angular bandwidth or
     /// a material's BRDF bandwidth table, as a log-scale heat map.
     Bandwidth(bandwidth_cmd::BandwidthArgs),
+    /// Take results to other tools: a material as glTF 2.0 (the metallic-roughness model fitted
+    /// to it, with its error, on a sample sphere).
+    Export(export_cmd::ExportArgs),
     /// List built-in materials, analytic models, published fits, the 100 MERL materials and
     /// where data comes from.
     List,
@@ -168,6 +172,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Bandwidth(args) => bandwidth_cmd::run(&args),
         Command::Scene(args) => scene_cmd::run(&args),
         Command::Score(args) => score_cmd::run(&args),
+        Command::Export(args) => export_cmd::run(&args),
         Command::List => list(),
         Command::Info { spec, strict } => info(&spec, strict),
     }

@@ -3,82 +3,19 @@
 //!
 //! One node and one mesh (one triangle primitive, no material) per light-mapped scene mesh, in
 //! scene order, both named after the mesh; attributes POSITION, NORMAL, TANGENT and TEXCOORD_0
-//! where the mesh has them, TEXCOORD_1 always, `u32` indices. Extras:
+//! where the mesh has them, TEXCOORD_1 always (and as TEXCOORD_0 of a mesh without its own
+//! UVs: glTF numbers texture coordinates without gaps), `u32` indices. Extras:
 //! - `asset.extras.lustre_lightmap`: `{ width, height, pages, gutter, texels_per_metre, source,
 //!   scene_meshes }` (the atlas, and the number of meshes of the scene it was made for);
-//! - each node's (and mesh's) `extras`: `{ lightmap_page, scene_mesh }` (the page, and the mesh's
-//!   index in the scene).
+//! - each node's (and mesh's) `extras`: `{ lightmap_page, scene_mesh, uv0 }` (the page, the mesh's
+//!   index in the scene, and whether TEXCOORD_0 is the mesh's own).
 
 use super::{AtlasSource, LightmapAtlas};
 use crate::error::{Result, SceneError};
+use crate::glb_write::Builder;
 use crate::Scene;
 use serde_json::{json, Value};
 use std::path::Path;
-
-const ARRAY_BUFFER: u32 = 34962;
-const ELEMENT_ARRAY_BUFFER: u32 = 34963;
-const FLOAT: u32 = 5126;
-const UNSIGNED_INT: u32 = 5125;
-
-/// Buffer views and accessors under construction.
-#[derive(Default)]
-struct Builder {
-    bin: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
-}
-
-impl Builder {
-    /// Appends `data` (f32 or u32 words) as a view and an accessor; returns the accessor index.
-    fn push(
-        &mut self,
-        words: &[[u8; 4]],
-        count: usize,
-        kind: &str,
-        component: u32,
-        target: u32,
-        bounds: Option<(Vec<f32>, Vec<f32>)>,
-    ) -> usize {
-        let offset = self.bin.len();
-        for w in words {
-            self.bin.extend_from_slice(w);
-        }
-        self.views.push(json!({
-            "buffer": 0,
-            "byteOffset": offset,
-            "byteLength": words.len() * 4,
-            "target": target,
-        }));
-        let mut acc = json!({
-            "bufferView": self.views.len() - 1,
-            "componentType": component,
-            "count": count,
-            "type": kind,
-        });
-        if let Some((lo, hi)) = bounds {
-            acc["min"] = json!(lo);
-            acc["max"] = json!(hi);
-        }
-        self.accessors.push(acc);
-        self.accessors.len() - 1
-    }
-
-    fn floats<const N: usize>(&mut self, data: &[[f32; N]], kind: &str, bounds: bool) -> usize {
-        let words: Vec<[u8; 4]> = data.iter().flatten().map(|f| f.to_le_bytes()).collect();
-        let b = bounds.then(|| {
-            let mut lo = vec![f32::INFINITY; N];
-            let mut hi = vec![f32::NEG_INFINITY; N];
-            for v in data {
-                for k in 0..N {
-                    lo[k] = lo[k].min(v[k]);
-                    hi[k] = hi[k].max(v[k]);
-                }
-            }
-            (lo, hi)
-        });
-        self.push(&words, data.len(), kind, FLOAT, ARRAY_BUFFER, b)
-    }
-}
 
 /// Writes atomically to `path` a binary glTF with every light-mapped mesh of `scene` (world
 /// space; POSITION, NORMAL, TANGENT, TEXCOORD_0 where present, TEXCOORD_1 = the light-map UVs;
@@ -121,23 +58,15 @@ pub fn write_atlas_glb(scene: &Scene, atlas: &LightmapAtlas, path: &Path) -> Res
             attributes.insert("TEXCOORD_0".into(), json!(b.floats(&u, "VEC2", false)));
         }
         let u: Vec<[f32; 2]> = uv1.iter().map(|v| v.to_array()).collect();
-        attributes.insert("TEXCOORD_1".into(), json!(b.floats(&u, "VEC2", false)));
-        let idx: Vec<[u8; 4]> = m
-            .indices
-            .iter()
-            .flatten()
-            .map(|i| i.to_le_bytes())
-            .collect();
-        let n_idx = idx.len();
-        let indices = b.push(
-            &idx,
-            n_idx,
-            "SCALAR",
-            UNSIGNED_INT,
-            ELEMENT_ARRAY_BUFFER,
-            None,
-        );
-        let extras = json!({ "lightmap_page": page, "scene_mesh": i });
+        let lightmap_uv = b.floats(&u, "VEC2", false);
+        attributes.insert("TEXCOORD_1".into(), json!(lightmap_uv));
+        // glTF numbers TEXCOORD_n from 0 without gaps: a mesh without its own UVs gets the
+        // light-map UVs as TEXCOORD_0 too (the same accessor), marked `uv0: false`.
+        if m.uv0.is_none() {
+            attributes.insert("TEXCOORD_0".into(), json!(lightmap_uv));
+        }
+        let indices = b.indices(&m.indices);
+        let extras = json!({ "lightmap_page": page, "scene_mesh": i, "uv0": m.uv0.is_some() });
         meshes.push(json!({
             "name": m.name,
             "primitives": [{ "attributes": attributes, "indices": indices, "mode": 4 }],
@@ -149,7 +78,7 @@ pub fn write_atlas_glb(scene: &Scene, atlas: &LightmapAtlas, path: &Path) -> Res
         AtlasSource::Texcoord1 => "texcoord1".to_string(),
         AtlasSource::Generated { unwrapper } => unwrapper.clone(),
     };
-    let mut doc = json!({
+    let doc = json!({
         "asset": {
             "version": "2.0",
             "generator": "lustre light-map atlas",
@@ -170,31 +99,7 @@ pub fn write_atlas_glb(scene: &Scene, atlas: &LightmapAtlas, path: &Path) -> Res
         "accessors": b.accessors,
         "bufferViews": b.views,
     });
-    if !b.bin.is_empty() {
-        doc["buffers"] = json!([{ "byteLength": b.bin.len() }]);
-    }
-    let mut json_bytes = serde_json::to_vec(&doc).map_err(|e| fmt(format!("JSON: {e}")))?;
-    while json_bytes.len() % 4 != 0 {
-        json_bytes.push(b' ');
-    }
-    let mut bin = b.bin;
-    while bin.len() % 4 != 0 {
-        bin.push(0);
-    }
-    let total = 12 + 8 + json_bytes.len() + if bin.is_empty() { 0 } else { 8 + bin.len() };
-    let total = u32::try_from(total).map_err(|_| fmt(format!("{total} bytes exceed a GLB")))?;
-    let mut out = Vec::with_capacity(total as usize);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&total.to_le_bytes());
-    out.extend_from_slice(&(json_bytes.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&json_bytes);
-    if !bin.is_empty() {
-        out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&bin);
-    }
+    let out = crate::glb_write::glb_bytes(path, &doc, b.bin)?;
     crate::scene_file::write_atomic(path, &out)
 }
 
@@ -321,7 +226,9 @@ pub fn read_atlas_glb(path: &Path, scene: &mut Scene) -> Result<LightmapAtlas> {
         target.positions = m.positions;
         target.normals = m.normals;
         target.tangents = m.tangents;
-        target.uv0 = m.uv0;
+        // `uv0: false`: TEXCOORD_0 repeats the light-map UVs (the writer's note above).
+        let own_uv0 = extras.and_then(|e| e.get("uv0")).and_then(Value::as_bool);
+        target.uv0 = if own_uv0 == Some(false) { None } else { m.uv0 };
         target.uv1 = m.uv1;
         target.indices = m.indices;
         mesh_page[idx] = Some(page);

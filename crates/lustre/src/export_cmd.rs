@@ -1,0 +1,292 @@
+//! `lustre export`: lustre's results for other tools. `export material SPEC --to gltf --out
+//! M.glb` fits the glTF 2.0 metallic-roughness model to any material (a measured file, a
+//! neural BRDF, a fit JSON, a catalog spec; `lustre_fit::gltf`), prints its error beside that of
+//! lustre's own GGX fit of the same data, and writes a sample sphere carrying it
+//! (`lustre_scene::export::material`); `--to mitsuba --out M.xml` fits Mitsuba 3's rough
+//! conductor and rough plastic (`lustre_fit::mitsuba`) and writes the better one, or an RGL
+//! file as Mitsuba's `measured` (the XML: `lustre_fit::mitsuba`).
+
+use anyhow::Context;
+use indicatif::{ProgressBar, ProgressStyle};
+use lustre_fit::ct::{fit_masked, CtDistribution, CtOptions};
+use lustre_fit::data::{load_with, LoadOptions};
+use lustre_fit::metrics::evaluate_masked;
+use lustre_fit::mitsuba::{measured_xml, MitsubaBsdf};
+use lustre_scene::export::material::{write_sphere_glb, GltfMaterial};
+use serde_json::json;
+use std::path::PathBuf;
+
+/// Arguments of `lustre export`.
+#[derive(clap::Args, Debug)]
+pub struct ExportArgs {
+    #[command(subcommand)]
+    pub command: ExportCommand,
+}
+
+/// The `lustre export` subcommands.
+#[derive(clap::Subcommand, Debug)]
+pub enum ExportCommand {
+    /// A material as glTF 2.0 (the metallic-roughness model fitted to it by Ngan L2, on a
+    /// sample sphere with normals, tangents and texture coordinates, as a .glb) or as a Mitsuba
+    /// 3 BSDF (rough conductor or rough plastic, whichever fits better; an RGL file as
+    /// `measured`); prints what the export loses (the fit's error beside lustre's own GGX fit
+    /// of the same data).
+    Material(MaterialArgs),
+}
+
+/// The formats `lustre export material` writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MaterialFormat {
+    /// glTF 2.0 binary (.glb): `pbrMetallicRoughness` on a sample sphere.
+    Gltf,
+    /// A Mitsuba 3 XML file with one BSDF: `roughconductor` or `roughplastic`, whichever fits
+    /// better, or `measured` for an RGL .bsdf file (copied beside it).
+    Mitsuba,
+}
+
+/// Arguments of `lustre export material`.
+#[derive(clap::Args, Debug)]
+pub struct MaterialArgs {
+    /// The material: a measured file (.binary, .bsdf, .dat, .gonio), a fit JSON, `nbrdf:NAME`,
+    /// a published fit (`sgd:NAME`) or any model spec (see `lustre list`).
+    #[arg(value_name = "SPEC")]
+    pub spec: String,
+    /// The format to write.
+    #[arg(long, value_enum, default_value_t = MaterialFormat::Gltf)]
+    pub to: MaterialFormat,
+    /// The file to write (.glb for glTF, .xml for Mitsuba; replaced atomically when it exists).
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Refuse MERL tables with unmeasured (negative) bins instead of masking them.
+    #[arg(long)]
+    pub strict: bool,
+}
+
+/// Runs `lustre export`.
+pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
+    match &args.command {
+        ExportCommand::Material(m) => material(m),
+    }
+}
+
+/// Three channels as `[a, b, c]` with four decimals.
+fn rgb(v: &[f64; 3]) -> String {
+    format!("[{:.4}, {:.4}, {:.4}]", v[0], v[1], v[2])
+}
+
+fn material(args: &MaterialArgs) -> anyhow::Result<()> {
+    let ext = args
+        .out
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let want = match args.to {
+        MaterialFormat::Gltf => "glb",
+        MaterialFormat::Mitsuba => "xml",
+    };
+    if ext.as_deref() != Some(want) {
+        anyhow::bail!(
+            "--out {}: a {} export is written as .{want}; name it so",
+            args.out.display(),
+            match args.to {
+                MaterialFormat::Gltf => "glTF (binary glTF)",
+                MaterialFormat::Mitsuba => "Mitsuba (XML)",
+            }
+        );
+    }
+    let data = load_with(
+        &args.spec,
+        &LoadOptions {
+            strict: args.strict,
+        },
+    )
+    .with_context(|| format!("cannot load {:?}", args.spec))?;
+    let rgl = rgl_file(&args.spec);
+    if args.to == MaterialFormat::Mitsuba {
+        if let Some(file) = rgl {
+            return measured(args, &data.name, &file);
+        }
+    }
+    let spinner = ProgressBar::new_spinner();
+    spinner.set_style(
+        ProgressStyle::with_template("{spinner} {msg} {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    spinner.enable_steady_tick(std::time::Duration::from_millis(200));
+    spinner.set_message(format!("fitting the exported model to {}", data.name));
+    let fitted = match args.to {
+        MaterialFormat::Gltf => Fitted::Gltf(lustre_fit::gltf::fit_gltf(&data)),
+        MaterialFormat::Mitsuba => Fitted::Mitsuba(lustre_fit::mitsuba::fit_mitsuba(&data)),
+    };
+    spinner.set_message(format!("fitting lustre's GGX model to {}", data.name));
+    let ggx = fit_masked(
+        data.bsdf.as_ref(),
+        CtDistribution::Ggx,
+        &CtOptions::default(),
+        data.coverage.as_ref(),
+    );
+    spinner.finish_and_clear();
+    let ggx_error = match ggx.and_then(|f| Ok(f.to_bsdf(&data.name)?)) {
+        Ok(model) => Some(
+            evaluate_masked(
+                data.bsdf.as_ref(),
+                &model,
+                data.transmission,
+                data.coverage.as_ref(),
+            )
+            .ngan_mean(),
+        ),
+        Err(e) => {
+            eprintln!("warning: no GGX fit of {} to compare with: {e}", data.name);
+            None
+        }
+    };
+    let errors = match &fitted {
+        Fitted::Gltf(Ok(g)) => {
+            println!(
+                "glTF metallic-roughness fit of {}: base colour {}, metallic {:.4}, roughness {:.4}",
+                args.spec,
+                rgb(&g.base_color),
+                g.metallic,
+                g.roughness
+            );
+            g.errors
+        }
+        Fitted::Mitsuba(Ok(m)) => {
+            println!(
+                "Mitsuba 3 {} fit of {}: {}",
+                m.bsdf.plugin(),
+                args.spec,
+                match m.bsdf {
+                    MitsubaBsdf::RoughConductor { specular, alpha } =>
+                        format!("specular_reflectance {}, alpha {alpha:.4}", rgb(&specular)),
+                    MitsubaBsdf::RoughPlastic { diffuse, alpha } => format!(
+                        "diffuse_reflectance {}, alpha {alpha:.4}, int_ior {}",
+                        rgb(&diffuse),
+                        lustre_fit::mitsuba::PLASTIC_IOR
+                    ),
+                }
+            );
+            for (c, e) in m.candidates.iter().skip(1) {
+                println!("  ({} fitted too: Ngan L2 {e:.4})", c.plugin());
+            }
+            m.errors
+        }
+        Fitted::Gltf(Err(e)) | Fitted::Mitsuba(Err(e)) => {
+            anyhow::bail!("fitting the exported model to {}: {e}", data.name)
+        }
+    };
+    println!(
+        "  Ngan L2 {:.4} (RGB {}), L1 {:.4}; albedo at normal incidence {} (data {})",
+        errors.ngan_mean(),
+        rgb(&errors.ngan_l2),
+        errors.l1_mean(),
+        rgb(&errors.albedo_model),
+        rgb(&errors.albedo_data)
+    );
+    if let Some(g) = ggx_error {
+        println!("  lustre's Cook–Torrance GGX fit of the same data: Ngan L2 {g:.4}");
+    }
+    if data.transmission {
+        eprintln!(
+            "warning: {} transmits light; the exported material carries its reflection only \
+             (the errors above count what is lost)",
+            args.spec
+        );
+    }
+    if data.bsdf.flags().anisotropic {
+        eprintln!(
+            "warning: {} is anisotropic; the exported model is isotropic (the errors above \
+             count what is lost)",
+            args.spec
+        );
+    }
+    if let Some(g) = ggx_error.filter(|&g| errors.ngan_mean() > 2.0 * g) {
+        eprintln!(
+            "warning: the exported model fits {} {:.1}× worse than lustre's GGX fit (Ngan L2 \
+             {:.4} against {g:.4}): the target model cannot carry this material well",
+            args.spec,
+            errors.ngan_mean() / g.max(f64::MIN_POSITIVE),
+            errors.ngan_mean()
+        );
+    }
+    let extras = json!({
+        "source": args.spec,
+        "ngan_l2": errors.ngan_l2,
+        "l1": errors.l1,
+        "ggx_ngan_l2": ggx_error,
+    });
+    match fitted {
+        Fitted::Gltf(Ok(g)) => {
+            let material = GltfMaterial {
+                name: data.name.clone(),
+                base_color: g.base_color,
+                metallic: g.metallic,
+                roughness: g.roughness,
+                extras,
+            };
+            let bytes = write_sphere_glb(&material, &args.out)?;
+            println!("wrote {} ({bytes} bytes)", args.out.display());
+        }
+        Fitted::Mitsuba(Ok(m)) => {
+            let note = format!(
+                "lustre export: {} fitted to {} (Ngan L2 {:.4}); in lustre: {}",
+                m.bsdf.plugin(),
+                args.spec,
+                errors.ngan_mean(),
+                m.bsdf.spec()
+            );
+            let xml = m.bsdf.xml(&data.name, &note);
+            lustre_scene::scene_file::write_atomic(&args.out, xml.as_bytes())?;
+            println!("  in lustre: {}", m.bsdf.spec());
+            println!("wrote {}", args.out.display());
+        }
+        _ => unreachable!("errors returned above"),
+    }
+    Ok(())
+}
+
+/// What was fitted for the export.
+enum Fitted {
+    Gltf(lustre_brdf::Result<lustre_fit::gltf::GltfFit>),
+    Mitsuba(lustre_brdf::Result<lustre_fit::mitsuba::MitsubaFit>),
+}
+
+/// The RGL `.bsdf` file a spec names, if it is one.
+fn rgl_file(spec: &str) -> Option<PathBuf> {
+    let p = PathBuf::from(spec.trim());
+    let is_bsdf = p
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("bsdf"));
+    (is_bsdf && p.is_file()).then_some(p)
+}
+
+/// An RGL file as Mitsuba's `measured` BSDF: the XML and a copy of the file beside it.
+fn measured(args: &MaterialArgs, name: &str, file: &std::path::Path) -> anyhow::Result<()> {
+    let file_name = file
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| format!("{name}.bsdf"));
+    let dir = args
+        .out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    let copy = dir.join(&file_name);
+    let bytes = lustre_brdf::error::read_file(file)?;
+    if std::fs::canonicalize(&copy).ok() != std::fs::canonicalize(file).ok() {
+        lustre_scene::scene_file::write_atomic(&copy, &bytes)?;
+    }
+    let note = format!(
+        "lustre export: the RGL measurement {} as Mitsuba's measured BSDF (no fit, no loss)",
+        file.display()
+    );
+    let xml = measured_xml(name, &file_name, &note);
+    lustre_scene::scene_file::write_atomic(&args.out, xml.as_bytes())?;
+    println!(
+        "Mitsuba 3 measured BSDF of {}: the data itself ({} copied beside the XML)",
+        args.spec,
+        copy.display()
+    );
+    println!("wrote {}", args.out.display());
+    Ok(())
+}

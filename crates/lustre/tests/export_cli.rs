@@ -1,0 +1,337 @@
+//! `lustre export material`: the glTF 2.0 files it writes pass the Khronos glTF Validator with no
+//! error (node and tools/gltf's pinned validator: this test fails without them), reload in
+//! lustre's own glTF reader with the fitted values, and bad requests are refused.
+
+mod common;
+
+use common::{fails, lustre, ok};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The validator's report of `files` (one JSON line each); panics when it finds an error or
+/// cannot run.
+fn validate(files: &[&Path]) -> String {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/gltf/validate.mjs");
+    let modules = script.with_file_name("node_modules").join("gltf-validator");
+    assert!(
+        modules.is_dir(),
+        "the glTF Validator is not installed: run `cd tools/gltf && npm ci` ({})",
+        modules.display()
+    );
+    let o = Command::new("node")
+        .arg(&script)
+        .args(files)
+        .output()
+        .expect("node runs (apt-get install nodejs)");
+    let report = String::from_utf8_lossy(&o.stdout).to_string();
+    // The warnings are listed in the test's output.
+    eprintln!("{report}");
+    assert!(
+        o.status.success(),
+        "{report}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    for line in report.lines() {
+        assert!(line.contains("\"errors\":0"), "{line}");
+    }
+    report
+}
+
+/// A number printed after `key` in `t`.
+fn number_after(t: &str, key: &str) -> f64 {
+    let rest = &t[t.find(key).unwrap_or_else(|| panic!("{key} in {t}")) + key.len()..];
+    let end = rest
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(rest.len());
+    rest[..end]
+        .parse()
+        .unwrap_or_else(|_| panic!("{key} in {t}"))
+}
+
+#[test]
+fn exported_materials_pass_the_khronos_validator_and_reload() {
+    let dir = tempfile::tempdir().expect("dir");
+    let rgl = lustre_brdf::shared_data_dir().join("measured/rgl");
+    let bsdf: PathBuf = std::fs::read_dir(&rgl)
+        .expect("rgl data")
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "bsdf"))
+        .min()
+        .expect("an RGL .bsdf file");
+    let mut files = vec![];
+    for (spec, name) in [
+        ("sgd:nickel".to_string(), "nickel.glb"),
+        ("nbrdf:gold-metallic-paint".to_string(), "gold.glb"),
+        (bsdf.display().to_string(), "rgl.glb"),
+    ] {
+        let out = dir.path().join(name);
+        let t = ok(lustre()
+            .args(["export", "material", &spec, "--to", "gltf", "--out"])
+            .arg(&out));
+        // The glTF model's error beside lustre's own GGX fit of the same data.
+        let gltf = number_after(&t, "Ngan L2 ");
+        let ggx = number_after(&t, "GGX fit of the same data: Ngan L2 ");
+        assert!(gltf.is_finite() && gltf >= 0.0 && ggx.is_finite(), "{t}");
+        assert!(t.contains("wrote"), "{t}");
+        // lustre's reader takes the file back: the sphere and its material, as printed.
+        let scene = lustre_scene::Scene::load(&out).expect("reloads");
+        assert_eq!(scene.triangle_count(), 3968);
+        let colour = &t[t.find("base colour [").expect("colour") + 13..];
+        let colour: Vec<f64> = colour[..colour.find(']').expect("]")]
+            .split(", ")
+            .map(|v| v.parse().expect("number"))
+            .collect();
+        match &scene.materials[0].kind {
+            lustre_scene::MaterialKind::PbrMetallicRoughness {
+                base_color,
+                metallic,
+                roughness,
+                ..
+            } => {
+                for (got, printed) in base_color.factor.0.iter().zip(&colour) {
+                    assert!((got - printed).abs() <= 5e-5, "{t}");
+                }
+                assert!((metallic.factor - number_after(&t, ", metallic ")).abs() <= 5e-5);
+                assert!((roughness.factor - number_after(&t, ", roughness ")).abs() <= 5e-5);
+            }
+            other => panic!("{other:?}"),
+        }
+        files.push(out);
+    }
+    let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
+    validate(&refs);
+
+    // A bake's atlas (lightmap.glb) is glTF too: it passes the validator.
+    let bake = dir.path().join("bake");
+    ok(lustre()
+        .arg("bake")
+        .arg(lustre_brdf::shared_data_dir().join("scenes/cornell_box/cornell_box.obj"))
+        .args(["--spp", "1", "--bounces", "1", "--texels-per-metre", "0.25"])
+        .args(["--no-denoise", "--out"])
+        .arg(&bake));
+    validate(&[&bake.join("lightmap.glb")]);
+}
+
+#[test]
+fn export_refuses_what_it_cannot_write() {
+    let dir = tempfile::tempdir().expect("dir");
+    let t = fails(
+        lustre()
+            .args(["export", "material", "sgd:nickel", "--out"])
+            .arg(dir.path().join("m.gltf")),
+    );
+    assert!(
+        t.contains("a glTF (binary glTF) export is written as .glb"),
+        "{t}"
+    );
+    let t = fails(
+        lustre()
+            .args([
+                "export",
+                "material",
+                "sgd:nickel",
+                "--to",
+                "mitsuba",
+                "--out",
+            ])
+            .arg(dir.path().join("m.glb")),
+    );
+    assert!(
+        t.contains("a Mitsuba (XML) export is written as .xml"),
+        "{t}"
+    );
+    let t = fails(
+        lustre()
+            .args(["export", "material", "nosuch-material", "--out"])
+            .arg(dir.path().join("m.glb")),
+    );
+    assert!(t.contains("unknown material \"nosuch-material\""), "{t}");
+    let t = fails(
+        lustre()
+            .args(["export", "material", "sgd:nickel", "--out"])
+            .arg(dir.path().join("nodir/m.glb")),
+    );
+    assert!(t.contains("no such folder"), "{t}");
+    // What the target model cannot carry is named, with what it costs.
+    let t = ok(lustre()
+        .args(["export", "material", "kurt-glass", "--out"])
+        .arg(dir.path().join("glass.glb")));
+    assert!(
+        t.contains("kurt-glass transmits light; the exported material carries its reflection only"),
+        "{t}"
+    );
+    assert!(t.contains("worse than lustre's GGX fit"), "{t}");
+    let t = ok(lustre()
+        .args(["export", "material", "kurt-demo", "--out"])
+        .arg(dir.path().join("brushed.glb")));
+    assert!(
+        t.contains("kurt-demo is anisotropic; the exported model is isotropic"),
+        "{t}"
+    );
+    // An existing file is replaced whole.
+    let out = dir.path().join("m.glb");
+    std::fs::write(&out, b"old").expect("write");
+    ok(lustre()
+        .args(["export", "material", "ggx(alpha=0.3)", "--out"])
+        .arg(&out));
+    let bytes = std::fs::read(&out).expect("read");
+    assert!(bytes.starts_with(b"glTF"));
+    assert_eq!(
+        u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
+        bytes.len()
+    );
+}
+
+/// Direction pairs (wi, wo) over the upper hemisphere, the mirror configuration among them.
+fn pairs() -> Vec<([f64; 3], [f64; 3])> {
+    let dir = |t: f64, p: f64| {
+        let (t, p) = (t.to_radians(), p.to_radians());
+        [t.sin() * p.cos(), t.sin() * p.sin(), t.cos()]
+    };
+    let mut v = vec![];
+    for ti in [5.0, 30.0, 55.0, 80.0] {
+        for (to, po) in [(ti, 180.0), (20.0, 150.0), (45.0, 90.0), (70.0, 200.0)] {
+            v.push((dir(ti, 0.0), dir(to, po)));
+        }
+    }
+    v
+}
+
+/// Mitsuba 3's values of the BSDF in `xml` at `pairs` (tools/mitsuba/eval_bsdf.py; fails
+/// without Mitsuba: `pip install mitsuba==3.9.1`).
+fn mitsuba_eval(xml: &Path, pairs: &[([f64; 3], [f64; 3])]) -> Vec<[f64; 3]> {
+    use std::io::Write;
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/mitsuba/eval_bsdf.py");
+    let mut child = Command::new("python3")
+        .arg(&script)
+        .arg(xml)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("python3 runs");
+    let json = serde_json::to_string(&pairs.iter().map(|(a, b)| [a, b]).collect::<Vec<_>>())
+        .expect("json");
+    child
+        .stdin
+        .take()
+        .expect("stdin")
+        .write_all(json.as_bytes())
+        .expect("write");
+    let o = child.wait_with_output().expect("runs");
+    assert!(
+        o.status.success(),
+        "Mitsuba could not evaluate {}: {}",
+        xml.display(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    serde_json::from_slice(&o.stdout).expect("Mitsuba's values")
+}
+
+/// `a` and `b` agree within `rel` of the larger (and 1e-6 absolute); prints the largest
+/// relative difference.
+fn assert_close(what: &str, a: &[[f64; 3]], b: &[[f64; 3]], rel: f64) {
+    let worst = a
+        .iter()
+        .zip(b)
+        .flat_map(|(x, y)| {
+            (0..3).map(move |c| (x[c] - y[c]).abs() / x[c].abs().max(y[c].abs()).max(1e-6))
+        })
+        .fold(0.0, f64::max);
+    eprintln!("{what}: largest relative difference {worst:.2e}");
+    for (k, (x, y)) in a.iter().zip(b).enumerate() {
+        for c in 0..3 {
+            let tol = rel * x[c].abs().max(y[c].abs()) + 1e-6;
+            assert!(
+                (x[c] - y[c]).abs() <= tol,
+                "{what}: pair {k} channel {c}: {} against {}",
+                x[c],
+                y[c]
+            );
+        }
+    }
+}
+
+#[test]
+fn mitsuba_exports_evaluate_alike_in_mitsuba_and_in_lustre() {
+    use lustre_brdf::bsdf::Bsdf;
+    let dir = tempfile::tempdir().expect("dir");
+    let pairs = pairs();
+    let lustre_eval = |b: &dyn Bsdf| -> Vec<[f64; 3]> {
+        pairs
+            .iter()
+            .map(|(wi, wo)| b.eval(glam::DVec3::from(*wi), glam::DVec3::from(*wo)).0)
+            .collect()
+    };
+    // A measured paint (a conductor fits it better) and a plastic (the plastic fits it).
+    for (spec, plugin) in [
+        ("nbrdf:gold-metallic-paint", "roughconductor"),
+        (
+            "roughplastic(diffuse_r=0.6,diffuse_g=0.3,diffuse_b=0.1,alpha=0.2,distribution=ggx)",
+            "roughplastic",
+        ),
+    ] {
+        let xml = dir.path().join(format!("{plugin}.xml"));
+        let t = ok(lustre()
+            .args(["export", "material", spec, "--to", "mitsuba", "--out"])
+            .arg(&xml));
+        assert!(t.contains(&format!("Mitsuba 3 {plugin} fit of")), "{t}");
+        let lustre_spec = t
+            .lines()
+            .find_map(|l| l.trim().strip_prefix("in lustre: "))
+            .expect("the lustre spec");
+        let model = lustre_brdf::catalog::resolve(lustre_spec).expect("resolves");
+        let ours = lustre_eval(model.as_ref());
+        // Mitsuba's own evaluation of the file: f32 arithmetic (1e-4 of the value); its rough
+        // plastic interpolates a precomputed table of the rough interface's transmittance
+        // (1e-3).
+        let tol = if plugin == "roughplastic" { 1e-3 } else { 1e-4 };
+        assert_close(spec, &mitsuba_eval(&xml, &pairs), &ours, tol);
+        // lustre's Mitsuba reader takes the BSDF back as it was fitted.
+        let text = std::fs::read_to_string(&xml).expect("xml");
+        let (start, end) = (
+            text.find("<bsdf").expect("bsdf"),
+            text.find("</scene>").expect("scene"),
+        );
+        let id = &text[text.find(" id=\"").expect("id") + 5..];
+        let id = &id[..id.find('"').expect("quote")];
+        let scene_xml = dir.path().join("scene.xml");
+        std::fs::write(
+            &scene_xml,
+            format!(
+                "<scene version=\"3.0.0\">{}<shape type=\"rectangle\"><ref id=\"{id}\"/></shape>\
+                 </scene>",
+                &text[start..end]
+            ),
+        )
+        .expect("write");
+        let scene = lustre_scene::Scene::load(&scene_xml).expect("reloads");
+        let back = scene.materials[0]
+            .bsdf_at(&scene.textures, &[glam::Vec2::ZERO; 2])
+            .expect("bsdf");
+        assert_close(spec, &lustre_eval(back.as_ref()), &ours, 1e-12);
+    }
+    // An RGL measurement is exported as itself: Mitsuba's `measured` beside a copy of the file.
+    let rgl = lustre_brdf::shared_data_dir().join("measured/rgl/paper_white_rgb.bsdf");
+    let xml = dir.path().join("rgl/paper.xml");
+    std::fs::create_dir_all(dir.path().join("rgl")).expect("mkdir");
+    let t = ok(lustre()
+        .args(["export", "material"])
+        .arg(&rgl)
+        .args(["--to", "mitsuba", "--out"])
+        .arg(&xml));
+    assert!(t.contains("Mitsuba 3 measured BSDF"), "{t}");
+    assert_eq!(
+        std::fs::read(dir.path().join("rgl/paper_white_rgb.bsdf")).expect("copy"),
+        std::fs::read(&rgl).expect("source")
+    );
+    let theirs = mitsuba_eval(&xml, &pairs);
+    let ours = lustre_eval(
+        lustre_brdf::catalog::resolve(&rgl.display().to_string())
+            .expect("rgl")
+            .as_ref(),
+    );
+    // lustre's RGL reader against Mitsuba's `measured` plugin (f32 tables).
+    assert_close("paper_white_rgb.bsdf", &theirs, &ours, 1e-4);
+}
