@@ -1,6 +1,7 @@
 //! `lustre export material`: the glTF 2.0 files it writes pass the Khronos glTF Validator with no
-//! error (node and tools/gltf's pinned validator: this test fails without them), reload in
-//! lustre's own glTF reader with the fitted values, and bad requests are refused.
+//! error and load in three.js's GLTFLoader (node and tools/gltf's pinned packages: this test
+//! fails without them), reload in lustre's own glTF reader with the fitted values; the Mitsuba
+//! files evaluate alike in Mitsuba 3 and in lustre; bad requests are refused.
 
 mod common;
 
@@ -35,6 +36,27 @@ fn validate(files: &[&Path]) -> String {
         assert!(line.contains("\"errors\":0"), "{line}");
     }
     report
+}
+
+/// three.js's GLTFLoader's view of `files` (tools/gltf/three_load.mjs, one JSON value each);
+/// panics when a file does not load.
+fn three_load(files: &[&Path]) -> Vec<serde_json::Value> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/gltf/three_load.mjs");
+    let o = Command::new("node")
+        .arg(&script)
+        .args(files)
+        .output()
+        .expect("node runs (apt-get install nodejs)");
+    let report = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(
+        o.status.success(),
+        "three.js: {report}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    report
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON"))
+        .collect()
 }
 
 /// A number printed after `key` in `t`.
@@ -101,6 +123,30 @@ fn exported_materials_pass_the_khronos_validator_and_reload() {
     }
     let refs: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
     validate(&refs);
+    // three.js's loader reads each as a MeshStandardMaterial with the fitted factors (the
+    // reload above checked them against the printed values) and the sphere's tangents.
+    for (v, out) in three_load(&refs).iter().zip(&files) {
+        let scene = lustre_scene::Scene::load(out).expect("reloads");
+        let (m, t) = (&v["materials"][0], v["triangles"].as_f64());
+        assert_eq!(t, Some(3968.0), "{v}");
+        assert_eq!(m["type"], "MeshStandardMaterial", "{v}");
+        assert_eq!(m["tangents"], true, "{v}");
+        let lustre_scene::MaterialKind::PbrMetallicRoughness {
+            base_color,
+            metallic,
+            roughness,
+            ..
+        } = &scene.materials[0].kind
+        else {
+            panic!("{v}")
+        };
+        let close = |x: &serde_json::Value, y: f64| (x.as_f64().expect("number") - y).abs() < 1e-6;
+        assert!(close(&m["metalness"], metallic.factor), "{v}");
+        assert!(close(&m["roughness"], roughness.factor), "{v}");
+        for c in 0..3 {
+            assert!(close(&m["color"][c], base_color.factor.0[c]), "{v}");
+        }
+    }
 
     // A bake's atlas (lightmap.glb) is glTF too: it passes the validator.
     let bake = dir.path().join("bake");
@@ -111,6 +157,8 @@ fn exported_materials_pass_the_khronos_validator_and_reload() {
         .args(["--no-denoise", "--out"])
         .arg(&bake));
     validate(&[&bake.join("lightmap.glb")]);
+    let atlas = three_load(&[&bake.join("lightmap.glb")]);
+    assert_eq!(atlas[0]["meshes"].as_f64(), Some(7.0), "{atlas:?}");
 }
 
 #[test]
