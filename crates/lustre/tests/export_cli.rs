@@ -9,51 +9,43 @@ use common::{fails, lustre, ok};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// The validator's report of `files` (one JSON line each); panics when it finds an error or
-/// cannot run.
-fn validate(files: &[&Path]) -> String {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/gltf/validate.mjs");
-    let modules = script.with_file_name("node_modules").join("gltf-validator");
+/// Runs the node script `tools/gltf/NAME` on `files` (the packages of tools/gltf, installed by
+/// `npm ci` there); its standard output, one JSON line per file; panics when it fails.
+fn node_tool(name: &str, files: &[&Path]) -> String {
+    let tools = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/gltf");
     assert!(
-        modules.is_dir(),
-        "the glTF Validator is not installed: run `cd tools/gltf && npm ci` ({})",
-        modules.display()
+        tools.join("node_modules/gltf-validator").is_dir()
+            && tools.join("node_modules/three").is_dir(),
+        "tools/gltf's packages are not installed: run `cd tools/gltf && npm ci`"
     );
     let o = Command::new("node")
-        .arg(&script)
+        .arg(tools.join(name))
         .args(files)
         .output()
         .expect("node runs (apt-get install nodejs)");
     let report = String::from_utf8_lossy(&o.stdout).to_string();
-    // The warnings are listed in the test's output.
-    eprintln!("{report}");
     assert!(
         o.status.success(),
-        "{report}{}",
+        "{name}: {report}{}",
         String::from_utf8_lossy(&o.stderr)
     );
+    report
+}
+
+/// The Khronos validator's report of `files`; panics when it finds an error. The warnings are
+/// listed in the test's output.
+fn validate(files: &[&Path]) -> String {
+    let report = node_tool("validate.mjs", files);
+    eprintln!("{report}");
     for line in report.lines() {
         assert!(line.contains("\"errors\":0"), "{line}");
     }
     report
 }
 
-/// three.js's GLTFLoader's view of `files` (tools/gltf/three_load.mjs, one JSON value each);
-/// panics when a file does not load.
+/// three.js's GLTFLoader's view of `files` (one JSON value each); panics when one does not load.
 fn three_load(files: &[&Path]) -> Vec<serde_json::Value> {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/gltf/three_load.mjs");
-    let o = Command::new("node")
-        .arg(&script)
-        .args(files)
-        .output()
-        .expect("node runs (apt-get install nodejs)");
-    let report = String::from_utf8_lossy(&o.stdout).to_string();
-    assert!(
-        o.status.success(),
-        "three.js: {report}{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    report
+    node_tool("three_load.mjs", files)
         .lines()
         .map(|l| serde_json::from_str(l).expect("JSON"))
         .collect()
@@ -164,43 +156,34 @@ fn exported_materials_pass_the_khronos_validator_and_reload() {
 #[test]
 fn export_refuses_what_it_cannot_write() {
     let dir = tempfile::tempdir().expect("dir");
-    let t = fails(
-        lustre()
-            .args(["export", "material", "sgd:nickel", "--out"])
-            .arg(dir.path().join("m.gltf")),
-    );
-    assert!(
-        t.contains("a glTF (binary glTF) export is written as .glb"),
-        "{t}"
-    );
-    let t = fails(
-        lustre()
-            .args([
-                "export",
-                "material",
-                "sgd:nickel",
-                "--to",
-                "mitsuba",
-                "--out",
-            ])
-            .arg(dir.path().join("m.glb")),
-    );
-    assert!(
-        t.contains("a Mitsuba (XML) export is written as .xml"),
-        "{t}"
-    );
-    let t = fails(
-        lustre()
-            .args(["export", "material", "nosuch-material", "--out"])
-            .arg(dir.path().join("m.glb")),
-    );
-    assert!(t.contains("unknown material \"nosuch-material\""), "{t}");
-    let t = fails(
-        lustre()
-            .args(["export", "material", "sgd:nickel", "--out"])
-            .arg(dir.path().join("nodir/m.glb")),
-    );
-    assert!(t.contains("no such folder"), "{t}");
+    for (spec, to, out, says) in [
+        (
+            "sgd:nickel",
+            "gltf",
+            "m.gltf",
+            "a glTF (binary glTF) export is written as .glb",
+        ),
+        (
+            "sgd:nickel",
+            "mitsuba",
+            "m.glb",
+            "a Mitsuba (XML) export is written as .xml",
+        ),
+        (
+            "nosuch-material",
+            "gltf",
+            "m.glb",
+            "unknown material \"nosuch-material\"",
+        ),
+        ("sgd:nickel", "gltf", "nodir/m.glb", "no such folder"),
+    ] {
+        let t = fails(
+            lustre()
+                .args(["export", "material", spec, "--to", to, "--out"])
+                .arg(dir.path().join(out)),
+        );
+        assert!(t.contains(says), "{t}");
+    }
     // What the target model cannot carry is named, with what it costs.
     let t = ok(lustre()
         .args(["export", "material", "kurt-glass", "--out"])
