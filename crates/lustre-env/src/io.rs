@@ -76,19 +76,19 @@ pub fn map_size(path: &Path) -> Result<(usize, usize)> {
     if head.starts_with(&EXR_MAGIC) {
         let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(&head), false)
             .map_err(|e| format_err(path, format!("bad OpenEXR header: {e}")))?;
-        let header = meta
-            .headers
-            .first()
-            .ok_or_else(|| format_err(path, "an OpenEXR file without a layer"))?;
-        Ok((header.layer_size.width(), header.layer_size.height()))
+        // The largest layer: an upper bound of the one the reader takes.
+        meta.headers
+            .iter()
+            .map(|h| (h.layer_size.width(), h.layer_size.height()))
+            .max_by_key(|&(w, h)| w.saturating_mul(h))
+            .ok_or_else(|| format_err(path, "an OpenEXR file without a layer"))
     } else if head.starts_with(HDR_MAGIC) {
         let decoder = image::codecs::hdr::HdrDecoder::new(Cursor::new(&head))
             .map_err(|e| format_err(path, format!("bad Radiance header: {e}")))?;
         let meta = decoder.metadata();
         Ok((meta.width as usize, meta.height as usize))
     } else {
-        // read_map says what is wrong with it.
-        read_map(path).map(|m| (m.map.width, m.map.height))
+        Err(not_a_map(path, &head))
     }
 }
 
@@ -102,13 +102,20 @@ pub fn read_map(path: &Path) -> Result<LoadedMap> {
         parse_exr(path, &bytes)
     } else if bytes.starts_with(HDR_MAGIC) {
         parse_hdr(path, &bytes)
-    } else if bytes.is_empty() {
-        Err(format_err(path, "empty file"))
     } else {
-        Err(format_err(
+        Err(not_a_map(path, &bytes))
+    }
+}
+
+/// The error of a file that starts with neither map's magic number.
+fn not_a_map(path: &Path, bytes: &[u8]) -> EnvError {
+    if bytes.is_empty() {
+        format_err(path, "empty file")
+    } else {
+        format_err(
             path,
             "not an environment map: neither the Radiance '#?' nor the OpenEXR magic number",
-        ))
+        )
     }
 }
 

@@ -114,8 +114,8 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
     spinner.enable_steady_tick(std::time::Duration::from_millis(200));
     spinner.set_message(format!("fitting the exported model to {}", data.name));
     let fitted = match args.to {
-        MaterialFormat::Gltf => Fitted::Gltf(lustre_fit::gltf::fit_gltf(&data)),
-        MaterialFormat::Mitsuba => Fitted::Mitsuba(lustre_fit::mitsuba::fit_mitsuba(&data)),
+        MaterialFormat::Gltf => lustre_fit::gltf::fit_gltf(&data).map(Fitted::Gltf),
+        MaterialFormat::Mitsuba => lustre_fit::mitsuba::fit_mitsuba(&data).map(Fitted::Mitsuba),
     };
     spinner.set_message(format!("fitting lustre's GGX model to {}", data.name));
     let ggx = fit_masked(
@@ -125,6 +125,7 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
         data.coverage.as_ref(),
     );
     spinner.finish_and_clear();
+    let fitted = fitted.with_context(|| format!("fitting the exported model to {}", data.name))?;
     let ggx_error = match ggx.and_then(|f| Ok(f.to_bsdf(&data.name)?)) {
         Ok(model) => Some(
             evaluate_masked(
@@ -141,7 +142,7 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
         }
     };
     let errors = match &fitted {
-        Fitted::Gltf(Ok(g)) => {
+        Fitted::Gltf(g) => {
             println!(
                 "glTF metallic-roughness fit of {}: base colour {}, metallic {:.4}, roughness {:.4}",
                 args.spec,
@@ -151,7 +152,7 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
             );
             g.errors
         }
-        Fitted::Mitsuba(Ok(m)) => {
+        Fitted::Mitsuba(m) => {
             println!(
                 "Mitsuba 3 {} fit of {}: {}",
                 m.bsdf.plugin(),
@@ -170,9 +171,6 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
                 println!("  ({} fitted too: Ngan L2 {e:.4})", c.plugin());
             }
             m.errors
-        }
-        Fitted::Gltf(Err(e)) | Fitted::Mitsuba(Err(e)) => {
-            anyhow::bail!("fitting the exported model to {}: {e}", data.name)
         }
     };
     println!(
@@ -216,7 +214,7 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
         "ggx_ngan_l2": ggx_error,
     });
     match fitted {
-        Fitted::Gltf(Ok(g)) => {
+        Fitted::Gltf(g) => {
             let material = GltfMaterial {
                 name: data.name.clone(),
                 base_color: g.base_color,
@@ -227,7 +225,7 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
             let bytes = write_sphere_glb(&material, &args.out)?;
             println!("wrote {} ({bytes} bytes)", args.out.display());
         }
-        Fitted::Mitsuba(Ok(m)) => {
+        Fitted::Mitsuba(m) => {
             let note = format!(
                 "lustre export: {} fitted to {} (Ngan L2 {:.4}); in lustre: {}",
                 m.bsdf.plugin(),
@@ -240,15 +238,14 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
             println!("  in lustre: {}", m.bsdf.spec());
             println!("wrote {}", args.out.display());
         }
-        _ => unreachable!("errors returned above"),
     }
     Ok(())
 }
 
 /// What was fitted for the export.
 enum Fitted {
-    Gltf(lustre_brdf::Result<lustre_fit::gltf::GltfFit>),
-    Mitsuba(lustre_brdf::Result<lustre_fit::mitsuba::MitsubaFit>),
+    Gltf(lustre_fit::gltf::GltfFit),
+    Mitsuba(lustre_fit::mitsuba::MitsubaFit),
 }
 
 /// The RGL `.bsdf` file a spec names, if it is one.
