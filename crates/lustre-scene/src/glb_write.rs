@@ -34,19 +34,22 @@ impl Builder {
         count: usize,
         kind: &str,
         component: u32,
-        target: u32,
+        target: Option<u32>,
         bounds: Option<(Vec<f32>, Vec<f32>)>,
     ) -> usize {
         let offset = self.bin.len();
         for w in words {
             self.bin.extend_from_slice(w);
         }
-        self.views.push(json!({
+        let mut view = json!({
             "buffer": 0,
             "byteOffset": offset,
             "byteLength": words.len() * 4,
-            "target": target,
-        }));
+        });
+        if let Some(t) = target {
+            view["target"] = json!(t);
+        }
+        self.views.push(view);
         let mut acc = json!({
             "bufferView": self.views.len() - 1,
             "componentType": component,
@@ -61,8 +64,29 @@ impl Builder {
         self.accessors.len() - 1
     }
 
-    /// Appends f32 vectors as an accessor of `kind` (`VEC3`…), with min/max when `bounds`.
+    /// Appends f32 vectors as a vertex-attribute accessor of `kind` (`VEC3`…), with min/max when
+    /// `bounds`.
     pub fn floats<const N: usize>(&mut self, data: &[[f32; N]], kind: &str, bounds: bool) -> usize {
+        self.floats_to(data, kind, bounds, Some(ARRAY_BUFFER))
+    }
+
+    /// Appends f32 vectors as an animation sampler's accessor (its view has no `target`).
+    pub fn animation_floats<const N: usize>(
+        &mut self,
+        data: &[[f32; N]],
+        kind: &str,
+        bounds: bool,
+    ) -> usize {
+        self.floats_to(data, kind, bounds, None)
+    }
+
+    fn floats_to<const N: usize>(
+        &mut self,
+        data: &[[f32; N]],
+        kind: &str,
+        bounds: bool,
+        target: Option<u32>,
+    ) -> usize {
         let words: Vec<[u8; 4]> = data.iter().flatten().map(|f| f.to_le_bytes()).collect();
         let b = bounds.then(|| {
             let mut lo = vec![f32::INFINITY; N];
@@ -75,7 +99,7 @@ impl Builder {
             }
             (lo, hi)
         });
-        self.push(&words, data.len(), kind, FLOAT, ARRAY_BUFFER, b)
+        self.push(&words, data.len(), kind, FLOAT, target, b)
     }
 }
 
@@ -122,7 +146,7 @@ impl Builder {
             n,
             "SCALAR",
             UNSIGNED_INT,
-            ELEMENT_ARRAY_BUFFER,
+            Some(ELEMENT_ARRAY_BUFFER),
             None,
         )
     }

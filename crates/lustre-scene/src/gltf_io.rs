@@ -214,6 +214,8 @@ pub fn from_slice(path: &Path, bytes: &[u8]) -> Result<Scene> {
         }
     };
     let mut default_material = None;
+    // The node of each scene mesh, for the extras of a file lustre exported.
+    let mut mesh_nodes = Vec::new();
     let mut stack: Vec<(gltf::Node, DMat4, usize)> = roots
         .into_iter()
         .rev()
@@ -278,6 +280,7 @@ pub fn from_slice(path: &Path, bytes: &[u8]) -> Result<Scene> {
                 m.transform(&world);
                 m.emission = emission[material];
                 r.scene.push_mesh(path, m)?;
+                mesh_nodes.push(node.index());
             }
         }
         if let Some(cam) = node.camera() {
@@ -326,7 +329,16 @@ pub fn from_slice(path: &Path, bytes: &[u8]) -> Result<Scene> {
             };
         }
     }
+    let raw = crate::lightmap::json_of(path, bytes)?;
+    if raw.pointer("/asset/extras/lustre_scene").is_some() {
+        r.lustre_extras(&document, &raw, &mesh_nodes)?;
+    }
     Ok(r.scene)
+}
+
+/// The non-negative integer at `key` of `v`.
+fn index_at(v: &serde_json::Value, key: &str) -> Option<usize> {
+    v.get(key)?.as_u64().and_then(|x| usize::try_from(x).ok())
 }
 
 /// `%20`-style escapes in a URI path.
@@ -353,6 +365,185 @@ fn percent_decode(uri: &str) -> String {
 }
 
 impl Reader<'_> {
+    /// A file `lustre export scene` wrote (`asset.extras.lustre_scene`): the exact materials,
+    /// emission, hints, cameras, camera paths, film, environment, room probes and the embedded
+    /// light maps replace what the glTF core said ([`crate::export::scene`]).
+    fn lustre_extras(
+        &mut self,
+        document: &gltf::Document,
+        raw: &serde_json::Value,
+        mesh_nodes: &[usize],
+    ) -> Result<()> {
+        use crate::export::exact;
+        use serde_json::Value;
+        let path = self.path;
+        let fmt = |p: String| SceneError::format(path, p);
+        let info = raw
+            .pointer("/asset/extras/lustre_scene")
+            .cloned()
+            .unwrap_or(Value::Null);
+        let version = info.get("version").and_then(Value::as_u64);
+        if version != Some(1) {
+            return Err(fmt(format!(
+                "lustre_scene version {version:?}: this lustre reads version 1"
+            )));
+        }
+        let empty = Vec::new();
+        let arr = |k: &str| raw.get(k).and_then(Value::as_array).unwrap_or(&empty);
+        let (materials, nodes, textures) = (arr("materials"), arr("nodes"), arr("textures"));
+        // Materials, exactly.
+        for (i, m) in materials.iter().enumerate() {
+            let Some(v) = m.pointer("/extras/lustre_material") else {
+                continue;
+            };
+            let name = self.scene.materials[i].name.clone();
+            let mut load = |k: usize, uv: u8| -> Result<TextureRef> {
+                let tex = document.textures().nth(k).ok_or_else(|| {
+                    SceneError::material(&name, format!("lustre extras name texture {k}"))
+                })?;
+                let cs = match textures
+                    .get(k)
+                    .and_then(|t| t.pointer("/extras/lustre_color_space"))
+                    .and_then(Value::as_str)
+                {
+                    Some("srgb") => ColorSpace::Srgb,
+                    _ => ColorSpace::Linear,
+                };
+                self.texture_of(&tex, u32::from(uv), cs)
+            };
+            let exact = exact::material_from_json(&name, v, &mut load)?;
+            self.scene.materials[i] = exact;
+        }
+        // Per mesh: emission, hints, and the light map's page and own UVs.
+        let mut mesh_page = vec![None; self.scene.meshes.len()];
+        let mut page_texture: Vec<Option<usize>> = Vec::new();
+        for (i, &n) in mesh_nodes.iter().enumerate() {
+            let Some(extras) = nodes.get(n).and_then(|n| n.get("extras")) else {
+                continue;
+            };
+            let mesh = &mut self.scene.meshes[i];
+            if let Some(h) = extras.get("lustre_hints") {
+                mesh.hints = serde_json::from_value(h.clone())
+                    .map_err(|e| fmt(format!("node {n}: lustre_hints: {e}")))?;
+            }
+            if let Some(e) = extras.get("lustre_emission") {
+                let c: [f64; 3] = serde_json::from_value(e.clone())
+                    .map_err(|e| fmt(format!("node {n}: lustre_emission: {e}")))?;
+                mesh.emission = Some(Rgb(c));
+            }
+            let Some(page) = index_at(extras, "lightmap_page") else {
+                continue;
+            };
+            if index_at(extras, "scene_mesh") != Some(i) {
+                return Err(fmt(format!(
+                    "node {n} ({:?}): its scene_mesh is not its place in the file ({i})",
+                    mesh.name
+                )));
+            }
+            if extras.get("uv0").and_then(Value::as_bool) == Some(false) {
+                mesh.uv0 = None;
+            }
+            if mesh.uv1.is_none() {
+                return Err(fmt(format!("mesh {:?} has no TEXCOORD_1", mesh.name)));
+            }
+            let material = raw
+                .pointer(&format!(
+                    "/meshes/{}/primitives/0/material",
+                    nodes[n]["mesh"]
+                ))
+                .and_then(Value::as_u64)
+                .and_then(|m| materials.get(m as usize));
+            let Some(t) = material
+                .and_then(|m| m.pointer("/extensions/MOZ_lightmap"))
+                .and_then(|l| index_at(l, "index"))
+            else {
+                return Err(fmt(format!(
+                    "mesh {:?} has a light-map page but its material no MOZ_lightmap",
+                    mesh.name
+                )));
+            };
+            if page_texture.len() <= page {
+                page_texture.resize(page + 1, None);
+            }
+            if page_texture[page].is_some_and(|p| p != t) {
+                return Err(fmt(format!("light-map page {page} is two textures")));
+            }
+            page_texture[page] = Some(t);
+            mesh_page[i] = Some(page as u32);
+        }
+        let lm = crate::lightmap::atlas_info(path, raw)?;
+        if lm.scene_meshes != self.scene.meshes.len() {
+            return Err(fmt(format!(
+                "lustre_lightmap describes {} meshes, the file has {}",
+                lm.scene_meshes,
+                self.scene.meshes.len()
+            )));
+        }
+        let mut pages = Vec::new();
+        for p in 0..lm.atlas.pages as usize {
+            let t = page_texture.get(p).copied().flatten().ok_or_else(|| {
+                fmt(format!(
+                    "light-map page {p}: no mesh's material names its texture"
+                ))
+            })?;
+            let what = format!("light-map page {p}");
+            let (w, h, texels) = self.rgbe_texture(document, t, &what)?;
+            if (w, h) != (lm.atlas.width, lm.atlas.height) {
+                return Err(fmt(format!(
+                    "{what} is {w}×{h}, the atlas's pages {}×{}",
+                    lm.atlas.width, lm.atlas.height
+                )));
+            }
+            pages.push(texels);
+        }
+        self.scene.lightmap = Some(crate::lightmap::SceneLightmap {
+            atlas: crate::lightmap::LightmapAtlas {
+                mesh_page,
+                ..lm.atlas
+            },
+            atlas_file: path.to_path_buf(),
+            pages: Vec::new(),
+            embedded: pages,
+        });
+        // Cameras (the paths' own camera nodes are not scene cameras), paths, film, the rest.
+        self.scene.cameras = nodes
+            .iter()
+            .filter(|n| n.pointer("/extras/lustre_path").is_none())
+            .filter_map(|n| n.pointer("/extras/lustre_camera"))
+            .map(|c| exact::camera_from_json(c).ok_or_else(|| fmt(format!("camera {c}"))))
+            .collect::<Result<_>>()?;
+        self.scene.camera_paths = info
+            .get("camera_paths")
+            .and_then(Value::as_array)
+            .unwrap_or(&empty)
+            .iter()
+            .map(|p| exact::path_from_json(p).ok_or_else(|| fmt(format!("camera path {p}"))))
+            .collect::<Result<_>>()?;
+        if let (Some(w), Some(h)) = (
+            info.pointer("/film/width").and_then(Value::as_u64),
+            info.pointer("/film/height").and_then(Value::as_u64),
+        ) {
+            self.scene.film = Film {
+                width: u32::try_from(w).map_err(|_| fmt(format!("film width {w}")))?,
+                height: u32::try_from(h).map_err(|_| fmt(format!("film height {h}")))?,
+            };
+        }
+        if let Some(e) = info.get("environment").filter(|e| !e.is_null()) {
+            let mut map = |t: usize| {
+                let (w, h, texels) = self.rgbe_texture(document, t, "the environment map")?;
+                lustre_env::equirect::EquirectMap::new(w as usize, h as usize, texels)
+                    .map_err(|e| fmt(format!("the environment map: {e}")))
+            };
+            self.scene.environment =
+                Some(exact::environment_from_json(path, &self.base, e, &mut map)?);
+        }
+        if let Some(p) = info.get("probes") {
+            self.scene.probes = serde_json::from_value(p.clone())
+                .map_err(|e| fmt(format!("lustre_scene.probes: {e}")))?;
+        }
+        Ok(())
+    }
+
     fn texture(&mut self, info: &gltf::texture::Info, cs: ColorSpace) -> Result<TextureRef> {
         self.texture_of(&info.texture(), info.tex_coord(), cs)
     }
@@ -409,6 +600,33 @@ impl Reader<'_> {
             texture: index,
             uv_set: tex_coord as u8,
         })
+    }
+
+    /// Texture `t`, an embedded PNG of RGBE texels (light-map pages, the environment map):
+    /// its width, height and decoded texels. Errors name `what`.
+    fn rgbe_texture(
+        &self,
+        document: &gltf::Document,
+        t: usize,
+        what: &str,
+    ) -> Result<(u32, u32, Vec<[f32; 3]>)> {
+        let fmt = |p: String| SceneError::format(self.path, format!("{what}: {p}"));
+        let image = document
+            .textures()
+            .nth(t)
+            .map(|t| t.source())
+            .ok_or_else(|| fmt(format!("no texture {t}")))?;
+        let gltf::image::Source::View { view, .. } = image.source() else {
+            return Err(fmt("the image is not embedded".into()));
+        };
+        let img = image::load_from_memory(self.view_bytes(&view)?)
+            .map_err(|e| fmt(e.to_string()))?
+            .to_rgba8();
+        let texels = img
+            .pixels()
+            .map(|px| crate::export::scene::rgbe_decode(px.0))
+            .collect();
+        Ok((img.width(), img.height(), texels))
     }
 
     fn view_bytes(&self, view: &gltf::buffer::View) -> Result<&[u8]> {

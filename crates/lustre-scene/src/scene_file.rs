@@ -873,6 +873,7 @@ pub fn build(path: &Path, file: &SceneFile) -> Result<Scene> {
             atlas,
             atlas_file,
             pages,
+            embedded: Vec::new(),
         });
     }
     Ok(scene)

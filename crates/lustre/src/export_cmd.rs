@@ -4,7 +4,10 @@
 //! lustre's own GGX fit of the same data, and writes a sample sphere carrying it
 //! (`lustre_scene::export::material`); `--to mitsuba --out M.xml` fits Mitsuba 3's rough
 //! conductor and rough plastic (`lustre_fit::mitsuba`) and writes the better one, or an RGL
-//! file as Mitsuba's `measured` (the XML: `lustre_fit::mitsuba`).
+//! file as Mitsuba's `measured` (the XML: `lustre_fit::mitsuba`). `export scene
+//! BAKED/scene.toml --out S.glb` writes a baked scene as one glTF 2.0 file with its light maps
+//! (`MOZ_lightmap`, RGBE PNG pages), materials, cameras and camera paths
+//! (`lustre_scene::export::scene`), which lustre reads back unchanged.
 
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -32,6 +35,33 @@ pub enum ExportCommand {
     /// `measured`); prints what the export loses (the fit's error beside lustre's own GGX fit
     /// of the same data).
     Material(MaterialArgs),
+    /// A baked scene (the scene.toml `lustre bake` wrote) as one binary glTF 2.0 file: meshes
+    /// with TEXCOORD_1 for the light-map atlas, the light-map pages as RGBE PNG textures through
+    /// `MOZ_lightmap`, the nearest glTF materials (the exact lustre ones in their extras),
+    /// an equirect environment map, cameras, and the camera paths as animations. lustre reads
+    /// the file back as it was (`lustre render FILE.glb`).
+    Scene(SceneArgs),
+}
+
+/// The formats `lustre export scene` writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SceneFormat {
+    /// glTF 2.0 binary (.glb) with the light maps inside (`MOZ_lightmap`).
+    Glb,
+}
+
+/// Arguments of `lustre export scene`.
+#[derive(clap::Args, Debug)]
+pub struct SceneArgs {
+    /// A baked scene file (DIR/scene.toml from `lustre bake SCENE --out DIR`).
+    #[arg(value_name = "SCENE")]
+    pub scene: PathBuf,
+    /// The format to write.
+    #[arg(long, value_enum, default_value_t = SceneFormat::Glb)]
+    pub to: SceneFormat,
+    /// The file to write (.glb; replaced atomically when it exists).
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
 }
 
 /// The formats `lustre export material` writes.
@@ -66,7 +96,92 @@ pub struct MaterialArgs {
 pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
     match &args.command {
         ExportCommand::Material(m) => material(m),
+        ExportCommand::Scene(s) => scene(s),
     }
+}
+
+/// The glTF material of a material given by a catalog specification: the metallic-roughness
+/// model fitted to it (Ngan L2), and a line saying so with its error.
+fn spec_fit(m: &lustre_scene::material::Material) -> Option<(serde_json::Value, String)> {
+    let lustre_scene::material::MaterialKind::Spec(s) = &m.kind else {
+        return None;
+    };
+    let bsdf = lustre_brdf::catalog::resolve(&s.spec).ok()?;
+    let data = lustre_fit::data::MeasuredData::from_bsdf(&m.name, bsdf);
+    let g = lustre_fit::gltf::fit_gltf(&data).ok()?;
+    let [r, gr, b] = g.base_color.map(|c| c.clamp(0.0, 1.0));
+    let edits = if s.edits.is_empty() {
+        String::new()
+    } else {
+        format!(" (before {} edit(s))", s.edits.len())
+    };
+    Some((
+        json!({ "baseColorFactor": [r, gr, b, 1.0], "metallicFactor": g.metallic,
+                "roughnessFactor": g.roughness }),
+        format!(
+            "{}{edits} as the metallic-roughness model fitted to it: Ngan L2 {:.4}",
+            s.spec,
+            g.errors.ngan_mean()
+        ),
+    ))
+}
+
+fn scene(args: &SceneArgs) -> anyhow::Result<()> {
+    let ext = args
+        .out
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    if ext.as_deref() != Some("glb") {
+        anyhow::bail!(
+            "--out {}: a scene is exported as binary glTF; name it .glb",
+            args.out.display()
+        );
+    }
+    let baked = lustre_trace::baked::BakedScene::load(&args.scene)?;
+    for w in &baked.warnings {
+        eprintln!("warning: {w}");
+    }
+    let out = lustre_scene::export::scene::write_scene_glb(
+        &baked.scene,
+        &baked.atlas,
+        &baked.pages,
+        &spec_fit,
+        &args.out,
+    )?;
+    let mb = |b: usize| b as f64 / 1e6;
+    println!(
+        "{} meshes ({} triangles), {} glTF materials, {} textures ({:.2} MB), {} cameras, {} \
+         camera paths as animations",
+        out.meshes,
+        out.triangles,
+        out.materials,
+        out.textures,
+        mb(out.texture_bytes),
+        out.cameras,
+        out.animations
+    );
+    println!(
+        "light maps: {} page(s) of {}×{} texels, irradiance as RGBE in 8-bit PNG through \
+         MOZ_lightmap ({:.2} MB)",
+        out.lightmap_pages,
+        out.lightmap_size.0,
+        out.lightmap_size.1,
+        mb(out.lightmap_bytes)
+    );
+    if out.environment_bytes > 0 {
+        println!(
+            "environment map: embedded, RGBE in 8-bit PNG ({:.2} MB)",
+            mb(out.environment_bytes)
+        );
+    }
+    if !out.approximations.is_empty() {
+        println!("glTF materials for other viewers (the exact lustre ones are in their extras):");
+        for a in &out.approximations {
+            println!("  {a}");
+        }
+    }
+    println!("wrote {} ({:.2} MB)", args.out.display(), mb(out.bytes));
+    Ok(())
 }
 
 /// Three channels as `[a, b, c]` with four decimals.

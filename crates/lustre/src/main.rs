@@ -67,8 +67,8 @@ enum Command {
     /// Local bandwidth maps (004 Fig. IV.6 and IV.8): an environment map's angular bandwidth or
     /// a material's BRDF bandwidth table, as a log-scale heat map.
     Bandwidth(bandwidth_cmd::BandwidthArgs),
-    /// Take results to other tools: a material as glTF 2.0 (the metallic-roughness model fitted
-    /// to it, with its error, on a sample sphere).
+    /// Take results to other tools: a material as glTF 2.0 or Mitsuba 3 (a model fitted to it,
+    /// with its error), a baked scene as one glTF 2.0 file with its light maps.
     Export(export_cmd::ExportArgs),
     /// List built-in materials, analytic models, published fits, the 100 MERL materials and
     /// where data comes from.

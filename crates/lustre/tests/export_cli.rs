@@ -366,3 +366,283 @@ fn mitsuba_exports_evaluate_alike_in_mitsuba_and_in_lustre() {
     // lustre's RGL reader against Mitsuba's `measured` plugin (f32 tables).
     assert_close("paper_white_rgb.bsdf", &theirs, &ours, 1e-4);
 }
+
+/// Bakes `scene` quickly (full transport, 4 paths a texel, 8 texels per unit) into `out`.
+fn quick_bake(scene: &Path, out: &Path) {
+    ok(lustre()
+        .arg("bake")
+        .arg(scene)
+        .args([
+            "--transport",
+            "full",
+            "--spp",
+            "4",
+            "--texels-per-metre",
+            "8",
+            "--out",
+        ])
+        .arg(out));
+}
+
+/// Renders `scene` (camera `camera`) on the CPU at 96×54 into `out`; against `reference` when
+/// given. The output.
+fn cpu_frame(scene: &Path, camera: &str, out: &Path, reference: Option<&Path>) -> String {
+    let mut c = lustre();
+    c.arg("render")
+        .arg(scene)
+        .args([
+            "--camera", camera, "--size", "96x54", "--device", "cpu", "--out",
+        ])
+        .arg(out);
+    if let Some(r) = reference {
+        c.arg("--compare-reference").arg(r);
+    }
+    ok(&mut c)
+}
+
+/// The glossy hits a frame's output printed.
+fn glossy_hits(t: &str) -> f64 {
+    number_after(t, "Regular with 16 samples: ")
+}
+
+/// The export and the baked scene it came from, read by lustre: the same meshes, hints, probes,
+/// cameras, paths, film and environment, and materials that evaluate equal at every mesh's
+/// first vertex (the textures travel as their original files, so exactly).
+fn assert_reloads_unchanged(baked: &Path, glb: &Path) {
+    let a = lustre_scene::Scene::load(baked).expect("baked scene");
+    let b = lustre_scene::Scene::load(glb).expect("exported scene");
+    assert_eq!(a.meshes.len(), b.meshes.len());
+    let pairs: Vec<_> = pairs()
+        .into_iter()
+        .map(|(wi, wo)| (glam::DVec3::from(wi), glam::DVec3::from(wo)))
+        .collect();
+    let mut worst: f64 = 0.0;
+    for (ma, mb) in a.meshes.iter().zip(&b.meshes) {
+        assert_eq!(ma.name, mb.name);
+        assert_eq!(ma.positions, mb.positions, "{}", ma.name);
+        assert_eq!(ma.indices, mb.indices, "{}", ma.name);
+        assert_eq!(ma.uv1, mb.uv1, "{}", ma.name);
+        assert_eq!(ma.uv0.is_some(), mb.uv0.is_some(), "{}", ma.name);
+        assert_eq!(ma.hints, mb.hints, "{}", ma.name);
+        assert_eq!(ma.emission, mb.emission, "{}", ma.name);
+        let (xa, xb) = (&a.materials[ma.material], &b.materials[mb.material]);
+        assert_eq!(xa.name, xb.name);
+        assert_eq!(xa.kind.name(), xb.kind.name(), "{}", xa.name);
+        assert_eq!(xa.two_sided, xb.two_sided, "{}", xa.name);
+        let uv = |m: &lustre_scene::Mesh| {
+            [
+                m.uv0.as_ref().map_or(glam::Vec2::ZERO, |u| u[0]),
+                m.uv1.as_ref().map_or(glam::Vec2::ZERO, |u| u[0]),
+            ]
+        };
+        let fa = xa.bsdf_at(&a.textures, &uv(ma)).expect("bsdf");
+        let fb = xb.bsdf_at(&b.textures, &uv(mb)).expect("bsdf");
+        for &(wi, wo) in &pairs {
+            let (va, vb) = (fa.eval(wi, wo), fb.eval(wi, wo));
+            for c in 0..3 {
+                let d = (va.0[c] - vb.0[c]).abs() / (1e-3 + va.0[c].abs());
+                worst = worst.max(d);
+                // Within an 8-bit texture's quantisation.
+                assert!(d <= 1.0 / 255.0, "{}: {va:?} vs {vb:?}", xa.name);
+            }
+        }
+    }
+    eprintln!("materials: largest relative difference {worst:.2e}");
+    assert_eq!(a.probes, b.probes);
+    assert_eq!(a.cameras, b.cameras);
+    assert_eq!(a.camera_paths, b.camera_paths);
+    assert_eq!(a.film, b.film);
+    let (ea, eb) = (a.environment.as_ref(), b.environment.as_ref());
+    assert_eq!(ea.is_some(), eb.is_some());
+    if let (Some(ea), Some(eb)) = (ea, eb) {
+        assert_eq!(ea.to_local, eb.to_local);
+        assert_eq!(ea.intensity, eb.intensity);
+        match (&ea.source, &eb.source) {
+            // A Radiance .hdr's texels come back bit for bit from the embedded RGBE PNG.
+            (
+                lustre_scene::EnvironmentSource::Map { map: x, .. },
+                lustre_scene::EnvironmentSource::Map { map: y, .. },
+            ) => assert!(x == y, "the environment map changed"),
+            (x, y) => assert_eq!(x, y),
+        }
+    }
+    let lm = b.lightmap.as_ref().expect("the light map travels");
+    assert_eq!(Some(&lm.atlas), a.lightmap.as_ref().map(|l| &l.atlas));
+    assert!(!lm.embedded.is_empty() && lm.pages.is_empty());
+}
+
+/// Mean over the texels and channels of an EXR light-map page.
+fn page_mean(exr: &Path) -> f64 {
+    let img = image::open(exr).expect("page").into_rgb32f();
+    let n = img.as_raw().len();
+    img.as_raw().iter().map(|&v| f64::from(v)).sum::<f64>() / n as f64
+}
+
+/// three.js (GLTFLoader and a MOZ_lightmap plugin) in headless Chromium on `glb`: its report.
+fn three_page(glb: &Path, png: &Path) -> serde_json::Value {
+    let report = node_tool("three_page.mjs", &[glb, png]);
+    eprintln!("{report}");
+    serde_json::from_str(report.trim()).expect("JSON")
+}
+
+#[test]
+fn a_baked_hall_exports_to_a_glb_that_validates_reloads_and_opens_in_three_js() {
+    let dir = tempfile::tempdir().expect("dir");
+    let d = dir.path();
+    // The Modern Hall from its own XML (the automatic real-time set-up decides its hints).
+    let hall = lustre_brdf::shared_data_dir().join("scenes/modern_hall/mitsuba/scene.xml");
+    quick_bake(&hall, &d.join("bake"));
+    let baked = d.join("bake/scene.toml");
+    let glb = d.join("hall.glb");
+    let t = ok(lustre()
+        .args(["export", "scene"])
+        .arg(&baked)
+        .arg("--out")
+        .arg(&glb));
+    assert!(
+        t.contains("32 meshes") && t.contains("through MOZ_lightmap") && t.contains("wrote"),
+        "{t}"
+    );
+    // Materials glTF cannot say are named with what the glTF one leaves out.
+    assert!(
+        t.contains("Glass (dielectric): solid glass as glTF's thin-walled transmission"),
+        "{t}"
+    );
+    validate(&[&glb]);
+    assert_reloads_unchanged(&baked, &glb);
+    // The frames agree: the scene's camera, from the bake and from the export.
+    let a = cpu_frame(&baked, "default", &d.join("a"), None);
+    let b = cpu_frame(&glb, "default", &d.join("b"), Some(&d.join("a/frame.exr")));
+    let psnr = number_after(&b, "PSNR ");
+    eprintln!("Hall, baked vs exported: {psnr} dB");
+    assert!(psnr >= 45.0, "{b}");
+    assert_eq!(glossy_hits(&a), glossy_hits(&b), "{a}\n{b}");
+    // three.js shows the light map: its page decodes to the baked irradiance, and the frame is
+    // several times brighter with it than without.
+    let r = three_page(&glb, &d.join("three.png"));
+    let with = &r["with"];
+    assert_eq!(with["meshes"].as_f64(), Some(32.0), "{r}");
+    assert!(with["lightmapped"].as_f64().unwrap_or(0.0) >= 10.0, "{r}");
+    assert_eq!(with["pages"][0]["encoding"], "rgbe", "{r}");
+    let three_mean = with["pages"][0]["meanIrradiance"].as_f64().expect("mean");
+    let baked_mean = page_mean(&d.join("bake/lightmap_000.exr"));
+    assert!(
+        (three_mean / baked_mean - 1.0).abs() <= 0.005,
+        "three.js page mean {three_mean}, baked {baked_mean}"
+    );
+    let (lit, unlit) = (
+        with["frameMean"].as_f64().expect("frame"),
+        r["without"]["frameMean"].as_f64().expect("frame"),
+    );
+    assert!(lit >= 2.0 * unlit && lit > 0.05, "{r}");
+    assert!(r["console"].as_array().is_some_and(Vec::is_empty), "{r}");
+    assert!(
+        std::fs::metadata(d.join("three.png"))
+            .expect("capture")
+            .len()
+            > 1000
+    );
+}
+
+#[test]
+fn a_sunroom_exports_with_its_sky_cameras_and_camera_path() {
+    let dir = tempfile::tempdir().expect("dir");
+    let d = dir.path();
+    let sunroom = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/sunroom/scene.xml");
+    let scene = d.join("scene.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            r#"schema = "lustre-scene"
+version = 1
+film = {{ width = 320, height = 180 }}
+
+[[geometry]]
+file = {:?}
+
+[[camera]]
+name = "corner"
+position = [2.0, 1.4, 1.8]
+look_at = [-1.0, 0.8, -1.0]
+up = [0.0, 1.0, 0.0]
+fov_deg = 60.0
+fov_axis = "y"
+
+[[camera_path]]
+name = "walk"
+looped = false
+keyframes = [{{ time = 0.0, camera = "corner" }}, {{ time = 3.0, camera = "default" }}]
+"#,
+            sunroom.display().to_string()
+        ),
+    )
+    .expect("write");
+    quick_bake(&scene, &d.join("bake"));
+    let baked = d.join("bake/scene.toml");
+    let glb = d.join("sunroom.glb");
+    // An existing file is replaced whole.
+    std::fs::write(&glb, b"old").expect("write");
+    let t = ok(lustre()
+        .args(["export", "scene"])
+        .arg(&baked)
+        .arg("--out")
+        .arg(&glb));
+    assert!(
+        t.contains("2 cameras, 1 camera paths as animations")
+            && t.contains("environment map: embedded"),
+        "{t}"
+    );
+    let names: Vec<_> = std::fs::read_dir(d)
+        .expect("dir")
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .collect();
+    assert!(!names.iter().any(|n| n.contains(".tmp")), "{names:?}");
+    validate(&[&glb]);
+    assert_reloads_unchanged(&baked, &glb);
+    for camera in ["default", "corner"] {
+        let a = cpu_frame(&baked, camera, &d.join(format!("a-{camera}")), None);
+        let b = cpu_frame(
+            &glb,
+            camera,
+            &d.join(format!("b-{camera}")),
+            Some(&d.join(format!("a-{camera}/frame.exr"))),
+        );
+        let psnr = number_after(&b, "PSNR ");
+        eprintln!("sunroom {camera}, baked vs exported: {psnr} dB");
+        assert!(psnr >= 45.0, "{b}");
+        assert_eq!(glossy_hits(&a), glossy_hits(&b), "{a}\n{b}");
+    }
+    // three.js plays the path as an animation of its camera node.
+    let r = three_page(&glb, &d.join("three.png"));
+    let anim = &r["with"]["animations"][0];
+    assert_eq!(anim["name"], "walk", "{r}");
+    assert_eq!(anim["duration"].as_f64(), Some(3.0), "{r}");
+    assert_eq!(anim["tracks"].as_f64(), Some(2.0), "{r}");
+    assert_eq!(r["with"]["lightmapped"].as_f64(), Some(17.0), "{r}");
+}
+
+#[test]
+fn scene_export_refuses_what_it_cannot_write() {
+    let dir = tempfile::tempdir().expect("dir");
+    let sunroom = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/sunroom/scene.xml");
+    // Not baked: refused, with the command that bakes it.
+    let t = fails(
+        lustre()
+            .args(["export", "scene"])
+            .arg(&sunroom)
+            .arg("--out")
+            .arg(dir.path().join("s.glb")),
+    );
+    assert!(t.contains("lustre bake"), "{t}");
+    // A scene is one binary glTF.
+    let t = fails(
+        lustre()
+            .args(["export", "scene"])
+            .arg(&sunroom)
+            .arg("--out")
+            .arg(dir.path().join("s.gltf")),
+    );
+    assert!(t.contains("name it .glb"), "{t}");
+    assert!(!dir.path().join("s.glb").exists() && !dir.path().join("s.gltf").exists());
+}

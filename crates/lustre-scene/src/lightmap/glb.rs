@@ -104,7 +104,7 @@ pub fn write_atlas_glb(scene: &Scene, atlas: &LightmapAtlas, path: &Path) -> Res
 }
 
 /// The JSON chunk of a GLB (or the text of a `.gltf`).
-fn json_of(path: &Path, bytes: &[u8]) -> Result<Value> {
+pub(crate) fn json_of(path: &Path, bytes: &[u8]) -> Result<Value> {
     let fmt = |p: String| SceneError::format(path, p);
     let json = if bytes.starts_with(b"glTF") {
         if bytes.len() < 20 {
@@ -125,14 +125,16 @@ fn field_u32(v: &Value, key: &str) -> Option<u32> {
     v.get(key)?.as_u64().and_then(|x| u32::try_from(x).ok())
 }
 
-/// Reads an atlas written by [`write_atlas_glb`] onto `scene`: each light-mapped mesh's
-/// vertices and indices are replaced by the file's (matched by the scene-mesh index in the
-/// extras and checked by name and triangle count), and the atlas is returned. Errors name the
-/// file: not such a file, or made for another scene (mesh count, names, triangle counts).
-pub fn read_atlas_glb(path: &Path, scene: &mut Scene) -> Result<LightmapAtlas> {
+/// An atlas as `asset.extras.lustre_lightmap` describes it (no meshes' pages yet), and the
+/// number of meshes of the scene it was made for.
+pub(crate) struct AtlasInfo {
+    pub atlas: LightmapAtlas,
+    pub scene_meshes: usize,
+}
+
+/// Reads `asset.extras.lustre_lightmap` of a glTF's JSON; errors name `path`.
+pub(crate) fn atlas_info(path: &Path, json: &Value) -> Result<AtlasInfo> {
     let fmt = |p: String| SceneError::format(path, p);
-    let bytes = crate::error::read_referenced(&scene.source.clone(), path)?;
-    let json = json_of(path, &bytes)?;
     let info = json
         .pointer("/asset/extras/lustre_lightmap")
         .ok_or_else(|| {
@@ -162,6 +164,41 @@ pub fn read_atlas_glb(path: &Path, scene: &mut Scene) -> Result<LightmapAtlas> {
             "atlas of {pages} pages of {width}×{height} texels is invalid"
         )));
     }
+    Ok(AtlasInfo {
+        atlas: LightmapAtlas {
+            width,
+            height,
+            pages,
+            mesh_page: Vec::new(),
+            gutter,
+            texels_per_metre,
+            source,
+        },
+        scene_meshes,
+    })
+}
+
+/// Reads an atlas written by [`write_atlas_glb`] onto `scene`: each light-mapped mesh's
+/// vertices and indices are replaced by the file's (matched by the scene-mesh index in the
+/// extras and checked by name and triangle count), and the atlas is returned. Errors name the
+/// file: not such a file, or made for another scene (mesh count, names, triangle counts).
+pub fn read_atlas_glb(path: &Path, scene: &mut Scene) -> Result<LightmapAtlas> {
+    let fmt = |p: String| SceneError::format(path, p);
+    let bytes = crate::error::read_referenced(&scene.source.clone(), path)?;
+    let json = json_of(path, &bytes)?;
+    let AtlasInfo {
+        atlas,
+        scene_meshes,
+    } = atlas_info(path, &json)?;
+    let LightmapAtlas {
+        width,
+        height,
+        pages,
+        gutter,
+        texels_per_metre,
+        source,
+        ..
+    } = atlas;
     if scene_meshes != scene.meshes.len() {
         return Err(fmt(format!(
             "made for a scene of {scene_meshes} meshes, this one ({}) has {}",

@@ -36,6 +36,7 @@ pub use check::{
     check_layout, find_overlapping_triangles, raster_conservative, uv1_charts, LayoutCheck,
     RASTER_TOLERANCE,
 };
+pub(crate) use glb::{atlas_info, json_of};
 pub use glb::{read_atlas_glb, write_atlas_glb};
 
 use serde::{Deserialize, Serialize};
@@ -86,6 +87,9 @@ pub struct SceneLightmap {
     /// The atlas `.glb`, resolved against the scene file's folder.
     pub atlas_file: PathBuf,
     /// One image per page (page `i` is `pages[i]`), resolved against the scene file's folder;
-    /// empty when the atlas has not been baked yet.
+    /// empty when the atlas has not been baked yet or the pages are `embedded`.
     pub pages: Vec<PathBuf>,
+    /// The baked pages (irradiance, one RGB texel list per page) when the scene file carries
+    /// them itself (a glTF `lustre export scene` wrote); empty when they are files.
+    pub embedded: Vec<Vec<[f32; 3]>>,
 }

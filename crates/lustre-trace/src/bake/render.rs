@@ -236,6 +236,22 @@ pub fn render_lightmapped(
 /// atlas has not been baked).
 pub fn read_pages(lightmap: &SceneLightmap) -> Result<Vec<Vec<[f32; 3]>>> {
     let atlas = &lightmap.atlas;
+    if !lightmap.embedded.is_empty() {
+        let texels = atlas.width as usize * atlas.height as usize;
+        if lightmap.embedded.len() != atlas.pages as usize
+            || lightmap.embedded.iter().any(|p| p.len() != texels)
+        {
+            return Err(TraceError::Parameter(format!(
+                "{}: {} embedded light-map pages for an atlas of {} pages of {}×{} texels",
+                lightmap.atlas_file.display(),
+                lightmap.embedded.len(),
+                atlas.pages,
+                atlas.width,
+                atlas.height
+            )));
+        }
+        return Ok(lightmap.embedded.clone());
+    }
     if lightmap.pages.is_empty() {
         return Err(TraceError::Parameter(format!(
             "the light-map atlas {} has no baked pages (run `lustre bake`)",
