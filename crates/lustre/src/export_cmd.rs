@@ -38,30 +38,49 @@ pub enum ExportCommand {
     /// A baked scene (the scene.toml `lustre bake` wrote) as one binary glTF 2.0 file: meshes
     /// with TEXCOORD_1 for the light-map atlas, the light-map pages as RGBE PNG textures through
     /// `MOZ_lightmap`, the nearest glTF materials (the exact lustre ones in their extras),
-    /// an equirect environment map, cameras, and the camera paths as animations. lustre reads
-    /// the file back as it was (`lustre render FILE.glb`).
+    /// an equirect environment map, cameras, and the camera paths as animations; the probes'
+    /// cube maps as .hdr faces beside it (FILE.glb.probes/). lustre reads the file back as it
+    /// was (`lustre render FILE.glb`). With `--to mitsuba`, any scene as a
+    /// Mitsuba 3 scene folder (scene.xml, OBJ meshes, textures) that Mitsuba renders as it is.
     Scene(SceneArgs),
 }
 
 /// The formats `lustre export scene` writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum SceneFormat {
-    /// glTF 2.0 binary (.glb) with the light maps inside (`MOZ_lightmap`).
+    /// glTF 2.0 binary (.glb) with the light maps inside (`MOZ_lightmap`); the scene must be
+    /// baked.
     Glb,
+    /// A Mitsuba 3 scene folder: DIR/scene.xml, the meshes as OBJ in DIR/meshes, textures and
+    /// the environment map in DIR/textures (any scene; light maps are not needed).
+    Mitsuba,
 }
 
 /// Arguments of `lustre export scene`.
 #[derive(clap::Args, Debug)]
 pub struct SceneArgs {
-    /// A baked scene file (DIR/scene.toml from `lustre bake SCENE --out DIR`).
+    /// A baked scene file (DIR/scene.toml from `lustre bake SCENE --out DIR`) for glTF; any
+    /// scene lustre reads for Mitsuba.
     #[arg(value_name = "SCENE")]
     pub scene: PathBuf,
     /// The format to write.
     #[arg(long, value_enum, default_value_t = SceneFormat::Glb)]
     pub to: SceneFormat,
-    /// The file to write (.glb; replaced atomically when it exists).
-    #[arg(long, value_name = "FILE")]
+    /// The file to write (.glb; replaced atomically when it exists), or for Mitsuba the folder
+    /// (created; its files replaced atomically, scene.xml last).
+    #[arg(long, value_name = "FILE|DIR")]
     pub out: PathBuf,
+    /// glTF: the probes' cube-map face size in texels (as `lustre render --probe-size`); the
+    /// probes are captured as the renderer captures them and written beside the .glb.
+    #[arg(long, default_value_t = 128)]
+    pub probe_size: usize,
+    /// Mitsuba: samples per pixel written as the scene's `spp` default (`mitsuba -D spp=N`
+    /// overrides it).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1_048_576))]
+    pub spp: u32,
+    /// Mitsuba: the path integrator's `max_depth` default (lustre reference's --max-depth).
+    #[arg(long, default_value_t = 65, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub max_depth: u32,
 }
 
 /// The formats `lustre export material` writes.
@@ -126,7 +145,121 @@ fn spec_fit(m: &lustre_scene::material::Material) -> Option<(serde_json::Value, 
     ))
 }
 
+/// The Mitsuba BSDF of a material given by a catalog specification: an RGL file as Mitsuba's
+/// `measured` (copied into the folder), anything else the better of Mitsuba's rough conductor
+/// and rough plastic fitted to it (Ngan L2), and a line saying so with its error.
+fn spec_mitsuba(
+    m: &lustre_scene::material::Material,
+    id: &str,
+    dir: &std::path::Path,
+) -> Option<(String, String)> {
+    let lustre_scene::material::MaterialKind::Spec(s) = &m.kind else {
+        return None;
+    };
+    let element = |xml: String| -> Option<String> {
+        let (a, b) = (xml.find("<bsdf")?, xml.rfind("</bsdf>")?);
+        Some(xml[a..b + "</bsdf>".len()].to_string())
+    };
+    if s.edits.is_empty() {
+        if let Some(file) = rgl_file(&s.spec) {
+            let name = file.file_name()?.to_string_lossy().into_owned();
+            let rel = format!("textures/{name}");
+            let bytes = std::fs::read(&file).ok()?;
+            lustre_scene::scene_file::write_atomic(&dir.join(&rel), &bytes).ok()?;
+            let note = format!("{} as Mitsuba's measured BSDF (no fit, no loss)", s.spec);
+            return Some((element(measured_xml(id, &rel, &note))?, note));
+        }
+    }
+    let bsdf = lustre_brdf::catalog::resolve(&s.spec).ok()?;
+    let data = lustre_fit::data::MeasuredData::from_bsdf(&m.name, bsdf);
+    let f = lustre_fit::mitsuba::fit_mitsuba(&data).ok()?;
+    let edits = if s.edits.is_empty() {
+        String::new()
+    } else {
+        format!(" (before {} edit(s))", s.edits.len())
+    };
+    let note = format!(
+        "{}{edits} as Mitsuba's {} fitted to it: Ngan L2 {:.4}",
+        s.spec,
+        f.bsdf.plugin(),
+        f.errors.ngan_mean()
+    );
+    Some((element(f.bsdf.xml(id, &note))?, note))
+}
+
+/// `lustre export scene --to mitsuba`: any scene as a Mitsuba 3 scene folder.
+fn scene_mitsuba(args: &SceneArgs) -> anyhow::Result<()> {
+    if args.out.is_file() {
+        anyhow::bail!(
+            "--out {}: a Mitsuba scene is a folder (scene.xml, meshes/, textures/); this is a file",
+            args.out.display()
+        );
+    }
+    let scene = lustre_scene::Scene::load(&args.scene)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let settings = lustre_scene::export::mitsuba::MitsubaSettings {
+        spp: args.spp,
+        max_depth: args.max_depth,
+    };
+    // Fitting a Mitsuba model to each lustre specification takes seconds: say so.
+    let fits = scene
+        .materials
+        .iter()
+        .filter(|m| matches!(m.kind, lustre_scene::material::MaterialKind::Spec(_)))
+        .count();
+    let spinner = ProgressBar::new_spinner();
+    if fits > 0 {
+        spinner.set_style(
+            ProgressStyle::with_template("{spinner} {msg} {elapsed}")
+                .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+        );
+        spinner.enable_steady_tick(std::time::Duration::from_millis(200));
+        spinner.set_message(format!(
+            "writing the scene; fitting Mitsuba models to {fits} lustre material(s)"
+        ));
+    }
+    let out = lustre_scene::export::mitsuba::write_mitsuba_scene(
+        &scene,
+        &args.out,
+        settings,
+        &spec_mitsuba,
+    );
+    spinner.finish_and_clear();
+    let out = out?;
+    println!(
+        "{} meshes ({} triangles, OBJ), {} BSDFs, {} texture files, {} area emitters, {} sensors; \
+         path tracer, max_depth {}, {} spp, {}×{} (override with mitsuba -D)",
+        out.meshes,
+        out.triangles,
+        out.materials,
+        out.textures,
+        out.emitters,
+        out.cameras,
+        args.max_depth,
+        args.spp,
+        scene.film.width,
+        scene.film.height
+    );
+    if !out.approximations.is_empty() {
+        println!("what Mitsuba's plugins approximate:");
+        for a in &out.approximations {
+            println!("  {a}");
+        }
+    }
+    println!(
+        "wrote {} ({:.2} MB in all)",
+        args.out.join("scene.xml").display(),
+        out.bytes as f64 / 1e6
+    );
+    Ok(())
+}
+
 fn scene(args: &SceneArgs) -> anyhow::Result<()> {
+    if args.to == SceneFormat::Mitsuba {
+        return scene_mitsuba(args);
+    }
     let ext = args
         .out
         .extension()
@@ -181,7 +314,146 @@ fn scene(args: &SceneArgs) -> anyhow::Result<()> {
         }
     }
     println!("wrote {} ({:.2} MB)", args.out.display(), mb(out.bytes));
+    if let Some(p) = write_probes(&baked, &args.out, args.probe_size)? {
+        println!(
+            "probes: {} cube map(s) of 6 × {}² texels as Radiance .hdr faces (OpenGL cube-map \
+             convention) and probes.json in {} ({:.2} MB, captured in {:.1} s)",
+            p.count,
+            args.probe_size,
+            p.dir.display(),
+            mb(p.bytes),
+            p.seconds
+        );
+    }
     Ok(())
+}
+
+/// The probe cube maps written beside an exported glTF.
+struct ProbeFiles {
+    dir: PathBuf,
+    count: usize,
+    bytes: usize,
+    seconds: f64,
+}
+
+/// The file name of face `f` of probe `k` named `name`.
+fn face_file(k: usize, name: &str, f: usize) -> String {
+    let name: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "-_".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .take(48)
+        .collect();
+    format!(
+        "{k:02}_{name}_{}.hdr",
+        ["px", "nx", "py", "ny", "pz", "nz"][f]
+    )
+}
+
+/// Captures the scene's probes (object probes, then room probes) as `lustre render` does and
+/// writes each as six Radiance `.hdr` faces (+X, −X, +Y, −Y, +Z, −Z; OpenGL's cube-map
+/// convention, row 0 at the top) in `OUT.probes/`, with `probes.json` naming them with their
+/// centres and bounding planes. `None` when the scene has no probes.
+fn write_probes(
+    baked: &lustre_trace::baked::BakedScene,
+    out: &std::path::Path,
+    face_size: usize,
+) -> anyhow::Result<Option<ProbeFiles>> {
+    use lustre_shade::probe::{capture_probes, has_probes, LitScene, ProbeOptions};
+    let scene = &baked.scene;
+    if !has_probes(scene) {
+        return Ok(None);
+    }
+    let opts = ProbeOptions {
+        face_size,
+        ..ProbeOptions::default()
+    };
+    opts.validate()?;
+    let t = std::time::Instant::now();
+    let (ps, _) = lustre_trace::reference::path_scene(scene)?;
+    let spec: Vec<lustre_brdf::rgb::Rgb> = scene
+        .materials
+        .iter()
+        .map(lustre_trace::bake::spec_albedo)
+        .collect();
+    let lm = lustre_trace::bake::render::Lightmapped::new(
+        scene,
+        &baked.atlas,
+        &baked.pages,
+        &ps.geometry,
+        spec,
+    )?;
+    let pt = lustre_trace::path_tracer::PathTracer::new(
+        &ps,
+        lustre_trace::path_tracer::PathOptions::default(),
+    )?;
+    let lit = LitScene::new(scene, &ps, &pt, &lm)?;
+    let total = scene.meshes.iter().filter(|m| m.hints.probe).count() + scene.probes.len();
+    let bar = ProgressBar::new(total as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} probes captured {elapsed}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let probes = capture_probes(&lit, &opts, &mut |_, _| bar.inc(1))?;
+    bar.finish_and_clear();
+    let mut dir = out.as_os_str().to_owned();
+    dir.push(".probes");
+    let dir = PathBuf::from(dir);
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut bytes = 0;
+    let mut list = Vec::new();
+    for (k, p) in probes.iter().enumerate() {
+        let cube = &p.pyramid.levels[0];
+        let mut faces = Vec::new();
+        for (f, face) in cube.faces.iter().enumerate() {
+            let texels: Vec<image::Rgb<f32>> = face.iter().map(|&c| image::Rgb(c)).collect();
+            let mut hdr = Vec::new();
+            image::codecs::hdr::HdrEncoder::new(&mut hdr)
+                .encode(&texels, cube.size, cube.size)
+                .with_context(|| format!("encoding probe {:?}", p.name))?;
+            let name = face_file(k, &p.name, f);
+            lustre_scene::scene_file::write_atomic(&dir.join(&name), &hdr)?;
+            bytes += hdr.len();
+            faces.push(name);
+        }
+        let planes: Vec<serde_json::Value> = p
+            .planes
+            .iter()
+            .map(|b| json!({ "point": (b.point + p.centre).to_array(), "normal": b.normal.to_array() }))
+            .collect();
+        list.push(json!({
+            "name": p.name,
+            "kind": if p.mesh.is_some() { "object" } else { "room" },
+            "mesh": p.mesh,
+            "centre": p.centre.to_array(),
+            "planes": planes,
+            "faces": faces,
+        }));
+    }
+    let index = json!({
+        "schema": "lustre-probes",
+        "version": 1,
+        "scene": out.file_name().map(|n| n.to_string_lossy().to_string()),
+        "face_size": face_size,
+        "faces": "+X, -X, +Y, -Y, +Z, -Z; OpenGL cube-map convention, row 0 at the top; \
+                  linear radiance (Radiance RGBE .hdr)",
+        "planes": "world-space point and normal of each bounding plane (parallax), the normal pointing into the probe's volume",
+        "probes": list,
+    });
+    let text = serde_json::to_string_pretty(&index)?;
+    lustre_scene::scene_file::write_atomic(&dir.join("probes.json"), text.as_bytes())?;
+    bytes += text.len();
+    Ok(Some(ProbeFiles {
+        dir,
+        count: probes.len(),
+        bytes,
+        seconds: t.elapsed().as_secs_f64(),
+    }))
 }
 
 /// Three channels as `[a, b, c]` with four decimals.

@@ -471,6 +471,76 @@ fn assert_reloads_unchanged(baked: &Path, glb: &Path) {
     assert!(!lm.embedded.is_empty() && lm.pages.is_empty());
 }
 
+/// The probe cube maps beside an exported glb are the probes lustre's renderer captures for the
+/// baked scene (the same capture, face for face, texel for texel within the .hdr's RGBE
+/// precision), listed in probes.json with their centres and bounding planes.
+fn assert_probes_written(baked: &Path, glb: &Path, printed: &str) {
+    use lustre_shade::probe::{capture_probes, LitScene, ProbeOptions};
+    let b = lustre_trace::baked::BakedScene::load(baked).expect("baked");
+    let (ps, _) = lustre_trace::reference::path_scene(&b.scene).expect("path scene");
+    let spec = b
+        .scene
+        .materials
+        .iter()
+        .map(lustre_trace::bake::spec_albedo)
+        .collect();
+    let lm = lustre_trace::bake::render::Lightmapped::new(
+        &b.scene,
+        &b.atlas,
+        &b.pages,
+        &ps.geometry,
+        spec,
+    )
+    .expect("light maps");
+    let pt = lustre_trace::path_tracer::PathTracer::new(&ps, Default::default()).expect("tracer");
+    let lit = LitScene::new(&b.scene, &ps, &pt, &lm).expect("lit");
+    let probes = capture_probes(&lit, &ProbeOptions::default(), &mut |_, _| {}).expect("probes");
+    assert!(!probes.is_empty());
+    assert!(
+        printed.contains(&format!("probes: {} cube map(s) of 6 × 128²", probes.len())),
+        "{printed}"
+    );
+    let dir = PathBuf::from(format!("{}.probes", glb.display()));
+    let index: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("probes.json")).expect("json"))
+            .expect("JSON");
+    let list = index["probes"].as_array().expect("probes");
+    assert_eq!(list.len(), probes.len());
+    let mut worst: f64 = 0.0;
+    for (p, entry) in probes.iter().zip(list) {
+        assert_eq!(entry["name"], p.name.as_str());
+        assert_eq!(entry["centre"].as_array().map(Vec::len), Some(3));
+        for (i, c) in p.centre.to_array().iter().enumerate() {
+            assert_eq!(entry["centre"][i].as_f64(), Some(*c));
+        }
+        assert_eq!(
+            entry["planes"].as_array().map(Vec::len),
+            Some(p.planes.len())
+        );
+        let cube = &p.pyramid.levels[0];
+        for (f, face) in cube.faces.iter().enumerate() {
+            let file = dir.join(entry["faces"][f].as_str().expect("face file"));
+            let img = image::open(&file).expect("face").into_rgb32f();
+            assert_eq!(
+                (img.width() as usize, img.height() as usize),
+                (cube.size, cube.size)
+            );
+            for (got, want) in img.pixels().zip(face) {
+                let m = want.iter().fold(0f32, |a, &b| a.max(b));
+                for c in 0..3 {
+                    let d = f64::from((got.0[c] - want[c]).abs() / m.max(1e-6));
+                    worst = worst.max(d);
+                    assert!(d <= 1.0 / 128.0, "{}: {got:?} vs {want:?}", file.display());
+                }
+            }
+        }
+    }
+    eprintln!(
+        "{} probes: largest texel difference {worst:.2e} of the texel's largest channel",
+        probes.len()
+    );
+}
+
 /// Mean over the texels and channels of an EXR light-map page.
 fn page_mean(exr: &Path) -> f64 {
     let img = image::open(exr).expect("page").into_rgb32f();
@@ -510,6 +580,7 @@ fn a_baked_hall_exports_to_a_glb_that_validates_reloads_and_opens_in_three_js() 
     );
     validate(&[&glb]);
     assert_reloads_unchanged(&baked, &glb);
+    assert_probes_written(&baked, &glb, &t);
     // The frames agree: the scene's camera, from the bake and from the export.
     let a = cpu_frame(&baked, "default", &d.join("a"), None);
     let b = cpu_frame(&glb, "default", &d.join("b"), Some(&d.join("a/frame.exr")));
@@ -645,4 +716,187 @@ fn scene_export_refuses_what_it_cannot_write() {
     );
     assert!(t.contains("name it .glb"), "{t}");
     assert!(!dir.path().join("s.glb").exists() && !dir.path().join("s.gltf").exists());
+}
+
+/// An EXR's width, height and RGB values.
+fn exr(path: &Path) -> (usize, usize, Vec<f64>) {
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .into_rgb32f();
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    (w, h, img.into_raw().into_iter().map(f64::from).collect())
+}
+
+/// A Gaussian blur of σ pixels (edges clamped), which takes Monte-Carlo noise out of a
+/// comparison of two renderers.
+fn blur(w: usize, h: usize, a: &[f64], sigma: f64) -> Vec<f64> {
+    let r = (3.0 * sigma) as isize;
+    let k: Vec<f64> = (-r..=r)
+        .map(|i| (-0.5 * (i as f64 / sigma).powi(2)).exp())
+        .collect();
+    let sum: f64 = k.iter().sum();
+    let pass = |a: &[f64], dx: isize, dy: isize| -> Vec<f64> {
+        let mut o = vec![0.0; a.len()];
+        for y in 0..h as isize {
+            for x in 0..w as isize {
+                for c in 0..3 {
+                    o[(y as usize * w + x as usize) * 3 + c] = k
+                        .iter()
+                        .enumerate()
+                        .map(|(i, kk)| {
+                            let d = i as isize - r;
+                            let xx = (x + d * dx).clamp(0, w as isize - 1) as usize;
+                            let yy = (y + d * dy).clamp(0, h as isize - 1) as usize;
+                            kk * a[(yy * w + xx) * 3 + c]
+                        })
+                        .sum::<f64>()
+                        / sum;
+                }
+            }
+        }
+        o
+    };
+    pass(&pass(a, 1, 0), 0, 1)
+}
+
+/// `(mean ratio, relative RMS)` of `img` against `reference` after a `sigma`-pixel blur.
+fn against(img: &Path, reference: &Path, sigma: f64) -> (f64, f64) {
+    let (w, h, a) = exr(img);
+    let (w2, h2, b) = exr(reference);
+    assert_eq!((w, h), (w2, h2));
+    let (a, b) = if sigma > 0.0 {
+        (blur(w, h, &a, sigma), blur(w, h, &b, sigma))
+    } else {
+        (a, b)
+    };
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let rms = (a.iter().zip(&b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt();
+    (mean(&a) / mean(&b), rms / mean(&b))
+}
+
+/// Mitsuba 3 (pip, scalar_rgb) renders `scene` at `size` and `spp` into `out`.
+fn mitsuba_render(scene: &Path, out: &Path, size: &str, spp: u32) {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tools/mitsuba/render_scene.py");
+    let o = Command::new("python3")
+        .arg(script)
+        .arg(scene)
+        .arg(out)
+        .args(["--size", size, "--spp", &spp.to_string()])
+        .output()
+        .expect("python3 runs");
+    let t = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        o.status.success(),
+        "Mitsuba 3 (pip install mitsuba==3.9.1): {t}"
+    );
+    eprintln!("{t}");
+}
+
+/// `lustre reference` of `scene` at `size` and `spp` into `out`.
+fn reference(scene: &Path, out: &Path, size: &str, spp: u32) {
+    ok(lustre()
+        .arg("reference")
+        .arg(scene)
+        .args(["--size", size, "--spp", &spp.to_string(), "--out"])
+        .arg(out));
+}
+
+#[test]
+fn scenes_exported_to_mitsuba_render_alike_in_mitsuba_and_in_lustre() {
+    let dir = tempfile::tempdir().expect("dir");
+    let d = dir.path();
+    let hall = lustre_brdf::shared_data_dir().join("scenes/modern_hall/mitsuba/scene.xml");
+    let sunroom = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/sunroom/scene.xml");
+    for (name, scene, spp) in [("hall", &hall, 1024), ("sunroom", &sunroom, 512)] {
+        let out = d.join(name);
+        let t = ok(lustre()
+            .args(["export", "scene"])
+            .arg(scene)
+            .args(["--to", "mitsuba", "--out"])
+            .arg(&out));
+        assert!(t.contains("wrote") && t.contains("OBJ"), "{t}");
+        let xml = out.join("scene.xml");
+        // lustre reads the folder back as the same scene: its reference is the original's,
+        // sample for sample.
+        reference(scene, &d.join(format!("{name}-a.exr")), "64x36", 16);
+        reference(&xml, &d.join(format!("{name}-b.exr")), "64x36", 16);
+        let (ratio, rms) = against(
+            &d.join(format!("{name}-b.exr")),
+            &d.join(format!("{name}-a.exr")),
+            0.0,
+        );
+        assert!(
+            (ratio - 1.0).abs() <= 1e-5 && rms <= 1e-4,
+            "{name}: {ratio} {rms}"
+        );
+        // Mitsuba renders the folder as it is, as lustre's path tracer renders the original:
+        // within 2 % after a 2-pixel blur, the mean within 1 %.
+        mitsuba_render(&xml, &d.join(format!("{name}-mitsuba.exr")), "96x54", spp);
+        reference(scene, &d.join(format!("{name}-lustre.exr")), "96x54", spp);
+        let (ratio, rms) = against(
+            &d.join(format!("{name}-mitsuba.exr")),
+            &d.join(format!("{name}-lustre.exr")),
+            2.0,
+        );
+        eprintln!(
+            "{name}: Mitsuba 3 of the export against lustre reference of the original, \
+             {spp} spp, 2-px blur: mean ratio {ratio:.4}, relative RMS {:.2} %",
+            100.0 * rms
+        );
+        assert!((ratio - 1.0).abs() <= 0.01 && rms <= 0.02, "{name}");
+    }
+    // lustre's own materials (a published fit, an RGL measurement) become a fitted Mitsuba
+    // model and Mitsuba's `measured` BSDF (the file copied), and Mitsuba loads the folder.
+    let rgl: PathBuf = std::fs::read_dir(lustre_brdf::shared_data_dir().join("measured/rgl"))
+        .expect("rgl data")
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|e| e == "bsdf"))
+        .min()
+        .expect("an RGL .bsdf file");
+    let toml = d.join("specs.toml");
+    std::fs::write(
+        &toml,
+        format!(
+            "schema = \"lustre-scene\"\nversion = 1\n[[geometry]]\nfile = {:?}\n[materials]\n\
+             Oak = \"sgd:nickel\"\nWalnut = {:?}\n",
+            sunroom.display().to_string(),
+            rgl.display().to_string()
+        ),
+    )
+    .expect("write");
+    let out = d.join("specs");
+    let t = ok(lustre()
+        .args(["export", "scene"])
+        .arg(&toml)
+        .args(["--to", "mitsuba", "--out"])
+        .arg(&out));
+    assert!(
+        t.contains(
+            "Oak (sgd:nickel): sgd:nickel as Mitsuba's roughconductor fitted to it: Ngan L2"
+        ),
+        "{t}"
+    );
+    assert!(
+        t.contains("as Mitsuba's measured BSDF (no fit, no loss)"),
+        "{t}"
+    );
+    let copied = out.join("textures").join(rgl.file_name().expect("name"));
+    assert_eq!(std::fs::read(&copied).ok(), std::fs::read(&rgl).ok());
+    mitsuba_render(&out.join("scene.xml"), &d.join("specs.exr"), "32x18", 4);
+    // The folder is a folder.
+    let file = d.join("file");
+    std::fs::write(&file, b"x").expect("write");
+    let t = fails(
+        lustre()
+            .args(["export", "scene"])
+            .arg(&hall)
+            .args(["--to", "mitsuba", "--out"])
+            .arg(&file),
+    );
+    assert!(t.contains("a Mitsuba scene is a folder"), "{t}");
 }
