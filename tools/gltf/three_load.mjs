@@ -1,6 +1,7 @@
 // Loads glTF files with three.js's GLTFLoader (the loader three.js viewers use), in node:
 // `node three_load.mjs FILE...`. Prints one JSON line per file: { file, meshes, triangles,
-// materials: [{ name, type, color, metalness, roughness }], userData } and exits 1 when a file
+// materials: [{ name, type, color, metalness, roughness, anisotropy, anisotropyRotation }],
+// userData } and exits 1 when a file
 // fails to load. Textures are not decoded (node has no image decoder); files with images fail.
 import { readFile } from "node:fs/promises";
 import { GLTFLoader } from "three/addons/loaders/GLTFLoader.js";
@@ -27,6 +28,8 @@ for (const file of process.argv.slice(2)) {
         color: m.color ? m.color.toArray() : null,
         metalness: m.metalness,
         roughness: m.roughness,
+        anisotropy: m.anisotropy ?? 0,
+        anisotropyRotation: m.anisotropyRotation ?? 0,
         tangents: "tangent" in g.attributes,
         userData: m.userData,
       });

@@ -73,6 +73,17 @@ fn chi2_models() -> Vec<Box<dyn Bsdf>> {
         Box::new(Plastic::new(Rgb::new(0.1, 0.5, 0.9), Rgb::ONE, 1.5, 1.0, false).unwrap()),
         Box::new(PbrMetallicRoughness::new(Rgb::new(0.8, 0.5, 0.3), 0.3, 0.5).unwrap()),
         Box::new(PbrMetallicRoughness::new(Rgb::splat(0.9), 1.0, 0.4).unwrap()),
+        // KHR_materials_anisotropy: a brushed metal and a dielectric, rotated off the tangent.
+        Box::new(
+            PbrMetallicRoughness::new(Rgb::new(0.9, 0.8, 0.6), 1.0, 0.3)
+                .and_then(|m| m.with_anisotropy(0.8, 0.6))
+                .unwrap(),
+        ),
+        Box::new(
+            PbrMetallicRoughness::new(Rgb::new(0.3, 0.5, 0.7), 0.2, 0.5)
+                .and_then(|m| m.with_anisotropy(0.5, -1.2))
+                .unwrap(),
+        ),
     ]
 }
 
@@ -594,6 +605,11 @@ proptest! {
             Box::new(Conductor::preset("Cu").unwrap()),
             Box::new(Plastic::new(Rgb::splat(c), Rgb::ONE, int, ext, flip).unwrap()),
             Box::new(PbrMetallicRoughness::new(Rgb::splat(c), c, au.min(1.0)).unwrap()),
+            Box::new(
+                PbrMetallicRoughness::new(Rgb::splat(c), c, au.min(1.0))
+                    .and_then(|m| m.with_anisotropy(c, av * 7.0))
+                    .unwrap(),
+            ),
         ];
         for m in &models {
             check_finite(m.as_ref(), wi, wo, u1, u2)?;

@@ -135,10 +135,21 @@ fn gpu_models_match_lustre_brdf() {
         );
         models.push((name, Box::new(m), r));
     }
-    for (name, metallic, roughness) in [("glTF dielectric-ish", 0.3, 0.5), ("glTF metal", 1.0, 0.2)]
-    {
-        let m =
-            PbrMetallicRoughness::new(Rgb::new(0.8, 0.5, 0.2), metallic, roughness).expect("pbr");
+    for (name, metallic, roughness, anisotropy, rotation) in [
+        ("glTF dielectric-ish", 0.3, 0.5, 0.0, 0.0),
+        ("glTF metal", 1.0, 0.2, 0.0, 0.0),
+        ("glTF brushed metal (anisotropy)", 1.0, 0.3, 0.8, 0.6),
+        ("glTF anisotropic dielectric", 0.2, 0.5, 0.5, -1.2),
+    ] {
+        let m = PbrMetallicRoughness::new(Rgb::new(0.8, 0.5, 0.2), metallic, roughness)
+            .and_then(|m| {
+                if anisotropy > 0.0 {
+                    m.with_anisotropy(anisotropy, rotation)
+                } else {
+                    Ok(m)
+                }
+            })
+            .expect("pbr");
         let r = record(
             KIND_PBR_METALLIC_ROUGHNESS,
             0,

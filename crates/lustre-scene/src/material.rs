@@ -783,7 +783,8 @@ impl Material {
                 roughness,
                 transmission,
                 ior,
-                ..
+                anisotropy,
+                anisotropy_rotation,
             } => {
                 let c = rgb(base_color);
                 let r = clamp_unit(roughness.at(textures, uv));
@@ -803,10 +804,13 @@ impl Material {
                         )
                     }
                 } else {
-                    self.emit(
-                        sink,
-                        PbrMetallicRoughness::new(c, clamp_unit(metallic.at(textures, uv)), r)?,
-                    )
+                    let m = PbrMetallicRoughness::new(c, clamp_unit(metallic.at(textures, uv)), r)?;
+                    let m = if *anisotropy > 0.0 {
+                        m.with_anisotropy(clamp_unit(*anisotropy), *anisotropy_rotation)?
+                    } else {
+                        m
+                    };
+                    self.emit(sink, m)
                 }
             }
             MaterialKind::Spec(r) => self.emit(sink, r.bsdf.clone()),

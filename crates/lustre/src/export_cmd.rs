@@ -537,6 +537,12 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
                 g.metallic,
                 g.roughness
             );
+            if g.anisotropy > 0.0 {
+                println!(
+                    "  KHR_materials_anisotropy: strength {:.4}, rotation {:.4} rad from the tangent",
+                    g.anisotropy, g.anisotropy_rotation
+                );
+            }
             g.errors
         }
         Fitted::Mitsuba(m) => {
@@ -578,7 +584,8 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
             args.spec
         );
     }
-    if data.bsdf.flags().anisotropic {
+    let exported_anisotropic = matches!(&fitted, Fitted::Gltf(g) if g.anisotropy > 0.0);
+    if data.bsdf.flags().anisotropic && !exported_anisotropic {
         eprintln!(
             "warning: {} is anisotropic; the exported model is isotropic (the errors above \
              count what is lost)",
@@ -607,6 +614,8 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
                 base_color: g.base_color,
                 metallic: g.metallic,
                 roughness: g.roughness,
+                anisotropy: g.anisotropy,
+                anisotropy_rotation: g.anisotropy_rotation,
                 extras,
             };
             let bytes = write_sphere_glb(&material, &args.out)?;

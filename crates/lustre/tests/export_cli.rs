@@ -193,9 +193,44 @@ fn export_refuses_what_it_cannot_write() {
         "{t}"
     );
     assert!(t.contains("worse than lustre's GGX fit"), "{t}");
+    // An anisotropic material exports with KHR_materials_anisotropy, fitted: three.js reads it
+    // as a physical material with that strength and rotation, lustre renders it anisotropic.
+    let brushed = dir.path().join("brushed.glb");
     let t = ok(lustre()
         .args(["export", "material", "kurt-demo", "--out"])
-        .arg(dir.path().join("brushed.glb")));
+        .arg(&brushed));
+    assert!(!t.contains("the exported model is isotropic"), "{t}");
+    let strength = number_after(&t, "KHR_materials_anisotropy: strength ");
+    let rotation = number_after(&t, ", rotation ");
+    assert!(strength > 0.3, "{t}");
+    // It fits the brushed metal better than lustre's own isotropic GGX fit.
+    let gltf = number_after(&t, "  Ngan L2 ");
+    let ggx = number_after(&t, "GGX fit of the same data: Ngan L2 ");
+    assert!(gltf < ggx, "{t}");
+    validate(&[&brushed]);
+    let v = &three_load(&[&brushed])[0]["materials"][0];
+    assert_eq!(v["type"], "MeshPhysicalMaterial", "{v}");
+    assert!(
+        (v["anisotropy"].as_f64().expect("anisotropy") - strength).abs() <= 5e-5,
+        "{v}"
+    );
+    assert!((v["anisotropyRotation"].as_f64().expect("rotation") - rotation).abs() <= 5e-5);
+    let scene = lustre_scene::Scene::load(&brushed).expect("reloads");
+    let f = scene.materials[0]
+        .bsdf_at(&scene.textures, &[glam::Vec2::ZERO; 2])
+        .expect("bsdf");
+    assert!(f.flags().anisotropic);
+    // Mitsuba's rough conductor and plastic are isotropic: said so.
+    let t = ok(lustre()
+        .args([
+            "export",
+            "material",
+            "kurt-demo",
+            "--to",
+            "mitsuba",
+            "--out",
+        ])
+        .arg(dir.path().join("brushed.xml")));
     assert!(
         t.contains("kurt-demo is anisotropic; the exported model is isotropic"),
         "{t}"

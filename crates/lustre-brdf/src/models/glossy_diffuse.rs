@@ -31,6 +31,18 @@ pub(crate) trait GlossyDiffuse: Bsdf {
 /// probability P_s(wo), else the cosine lobe; the direction, its density [`pdf`] and the model's
 /// value. `None` below the horizon or where the density is not positive and finite.
 pub(crate) fn sample<M: GlossyDiffuse>(m: &M, wo: DVec3, u1: f64, u2: f64) -> Option<BsdfSample> {
+    let (wi, kind, pdf) = sample_direction(m, wo, u1, u2)?;
+    Some(BsdfSample::new(wi, m.eval(wi, wo), pdf, kind))
+}
+
+/// [`sample`] without the model's value: the direction, its lobe and its density, for a model
+/// that evaluates in another frame (the glTF material's rotated anisotropy).
+pub(crate) fn sample_direction<M: GlossyDiffuse>(
+    m: &M,
+    wo: DVec3,
+    u1: f64,
+    u2: f64,
+) -> Option<(DVec3, LobeFlags, f64)> {
     if wo.z.is_nan() || wo.z <= 0.0 {
         return None;
     }
@@ -45,7 +57,7 @@ pub(crate) fn sample<M: GlossyDiffuse>(m: &M, wo: DVec3, u1: f64, u2: f64) -> Op
     };
     // 0 where wi is not above the surface: no sample.
     let pdf = pdf(m, wi, wo);
-    (pdf > 0.0 && pdf.is_finite()).then(|| BsdfSample::new(wi, m.eval(wi, wo), pdf, kind))
+    (pdf > 0.0 && pdf.is_finite()).then_some((wi, kind, pdf))
 }
 
 /// [`Bsdf::pdf`] of the mixture: P_s · D(h) G1(wo, h) / (4 cos θo) + (1 − P_s) cos θi / π.

@@ -28,6 +28,8 @@ pub const MODULE: Module = Module {
 pub fn pack_pbr_metallic_roughness(m: &PbrMetallicRoughness) -> Result<RecordParams> {
     let mut p = Params::new("glTF metallic-roughness");
     p.rgb(0, m.base_color, m.metallic)?;
-    p.set(1, [m.alpha(), 0.0, 0.0, 0.0])?;
+    p.set(1, [m.alpha_t(), 0.0, m.alpha_b(), m.anisotropy])?;
+    let (c, sn) = m.rotation();
+    p.set(2, [c, sn, 0.0, 0.0])?;
     Ok(p.p)
 }

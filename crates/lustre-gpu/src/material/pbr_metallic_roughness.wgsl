@@ -4,16 +4,31 @@
 // weights w = (1 − |cos|)⁵; metal = spec (c + (1 − c) w), dielectric = c (1 − F)/π + spec F
 // with F = 0.04 + 0.96 w, mixed by metallic; sampling picks the glossy lobe with the
 // probability of its Fresnel-weighted share at ωo, else the cosine lobe.
-// Parameters (pack_pbr_metallic_roughness): p0 = (base colour rgb, metallic), p1 = (α, 0, 0, 0).
+// KHR_materials_anisotropy: GGX with α_t = mix(α, 1, s²) along t = (cos ρ, sin ρ, 0) and
+// α_b = α across it; eval, pdf and sample work in the frame (t, z × t, z).
+// Parameters (pack_pbr_metallic_roughness): p0 = (base colour rgb, metallic),
+// p1 = (α_t, relative ior of a textured record's glass, α_b, anisotropy strength s),
+// p2 = (cos ρ, sin ρ, 0, 0).
 
 struct PbrMetallicRoughness {
     base: vec3<f32>,
     metallic: f32,
     mf: Microfacet,
+    rot: vec2<f32>,
 }
 
 fn pbr_metallic_roughness_unpack(p: array<vec4<f32>, 8>) -> PbrMetallicRoughness {
-    return PbrMetallicRoughness(p[0].xyz, p[0].w, Microfacet(p[1].x, p[1].x, MICROFACET_GGX));
+    return PbrMetallicRoughness(p[0].xyz, p[0].w, Microfacet(p[1].x, p[1].z, MICROFACET_GGX),
+        p[2].xy);
+}
+
+// `v` in the anisotropy frame and back.
+fn pbr_to_aniso(m: PbrMetallicRoughness, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(m.rot.x * v.x + m.rot.y * v.y, -m.rot.y * v.x + m.rot.x * v.y, v.z);
+}
+
+fn pbr_from_aniso(m: PbrMetallicRoughness, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(m.rot.x * v.x - m.rot.y * v.y, m.rot.y * v.x + m.rot.x * v.y, v.z);
 }
 
 fn pbr_schlick5(c: f32) -> f32 {
@@ -36,6 +51,10 @@ fn pbr_prob_specular(m: PbrMetallicRoughness, wo: vec3<f32>) -> f32 {
 }
 
 fn pbr_metallic_roughness_eval(m: PbrMetallicRoughness, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
+    return pbr_eval_aniso(m, pbr_to_aniso(m, wi), pbr_to_aniso(m, wo));
+}
+
+fn pbr_eval_aniso(m: PbrMetallicRoughness, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {
     if (!(wi.z > 0.0 && wo.z > 0.0)) {
         return vec3<f32>(0.0);
     }
@@ -55,22 +74,25 @@ fn pbr_metallic_roughness_eval(m: PbrMetallicRoughness, wi: vec3<f32>, wo: vec3<
 }
 
 fn pbr_metallic_roughness_pdf(m: PbrMetallicRoughness, wi: vec3<f32>, wo: vec3<f32>) -> f32 {
-    return glossy_diffuse_pdf(m.mf, pbr_prob_specular(m, wo), wi, wo);
+    return glossy_diffuse_pdf(m.mf, pbr_prob_specular(m, wo), pbr_to_aniso(m, wi),
+        pbr_to_aniso(m, wo));
 }
 
-fn pbr_metallic_roughness_sample(m: PbrMetallicRoughness, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
-    if (!(wo.z > 0.0)) {
+fn pbr_metallic_roughness_sample(m: PbrMetallicRoughness, wo_in: vec3<f32>, u: vec2<f32>) -> BsdfSample {
+    if (!(wo_in.z > 0.0)) {
         return no_sample();
     }
-    let wi = glossy_diffuse_direction(m.mf, pbr_prob_specular(m, wo), wo, u);
+    let wo = pbr_to_aniso(m, wo_in);
+    let ps = pbr_prob_specular(m, wo);
+    let wi = glossy_diffuse_direction(m.mf, ps, wo, u);
     if (!(wi.z > 0.0)) {
         return no_sample();
     }
-    let pdf = pbr_metallic_roughness_pdf(m, wi, wo);
+    let pdf = glossy_diffuse_pdf(m.mf, ps, wi, wo);
     if (!(pdf > 0.0 && pdf <= 3.4e38)) {
         return no_sample();
     }
-    return BsdfSample(wi, pdf, pbr_metallic_roughness_eval(m, wi, wo), 0u);
+    return BsdfSample(pbr_from_aniso(m, wi), pdf, pbr_eval_aniso(m, wi, wo), 0u);
 }
 
 // The record with its textured parameters at the pixel (FLAG_TEXTURED; textured.wgsl's
@@ -95,7 +117,10 @@ fn pbr_metallic_roughness_textured(b_in: GpuBsdf, c: vec3<f32>, s: vec3<f32>) ->
         }
     } else {
         b.p[0] = vec4<f32>(c, textured_unit(s.x));
-        b.p[1] = vec4<f32>(max(r * r, TEXTURED_PBR_ALPHA_MIN), eta, 0.0, 0.0);
+        // α at the texel; α_t from the record's anisotropy strength, the rotation kept.
+        let a = max(r * r, TEXTURED_PBR_ALPHA_MIN);
+        let strength = b.p[1].w;
+        b.p[1] = vec4<f32>(a + (1.0 - a) * strength * strength, eta, a, strength);
     }
     return b;
 }

@@ -210,10 +210,19 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             roughness,
             transmission,
             ior,
-            ..
+            anisotropy,
+            anisotropy_rotation,
         } => {
             let (c, tc) = rgb(base_color);
             let r = clamp_unit(roughness.factor);
+            let pbr = |m: f64| {
+                let b = PbrMetallicRoughness::new(c, clamp_unit(m), r)?;
+                if *anisotropy > 0.0 {
+                    b.with_anisotropy(clamp_unit(*anisotropy), *anisotropy_rotation)
+                } else {
+                    Ok(b)
+                }
+            };
             // The glass the CPU builds where the transmission is ≥ ½ (its relative ior also
             // rides in a textured record).
             let glass = || {
@@ -226,8 +235,7 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
                 || roughness.texture.is_some()
                 || transmission.texture.is_some();
             if textured {
-                let b =
-                    PbrMetallicRoughness::new(c, clamp_unit(metallic.factor), r).map_err(brdf)?;
+                let b = pbr(metallic.factor).map_err(brdf)?;
                 let mut p = pack_pbr_metallic_roughness(&b)?;
                 let eta = if transmission.texture.is_some() || transmission.factor >= 0.5 {
                     glass()?.eta as f32
@@ -259,7 +267,7 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
                     .map_err(brdf)?;
                 return Ok(record(KIND_ROUGH_DIELECTRIC, 0, pack_rough_dielectric(&g)?));
             }
-            let b = PbrMetallicRoughness::new(c, clamp_unit(metallic.factor), r).map_err(brdf)?;
+            let b = pbr(metallic.factor).map_err(brdf)?;
             Ok(record(
                 KIND_PBR_METALLIC_ROUGHNESS,
                 0,

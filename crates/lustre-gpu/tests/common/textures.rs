@@ -162,7 +162,8 @@ pub fn textured_gltf() -> MaterialKind {
         roughness: scalar(2, 1),
         transmission: TexturedScalar::constant(0.0),
         ior: 1.5,
-        anisotropy: 0.0,
-        anisotropy_rotation: 0.0,
+        // KHR_materials_anisotropy over a textured roughness: α_t from each texel's α.
+        anisotropy: 0.6,
+        anisotropy_rotation: 0.5,
     }
 }

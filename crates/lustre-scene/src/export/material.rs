@@ -28,6 +28,10 @@ pub struct GltfMaterial {
     pub metallic: f64,
     /// `roughnessFactor`.
     pub roughness: f64,
+    /// `KHR_materials_anisotropy` `anisotropyStrength` (0: none written).
+    pub anisotropy: f64,
+    /// `KHR_materials_anisotropy` `anisotropyRotation` (radians from the tangent).
+    pub anisotropy_rotation: f64,
     /// What the exporter records beside it (`extras.lustre`: the source, the fit's errors).
     pub extras: Value,
 }
@@ -43,7 +47,7 @@ impl GltfMaterial {
             }
         };
         let [r, g, b] = self.base_color;
-        Ok(json!({
+        let mut m = json!({
             "name": self.name,
             "pbrMetallicRoughness": {
                 "baseColorFactor": [unit("base colour red", r)?, unit("base colour green", g)?,
@@ -52,7 +56,20 @@ impl GltfMaterial {
                 "roughnessFactor": unit("roughness", self.roughness)?,
             },
             "extras": { "lustre": self.extras },
-        }))
+        });
+        if self.anisotropy > 0.0 {
+            if !self.anisotropy_rotation.is_finite() {
+                return Err(format!(
+                    "anisotropy rotation {} is not finite",
+                    self.anisotropy_rotation
+                ));
+            }
+            m["extensions"] = json!({ "KHR_materials_anisotropy": {
+                "anisotropyStrength": unit("anisotropy", self.anisotropy)?,
+                "anisotropyRotation": self.anisotropy_rotation,
+            } });
+        }
+        Ok(m)
     }
 }
 
@@ -111,7 +128,7 @@ pub fn sphere_glb(material: &GltfMaterial, path: &Path) -> Result<Vec<u8>> {
     let t = b.floats(&tan, "VEC4", false);
     let u = b.floats(&uv, "VEC2", false);
     let i = b.indices(&tris);
-    let doc = json!({
+    let mut doc = json!({
         "asset": { "version": "2.0", "generator": "lustre export" },
         "scene": 0,
         "scenes": [{ "nodes": [0] }],
@@ -129,6 +146,9 @@ pub fn sphere_glb(material: &GltfMaterial, path: &Path) -> Result<Vec<u8>> {
         "accessors": b.accessors,
         "bufferViews": b.views,
     });
+    if material.anisotropy > 0.0 {
+        doc["extensionsUsed"] = json!(["KHR_materials_anisotropy"]);
+    }
     crate::glb_write::glb_bytes(path, &doc, b.bin)
 }
 
@@ -173,6 +193,8 @@ mod tests {
             base_color: [0.5, 1.5, 0.5],
             metallic: 0.0,
             roughness: 0.5,
+            anisotropy: 0.0,
+            anisotropy_rotation: 0.0,
             extras: json!({}),
         };
         let e = sphere_glb(&m, Path::new("m.glb")).unwrap_err().to_string();
