@@ -70,6 +70,27 @@ impl Builder {
         self.floats_to(data, kind, bounds, Some(ARRAY_BUFFER))
     }
 
+    /// Appends mesh `m`'s own vertex attributes (POSITION with its bounds; NORMAL, TANGENT and
+    /// TEXCOORD_0 where it has them): the primitive's `attributes` so far.
+    pub fn mesh_attributes(&mut self, m: &crate::Mesh) -> serde_json::Map<String, Value> {
+        let mut a = serde_json::Map::new();
+        let pos: Vec<[f32; 3]> = m.positions.iter().map(|p| p.to_array()).collect();
+        a.insert("POSITION".into(), json!(self.floats(&pos, "VEC3", true)));
+        if let Some(n) = &m.normals {
+            let n: Vec<[f32; 3]> = n.iter().map(|v| v.to_array()).collect();
+            a.insert("NORMAL".into(), json!(self.floats(&n, "VEC3", false)));
+        }
+        if let Some(t) = &m.tangents {
+            let t: Vec<[f32; 4]> = t.iter().map(|v| v.to_array()).collect();
+            a.insert("TANGENT".into(), json!(self.floats(&t, "VEC4", false)));
+        }
+        if let Some(u) = &m.uv0 {
+            let u: Vec<[f32; 2]> = u.iter().map(|v| v.to_array()).collect();
+            a.insert("TEXCOORD_0".into(), json!(self.floats(&u, "VEC2", false)));
+        }
+        a
+    }
+
     /// Appends f32 vectors as an animation sampler's accessor (its view has no `target`).
     pub fn animation_floats<const N: usize>(
         &mut self,

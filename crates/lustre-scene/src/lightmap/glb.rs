@@ -42,21 +42,7 @@ pub fn write_atlas_glb(scene: &Scene, atlas: &LightmapAtlas, path: &Path) -> Res
                 "light-mapped mesh without uv1",
             ));
         };
-        let mut attributes = serde_json::Map::new();
-        let pos: Vec<[f32; 3]> = m.positions.iter().map(|p| p.to_array()).collect();
-        attributes.insert("POSITION".into(), json!(b.floats(&pos, "VEC3", true)));
-        if let Some(n) = &m.normals {
-            let n: Vec<[f32; 3]> = n.iter().map(|v| v.to_array()).collect();
-            attributes.insert("NORMAL".into(), json!(b.floats(&n, "VEC3", false)));
-        }
-        if let Some(t) = &m.tangents {
-            let t: Vec<[f32; 4]> = t.iter().map(|v| v.to_array()).collect();
-            attributes.insert("TANGENT".into(), json!(b.floats(&t, "VEC4", false)));
-        }
-        if let Some(u) = &m.uv0 {
-            let u: Vec<[f32; 2]> = u.iter().map(|v| v.to_array()).collect();
-            attributes.insert("TEXCOORD_0".into(), json!(b.floats(&u, "VEC2", false)));
-        }
+        let mut attributes = b.mesh_attributes(m);
         let u: Vec<[f32; 2]> = uv1.iter().map(|v| v.to_array()).collect();
         let lightmap_uv = b.floats(&u, "VEC2", false);
         attributes.insert("TEXCOORD_1".into(), json!(lightmap_uv));
