@@ -152,6 +152,31 @@ pub fn from_slice(path: &Path, bytes: &[u8]) -> Result<Scene> {
             return Err(fmt(format!("accessor {ai}: byteOffset {offset} is absurd")));
         }
     }
+    // gltf 1.4.1 unwraps an embedded image's mimeType and bufferView, or else its uri (the
+    // specification requires them), when it reads the image's source: a panic without them
+    // (found by the `gltf` fuzz target).
+    for (ii, image) in root.images.iter().enumerate() {
+        match (&image.buffer_view, &image.uri) {
+            (Some(_), _) if image.mime_type.is_none() => {
+                return Err(fmt(format!(
+                    "image {ii} is in a bufferView but has no mimeType"
+                )))
+            }
+            (Some(v), _) if v.value() >= root.buffer_views.len() => {
+                return Err(fmt(format!(
+                    "image {ii} names bufferView {}, but the file has {}",
+                    v.value(),
+                    root.buffer_views.len()
+                )))
+            }
+            (None, None) => {
+                return Err(fmt(format!(
+                    "image {ii} has neither a uri nor a bufferView"
+                )))
+            }
+            _ => {}
+        }
+    }
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice(bytes).map_err(|e| fmt(format!("invalid glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("")).to_path_buf();
@@ -411,7 +436,8 @@ impl Reader<'_> {
                 };
                 self.texture_of(&tex, u32::from(uv), cs)
             };
-            let exact = exact::material_from_json(&name, v, &mut load)?;
+            let exact =
+                exact::material_from_json(&name, v, &mut load).map_err(|e| fmt(e.to_string()))?;
             self.scene.materials[i] = exact;
         }
         // Per mesh: emission, hints, and the light map's page and own UVs.

@@ -477,3 +477,89 @@ fn gltf_accessor_with_count_zero_is_an_error() {
     let e = Scene::load(&p).unwrap_err().to_string();
     assert!(e.contains("count 0"), "{e}");
 }
+
+/// `glb` with its JSON chunk replaced by `json` (padded with spaces), the lengths updated.
+fn glb_with_json(glb: &[u8], json: &serde_json::Value) -> Vec<u8> {
+    let len = |at: usize| u32::from_le_bytes([glb[at], glb[at + 1], glb[at + 2], glb[at + 3]]);
+    let json_len = len(12) as usize;
+    let rest = &glb[20 + json_len..];
+    let mut text = json.to_string().into_bytes();
+    while !text.len().is_multiple_of(4) {
+        text.push(b' ');
+    }
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&((12 + 8 + text.len() + rest.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&text);
+    out.extend_from_slice(rest);
+    out
+}
+
+/// An exported scene whose embedded images lost their mimeType (the specification requires it;
+/// the gltf crate panicked reading them, found by the `gltf` fuzz target) is an error naming
+/// the image, and broken lustre extras are errors naming the file, never panics.
+#[test]
+fn exported_scene_bad_input() {
+    let seed =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds/gltf/exported_scene.glb");
+    let glb = std::fs::read(&seed).unwrap();
+    let json_len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
+    let doc: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    let at = Path::new("/nonexistent/x.glb");
+    assert!(lustre_scene::gltf_io::from_slice(at, &glb_with_json(&glb, &doc)).is_ok());
+    let mut no_mime = doc.clone();
+    for image in no_mime["images"].as_array_mut().unwrap() {
+        image.as_object_mut().unwrap().remove("mimeType");
+    }
+    let e = lustre_scene::gltf_io::from_slice(at, &glb_with_json(&glb, &no_mime)).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("image 0 is in a bufferView but has no mimeType"),
+        "{e}"
+    );
+    let mut no_source = doc.clone();
+    no_source["images"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("bufferView");
+    let e = lustre_scene::gltf_io::from_slice(at, &glb_with_json(&glb, &no_source)).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("image 0 has neither a uri nor a bufferView"),
+        "{e}"
+    );
+    for (pointer, value, says) in [
+        (
+            "/asset/extras/lustre_scene/version",
+            serde_json::json!(2),
+            "version",
+        ),
+        (
+            "/asset/extras/lustre_scene/camera_paths/0/keyframes",
+            serde_json::json!([]),
+            "camera path",
+        ),
+        (
+            "/asset/extras/lustre_scene/environment/source",
+            serde_json::json!({}),
+            "environment",
+        ),
+        (
+            "/materials/0/extras/lustre_material/kind",
+            serde_json::json!("velvet"),
+            "velvet",
+        ),
+    ] {
+        let mut bad = doc.clone();
+        *bad.pointer_mut(pointer)
+            .unwrap_or_else(|| panic!("{pointer}")) = value;
+        let e = lustre_scene::gltf_io::from_slice(at, &glb_with_json(&glb, &bad)).unwrap_err();
+        assert!(
+            e.to_string().contains(says) && e.to_string().contains("x.glb"),
+            "{pointer}: {e}"
+        );
+    }
+}
