@@ -270,6 +270,12 @@ fn scene(args: &SceneArgs) -> anyhow::Result<()> {
             args.out.display()
         );
     }
+    // The probes' settings are checked before anything is written.
+    lustre_shade::probe::ProbeOptions {
+        face_size: args.probe_size,
+        ..lustre_shade::probe::ProbeOptions::default()
+    }
+    .validate()?;
     let baked = lustre_trace::baked::BakedScene::load(&args.scene)?;
     for w in &baked.warnings {
         eprintln!("warning: {w}");

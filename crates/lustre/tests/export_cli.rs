@@ -750,6 +750,15 @@ fn scene_export_refuses_what_it_cannot_write() {
             .arg(dir.path().join("s.gltf")),
     );
     assert!(t.contains("name it .glb"), "{t}");
+    // An absurd probe size is refused before anything is written.
+    let t = fails(
+        lustre()
+            .args(["export", "scene"])
+            .arg(&sunroom)
+            .args(["--probe-size", "0", "--out"])
+            .arg(dir.path().join("s.glb")),
+    );
+    assert!(t.contains("probe face size 0"), "{t}");
     assert!(!dir.path().join("s.glb").exists() && !dir.path().join("s.gltf").exists());
 }
 
