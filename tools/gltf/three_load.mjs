@@ -1,6 +1,8 @@
 // Loads glTF files with three.js's GLTFLoader (the loader three.js viewers use), in node:
 // `node three_load.mjs FILE...`. Prints one JSON line per file: { file, meshes, triangles,
-// materials: [{ name, type, color, metalness, roughness, anisotropy, anisotropyRotation }],
+// materials: [{ name, type, color, metalness, roughness, anisotropy, anisotropyRotation,
+// clearcoat, clearcoatRoughness, sheen, sheenColor, sheenRoughness, specularIntensity,
+// specularColor, ior }],
 // userData } and exits 1 when a file
 // fails to load. Textures are not decoded (node has no image decoder); files with images fail.
 import { readFile } from "node:fs/promises";
@@ -30,6 +32,14 @@ for (const file of process.argv.slice(2)) {
         roughness: m.roughness,
         anisotropy: m.anisotropy ?? 0,
         anisotropyRotation: m.anisotropyRotation ?? 0,
+        clearcoat: m.clearcoat ?? 0,
+        clearcoatRoughness: m.clearcoatRoughness ?? 0,
+        sheen: m.sheen ?? 0,
+        sheenColor: m.sheenColor ? m.sheenColor.toArray() : [0, 0, 0],
+        sheenRoughness: m.sheenRoughness ?? 0,
+        specularIntensity: m.specularIntensity ?? 1,
+        specularColor: m.specularColor ? m.specularColor.toArray() : [1, 1, 1],
+        ior: m.ior ?? 1.5,
         tangents: "tangent" in g.attributes,
         userData: m.userData,
       });

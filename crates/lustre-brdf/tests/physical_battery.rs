@@ -13,7 +13,7 @@ use lustre_brdf::microfacet::fresnel::{fresnel_dielectric, fresnel_diffuse_refle
 use lustre_brdf::models::conductor::{ComplexIor, Conductor};
 use lustre_brdf::models::dielectric::Dielectric;
 use lustre_brdf::models::lambert::Lambert;
-use lustre_brdf::models::pbr_metallic_roughness::PbrMetallicRoughness;
+use lustre_brdf::models::pbr_metallic_roughness::{PbrLayers, PbrMetallicRoughness};
 use lustre_brdf::models::plastic::Plastic;
 use lustre_brdf::models::rough_conductor::RoughConductor;
 use lustre_brdf::models::rough_dielectric::RoughDielectric;
@@ -84,7 +84,32 @@ fn chi2_models() -> Vec<Box<dyn Bsdf>> {
                 .and_then(|m| m.with_anisotropy(0.5, -1.2))
                 .unwrap(),
         ),
+        // KHR_materials_clearcoat / _sheen / _specular / _ior: a coated, sheened, tinted
+        // dielectric and a coated brushed metal.
+        Box::new(
+            PbrMetallicRoughness::new(Rgb::new(0.5, 0.1, 0.1), 0.0, 0.7)
+                .and_then(|m| m.with_layers(1.4, layered(0.8, 0.05, Rgb::new(0.6, 0.5, 0.9), 0.4)))
+                .unwrap(),
+        ),
+        Box::new(
+            PbrMetallicRoughness::new(Rgb::new(0.9, 0.6, 0.3), 1.0, 0.5)
+                .and_then(|m| m.with_anisotropy(0.7, 0.3))
+                .and_then(|m| m.with_layers(1.5, layered(1.0, 0.2, Rgb::ZERO, 0.0)))
+                .unwrap(),
+        ),
     ]
+}
+
+/// glTF layers: a coat (weight, roughness), a sheen (colour, roughness), a tinted, weighted F0.
+fn layered(coat: f64, coat_r: f64, sheen: Rgb, sheen_r: f64) -> PbrLayers {
+    PbrLayers {
+        specular: 0.8,
+        specular_color: Rgb::new(1.2, 1.0, 0.7),
+        clearcoat: coat,
+        clearcoat_roughness: coat_r,
+        sheen_color: sheen,
+        sheen_roughness: sheen_r,
+    }
 }
 
 /// Models whose every lobe is a Dirac delta.
@@ -306,6 +331,15 @@ fn white_furnace_and_energy() {
             Box::new(PbrMetallicRoughness::new(Rgb::ONE, 1.0, 0.2).unwrap()),
             0.98,
         ),
+        // A white metal under a rough clear coat: the coat's share replaces the metal's.
+        (
+            Box::new(
+                PbrMetallicRoughness::new(Rgb::ONE, 1.0, 0.3)
+                    .and_then(|m| m.with_layers(1.5, layered(1.0, 0.6, Rgb::ZERO, 0.0)))
+                    .unwrap(),
+            ),
+            0.9,
+        ),
     ];
     for (m, normal_min) in &lossy {
         assert!(m.flags().energy_conserving, "{}", m.name());
@@ -419,6 +453,72 @@ fn known_values() {
     let p = PbrMetallicRoughness::new(Rgb::new(0.5, 0.2, 0.1), 0.0, 1.0).unwrap();
     let want = 0.5 * (1.0 - 0.04) / std::f64::consts::PI + 0.04 / (4.0 * std::f64::consts::PI);
     assert!((p.eval(DVec3::Z, DVec3::Z)[0] - want).abs() < 1e-14);
+    // glTF layers. The defaults are the core model, bit for bit at these pairs up to f0's
+    // rounding; specular 0 leaves the Lambert base; a coat over black is the coat alone.
+    let core = PbrMetallicRoughness::new(Rgb::new(0.5, 0.2, 0.1), 0.3, 0.4).unwrap();
+    let same = core.with_layers(1.5, PbrLayers::default()).unwrap();
+    let no_spec = PbrMetallicRoughness::new(Rgb::new(0.5, 0.2, 0.1), 0.0, 0.4)
+        .unwrap()
+        .with_layers(
+            1.5,
+            PbrLayers {
+                specular: 0.0,
+                ..PbrLayers::default()
+            },
+        )
+        .unwrap();
+    let black = PbrMetallicRoughness::new(Rgb::ZERO, 0.0, 0.4).unwrap();
+    let coat_only = black
+        .with_layers(
+            1.5,
+            PbrLayers {
+                specular: 0.0,
+                clearcoat: 1.0,
+                clearcoat_roughness: 0.6,
+                ..PbrLayers::default()
+            },
+        )
+        .unwrap();
+    let coat_ref = RoughConductor::new(
+        dist(Ggx, 0.36, 0.36),
+        ComplexIor::preset("none").unwrap(),
+        Rgb::ONE,
+    )
+    .unwrap();
+    let sheen = black
+        .with_layers(
+            1.5,
+            PbrLayers {
+                specular: 0.0,
+                sheen_color: Rgb::new(0.5, 0.25, 0.1),
+                sheen_roughness: 0.5,
+                ..PbrLayers::default()
+            },
+        )
+        .unwrap();
+    for _ in 0..200 {
+        let wi = spherical(rng.next_f64() * 1.5, rng.next_f64() * 6.0);
+        let wo = spherical(rng.next_f64() * 1.5, rng.next_f64() * 6.0);
+        let (a, b) = (core.eval(wi, wo), same.eval(wi, wo));
+        for c in 0..3 {
+            assert!((a[c] - b[c]).abs() <= 1e-12 * a[c], "{a:?} vs {b:?}");
+        }
+        let d = no_spec.eval(wi, wo)[0];
+        assert!((d - 0.5 / std::f64::consts::PI).abs() < 1e-14, "{d}");
+        let h = (wi + wo).normalize();
+        let fc = 0.04 + 0.96 * (1.0 - wo.dot(h)).powi(5);
+        let want = coat_ref.eval(wi, wo)[0] * fc;
+        let got = coat_only.eval(wi, wo)[0];
+        assert!(
+            (got - want).abs() <= 1e-12 * want.max(1e-300),
+            "{got} vs {want}"
+        );
+        // Charlie, α = 0.25: D = 6 sin⁴θh / (2π); Neubelt V; over a black base.
+        let s2 = 1.0 - h.z * h.z;
+        let dv = 6.0 * s2 * s2 / (2.0 * std::f64::consts::PI) / (4.0 * (wi.z + wo.z - wi.z * wo.z));
+        let got = sheen.eval(wi, wo);
+        assert!((got[0] - 0.5 * dv).abs() <= 1e-12 * dv && (got[2] - 0.1 * dv).abs() <= 1e-12 * dv);
+    }
     // A nearly smooth rough conductor reflects like the smooth one.
     let sharp = RoughConductor::new(dist(Ggx, 1e-3, 1e-3), gold(), Rgb::ONE).unwrap();
     let smooth = Conductor::preset("Au").unwrap();

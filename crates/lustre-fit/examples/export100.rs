@@ -1,5 +1,7 @@
 //! What an export loses, on the 100 MERL materials (their neural BRDFs, `nbrdf:NAME`, as the
-//! data): Ngan's L2 of the glTF metallic-roughness fit (`lustre export material --to gltf`), of
+//! data): Ngan's L2 of the glTF metallic-roughness fit (`lustre export material --to gltf`)
+//! without and with the layers it chose (`KHR_materials_specular` S, `_clearcoat` C, `_sheen`
+//! Sh), of
 //! the Mitsuba 3 fit (`--to mitsuba`: rough conductor or rough plastic, the better), of lustre's
 //! own GGX Cook–Torrance fit and of the published SGD fit (`sgd:NAME`), one row per material,
 //! then the medians.
@@ -37,10 +39,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let names = lustre_brdf::fits::sgd::list_materials()?;
     let t0 = Instant::now();
     let mut table = String::from(
-        "| material | glTF (m, r) | glTF | Mitsuba (plugin) | Mitsuba | lustre GGX | published SGD |\n\
-         |---|---|---:|---|---:|---:|---:|\n",
+        "| material | glTF (m, r) | glTF core | glTF layers | glTF + layers | Mitsuba (plugin) | Mitsuba | lustre GGX | published SGD |\n\
+         |---|---|---:|---|---:|---|---:|---:|---:|\n",
     );
-    let (mut g, mut m, mut c, mut s) = (vec![], vec![], vec![], vec![]);
+    let (mut g, mut m, mut c, mut s, mut gc) = (vec![], vec![], vec![], vec![], vec![]);
+    let mut with_layers = std::collections::BTreeMap::new();
     let mut plugins = std::collections::BTreeMap::new();
     for name in names.iter().take(limit) {
         let data = load(&format!("nbrdf:{name}"))?;
@@ -62,14 +65,39 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ));
         let (ge, me) = (gltf.errors.ngan_mean(), mits.errors.ngan_mean());
         *plugins.entry(mits.bsdf.plugin()).or_insert(0) += 1;
+        let l = &gltf.layers;
+        let d = lustre_brdf::models::pbr_metallic_roughness::PbrLayers::default();
+        let mut used = vec![];
+        if l.specular != d.specular || l.specular_color != d.specular_color {
+            used.push("S");
+        }
+        if l.has_clearcoat() {
+            used.push("C");
+        }
+        if l.has_sheen() {
+            used.push("Sh");
+        }
+        for u in &used {
+            *with_layers.entry(*u).or_insert(0) += 1;
+        }
+        let used = if used.is_empty() {
+            "—".to_string()
+        } else {
+            used.join("+")
+        };
         writeln!(
             table,
-            "| {name} | {:.2}, {:.3} | {ge:.4} | {} | {me:.4} | {ggx:.4} | {sgd:.4} |",
+            "| {name} | {:.2}, {:.3} | {:.4} | {used} | {ge:.4} | {} | {me:.4} | {ggx:.4} | {sgd:.4} |",
             gltf.metallic,
             gltf.roughness,
+            gltf.core_ngan_l2,
             mits.bsdf.plugin()
         )?;
-        eprintln!("{name}: glTF {ge:.4}, Mitsuba {me:.4}, GGX {ggx:.4}, SGD {sgd:.4}");
+        eprintln!(
+            "{name}: glTF {:.4} → {ge:.4} ({used}), Mitsuba {me:.4}, GGX {ggx:.4}, SGD {sgd:.4}",
+            gltf.core_ngan_l2
+        );
+        gc.push(gltf.core_ngan_l2);
         g.push(ge);
         m.push(me);
         c.push(ggx);
@@ -79,14 +107,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ratio = |a: &[f64], b: &[f64]| median(a.iter().zip(b).map(|(x, y)| x / y).collect());
     writeln!(
         table,
-        "\n{n} materials in {:.0} s. Medians of Ngan's L2: glTF {:.4}, Mitsuba {:.4}, lustre GGX \
-         {:.4}, published SGD {:.4}; median ratio to lustre's GGX fit: glTF {:.2}, Mitsuba {:.2}. \
+        "\n{n} materials in {:.0} s. Medians of Ngan's L2: glTF core {:.4}, glTF + layers {:.4}, \
+         Mitsuba {:.4}, lustre GGX {:.4}, published SGD {:.4}; median ratio to lustre's GGX fit: \
+         glTF core {:.2}, glTF + layers {:.2}, Mitsuba {:.2}. Layers chosen: {with_layers:?}. \
          Mitsuba plugins chosen: {plugins:?}.",
         t0.elapsed().as_secs_f64(),
+        median(gc.clone()),
         median(g.clone()),
         median(m.clone()),
         median(c.clone()),
         median(s.clone()),
+        ratio(&gc, &c),
         ratio(&g, &c),
         ratio(&m, &c),
     )?;

@@ -136,6 +136,30 @@ pub const FRESNEL: Module = Module {
 };
 
 /// A visible-normal microfacet lobe beside a cosine lobe: the density and sampled direction of
+/// The `KHR_materials_sheen` lobe: Charlie D, Neubelt V, the albedo table
+/// (`lustre_brdf::models::sheen`).
+pub const SHEEN: Module = Module {
+    name: "sheen",
+    source: Source::Generated(sheen_source),
+    deps: &[&TYPES],
+};
+
+/// `sheen.wgsl` with [`lustre_brdf::models::sheen::SHEEN_ALBEDO_FIT`] appended as a WGSL
+/// constant (one `vec4` per power of x).
+fn sheen_source() -> String {
+    use lustre_brdf::models::sheen::SHEEN_ALBEDO_FIT;
+    let rows: Vec<String> = SHEEN_ALBEDO_FIT
+        .iter()
+        .map(|r| format!("vec4<f32>({:?}, {:?}, {:?}, {:?})", r[0], r[1], r[2], r[3]))
+        .collect();
+    format!(
+        "{}\nconst SHEEN_ALBEDO_FIT = array<vec4<f32>, {}>({});\n",
+        include_str!("wgsl/sheen.wgsl"),
+        rows.len(),
+        rows.join(", ")
+    )
+}
+
 /// the rough plastic and the glTF metallic-roughness model.
 pub const GLOSSY_DIFFUSE: Module = Module {
     name: "glossy_diffuse",
@@ -210,7 +234,7 @@ pub const PASS_PROVIDED: [&str; 9] = [
 ];
 
 /// Every module, in an order [`compose`] would emit them.
-pub const ALL: [&Module; 39] = [
+pub const ALL: [&Module; 40] = [
     &TYPES,
     &FRAME,
     &LOBE,
@@ -224,6 +248,7 @@ pub const ALL: [&Module; 39] = [
     &BSDF_SAMPLE,
     &FRESNEL,
     &GLOSSY_DIFFUSE,
+    &SHEEN,
     &material::kinds::RECORD,
     &material::textured::PARAMS,
     &material::rough_conductor::MODULE,

@@ -9,7 +9,7 @@ use lustre_brdf::microfacet::distribution::{MicrofacetDistribution, MicrofacetTy
 use lustre_brdf::models::conductor::{ComplexIor, Conductor};
 use lustre_brdf::models::dielectric::Dielectric;
 use lustre_brdf::models::lambert::Lambert;
-use lustre_brdf::models::pbr_metallic_roughness::PbrMetallicRoughness;
+use lustre_brdf::models::pbr_metallic_roughness::{PbrLayers, PbrMetallicRoughness};
 use lustre_brdf::models::plastic::Plastic;
 use lustre_brdf::models::rough_conductor::RoughConductor;
 use lustre_brdf::models::rough_dielectric::RoughDielectric;
@@ -149,6 +149,49 @@ fn gpu_models_match_lustre_brdf() {
                     Ok(m)
                 }
             })
+            .expect("pbr");
+        let r = record(
+            KIND_PBR_METALLIC_ROUGHNESS,
+            0,
+            pack_pbr_metallic_roughness(&m).expect("pack"),
+        );
+        models.push((name, Box::new(m), r));
+    }
+    // KHR_materials_ior / _specular / _clearcoat / _sheen layers.
+    for (name, metallic, layers) in [
+        (
+            "glTF coated, sheened, tinted dielectric",
+            0.0,
+            PbrLayers {
+                specular: 0.8,
+                specular_color: Rgb::new(1.2, 1.0, 0.7),
+                clearcoat: 0.8,
+                clearcoat_roughness: 0.15,
+                sheen_color: Rgb::new(0.6, 0.5, 0.9),
+                sheen_roughness: 0.4,
+            },
+        ),
+        (
+            "glTF coated metal",
+            1.0,
+            PbrLayers {
+                clearcoat: 1.0,
+                clearcoat_roughness: 0.3,
+                ..PbrLayers::default()
+            },
+        ),
+        (
+            "glTF sharp sheen",
+            0.0,
+            PbrLayers {
+                sheen_color: Rgb::new(1.0, 0.8, 0.6),
+                sheen_roughness: 0.05,
+                ..PbrLayers::default()
+            },
+        ),
+    ] {
+        let m = PbrMetallicRoughness::new(Rgb::new(0.5, 0.2, 0.1), metallic, 0.6)
+            .and_then(|m| m.with_layers(1.4, layers))
             .expect("pbr");
         let r = record(
             KIND_PBR_METALLIC_ROUGHNESS,

@@ -379,6 +379,7 @@ fn textured_metallic_and_transmission_match_the_cpu_twin() {
         ior: 1.5,
         anisotropy: 0.0,
         anisotropy_rotation: 0.0,
+        layers: Default::default(),
     };
     let up = LightmapFrameScene::upload(&ctx, &b.scene, &b.atlas, &b.pages).unwrap();
     let (ps, spec, _) = diffuse_path_scene(&b.scene).unwrap();

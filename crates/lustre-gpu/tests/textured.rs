@@ -89,6 +89,7 @@ fn textured_room() -> Scene {
             ior: 1.5,
             anisotropy: 0.0,
             anisotropy_rotation: 0.0,
+            layers: Default::default(),
         },
     );
     scene

@@ -5,8 +5,9 @@
 //! after checking every accessor's type and bounds. Materials become
 //! [`MaterialKind::PbrMetallicRoughness`] with base-colour (sRGB), metallic-roughness, normal and
 //! emissive (sRGB) textures, alpha mask (cutoff; `BLEND` read as a stochastic mask with a
-//! warning), `KHR_materials_emissive_strength`, `_transmission`, `_ior` and `_anisotropy`
-//! (strength and rotation). A material's emissive factor × strength becomes its meshes'
+//! warning), `KHR_materials_emissive_strength`, `_transmission`, `_ior`, `_anisotropy`
+//! (strength and rotation), `_specular`, `_clearcoat` and `_sheen` (their factors; the
+//! extensions' textures are listed as warnings and not read). A material's emissive factor × strength becomes its meshes'
 //! [`Mesh::emission`]. Perspective cameras keep `yfov` ([`FovAxis::Y`]) and `aspectRatio`.
 //!
 //! A glTF has no film: when the first camera has an aspect ratio, the film is 720 rows at that
@@ -23,6 +24,7 @@ use crate::texture::{ColorSpace, Texture};
 use crate::{Film, Scene};
 use glam::{DMat4, DVec3, Vec2, Vec3, Vec4};
 use gltf::accessor::{DataType, Dimensions};
+use lustre_brdf::models::pbr_metallic_roughness::PbrLayers;
 use lustre_brdf::Rgb;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -40,7 +42,110 @@ pub const SUPPORTED_USED: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_anisotropy",
+    "KHR_materials_specular",
+    "KHR_materials_clearcoat",
+    "KHR_materials_sheen",
 ];
+
+/// The glTF extension objects of `layers` (those that differ from the core model), keyed by
+/// extension name, as the exporter writes them and [`layers_from_extensions`] reads them.
+pub fn layers_extensions(layers: &PbrLayers) -> Vec<(&'static str, serde_json::Value)> {
+    use serde_json::json;
+    let d = PbrLayers::default();
+    let mut out = Vec::new();
+    if layers.specular != d.specular || layers.specular_color != d.specular_color {
+        out.push((
+            "KHR_materials_specular",
+            json!({ "specularFactor": layers.specular,
+                    "specularColorFactor": layers.specular_color.0 }),
+        ));
+    }
+    if layers.has_clearcoat() {
+        out.push((
+            "KHR_materials_clearcoat",
+            json!({ "clearcoatFactor": layers.clearcoat,
+                    "clearcoatRoughnessFactor": layers.clearcoat_roughness }),
+        ));
+    }
+    if layers.has_sheen() {
+        out.push((
+            "KHR_materials_sheen",
+            json!({ "sheenColorFactor": layers.sheen_color.0,
+                    "sheenRoughnessFactor": layers.sheen_roughness }),
+        ));
+    }
+    out
+}
+
+/// The layers of a material's `KHR_materials_specular`, `_clearcoat` and `_sheen` objects
+/// (`ext(name)`), with the specification's defaults for what is absent; each texture the
+/// objects name goes to `ignored`. A factor of the wrong type or out of range is an error
+/// naming it.
+pub fn layers_from_extensions(
+    ext: &dyn Fn(&str) -> Option<serde_json::Value>,
+    ignored: &mut Vec<String>,
+) -> std::result::Result<PbrLayers, String> {
+    let mut l = PbrLayers::default();
+    let num = |o: &serde_json::Value, k: &str, default: f64| -> std::result::Result<f64, String> {
+        match o.get(k) {
+            None => Ok(default),
+            Some(v) => v
+                .as_f64()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| format!("{k} is not a finite number")),
+        }
+    };
+    let rgb = |o: &serde_json::Value, k: &str, default: Rgb| -> std::result::Result<Rgb, String> {
+        match o.get(k) {
+            None => Ok(default),
+            Some(v) => {
+                let a = v
+                    .as_array()
+                    .filter(|a| a.len() == 3)
+                    .ok_or_else(|| format!("{k} must be 3 numbers"))?;
+                let mut c = [0.0; 3];
+                for (o, x) in c.iter_mut().zip(a) {
+                    *o = x
+                        .as_f64()
+                        .filter(|x| x.is_finite())
+                        .ok_or_else(|| format!("{k} must be 3 finite numbers"))?;
+                }
+                Ok(Rgb(c))
+            }
+        }
+    };
+    let mut textures = |o: &serde_json::Value, keys: &[&str]| {
+        for k in keys {
+            if o.get(*k).is_some() {
+                ignored.push(format!("{k} ignored (its factor used)"));
+            }
+        }
+    };
+    if let Some(o) = ext("KHR_materials_specular") {
+        l.specular = num(&o, "specularFactor", 1.0)?;
+        l.specular_color = rgb(&o, "specularColorFactor", Rgb::ONE)?;
+        textures(&o, &["specularTexture", "specularColorTexture"]);
+    }
+    if let Some(o) = ext("KHR_materials_clearcoat") {
+        l.clearcoat = num(&o, "clearcoatFactor", 0.0)?;
+        l.clearcoat_roughness = num(&o, "clearcoatRoughnessFactor", 0.0)?;
+        textures(
+            &o,
+            &[
+                "clearcoatTexture",
+                "clearcoatRoughnessTexture",
+                "clearcoatNormalTexture",
+            ],
+        );
+    }
+    if let Some(o) = ext("KHR_materials_sheen") {
+        l.sheen_color = rgb(&o, "sheenColorFactor", Rgb::ZERO)?;
+        l.sheen_roughness = num(&o, "sheenRoughnessFactor", 0.0)?;
+        textures(&o, &["sheenColorTexture", "sheenRoughnessTexture"]);
+    }
+    l.validate().map_err(|e| e.to_string())?;
+    Ok(l)
+}
 
 /// gltf 1.4.1 subtracts the 12-byte header from a GLB's declared length before checking it (an
 /// overflow panic where overflow checks are on; found by the `gltf` fuzz target): check the header
@@ -293,6 +398,7 @@ pub fn from_slice(path: &Path, bytes: &[u8]) -> Result<Scene> {
                                 ior: 1.5,
                                 anisotropy: 0.0,
                                 anisotropy_rotation: 0.0,
+                                layers: PbrLayers::default(),
                             },
                         );
                         m.two_sided = false;
@@ -759,20 +865,11 @@ impl Reader<'_> {
             ),
             );
         }
-        if anisotropy != 0.0 {
-            warn(
-                &mut self.scene,
-                format!(
-                    "anisotropy {anisotropy} ignored: the glTF BRDF in lustre-brdf is isotropic"
-                ),
-            );
-        }
-        if transmission.factor == 0.0 && transmission.texture.is_none() && (ior - 1.5).abs() > 1e-6
-        {
-            warn(
-                &mut self.scene,
-                format!("ior {ior} ignored: the glTF BRDF uses 1.5 (F0 = 0.04)"),
-            );
+        let mut ignored = Vec::new();
+        let layers = layers_from_extensions(&|k: &str| m.extension_value(k).cloned(), &mut ignored)
+            .map_err(|e| SceneError::material(&name, e))?;
+        for what in ignored {
+            warn(&mut self.scene, what);
         }
         let mut mat = Material::new(
             name.clone(),
@@ -784,6 +881,7 @@ impl Reader<'_> {
                 ior,
                 anisotropy,
                 anisotropy_rotation,
+                layers,
             },
         );
         mat.two_sided = m.double_sided();

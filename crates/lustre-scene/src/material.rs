@@ -14,7 +14,7 @@ pub use lustre_brdf::microfacet::distribution::MicrofacetType;
 use lustre_brdf::models::conductor::{ComplexIor, Conductor};
 use lustre_brdf::models::dielectric::Dielectric;
 use lustre_brdf::models::lambert::Lambert;
-use lustre_brdf::models::pbr_metallic_roughness::{PbrMetallicRoughness, PBR_ALPHA_MIN};
+use lustre_brdf::models::pbr_metallic_roughness::{PbrLayers, PbrMetallicRoughness, PBR_ALPHA_MIN};
 use lustre_brdf::models::plastic::Plastic;
 use lustre_brdf::models::rough_conductor::RoughConductor;
 use lustre_brdf::models::rough_dielectric::RoughDielectric;
@@ -210,7 +210,8 @@ pub enum MaterialKind {
         /// Scale of the transmission.
         specular_transmittance: Rgb,
     },
-    /// glTF 2.0 metallic-roughness (with KHR_materials_transmission / _ior / _anisotropy).
+    /// glTF 2.0 metallic-roughness (with KHR_materials_transmission / _ior / _anisotropy /
+    /// _specular / _clearcoat / _sheen).
     PbrMetallicRoughness {
         /// Base colour (linear).
         base_color: TexturedRgb,
@@ -226,6 +227,8 @@ pub enum MaterialKind {
         anisotropy: f64,
         /// Rotation of the anisotropy direction from the tangent, radians.
         anisotropy_rotation: f64,
+        /// KHR_materials_specular / _clearcoat / _sheen factors (their textures are not read).
+        layers: PbrLayers,
     },
     /// Any lustre material specification (a fitted material JSON, `sgd:NAME`, an RGL `.bsdf`, a
     /// MERL `.binary`, `kurt(…)`, …), resolved through `lustre_brdf::catalog` at load.
@@ -785,6 +788,7 @@ impl Material {
                 ior,
                 anisotropy,
                 anisotropy_rotation,
+                layers,
             } => {
                 let c = rgb(base_color);
                 let r = clamp_unit(roughness.at(textures, uv));
@@ -804,7 +808,8 @@ impl Material {
                         )
                     }
                 } else {
-                    let m = PbrMetallicRoughness::new(c, clamp_unit(metallic.at(textures, uv)), r)?;
+                    let m = PbrMetallicRoughness::new(c, clamp_unit(metallic.at(textures, uv)), r)?
+                        .with_layers(*ior, *layers)?;
                     let m = if *anisotropy > 0.0 {
                         m.with_anisotropy(clamp_unit(*anisotropy), *anisotropy_rotation)?
                     } else {

@@ -227,6 +227,7 @@ pub fn fields(m: &Material) -> Vec<Field> {
             ior,
             anisotropy,
             anisotropy_rotation,
+            layers,
         } => vec![
             rgb(
                 "base_color",
@@ -245,6 +246,17 @@ pub fn fields(m: &Material) -> Vec<Field> {
                 (-std::f64::consts::PI, std::f64::consts::PI),
                 false,
             ),
+            scalar("specular", layers.specular, UNIT, false),
+            rgb("specular_color", layers.specular_color, (0.0, 10.0), false),
+            scalar("clearcoat", layers.clearcoat, UNIT, false),
+            scalar(
+                "clearcoat_roughness",
+                layers.clearcoat_roughness,
+                UNIT,
+                false,
+            ),
+            rgb("sheen_color", layers.sheen_color, UNIT, false),
+            scalar("sheen_roughness", layers.sheen_roughness, UNIT, false),
         ],
         K::Spec(s) => {
             let mut v = vec![Field {
@@ -498,6 +510,16 @@ fn assign(
             },
             "specular_transmittance",
         ) => *c = col(),
+        (K::PbrMetallicRoughness { layers, .. }, "specular_color") => layers.specular_color = col(),
+        (K::PbrMetallicRoughness { layers, .. }, "sheen_color") => layers.sheen_color = col(),
+        (K::PbrMetallicRoughness { layers, .. }, "specular") => layers.specular = num(),
+        (K::PbrMetallicRoughness { layers, .. }, "clearcoat") => layers.clearcoat = num(),
+        (K::PbrMetallicRoughness { layers, .. }, "clearcoat_roughness") => {
+            layers.clearcoat_roughness = num()
+        }
+        (K::PbrMetallicRoughness { layers, .. }, "sheen_roughness") => {
+            layers.sheen_roughness = num()
+        }
         (K::RoughPlastic { alpha: t, .. }, "alpha")
         | (K::RoughDielectric { alpha: t, .. }, "alpha")
         | (K::RoughConductor { alpha_u: t, .. }, "alpha_u")

@@ -412,11 +412,17 @@ fn gltf_anisotropy_is_read_and_rendered() {
         .bsdf_at(&scene.textures, &[glam::Vec2::ZERO; 2])
         .expect("bsdf");
     assert!(f.flags().anisotropic);
+    // KHR_materials_ior sets the dielectric's F0 too.
+    let lustre_scene::MaterialKind::PbrMetallicRoughness { ior, .. } = &scene.materials[0].kind
+    else {
+        panic!("{:?}", scene.materials[0].kind)
+    };
     let c = lustre_scene::Rgb([0.8f32, 0.2, 0.2].map(f64::from));
-    let want = PbrMetallicRoughness::new(c, f64::from(0.1f32), f64::from(0.4f32))
-        .and_then(|m| m.with_anisotropy(0.7, 0.4))
+    let core = PbrMetallicRoughness::new(c, f64::from(0.1f32), f64::from(0.4f32))
+        .and_then(|m| m.with_layers(*ior, Default::default()))
         .expect("model");
-    let iso = PbrMetallicRoughness::new(c, f64::from(0.1f32), f64::from(0.4f32)).expect("model");
+    let want = core.with_anisotropy(0.7, 0.4).expect("model");
+    let iso = core;
     let wo = glam::DVec3::new(0.3, 0.2, 0.93).normalize();
     let mut differs = false;
     for k in 0..16 {
@@ -432,4 +438,107 @@ fn gltf_anisotropy_is_read_and_rendered() {
         differs |= (iso.eval(wi, wo).0[0] - got.0[0]).abs() > 1e-3 * got.0[0];
     }
     assert!(differs, "the anisotropic lobe is not the isotropic one");
+}
+
+/// `KHR_materials_specular`, `_clearcoat` and `_sheen` are read and rendered (the material's
+/// BSDF is the layered glTF model); their textures are named in warnings; a factor out of range
+/// or of the wrong type is refused naming it.
+#[test]
+fn gltf_specular_clearcoat_and_sheen_are_read_and_rendered() {
+    use lustre_brdf::models::pbr_metallic_roughness::{PbrLayers, PbrMetallicRoughness};
+    use lustre_brdf::Bsdf;
+    let seed =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds/gltf/quad_embedded.gltf");
+    let base: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&seed).expect("seed")).expect("JSON");
+    let with = |ext: serde_json::Value| {
+        let mut doc = base.clone();
+        doc["materials"][0]["extensions"]["KHR_materials_transmission"]["transmissionFactor"] =
+            serde_json::json!(0.0);
+        for (k, v) in ext.as_object().expect("object") {
+            doc["materials"][0]["extensions"][k] = v.clone();
+            doc["extensionsUsed"]
+                .as_array_mut()
+                .expect("list")
+                .push(serde_json::json!(k));
+        }
+        lustre_scene::gltf_io::from_slice(
+            Path::new("/nonexistent/layers.gltf"),
+            doc.to_string().as_bytes(),
+        )
+    };
+    let scene = with(serde_json::json!({
+        "KHR_materials_specular": { "specularFactor": 0.5, "specularColorFactor": [2.0, 1.0, 0.5] },
+        "KHR_materials_clearcoat": { "clearcoatFactor": 0.9, "clearcoatRoughnessFactor": 0.1,
+                                     "clearcoatTexture": { "index": 0 } },
+        "KHR_materials_sheen": { "sheenColorFactor": [0.3, 0.2, 0.1], "sheenRoughnessFactor": 0.6 },
+    }))
+    .expect("reads");
+    let layers = PbrLayers {
+        specular: 0.5,
+        specular_color: lustre_scene::Rgb([2.0, 1.0, 0.5]),
+        clearcoat: 0.9,
+        clearcoat_roughness: 0.1,
+        sheen_color: lustre_scene::Rgb([0.3, 0.2, 0.1]),
+        sheen_roughness: 0.6,
+    };
+    let lustre_scene::MaterialKind::PbrMetallicRoughness {
+        layers: got, ior, ..
+    } = &scene.materials[0].kind
+    else {
+        panic!("{:?}", scene.materials[0].kind)
+    };
+    assert_eq!(*got, layers);
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("clearcoatTexture ignored")),
+        "{:?}",
+        scene.warnings
+    );
+    let f = scene.materials[0]
+        .bsdf_at(&scene.textures, &[glam::Vec2::ZERO; 2])
+        .expect("bsdf");
+    let c = lustre_scene::Rgb([0.8f32, 0.2, 0.2].map(f64::from));
+    let want = PbrMetallicRoughness::new(c, f64::from(0.1f32), f64::from(0.4f32))
+        .and_then(|m| m.with_layers(*ior, layers))
+        .expect("model");
+    let core = PbrMetallicRoughness::new(c, f64::from(0.1f32), f64::from(0.4f32))
+        .and_then(|m| m.with_layers(*ior, PbrLayers::default()))
+        .expect("model");
+    let wo = glam::DVec3::new(0.3, 0.2, 0.93).normalize();
+    for k in 0..16 {
+        let phi = k as f64 * std::f64::consts::TAU / 16.0;
+        let wi = glam::DVec3::new(0.9 * phi.cos(), 0.9 * phi.sin(), 0.436).normalize();
+        let (got, w) = (f.eval(wi, wo), want.eval(wi, wo));
+        for ch in 0..3 {
+            assert!(
+                (got.0[ch] - w.0[ch]).abs() <= 1e-12 * (1.0 + w.0[ch]),
+                "{got:?} {w:?}"
+            );
+        }
+        assert!((core.eval(wi, wo).0[0] - got.0[0]).abs() > 1e-3 * got.0[0]);
+    }
+    for (ext, what) in [
+        (
+            serde_json::json!({ "KHR_materials_clearcoat": { "clearcoatFactor": 1.5 } }),
+            "clearcoatFactor",
+        ),
+        (
+            serde_json::json!({ "KHR_materials_sheen": { "sheenColorFactor": [0.1, 0.2] } }),
+            "sheenColorFactor",
+        ),
+        (
+            serde_json::json!({ "KHR_materials_specular": { "specularFactor": "x" } }),
+            "specularFactor",
+        ),
+        (
+            serde_json::json!({ "KHR_materials_specular": { "specularColorFactor": [-1.0, 1.0, 1.0] } }),
+            "specularColorFactor",
+        ),
+    ] {
+        let e = with(ext).expect_err("refused").to_string();
+        assert!(e.contains(what), "{e}");
+    }
 }

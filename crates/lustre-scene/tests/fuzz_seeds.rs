@@ -62,6 +62,15 @@ fn gltf_seeds_read() {
         assert_eq!(m.alpha_mask.unwrap().cutoff, Some(0.3));
         assert_eq!(s.meshes[0].emission, Some(lustre_scene::Rgb::splat(2.0)));
         assert_eq!((s.film.width, s.film.height), (1080, 720));
+        if p.file_name().is_some_and(|n| n == "layered_material.gltf") {
+            // KHR_materials_specular / _clearcoat / _sheen, for the fuzzer to mutate.
+            let lustre_scene::MaterialKind::PbrMetallicRoughness { layers, .. } = &m.kind else {
+                panic!("{:?}", m.kind)
+            };
+            assert_eq!(layers.clearcoat, 0.9);
+            assert_eq!(layers.sheen_roughness, 0.6);
+            assert_eq!(layers.specular_color.0, [2.0, 1.0, 0.5]);
+        }
     }
 }
 

@@ -29,8 +29,10 @@ pub struct ExportArgs {
 /// The `lustre export` subcommands.
 #[derive(clap::Subcommand, Debug)]
 pub enum ExportCommand {
-    /// A material as glTF 2.0 (the metallic-roughness model fitted to it by Ngan L2, on a
-    /// sample sphere with normals, tangents and texture coordinates, as a .glb) or as a Mitsuba
+    /// A material as glTF 2.0 (the metallic-roughness model fitted to it by Ngan L2, with the
+    /// KHR_materials_anisotropy / _specular / _clearcoat / _sheen layers where they lower the
+    /// error, on a sample sphere with normals, tangents and texture coordinates, as a .glb) or
+    /// as a Mitsuba
     /// 3 BSDF (rough conductor or rough plastic, whichever fits better; an RGL file as
     /// `measured`); prints what the export loses (the fit's error beside lustre's own GGX fit
     /// of the same data).
@@ -128,15 +130,14 @@ fn spec_fit(m: &lustre_scene::material::Material) -> Option<(serde_json::Value, 
     let bsdf = lustre_brdf::catalog::resolve(&s.spec).ok()?;
     let data = lustre_fit::data::MeasuredData::from_bsdf(&m.name, bsdf);
     let g = lustre_fit::gltf::fit_gltf(&data).ok()?;
-    let [r, gr, b] = g.base_color.map(|c| c.clamp(0.0, 1.0));
     let edits = if s.edits.is_empty() {
         String::new()
     } else {
         format!(" (before {} edit(s))", s.edits.len())
     };
+    let material = gltf_material(&m.name, &g, json!({ "source": s.spec }));
     Some((
-        json!({ "baseColorFactor": [r, gr, b, 1.0], "metallicFactor": g.metallic,
-                "roughnessFactor": g.roughness }),
+        material.to_json().ok()?,
         format!(
             "{}{edits} as the metallic-roughness model fitted to it: Ngan L2 {:.4}",
             s.spec,
@@ -549,6 +550,35 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
                     g.anisotropy, g.anisotropy_rotation
                 );
             }
+            let l = &g.layers;
+            let d = lustre_brdf::models::pbr_metallic_roughness::PbrLayers::default();
+            if l.specular != d.specular || l.specular_color != d.specular_color {
+                println!(
+                    "  KHR_materials_specular: specularFactor {:.4}, specularColorFactor {}",
+                    l.specular,
+                    rgb(&l.specular_color.0)
+                );
+            }
+            if l.has_clearcoat() {
+                println!(
+                    "  KHR_materials_clearcoat: clearcoatFactor {:.4}, clearcoatRoughnessFactor {:.4}",
+                    l.clearcoat, l.clearcoat_roughness
+                );
+            }
+            if l.has_sheen() {
+                println!(
+                    "  KHR_materials_sheen: sheenColorFactor {}, sheenRoughnessFactor {:.4}",
+                    rgb(&l.sheen_color.0),
+                    l.sheen_roughness
+                );
+            }
+            if *l != d {
+                println!(
+                    "  without the specular / clearcoat / sheen layers (a reader that ignores \
+                     them): Ngan L2 {:.4}",
+                    g.core_ngan_l2
+                );
+            }
             g.errors
         }
         Fitted::Mitsuba(m) => {
@@ -615,15 +645,7 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
     });
     match fitted {
         Fitted::Gltf(g) => {
-            let material = GltfMaterial {
-                name: data.name.clone(),
-                base_color: g.base_color,
-                metallic: g.metallic,
-                roughness: g.roughness,
-                anisotropy: g.anisotropy,
-                anisotropy_rotation: g.anisotropy_rotation,
-                extras,
-            };
+            let material = gltf_material(&data.name, &g, extras);
             let bytes = write_sphere_glb(&material, &args.out)?;
             println!("wrote {} ({bytes} bytes)", args.out.display());
         }
@@ -642,6 +664,24 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
         }
     }
     Ok(())
+}
+
+/// The glTF material of a fit: its factors and extensions (base colour clamped to [0, 1]).
+fn gltf_material(
+    name: &str,
+    g: &lustre_fit::gltf::GltfFit,
+    extras: serde_json::Value,
+) -> GltfMaterial {
+    GltfMaterial {
+        name: name.to_string(),
+        base_color: g.base_color.map(|c| c.clamp(0.0, 1.0)),
+        metallic: g.metallic,
+        roughness: g.roughness,
+        anisotropy: g.anisotropy,
+        anisotropy_rotation: g.anisotropy_rotation,
+        layers: g.layers,
+        extras,
+    }
 }
 
 /// What was fitted for the export.

@@ -117,28 +117,59 @@ fn exported_materials_pass_the_khronos_validator_and_reload() {
     validate(&refs);
     // three.js's loader reads each as a MeshStandardMaterial with the fitted factors (the
     // reload above checked them against the printed values) and the sphere's tangents.
+    let mut layered = 0;
     for (v, out) in three_load(&refs).iter().zip(&files) {
         let scene = lustre_scene::Scene::load(out).expect("reloads");
         let (m, t) = (&v["materials"][0], v["triangles"].as_f64());
         assert_eq!(t, Some(3968.0), "{v}");
-        assert_eq!(m["type"], "MeshStandardMaterial", "{v}");
         assert_eq!(m["tangents"], true, "{v}");
         let lustre_scene::MaterialKind::PbrMetallicRoughness {
             base_color,
             metallic,
             roughness,
+            layers,
             ..
         } = &scene.materials[0].kind
         else {
             panic!("{v}")
         };
         let close = |x: &serde_json::Value, y: f64| (x.as_f64().expect("number") - y).abs() < 1e-6;
+        // The layers the fit chose: three.js reads the same factors as lustre (a physical
+        // material where there is one).
+        let core = *layers == Default::default();
+        layered += usize::from(!core);
+        let want = if core {
+            "MeshStandardMaterial"
+        } else {
+            "MeshPhysicalMaterial"
+        };
+        assert_eq!(m["type"], want, "{v}");
+        if !core {
+            println!("{}: three.js {m}", out.display());
+            assert!(close(&m["clearcoat"], layers.clearcoat), "{v}");
+            assert!(close(&m["sheenRoughness"], layers.sheen_roughness), "{v}");
+            assert!(close(&m["specularIntensity"], layers.specular), "{v}");
+            if layers.has_clearcoat() {
+                assert!(
+                    close(&m["clearcoatRoughness"], layers.clearcoat_roughness),
+                    "{v}"
+                );
+            }
+            for c in 0..3 {
+                assert!(close(&m["sheenColor"][c], layers.sheen_color.0[c]), "{v}");
+                assert!(
+                    close(&m["specularColor"][c], layers.specular_color.0[c]),
+                    "{v}"
+                );
+            }
+        }
         assert!(close(&m["metalness"], metallic.factor), "{v}");
         assert!(close(&m["roughness"], roughness.factor), "{v}");
         for c in 0..3 {
             assert!(close(&m["color"][c], base_color.factor.0[c]), "{v}");
         }
     }
+    assert!(layered >= 1, "no exported material carries a glTF layer");
 
     // A bake's atlas (lightmap.glb) is glTF too: it passes the validator.
     let bake = dir.path().join("bake");

@@ -18,6 +18,7 @@ pub mod plastic;
 pub mod rough_conductor;
 pub mod rough_dielectric;
 pub mod rough_plastic;
+pub mod sheen;
 pub mod thin_dielectric;
 pub mod two_sided;
 pub mod ward;

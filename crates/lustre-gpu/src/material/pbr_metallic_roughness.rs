@@ -6,7 +6,7 @@ use super::kinds::RECORD;
 use super::textured::PARAMS;
 use super::{Params, RecordParams};
 use crate::error::Result;
-use crate::wgsl::{Module, Source, BSDF_SAMPLE, FRAME, FRESNEL, GLOSSY_DIFFUSE, MICROFACET};
+use crate::wgsl::{Module, Source, BSDF_SAMPLE, FRAME, FRESNEL, GLOSSY_DIFFUSE, MICROFACET, SHEEN};
 use lustre_brdf::models::pbr_metallic_roughness::PbrMetallicRoughness;
 
 /// `pbr_metallic_roughness.wgsl`: `pbr_metallic_roughness_{unpack, eval, pdf, sample}`, `pbr_metallic_roughness_textured`.
@@ -21,6 +21,7 @@ pub const MODULE: Module = Module {
         &FRAME,
         &MICROFACET,
         &GLOSSY_DIFFUSE,
+        &SHEEN,
     ],
 };
 
@@ -30,6 +31,9 @@ pub fn pack_pbr_metallic_roughness(m: &PbrMetallicRoughness) -> Result<RecordPar
     p.rgb(0, m.base_color, m.metallic)?;
     p.set(1, [m.alpha_t(), 0.0, m.alpha_b(), m.anisotropy])?;
     let (c, sn) = m.rotation();
-    p.set(2, [c, sn, 0.0, 0.0])?;
+    let l = &m.layers;
+    p.set(2, [c, sn, l.clearcoat, m.coat_alpha()])?;
+    p.rgb(3, m.f0(), l.specular)?;
+    p.rgb(4, l.sheen_color, l.sheen_roughness)?;
     Ok(p.p)
 }

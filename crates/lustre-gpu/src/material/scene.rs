@@ -212,11 +212,13 @@ pub fn pack_material(m: &Material, tables: &mut Vec<f32>) -> Result<GpuBsdf> {
             ior,
             anisotropy,
             anisotropy_rotation,
+            layers,
         } => {
             let (c, tc) = rgb(base_color);
             let r = clamp_unit(roughness.factor);
             let pbr = |m: f64| {
-                let b = PbrMetallicRoughness::new(c, clamp_unit(m), r)?;
+                let b =
+                    PbrMetallicRoughness::new(c, clamp_unit(m), r)?.with_layers(*ior, *layers)?;
                 if *anisotropy > 0.0 {
                     b.with_anisotropy(clamp_unit(*anisotropy), *anisotropy_rotation)
                 } else {

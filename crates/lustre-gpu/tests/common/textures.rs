@@ -1,6 +1,7 @@
 //! Small synthetic textures and the textured materials' untextured twins, shared by the
 //! tests of textured materials on the GPU (`textured`, `adaptive_textured`).
 
+use lustre_brdf::models::pbr_metallic_roughness::PbrLayers;
 use lustre_brdf::rgb::Rgb;
 use lustre_scene::material::{MicrofacetType, TextureRef, TexturedRgb, TexturedScalar};
 use lustre_scene::texture::{ColorSpace, Texture};
@@ -122,6 +123,7 @@ pub fn untextured(m: &Material, textures: &[Texture]) -> Material {
             ior,
             anisotropy,
             anisotropy_rotation,
+            layers,
         } => MaterialKind::PbrMetallicRoughness {
             base_color: rgb(base_color),
             metallic: sc(metallic),
@@ -130,6 +132,7 @@ pub fn untextured(m: &Material, textures: &[Texture]) -> Material {
             ior: *ior,
             anisotropy: *anisotropy,
             anisotropy_rotation: *anisotropy_rotation,
+            layers: *layers,
         },
         other => panic!("{} is not one of the textured materials", other.name()),
     };
@@ -151,7 +154,8 @@ pub fn textured_gold() -> MaterialKind {
 }
 
 /// A glTF metallic-roughness material with texture 1 as its base colour and texture 2's B and G
-/// channels as its metallic and roughness ([`textures`]); opaque.
+/// channels as its metallic and roughness ([`textures`]); opaque, anisotropic, with a tinted
+/// specular, a clear coat and a sheen.
 pub fn textured_gltf() -> MaterialKind {
     MaterialKind::PbrMetallicRoughness {
         base_color: TexturedRgb::texture(TextureRef {
@@ -165,5 +169,14 @@ pub fn textured_gltf() -> MaterialKind {
         // KHR_materials_anisotropy over a textured roughness: α_t from each texel's α.
         anisotropy: 0.6,
         anisotropy_rotation: 0.5,
+        // KHR_materials_specular / _clearcoat / _sheen factors over the textured base.
+        layers: PbrLayers {
+            specular: 0.9,
+            specular_color: Rgb::new(1.0, 0.9, 0.8),
+            clearcoat: 0.5,
+            clearcoat_roughness: 0.1,
+            sheen_color: Rgb::new(0.3, 0.2, 0.1),
+            sheen_roughness: 0.5,
+        },
     }
 }

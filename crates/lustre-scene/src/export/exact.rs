@@ -17,6 +17,7 @@ use crate::material::{
     TexturedScalar,
 };
 use glam::{DMat3, DVec3};
+use lustre_brdf::models::pbr_metallic_roughness::PbrLayers;
 use lustre_brdf::Rgb;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -119,10 +120,12 @@ pub fn material_to_json(m: &Material, tex: &dyn Fn(usize) -> usize) -> Value {
             ior,
             anisotropy,
             anisotropy_rotation,
+            layers,
         } => json!({
             "base_color": rgb_json(base_color, tex), "metallic": scalar_json(metallic, tex),
             "roughness": scalar_json(roughness, tex), "transmission": scalar_json(transmission, tex),
             "ior": ior, "anisotropy": anisotropy, "anisotropy_rotation": anisotropy_rotation,
+            "layers": layers,
         }),
         MaterialKind::Spec(s) => json!({ "spec": s.spec, "edits": s.edits }),
     };
@@ -297,6 +300,15 @@ pub fn material_from_json(
                 ior: f("ior")?,
                 anisotropy: f("anisotropy")?,
                 anisotropy_rotation: f("anisotropy_rotation")?,
+                layers: match v.get("layers") {
+                    None => PbrLayers::default(),
+                    Some(l) => {
+                        let l: PbrLayers = serde_json::from_value(l.clone())
+                            .map_err(|e| err(format!("layers: {e}")))?;
+                        l.validate().map_err(|e| err(format!("layers: {e}")))?;
+                        l
+                    }
+                },
             }
         }
         "spec" => {
@@ -562,6 +574,14 @@ mod tests {
                 ior: 1.45,
                 anisotropy: 0.6,
                 anisotropy_rotation: 0.3,
+                layers: PbrLayers {
+                    specular: 0.7,
+                    specular_color: Rgb::new(1.5, 1.0, 0.5),
+                    clearcoat: 0.4,
+                    clearcoat_roughness: 0.2,
+                    sheen_color: Rgb::new(0.2, 0.3, 0.4),
+                    sheen_roughness: 0.6,
+                },
             },
             MaterialKind::Spec(ResolvedSpec::resolve("fit", "sgd:nickel").expect("sgd:nickel")),
         ];

@@ -8,6 +8,7 @@
 
 use crate::error::{Result, SceneError};
 use crate::glb_write::Builder;
+use lustre_brdf::models::pbr_metallic_roughness::PbrLayers;
 use serde_json::{json, Value};
 use std::f64::consts::PI;
 use std::path::Path;
@@ -32,6 +33,9 @@ pub struct GltfMaterial {
     pub anisotropy: f64,
     /// `KHR_materials_anisotropy` `anisotropyRotation` (radians from the tangent).
     pub anisotropy_rotation: f64,
+    /// `KHR_materials_specular` / `_clearcoat` / `_sheen` (each written where it differs from the
+    /// core model).
+    pub layers: PbrLayers,
     /// What the exporter records beside it (`extras.lustre`: the source, the fit's errors).
     pub extras: Value,
 }
@@ -64,10 +68,14 @@ impl GltfMaterial {
                     self.anisotropy_rotation
                 ));
             }
-            m["extensions"] = json!({ "KHR_materials_anisotropy": {
+            m["extensions"]["KHR_materials_anisotropy"] = json!({
                 "anisotropyStrength": unit("anisotropy", self.anisotropy)?,
                 "anisotropyRotation": self.anisotropy_rotation,
-            } });
+            });
+        }
+        self.layers.validate().map_err(|e| e.to_string())?;
+        for (k, v) in crate::gltf_io::layers_extensions(&self.layers) {
+            m["extensions"][k] = v;
         }
         Ok(m)
     }
@@ -146,8 +154,8 @@ pub fn sphere_glb(material: &GltfMaterial, path: &Path) -> Result<Vec<u8>> {
         "accessors": b.accessors,
         "bufferViews": b.views,
     });
-    if material.anisotropy > 0.0 {
-        doc["extensionsUsed"] = json!(["KHR_materials_anisotropy"]);
+    if let Some(ext) = mat.get("extensions").and_then(Value::as_object) {
+        doc["extensionsUsed"] = json!(ext.keys().collect::<Vec<_>>());
     }
     crate::glb_write::glb_bytes(path, &doc, b.bin)
 }
@@ -187,6 +195,66 @@ mod tests {
     }
 
     #[test]
+    fn the_layers_are_written_as_their_extensions_and_read_back() {
+        let layers = PbrLayers {
+            specular: 0.6,
+            specular_color: lustre_brdf::Rgb::new(2.0, 1.5, 1.0),
+            clearcoat: 0.8,
+            clearcoat_roughness: 0.15,
+            sheen_color: lustre_brdf::Rgb::new(0.4, 0.3, 0.2),
+            sheen_roughness: 0.7,
+        };
+        let m = GltfMaterial {
+            name: "layered".into(),
+            base_color: [0.5, 0.4, 0.3],
+            metallic: 0.2,
+            roughness: 0.5,
+            anisotropy: 0.3,
+            anisotropy_rotation: 0.4,
+            layers,
+            extras: json!({}),
+        };
+        let dir = tempfile::tempdir().expect("dir");
+        let path = dir.path().join("m.glb");
+        write_sphere_glb(&m, &path).expect("written");
+        let bytes = std::fs::read(&path).expect("read");
+        let text = String::from_utf8_lossy(&bytes);
+        for ext in [
+            "KHR_materials_specular",
+            "KHR_materials_clearcoat",
+            "KHR_materials_sheen",
+            "KHR_materials_anisotropy",
+        ] {
+            assert_eq!(
+                text.matches(ext).count(),
+                2,
+                "{ext}: used and in the material"
+            );
+        }
+        let scene = crate::Scene::load(&path).expect("reloads");
+        let crate::MaterialKind::PbrMetallicRoughness {
+            layers: got,
+            anisotropy,
+            ..
+        } = &scene.materials[0].kind
+        else {
+            panic!("{:?}", scene.materials[0].kind)
+        };
+        assert_eq!(*got, layers);
+        assert_eq!(*anisotropy, 0.3);
+        // Out of range: refused, naming the factor.
+        let bad = GltfMaterial {
+            layers: PbrLayers {
+                clearcoat: 1.5,
+                ..layers
+            },
+            ..m
+        };
+        let e = sphere_glb(&bad, &path).unwrap_err().to_string();
+        assert!(e.contains("clearcoatFactor"), "{e}");
+    }
+
+    #[test]
     fn a_material_out_of_range_is_refused_naming_it() {
         let m = GltfMaterial {
             name: "m".into(),
@@ -195,6 +263,7 @@ mod tests {
             roughness: 0.5,
             anisotropy: 0.0,
             anisotropy_rotation: 0.0,
+            layers: PbrLayers::default(),
             extras: json!({}),
         };
         let e = sphere_glb(&m, Path::new("m.glb")).unwrap_err().to_string();

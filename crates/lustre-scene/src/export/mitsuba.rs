@@ -343,7 +343,7 @@ impl Writer<'_> {
                 col("specular_reflectance", *specular_reflectance),
                 col("specular_transmittance", *specular_transmittance),
             ),
-            MaterialKind::PbrMetallicRoughness { base_color, metallic, roughness, transmission, ior: eta, anisotropy, .. } => {
+            MaterialKind::PbrMetallicRoughness { base_color, metallic, roughness, transmission, ior: eta, anisotropy, layers, .. } => {
                 let mut note = String::from(
                     "glTF metallic-roughness as Mitsuba's principled (Disney's model: its own \
                      diffuse and Fresnel terms",
@@ -351,10 +351,30 @@ impl Writer<'_> {
                 if *anisotropy > 0.0 {
                     note.push_str("; anisotropy as Disney's, its rotation dropped");
                 }
+                let d = lustre_brdf::models::pbr_metallic_roughness::PbrLayers::default();
+                if layers.specular != d.specular || layers.specular_color != d.specular_color {
+                    note.push_str("; KHR_materials_specular dropped (F0 from the ior)");
+                }
+                let mut extra = String::new();
+                if layers.has_clearcoat() {
+                    note.push_str("; the clear coat as Disney's (gloss = 1 − roughness)");
+                    extra += &format!(
+                        "<float name=\"clearcoat\" value=\"{}\"/><float name=\"clearcoat_gloss\" value=\"{}\"/>",
+                        layers.clearcoat,
+                        1.0 - layers.clearcoat_roughness
+                    );
+                }
+                if layers.has_sheen() {
+                    note.push_str("; the sheen as Disney's (weight = its colour's largest channel, untinted)");
+                    extra += &format!(
+                        "<float name=\"sheen\" value=\"{}\"/>",
+                        layers.sheen_color.max_component()
+                    );
+                }
                 note.push(')');
                 self.out.approximations.push(format!("{o} (pbr): {note}"));
                 format!(
-                    "<bsdf type=\"principled\">{}{}{}{}{}<float name=\"anisotropic\" value=\"{anisotropy}\"/></bsdf>",
+                    "<bsdf type=\"principled\">{}{}{}{}{}<float name=\"anisotropic\" value=\"{anisotropy}\"/>{extra}</bsdf>",
                     self.rgb("base_color", base_color, o)?,
                     self.scalar("metallic", metallic, o)?,
                     self.scalar("roughness", roughness, o)?,
@@ -853,6 +873,7 @@ mod tests {
             ior: 1.5,
             anisotropy: 0.5,
             anisotropy_rotation: 0.2,
+            layers: Default::default(),
         };
         s.materials[1].kind =
             MaterialKind::Spec(ResolvedSpec::resolve("fit", "sgd:nickel").expect("spec"));

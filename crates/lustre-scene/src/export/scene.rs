@@ -90,7 +90,8 @@ pub struct SceneExport {
 /// √α (for Beckmann too); anisotropic roughness through `KHR_materials_anisotropy` (bitangent
 /// α = the smaller, tangent α = mix(α, 1, strength²) = the larger, rotated to the larger
 /// axis). `spec` gives the glTF material of a catalog-specified material (a fit made by the
-/// caller), else it becomes a grey diffuse.
+/// caller: an object with its `pbrMetallicRoughness` and its `extensions`), else it becomes a
+/// grey diffuse.
 pub fn core_material(
     m: &Material,
     tex: &dyn Fn(usize) -> usize,
@@ -222,6 +223,7 @@ pub fn core_material(
             ior,
             anisotropy,
             anisotropy_rotation,
+            layers,
         } => {
             let mut p = colour(base_color);
             p["metallicFactor"] = json!(metallic.factor.clamp(0.0, 1.0));
@@ -246,12 +248,22 @@ pub fn core_material(
                     "anisotropyStrength": anisotropy, "anisotropyRotation": anisotropy_rotation,
                 });
             }
+            for (k, v) in crate::gltf_io::layers_extensions(layers) {
+                ext[k] = v;
+            }
             p
         }
         MaterialKind::Spec(s) => match spec {
-            Some((pbr, how)) => {
+            Some((fit, how)) => {
                 note = Some(how.clone());
-                pbr.clone()
+                if let Some(e) = fit.get("extensions").and_then(Value::as_object) {
+                    for (k, v) in e {
+                        ext[k] = v.clone();
+                    }
+                }
+                fit.get("pbrMetallicRoughness")
+                    .cloned()
+                    .unwrap_or(json!({}))
             }
             None => {
                 note = Some(format!("{}: no glTF fit given; a grey diffuse", s.spec));
