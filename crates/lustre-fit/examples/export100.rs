@@ -66,9 +66,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let (ge, me) = (gltf.errors.ngan_mean(), mits.errors.ngan_mean());
         *plugins.entry(mits.bsdf.plugin()).or_insert(0) += 1;
         let l = &gltf.layers;
-        let d = lustre_brdf::models::pbr_metallic_roughness::PbrLayers::default();
         let mut used = vec![];
-        if l.specular != d.specular || l.specular_color != d.specular_color {
+        if l.has_specular() {
             used.push("S");
         }
         if l.has_clearcoat() {

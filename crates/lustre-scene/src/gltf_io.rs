@@ -51,9 +51,8 @@ pub const SUPPORTED_USED: &[&str] = &[
 /// extension name, as the exporter writes them and [`layers_from_extensions`] reads them.
 pub fn layers_extensions(layers: &PbrLayers) -> Vec<(&'static str, serde_json::Value)> {
     use serde_json::json;
-    let d = PbrLayers::default();
     let mut out = Vec::new();
-    if layers.specular != d.specular || layers.specular_color != d.specular_color {
+    if layers.has_specular() {
         out.push((
             "KHR_materials_specular",
             json!({ "specularFactor": layers.specular,

@@ -385,28 +385,37 @@ fn scene_file_builds_the_modern_hall() {
     assert_eq!(env.radiance(DVec3::NEG_Y), Rgb(Sky::default().ground) * 0.5);
 }
 
+/// The fuzz seed's quad (its material opaque) with material extensions `ext` added and listed
+/// as used, read.
+fn quad_with(ext: serde_json::Value) -> lustre_scene::Result<lustre_scene::Scene> {
+    let seed =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds/gltf/quad_embedded.gltf");
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&seed).expect("seed")).expect("JSON");
+    doc["materials"][0]["extensions"]["KHR_materials_transmission"]["transmissionFactor"] =
+        serde_json::json!(0.0);
+    for (k, v) in ext.as_object().expect("object") {
+        doc["materials"][0]["extensions"][k] = v.clone();
+        doc["extensionsUsed"]
+            .as_array_mut()
+            .expect("list")
+            .push(serde_json::json!(k));
+    }
+    lustre_scene::gltf_io::from_slice(
+        Path::new("/nonexistent/quad.gltf"),
+        doc.to_string().as_bytes(),
+    )
+}
+
 /// `KHR_materials_anisotropy` is read and rendered: the material's BSDF is the glTF model with
 /// α_t = mix(α, 1, s²) along the rotated tangent, not the isotropic one.
 #[test]
 fn gltf_anisotropy_is_read_and_rendered() {
     use lustre_brdf::models::pbr_metallic_roughness::PbrMetallicRoughness;
     use lustre_brdf::Bsdf;
-    let seed =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds/gltf/quad_embedded.gltf");
-    let mut doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&seed).expect("seed")).expect("JSON");
-    let m = &mut doc["materials"][0];
-    m["extensions"]["KHR_materials_transmission"]["transmissionFactor"] = serde_json::json!(0.0);
-    m["extensions"]["KHR_materials_anisotropy"] =
-        serde_json::json!({ "anisotropyStrength": 0.7, "anisotropyRotation": 0.4 });
-    doc["extensionsUsed"]
-        .as_array_mut()
-        .expect("list")
-        .push(serde_json::json!("KHR_materials_anisotropy"));
-    let scene = lustre_scene::gltf_io::from_slice(
-        Path::new("/nonexistent/aniso.gltf"),
-        doc.to_string().as_bytes(),
-    )
+    let scene = quad_with(serde_json::json!({
+        "KHR_materials_anisotropy": { "anisotropyStrength": 0.7, "anisotropyRotation": 0.4 },
+    }))
     .expect("reads");
     let f = scene.materials[0]
         .bsdf_at(&scene.textures, &[glam::Vec2::ZERO; 2])
@@ -447,27 +456,7 @@ fn gltf_anisotropy_is_read_and_rendered() {
 fn gltf_specular_clearcoat_and_sheen_are_read_and_rendered() {
     use lustre_brdf::models::pbr_metallic_roughness::{PbrLayers, PbrMetallicRoughness};
     use lustre_brdf::Bsdf;
-    let seed =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds/gltf/quad_embedded.gltf");
-    let base: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&seed).expect("seed")).expect("JSON");
-    let with = |ext: serde_json::Value| {
-        let mut doc = base.clone();
-        doc["materials"][0]["extensions"]["KHR_materials_transmission"]["transmissionFactor"] =
-            serde_json::json!(0.0);
-        for (k, v) in ext.as_object().expect("object") {
-            doc["materials"][0]["extensions"][k] = v.clone();
-            doc["extensionsUsed"]
-                .as_array_mut()
-                .expect("list")
-                .push(serde_json::json!(k));
-        }
-        lustre_scene::gltf_io::from_slice(
-            Path::new("/nonexistent/layers.gltf"),
-            doc.to_string().as_bytes(),
-        )
-    };
-    let scene = with(serde_json::json!({
+    let scene = quad_with(serde_json::json!({
         "KHR_materials_specular": { "specularFactor": 0.5, "specularColorFactor": [2.0, 1.0, 0.5] },
         "KHR_materials_clearcoat": { "clearcoatFactor": 0.9, "clearcoatRoughnessFactor": 0.1,
                                      "clearcoatTexture": { "index": 0 } },
@@ -538,7 +527,7 @@ fn gltf_specular_clearcoat_and_sheen_are_read_and_rendered() {
             "specularColorFactor",
         ),
     ] {
-        let e = with(ext).expect_err("refused").to_string();
+        let e = quad_with(ext).expect_err("refused").to_string();
         assert!(e.contains(what), "{e}");
     }
 }

@@ -552,7 +552,7 @@ fn material(args: &MaterialArgs) -> anyhow::Result<()> {
             }
             let l = &g.layers;
             let d = lustre_brdf::models::pbr_metallic_roughness::PbrLayers::default();
-            if l.specular != d.specular || l.specular_color != d.specular_color {
+            if l.has_specular() {
                 println!(
                     "  KHR_materials_specular: specularFactor {:.4}, specularColorFactor {}",
                     l.specular,

@@ -110,6 +110,11 @@ impl PbrLayers {
         self.specular_color.map(|t| (r * r * t).min(1.0))
     }
 
+    /// Whether `KHR_materials_specular` differs from the core model (k ≠ 1 or t ≠ 1).
+    pub fn has_specular(&self) -> bool {
+        self.specular != 1.0 || self.specular_color != Rgb::ONE
+    }
+
     /// Whether the layers add a sheen lobe.
     pub fn has_sheen(&self) -> bool {
         self.sheen_color.max_component() > 0.0
@@ -340,9 +345,11 @@ impl GlossyDiffuse for PbrMetallicRoughness {
         let f_d = k * self.f0.map(|f0| f0 + (1.0 - f0) * w).max_component();
         let f_m = c + (1.0 - c) * w;
         let s = f_d + (f_m - f_d) * self.metallic;
-        let sheen = self.layers.sheen_color.max_component();
-        let d = (1.0 - self.metallic) * (1.0 - f_d) * c
-            + sheen * sheen_albedo(wo.z, self.layers.sheen_roughness);
+        let mut d = (1.0 - self.metallic) * (1.0 - f_d) * c;
+        if self.layers.has_sheen() {
+            let sheen = self.layers.sheen_color.max_component();
+            d += sheen * sheen_albedo(wo.z, self.layers.sheen_roughness);
+        }
         if s + d > 0.0 {
             s / (s + d)
         } else {
@@ -367,8 +374,7 @@ impl Bsdf for PbrMetallicRoughness {
             );
         }
         let l = &self.layers;
-        let d = PbrLayers::default();
-        if self.ior != 1.5 || l.specular != d.specular || l.specular_color != d.specular_color {
+        if self.ior != 1.5 || l.has_specular() {
             s += &format!(
                 ", ior={}, specular={}, specular_color={:?}",
                 self.ior, l.specular, l.specular_color.0

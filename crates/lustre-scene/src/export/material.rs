@@ -194,26 +194,31 @@ mod tests {
             .all(|u| (0.0..=1.0).contains(&u[0]) && (0.0..=1.0).contains(&u[1])));
     }
 
-    #[test]
-    fn the_layers_are_written_as_their_extensions_and_read_back() {
-        let layers = PbrLayers {
-            specular: 0.6,
-            specular_color: lustre_brdf::Rgb::new(2.0, 1.5, 1.0),
-            clearcoat: 0.8,
-            clearcoat_roughness: 0.15,
-            sheen_color: lustre_brdf::Rgb::new(0.4, 0.3, 0.2),
-            sheen_roughness: 0.7,
-        };
-        let m = GltfMaterial {
+    /// An anisotropic material with every layer.
+    fn layered() -> GltfMaterial {
+        GltfMaterial {
             name: "layered".into(),
             base_color: [0.5, 0.4, 0.3],
             metallic: 0.2,
             roughness: 0.5,
             anisotropy: 0.3,
             anisotropy_rotation: 0.4,
-            layers,
+            layers: PbrLayers {
+                specular: 0.6,
+                specular_color: lustre_brdf::Rgb::new(2.0, 1.5, 1.0),
+                clearcoat: 0.8,
+                clearcoat_roughness: 0.15,
+                sheen_color: lustre_brdf::Rgb::new(0.4, 0.3, 0.2),
+                sheen_roughness: 0.7,
+            },
             extras: json!({}),
-        };
+        }
+    }
+
+    #[test]
+    fn the_layers_are_written_as_their_extensions_and_read_back() {
+        let m = layered();
+        let layers = m.layers;
         let dir = tempfile::tempdir().expect("dir");
         let path = dir.path().join("m.glb");
         write_sphere_glb(&m, &path).expect("written");
@@ -257,14 +262,8 @@ mod tests {
     #[test]
     fn a_material_out_of_range_is_refused_naming_it() {
         let m = GltfMaterial {
-            name: "m".into(),
             base_color: [0.5, 1.5, 0.5],
-            metallic: 0.0,
-            roughness: 0.5,
-            anisotropy: 0.0,
-            anisotropy_rotation: 0.0,
-            layers: PbrLayers::default(),
-            extras: json!({}),
+            ..layered()
         };
         let e = sphere_glb(&m, Path::new("m.glb")).unwrap_err().to_string();
         assert!(

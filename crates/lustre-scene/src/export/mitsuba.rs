@@ -351,8 +351,7 @@ impl Writer<'_> {
                 if *anisotropy > 0.0 {
                     note.push_str("; anisotropy as Disney's, its rotation dropped");
                 }
-                let d = lustre_brdf::models::pbr_metallic_roughness::PbrLayers::default();
-                if layers.specular != d.specular || layers.specular_color != d.specular_color {
+                if layers.has_specular() {
                     note.push_str("; KHR_materials_specular dropped (F0 from the ior)");
                 }
                 let mut extra = String::new();
