@@ -405,16 +405,22 @@ impl Bsdf for PbrMetallicRoughness {
         }
         let wo = self.aniso_frame(wo);
         let pc = self.prob_coat(wo.z);
-        let (wi, lobe) = if u1 < pc {
+        let (wi, lobe, pdf) = if u1 < pc {
             let u1 = (u1 / pc).clamp(0.0, 1.0 - f64::EPSILON);
             let h = self.coat.sample_visible(wo, u1, u2)?;
-            (reflect(wo, h), LobeFlags::GLOSSY_REFLECTION)
+            let wi = reflect(wo, h);
+            (wi, LobeFlags::GLOSSY_REFLECTION, self.pdf_aniso(wi, wo))
         } else {
             let u1 = ((u1 - pc) / (1.0 - pc)).clamp(0.0, 1.0 - f64::EPSILON);
-            let (wi, lobe, _) = glossy_diffuse::sample_direction(self, wo, u1, u2)?;
-            (wi, lobe)
+            let (wi, lobe, base) = glossy_diffuse::sample_direction(self, wo, u1, u2)?;
+            // Without a coat the mixture's own density is the model's.
+            let pdf = if pc > 0.0 {
+                self.pdf_aniso(wi, wo)
+            } else {
+                base
+            };
+            (wi, lobe, pdf)
         };
-        let pdf = self.pdf_aniso(wi, wo);
         (pdf > 0.0 && pdf.is_finite())
             .then(|| BsdfSample::new(self.shading_frame(wi), self.eval_aniso(wi, wo), pdf, lobe))
     }
@@ -425,8 +431,9 @@ impl Bsdf for PbrMetallicRoughness {
 
     /// Reciprocal. Energy conserving only as a pure metal without sheen (a rough conductor with
     /// F ≤ 1, coated or not): the dielectric mix (1 − F(wo·h)) c/π + F·specular reflects up to
-    /// 1.116 with a white base at roughness 0.5 at grazing incidence, and the Charlie sheen's
-    /// albedo exceeds 1 at grazing incidence (measured in `tests/physical_battery.rs`).
+    /// 1.116 with a white base at roughness 0.5 at grazing incidence (measured in
+    /// `tests/physical_battery.rs`), and the Charlie sheen's albedo exceeds 1 at grazing
+    /// incidence (E(0) ≈ 5.7 at r = 0.07 by the quadrature of [`crate::models::sheen`]).
     fn flags(&self) -> BsdfFlags {
         let lobes = if self.metallic < 1.0 || self.layers.has_sheen() {
             LobeFlags::GLOSSY_REFLECTION | LobeFlags::DIFFUSE_REFLECTION
