@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# The automatic real-time set-up (issue 41) against converged references, before and after:
-# the Modern Hall from its XML (no hints) and with the hand-written hints, the built-in room
-# with its hints and with the automatic set-up, the Cornell box and the sunroom (scripts/
-# sunroom.py), on the CPU frame. Every log and frame lands in OUT (default /tmp/setup-study).
+# The automatic real-time set-up against converged references, before and after: the Modern
+# Hall from its XML (no hints) and with the hand-written hints, the built-in room with its hints
+# and with the automatic set-up, the Cornell box, the sunroom (scripts/sunroom.py) and the
+# sunroom on a vast site (sunroom.py --site), on the CPU frame. Every log and frame lands in
+# OUT (default /tmp/setup-study).
 #
 #   scripts/setup_study.sh [LUSTRE] [OUT] [SPP]
 set -euo pipefail
@@ -23,6 +24,7 @@ ref hall "$DATA/modern_hall/mitsuba/scene.xml" 192x108
 ref room "" 192x108
 ref cornell "$DATA/cornell_box/cornell_box.obj" 160x160
 ref sunroom scenes/sunroom/scene.xml 192x144
+ref site scenes/sunroom/site.xml 192x144
 # The Hall: bakes of the XML (automatic set-up, and none: what happened before) and of the
 # hand-written hints (alone, and with the automatic set-up around them).
 for v in auto manual; do
@@ -44,6 +46,9 @@ frame room-auto 192x108 --auto-setup
 # without a set-up (the environment only: what happened before).
 frame cornell-auto 160x160 "$DATA/cornell_box/cornell_box.obj"
 frame sunroom-auto 192x144 scenes/sunroom/scene.xml
+# The sunroom on a 2 km ground plane (scripts/sunroom.py --site): no free-space cell fits the
+# room, so its room probe stands at the camera.
+frame site-auto 192x144 scenes/sunroom/site.xml
 [ -f "$OUT/bake-sunroom-manual/scene.toml" ] || "$BIN" bake scenes/sunroom/scene.xml \
   --out "$OUT/bake-sunroom-manual" --transport full --spp 64 --texels-per-metre 16 \
   --bounces 8 --setup manual 2>&1 | tee "$OUT/bake-sunroom-manual.log"

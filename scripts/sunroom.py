@@ -2,9 +2,12 @@
 """Writes scenes/sunroom/scene.xml: a 6 × 3 × 5 m room lit only by a sky through two windows
 (one glazed with a thin glass pane, one open), with a glossy wooden floor, a silver mirror, a
 gold sphere, a glossy picture and a glossy table block. A test interior for the automatic
-real-time set-up (issue 41): nothing in it carries a real-time hint.
+real-time set-up: nothing in it carries a real-time hint.
 
-    python3 scripts/sunroom.py [OUT.xml]
+    python3 scripts/sunroom.py [OUT.xml] [--site]
+
+--site puts the room on a 2 km ground plane (scenes/sunroom/site.xml): an interior on a vast
+site, whose free-space cells (1/24 of the scene's longest side) are far larger than the room.
 """
 import sys
 
@@ -63,8 +66,10 @@ def wall_with_hole(prefix, axis_pos, hole, bsdf, facing):
 
 
 def main():
-    out = sys.argv[1] if len(sys.argv) > 1 else "scenes/sunroom/scene.xml"
-    x = ['<?xml version="1.0" encoding="utf-8"?>\n<!-- written by scripts/sunroom.py -->\n'
+    args = [a for a in sys.argv[1:] if a != "--site"]
+    site = "--site" in sys.argv[1:]
+    out = args[0] if args else "scenes/sunroom/scene.xml"
+    x = ['<?xml version="1.0" encoding="utf-8"?>\n<!-- written by scripts/sunroom.py' + (' (site)' if site else '') + ' -->\n'
          '<scene version="3.0.0">\n']
     x.append('''  <bsdf type="twosided" id="Plaster"><bsdf type="diffuse"><rgb name="reflectance" value="0.72, 0.70, 0.66"/></bsdf></bsdf>
   <bsdf type="twosided" id="Oak"><bsdf type="roughplastic"><float name="alpha" value="0.06"/><string name="distribution" value="ggx"/><rgb name="diffuse_reflectance" value="0.42, 0.24, 0.11"/></bsdf></bsdf>
@@ -95,6 +100,9 @@ def main():
   </shape>
 ''')
     x.append(box("Table", (-1.4, 0.0, -0.2), (-0.4, 0.7, 0.4), "Walnut"))
+    if site:
+        x.append('  <bsdf type="diffuse" id="Gravel"><rgb name="reflectance" value="0.30, 0.28, 0.25"/></bsdf>\n')
+        x.append(rect("Ground", (0, Y0 - 0.05, 0), (1000, 0, 0), (0, 0, -1000), "Gravel"))
     x.append(f'''  <emitter type="envmap">
     <string name="filename" value="{ENV}"/>
     <float name="scale" value="1.0"/>

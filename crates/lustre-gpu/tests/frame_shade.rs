@@ -341,12 +341,10 @@ fn materials_the_gpu_cannot_shade_are_named() {
     );
 }
 
-/// The sunroom (scenes/sunroom: no hints, a sky through its windows) with the automatic set-up:
-/// its room probe (a parallax box, no mesh) is chosen per point by the GPU as by the CPU
-/// (`probe::choose_probe`), beside three mirrors, three object probes and the pane's
-/// see-through buffer: regular sampling at ≥ 90 dB against the CPU twin, the same glossy pixels.
-#[test]
-fn gpu_reads_the_automatic_room_probes_as_its_cpu_twin() {
+/// The sunroom (scenes/sunroom: no hints, a sky through its windows) with the automatic set-up,
+/// `edit` applied after it, shaded on the GPU and by its CPU twin (regular sampling, 8 samples,
+/// 64×48): (PSNR, GPU glossy pixels, CPU glossy pixels, the mirror and see-through buffers).
+fn sunroom_parity(edit: impl FnOnce(&mut lustre_scene::Scene)) -> (f64, u64, u64, usize, usize) {
     let ctx = ctx();
     let mut scene =
         lustre_scene::Scene::load(std::path::Path::new("../../scenes/sunroom/scene.xml"))
@@ -358,6 +356,7 @@ fn gpu_reads_the_automatic_room_probes_as_its_cpu_twin() {
     };
     lustre_trace::setup::apply(&mut scene, &setup);
     assert!(!scene.probes.is_empty(), "room probes placed");
+    edit(&mut scene);
     let common::Baked {
         scene,
         atlas,
@@ -381,8 +380,6 @@ fn gpu_reads_the_automatic_room_probes_as_its_cpu_twin() {
         target, base, gb, ..
     } = draw(&ctx, &scene, &atlas, &pages, &camera, (w, h, k));
     let mut buffers = FrameBuffers::render(&lit, &light, &camera, w, h).expect("buffers");
-    assert_eq!(buffers.mirrors.len(), 3, "floor, mirror, picture");
-    assert_eq!(buffers.see_throughs.len(), 1, "the pane");
     round_trip(&ctx, &mut buffers);
     let gpu_scene = FrameShadeScene::upload(&ctx, &lit, &light, &buffers).expect("frame scene");
     let pass = FrameShadePass::new(&ctx).expect("compile");
@@ -411,11 +408,91 @@ fn gpu_reads_the_automatic_room_probes_as_its_cpu_twin() {
         shade_gbuffer_view_dependent(&lit, &light, &buffers, &camera, &gb, k, &req)
             .expect("cpu twin");
     let db = psnr(&gpu, &cpu, 1.0).expect("psnr");
-    eprintln!(
-        "sunroom, room probes: GPU vs CPU twin {db:.1} dB; glossy pixels GPU {} CPU {}",
-        stats.glossy_hits, cpu_stats.glossy_hits
+    assert!(cpu_stats.glossy_hits > (w * h / 4) as u64, "glossy pixels");
+    (
+        db,
+        stats.glossy_hits,
+        cpu_stats.glossy_hits,
+        buffers.mirrors.len(),
+        buffers.see_throughs.len(),
+    )
+}
+
+/// The sunroom with the automatic set-up: its room probe (a parallax box, no mesh) is chosen
+/// per point by the GPU as by the CPU (`probe::choose_probe`), beside three mirrors, three
+/// object probes and the pane's see-through buffer: regular sampling at ≥ 90 dB against the CPU
+/// twin, the same glossy pixels.
+#[test]
+fn gpu_reads_the_automatic_room_probes_as_its_cpu_twin() {
+    let (db, gpu_hits, cpu_hits, mirrors, see_throughs) = sunroom_parity(|_| {});
+    eprintln!("sunroom, room probes: GPU vs CPU twin {db:.1} dB; glossy pixels GPU {gpu_hits} CPU {cpu_hits}");
+    assert_eq!(mirrors, 3, "floor, mirror, picture");
+    assert_eq!(see_throughs, 1, "the pane");
+    assert!(db >= 90.0, "{db} dB");
+    assert_eq!(gpu_hits, cpu_hits);
+}
+
+/// The sunroom's room box split in two overlapping halves (x < 0.6 and x > −0.6 of its width's
+/// middle) and its floor no mirror, so that the floor reads the room probes: across the overlap
+/// the GPU blends the two boxes by depth as the CPU does (`probe::choose_probe`); and its pane
+/// hinted a 30 cm slab, so that the GPU reads the see-through buffer from the refraction
+/// offset as the CPU does (`frame::slab_offset`): ≥ 90 dB.
+#[test]
+fn gpu_blends_room_probes_and_offsets_slabs_as_its_cpu_twin() {
+    let (db, gpu_hits, cpu_hits, mirrors, _) = sunroom_parity(|scene| {
+        let site = scene.probes[0].clone();
+        let (lo, hi) = site.parallax_box().expect("a room box");
+        let mid = 0.5 * (lo[0] + hi[0]);
+        let half = 0.1 * (hi[0] - lo[0]);
+        let mut sites = vec![];
+        for (i, (a, b)) in [(lo[0], mid + half), (mid - half, hi[0])]
+            .into_iter()
+            .enumerate()
+        {
+            let mut s = site.clone();
+            s.name = format!("half-{i}");
+            s.box_min = Some([a, lo[1], lo[2]]);
+            s.box_max = Some([b, hi[1], hi[2]]);
+            s.centre = [0.5 * (a + b), site.centre[1], site.centre[2]];
+            sites.push(s);
+        }
+        scene.probes = sites;
+        // Blended in the overlap, one box alone outside it.
+        let planes = |s: &lustre_scene::ProbeSite| {
+            let (a, b) = s.parallax_box().expect("box");
+            let c = glam::DVec3::from(s.centre);
+            (
+                c,
+                lustre_shade::probe::box_planes(c, a.into(), b.into()).expect("planes"),
+            )
+        };
+        let boxes: Vec<_> = scene.probes.iter().map(planes).collect();
+        let at = |x: f64| {
+            let p = glam::DVec3::new(x, 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2]));
+            lustre_shade::probe::choose_probe(boxes.iter().map(|(c, b)| (*c, &b[..], true)), p)
+                .expect("a probe")
+        };
+        // A quarter of the overlap in from its low end: depths ½·half and 1½·half.
+        let c = at(mid - 0.5 * half);
+        assert_eq!(c.probe, 0, "{c:?}");
+        let (other, w) = c.blend.expect("blended in the overlap");
+        assert_eq!(other, 1);
+        assert!((w - 0.25).abs() < 1e-9, "{c:?}");
+        assert_eq!(at(lo[0] + 0.1 * (hi[0] - lo[0])).blend, None);
+        for m in &mut scene.meshes {
+            if m.name == "Floor" {
+                m.hints.planar_reflector = false;
+            }
+            if m.name == "WindowPane" {
+                m.hints.thickness = Some(0.3);
+            }
+        }
+    });
+    eprintln!("sunroom, two overlapping room boxes: GPU vs CPU twin {db:.1} dB; glossy pixels GPU {gpu_hits} CPU {cpu_hits}");
+    assert_eq!(
+        mirrors, 2,
+        "mirror, picture (the floor reads the room probes)"
     );
     assert!(db >= 90.0, "{db} dB");
-    assert_eq!(stats.glossy_hits, cpu_stats.glossy_hits);
-    assert!(cpu_stats.glossy_hits > (w * h / 4) as u64, "glossy pixels");
+    assert_eq!(gpu_hits, cpu_hits);
 }

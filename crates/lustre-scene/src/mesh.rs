@@ -47,7 +47,15 @@ pub struct ObjectHints {
     /// `None`: the frame's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub samples: Option<u32>,
+    /// A solid glass slab's thickness (scene units): in the walkthrough frame what shows
+    /// through it is displaced by the refraction offset of that thickness. `None`: a thin sheet.
+    /// The automatic set-up writes it for solid glass slabs ([`Mesh::slab_thickness`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thickness: Option<f64>,
 }
+
+/// Most triangles [`Mesh::slab_thickness`] pairs (it compares every pair).
+pub const MAX_SLAB_TRIANGLES: usize = 4096;
 
 /// Largest distance of a vertex from a mesh's plane, relative to the mesh's extent, for a
 /// triangle to lie in the plane ([`Mesh::dominant_plane`]).
@@ -103,6 +111,54 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// The thickness of a solid slab (a glass pane or shelf modelled with both faces): every
+    /// triangle is paired with the nearest plane of an opposite-facing triangle (normals within
+    /// cos 0.999 of opposite), the gaps' area-weighted median is the thickness. A slab when the
+    /// paired triangles hold ≥ 75 % of the area and the thickness is under a tenth of the
+    /// square root of the paired area (panes, not boxes). `None` otherwise, for a mesh with
+    /// more than [`MAX_SLAB_TRIANGLES`] triangles (curved glass is no slab), or without area.
+    pub fn slab_thickness(&self) -> Option<f64> {
+        if self.indices.len() > MAX_SLAB_TRIANGLES {
+            return None;
+        }
+        let p: Vec<DVec3> = self.positions.iter().map(|v| v.as_dvec3()).collect();
+        // (unit normal, centroid, area) of each triangle with area.
+        let tris: Vec<(DVec3, DVec3, f64)> = self
+            .indices
+            .iter()
+            .filter_map(|t| {
+                let [a, b, c] = t.map(|i| p.get(i as usize).copied().unwrap_or(DVec3::NAN));
+                let x = (b - a).cross(c - a);
+                let area = 0.5 * x.length();
+                (area > 0.0 && area.is_finite())
+                    .then(|| (x / (2.0 * area), (a + b + c) / 3.0, area))
+            })
+            .collect();
+        let total: f64 = tris.iter().map(|t| t.2).sum();
+        let mut gaps: Vec<(f64, f64)> = tris
+            .iter()
+            .filter_map(|&(n, c, a)| {
+                tris.iter()
+                    .filter(|o| o.0.dot(n) < -0.999)
+                    .map(|o| (o.1 - c).dot(n).abs())
+                    .filter(|g| *g > 0.0)
+                    .min_by(f64::total_cmp)
+                    .map(|g| (g, a))
+            })
+            .collect();
+        let paired: f64 = gaps.iter().map(|g| g.1).sum();
+        if total <= 0.0 || paired < 0.75 * total {
+            return None;
+        }
+        gaps.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut acc = 0.0;
+        let median = gaps.iter().find(|g| {
+            acc += g.1;
+            acc >= 0.5 * paired
+        })?;
+        (median.0 < 0.1 * paired.sqrt()).then_some(median.0)
+    }
+
     /// The plane of the mesh's largest triangle, refined as the area-weighted mean normal and
     /// centroid of the triangles parallel to it (cos > 0.999), with the triangles within
     /// [`PLANARITY_TOLERANCE`] × the mesh's extent of it. `None` without a triangle of non-zero
@@ -491,6 +547,21 @@ pub fn sphere(name: &str, center: Vec3, radius: f32, material: usize) -> Mesh {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn slabs_give_their_thickness_and_other_shapes_none() {
+        // A 2 × 1.5 pane 4 cm thick (the unit cube scaled), turned about y.
+        let mut pane = cube("pane", 0);
+        pane.transform(
+            &(DMat4::from_rotation_y(0.6) * DMat4::from_scale(DVec3::new(1.0, 0.75, 0.02))),
+        );
+        let t = pane.slab_thickness().expect("a slab");
+        assert!((t - 0.04).abs() < 1e-5, "{t}");
+        // A box as thick as it is wide, a sphere, a single sheet: no slab.
+        assert_eq!(cube("box", 0).slab_thickness(), None);
+        assert_eq!(sphere("ball", Vec3::ZERO, 1.0, 0).slab_thickness(), None);
+        assert_eq!(rectangle("sheet", 0).slab_thickness(), None);
+    }
 
     #[test]
     fn shapes_have_their_areas_and_face_outwards() {

@@ -42,6 +42,7 @@
 //! [objects.Mesh014]
 //! probe = true                              # a reflection probe for this object,
 //! probe_centre = [-1.8, 5.2, -1.5]          # optional: captured here (else its bounds' centre)
+//! thickness = 0.035                         # optional: a solid glass slab (refraction offset)
 //!
 //! [[probe]]                                 # a room probe (`lustre bake` places them
 //! name = "room-1"                           # when the file lists none): captured at centre,
@@ -543,6 +544,13 @@ impl SceneFile {
                 if !(d.is_finite() && d > 0.0) {
                     return Err(format!(
                         "objects.{name:?}.lightmap_texels_per_metre {d} must be > 0"
+                    ));
+                }
+            }
+            if let Some(t) = h.thickness {
+                if !(t.is_finite() && t > 0.0) {
+                    return Err(format!(
+                        "objects.{name:?}.thickness {t} must be finite and > 0"
                     ));
                 }
             }

@@ -1,7 +1,7 @@
 //! The walkthrough frame on the CPU (000 §4, Fig. 4.1): at every camera hit, the light-mapped
 //! diffuse term kd·E/π (000 Eq. 4.1) plus the view-dependent rest of the material integrated
-//! against pre-filtered incident light: the probe of the object hit (else the room probe whose
-//! box holds the point, else the nearest probe: [`choose_probe`]), looked up through its
+//! against pre-filtered incident light: the probe of the object hit (else the room probes whose
+//! boxes hold the point, two blended by depth, else the nearest probe: [`choose_probe`]), looked up through its
 //! bounding planes (000 §4.4.1), or the environment when the scene has no
 //! probe. The rest of the material, f − kd/π, is integrated by pushing a regular point set
 //! (a Fibonacci lattice) through the material's own sampling warp, each sample read at the MIP
@@ -26,7 +26,7 @@ use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
 use crate::mirror::{
     render_mirror, render_see_through_with_gbuffer, MirrorBuffer, ScreenTiles, ViewBuffer,
 };
-use crate::probe::{choose_probe, transmits, LitScene, Probe};
+use crate::probe::{choose_probe, transmits, LitScene, Probe, ProbeChoice};
 use crate::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
 use crate::warp::{fibonacci_point, integrate_warp};
 use crate::{Result, ShadeError};
@@ -36,13 +36,17 @@ use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::rgb::Rgb;
 use lustre_brdf::sampling::SplitMix64;
 use lustre_env::pyramid::CubePyramid;
-use lustre_scene::{Material, MaterialKind};
+use lustre_scene::{Material, MaterialKind, Scene};
 use lustre_trace::accel::Hit;
 use lustre_trace::bake::gbuffer::{shade_gbuffer, VisibilityBuffer, SKY};
 use lustre_trace::bake::render::camera_ray;
 use lustre_trace::image::Image;
 use lustre_trace::path_tracer::PathCamera;
 use rayon::prelude::*;
+
+/// One cube read: the pyramid, its bounding planes and the shading point relative to its
+/// centre.
+type CubeRead<'a> = (&'a CubePyramid, &'a [BoundingPlane], DVec3);
 
 /// The pre-filtered incident light of a frame: the probes, and the environment's pyramid for
 /// scenes without probes.
@@ -320,11 +324,53 @@ pub fn progressive_point(i: usize, n: usize, f: usize) -> (f64, f64) {
     )
 }
 
+/// The thickness and relative index of refraction of mesh `mesh` as a solid slab: its
+/// `thickness` hint (the automatic set-up writes it for solid glass) and its material's index
+/// (interior / exterior for the dielectrics, glTF's `ior`, else 1.5). `None` without the hint.
+pub fn slab_of(scene: &Scene, mesh: usize) -> Option<(f64, f64)> {
+    let m = scene.meshes.get(mesh)?;
+    let t = m.hints.thickness.filter(|t| *t > 0.0 && t.is_finite())?;
+    let eta = match scene.materials.get(m.material).map(|x| &x.kind) {
+        Some(
+            MaterialKind::Dielectric {
+                int_ior, ext_ior, ..
+            }
+            | MaterialKind::RoughDielectric {
+                int_ior, ext_ior, ..
+            }
+            | MaterialKind::ThinDielectric {
+                int_ior, ext_ior, ..
+            },
+        ) => *int_ior / *ext_ior,
+        Some(MaterialKind::PbrMetallicRoughness { ior, .. }) => *ior,
+        _ => 1.5,
+    };
+    (eta.is_finite() && eta > 0.0).then_some((t, eta))
+}
+
+/// The refraction offset of a solid slab (the see-through buffer of 000 §4.5 is a thin sheet's):
+/// a ray along `wi` entering a slab of thickness `t` and relative index `eta` through a face
+/// with normal `n` (either orientation) bends to sin θt = sin θi / η and leaves the far face
+/// displaced within the faces' plane, from where the straight ray would have crossed, by
+/// δ = t · w⊥ · (1 / (η cos θt) − 1 / cos θi), w⊥ = wi − (wi·n) n (the lateral shift
+/// t sin θi (1 − cos θi / (η cos θt)) across the ray); continuing along `wi` from there, the
+/// sample reads the see-through buffer from p + δ. Zero at grazing incidence, where no ray
+/// enters, or for η ≤ 0.
+pub fn slab_offset(t: f64, eta: f64, n: DVec3, wi: DVec3) -> DVec3 {
+    let c = wi.dot(n).abs();
+    let perp = wi - wi.dot(n) * n;
+    let s2 = perp.length_squared() / (eta * eta);
+    if !(c > 1e-6 && eta > 0.0 && s2 < 1.0) {
+        return DVec3::ZERO;
+    }
+    perp * (t * (1.0 / (eta * (1.0 - s2).sqrt()) - 1.0 / c))
+}
+
 /// The view-dependent radiance at camera hit `hit` of `lit` (000 Eq. 4.4): the material's rest
 /// f − kd/π (kd the light-mapped albedo) integrated with `n` samples of `points`, each read from
 /// the mirror buffer of an in-plane reflector triangle, the see-through buffer of a
 /// transmissive probe object (unless `see_through` is false: a see-through layer's own
-/// shading), the probe of the object (else the nearest probe, through its bounding planes) or
+/// shading), the probe of the object (else [`choose_probe`]'s, through its bounding planes) or
 /// the environment's pyramid. Returns the radiance (zero where nothing is view-dependent), the
 /// lookups made and whether the hit has a view-dependent part.
 pub fn view_dependent(
@@ -359,22 +405,30 @@ pub fn view_dependent(
         frame
     };
     let wo_local = frame.to_local(wo);
-    // The incident light: this object's probe, else the probe whose box holds the point (the
-    // nearest of them), else the nearest, else the environment.
-    let probe = buffers.probe_of_mesh[mesh]
-        .or_else(|| {
-            choose_probe(
-                light
-                    .probes
-                    .iter()
-                    .map(|q| (q.centre, &q.planes[..], q.mesh.is_none())),
-                p,
-            )
-        })
-        .map(|i| &light.probes[i]);
-    let env_light: Option<(&CubePyramid, &[BoundingPlane], DVec3)> = match probe {
-        Some(pr) => Some((&pr.pyramid, &pr.planes, p - pr.centre)),
-        None => light.environment.map(|env| (env, &[][..], DVec3::ZERO)),
+    // The incident light: this object's probe, else the room probes whose boxes hold the point
+    // (the two deepest blended), else the nearest probe, else the environment.
+    let choice = match buffers.probe_of_mesh[mesh] {
+        Some(i) => Some(ProbeChoice {
+            probe: i,
+            blend: None,
+        }),
+        None => choose_probe(
+            light
+                .probes
+                .iter()
+                .map(|q| (q.centre, &q.planes[..], q.mesh.is_none())),
+            p,
+        ),
+    };
+    let cube = |i: usize| -> CubeRead<'_> {
+        let pr = &light.probes[i];
+        (&pr.pyramid, &pr.planes[..], p - pr.centre)
+    };
+    let env_light: Option<(CubeRead, Option<(CubeRead, f64)>)> = match choice {
+        Some(c) => Some((cube(c.probe), c.blend.map(|(j, w)| (cube(j), w)))),
+        None => light
+            .environment
+            .map(|env| ((env, &[][..], DVec3::ZERO), None)),
     };
     // The mirror buffer, for the reflector's in-plane triangles.
     let mirror = buffers.mirror_at(mesh, hit.prim);
@@ -384,46 +438,56 @@ pub fn view_dependent(
     if env_light.is_none() && mirror.is_none() && see_through.is_none() {
         return (Rgb::ZERO, 0, false);
     }
-    // A view buffer's filtered radiance for a sample along `wi` (None when it leaves it).
-    let read_view = |v: &ViewBuffer, wi: DVec3, pdf: Option<f64>, total: usize, ck: bool| {
-        let ((x, y), found) = v.locate(p, wi)?;
-        let lod = pdf.map_or(0.0, |pd| {
-            let bias = if ck { 1.0 } else { FOOTPRINT_LEVEL_BIAS };
-            v.level(p, wi, found, 1.0 / (total as f64 * pd), bias)
-        });
-        Some(v.sample(x, y, lod))
-    };
+    // A solid slab's thickness and relative index: what shows through it is read from the
+    // point its refraction offset moves the sample to.
+    let slab = see_through.and_then(|_| slab_of(lit.scene, mesh));
+    // A view buffer's filtered radiance for a sample from `o` along `wi` (None when it leaves
+    // it).
+    let read_view =
+        |v: &ViewBuffer, o: DVec3, wi: DVec3, pdf: Option<f64>, total: usize, ck: bool| {
+            let ((x, y), found) = v.locate(o, wi)?;
+            let lod = pdf.map_or(0.0, |pd| {
+                let bias = if ck { 1.0 } else { FOOTPRINT_LEVEL_BIAS };
+                v.level(o, wi, found, 1.0 / (total as f64 * pd), bias)
+            });
+            Some(v.sample(x, y, lod))
+        };
     // The filtered radiance of a sample along `wi` drawn with density `pdf` (None: Dirac) out
     // of `total`; `ck` picks Colbert–Křivánek's level instead of the footprint's.
     let fetch = |wi: DVec3, pdf: Option<f64>, total: usize, ck: bool| -> Rgb {
         if let Some(m) = mirror {
-            if let Some(c) = read_view(&m.view, wi, pdf, total, ck) {
+            if let Some(c) = read_view(&m.view, p, wi, pdf, total, ck) {
                 return c;
             }
         }
         if let Some(v) = see_through {
             if wi.dot(frame.n) * wo.dot(frame.n) < 0.0 {
-                if let Some(c) = read_view(v, wi, pdf, total, ck) {
+                let o = slab.map_or(p, |(t, eta)| p + slab_offset(t, eta, frame.n, wi));
+                if let Some(c) = read_view(v, o, wi, pdf, total, ck) {
                     return c;
                 }
             }
         }
-        match env_light {
-            Some((pyramid, planes, rel)) => {
-                let face = pyramid.base_size();
-                let lod = pdf.map_or(0.0, |pd| {
-                    if ck {
-                        ck_level_at(pd, total, face, wi)
-                    } else {
-                        footprint_level(1.0 / (total as f64 * pd), wi, face)
-                    }
-                });
-                let dir = if planes.is_empty() {
-                    wi
+        let read_cube = |(pyramid, planes, rel): CubeRead| -> Rgb {
+            let face = pyramid.base_size();
+            let lod = pdf.map_or(0.0, |pd| {
+                if ck {
+                    ck_level_at(pd, total, face, wi)
                 } else {
-                    corrected_direction(planes, rel, wi)
-                };
-                Rgb(pyramid.sample(dir, lod))
+                    footprint_level(1.0 / (total as f64 * pd), wi, face)
+                }
+            });
+            let dir = if planes.is_empty() {
+                wi
+            } else {
+                corrected_direction(planes, rel, wi)
+            };
+            Rgb(pyramid.sample(dir, lod))
+        };
+        match env_light {
+            Some((first, None)) => read_cube(first),
+            Some((first, Some((second, w)))) => {
+                read_cube(first) * (1.0 - w) + read_cube(second) * w
             }
             None => ps.environment.as_ref().map_or(Rgb::ZERO, |e| e.eval(wi)),
         }
@@ -763,4 +827,44 @@ pub fn r2_bits(f: usize) -> (u32, u32) {
         f.wrapping_mul(A1) & 0xff_ffff,
         f.wrapping_mul(A2) & 0xff_ffff,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_slab_offset_is_where_the_refracted_ray_leaves() {
+        // A slab between z = 0 and z = −t, entered at the origin: Snell's law traced through
+        // it, and the straight ray along wi that meets the same exit point starts at δ.
+        let t = 0.04;
+        for eta in [1.33, 1.5, 2.4] {
+            for deg in [0.0f64, 10.0, 30.0, 45.0, 60.0, 80.0, 89.0] {
+                let th = deg.to_radians();
+                let phi = 0.7f64;
+                let wi = DVec3::new(th.sin() * phi.cos(), th.sin() * phi.sin(), -th.cos());
+                let perp_t = DVec3::new(wi.x, wi.y, 0.0) / eta;
+                let wt = DVec3::new(perp_t.x, perp_t.y, -(1.0 - perp_t.length_squared()).sqrt());
+                let exit = wt * (t / -wt.z);
+                let expect = exit - wi * (t / -wi.z);
+                for n in [DVec3::Z, -DVec3::Z] {
+                    let d = slab_offset(t, eta, n, wi);
+                    assert!(
+                        (d - expect).length() < 1e-12,
+                        "η {eta} θ {deg}°: {d} vs {expect}"
+                    );
+                    assert!(d.z.abs() < 1e-15, "in the faces' plane");
+                }
+                // The lateral shift across the ray: t sin θ (1 − cos θ / (η cos θt)).
+                let ct = (1.0 - (th.sin() / eta).powi(2)).sqrt();
+                let lateral = t * th.sin() * (1.0 - th.cos() / (eta * ct));
+                let got = slab_offset(t, eta, DVec3::Z, wi);
+                let across = (got - wi * got.dot(wi)).length();
+                assert!((across - lateral).abs() < 1e-12, "{across} vs {lateral}");
+            }
+        }
+        // Grazing, or no slab: no offset.
+        assert_eq!(slab_offset(t, 1.5, DVec3::Z, DVec3::X), DVec3::ZERO);
+        assert_eq!(slab_offset(t, 0.0, DVec3::Z, -DVec3::Z), DVec3::ZERO);
+    }
 }

@@ -379,29 +379,76 @@ pub fn outside_plane(b: &BoundingPlane, rel: DVec3) -> bool {
     (rel - b.point).dot(b.normal) < -1e-3 * b.point.length()
 }
 
-/// The probe a point `p` of a mesh without its own probe reads, among `probes` (centre, planes
-/// relative to it, whether it is a room probe): a room probe whose planes enclose `p`, else an
-/// object probe whose planes enclose it, else any; the nearest centre within the first of these
-/// groups that has one (000 §4.4 reads the nearest probe; a room's box makes it the room's, and
-/// an object probe, captured for its own object, serves others only where no room holds them).
+/// How far `rel` (relative to a probe's centre) lies inside its bounding planes: the least
+/// signed distance to one of them (negative outside one; +∞ without planes).
+pub fn plane_depth(planes: &[BoundingPlane], rel: DVec3) -> f64 {
+    planes
+        .iter()
+        .map(|b| (rel - b.point).dot(b.normal))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The probe(s) a point reads ([`choose_probe`]): `probe`, or where two room boxes hold the
+/// point, `probe` with weight 1 − w and `blend = Some((other, w))`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProbeChoice {
+    /// The probe read (with weight 1 − w when blended).
+    pub probe: usize,
+    /// The second room probe and its weight w ∈ [0, ½].
+    pub blend: Option<(usize, f64)>,
+}
+
+/// The probe(s) a point `p` of a mesh without its own probe reads, among `probes` (centre,
+/// planes relative to it, whether it is a room probe): the room probes whose planes enclose `p`,
+/// else an object probe whose planes enclose it, else any (the nearest centre within the first
+/// of these groups that has one: 000 §4.4 reads the nearest probe; a room's box makes it the
+/// room's, and an object probe, captured for its own object, serves others only where no room
+/// holds them). Where room boxes overlap, the two that hold `p` deepest are blended, each
+/// weighted by its depth d (the distance from `p` to its nearest face): w = d₂ / (d₁ + d₂), so a
+/// reflection fades from one room's probe to the next across their overlap instead of jumping
+/// (Unity's and Godot's probe blending; the same rule in `frame_shade.wgsl`).
 pub fn choose_probe<'p>(
     probes: impl IntoIterator<Item = (DVec3, &'p [BoundingPlane], bool)>,
     p: DVec3,
-) -> Option<usize> {
+) -> Option<ProbeChoice> {
     let mut best: Option<(u8, f64, usize)> = None;
+    // The two room boxes holding p deepest: (−depth, squared distance, index).
+    let mut rooms: [Option<(f64, f64, usize)>; 2] = [None, None];
     for (i, (centre, planes, room)) in probes.into_iter().enumerate() {
         let rel = p - centre;
-        let rank = match (planes.iter().any(|b| outside_plane(b, rel)), room) {
-            (false, true) => 0u8,
-            (false, false) => 1,
-            (true, _) => 2,
+        let inside = !planes.iter().any(|b| outside_plane(b, rel));
+        let rank = match (inside, room) {
+            (true, true) => 0u8,
+            (true, false) => 1,
+            (false, _) => 2,
         };
         let d2 = rel.length_squared();
         if best.is_none_or(|(r, d, _)| (rank, d2) < (r, d)) {
             best = Some((rank, d2, i));
         }
+        if rank == 0 {
+            let key = (-plane_depth(planes, rel).max(0.0), d2, i);
+            if rooms[0].is_none_or(|r| (key.0, key.1) < (r.0, r.1)) {
+                rooms = [Some(key), rooms[0]];
+            } else if rooms[1].is_none_or(|r| (key.0, key.1) < (r.0, r.1)) {
+                rooms[1] = Some(key);
+            }
+        }
     }
-    best.map(|b| b.2)
+    match rooms {
+        [Some((a, _, i)), Some((b, _, j))] if a + b < 0.0 => Some(ProbeChoice {
+            probe: i,
+            blend: Some((j, b / (a + b))),
+        }),
+        [Some((_, _, i)), _] => Some(ProbeChoice {
+            probe: i,
+            blend: None,
+        }),
+        _ => best.map(|b| ProbeChoice {
+            probe: b.2,
+            blend: None,
+        }),
+    }
 }
 
 /// Where the probe of mesh `mesh` is captured: its name and the mesh's `probe_centre` hint, else
@@ -436,6 +483,14 @@ pub fn probe_placement(lit: &LitScene, mesh: usize) -> Result<(String, DVec3)> {
 mod tests {
     use super::*;
 
+    /// The probe read with the larger weight.
+    fn pick<'p>(
+        probes: impl IntoIterator<Item = (DVec3, &'p [BoundingPlane], bool)>,
+        p: DVec3,
+    ) -> Option<usize> {
+        choose_probe(probes, p).map(|c| c.probe)
+    }
+
     #[test]
     fn a_box_that_holds_the_point_wins_over_a_nearer_centre() {
         // A room box [0, 4]³ probed at its middle; a small object probe just outside it, whose
@@ -448,18 +503,19 @@ mod tests {
         let probes = [(room_c, &room[..], true), (obj_c, &obj[..], false)];
         let p = DVec3::new(3.9, 3.5, 3.5);
         assert!(obj_c.distance(p) < room_c.distance(p));
-        assert_eq!(choose_probe(probes, p), Some(0));
-        // Inside two rooms: the nearer centre; inside neither: the nearer centre.
-        let both = [
-            (room_c, &room[..], true),
-            (DVec3::splat(3.0), &room[..], true),
-        ];
-        assert_eq!(choose_probe(both, DVec3::splat(3.5)), Some(1));
+        assert_eq!(
+            choose_probe(probes, p),
+            Some(ProbeChoice {
+                probe: 0,
+                blend: None
+            })
+        );
         // Inside a room and an object probe's planes: the room, though the object's is nearer;
-        // inside an object probe's planes only: that one before a nearer probe outside.
+        // inside an object probe's planes only: that one before a nearer probe outside; inside
+        // neither: the nearer centre.
         let obj_in_room = box_planes(obj_c, DVec3::ZERO, DVec3::splat(5.0)).unwrap();
         let mixed = [(room_c, &room[..], true), (obj_c, &obj_in_room[..], false)];
-        assert_eq!(choose_probe(mixed, DVec3::new(3.9, 3.5, 3.5)), Some(0));
+        assert_eq!(pick(mixed, DVec3::new(3.9, 3.5, 3.5)), Some(0));
         let away = DVec3::new(4.5, 3.6, 3.6);
         let near_c = DVec3::new(4.6, 3.6, 3.6);
         let elsewhere = box_planes(near_c, DVec3::splat(6.0), DVec3::splat(7.0)).unwrap();
@@ -467,14 +523,64 @@ mod tests {
             (near_c, &elsewhere[..], true),
             (obj_c, &obj_in_room[..], false),
         ];
-        assert_eq!(choose_probe(mixed, away), Some(1));
+        assert_eq!(pick(mixed, away), Some(1));
         let far = DVec3::new(9.0, 3.5, 3.5);
-        assert_eq!(choose_probe(probes, far), Some(1));
+        assert_eq!(pick(probes, far), Some(1));
         // Planes point inwards, at the box's faces relative to the centre.
         for b in &room {
             assert!((b.point.length() - 2.0).abs() < 1e-12);
             assert!((b.normal + b.point / 2.0).length() < 1e-12);
         }
         assert_eq!(choose_probe(std::iter::empty(), p), None);
+    }
+
+    #[test]
+    fn overlapping_room_boxes_blend_by_depth() {
+        // Rooms [0, 4]³ and [3, 7] × [0, 4]²: the point crosses their overlap along x.
+        let a = box_planes(DVec3::splat(2.0), DVec3::ZERO, DVec3::splat(4.0)).unwrap();
+        let b_lo = DVec3::new(3.0, 0.0, 0.0);
+        let b_hi = DVec3::new(7.0, 4.0, 4.0);
+        let b_c = 0.5 * (b_lo + b_hi);
+        let b = box_planes(b_c, b_lo, b_hi).unwrap();
+        let rooms = [(DVec3::splat(2.0), &a[..], true), (b_c, &b[..], true)];
+        // The weight of room b at x along y = z = 2.
+        let w_b = |x: f64| {
+            let c = choose_probe(rooms, DVec3::new(x, 2.0, 2.0)).unwrap();
+            match c.blend {
+                None => f64::from(u8::from(c.probe == 1)),
+                Some((j, w)) => {
+                    assert!((0.0..=0.5).contains(&w), "{w}");
+                    if j == 1 {
+                        w
+                    } else {
+                        1.0 - w
+                    }
+                }
+            }
+        };
+        // Outside the overlap one room alone; inside, d_a = 4 − x and d_b = x − 3.
+        assert_eq!(w_b(2.5), 0.0);
+        assert_eq!(w_b(5.0), 1.0);
+        for x in [3.1, 3.25, 3.5, 3.75, 3.9] {
+            let expect = (x - 3.0) / ((4.0 - x) + (x - 3.0));
+            assert!(
+                (w_b(x) - expect).abs() < 1e-12,
+                "x {x}: {} vs {expect}",
+                w_b(x)
+            );
+        }
+        // Continuous across both faces of the overlap and where the deeper box changes.
+        for x0 in [3.0, 3.5, 4.0] {
+            assert!(
+                (w_b(x0 - 1e-9) - w_b(x0 + 1e-9)).abs() < 1e-6,
+                "jump at x = {x0}"
+            );
+        }
+        // plane_depth: inside positive, outside negative, no planes unbounded.
+        assert!(
+            (plane_depth(&a, DVec3::new(1.0, 2.0, 2.0) - DVec3::splat(2.0)) - 1.0).abs() < 1e-12
+        );
+        assert!(plane_depth(&a, DVec3::new(5.0, 2.0, 2.0) - DVec3::splat(2.0)) < 0.0);
+        assert_eq!(plane_depth(&[], DVec3::ONE), f64::INFINITY);
     }
 }

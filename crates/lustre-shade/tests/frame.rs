@@ -600,6 +600,76 @@ fn a_glass_pane_transmits_what_lies_behind_it() {
     assert!(good as f64 >= 0.97 * total as f64, "{good} of {total}");
 }
 
+#[test]
+fn a_thick_slab_displaces_what_shows_through_it() {
+    // The pane seen at 28° from the normal: hinted a 15 cm slab, the post behind it appears
+    // displaced by the refraction offset (frame::slab_offset), as a ray through the slab sees
+    // it: the post's image moves by the projection of −δ; unhinted, it stays.
+    let cam = PathCamera::look_at(
+        DVec3::new(1.0, 2.2, 0.5),
+        DVec3::new(2.6, 2.2, 3.5),
+        DVec3::Y,
+        20.0,
+    )
+    .unwrap();
+    let (w, h) = (96, 96);
+    let (scene, atlas, pages) = room_with_pane(true);
+    let pane = scene.meshes.len() - 1;
+    let probes = [with_lit(&scene, &atlas, &pages, |lit| {
+        capture_probe(lit, pane, &probe_opts()).unwrap()
+    })];
+    let thickness = 0.15;
+    // The brightness-weighted column of the post (radiance > 4) in the frame.
+    let post_column = |t: Option<f64>| {
+        let (mut scene, atlas, pages) = room_with_pane(true);
+        scene.meshes[pane].hints.thickness = t;
+        let (img, _) = with_lit(&scene, &atlas, &pages, |lit| {
+            let light = FrameLight {
+                probes: &probes,
+                environment: None,
+            };
+            let opts = FrameRequest {
+                method: Method::Regular,
+                samples: 8,
+                rays: 4,
+                frames: 1,
+                seed: 1,
+            };
+            render_frame(lit, &light, &cam, w, h, &opts).unwrap()
+        });
+        let (mut sx, mut sw) = (0.0, 0.0);
+        for (i, p) in img.data.iter().enumerate() {
+            let v = f64::from(p[1]);
+            if v > 4.0 {
+                sx += (i % w) as f64 * v;
+                sw += v;
+            }
+        }
+        assert!(sw > 0.0, "the post is seen");
+        sx / sw
+    };
+    let thin = post_column(None);
+    let thick = post_column(Some(thickness));
+    // Predicted: the post's centre P shows where the camera sees P − δ, δ the offset along the
+    // ray towards P (the offset is nearly constant over the post).
+    let project = |q: DVec3| {
+        let v = q - cam.origin;
+        let px = v.dot(cam.right) / v.dot(cam.forward);
+        (px / (cam.tan_half_fov_y * w as f64 / h as f64) + 1.0) * 0.5 * w as f64
+    };
+    let centre = DVec3::new(2.6, 2.2, 3.7);
+    let wi = (centre - cam.origin).normalize();
+    let delta = lustre_shade::frame::slab_offset(thickness, 1.5, DVec3::Z, wi);
+    let expect = project(centre - delta) - project(centre);
+    let got = thick - thin;
+    eprintln!("post column: thin {thin:.2}, 15 cm slab {thick:.2}: shift {got:.2} px, predicted {expect:.2} px (δ = {delta})");
+    assert!(expect.abs() > 1.5, "a visible offset: {expect}");
+    assert!(
+        (got - expect).abs() < 0.25 * expect.abs(),
+        "{got} vs {expect}"
+    );
+}
+
 /// The room with a glass pane (reflection tinted black) between the camera and the ball, a
 /// probe object; or without it. Mesh 7 is the pane.
 fn room_with_pane_before_ball(with_pane: bool) -> (Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>) {

@@ -8,7 +8,8 @@
 //! - **Planar reflectors**: a mesh whose material has a view-dependent reflection (not
 //!   diffuse-only, not transmissive), whose dominant plane ([`lustre_scene::Mesh::dominant_plane`],
 //!   the mirror pass's own test) holds ≥ 99 % of its area, and whose area is at least 10⁻³ of
-//!   the squared scene diagonal. Ranked by plane area × glossy albedo; the first
+//!   the squared scene diagonal (or of the room box around the first camera where that is
+//!   smaller: an interior on a vast site keeps its mirrors). Ranked by plane area × glossy albedo; the first
 //!   `max_mirrors` get `planar_reflector`.
 //! - **Object probes**: every transmissive mesh (glass: its probe gives it a see-through pass),
 //!   then every other curved (not planar) view-dependent mesh, ranked by area × glossy albedo;
@@ -24,13 +25,17 @@
 //!   then greedily at the uncovered free cell farthest from any surface; each probe's box is
 //!   the median distance to the surroundings along ±x, ±y, ±z ([`axis_distances`]), the probe
 //!   moved to the box's middle (up to three times, while that is free space), until `coverage` of the free cells lie in a box or
-//!   `max_room_probes` are placed; a box that covers no new free cell is dropped. A scene
-//!   without a view-dependent surface gets none.
+//!   `max_room_probes` are placed; a box that covers no new free cell is dropped. Where no box
+//!   could be fitted (no free cell: a room on a vast site, whose cells outsize it), a probe
+//!   stands at each camera that something surrounds (≥ 50 % of its rays hit, ≤ 25 % a back
+//!   face) with the room's box around it; an open scene gets none. A scene without a
+//!   view-dependent surface gets none. Where room boxes overlap, the frame blends the two
+//!   that hold a point deepest (`lustre_shade::probe::choose_probe`).
 
 use crate::path_tracer::PathTracer;
 use glam::DVec3;
 use lustre_scene::mesh::PLANAR_AREA_SHARE;
-use lustre_scene::{ObjectHints, ProbeSite, Scene, Vec2};
+use lustre_scene::{MaterialKind, ObjectHints, ProbeSite, Scene, Vec2};
 use std::fmt;
 use std::ops::Range;
 
@@ -91,6 +96,10 @@ pub struct SetupReport {
     pub free_cells: usize,
     /// Fraction of `free_cells` covered.
     pub covered: f64,
+    /// Whether the room probes stand at the cameras: no box could be fitted to free space.
+    pub at_cameras: bool,
+    /// Solid glass slabs given their thickness (the refraction offset), by name.
+    pub slabs: Vec<(String, f64)>,
     /// Candidates over a budget or refused (a probe centre inside a solid or against a
     /// surface), by name.
     pub left_out: Vec<String>,
@@ -120,6 +129,12 @@ impl fmt::Display for SetupReport {
         )?;
         if self.hand_probes {
             write!(f, "{} room probe(s) from the scene file", self.room_probes)?;
+        } else if self.at_cameras {
+            write!(
+                f,
+                "{} room probe(s) at the cameras ({} free cells: no room box fitted)",
+                self.room_probes, self.free_cells
+            )?;
         } else {
             write!(
                 f,
@@ -127,6 +142,19 @@ impl fmt::Display for SetupReport {
                 self.room_probes,
                 100.0 * self.covered,
                 self.free_cells
+            )?;
+        }
+        if !self.slabs.is_empty() {
+            let names: Vec<String> = self
+                .slabs
+                .iter()
+                .map(|(n, t)| format!("{n} {t:.3}"))
+                .collect();
+            write!(
+                f,
+                "; {} glass slab(s) with their thickness{}",
+                self.slabs.len(),
+                list(&names)
             )?;
         }
         if self.hand_written > 0 {
@@ -367,7 +395,20 @@ pub fn auto_setup(scene: &Scene, tracer: &PathTracer, opts: &SetupOptions) -> Se
             ..Setup::default()
         };
     };
-    let diag = (scene_box.1 - scene_box.0).length().max(1e-9);
+    // The scale planar reflectors are measured against: the scene's diagonal, or the room
+    // around the first camera where that is smaller (an interior on a vast site).
+    let diag = scene
+        .cameras
+        .first()
+        .map(|c| c.position)
+        .filter(|p| inside(&scene_box, *p))
+        .map(|p| {
+            let b = room_box(tracer, p, scene_box);
+            (b.1 - b.0).length()
+        })
+        .unwrap_or(f64::INFINITY)
+        .min((scene_box.1 - scene_box.0).length())
+        .max(1e-9);
     let prims = mesh_prims(scene);
     let mut hints: Vec<Option<ObjectHints>> = vec![None; scene.meshes.len()];
     let hand: Vec<bool> = scene
@@ -453,6 +494,21 @@ pub fn auto_setup(scene: &Scene, tracer: &PathTracer, opts: &SetupOptions) -> Se
             report.see_through += 1;
         }
         report.object_probes.push(name);
+    }
+    // Solid glass (not a thin sheet) modelled with both faces: its thickness, for the
+    // refraction offset of what shows through it (hand-hinted meshes too, unless they give one).
+    for (m, mesh) in scene.meshes.iter().enumerate() {
+        let solid = matches!(
+            scene.materials.get(mesh.material).map(|x| &x.kind),
+            Some(MaterialKind::Dielectric { .. } | MaterialKind::RoughDielectric { .. })
+        );
+        if !solid || mesh.hints.thickness.is_some() {
+            continue;
+        }
+        if let Some(t) = mesh.slab_thickness() {
+            hints[m].get_or_insert_with(ObjectHints::default).thickness = Some(t);
+            report.slabs.push((mesh.name.clone(), t));
+        }
     }
     let probes = if !scene.probes.is_empty() {
         report.hand_probes = true;
@@ -597,9 +653,9 @@ fn room_probes(
         .collect();
     report.free_cells = free.len();
     if free.is_empty() {
-        return vec![];
+        return camera_probes(tracer, scene, &cameras, scene_box, opts, report);
     }
-    let mut seeds = cameras;
+    let mut seeds = cameras.clone();
     seeds.dedup_by(|a, b| a.distance(*b) < cell);
     let mut boxes: Vec<(DVec3, (DVec3, DVec3))> = vec![];
     let mut refused = vec![false; free.len()];
@@ -656,8 +712,46 @@ fn room_probes(
         }
         boxes.push((centre, b));
     }
+    if boxes.is_empty() {
+        return camera_probes(tracer, scene, &cameras, scene_box, opts, report);
+    }
     let count = free.iter().filter(|f| covered(&boxes, f.0)).count();
     report.covered = count as f64 / free.len() as f64;
+    sites(&boxes)
+}
+
+/// Where no room box could be fitted to free space (a room too open for the free-space test,
+/// too small for its cells), a probe at each camera that something surrounds (at least half
+/// of its rays hit a surface, at most a quarter a back face), with the box of the room around
+/// it: the glossy surfaces then read what the cameras' surroundings show, never the bare
+/// environment through the walls. An open scene (most of a camera's rays escape) gets none.
+fn camera_probes(
+    tracer: &PathTracer,
+    scene: &Scene,
+    cameras: &[DVec3],
+    scene_box: (DVec3, DVec3),
+    opts: &SetupOptions,
+    report: &mut SetupReport,
+) -> Vec<ProbeSite> {
+    let mut boxes: Vec<(DVec3, (DVec3, DVec3))> = vec![];
+    for &p in cameras {
+        if boxes.len() >= opts.max_room_probes || boxes.iter().any(|b| inside(&b.1, p)) {
+            continue;
+        }
+        let s = Surroundings::at(tracer, scene, p, None);
+        let rays = f64::from(Surroundings::RAYS);
+        if f64::from(s.backs) > 0.25 * rays || f64::from(s.hits) < 0.5 * rays {
+            continue;
+        }
+        boxes.push((p, room_box(tracer, p, scene_box)));
+    }
+    report.at_cameras = !boxes.is_empty();
+    report.covered = 0.0;
+    sites(&boxes)
+}
+
+/// The room probes of `boxes` (centre, box), named room-1, room-2, …
+fn sites(boxes: &[(DVec3, (DVec3, DVec3))]) -> Vec<ProbeSite> {
     let r = |v: f64| (v * 1e4).round() / 1e4;
     boxes
         .iter()
@@ -687,12 +781,14 @@ fn room_probes(
 pub fn apply(scene: &mut Scene, setup: &Setup) {
     for (name, h) in &setup.objects {
         for m in scene.meshes.iter_mut().filter(|m| &m.name == name) {
+            let thickness = m.hints.thickness.or(h.thickness);
             if !has_realtime_hints(&m.hints) {
                 m.hints = ObjectHints {
                     lightmap_texels_per_metre: m.hints.lightmap_texels_per_metre,
                     ..*h
                 };
             }
+            m.hints.thickness = thickness;
         }
     }
     if scene.probes.is_empty() {

@@ -28,6 +28,8 @@ fn sunroom_gets_mirrors_probes_and_a_room_box_inside_its_walls() {
     let scene = sunroom();
     let s = setup_of(&scene);
     eprintln!("{}", s.report);
+    // Its pane is a thin sheet (thindielectric): no slab.
+    assert!(s.report.slabs.is_empty(), "{}", s.report);
     for name in ["Floor", "Mirror", "Picture"] {
         assert!(
             hints(&s, name).is_some_and(|h| h.planar_reflector),
@@ -179,6 +181,33 @@ fn hall_from_its_xml_gets_its_floor_mirror_and_glass_probe() {
         "{}",
         s.report
     );
+    // The balustrade's panes are solid glass 3.1–3.7 cm thick: a slab with its thickness (the
+    // nearest opposite face of its row of panes, 3.5 cm), for the refraction offset.
+    let glass = scene
+        .meshes
+        .iter()
+        .find(|m| scene.materials[m.material].name == "Glass")
+        .expect("glass");
+    let t = hints(&s, &glass.name)
+        .and_then(|h| h.thickness)
+        .expect("a thickness");
+    assert!((0.030..=0.038).contains(&t), "{t}");
+    assert_eq!(s.report.slabs, vec![(glass.name.clone(), t)]);
+    assert!(
+        s.report.to_string().contains("1 glass slab(s)"),
+        "{}",
+        s.report
+    );
+    // Applied, the thickness joins the probe hint.
+    let mut applied = scene.clone();
+    apply(&mut applied, &s);
+    let h = applied
+        .meshes
+        .iter()
+        .find(|m| m.name == glass.name)
+        .expect("glass")
+        .hints;
+    assert!(h.probe && h.thickness == Some(t), "{h:?}");
 }
 
 #[test]
@@ -200,4 +229,47 @@ fn scenes_without_glossy_surfaces_or_walls_get_no_room_probes() {
         "{}",
         s.report
     );
+}
+
+#[test]
+fn a_room_on_a_vast_site_gets_a_probe_at_its_camera() {
+    // The sunroom on a 2 km ground plane: the free-space cells (1/24 of the scene's longest
+    // side, 83 m) are far larger than the room, none is free, and before the floor read the
+    // bare sky through the walls. Now a probe stands at the camera with the room's box.
+    let mut site = sunroom();
+    let plaster = site.material_index("Plaster").expect("plaster");
+    let mut ground = mesh::rectangle("Ground", plaster);
+    // Mitsuba's rectangle spans [-1, 1]² in z = 0: turned to face up, 1 km half-width, just
+    // below the floor.
+    ground.transform(
+        &(DMat4::from_translation(DVec3::new(0.0, -0.05, 0.0))
+            * DMat4::from_rotation_x(-std::f64::consts::FRAC_PI_2)
+            * DMat4::from_scale(DVec3::splat(1000.0))),
+    );
+    site.meshes.push(ground);
+    let s = setup_of(&site);
+    eprintln!("{}", s.report);
+    assert_eq!(s.report.free_cells, 0, "{}", s.report);
+    assert!(s.report.at_cameras, "{}", s.report);
+    assert_eq!(s.probes.len(), 1, "{}", s.report);
+    let camera = site.cameras[0].position;
+    let p = &s.probes[0];
+    assert!(DVec3::from(p.centre).distance(camera) < 1e-3, "{p:?}");
+    // The box is the room's: floor to ceiling (y 0 to 3), inside the walls (x ±3, z ±2.5).
+    let (lo, hi) = p.parallax_box().expect("a box");
+    for (k, (a, b)) in [(-3.0, 3.0), (0.0, 3.0), (-2.5, 2.5)]
+        .into_iter()
+        .enumerate()
+    {
+        assert!(lo[k] > a - 0.3 && hi[k] < b + 0.3, "axis {k}: {p:?}");
+        assert!(hi[k] - lo[k] > 0.5 * (b - a), "axis {k}: {p:?}");
+    }
+    assert!(
+        s.report.to_string().contains("at the cameras"),
+        "{}",
+        s.report
+    );
+    // The floor, the mirror and the picture keep their mirror passes (planes measured against
+    // the room, not the site).
+    assert_eq!(s.report.mirrors.len(), 3, "{}", s.report);
 }

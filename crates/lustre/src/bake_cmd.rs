@@ -37,9 +37,14 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = 4)]
     pub bounces: u32,
     /// Light-map texel density, texels per metre (scene unit); when absent 32, halved while
-    /// the scene's surface would need more than 2²⁴ texels (a scene in millimetres).
+    /// the scene's surface would need more than --max-texels texels (a scene in millimetres).
     #[arg(long)]
     pub texels_per_metre: Option<f32>,
+    /// The light maps' texel budget: where the surface would need more, the few largest meshes
+    /// (a ground plane under a building) get a coarser density of their own first, so the rest
+    /// keeps its; else the density is halved (`fit_densities`).
+    #[arg(long, default_value_t = DEFAULT_MAX_TEXELS)]
+    pub max_texels: u64,
     /// Seed of the per-texel sample streams.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -202,22 +207,37 @@ fn load_atlas(args: &BakeArgs) -> anyhow::Result<(Scene, LightmapAtlas)> {
         }
         _ => {
             let mut aopts = AtlasOptions::default();
-            if let Some(d) = args.texels_per_metre {
-                if !(d.is_finite() && d > 0.0) {
-                    bail!("--texels-per-metre {d}: must be finite and > 0");
-                }
-                aopts.texels_per_metre = d;
-            } else {
-                let d = density_within(&scene, aopts.texels_per_metre, DEFAULT_MAX_TEXELS);
-                if d < aopts.texels_per_metre {
-                    eprintln!(
-                        "atlas: {d} texels per scene unit, not {}: the scene's surface is large \
-                         in its units (--texels-per-metre chooses)",
-                        aopts.texels_per_metre
-                    );
-                    aopts.texels_per_metre = d;
-                }
+            if args.max_texels == 0 {
+                bail!("--max-texels 0: the light maps need at least one texel");
             }
+            let start = match args.texels_per_metre {
+                Some(d) if !(d.is_finite() && d > 0.0) => {
+                    bail!("--texels-per-metre {d}: must be finite and > 0")
+                }
+                Some(d) => d,
+                None => aopts.texels_per_metre,
+            };
+            let fit = fit_densities(&scene, start, args.max_texels);
+            if fit.density < start {
+                eprintln!(
+                    "atlas: {} texels per scene unit, not {start}: the scene's surface is large \
+                     in its units (--texels-per-metre and --max-texels choose)",
+                    fit.density
+                );
+            }
+            if let Some(&(m, d)) = fit.capped.first() {
+                eprintln!(
+                    "atlas: {} large mesh(es) at a coarser density of their own to stay within {} \
+                     texels ({:?} at {d:.3} texels per unit; --max-texels chooses)",
+                    fit.capped.len(),
+                    args.max_texels,
+                    scene.meshes[m].name
+                );
+            }
+            for &(m, d) in &fit.capped {
+                scene.meshes[m].hints.lightmap_texels_per_metre = Some(d);
+            }
+            aopts.texels_per_metre = fit.density;
             let bar = ProgressBar::new(0);
             bar.set_style(
                 ProgressStyle::with_template("atlas: {msg} [{bar:30}] {pos}/{len}, {elapsed}")
@@ -306,12 +326,14 @@ pub fn write_scene_file(
     if let Some(setup) = setup {
         for (name, hints) in &setup.objects {
             let entry = file.objects.entry(name.clone()).or_default();
+            let thickness = entry.thickness.or(hints.thickness);
             if !has_realtime_hints(entry) {
                 *entry = ObjectHints {
                     lightmap_texels_per_metre: entry.lightmap_texels_per_metre,
                     ..*hints
                 };
             }
+            entry.thickness = thickness;
         }
         if file.probes.is_empty() {
             file.probes = setup.probes.clone();
@@ -401,15 +423,61 @@ pub fn run(args: &BakeArgs) -> anyhow::Result<()> {
 /// with: 2²⁴ (16 M texels; 192 MB of irradiance).
 pub const DEFAULT_MAX_TEXELS: u64 = 1 << 24;
 
-/// The density `start` texels per scene unit, halved while the scene's surface would need more
-/// than `max_texels` texels (a scene in centimetres or millimetres, a large site).
-pub fn density_within(scene: &Scene, start: f32, max_texels: u64) -> f32 {
-    let area: f64 = scene.meshes.iter().map(|m| m.area()).sum();
+/// Light-map densities that fit a texel budget ([`fit_densities`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Densities {
+    /// Texels per scene unit of the meshes without a density of their own.
+    pub density: f32,
+    /// Meshes given a coarser density of their own (mesh, texels per unit), largest first.
+    pub capped: Vec<(usize, f32)>,
+}
+
+/// Light-map densities within `max_texels`: `start` texels per scene unit where the whole
+/// surface fits. Else the largest meshes (without a density of their own) are capped to an
+/// equal texel count C, chosen so that the scene fits exactly (water-filling: a room on a vast
+/// ground plane keeps its density, the plane gets what is left), when at most a quarter of the
+/// meshes need capping; otherwise (a scene in centimetres, where every mesh is large) `start`
+/// is halved and the same tried again.
+pub fn fit_densities(scene: &Scene, start: f32, max_texels: u64) -> Densities {
+    let budget = max_texels as f64;
     let mut d = start;
-    while d > f32::MIN_POSITIVE && area * f64::from(d) * f64::from(d) > max_texels as f64 {
+    loop {
+        let d2 = f64::from(d) * f64::from(d);
+        let mut fixed = 0.0;
+        let mut free: Vec<(f64, usize)> = vec![];
+        for (i, m) in scene.meshes.iter().enumerate() {
+            match m.hints.lightmap_texels_per_metre {
+                Some(h) => fixed += m.area() * f64::from(h) * f64::from(h),
+                None => free.push((m.area() * d2, i)),
+            }
+        }
+        let total: f64 = fixed + free.iter().map(|f| f.0).sum::<f64>();
+        if total <= budget || d <= f32::MIN_POSITIVE {
+            return Densities {
+                density: d,
+                capped: vec![],
+            };
+        }
+        free.sort_by(|a, b| b.0.total_cmp(&a.0));
+        // Cap the k largest at C = (budget − fixed − the rest) / k, where C lies between the
+        // k-th and the (k+1)-th need.
+        let mut rest: f64 = free.iter().map(|f| f.0).sum();
+        for k in 1..=(free.len() / 4).max(1).min(free.len()) {
+            rest -= free[k - 1].0;
+            let c = (budget - fixed - rest) / k as f64;
+            let next = free.get(k).map_or(0.0, |f| f.0);
+            if c >= next && c > 0.0 && c < free[k - 1].0 {
+                let capped = free[..k]
+                    .iter()
+                    // Rounded down to f32 (less 10⁻⁶) so that the scene stays within.
+                    .map(|&(need, i)| (i, (f64::from(d) * (c / need).sqrt() * (1.0 - 1e-6)) as f32))
+                    .filter(|&(_, h)| h > 0.0)
+                    .collect();
+                return Densities { density: d, capped };
+            }
+        }
         d /= 2.0;
     }
-    d
 }
 
 /// `lustre bake`: returns the scene file written (`None` for a shard, which writes none).
@@ -467,4 +535,87 @@ pub fn bake(args: &BakeArgs) -> anyhow::Result<Option<PathBuf>> {
         scene_path.display()
     );
     Ok(Some(scene_path))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::{DMat4, DVec3};
+    use lustre_scene::mesh;
+
+    /// A scene of `sides` squares, side lengths in scene units.
+    fn squares(sides: &[f64]) -> Scene {
+        let mut s = Scene::new("squares");
+        for (i, &a) in sides.iter().enumerate() {
+            let mut m = mesh::rectangle(&format!("square-{i}"), 0);
+            m.transform(&DMat4::from_scale(DVec3::splat(0.5 * a)));
+            s.meshes.push(m);
+        }
+        s
+    }
+
+    fn texels(s: &Scene, f: &Densities) -> f64 {
+        s.meshes
+            .iter()
+            .enumerate()
+            .map(|(i, m)| {
+                let d = f
+                    .capped
+                    .iter()
+                    .find(|c| c.0 == i)
+                    .map_or(f.density, |c| c.1);
+                m.area() * f64::from(d) * f64::from(d)
+            })
+            .sum()
+    }
+
+    #[test]
+    fn a_vast_ground_plane_is_capped_and_the_room_keeps_its_density() {
+        // Eight 4-unit walls (16 each) and a 2000-unit ground: at 16 texels per unit the walls
+        // need 8 · 4096 texels, the ground 1.02 G.
+        let mut sides = vec![4.0; 8];
+        sides.push(2000.0);
+        let s = squares(&sides);
+        let f = fit_densities(&s, 16.0, 1 << 20);
+        assert_eq!(f.density, 16.0);
+        assert_eq!(f.capped.len(), 1);
+        assert_eq!(f.capped[0].0, 8);
+        let t = texels(&s, &f);
+        assert!(t <= (1 << 20) as f64 && t > 0.99 * (1 << 20) as f64, "{t}");
+        // The ground gets what the walls leave: (2²⁰ − 8·4096) texels over 4·10⁶ units².
+        let expect = (((1u64 << 20) - 8 * 4096) as f64 / 4e6).sqrt();
+        assert!(
+            (f64::from(f.capped[0].1) - expect).abs() < 1e-3,
+            "{:?}",
+            f.capped
+        );
+        // Within the budget nothing changes.
+        let small = squares(&[4.0; 8]);
+        assert_eq!(
+            fit_densities(&small, 16.0, 1 << 20),
+            Densities {
+                density: 16.0,
+                capped: vec![]
+            }
+        );
+    }
+
+    #[test]
+    fn a_scene_in_centimetres_halves_the_density() {
+        // Every mesh large (a scene in centimetres): capping a quarter cannot fit; halved.
+        let s = squares(&[400.0; 8]);
+        let f = fit_densities(&s, 16.0, 1 << 20);
+        assert!(f.capped.is_empty(), "{f:?}");
+        assert!(f.density < 16.0);
+        assert!(texels(&s, &f) <= (1 << 20) as f64);
+        assert!(
+            texels(
+                &s,
+                &Densities {
+                    density: 2.0 * f.density,
+                    capped: vec![]
+                }
+            ) > (1 << 20) as f64
+        );
+    }
 }

@@ -76,8 +76,9 @@ pub enum Device {
 pub struct RenderArgs {
     /// A scene: a scene.toml with baked light maps (what `lustre bake --out DIR` writes), or
     /// any scene lustre reads (.xml, .gltf, .glb, .obj, a .toml without light maps), baked into
-    /// OUT/bake on first use (16 texels per unit, fewer where that would pass 2²⁰ texels; 64
-    /// paths per texel, 32 bounces, full transport, the automatic real-time set-up) and reused
+    /// OUT/bake on first use (16 texels per unit within 2²⁰ texels: the few largest meshes, such
+    /// as a ground plane, coarser first, else fewer for all; 64 paths per texel, 32 bounces,
+    /// full transport, the automatic real-time set-up) and reused
     /// while the scene is unchanged. Without one, the
     /// built-in room (baked into OUT/bake the same way).
     pub scene: Option<PathBuf>,
@@ -237,6 +238,7 @@ fn load_or_bake(path: &Path, render: &RenderArgs, k: u32) -> anyhow::Result<Bake
         spp: 64,
         bounces: 32,
         texels_per_metre: Some(density),
+        max_texels: FIRST_USE_TEXELS,
         seed: 0,
         tile: 64,
         no_denoise: false,
@@ -287,11 +289,15 @@ fn load_or_bake(path: &Path, render: &RenderArgs, k: u32) -> anyhow::Result<Bake
 }
 
 /// Texels per scene unit of a first-use bake: 16 (6 cm texels in a scene in metres), fewer where
-/// the scene's surface would need more than 2²⁰ texels at 16 (a scene in centimetres, a large
-/// building), rounded down to a power of two.
+/// the scene's surface would need more than 2²⁰ texels at 16 even with its few largest meshes
+/// coarser (a scene in centimetres), halved until it fits (`fit_densities`; the bake caps the
+/// largest meshes within the same budget).
 fn first_use_density(scene: &Scene) -> f32 {
-    crate::bake_cmd::density_within(scene, 16.0, 1 << 20)
+    crate::bake_cmd::fit_densities(scene, 16.0, FIRST_USE_TEXELS).density
 }
+
+/// The texel budget of a first-use bake: 2²⁰.
+const FIRST_USE_TEXELS: u64 = 1 << 20;
 
 /// A fingerprint of `scene` as loaded from `path` and of the bake's `options`: the file's
 /// canonical path and modification time, every mesh (name, vertices, triangles, material,

@@ -5,7 +5,8 @@
 // or frame f's R2-rotated lattice) pushed through the warp; f − kd/π on the reflection side;
 // Dirac-only materials summed over their branches (≤ 2 lookups); each sample read from the
 // mirror buffer of an in-plane reflector triangle, the see-through buffer of a transmissive
-// probe object, the probe of the object (else the nearest; through its bounding planes) or
+// probe object, the probe of the object (else probe::choose_probe's, two room probes blended by
+// depth where their boxes overlap; through its bounding planes) or
 // the environment's pyramid. `samples_main` runs one thread per G-buffer pixel over samples
 // [first, end) of each: llvmpipe (lavapipe) ends an invocation's loops silently once they have
 // run 65,535 iterations together, and 16 G-buffer pixels × 256 samples did (frame_shade.rs
@@ -158,6 +159,20 @@ fn cube_direction(cube: u32, rel: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
 
 // Whether `rel` (relative to cube `cube`'s centre) lies outside one of its bounding planes
 // (probe::outside_plane: by more than 10⁻³ of the plane's distance).
+// probe::plane_depth: the least signed distance of `rel` to cube `cube`'s bounding planes.
+fn cube_depth(cube: u32, rel: vec3<f32>) -> f32 {
+    let info = cubes[2u * cube + 1u];
+    let first = bitcast<u32>(info.y);
+    let count = bitcast<u32>(info.z);
+    var d = BIG;
+    for (var k = 0u; k < count; k++) {
+        let point = planes[2u * (first + k)].xyz;
+        let normal = planes[2u * (first + k) + 1u].xyz;
+        d = min(d, dot(rel - point, normal));
+    }
+    return d;
+}
+
 fn cube_outside(cube: u32, rel: vec3<f32>) -> bool {
     let info = cubes[2u * cube + 1u];
     let first = bitcast<u32>(info.y);
@@ -200,6 +215,8 @@ struct View {
     geometry: u32,
     has_front: bool,
     front_normal: vec3<f32>,
+    // a see-through buffer's slab: thickness (0: a thin sheet) and relative index
+    slab: vec2<f32>,
 }
 
 fn load_view(v: u32) -> View {
@@ -209,7 +226,7 @@ fn load_view(v: u32) -> View {
     return View(views[b].xyz, views[b + 1u].xyz, views[b + 2u].xyz, views[b + 3u].xyz,
                 views[b].w, bitcast<u32>(s.x), bitcast<u32>(s.y), bitcast<u32>(s.z),
                 bitcast<u32>(s.w), bitcast<u32>(g.x), bitcast<u32>(g.y) == 1u,
-                views[b + 7u].xyz);
+                views[b + 7u].xyz, g.zw);
 }
 
 // mirror::project_dir: image position of direction v (z = 0: none).
@@ -394,19 +411,39 @@ struct Point {
     // the cube read (NONE: no probe and no environment) and p relative to its centre
     cube: u32,
     rel: vec3<f32>,
+    // the second room probe blended in (NONE: none), p relative to it, and its weight
+    cube2: u32,
+    rel2: vec3<f32>,
+    w2: f32,
 }
 
-// A view buffer's filtered radiance for a sample (w = 0: not answered). pdf < 0: Dirac.
+// frame::slab_offset: the refraction offset of a slab of thickness t and relative index eta.
+fn slab_offset(t: f32, eta: f32, n: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let c = abs(dot(wi, n));
+    let perp = wi - dot(wi, n) * n;
+    let s2 = dot(perp, perp) / (eta * eta);
+    if (!(c > 1e-6 && eta > 0.0 && s2 < 1.0)) {
+        return vec3<f32>(0.0);
+    }
+    return perp * (t * (1.0 / (eta * sqrt(1.0 - s2)) - 1.0 / c));
+}
+
+// A view buffer's filtered radiance for a sample (w = 0: not answered). pdf < 0: Dirac. A
+// see-through buffer of a slab is read from the point its refraction offset moves p to.
 fn read_view(v: u32, pt: Point, wi: vec3<f32>, pdf: f32, total: f32, ck: bool) -> vec4<f32> {
     let view = load_view(v);
-    let loc = locate(view, pt.p, wi);
+    var o = pt.p;
+    if (view.slab.x > 0.0) {
+        o += slab_offset(view.slab.x, view.slab.y, pt.n, wi);
+    }
+    let loc = locate(view, o, wi);
     if (loc.xy.z == 0.0) {
         return vec4<f32>(0.0);
     }
     var lod = 0.0;
     if (pdf >= 0.0) {
         let bias = select(FOOTPRINT_LEVEL_BIAS, 1.0, ck);
-        lod = view_level(view, pt.p, wi, loc, 1.0 / (total * pdf), bias);
+        lod = view_level(view, o, wi, loc, 1.0 / (total * pdf), bias);
     }
     return vec4<f32>(view_sample(view, loc.xy.x, loc.xy.y, lod), 1.0);
 }
@@ -428,7 +465,16 @@ fn fetch(pt: Point, wi: vec3<f32>, pdf: f32, total: f32, ck: bool) -> vec3<f32> 
     if (pt.cube == NONE) {
         return vec3<f32>(0.0);
     }
-    let face = f32(cube_levels[bitcast<u32>(cubes[2u * pt.cube].w)].y);
+    let c = read_cube(pt.cube, pt.rel, wi, pdf, total, ck);
+    if (pt.cube2 == NONE) {
+        return c;
+    }
+    return c * (1.0 - pt.w2) + read_cube(pt.cube2, pt.rel2, wi, pdf, total, ck) * pt.w2;
+}
+
+// One cube's filtered radiance along wi (rel: the point relative to its centre).
+fn read_cube(cube: u32, rel: vec3<f32>, wi: vec3<f32>, pdf: f32, total: f32, ck: bool) -> vec3<f32> {
+    let face = f32(cube_levels[bitcast<u32>(cubes[2u * cube].w)].y);
     var lod = 0.0;
     if (pdf >= 0.0) {
         if (ck) {
@@ -437,7 +483,7 @@ fn fetch(pt: Point, wi: vec3<f32>, pdf: f32, total: f32, ck: bool) -> vec3<f32> 
             lod = footprint_level(1.0 / (total * pdf), wi, face);
         }
     }
-    return cube_sample(pt.cube, cube_direction(pt.cube, pt.rel, wi), lod);
+    return cube_sample(cube, cube_direction(cube, rel, wi), lod);
 }
 
 // SplitMix64 draw → top 24 bits (frame::ck_point).
@@ -642,13 +688,20 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
         bt = -bt;
     }
     let wo_l = vec3<f32>(dot(wo, t), dot(wo, bt), dot(wo, n));
-    // The incident light: the object's probe, else a room probe whose planes enclose the
-    // point, else an object probe whose planes do, else any; the nearest of the first group
-    // that has one (probe::choose_probe); else the environment.
+    // The incident light: the object's probe, else the room probes whose planes enclose the
+    // point (the two deepest blended by depth), else an object probe whose planes do, else any;
+    // the nearest of the first group that has one (probe::choose_probe); else the environment.
     var cube = bitcast<u32>(r3.w);
+    var cube2 = NONE;
+    var w2 = 0.0;
     if (cube == NONE) {
         var best = BIG;
         var best_rank = 3u;
+        // The two room boxes holding p deepest: depth, squared distance, index.
+        var r0 = vec3<f32>(-1.0, 0.0, 0.0);
+        var r1 = vec3<f32>(-1.0, 0.0, 0.0);
+        var i0 = NONE;
+        var i1 = NONE;
         for (var c = 0u; c < u.method.z; c++) {
             let dc = cubes[2u * c].xyz - p;
             let d2 = dot(dc, dc);
@@ -661,6 +714,25 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
                 best_rank = rank;
                 cube = c;
             }
+            if (rank == 0u) {
+                let depth = max(cube_depth(c, -dc), 0.0);
+                if (i0 == NONE || depth > r0.x || (depth == r0.x && d2 < r0.y)) {
+                    r1 = r0;
+                    i1 = i0;
+                    r0 = vec3<f32>(depth, d2, 0.0);
+                    i0 = c;
+                } else if (i1 == NONE || depth > r1.x || (depth == r1.x && d2 < r1.y)) {
+                    r1 = vec3<f32>(depth, d2, 0.0);
+                    i1 = c;
+                }
+            }
+        }
+        if (i0 != NONE) {
+            cube = i0;
+            if (i1 != NONE && r0.x + r1.x > 0.0) {
+                cube2 = i1;
+                w2 = r1.x / (r0.x + r1.x);
+            }
         }
     }
     if (cube == NONE) {
@@ -670,8 +742,12 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
     if (cube != NONE && cube < u.method.z) {
         rel = p - cubes[2u * cube].xyz;
     }
+    var rel2 = vec3<f32>(0.0);
+    if (cube2 != NONE) {
+        rel2 = p - cubes[2u * cube2].xyz;
+    }
     let see_through = select(bitcast<u32>(r5.w), NONE, u.flags.x != 0u);
-    let pt = Point(p, n, wo, bitcast<u32>(r4.w), see_through, cube, rel);
+    let pt = Point(p, n, wo, bitcast<u32>(r4.w), see_through, cube, rel, cube2, rel2, w2);
     if (pt.cube == NONE && pt.mirror == NONE && pt.see_through == NONE) {
         return vec3<f32>(0.0);
     }

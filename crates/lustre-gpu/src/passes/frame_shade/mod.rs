@@ -324,6 +324,12 @@ impl FrameShadeScene {
         for (i, v) in views.iter().enumerate() {
             let c = &v.camera;
             let front = v.front;
+            // A see-through buffer's slab (thickness, relative index; 0: a thin sheet).
+            let (thickness, eta) = if i >= links.mirrors() {
+                lustre_shade::frame::slab_of(scene, v.mesh as usize).unwrap_or((0.0, 1.0))
+            } else {
+                (0.0, 1.0)
+            };
             view_records.extend([
                 v4(c.origin, c.tan_half_fov_y as f32),
                 v4(c.forward, 0.0),
@@ -335,7 +341,12 @@ impl FrameShadeScene {
                     bits(v.level_sizes.len() as u32),
                     bits(r_off[i]),
                 ],
-                [bits(g_off[i]), bits(u32::from(front.is_some())), 0.0, 0.0],
+                [
+                    bits(g_off[i]),
+                    bits(u32::from(front.is_some())),
+                    thickness as f32,
+                    eta as f32,
+                ],
                 v4(front.map_or(DVec3::ZERO, |f| f.point), 0.0),
                 v4(front.map_or(DVec3::ZERO, |f| f.normal), 0.0),
             ]);
