@@ -30,7 +30,11 @@
 //! surface, or when the segment from the texel's reference sample (the valid one nearest the
 //! texel centre) to it is blocked (a wall thinner than the texel between them). Invalid samples
 //! do not count; a texel without a valid sample is *buried* and filled. Ray origins are offset
-//! along the geometric normal (the path tracer's rule).
+//! along the geometric normal (the path tracer's rule). A sample that falls beyond its
+//! triangle's edge in the atlas is snapped onto the edge and moved [`raster::EDGE_INSET`] of a
+//! texel inside: on the edge itself, where a wall meets a ceiling made of another mesh, its
+//! rays would start on the other surface's plane and pass out through the seam (a two-sided
+//! material has no back faces to reveal it).
 //!
 //! **Sharding.** [`bake_tiles`] bakes the tiles whose index k (pages in order, tiles row-major
 //! within a page) satisfies k mod N = K for `shard = Some((K, N))`, all tiles for `None`;

@@ -139,8 +139,24 @@ fn nearest(t: &[[f64; 2]; 3], q: [f64; 2]) -> Option<(f64, [f64; 3])> {
             best = Some((dist, w));
         }
     }
-    best
+    // A point snapped onto an edge is moved EDGE_INSET texels towards the centroid: on the
+    // edge itself, where a wall meets the ceiling, its rays would start on the other surface's
+    // plane and could pass out through the seam (bright dots along a room's edges).
+    best.map(|(dist, w)| {
+        let p = [0, 1].map(|k| w[0] * t[0][k] + w[1] * t[1][k] + w[2] * t[2][k]);
+        let c = [0, 1].map(|k| (t[0][k] + t[1][k] + t[2][k]) / 3.0);
+        let len = ((c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2)).sqrt();
+        let s = if len > 0.0 {
+            (EDGE_INSET / len).min(1.0)
+        } else {
+            0.0
+        };
+        (dist, w.map(|x| (1.0 - s) * x + s / 3.0))
+    })
 }
+
+/// How far (texels) a sample snapped onto a triangle's edge is moved inside ([`nearest`]).
+pub const EDGE_INSET: f64 = 0.05;
 
 /// The seed of sample `k` of texel (x, y) of page `page`.
 pub fn texel_seed(seed: u64, page: u32, x: u32, y: u32, k: u32) -> u64 {
@@ -344,8 +360,15 @@ mod tests {
         let t = [[0.0, 0.0], [2.0, 0.0], [0.0, 2.0]];
         let (d, b) = nearest(&t, [1.0, -1.0]).unwrap();
         assert!((d - 1.0).abs() < 1e-12);
+        // Onto the edge at (1, 0), then EDGE_INSET texels towards the centroid (2/3, 2/3).
         let p = [0, 1].map(|c| b[0] * t[0][c] + b[1] * t[1][c] + b[2] * t[2][c]);
-        assert!((p[0] - 1.0).abs() < 1e-12 && p[1].abs() < 1e-12);
+        let to_c: [f64; 2] = [2.0 / 3.0 - 1.0, 2.0 / 3.0];
+        let len = (to_c[0] * to_c[0] + to_c[1] * to_c[1]).sqrt();
+        for k in 0..2 {
+            let expect = [1.0, 0.0][k] + to_c[k] * EDGE_INSET / len;
+            assert!((p[k] - expect).abs() < 1e-12, "{p:?}");
+        }
+        assert!(b.iter().all(|&w| w > 0.0) && (b.iter().sum::<f64>() - 1.0).abs() < 1e-12);
         let (d, _) = nearest(&t, [0.5, 0.5]).unwrap();
         assert_eq!(d, 0.0);
     }
