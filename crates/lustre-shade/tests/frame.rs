@@ -624,18 +624,7 @@ fn a_thick_slab_displaces_what_shows_through_it() {
         let (mut scene, atlas, pages) = room_with_pane(true);
         scene.meshes[pane].hints.thickness = t;
         let (img, _) = with_lit(&scene, &atlas, &pages, |lit| {
-            let light = FrameLight {
-                probes: &probes,
-                environment: None,
-            };
-            let opts = FrameRequest {
-                method: Method::Regular,
-                samples: 8,
-                rays: 4,
-                frames: 1,
-                seed: 1,
-            };
-            render_frame(lit, &light, &cam, w, h, &opts).unwrap()
+            frame(lit, &probes, &cam, (w, h), (Method::Regular, 1), 8)
         });
         let (mut sx, mut sw) = (0.0, 0.0);
         for (i, p) in img.data.iter().enumerate() {

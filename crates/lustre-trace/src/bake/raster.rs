@@ -155,7 +155,7 @@ fn nearest(t: &[[f64; 2]; 3], q: [f64; 2]) -> Option<(f64, [f64; 3])> {
     })
 }
 
-/// How far (texels) a sample snapped onto a triangle's edge is moved inside ([`nearest`]).
+/// How far (texels) a sample snapped onto a triangle's edge is moved inside (`nearest`).
 pub const EDGE_INSET: f64 = 0.05;
 
 /// The seed of sample `k` of texel (x, y) of page `page`.
