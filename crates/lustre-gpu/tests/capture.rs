@@ -369,6 +369,41 @@ fn gpu_mirror_and_see_through_buffers_match_their_twin_and_ray_casting() {
     });
 }
 
+/// The sunroom on its 2 km ground plane (scenes/sunroom/site.xml): the floor's mirror buffer on
+/// the GPU keeps the bottom of the walls. Surfaces count as in the clip plane within 10⁻⁴ of the
+/// reflector's diagonal, not of the scene's (28 cm here, which clipped the walls' bottom out of
+/// the mirror and let it show the sunlit ground through them).
+#[test]
+fn gpu_mirror_of_a_room_on_a_vast_site_keeps_its_walls() {
+    let ctx = ctx();
+    let pass = GpuViewPass::new(&ctx).unwrap();
+    let (w, h) = (96, 72);
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/sunroom/site.xml");
+    let mut scene = Scene::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    // The ground coarse in the light maps (16 texels), the room at 4 per metre.
+    let ground = mesh_named(&scene, "Ground");
+    scene.meshes[ground].hints.lightmap_texels_per_metre = Some(0.002);
+    let b = quick_bake(scene, 4.0);
+    let up = LightmapFrameScene::upload(&ctx, &b.scene, &b.atlas, &b.pages).unwrap();
+    let cam = path_camera(&b.scene, None, w as u32, h as u32).unwrap();
+    let floor = mesh_named(&b.scene, "Floor");
+    with_lit(&b, |lit, ps| {
+        let (_, r) = pass
+            .render_mirror(&ctx, &up, lit, floor, &cam, w, h)
+            .unwrap();
+        let gpu = r.view.read_back(&ctx).unwrap();
+        let gb = r.gbuffer.read_back(&ctx).unwrap();
+        let cpu = render_mirror(lit, floor, &cam, w, h).unwrap();
+        let a = check_view(&gpu, &gb, lit, ps, &cpu.view, "site mirror");
+        eprintln!("sunroom on its site, floor mirror {w}×{h}: twin ≥ 90 dB at every level; {a}");
+        assert!(
+            a.hits >= 0.995 && a.positions >= 0.99 && a.db >= 40.0,
+            "site mirror: {a}"
+        );
+    });
+}
+
 /// The clip plane removes exactly what lies between the eye and the plane: a camera above the
 /// floor clipping at a plane through the room's middle height sees nothing below it except
 /// along rays that leave the plane.
@@ -389,6 +424,7 @@ fn clip_plane_discards_between_eye_and_plane_and_bad_input_errs() {
     let opts = DrawOptions {
         skip: None,
         plane: Some((DVec3::new(0.0, y0, 0.0), DVec3::Y)),
+        plane_tolerance: None,
         through_glass: false,
     };
     let r = pass
@@ -454,6 +490,7 @@ fn clip_plane_discards_between_eye_and_plane_and_bad_input_errs() {
     let degenerate = DrawOptions {
         skip: None,
         plane: Some((DVec3::ZERO, DVec3::ZERO)),
+        plane_tolerance: None,
         through_glass: false,
     };
     let e = pass

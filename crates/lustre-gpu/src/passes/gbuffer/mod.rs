@@ -374,9 +374,14 @@ pub struct DrawOptions {
     pub skip: Option<std::ops::Range<u32>>,
     /// A clip plane (a point on it, its normal): fragments on the eye's side of it and nearer
     /// the plane than the eye (those between the eye and the plane along the eye's rays), or
-    /// within 10⁻⁴ of the scene's diagonal of the plane, are discarded, as the CPU mirror pass
-    /// starts its rays on the plane. An eye on the plane clips nothing.
+    /// within `plane_tolerance` of the plane, are discarded, as the CPU mirror pass starts its
+    /// rays on the plane. An eye on the plane clips nothing.
     pub plane: Option<(DVec3, DVec3)>,
+    /// How far beyond the clip plane surfaces still count as in it (the reflector's coplanar
+    /// neighbours); `None`: 10⁻⁴ of the scene's diagonal. The mirror pass gives 10⁻⁴ of the
+    /// reflector's own diagonal: on a 2 km site the scene's would clip the bottom 28 cm of a
+    /// room's walls out of its floor's mirror, which then showed the sunlit ground through them.
+    pub plane_tolerance: Option<f64>,
     /// Leave out the triangles of transmitting materials too (probes and view buffers look
     /// through glass, as `LitScene::hit`).
     pub through_glass: bool,
@@ -422,8 +427,10 @@ fn draw_uniform(
         None => ([0.0; 4], 0.0),
     };
     u.push(plane.map(f32::to_bits));
-    // Surfaces within 10 near planes (10⁻⁴ of the scene's diagonal) of the plane count as in it.
-    u.push([eye.to_bits(), (10.0 * near).to_bits(), 0, 0]);
+    // Surfaces within the tolerance (by default 10 near planes, 10⁻⁴ of the scene's diagonal)
+    // of the plane count as in it.
+    let tolerance = opts.plane_tolerance.map_or(10.0 * near, |t| t as f32);
+    u.push([eye.to_bits(), tolerance.to_bits(), 0, 0]);
     Ok(u)
 }
 

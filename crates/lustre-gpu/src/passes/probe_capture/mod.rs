@@ -226,6 +226,7 @@ impl GpuProbeCapture {
         let opts = DrawOptions {
             skip,
             plane: None,
+            plane_tolerance: None,
             through_glass: true,
         };
         for f in 0..6 {
@@ -261,6 +262,7 @@ impl GpuProbeCapture {
         let opts = DrawOptions {
             skip,
             plane: None,
+            plane_tolerance: None,
             through_glass: true,
         };
         self.gbuffer.draw_with(

@@ -102,9 +102,14 @@ impl GpuViewPass {
             .map_err(|e| invalid("planar reflector", e.to_string()))?;
         let plane = reflector.plane;
         let cam = mirror_camera(camera, &plane);
+        // In the plane: within 10⁻⁴ of the reflector's own diagonal (not the scene's).
+        let size = lit
+            .mesh_bounds(mesh)
+            .map_or(0.0, |(lo, hi)| (hi - lo).length());
         let opts = DrawOptions {
             skip: Some(mesh_triangles(lit.scene, mesh)?),
             plane: Some((plane.point, plane.normal)),
+            plane_tolerance: (size > 0.0).then_some(1e-4 * size),
             through_glass: true,
         };
         let view = self.render_view(ctx, scene, &cam, w, h, &opts, mesh as u32, Some(plane))?;
@@ -127,8 +132,8 @@ impl GpuViewPass {
     ) -> Result<ViewRender> {
         let opts = DrawOptions {
             skip: Some(mesh_triangles(lit.scene, mesh)?),
-            plane: None,
             through_glass: true,
+            ..DrawOptions::default()
         };
         self.render_view(ctx, scene, camera, w, h, &opts, mesh as u32, None)
     }
