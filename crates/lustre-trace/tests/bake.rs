@@ -1002,10 +1002,12 @@ fn full_transport_bakes_are_keyed_by_every_material_parameter() {
 fn a_room_of_separate_two_sided_faces_does_not_leak_at_its_seams() {
     // A 2 × 1 × 2 room of six separate rectangles meeting edge to edge, a two-sided material
     // (no back faces to tell inside from outside), a sky of radiance 1 outside and no light
-    // inside: every texel should bake to exactly zero. Texel samples that fell beyond a face's
-    // edge were snapped onto it, where their rays started on the neighbouring face's plane and
-    // passed out through the seam: 126 of the 2,520 texels were lit. Moved EDGE_INSET inside,
-    // 7 are (one escaped sample each, E ≈ 0.1 of the sky's π; not yet explained).
+    // inside: every texel should bake to exactly zero. Texel samples beyond a face's edge were
+    // snapped onto it, where their rays started on the neighbouring face's plane and passed out
+    // through the seam: 126 of the 2,520 texels were lit (2 bounces). Samples on or within
+    // EDGE_INSET of an edge are now moved inside: with direct light none is lit; with a bounce,
+    // 4 are (one escaped path each: a path vertex within a hair of a seam, whose next ray misses
+    // the neighbouring face).
     let (w, h) = (66, 44);
     let v = DVec3::new;
     let faces = [
@@ -1059,26 +1061,32 @@ fn a_room_of_separate_two_sided_faces_does_not_leak_at_its_seams() {
     plaster.two_sided = true;
     let scene = scene_with(meshes, vec![plaster], Some(Rgb::splat(1.0)));
     let at = atlas(w, h, (0..6).map(|_| Some(0)).collect(), 2);
-    let dir = tempfile::tempdir().unwrap();
-    let a = bake(&scene, &at, &raw_opts(16, 2), dir.path());
-    let lit: Vec<(usize, [f32; 3])> = a.texels[0]
-        .iter()
-        .enumerate()
-        .filter(|(_, r)| r.covered() && r.e != [0.0; 3])
-        .map(|(i, r)| (i, r.e))
-        .collect();
-    let covered = a.texels[0].iter().filter(|r| r.covered()).count();
-    eprintln!("{} of {covered} covered texels lit", lit.len());
-    assert!(covered >= 6 * 400, "{covered}");
-    assert!(
-        lit.len() * 200 <= covered,
-        "{} lit texels (index, E): {:?}",
-        lit.len(),
-        &lit[..lit.len().min(8)]
-    );
-    let worst = lit.iter().map(|l| l.1[1]).fold(0.0f32, f32::max);
-    assert!(
-        worst < 0.25,
-        "a texel lit by more than one escaped sample: E {worst}"
-    );
+    for bounces in [1, 2] {
+        let dir = tempfile::tempdir().unwrap();
+        let a = bake(&scene, &at, &raw_opts(16, bounces), dir.path());
+        let lit: Vec<(usize, [f32; 3])> = a.texels[0]
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.covered() && r.e != [0.0; 3])
+            .map(|(i, r)| (i, r.e))
+            .collect();
+        let covered = a.texels[0].iter().filter(|r| r.covered()).count();
+        eprintln!(
+            "{bounces} bounce(s): {} of {covered} covered texels lit",
+            lit.len()
+        );
+        assert!(covered >= 6 * 400, "{covered}");
+        let allowed = if bounces == 1 { 0 } else { covered / 200 };
+        assert!(
+            lit.len() <= allowed,
+            "{bounces} bounce(s): {} lit texels (index, E): {:?}",
+            lit.len(),
+            &lit[..lit.len().min(8)]
+        );
+        let worst = lit.iter().map(|l| l.1[1]).fold(0.0f32, f32::max);
+        assert!(
+            worst < 0.25,
+            "a texel lit by more than one escaped path: E {worst}"
+        );
+    }
 }

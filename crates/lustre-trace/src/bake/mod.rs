@@ -31,10 +31,11 @@
 //! texel centre) to it is blocked (a wall thinner than the texel between them). Invalid samples
 //! do not count; a texel without a valid sample is *buried* and filled. Ray origins are offset
 //! along the geometric normal (the path tracer's rule). A sample that falls beyond its
-//! triangle's edge in the atlas is snapped onto the edge and moved [`raster::EDGE_INSET`] of a
-//! texel inside: on the edge itself, where a wall meets a ceiling made of another mesh, its
-//! rays would start on the other surface's plane and pass out through the seam (a two-sided
-//! material has no back faces to reveal it).
+//! triangle's edge in the atlas is snapped onto the edge and, as one within
+//! [`raster::EDGE_INSET`] of an edge, moved that far (in texels) inside: on or within a hair of
+//! the edge, where a wall meets a ceiling made of another mesh, its rays would start on the
+//! other surface's plane and pass out through the seam (a two-sided material has no back faces
+//! to reveal it).
 //!
 //! **Sharding.** [`bake_tiles`] bakes the tiles whose index k (pages in order, tiles row-major
 //! within a page) satisfies k mod N = K for `shard = Some((K, N))`, all tiles for `None`;

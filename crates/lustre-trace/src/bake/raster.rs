@@ -117,7 +117,15 @@ fn bary(t: &[[f64; 2]; 3], q: [f64; 2]) -> Option<[f64; 3]> {
 fn nearest(t: &[[f64; 2]; 3], q: [f64; 2]) -> Option<(f64, [f64; 3])> {
     let b = bary(t, q)?;
     if b.iter().all(|&w| w >= 0.0) {
-        return Some((0.0, b));
+        // Inside, but within EDGE_INSET of an edge (the distance to the edge opposite vertex i
+        // is b_i times the triangle's height over it): moved in as the snapped ones.
+        let area2 = cross2(t[0], t[1], t[2]).abs();
+        let near_edge = (0..3).any(|i| {
+            let (a, c) = (t[(i + 1) % 3], t[(i + 2) % 3]);
+            let len = ((c[0] - a[0]).powi(2) + (c[1] - a[1]).powi(2)).sqrt();
+            len > 0.0 && b[i] * area2 / len < EDGE_INSET
+        });
+        return Some((0.0, if near_edge { inset(t, b) } else { b }));
     }
     let mut best: Option<(f64, [f64; 3])> = None;
     for e in 0..3 {
@@ -139,23 +147,27 @@ fn nearest(t: &[[f64; 2]; 3], q: [f64; 2]) -> Option<(f64, [f64; 3])> {
             best = Some((dist, w));
         }
     }
-    // A point snapped onto an edge is moved EDGE_INSET texels towards the centroid: on the
-    // edge itself, where a wall meets the ceiling, its rays would start on the other surface's
-    // plane and could pass out through the seam (bright dots along a room's edges).
-    best.map(|(dist, w)| {
-        let p = [0, 1].map(|k| w[0] * t[0][k] + w[1] * t[1][k] + w[2] * t[2][k]);
-        let c = [0, 1].map(|k| (t[0][k] + t[1][k] + t[2][k]) / 3.0);
-        let len = ((c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2)).sqrt();
-        let s = if len > 0.0 {
-            (EDGE_INSET / len).min(1.0)
-        } else {
-            0.0
-        };
-        (dist, w.map(|x| (1.0 - s) * x + s / 3.0))
-    })
+    best.map(|(dist, w)| (dist, inset(t, w)))
 }
 
-/// How far (texels) a sample snapped onto a triangle's edge is moved inside (`nearest`).
+/// Barycentric weights `w` of `t` moved EDGE_INSET texels towards its centroid (all of the way
+/// when that is nearer). A sample on or within a hair of an edge, where a wall meets a ceiling
+/// made of another mesh, starts its rays on (or within 4·10⁻⁵ of) the other surface's plane,
+/// and some pass out through the seam (bright dots along a room's edges).
+fn inset(t: &[[f64; 2]; 3], w: [f64; 3]) -> [f64; 3] {
+    let p = [0, 1].map(|k| w[0] * t[0][k] + w[1] * t[1][k] + w[2] * t[2][k]);
+    let c = [0, 1].map(|k| (t[0][k] + t[1][k] + t[2][k]) / 3.0);
+    let len = ((c[0] - p[0]).powi(2) + (c[1] - p[1]).powi(2)).sqrt();
+    let s = if len > 0.0 {
+        (EDGE_INSET / len).min(1.0)
+    } else {
+        0.0
+    };
+    w.map(|x| (1.0 - s) * x + s / 3.0)
+}
+
+/// How far (texels) a sample snapped onto a triangle's edge, or within this of one, is moved
+/// inside (`nearest`).
 pub const EDGE_INSET: f64 = 0.05;
 
 /// The seed of sample `k` of texel (x, y) of page `page`.
@@ -369,6 +381,16 @@ mod tests {
             assert!((p[k] - expect).abs() < 1e-12, "{p:?}");
         }
         assert!(b.iter().all(|&w| w > 0.0) && (b.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        // Inside but 0.01 texel from the edge y = 0: moved in the same way; deep inside: kept.
+        let (d, b) = nearest(&t, [1.0, 0.01]).unwrap();
+        assert_eq!(d, 0.0);
+        let p = [0, 1].map(|c| b[0] * t[0][c] + b[1] * t[1][c] + b[2] * t[2][c]);
+        let to_c: [f64; 2] = [2.0 / 3.0 - 1.0, 2.0 / 3.0 - 0.01];
+        let len = (to_c[0] * to_c[0] + to_c[1] * to_c[1]).sqrt();
+        for k in 0..2 {
+            let expect = [1.0, 0.01][k] + to_c[k] * EDGE_INSET / len;
+            assert!((p[k] - expect).abs() < 1e-12, "{p:?}");
+        }
         let (d, _) = nearest(&t, [0.5, 0.5]).unwrap();
         assert_eq!(d, 0.0);
     }
