@@ -347,26 +347,38 @@ fn gpu_mirror_and_see_through_buffers_match_their_twin_and_ray_casting() {
             "room see-through: {a}"
         );
     });
-    let hb = hall();
-    let up = LightmapFrameScene::upload(&ctx, &hb.scene, &hb.atlas, &hb.pages).unwrap();
-    let cam = path_camera(&hb.scene, None, w as u32, h as u32).unwrap();
-    let floor = mesh_named(&hb.scene, "Mesh011");
-    with_lit(&hb, |lit, ps| {
+    let a = floor_mirror(&ctx, &pass, &hall(), "Mesh011", (w, h), "hall mirror");
+    eprintln!("Modern Hall floor (Mesh011) mirror {w}×{h}: twin ≥ 90 dB at every level; {a}");
+    // Raster vs ray casting: surfaces seen edge-on at the mirrored eye's height rasterise as a
+    // one-texel line the rays miss.
+    assert!(
+        a.hits >= 0.99 && a.positions >= 0.99 && a.db >= 25.0 && a.db_agreeing >= 40.0,
+        "hall mirror: {a}"
+    );
+}
+
+/// The GPU mirror buffer of mesh `floor` of `b` from its first camera at w×h, held to its twin
+/// at every level ([`check_view`]) and against the CPU's ray-cast mirror.
+fn floor_mirror(
+    ctx: &GpuContext,
+    pass: &GpuViewPass,
+    b: &Baked,
+    floor: &str,
+    (w, h): (usize, usize),
+    label: &str,
+) -> ViewAgreement {
+    let up = LightmapFrameScene::upload(ctx, &b.scene, &b.atlas, &b.pages).unwrap();
+    let cam = path_camera(&b.scene, None, w as u32, h as u32).unwrap();
+    let floor = mesh_named(&b.scene, floor);
+    with_lit(b, |lit, ps| {
         let (_, r) = pass
-            .render_mirror(&ctx, &up, lit, floor, &cam, w, h)
+            .render_mirror(ctx, &up, lit, floor, &cam, w, h)
             .unwrap();
-        let gpu = r.view.read_back(&ctx).unwrap();
-        let gb = r.gbuffer.read_back(&ctx).unwrap();
+        let gpu = r.view.read_back(ctx).unwrap();
+        let gb = r.gbuffer.read_back(ctx).unwrap();
         let cpu = render_mirror(lit, floor, &cam, w, h).unwrap();
-        let a = check_view(&gpu, &gb, lit, ps, &cpu.view, "hall mirror");
-        eprintln!("Modern Hall floor (Mesh011) mirror {w}×{h}: twin ≥ 90 dB at every level; {a}");
-        // Raster vs ray casting: surfaces seen edge-on at the mirrored eye's height rasterise
-        // as a one-texel line the rays miss.
-        assert!(
-            a.hits >= 0.99 && a.positions >= 0.99 && a.db >= 25.0 && a.db_agreeing >= 40.0,
-            "hall mirror: {a}"
-        );
-    });
+        check_view(&gpu, &gb, lit, ps, &cpu.view, label)
+    })
 }
 
 /// The sunroom on its 2 km ground plane (scenes/sunroom/site.xml): the floor's mirror buffer on
@@ -385,23 +397,12 @@ fn gpu_mirror_of_a_room_on_a_vast_site_keeps_its_walls() {
     let ground = mesh_named(&scene, "Ground");
     scene.meshes[ground].hints.lightmap_texels_per_metre = Some(0.002);
     let b = quick_bake(scene, 4.0);
-    let up = LightmapFrameScene::upload(&ctx, &b.scene, &b.atlas, &b.pages).unwrap();
-    let cam = path_camera(&b.scene, None, w as u32, h as u32).unwrap();
-    let floor = mesh_named(&b.scene, "Floor");
-    with_lit(&b, |lit, ps| {
-        let (_, r) = pass
-            .render_mirror(&ctx, &up, lit, floor, &cam, w, h)
-            .unwrap();
-        let gpu = r.view.read_back(&ctx).unwrap();
-        let gb = r.gbuffer.read_back(&ctx).unwrap();
-        let cpu = render_mirror(lit, floor, &cam, w, h).unwrap();
-        let a = check_view(&gpu, &gb, lit, ps, &cpu.view, "site mirror");
-        eprintln!("sunroom on its site, floor mirror {w}×{h}: twin ≥ 90 dB at every level; {a}");
-        assert!(
-            a.hits >= 0.995 && a.positions >= 0.99 && a.db >= 40.0,
-            "site mirror: {a}"
-        );
-    });
+    let a = floor_mirror(&ctx, &pass, &b, "Floor", (w, h), "site mirror");
+    eprintln!("sunroom on its site, floor mirror {w}×{h}: twin ≥ 90 dB at every level; {a}");
+    assert!(
+        a.hits >= 0.995 && a.positions >= 0.99 && a.db >= 40.0,
+        "site mirror: {a}"
+    );
 }
 
 /// The clip plane removes exactly what lies between the eye and the plane: a camera above the
