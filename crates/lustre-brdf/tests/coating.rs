@@ -84,3 +84,68 @@ fn interpolated_coatings_match_the_exact_tables() {
         assert!(worst_f_rel < 3e-3, "{kind:?}: BRDF off by {worst_f_rel}");
     }
 }
+
+/// A plastic's base as a Lambertian (`CoatedBase`): kd is the base lobe's albedo under uniform
+/// light averaged over cosine-weighted outgoing directions, (1/π)∫∫ f μi μo dωi dωo, here by a
+/// midpoint rule over (μi, μo) of the BSDF's own `eval` (specular 0: the base lobe alone), for
+/// smooth and rough coatings, linear and nonlinear ρ'.
+#[test]
+fn the_coated_base_is_the_base_lobes_mean_albedo() {
+    use lustre_brdf::models::plastic::{CoatedBase, Plastic};
+    let rho = Rgb([0.8, 0.5, 0.2]);
+    let mean_albedo = |b: &dyn Bsdf| -> Rgb {
+        let n = 800;
+        let mut sum = Rgb::ZERO;
+        for i in 0..n {
+            let mi = (i as f64 + 0.5) / n as f64;
+            let wi = DVec3::new((1.0 - mi * mi).sqrt(), 0.0, mi);
+            for o in 0..n {
+                let mo = (o as f64 + 0.5) / n as f64;
+                let wo = DVec3::new(-(1.0 - mo * mo).sqrt(), 0.0, mo);
+                // dω = 2π dμ (isotropic base), (1/π)·2π·2π / n² · f μi μo ... with the 1/π
+                // of the cosine-weighted mean over ωo: 4 ∫∫ f π μi μo dμi dμo.
+                sum += b.eval(wi, wo) * (4.0 * std::f64::consts::PI * mi * mo);
+            }
+        }
+        sum * (1.0 / (n * n) as f64)
+    };
+    for nonlinear in [false, true] {
+        let smooth = Plastic::new(rho, Rgb::ZERO, 1.5, 1.0, nonlinear).unwrap();
+        let base = smooth.coated_base();
+        let (want, got) = (mean_albedo(&smooth), base.kd(rho));
+        for c in 0..3 {
+            assert!(
+                (want[c] - got[c]).abs() < 2e-4 * want[c],
+                "smooth {nonlinear}: {want:?} {got:?}"
+            );
+        }
+        for alpha in [0.01, 0.1, 0.4] {
+            let rough = RoughPlastic::new(
+                MicrofacetType::Ggx,
+                alpha,
+                rho,
+                Rgb::ZERO,
+                1.5,
+                1.0,
+                nonlinear,
+            )
+            .unwrap();
+            let t = rough.mean_transmittance();
+            assert!(t > 0.8 && t < 0.95, "T̄ {t}");
+            let (want, got) = (mean_albedo(&rough), rough.coated_base().kd(rho));
+            for c in 0..3 {
+                assert!(
+                    (want[c] - got[c]).abs() < 2e-3 * want[c],
+                    "α {alpha} {nonlinear}: {want:?} {got:?}"
+                );
+            }
+        }
+    }
+    // Far below ρ: the coating's Fresnel and 1/η² take about half of it.
+    let b = Plastic::new(rho, Rgb::ZERO, 1.5, 1.0, true)
+        .unwrap()
+        .coated_base();
+    let kd = b.kd(rho);
+    assert!(kd[0] < 0.75 * rho[0] && kd[2] < 0.6 * rho[2], "{kd:?}");
+    assert_eq!(CoatedBase::UNCOATED.kd(rho), rho);
+}

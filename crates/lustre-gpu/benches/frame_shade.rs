@@ -21,7 +21,7 @@ use lustre_shade::frame::{FrameBuffers, FrameLight};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
 use lustre_trace::bake::render::Lightmapped;
-use lustre_trace::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Denoiser};
+use lustre_trace::bake::{assemble, bake_tiles, base_albedo, BakeOptions, BaseAlbedo, Denoiser};
 use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{path_camera, path_scene};
 
@@ -71,8 +71,14 @@ fn frame(c: &mut Criterion) {
     ));
     let pages = fail(assemble(&scene, &atlas, &bake, dir.path())).pages;
     let (ps, _) = fail(path_scene(&scene));
-    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = fail(Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec));
+    let bases: Vec<BaseAlbedo> = scene.materials.iter().map(base_albedo).collect();
+    let lm = fail(Lightmapped::new(
+        &scene,
+        &atlas,
+        &pages,
+        &ps.geometry,
+        bases,
+    ));
     let pt = fail(PathTracer::new(&ps, PathOptions::default()));
     let lit = fail(LitScene::new(&scene, &ps, &pt, &lm));
     let popts = ProbeOptions {

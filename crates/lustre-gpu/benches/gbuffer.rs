@@ -54,8 +54,14 @@ fn frame(c: &mut Criterion) {
     let ctx = fail(GpuContext::new());
     let renderer = fail(LightmapRenderer::new(&ctx));
     let up = fail(LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages));
-    let (ps, spec, _) = fail(diffuse_path_scene(&scene));
-    let lit = fail(Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec));
+    let (ps, bases, _) = fail(diffuse_path_scene(&scene));
+    let lit = fail(Lightmapped::new(
+        &scene,
+        &atlas,
+        &pages,
+        &ps.geometry,
+        bases,
+    ));
     let pt = fail(PathTracer::new(&ps, Default::default()));
     let mut g = c.benchmark_group("lightmapped_frame_modern_hall");
     g.sample_size(10);

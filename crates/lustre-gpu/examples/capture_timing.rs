@@ -191,8 +191,8 @@ fn main() -> Res<()> {
     let mut view_rows = Vec::new();
     for (label, b) in &scenes {
         let up = LightmapFrameScene::upload(&ctx, &b.scene, &b.atlas, &b.pages)?;
-        let (ps, spec, _) = diffuse_path_scene(&b.scene)?;
-        let lm = Lightmapped::new(&b.scene, &b.atlas, &b.pages, &ps.geometry, spec)?;
+        let (ps, bases, _) = diffuse_path_scene(&b.scene)?;
+        let lm = Lightmapped::new(&b.scene, &b.atlas, &b.pages, &ps.geometry, bases)?;
         let pt = PathTracer::new(&ps, PathOptions::default())?;
         let lit = LitScene::new(&b.scene, &ps, &pt, &lm)?;
         for m in 0..b.scene.meshes.len() {

@@ -45,8 +45,8 @@ fn mesh_named(scene: &Scene, name: &str) -> usize {
 
 /// Runs `f` with the CPU's lit scene of `b` and its path scene.
 fn with_lit<R>(b: &Baked, f: impl FnOnce(&LitScene, &PathScene) -> R) -> R {
-    let (ps, spec, _) = diffuse_path_scene(&b.scene).expect("path scene");
-    let lm = Lightmapped::new(&b.scene, &b.atlas, &b.pages, &ps.geometry, spec).expect("lit");
+    let (ps, bases, _) = diffuse_path_scene(&b.scene).expect("path scene");
+    let lm = Lightmapped::new(&b.scene, &b.atlas, &b.pages, &ps.geometry, bases).expect("lit");
     let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let lit = LitScene::new(&b.scene, &ps, &pt, &lm).expect("lit scene");
     f(&lit, &ps)

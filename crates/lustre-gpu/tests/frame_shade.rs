@@ -21,7 +21,7 @@ use lustre_shade::frame::{shade_gbuffer_view_dependent, FrameBuffers, FrameLight
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
 use lustre_trace::bake::render::Lightmapped;
-use lustre_trace::bake::spec_albedo;
+use lustre_trace::bake::{base_albedo, BaseAlbedo};
 use lustre_trace::metrics::psnr;
 use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{path_camera, path_scene};
@@ -121,8 +121,8 @@ fn gpu_view_dependent_pass_matches_its_cpu_twin_on_the_room() {
         pages,
     } = quick_bake(room(), 4.0);
     let (ps, _) = path_scene(&scene).expect("path scene");
-    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
+    let bases: Vec<BaseAlbedo> = scene.materials.iter().map(base_albedo).collect();
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, bases).expect("light maps");
     let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit");
     let popts = PROBES;
@@ -363,8 +363,8 @@ fn sunroom_parity(edit: impl FnOnce(&mut lustre_scene::Scene)) -> (f64, u64, u64
         pages,
     } = quick_bake(scene, 4.0);
     let (ps, _) = path_scene(&scene).expect("path scene");
-    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
+    let bases: Vec<BaseAlbedo> = scene.materials.iter().map(base_albedo).collect();
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, bases).expect("light maps");
     let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit");
     let popts = PROBES;

@@ -100,8 +100,8 @@ fn gpu_shading_matches_the_cpu_twin_on_its_gbuffer() {
     for (name, b) in [("Cornell box", cornell()), ("Modern Hall", hall())] {
         let cam = camera(&b, w, h);
         let up = LightmapFrameScene::upload(&ctx, &b.scene, &b.atlas, &b.pages).unwrap();
-        let (ps, spec, _) = diffuse_path_scene(&b.scene).unwrap();
-        let lit = Lightmapped::new(&b.scene, &b.atlas, &b.pages, &ps.geometry, spec).unwrap();
+        let (ps, bases, _) = diffuse_path_scene(&b.scene).unwrap();
+        let lit = Lightmapped::new(&b.scene, &b.atlas, &b.pages, &ps.geometry, bases).unwrap();
         for k in [1, 2] {
             let (img, gb) = r.render(&ctx, &up, &cam, w, h, k).unwrap();
             let cpu =
@@ -253,9 +253,9 @@ fn sky_pixels_match_the_environment_lookup() {
     let (w, h) = (160, 90);
     let cam = camera(&b, w, h);
     let up = LightmapFrameScene::upload(&ctx, &b.scene, &b.atlas, &b.pages).unwrap();
-    let (ps, spec, _) = diffuse_path_scene(&b.scene).unwrap();
+    let (ps, bases, _) = diffuse_path_scene(&b.scene).unwrap();
     assert!(ps.environment.is_some());
-    let lit = Lightmapped::new(&b.scene, &b.atlas, &b.pages, &ps.geometry, spec).unwrap();
+    let lit = Lightmapped::new(&b.scene, &b.atlas, &b.pages, &ps.geometry, bases).unwrap();
     let (img, gb) = r.render(&ctx, &up, &cam, w, h, 1).unwrap();
     let sky = gb.prim.iter().filter(|&&p| p == SKY).count();
     let cpu = shade_gbuffer(&lit, &ps.geometry, ps.environment.as_ref(), &cam, &gb, 1).unwrap();
@@ -382,8 +382,8 @@ fn textured_metallic_and_transmission_match_the_cpu_twin() {
         layers: Default::default(),
     };
     let up = LightmapFrameScene::upload(&ctx, &b.scene, &b.atlas, &b.pages).unwrap();
-    let (ps, spec, _) = diffuse_path_scene(&b.scene).unwrap();
-    let lit = Lightmapped::new(&b.scene, &b.atlas, &b.pages, &ps.geometry, spec).unwrap();
+    let (ps, bases, _) = diffuse_path_scene(&b.scene).unwrap();
+    let lit = Lightmapped::new(&b.scene, &b.atlas, &b.pages, &ps.geometry, bases).unwrap();
     let (img, gb) = r.render(&ctx, &up, &cam, w, h, 1).unwrap();
     let cpu = shade_gbuffer(&lit, &ps.geometry, ps.environment.as_ref(), &cam, &gb, 1).unwrap();
     let db = psnr(&img, &cpu, 1.0).unwrap();

@@ -10,7 +10,6 @@
 mod common;
 use common::{ctx, frame_buffers, quick_bake};
 use glam::DVec3;
-use lustre_brdf::rgb::Rgb;
 use lustre_gpu::{
     GpuContext, GpuFrameSession, GpuWalkthrough, LightmapFrameScene, SessionIntermediates, StepWork,
 };
@@ -19,7 +18,7 @@ use lustre_shade::frame::{shade_gbuffer_view_dependent, FrameLight};
 use lustre_shade::probe::{LitScene, Probe, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
 use lustre_trace::bake::render::Lightmapped;
-use lustre_trace::bake::spec_albedo;
+use lustre_trace::bake::{base_albedo, BaseAlbedo};
 use lustre_trace::image::Image;
 use lustre_trace::metrics::psnr;
 use lustre_trace::path_tracer::{PathCamera, PathOptions, PathTracer};
@@ -41,8 +40,8 @@ fn with_room(f: impl FnOnce(&GpuContext, &Scene, &LitScene, &mut GpuWalkthrough)
         pages,
     } = quick_bake(scene, 4.0);
     let (ps, _) = path_scene(&scene).expect("path scene");
-    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
+    let bases: Vec<BaseAlbedo> = scene.materials.iter().map(base_albedo).collect();
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, bases).expect("light maps");
     let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit");
     let up = LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages).expect("upload");

@@ -28,7 +28,7 @@ use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
 use lustre_trace::bake::gbuffer::VisibilityBuffer;
 use lustre_trace::bake::render::Lightmapped;
-use lustre_trace::bake::spec_albedo;
+use lustre_trace::bake::{base_albedo, BaseAlbedo};
 use lustre_trace::image::Image;
 use lustre_trace::metrics::psnr;
 use lustre_trace::path_tracer::{PathCamera, PathOptions, PathTracer};
@@ -115,8 +115,8 @@ fn twin(
     opts: &FrameRequest,
 ) -> (Image, u64) {
     let (ps, _) = path_scene(scene).expect("path scene");
-    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = Lightmapped::new(scene, &baked.atlas, &baked.pages, &ps.geometry, spec)
+    let bases: Vec<BaseAlbedo> = scene.materials.iter().map(base_albedo).collect();
+    let lm = Lightmapped::new(scene, &baked.atlas, &baked.pages, &ps.geometry, bases)
         .expect("light maps");
     let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let lit = LitScene::new(scene, &ps, &pt, &lm).expect("lit");
@@ -143,8 +143,8 @@ fn textured_and_normal_mapped_glossy_materials_match_their_cpu_twin() {
         assert_eq!(b.flags & flags, flags, "{name}");
     }
     let (ps, _) = path_scene(scene).expect("path scene");
-    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = Lightmapped::new(scene, &baked.atlas, &baked.pages, &ps.geometry, spec)
+    let bases: Vec<BaseAlbedo> = scene.materials.iter().map(base_albedo).collect();
+    let lm = Lightmapped::new(scene, &baked.atlas, &baked.pages, &ps.geometry, bases)
         .expect("light maps");
     let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let lit = LitScene::new(scene, &ps, &pt, &lm).expect("lit");

@@ -12,7 +12,6 @@
 
 mod common;
 use common::{ctx, frame_buffers, quick_bake};
-use lustre_brdf::rgb::Rgb;
 use lustre_gpu::material::{pack_material, FLAG_TEXTURED};
 use lustre_gpu::{GpuContext, GpuFrame, GpuWalkthrough, LightmapFrameScene};
 use lustre_scene::{Material, MaterialKind, ResolvedSpec, Scene};
@@ -23,7 +22,7 @@ use lustre_shade::mirror::ScreenTiles;
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
 use lustre_trace::bake::render::Lightmapped;
-use lustre_trace::bake::spec_albedo;
+use lustre_trace::bake::{base_albedo, BaseAlbedo};
 use lustre_trace::image::Image;
 use lustre_trace::metrics::psnr;
 use lustre_trace::path_tracer::{PathCamera, PathOptions, PathTracer};
@@ -118,8 +117,8 @@ fn the_gpu_frame_matches_its_cpu_twins_and_the_ray_cast_frame() {
         pages,
     } = quick_bake(scene, 4.0);
     let (ps, _) = path_scene(&scene).expect("path scene");
-    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
+    let bases: Vec<BaseAlbedo> = scene.materials.iter().map(base_albedo).collect();
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, bases).expect("light maps");
     let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit");
     let up = LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages).expect("upload");
@@ -231,8 +230,8 @@ fn a_material_the_gpu_cannot_shade_is_refused_by_name() {
         pages,
     } = quick_bake(scene, 4.0);
     let (ps, _) = path_scene(&scene).expect("path scene");
-    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
+    let bases: Vec<BaseAlbedo> = scene.materials.iter().map(base_albedo).collect();
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, bases).expect("light maps");
     let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit");
     let up = LightmapFrameScene::upload(&ctx, &scene, &atlas, &pages).expect("upload");
@@ -261,8 +260,8 @@ fn the_gpu_frame_of_the_modern_hall_matches_its_cpu_twins() {
         pages,
     } = quick_bake(scene, 4.0);
     let (ps, _) = path_scene(&scene).expect("path scene");
-    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
+    let bases: Vec<BaseAlbedo> = scene.materials.iter().map(base_albedo).collect();
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, bases).expect("light maps");
     let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit");
     // The textured rough plastics are on the GPU, flagged to read ρ per pixel.

@@ -6,13 +6,12 @@
 //! not change the frame's cost. `cargo bench -p lustre-shade --bench walkthrough -- --noplot`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use lustre_brdf::rgb::Rgb;
 use lustre_scene::lightmap::{build_atlas, AtlasOptions};
 use lustre_shade::frame::{render_frame, FrameLight};
 use lustre_shade::probe::{capture_probe, LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
 use lustre_trace::bake::render::Lightmapped;
-use lustre_trace::bake::{assemble, bake_tiles, spec_albedo, BakeOptions, Transport};
+use lustre_trace::bake::{assemble, bake_tiles, base_albedo, BakeOptions, BaseAlbedo, Transport};
 use lustre_trace::path_tracer::{PathOptions, PathTracer};
 use lustre_trace::reference::{path_camera, path_scene};
 use std::hint::black_box;
@@ -40,8 +39,8 @@ fn bench(c: &mut Criterion) {
         .expect("assemble")
         .pages;
     let (ps, _) = path_scene(&scene).expect("path scene");
-    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec).expect("light maps");
+    let bases: Vec<BaseAlbedo> = scene.materials.iter().map(base_albedo).collect();
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, bases).expect("light maps");
     let pt = PathTracer::new(&ps, PathOptions::default()).expect("tracer");
     let lit = LitScene::new(&scene, &ps, &pt, &lm).expect("lit scene");
     let popts = ProbeOptions {

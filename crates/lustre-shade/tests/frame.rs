@@ -17,7 +17,7 @@ use lustre_shade::integrator::corrected_direction;
 use lustre_shade::probe::{capture_cube, capture_probe, LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
 use lustre_trace::bake::render::{render_lightmapped, Lightmapped};
-use lustre_trace::bake::spec_albedo;
+use lustre_trace::bake::{base_albedo, BaseAlbedo};
 use lustre_trace::path_tracer::{PathCamera, PathOptions, PathTracer};
 use std::f64::consts::PI;
 
@@ -125,8 +125,8 @@ fn with_lit<R>(
     f: impl FnOnce(&LitScene) -> R,
 ) -> R {
     let (ps, _) = lustre_trace::reference::path_scene(scene).unwrap();
-    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = Lightmapped::new(scene, atlas, pages, &ps.geometry, spec).unwrap();
+    let bases: Vec<BaseAlbedo> = scene.materials.iter().map(base_albedo).collect();
+    let lm = Lightmapped::new(scene, atlas, pages, &ps.geometry, bases).unwrap();
     let pt = PathTracer::new(&ps, PathOptions::default()).unwrap();
     let lit = LitScene::new(scene, &ps, &pt, &lm).unwrap();
     f(&lit)

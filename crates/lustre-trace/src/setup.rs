@@ -205,8 +205,8 @@ fn appearance(scene: &Scene, material: usize) -> Appearance {
         return none;
     }
     let total = bsdf.albedo(DVec3::Z, 256).luminance();
-    let spec = crate::bake::spec_albedo(m);
-    let diffuse = crate::bake::diffuse_albedo(m, &scene.textures, &uv, spec).luminance();
+    let base = crate::bake::base_albedo(m);
+    let diffuse = crate::bake::diffuse_albedo(m, &scene.textures, &uv, base).luminance();
     let glossy = if flags.transmission {
         1.0
     } else {
@@ -423,10 +423,18 @@ pub fn auto_setup(scene: &Scene, tracer: &PathTracer, opts: &SetupOptions) -> Se
         .filter(|m| m.hints.planar_reflector)
         .count();
     let mut probes_used = scene.meshes.iter().filter(|m| m.hints.probe).count();
+    let per_material: Vec<Appearance> = (0..scene.materials.len())
+        .map(|k| appearance(scene, k))
+        .collect();
+    let none = Appearance {
+        view_dependent: false,
+        transmissive: false,
+        glossy: 0.0,
+    };
     let looks: Vec<Appearance> = scene
         .meshes
         .iter()
-        .map(|m| appearance(scene, m.material))
+        .map(|m| per_material.get(m.material).copied().unwrap_or(none))
         .collect();
     let any_view_dependent = looks.iter().any(|a| a.view_dependent);
     // Candidates: (score, mesh, planar).

@@ -34,8 +34,8 @@ use lustre_scene::{Camera, Material, MaterialKind, Scene};
 use lustre_shade::frame::FrameStats;
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::request::FrameRequest;
+use lustre_trace::bake::base_albedo;
 use lustre_trace::bake::render::Lightmapped;
-use lustre_trace::bake::spec_albedo;
 use lustre_trace::baked::{environment_pyramid, BakedScene};
 use lustre_trace::image::Image;
 use lustre_trace::path_tracer::{Accumulator, PathCamera, PathOptions, PathScene, PathTracer};
@@ -347,8 +347,8 @@ fn run_inner(
         // The walkthrough's parts, each with what the next needs, or why there is none.
         let lm = match &walkthrough {
             Ok((atlas, pages)) => {
-                let spec = scene.materials.iter().map(spec_albedo).collect();
-                let lm = Lightmapped::new(&scene, atlas, pages, &ps.geometry, spec)?;
+                let bases = scene.materials.iter().map(base_albedo).collect();
+                let lm = Lightmapped::new(&scene, atlas, pages, &ps.geometry, bases)?;
                 Ok((lm, atlas, pages))
             }
             Err(why) => Err(why.as_str()),

@@ -383,17 +383,17 @@ fn write_probes(
     opts.validate()?;
     let t = std::time::Instant::now();
     let (ps, _) = lustre_trace::reference::path_scene(scene)?;
-    let spec: Vec<lustre_brdf::rgb::Rgb> = scene
+    let bases: Vec<lustre_trace::bake::BaseAlbedo> = scene
         .materials
         .iter()
-        .map(lustre_trace::bake::spec_albedo)
+        .map(lustre_trace::bake::base_albedo)
         .collect();
     let lm = lustre_trace::bake::render::Lightmapped::new(
         scene,
         &baked.atlas,
         &baked.pages,
         &ps.geometry,
-        spec,
+        bases,
     )?;
     let pt = lustre_trace::path_tracer::PathTracer::new(
         &ps,

@@ -8,7 +8,6 @@
 use anyhow::{bail, Context};
 use clap::builder::TypedValueParser;
 use indicatif::{ProgressBar, ProgressStyle};
-use lustre_brdf::rgb::Rgb;
 use lustre_env::pyramid::CubePyramid;
 use lustre_gpu::{GpuContext, GpuFrameSession, GpuFrameTimes, GpuWalkthrough, LightmapFrameScene};
 use lustre_scene::camera_path_file::CameraPathFile;
@@ -20,7 +19,7 @@ use lustre_shade::frame::{render_frame, FrameLight, FrameStats};
 use lustre_shade::probe::{capture_probes, has_probes, LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
 use lustre_trace::bake::render::Lightmapped;
-use lustre_trace::bake::spec_albedo;
+use lustre_trace::bake::{base_albedo, BaseAlbedo};
 use lustre_trace::baked::{environment_pyramid, read_environment, BakedScene};
 use lustre_trace::image::Image;
 use lustre_trace::path_tracer::PathCamera;
@@ -511,8 +510,8 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
-    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, spec)
+    let bases: Vec<BaseAlbedo> = scene.materials.iter().map(base_albedo).collect();
+    let lm = Lightmapped::new(&scene, &atlas, &pages, &ps.geometry, bases)
         .with_context(|| format!("{name}: light maps"))?;
     let pt = PathTracer::new(&ps, PathOptions::default())?;
     let lit = LitScene::new(&scene, &ps, &pt, &lm)?;

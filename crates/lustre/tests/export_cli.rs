@@ -544,18 +544,18 @@ fn assert_probes_written(baked: &Path, glb: &Path, printed: &str) {
     use lustre_shade::probe::{capture_probes, LitScene, ProbeOptions};
     let b = lustre_trace::baked::BakedScene::load(baked).expect("baked");
     let (ps, _) = lustre_trace::reference::path_scene(&b.scene).expect("path scene");
-    let spec = b
+    let bases = b
         .scene
         .materials
         .iter()
-        .map(lustre_trace::bake::spec_albedo)
+        .map(lustre_trace::bake::base_albedo)
         .collect();
     let lm = lustre_trace::bake::render::Lightmapped::new(
         &b.scene,
         &b.atlas,
         &b.pages,
         &ps.geometry,
-        spec,
+        bases,
     )
     .expect("light maps");
     let pt = lustre_trace::path_tracer::PathTracer::new(&ps, Default::default()).expect("tracer");

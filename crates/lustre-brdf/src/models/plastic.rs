@@ -27,6 +27,56 @@ use crate::sampling::{cosine_hemisphere, cosine_hemisphere_pdf};
 use glam::DVec3;
 use std::f64::consts::FRAC_1_PI;
 
+/// A plastic's base seen through its coating, as the Lambertian a light map can hold. The base
+/// lobe is f(wi, wo) = ρ' T(μi) T(μo) / (π η²) (T the coating's transmittance, 1 − F for a
+/// smooth one); under uniform incident radiance L it reflects ρ' T(μo) T̄ L / η² towards μo,
+/// T̄ = 2∫₀¹ T(μ) μ dμ, and, averaged over cosine-weighted outgoing directions, its albedo is
+///
+/// ```text
+/// kd = ρ' T̄² / η² = scale · ρ / (1 − fdr · ρ),
+/// ```
+///
+/// scale = T̄² / (η² (1 − Fdr)) and fdr = 0 for the linear ρ', scale = T̄² / η² and fdr = Fdr for
+/// the nonlinear one (per channel). What kd leaves of f (a part that depends on μi and μo) is
+/// the view-dependent rest. An uncoated base: scale 1, fdr 0 (kd = ρ).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoatedBase {
+    /// The factor on ρ.
+    pub scale: f64,
+    /// The internal reflectance in the denominator (0: linear).
+    pub fdr: f64,
+}
+
+impl CoatedBase {
+    /// kd = ρ.
+    pub const UNCOATED: CoatedBase = CoatedBase {
+        scale: 1.0,
+        fdr: 0.0,
+    };
+
+    /// The base of a coating of relative index `eta` with mean transmittance `mean_t` (T̄) and
+    /// internal reflectance `fdr_int`, ρ' linear or `nonlinear`.
+    pub fn new(mean_t: f64, eta: f64, fdr_int: f64, nonlinear: bool) -> Self {
+        let s = mean_t * mean_t / (eta * eta);
+        if nonlinear {
+            CoatedBase {
+                scale: s,
+                fdr: fdr_int,
+            }
+        } else {
+            CoatedBase {
+                scale: s / (1.0 - fdr_int),
+                fdr: 0.0,
+            }
+        }
+    }
+
+    /// kd of a base of albedo ρ (each channel in [0, 1]).
+    pub fn kd(&self, rho: Rgb) -> Rgb {
+        rho.map(|x| self.scale * x / (1.0 - self.fdr * x))
+    }
+}
+
 /// A smooth plastic.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Plastic {
@@ -81,6 +131,16 @@ impl Plastic {
     /// The coating's internal diffuse reflectance Fdr(1/η).
     pub fn internal_reflectance(&self) -> f64 {
         self.fdr_int
+    }
+
+    /// The base as a Lambertian ([`CoatedBase`]), T(μ) = 1 − F(μ): T̄ = 1 − Fdr(η).
+    pub fn coated_base(&self) -> CoatedBase {
+        CoatedBase::new(
+            1.0 - fresnel_diffuse_reflectance(self.eta),
+            self.eta,
+            self.fdr_int,
+            self.nonlinear,
+        )
     }
 
     fn prob_specular(&self, f_o: f64) -> f64 {

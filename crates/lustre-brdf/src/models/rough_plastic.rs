@@ -25,6 +25,7 @@ use crate::microfacet::distribution::{MicrofacetDistribution, MicrofacetType};
 use crate::microfacet::fresnel::fresnel_dielectric;
 use crate::models::dielectric::{refract, relative_ior};
 use crate::models::glossy_diffuse::{self, GlossyDiffuse};
+use crate::models::plastic::CoatedBase;
 use crate::rgb::Rgb;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -182,6 +183,31 @@ impl RoughPlastic {
     /// The coating's internal reflectance Fdr.
     pub fn internal_reflectance(&self) -> f64 {
         self.internal_reflectance
+    }
+
+    /// T̄ = 2∫₀¹ T(μ) μ dμ of the interpolated table (exact for its piecewise-linear T).
+    pub fn mean_transmittance(&self) -> f64 {
+        let tab = &self.external_transmittance;
+        let h = 1.0 / (TABLE_RES - 1) as f64;
+        let mut sum = 0.0;
+        for i in 0..TABLE_RES - 1 {
+            let (a, b) = (i as f64 * h, (i + 1) as f64 * h);
+            let slope = (tab[i + 1] - tab[i]) / h;
+            // ∫ₐᵇ (T_a + slope (μ − a)) μ dμ
+            sum += tab[i] * (b * b - a * a) / 2.0
+                + slope * ((b * b * b - a * a * a) / 3.0 - a * (b * b - a * a) / 2.0);
+        }
+        2.0 * sum
+    }
+
+    /// The base as a Lambertian ([`CoatedBase`]).
+    pub fn coated_base(&self) -> CoatedBase {
+        CoatedBase::new(
+            self.mean_transmittance(),
+            self.eta,
+            self.internal_reflectance,
+            self.nonlinear,
+        )
     }
 }
 

@@ -232,8 +232,8 @@ pub fn render_lightmapped_gbuffer(
     k: u32,
 ) -> Result<(Image, VisibilityBuffer)> {
     let (gw, gh) = gbuffer_size(w, h, k)?;
-    let (ps, spec, _) = diffuse_path_scene(scene)?;
-    let lit = Lightmapped::new(scene, atlas, pages, &ps.geometry, spec)?;
+    let (ps, bases, _) = diffuse_path_scene(scene)?;
+    let lit = Lightmapped::new(scene, atlas, pages, &ps.geometry, bases)?;
     let pt = PathTracer::new(&ps, PathOptions::default())?;
     let gb = trace_gbuffer(&pt, &ps.geometry, camera, gw, gh)?;
     let img = shade_gbuffer(&lit, &ps.geometry, ps.environment.as_ref(), camera, &gb, k)?;

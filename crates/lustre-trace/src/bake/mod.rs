@@ -60,6 +60,8 @@ use crate::{Result, TraceError};
 use glam::{DVec3, Vec2};
 use lustre_brdf::bsdf::Bsdf;
 use lustre_brdf::models::lambert::Lambert;
+use lustre_brdf::models::plastic::{CoatedBase, Plastic};
+use lustre_brdf::models::rough_plastic::{RoughPlastic, RoughPlasticCoating};
 use lustre_brdf::rgb::Rgb;
 use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::{Material, MaterialKind, Scene, Texture};
@@ -144,14 +146,86 @@ impl BakeOptions {
     }
 }
 
+/// What [`diffuse_albedo`] needs of a material beyond its parameters, computed once per
+/// material by [`base_albedo`]: a catalog specification's albedo and a plastic's coating.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BaseAlbedo {
+    /// A catalog specification's hemispherical albedo at normal incidence (zero for the other
+    /// kinds): fitted models have no separate diffuse term at this interface, so their glossy
+    /// energy is counted as diffuse there — the one exception to "glossy energy dropped".
+    pub spec: Rgb,
+    /// A (rough) plastic's base seen through its coating ([`CoatedBase`]); uncoated otherwise.
+    pub coat: CoatedBase,
+}
+
+impl Default for BaseAlbedo {
+    fn default() -> Self {
+        BaseAlbedo {
+            spec: Rgb::ZERO,
+            coat: CoatedBase::UNCOATED,
+        }
+    }
+}
+
+/// The [`BaseAlbedo`] of `m`: a catalog specification's albedo at normal incidence (1024
+/// stratified samples); a plastic's coated base (a rough one's at its roughness factor, a
+/// textured roughness's mean not known here; uncoated where the coating is invalid).
+pub fn base_albedo(m: &Material) -> BaseAlbedo {
+    let mut out = BaseAlbedo::default();
+    match &m.kind {
+        MaterialKind::Spec(r) => {
+            out.spec = r.bsdf.albedo(DVec3::Z, 1024).map(|v| {
+                if v.is_finite() {
+                    v.clamp(0.0, 1.0)
+                } else {
+                    0.0
+                }
+            });
+        }
+        MaterialKind::Plastic {
+            int_ior,
+            ext_ior,
+            nonlinear,
+            ..
+        } => {
+            if let Ok(p) = Plastic::new(Rgb::ZERO, Rgb::ZERO, *int_ior, *ext_ior, *nonlinear) {
+                out.coat = p.coated_base();
+            }
+        }
+        MaterialKind::RoughPlastic {
+            alpha,
+            distribution,
+            int_ior,
+            ext_ior,
+            nonlinear,
+            ..
+        } => {
+            let a = RoughPlasticCoating::clamp(alpha.factor);
+            if let Ok(p) = RoughPlastic::new(
+                *distribution,
+                a,
+                Rgb::ZERO,
+                Rgb::ZERO,
+                *int_ior,
+                *ext_ior,
+                *nonlinear,
+            ) {
+                out.coat = p.coated_base();
+            }
+        }
+        _ => {}
+    }
+    out
+}
+
 /// The diffuse (view-independent) albedo of a material at texture coordinates `uv` (uv0, uv1),
-/// the reflectance each bounce of a bake uses: `diffuse` → its reflectance; (rough) plastic →
-/// its diffuse base; glTF metallic-roughness → base colour × (1 − metallic), 0 where the
-/// transmission weight is ≥ ½ (rendered as glass); conductors and dielectrics → 0; a catalog
-/// specification → `spec_albedo` (its hemispherical albedo at normal incidence, see
-/// [`spec_albedo`]: fitted models have no separate diffuse term at this interface, so their
-/// glossy energy is counted as diffuse there — the one exception to "glossy energy dropped").
-pub fn diffuse_albedo(m: &Material, textures: &[Texture], uv: &[Vec2; 2], spec: Rgb) -> Rgb {
+/// the reflectance each bounce of a bake uses and the light-mapped shading's kd: `diffuse` →
+/// its reflectance; (rough) plastic → its base seen through the coating
+/// ([`CoatedBase::kd`]: ρ' T̄² / η², about half of ρ at η = 1.5 — what a light map can hold of
+/// the base lobe; the rest of that lobe is view-dependent); glTF metallic-roughness → base
+/// colour × (1 − metallic), 0 where the transmission weight is ≥ ½ (rendered as glass);
+/// conductors and dielectrics → 0; a catalog specification → `base.spec` (see [`BaseAlbedo`]).
+pub fn diffuse_albedo(m: &Material, textures: &[Texture], uv: &[Vec2; 2], base: BaseAlbedo) -> Rgb {
     let clamp = |c: Rgb| {
         c.map(|v| {
             if v.is_finite() {
@@ -164,7 +238,7 @@ pub fn diffuse_albedo(m: &Material, textures: &[Texture], uv: &[Vec2; 2], spec: 
     match &m.kind {
         MaterialKind::Diffuse { reflectance } => clamp(reflectance.at(textures, uv)),
         MaterialKind::Plastic { diffuse, .. } | MaterialKind::RoughPlastic { diffuse, .. } => {
-            clamp(diffuse.at(textures, uv))
+            base.coat.kd(clamp(diffuse.at(textures, uv)))
         }
         MaterialKind::PbrMetallicRoughness {
             base_color,
@@ -184,22 +258,7 @@ pub fn diffuse_albedo(m: &Material, textures: &[Texture], uv: &[Vec2; 2], spec: 
         | MaterialKind::Dielectric { .. }
         | MaterialKind::RoughDielectric { .. }
         | MaterialKind::ThinDielectric { .. } => Rgb::ZERO,
-        MaterialKind::Spec(_) => spec,
-    }
-}
-
-/// The albedo a catalog-specification material bakes with: its BSDF's hemispherical albedo at
-/// normal incidence (1024 stratified samples); black for other kinds.
-pub fn spec_albedo(m: &Material) -> Rgb {
-    match &m.kind {
-        MaterialKind::Spec(r) => r.bsdf.albedo(DVec3::Z, 1024).map(|v| {
-            if v.is_finite() {
-                v.clamp(0.0, 1.0)
-            } else {
-                0.0
-            }
-        }),
-        _ => Rgb::ZERO,
+        MaterialKind::Spec(_) => base.spec,
     }
 }
 
@@ -208,7 +267,7 @@ pub fn spec_albedo(m: &Material) -> Rgb {
 struct DiffuseSurface<'s> {
     material: &'s Material,
     textures: &'s [Texture],
-    spec: Rgb,
+    base: BaseAlbedo,
 }
 
 fn uv2(uv: [f64; 2]) -> [Vec2; 2] {
@@ -217,7 +276,7 @@ fn uv2(uv: [f64; 2]) -> [Vec2; 2] {
 
 impl Surface for DiffuseSurface<'_> {
     fn with_bsdf(&self, uv: [f64; 2], f: &mut dyn FnMut(&dyn Bsdf)) {
-        let kd = diffuse_albedo(self.material, self.textures, &uv2(uv), self.spec);
+        let kd = diffuse_albedo(self.material, self.textures, &uv2(uv), self.base);
         f(&Lambert { kd })
     }
     fn masked(&self) -> bool {
@@ -245,9 +304,9 @@ impl Surface for DiffuseSurface<'_> {
 
 /// The bake's view of `scene`: the path tracer's geometry and environment
 /// ([`crate::reference::path_scene`]) with every material replaced by its diffuse part, and
-/// the albedo each catalog material bakes with (per material). Errors: a scene with neither an
+/// what each material's diffuse albedo needs ([`base_albedo`], per material). Errors: a scene with neither an
 /// emitter nor a non-black environment (it would bake black).
-pub fn diffuse_path_scene(scene: &Scene) -> Result<(PathScene<'_>, Vec<Rgb>, Vec<String>)> {
+pub fn diffuse_path_scene(scene: &Scene) -> Result<(PathScene<'_>, Vec<BaseAlbedo>, Vec<String>)> {
     let (mut ps, warnings) = crate::reference::path_scene(scene)?;
     let emitters = ps
         .geometry
@@ -260,20 +319,20 @@ pub fn diffuse_path_scene(scene: &Scene) -> Result<(PathScene<'_>, Vec<Rgb>, Vec
             scene.source.display()
         )));
     }
-    let spec: Vec<Rgb> = scene.materials.iter().map(spec_albedo).collect();
+    let bases: Vec<BaseAlbedo> = scene.materials.iter().map(base_albedo).collect();
     ps.materials = scene
         .materials
         .iter()
-        .zip(&spec)
-        .map(|(m, &s)| {
+        .zip(&bases)
+        .map(|(m, &b)| {
             Box::new(DiffuseSurface {
                 material: m,
                 textures: &scene.textures,
-                spec: s,
+                base: b,
             }) as Box<dyn Surface + '_>
         })
         .collect();
-    Ok((ps, spec, warnings))
+    Ok((ps, bases, warnings))
 }
 
 /// Checks that `atlas` fits `scene` (one entry per mesh, pages in range, uv1 present and
@@ -409,7 +468,7 @@ pub fn bake_hash(scene: &Scene, atlas: &LightmapAtlas, opts: &BakeOptions) -> u6
     for (m, s) in scene
         .materials
         .iter()
-        .zip(scene.materials.iter().map(spec_albedo))
+        .zip(scene.materials.iter().map(base_albedo))
     {
         h.bytes(m.name.as_bytes());
         h.bytes(m.kind.name().as_bytes());

@@ -8,7 +8,7 @@
 //! ([`super::diffuse_path_scene`]) measures the whole bake.
 
 use super::raster::Raster;
-use super::{diffuse_albedo, diffuse_path_scene};
+use super::{diffuse_albedo, diffuse_path_scene, BaseAlbedo};
 use crate::image::Image;
 use crate::path_tracer::{Geometry, PathCamera, PathOptions, PathTracer};
 use crate::{Result, TraceError};
@@ -41,19 +41,19 @@ pub struct Lightmapped<'a> {
     pages: &'a [Vec<[f32; 3]>],
     raster: Raster,
     mapped: Vec<u32>,
-    spec: Vec<Rgb>,
+    bases: Vec<BaseAlbedo>,
 }
 
 impl<'a> Lightmapped<'a> {
     /// Checks that `pages` fit `atlas` and maps every triangle of `geometry` (the triangles of
-    /// [`super::diffuse_path_scene`], in its order) to its light-map triangle. `spec` is the
-    /// per-material diffuse albedo of spec materials that [`super::diffuse_path_scene`] returns.
+    /// [`super::diffuse_path_scene`], in its order) to its light-map triangle. `bases` are the
+    /// per-material [`BaseAlbedo`]s that [`super::diffuse_path_scene`] returns.
     pub fn new(
         scene: &'a Scene,
         atlas: &'a LightmapAtlas,
         pages: &'a [Vec<[f32; 3]>],
         geometry: &Geometry,
-        spec: Vec<Rgb>,
+        bases: Vec<BaseAlbedo>,
     ) -> Result<Self> {
         let n = (atlas.width * atlas.height) as usize;
         if pages.len() != atlas.pages as usize || pages.iter().any(|p| p.len() != n) {
@@ -78,7 +78,7 @@ impl<'a> Lightmapped<'a> {
             pages,
             raster,
             mapped,
-            spec,
+            bases,
         })
     }
 
@@ -105,9 +105,9 @@ impl<'a> Lightmapped<'a> {
         self.atlas
     }
 
-    /// The per-material diffuse albedo of spec materials (as given to [`Lightmapped::new`]).
-    pub fn spec(&self) -> &[Rgb] {
-        &self.spec
+    /// The per-material [`BaseAlbedo`]s (as given to [`Lightmapped::new`]).
+    pub fn bases(&self) -> &[BaseAlbedo] {
+        &self.bases
     }
 
     /// The diffuse albedo kd that [`Lightmapped::radiance`] applies at this hit (zero where it
@@ -161,7 +161,7 @@ impl<'a> Lightmapped<'a> {
                     (uv1[1] / f64::from(atlas.height)) as f32,
                 ),
             ],
-            self.spec[m],
+            self.bases[m],
         );
         (l, kd, e)
     }
@@ -204,8 +204,8 @@ pub fn render_lightmapped(
             "image {w}×{h} at {spp} spp is empty"
         )));
     }
-    let (ps, spec, _) = diffuse_path_scene(scene)?;
-    let lit = Lightmapped::new(scene, atlas, pages, &ps.geometry, spec)?;
+    let (ps, bases, _) = diffuse_path_scene(scene)?;
+    let lit = Lightmapped::new(scene, atlas, pages, &ps.geometry, bases)?;
     let pt = PathTracer::new(&ps, PathOptions::default())?;
     let shade = |o: DVec3, d: DVec3| -> Rgb {
         match pt.intersect(o, d) {

@@ -292,7 +292,7 @@ fn with_baker<R>(
     f: impl FnOnce(&TexelBaker, Vec<String>) -> Result<R>,
 ) -> Result<R> {
     opts.validate()?;
-    let (ps, spec, warnings) = diffuse_path_scene(scene)?;
+    let (ps, bases, warnings) = diffuse_path_scene(scene)?;
     let ps = match opts.transport {
         super::Transport::Diffuse => ps,
         super::Transport::Full => crate::reference::path_scene(scene)?.0,
@@ -310,7 +310,7 @@ fn with_baker<R>(
         ps: &ps,
         pt: &pt,
         raster: &raster,
-        spec: &spec,
+        bases: &bases,
         opts,
     };
     f(&baker, warnings)

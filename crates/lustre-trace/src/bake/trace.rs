@@ -43,7 +43,7 @@ pub struct TexelBaker<'a, 's> {
     pub(crate) ps: &'a PathScene<'s>,
     pub(crate) pt: &'a PathTracer<'a, 's>,
     pub(crate) raster: &'a Raster,
-    pub(crate) spec: &'a [Rgb],
+    pub(crate) bases: &'a [super::BaseAlbedo],
     pub(crate) opts: &'a BakeOptions,
 }
 
@@ -96,7 +96,7 @@ impl TexelBaker<'_, '_> {
                 Vec2::new(uv0[0] as f32, uv0[1] as f32),
                 Vec2::new(uv1[0] as f32, uv1[1] as f32),
             ],
-            self.spec[m],
+            self.bases[m],
         );
         let (dx, dy) = (uv[0] - f64::from(x) - 0.5, uv[1] - f64::from(y) - 0.5);
         Point {

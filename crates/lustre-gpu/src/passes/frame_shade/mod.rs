@@ -211,7 +211,7 @@ impl FrameShadeScene {
         // kd per pixel (`Lightmapped::albedo`): the light-map pass's records, their textures
         // after the parameters'.
         let limit = ctx.device.limits().max_storage_buffer_binding_size as usize;
-        let albedo = shading_records(scene, lit.lit, g, lit.lit.spec(), slots, limit)?;
+        let albedo = shading_records(scene, lit.lit, g, lit.lit.bases(), slots, limit)?;
         let atlas = lit.lit.atlas();
         // Per triangle: 7 vec4 (frame_shade.wgsl `shade_point`); per triangle of a
         // normal-mapped material, 4 vec4 in `tangents`.

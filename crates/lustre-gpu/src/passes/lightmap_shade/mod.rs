@@ -22,9 +22,9 @@ use crate::wgsl;
 use lustre_brdf::rgb::Rgb;
 use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::{MaterialKind, Scene, TexturedRgb, TexturedScalar};
-use lustre_trace::bake::diffuse_path_scene;
 use lustre_trace::bake::gbuffer::{gbuffer_size, VisibilityBuffer};
 use lustre_trace::bake::render::Lightmapped;
+use lustre_trace::bake::{diffuse_path_scene, BaseAlbedo};
 use lustre_trace::image::Image;
 use lustre_trace::path_tracer::{EnvLight, Geometry, PathCamera};
 use std::sync::OnceLock;
@@ -84,34 +84,45 @@ pub(crate) fn gpu_scalar(
 
 /// A material as `lightmap_shade.wgsl` reads it ([`lustre_trace::bake::diffuse_albedo`]):
 /// (base factor, k), (base texture slot bits, uv set bits, two-sided, 1 when metallic or
-/// transmission is textured), then metallic and transmission as [`gpu_scalar`]. Untextured
-/// factors are clamped here; with textured metallic or transmission, k is computed per pixel.
+/// transmission is textured, 2 for a textured plastic's coated base), then metallic and
+/// transmission as [`gpu_scalar`] (a coated base: its Fdr in the first row's x). Untextured
+/// factors are clamped (and a plastic's coated base applied) here; with textured metallic or
+/// transmission, k is computed per pixel; a textured plastic's kd = k·c / (1 − Fdr·c) per pixel.
 fn gpu_material(
     scene: &Scene,
     m: usize,
-    spec: Rgb,
+    base: BaseAlbedo,
     slots: &mut Vec<usize>,
 ) -> Result<[[f32; 4]; 4]> {
     let material = &scene.materials[m];
-    let untextured = |c: Rgb, k: f64| {
-        let c = c.map(|v| {
+    let clamp = |c: Rgb| {
+        c.map(|v| {
             if v.is_finite() {
                 v.clamp(0.0, 1.0)
             } else {
                 0.0
             }
-        });
-        (c, None, k)
+        })
     };
+    let untextured = |c: Rgb, k: f64| (clamp(c), None, k);
     let rgb = |t: &TexturedRgb, k: f64| match t.texture {
         Some(r) => (t.factor, Some(r), k),
         None => untextured(t.factor, k),
     };
     let mut scalars = None;
+    let mut mode = 0.0;
     let (factor, texture, k) = match &material.kind {
         MaterialKind::Diffuse { reflectance } => rgb(reflectance, 1.0),
         MaterialKind::Plastic { diffuse, .. } | MaterialKind::RoughPlastic { diffuse, .. } => {
-            rgb(diffuse, 1.0)
+            match diffuse.texture {
+                Some(r) => {
+                    mode = 2.0;
+                    let fdr = base.coat.fdr as f32;
+                    scalars = Some([[fdr, 0.0, 0.0, 0.0], [0.0; 4]]);
+                    (diffuse.factor, Some(r), base.coat.scale)
+                }
+                None => untextured(base.coat.kd(clamp(diffuse.factor)), 1.0),
+            }
         }
         MaterialKind::PbrMetallicRoughness {
             base_color,
@@ -120,6 +131,7 @@ fn gpu_material(
             ..
         } => {
             if metallic.texture.is_some() || transmission.texture.is_some() {
+                mode = 1.0;
                 scalars = Some([
                     gpu_scalar(scene, &material.name, metallic, slots)?,
                     gpu_scalar(scene, &material.name, transmission, slots)?,
@@ -131,7 +143,7 @@ fn gpu_material(
                 rgb(base_color, 1.0 - metallic.factor.clamp(0.0, 1.0))
             }
         }
-        MaterialKind::Spec(_) => untextured(spec, 1.0),
+        MaterialKind::Spec(_) => untextured(base.spec, 1.0),
         _ => untextured(Rgb::ZERO, 0.0),
     };
     let (tex, uv_set) = match texture {
@@ -149,7 +161,7 @@ fn gpu_material(
             f32::from_bits(tex as u32),
             f32::from_bits(uv_set),
             if material.two_sided { 1.0 } else { 0.0 },
-            if scalars.is_some() { 1.0 } else { 0.0 },
+            mode,
         ],
         metal,
         trans,
@@ -166,22 +178,22 @@ pub(crate) struct ShadingRecords {
     pub info: Vec<[u32; 4]>,
 }
 
-/// The [`ShadingRecords`] of the triangles `g` of `scene` mapped by `lit`, with the spec
-/// materials' albedo `spec`; the textures are those of `slots` (textures other records already
+/// The [`ShadingRecords`] of the triangles `g` of `scene` mapped by `lit`, with the
+/// materials' [`BaseAlbedo`]s `bases`; the textures are those of `slots` (textures other records already
 /// refer to by slot), then those the records add. Errors (named): a triangle's material or a
 /// texture beyond the scene's, records beyond `max_buffer` bytes.
 pub(crate) fn shading_records(
     scene: &Scene,
     lit: &Lightmapped,
     g: &Geometry,
-    spec: &[Rgb],
+    bases: &[BaseAlbedo],
     mut slots: Vec<usize>,
     max_buffer: usize,
 ) -> Result<ShadingRecords> {
     let mut mats = Vec::with_capacity(4 * scene.materials.len());
     for m in 0..scene.materials.len() {
-        let s = spec.get(m).copied().unwrap_or(Rgb::ZERO);
-        mats.extend(gpu_material(scene, m, s, &mut slots)?);
+        let b = bases.get(m).copied().unwrap_or_default();
+        mats.extend(gpu_material(scene, m, b, &mut slots)?);
     }
     if mats.is_empty() {
         mats.push([0.0; 4]);
@@ -231,7 +243,7 @@ pub(crate) fn shading_records(
 impl GpuLightmapScene {
     /// Uploads what shading needs: per triangle of `g` (the geometry `lit` was built for) its
     /// normals, uv0, light-map page and uv1, emission and material; the materials' diffuse
-    /// albedo (`spec` as `diffuse_path_scene` returns it); the light-map pages of `atlas`;
+    /// albedo (`bases` as `diffuse_path_scene` returns them); the light-map pages of `atlas`;
     /// `environment`. Errors: texture references beyond the scene's (named), pages or textures
     /// beyond the device's limits.
     #[allow(clippy::too_many_arguments)]
@@ -242,7 +254,7 @@ impl GpuLightmapScene {
         pages: &[Vec<[f32; 3]>],
         lit: &Lightmapped,
         g: &Geometry,
-        spec: &[Rgb],
+        bases: &[BaseAlbedo],
         environment: Option<&EnvLight>,
     ) -> Result<Self> {
         let limits = ctx.device.limits();
@@ -258,7 +270,7 @@ impl GpuLightmapScene {
             scene,
             lit,
             g,
-            spec,
+            bases,
             Vec::new(),
             limits.max_storage_buffer_binding_size as usize,
         )?;
@@ -665,15 +677,15 @@ impl LightmapFrameScene {
         pages: &[Vec<[f32; 3]>],
     ) -> Result<Self> {
         let trace_err = |e: lustre_trace::TraceError| invalid("scene", e.to_string());
-        let (ps, spec, _) = diffuse_path_scene(scene).map_err(trace_err)?;
+        let (ps, bases, _) = diffuse_path_scene(scene).map_err(trace_err)?;
         if ps.geometry.positions.is_empty() {
             return Err(invalid(
                 "scene",
                 format!("{}: the scene has no triangles", scene.source.display()),
             ));
         }
-        let lit =
-            Lightmapped::new(scene, atlas, pages, &ps.geometry, spec.clone()).map_err(trace_err)?;
+        let lit = Lightmapped::new(scene, atlas, pages, &ps.geometry, bases.clone())
+            .map_err(trace_err)?;
         let geometry = GpuGeometry::upload(ctx, scene, &ps.geometry)?;
         let shading = GpuLightmapScene::upload(
             ctx,
@@ -682,7 +694,7 @@ impl LightmapFrameScene {
             pages,
             &lit,
             &ps.geometry,
-            &spec,
+            &bases,
             ps.environment.as_ref(),
         )?;
         Ok(LightmapFrameScene { geometry, shading })
