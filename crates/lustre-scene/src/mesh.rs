@@ -66,6 +66,11 @@ pub const PLANARITY_TOLERANCE: f64 = 1e-3;
 /// triangles are shaded like any other glossy surface); a curved or folded mesh does not.
 pub const PLANAR_AREA_SHARE: f64 = 0.99;
 
+/// Smallest share of the area facing the eye that a transmissive mesh's plane toward it must
+/// hold for a mirror pass ([`Mesh::plane_facing`]): a glass slab's two faces halve its area, so
+/// the rule looks at the side the eye sees (the Modern Hall's balustrade: 81 %, 41 % of all).
+pub const GLASS_PLANE_SHARE: f64 = 0.5;
+
 /// The plane most of a mesh lies in ([`Mesh::dominant_plane`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshPlane {
@@ -78,6 +83,9 @@ pub struct MeshPlane {
     pub in_plane: Vec<bool>,
     /// The share of the mesh's area in the plane.
     pub area_share: f64,
+    /// The share of the area of the triangles facing the eye in the plane
+    /// ([`Mesh::plane_facing`]; `area_share` without an eye).
+    pub facing_share: f64,
 }
 
 /// The largest per-object sample budget ([`ObjectHints::samples`]).
@@ -165,6 +173,13 @@ impl Mesh {
     /// area. What the mirror pass reflects in, and what the automatic set-up calls planar
     /// (an area share ≥ [`PLANAR_AREA_SHARE`]).
     pub fn dominant_plane(&self) -> Option<MeshPlane> {
+        self.plane_facing(None)
+    }
+
+    /// [`Mesh::dominant_plane`] seen from `eye`: the plane of the largest triangle whose front
+    /// faces it (of all triangles when `None`, or when none faces it), with the share of the
+    /// facing triangles' area in it — a glass slab's face toward the eye, not its far face.
+    pub fn plane_facing(&self, eye: Option<DVec3>) -> Option<MeshPlane> {
         let p: Vec<DVec3> = self.positions.iter().map(|v| v.as_dvec3()).collect();
         let tris: Vec<[DVec3; 3]> = self
             .indices
@@ -175,11 +190,20 @@ impl Mesh {
             .iter()
             .map(|[a, b, c]| (*b - *a).cross(*c - *a))
             .collect();
-        let largest = cross
-            .iter()
-            .filter(|c| c.is_finite())
-            .max_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
-            .and_then(|c| c.try_normalize())?;
+        let largest_of = |facing: bool| {
+            cross
+                .iter()
+                .zip(&tris)
+                .filter(|(c, t)| {
+                    c.is_finite()
+                        && (!facing
+                            || eye.is_some_and(|e| (e - (t[0] + t[1] + t[2]) / 3.0).dot(**c) > 0.0))
+                })
+                .map(|(c, _)| *c)
+                .max_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))
+                .and_then(|c| c.try_normalize())
+        };
+        let largest = largest_of(eye.is_some()).or_else(|| largest_of(false))?;
         let (mut n, mut c, mut a_par) = (DVec3::ZERO, DVec3::ZERO, 0.0);
         for (t, x) in tris.iter().zip(&cross) {
             let a = x.length();
@@ -211,11 +235,28 @@ impl Mesh {
             .filter(|(_, &k)| k)
             .map(|(x, _)| x.length())
             .sum();
+        let faces = |t: &[DVec3; 3], x: &DVec3| {
+            eye.is_none_or(|e| (e - (t[0] + t[1] + t[2]) / 3.0).dot(*x) > 0.0)
+        };
+        let facing: f64 = tris
+            .iter()
+            .zip(&cross)
+            .filter(|(t, x)| x.is_finite() && faces(t, x))
+            .map(|(_, x)| x.length())
+            .sum();
+        let facing_inside: f64 = tris
+            .iter()
+            .zip(&cross)
+            .zip(&in_plane)
+            .filter(|((t, x), &k)| k && x.is_finite() && faces(t, x))
+            .map(|((_, x), _)| x.length())
+            .sum();
         Some(MeshPlane {
             point,
             normal,
             in_plane,
             area_share: inside / total.max(1e-300),
+            facing_share: facing_inside / facing.max(1e-300),
         })
     }
 
@@ -561,6 +602,45 @@ mod tests {
         assert_eq!(cube("box", 0).slab_thickness(), None);
         assert_eq!(sphere("ball", Vec3::ZERO, 1.0, 0).slab_thickness(), None);
         assert_eq!(rectangle("sheet", 0).slab_thickness(), None);
+    }
+
+    #[test]
+    fn a_slabs_plane_is_its_face_toward_the_eye() {
+        // A 2 × 1.5 pane 4 cm thick, faces at z = ±0.02 (areas 3; edges 0.06 at x = ±1, 0.08 at
+        // y = ±0.75): 6.28 in all.
+        let mut pane = cube("pane", 0);
+        pane.transform(&DMat4::from_scale(DVec3::new(1.0, 0.75, 0.02)));
+        for (eye, z) in [
+            (DVec3::new(3.0, 0.2, 5.0), 0.02f64),
+            (DVec3::new(-3.0, 0.1, -5.0), -0.02),
+        ] {
+            let p = pane.plane_facing(Some(eye)).expect("a plane");
+            assert!((p.normal.z - z.signum()).abs() < 1e-9, "{eye}: {p:?}");
+            assert!((p.point.z - z).abs() < 1e-6, "{eye}: {p:?}");
+            // One face of the slab's 6.28: under half of it, most of what the eye sees (the
+            // face and the edge at x = ±1 turned to it).
+            let total = 2.0 * (3.0 + 0.06 + 0.08);
+            assert!(
+                (p.area_share - 3.0 / total).abs() < 1e-4,
+                "{}",
+                p.area_share
+            );
+            let facing = 3.0 + 0.06;
+            assert!(
+                (p.facing_share - 3.0 / facing).abs() < 1e-4,
+                "{}",
+                p.facing_share
+            );
+            assert!(p.facing_share >= GLASS_PLANE_SHARE);
+        }
+        // Without an eye: the dominant plane, its facing share the area share.
+        let d = pane.dominant_plane().expect("a plane");
+        assert_eq!(d.facing_share, d.area_share);
+        // A closed box: no face holds half of what an eye sees from a corner.
+        let p = cube("box", 0)
+            .plane_facing(Some(DVec3::splat(5.0)))
+            .expect("a plane");
+        assert!(p.facing_share < GLASS_PLANE_SHARE, "{}", p.facing_share);
     }
 
     #[test]

@@ -8,11 +8,11 @@
 //!
 //! This is the CPU definition of the mirror pass; the GPU pass renders the same buffer.
 
-use crate::probe::LitScene;
+use crate::probe::{transmits, LitScene};
 use crate::{Result, ShadeError};
 use glam::DVec3;
 use lustre_brdf::rgb::Rgb;
-use lustre_scene::mesh::{MeshPlane, PLANARITY_TOLERANCE, PLANAR_AREA_SHARE};
+use lustre_scene::mesh::{MeshPlane, GLASS_PLANE_SHARE, PLANARITY_TOLERANCE, PLANAR_AREA_SHARE};
 use lustre_trace::bake::gbuffer::{VisibilityBuffer, SKY};
 use lustre_trace::path_tracer::PathCamera;
 use rayon::prelude::*;
@@ -38,34 +38,49 @@ pub struct Reflector {
 }
 
 impl ReflectorPlane {
-    /// The plane of mesh `m` of `lit`'s scene: the plane of its largest triangle, refined as the
-    /// area-weighted mean normal and centroid of the triangles parallel to it (cos > 0.999), and
-    /// the triangles within [`PLANARITY_TOLERANCE`] × the mesh's extent of it. Errors (naming the
-    /// mesh): no such mesh, no triangle of non-zero area, or less than [`PLANAR_AREA_SHARE`] of
-    /// the area in the plane (not planar).
-    pub fn of_mesh(lit: &LitScene, m: usize) -> Result<Reflector> {
+    /// The plane of mesh `m` of `lit`'s scene seen from `eye`: the plane of its largest
+    /// triangle, refined as the area-weighted mean normal and centroid of the triangles parallel
+    /// to it (cos > 0.999), and the triangles within [`PLANARITY_TOLERANCE`] × the mesh's extent
+    /// of it ([`lustre_scene::Mesh::dominant_plane`]); for glass, of its largest triangle facing
+    /// `eye` ([`lustre_scene::Mesh::plane_facing`]: a slab's near face), so that its normal
+    /// points to the eye's side. Errors (naming the mesh): no such mesh, no triangle of non-zero
+    /// area, or less than [`PLANAR_AREA_SHARE`] of the area in the plane (for glass, less than
+    /// [`GLASS_PLANE_SHARE`] of the area facing the eye): not planar.
+    pub fn of_mesh(lit: &LitScene, m: usize, eye: DVec3) -> Result<Reflector> {
         let mesh = lit.scene.meshes.get(m).ok_or_else(|| {
             ShadeError::Parameter(format!(
                 "{}: no mesh {m} to reflect in",
                 lit.scene.source.display()
             ))
         })?;
+        let glass = transmits(lit.scene, mesh.material);
         let MeshPlane {
             point,
             normal,
             in_plane,
             area_share,
-        } = mesh.dominant_plane().ok_or_else(|| {
+            facing_share,
+        } = if glass {
+            mesh.plane_facing(Some(eye))
+        } else {
+            mesh.dominant_plane()
+        }
+        .ok_or_else(|| {
             ShadeError::Parameter(format!(
                 "planar reflector {:?} has no triangle of non-zero area",
                 mesh.name
             ))
         })?;
-        if area_share.is_nan() || area_share < PLANAR_AREA_SHARE {
+        let (share, need, of) = if glass {
+            (facing_share, GLASS_PLANE_SHARE, "the area facing the eye")
+        } else {
+            (area_share, PLANAR_AREA_SHARE, "its area")
+        };
+        if share.is_nan() || share < need {
             return Err(ShadeError::Parameter(format!(
-                "planar reflector {:?} is not planar: only {:.1} % of its area lies in one plane (within {PLANARITY_TOLERANCE} of its extent)",
+                "planar reflector {:?} is not planar: only {:.1} % of {of} lies in one plane (within {PLANARITY_TOLERANCE} of its extent)",
                 mesh.name,
-                100.0 * area_share
+                100.0 * share
             )));
         }
         Ok(Reflector {
@@ -189,7 +204,7 @@ pub fn render_mirror(
     w: usize,
     h: usize,
 ) -> Result<MirrorBuffer> {
-    let reflector = ReflectorPlane::of_mesh(lit, mesh)?;
+    let reflector = ReflectorPlane::of_mesh(lit, mesh, camera.origin)?;
     let plane = reflector.plane;
     let cam = mirror_camera(camera, &plane);
     let (mut view, _) = render_view(lit, mesh, &cam, w, h, |d| {

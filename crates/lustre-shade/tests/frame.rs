@@ -450,7 +450,9 @@ fn mirror_lookups_see_what_rays_from_the_floor_see() {
         eprintln!("mirror lookups: rel. RMS {rel:.4} over {n} samples, {left} left the buffer");
         assert!(rel < 0.03, "{rel}");
         // A sphere is no plane.
-        let err = ReflectorPlane::of_mesh(lit, 6).unwrap_err().to_string();
+        let err = ReflectorPlane::of_mesh(lit, 6, camera().origin)
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("not planar") && err.contains("ball"), "{err}");
     });
 }

@@ -10,7 +10,10 @@
 //!   the mirror pass's own test) holds ≥ 99 % of its area, and whose area is at least 10⁻³ of
 //!   the squared scene diagonal (or of the room box around the first camera where that is
 //!   smaller: an interior on a vast site keeps its mirrors). Ranked by plane area × glossy albedo; the first
-//!   `max_mirrors` get `planar_reflector`.
+//!   `max_mirrors` get `planar_reflector`. Glass too, beside its object probe (which keeps
+//!   its see-through pass), where its plane toward the first camera
+//!   ([`lustre_scene::Mesh::plane_facing`]: a slab's near face) holds ≥ 50 % of the area facing
+//!   it; the mirror pass takes that face.
 //! - **Object probes**: every transmissive mesh (glass: its probe gives it a see-through pass),
 //!   then every other curved (not planar) view-dependent mesh, ranked by area × glossy albedo;
 //!   the first `max_object_probes` get `probe`. A mesh whose bounds' centre lies inside a solid,
@@ -34,7 +37,7 @@
 
 use crate::path_tracer::PathTracer;
 use glam::DVec3;
-use lustre_scene::mesh::PLANAR_AREA_SHARE;
+use lustre_scene::mesh::{GLASS_PLANE_SHARE, PLANAR_AREA_SHARE};
 use lustre_scene::{MaterialKind, ObjectHints, ProbeSite, Scene, Vec2};
 use std::fmt;
 use std::ops::Range;
@@ -438,6 +441,7 @@ pub fn auto_setup(scene: &Scene, tracer: &PathTracer, opts: &SetupOptions) -> Se
         .collect();
     let any_view_dependent = looks.iter().any(|a| a.view_dependent);
     // Candidates: (score, mesh, planar).
+    let eye = scene.cameras.first().map(|c| c.position);
     let mut mirror_cands = vec![];
     let mut probe_cands = vec![];
     for (m, look) in looks.iter().enumerate() {
@@ -454,6 +458,14 @@ pub fn auto_setup(scene: &Scene, tracer: &PathTracer, opts: &SetupOptions) -> Se
             mirror_cands.push((plane * look.glossy, m));
         } else if look.transmissive {
             probe_cands.push((f64::INFINITY, area, m));
+            // Planar glass (a pane, or a slab's face toward the first camera) reflects through
+            // a mirror pass too; its probe keeps the see-through pass.
+            if let Some(p) = scene.meshes[m].plane_facing(eye) {
+                let plane = p.area_share * area;
+                if p.facing_share >= GLASS_PLANE_SHARE && plane >= 1e-3 * diag * diag {
+                    mirror_cands.push((plane * look.glossy, m));
+                }
+            }
         } else if !planar {
             probe_cands.push((area * look.glossy, area, m));
         }

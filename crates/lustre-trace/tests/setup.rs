@@ -37,13 +37,19 @@ fn sunroom_gets_mirrors_probes_and_a_room_box_inside_its_walls() {
             s.objects
         );
     }
-    for name in ["WindowPane", "GoldSphere", "Table"] {
+    for name in ["GoldSphere", "Table"] {
         assert!(
             hints(&s, name).is_some_and(|h| h.probe && !h.planar_reflector),
             "{name}: {:?}",
             s.objects
         );
     }
+    // The pane: a probe (its see-through pass) and a mirror pass (its reflections).
+    assert!(
+        hints(&s, "WindowPane").is_some_and(|h| h.probe && h.planar_reflector),
+        "{:?}",
+        s.objects
+    );
     assert_eq!(s.report.see_through, 1, "the pane");
     // Diffuse walls get nothing.
     assert!(hints(&s, "WestWall").is_none());
@@ -74,7 +80,7 @@ fn sunroom_gets_mirrors_probes_and_a_room_box_inside_its_walls() {
     assert!(s
         .report
         .to_string()
-        .starts_with("real-time set-up: 3 mirror"));
+        .starts_with("real-time set-up: 4 mirror"));
 }
 
 #[test]
@@ -157,7 +163,7 @@ fn thousands_of_small_glossy_objects_stay_within_the_budget() {
 }
 
 #[test]
-fn hall_from_its_xml_gets_its_floor_mirror_and_glass_probe() {
+fn hall_from_its_xml_gets_its_floor_mirror_and_glass_probe_and_mirror() {
     let scene = Scene::load(Path::new(
         "../../../shared/data/scenes/modern_hall/mitsuba/scene.xml",
     ))
@@ -169,8 +175,9 @@ fn hall_from_its_xml_gets_its_floor_mirror_and_glass_probe() {
         scene.materials[m.material].name.clone()
     };
     // The tiled floor is the Hall's large near-mirror; the glass balustrade gets a probe (and
-    // a see-through pass).
+    // a see-through pass) and a mirror pass for the face of its long slab toward the camera.
     assert!(s.report.mirrors.iter().any(|n| material(n) == "FloorTiles"));
+    assert!(s.report.mirrors.iter().any(|n| material(n) == "Glass"));
     assert!(s
         .report
         .object_probes
@@ -269,7 +276,7 @@ fn a_room_on_a_vast_site_gets_a_probe_at_its_camera() {
         "{}",
         s.report
     );
-    // The floor, the mirror and the picture keep their mirror passes (planes measured against
-    // the room, not the site).
-    assert_eq!(s.report.mirrors.len(), 3, "{}", s.report);
+    // The floor, the mirror, the picture and the pane keep their mirror passes (planes
+    // measured against the room, not the site).
+    assert_eq!(s.report.mirrors.len(), 4, "{}", s.report);
 }

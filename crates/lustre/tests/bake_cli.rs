@@ -248,7 +248,7 @@ fn bake_writes_the_automatic_set_up_and_scene_setup_draws_it() {
         );
         assert!(o.status.success(), "{all}");
         assert_eq!(
-            all.contains("real-time set-up: 3 mirror pass(es)"),
+            all.contains("real-time set-up: 4 mirror pass(es)"),
             setup == "auto",
             "{all}"
         );
@@ -261,12 +261,17 @@ fn bake_writes_the_automatic_set_up_and_scene_setup_draws_it() {
             "{auto}"
         );
     }
-    for probe in ["WindowPane", "GoldSphere", "Table"] {
+    for probe in ["GoldSphere", "Table"] {
         assert!(
             auto.contains(&format!("[objects.{probe}]\nprobe = true")),
             "{auto}"
         );
     }
+    // The pane: a mirror pass for its reflections, a probe for its see-through pass.
+    assert!(
+        auto.contains("[objects.WindowPane]\nplanar_reflector = true\nprobe = true"),
+        "{auto}"
+    );
     assert!(
         auto.contains("[[probe]]\nname = \"room-1\"") && auto.contains("box_min"),
         "{auto}"

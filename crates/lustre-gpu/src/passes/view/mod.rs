@@ -98,7 +98,7 @@ impl GpuViewPass {
         w: usize,
         h: usize,
     ) -> Result<(Reflector, ViewRender)> {
-        let reflector = ReflectorPlane::of_mesh(lit, mesh)
+        let reflector = ReflectorPlane::of_mesh(lit, mesh, camera.origin)
             .map_err(|e| invalid("planar reflector", e.to_string()))?;
         let plane = reflector.plane;
         let cam = mirror_camera(camera, &plane);
