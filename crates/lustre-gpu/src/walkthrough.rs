@@ -31,7 +31,7 @@ use crate::timer::GpuTimer;
 use crate::view_buffer::GpuViewBuffer;
 use lustre_env::pyramid::CubePyramid;
 use lustre_shade::frame::{view_meshes, walkthrough_request, FrameStats, FrameTables};
-use lustre_shade::mirror::{Reflector, ScreenTiles};
+use lustre_shade::mirror::{mirror_camera, Reflector, ScreenTiles};
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
 use lustre_trace::image::Image;
@@ -89,9 +89,10 @@ pub struct GpuWalkthrough {
 /// had finished.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct GpuFrameTimes {
-    /// Mirror and see-through buffers (their see-through layers included).
+    /// Mirror and see-through buffers (their mirror and see-through layers included).
     pub views_ms: f64,
-    /// Of `views_ms`: the see-through layers' view-dependent shading and MIP rebuild.
+    /// Of `views_ms`: the mirror and see-through layers' view-dependent shading and MIP
+    /// rebuild.
     pub layers_ms: f64,
     /// The raster G-buffer.
     pub gbuffer_ms: f64,
@@ -129,6 +130,9 @@ pub struct GpuFrame {
     pub views: Vec<GpuViewBuffer>,
     /// The w×h G-buffer of each see-through buffer (its layer's input).
     pub see_through_gbuffers: Vec<GBufferTarget>,
+    /// The w×h G-buffer of each mirror buffer (its layer's input, seen from the mirrored
+    /// camera).
+    pub mirror_gbuffers: Vec<GBufferTarget>,
     /// The reflector of each mirror buffer.
     pub reflectors: Vec<Reflector>,
     /// The per-mesh tables the view-dependent pass read.
@@ -369,6 +373,8 @@ struct CameraFrame {
     see_throughs: usize,
     /// The G-buffer of each see-through buffer (its layer's input).
     see_through_gbuffers: Vec<GBufferTarget>,
+    /// The G-buffer of each mirror buffer (its layer's input).
+    mirror_gbuffers: Vec<GBufferTarget>,
     tables: FrameTables,
     scene: FrameShadeScene,
 }
@@ -621,6 +627,7 @@ impl GpuFrameSession {
                 lightmapped: t.lightmapped,
                 views: f.views,
                 see_through_gbuffers: f.see_through_gbuffers,
+                mirror_gbuffers: f.mirror_gbuffers,
                 reflectors: f.reflectors,
                 tables: f.tables,
             }),
@@ -647,6 +654,7 @@ fn render_camera(
     let mut views = vec![];
     let mut reflectors = vec![];
     let mut in_plane = vec![];
+    let mut mirror_gbuffers = vec![];
     for &m in &reflector_meshes {
         let (reflector, render) =
             walk.views
@@ -654,6 +662,7 @@ fn render_camera(
         in_plane.push((m, reflector.in_plane.clone()));
         reflectors.push(reflector);
         views.push(render.view);
+        mirror_gbuffers.push(render.gbuffer);
     }
     let mut see_through_gbuffers = vec![];
     for &m in &transmissive {
@@ -674,13 +683,24 @@ fn render_camera(
         walk.environment.as_ref(),
         &views,
     )?;
-    // The see-through layers (lustre_shade::frame::shade_see_through_layer): what each
+    // The mirror layers (lustre_shade::frame::shade_mirror_layer): what each mirror buffer
+    // shows gains its view-dependent part as the mirrored camera sees it, read from the probes;
+    // then the see-through layers (lustre_shade::frame::shade_see_through_layer): what each
     // see-through buffer shows gains its view-dependent part, read from the mirror buffers and
-    // probes; then its levels and the pass's copy are rebuilt.
-    if !transmissive.is_empty() {
+    // probes. After each, the levels and the pass's copy are rebuilt.
+    if !reflectors.is_empty() || !transmissive.is_empty() {
         timer.start(ctx)?;
         let (wu, hu) = (w as u32, h as u32);
         let out = FrameShadeTarget::new(ctx, wu, hu, 1)?;
+        for (i, gb) in mirror_gbuffers.iter().enumerate() {
+            let cam = mirror_camera(camera, &reflectors[i].plane);
+            walk.shade
+                .shade_mirror_layer(ctx, &scene, gb, &views[i], &cam, &out)?;
+            walk.views.build_levels(ctx, &views[i])?;
+        }
+        for (i, view) in views.iter().enumerate().take(reflectors.len()) {
+            scene.refresh_view(ctx, i, view)?;
+        }
         let first = reflectors.len();
         for (i, (&m, gb)) in transmissive.iter().zip(&see_through_gbuffers).enumerate() {
             let view = &views[first + i];
@@ -716,6 +736,7 @@ fn render_camera(
         reflectors,
         see_throughs: transmissive.len(),
         see_through_gbuffers,
+        mirror_gbuffers,
         tables,
         scene,
     })

@@ -16,9 +16,10 @@ use lustre_gpu::material::{pack_material, FLAG_TEXTURED};
 use lustre_gpu::{GpuContext, GpuFrame, GpuWalkthrough, LightmapFrameScene};
 use lustre_scene::{Material, MaterialKind, ResolvedSpec, Scene};
 use lustre_shade::frame::{
-    render_frame, shade_gbuffer_view_dependent, shade_see_through_layer, view_meshes, FrameLight,
+    render_frame, shade_gbuffer_view_dependent, shade_mirror_layer, shade_see_through_layer,
+    view_meshes, FrameLight,
 };
-use lustre_shade::mirror::ScreenTiles;
+use lustre_shade::mirror::{mirror_camera, ScreenTiles};
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
 use lustre_trace::bake::render::Lightmapped;
@@ -67,9 +68,10 @@ fn gpu_and_twin(
     (frame, twin_stats.glossy_hits, db)
 }
 
-/// The see-through layers of a GPU frame against their CPU twin
-/// ([`shade_see_through_layer`] on the read-back see-through G-buffers and mirror buffers):
-/// the lowest PSNR over the layers, and the layers' glossy pixels.
+/// The see-through and mirror layers of a GPU frame against their CPU twins
+/// ([`shade_see_through_layer`] on the read-back see-through G-buffers and mirror buffers,
+/// [`shade_mirror_layer`] on the read-back mirror G-buffers): the lowest PSNR over the layers,
+/// and the layers' glossy pixels.
 fn layer_parity(
     ctx: &GpuContext,
     lit: &LitScene,
@@ -92,6 +94,26 @@ fn layer_parity(
         let (twin, stats) =
             shade_see_through_layer(lit, light, &buffers, camera, &gb, &tiles).expect("CPU layer");
         let view = &buffers.see_throughs[i];
+        let gpu = Image::from_data(
+            w,
+            h,
+            view.texels
+                .iter()
+                .map(|t| t.radiance.0.map(|c| c as f32))
+                .collect(),
+        )
+        .expect("image");
+        worst = worst.min(psnr(&gpu, &twin, 1.0).expect("psnr"));
+        glossy += stats.glossy_hits;
+    }
+    // The mirror layers: each mirror buffer's view-dependent part as its mirrored camera sees
+    // it ([`shade_mirror_layer`] on the read-back mirror G-buffers).
+    assert_eq!(frame.reflectors.len(), frame.mirror_gbuffers.len());
+    for (i, gb) in frame.mirror_gbuffers.iter().enumerate() {
+        let gb = gb.read_back(ctx).expect("mirror G-buffer read-back");
+        let cam = mirror_camera(camera, &frame.reflectors[i].plane);
+        let (twin, stats) = shade_mirror_layer(lit, light, &buffers, &cam, &gb).expect("CPU layer");
+        let view = &buffers.mirrors[i].view;
         let gpu = Image::from_data(
             w,
             h,
@@ -159,7 +181,7 @@ fn the_gpu_frame_matches_its_cpu_twins_and_the_ray_cast_frame() {
             // The glass's see-through layer (the floor's reflections behind the frosted glass).
             let (db, glossy) = layer_parity(&ctx, &lit, &light, &frame, &camera, (w, h));
             println!(
-                "{name}: see-through layer vs its CPU twin {db:.1} dB, {glossy} glossy texels"
+                "{name}: see-through and mirror layers vs their CPU twins {db:.1} dB, {glossy} glossy texels"
             );
             assert!(glossy > 0, "{name}: the layer shades nothing");
             assert!(db >= 90.0, "{name}: layer {db:.1} dB");
@@ -306,7 +328,7 @@ fn the_gpu_frame_of_the_modern_hall_matches_its_cpu_twins() {
         assert!(db >= 90.0, "{name}: {db:.1} dB");
         // The glass balustrade's see-through layer: the floor and the steps behind it.
         let (db, glossy) = layer_parity(&ctx, &lit, &light, &frame, &camera, (w, h));
-        println!("Modern Hall, {name}: see-through layer vs its CPU twin {db:.1} dB, {glossy} glossy texels");
+        println!("Modern Hall, {name}: see-through and mirror layers vs their CPU twins {db:.1} dB, {glossy} glossy texels");
         assert!(glossy > 0, "{name}: the layer shades nothing");
         assert!(db >= 90.0, "{name}: layer {db:.1} dB");
     }

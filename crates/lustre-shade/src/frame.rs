@@ -24,7 +24,8 @@
 use crate::integrator::{corrected_direction, pixel_seed, BoundingPlane};
 use crate::mip::{ck_level_at, footprint_level, FOOTPRINT_LEVEL_BIAS};
 use crate::mirror::{
-    render_mirror, render_see_through_with_gbuffer, MirrorBuffer, ScreenTiles, ViewBuffer,
+    mirror_camera, render_mirror_with_gbuffer, render_see_through_with_gbuffer, MirrorBuffer,
+    ScreenTiles, ViewBuffer,
 };
 use crate::probe::{choose_probe, transmits, LitScene, Probe, ProbeChoice};
 use crate::request::{FrameRequest, Method, MAX_WALKTHROUGH_SAMPLES};
@@ -113,9 +114,12 @@ impl FrameBuffers {
         let t_mirror = std::time::Instant::now();
         let mut mirror_of_mesh = vec![None; meshes.len()];
         let mut mirrors = vec![];
+        let mut mirror_gbuffers = vec![];
         for &m in &reflectors {
             mirror_of_mesh[m] = Some(mirrors.len());
-            mirrors.push(render_mirror(lit, m, camera, w, h)?);
+            let (mirror, gb) = render_mirror_with_gbuffer(lit, m, camera, w, h)?;
+            mirrors.push(mirror);
+            mirror_gbuffers.push(gb);
         }
         let mut buffers = FrameBuffers {
             mirrors,
@@ -127,6 +131,14 @@ impl FrameBuffers {
             first_prim: first_prims(lit),
             seconds: 0.0,
         };
+        // The mirror layers: what each mirror buffer shows gains its view-dependent part as the
+        // mirrored camera sees it (a gold sphere reflected in a floor is no longer black), read
+        // from the probes only.
+        for (i, gb) in mirror_gbuffers.iter().enumerate() {
+            let cam = mirror_camera(camera, &buffers.mirrors[i].plane);
+            let (layer, _) = shade_mirror_layer(lit, light, &buffers, &cam, gb)?;
+            buffers.mirrors[i].view.set_radiance(&layer.data);
+        }
         // The see-through pass: the camera's view without each transmissive probe object, its
         // layer's view-dependent part shaded over the mirror buffers and probes.
         let mut see_throughs = vec![];
@@ -143,6 +155,22 @@ impl FrameBuffers {
         buffers.see_throughs = see_throughs;
         buffers.seconds = t_mirror.elapsed().as_secs_f64();
         Ok(buffers)
+    }
+
+    /// The same probe table without view buffers: what a mirror layer reads
+    /// ([`shade_mirror_layer`]).
+    pub fn probes_only(&self) -> FrameBuffers {
+        let n = self.probe_of_mesh.len();
+        FrameBuffers {
+            mirrors: vec![],
+            mirror_of_mesh: vec![None; n],
+            see_throughs: vec![],
+            see_through_of_mesh: vec![None; n],
+            probe_of_mesh: self.probe_of_mesh.clone(),
+            thin: self.thin.clone(),
+            first_prim: self.first_prim.clone(),
+            seconds: 0.0,
+        }
     }
 
     /// The per-mesh tables of these buffers (what a GPU pass needs besides the buffers).
@@ -723,6 +751,29 @@ pub fn shade_see_through_layer(
         seed: 0,
     };
     shade_gbuffer_region(lit, light, buffers, camera, gb, 1, &req, Some(tiles), false)
+}
+
+/// The mirror layer (000 §4.5.1 shades mirror buffers diffuse only): what a mirror buffer
+/// shows, light-mapped plus its own view-dependent part as the mirrored camera `camera` sees it,
+/// from its w×h G-buffer `gb` with [`SEE_THROUGH_SAMPLES`] regular samples, read from the probes
+/// of `buffers` (its view buffers are not read: they belong to the real camera). The CPU twin of
+/// lustre-gpu's mirror layer pass.
+pub fn shade_mirror_layer(
+    lit: &LitScene,
+    light: &FrameLight,
+    buffers: &FrameBuffers,
+    camera: &PathCamera,
+    gb: &VisibilityBuffer,
+) -> Result<(Image, FrameStats)> {
+    let req = FrameRequest {
+        method: Method::Regular,
+        samples: SEE_THROUGH_SAMPLES as u32,
+        rays: 1,
+        frames: 1,
+        seed: 0,
+    };
+    let plain = buffers.probes_only();
+    shade_gbuffer_region(lit, light, &plain, camera, gb, 1, &req, None, false)
 }
 
 /// [`shade_gbuffer_view_dependent`] with the view-dependent part only in the output pixels of

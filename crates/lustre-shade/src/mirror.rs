@@ -196,7 +196,8 @@ pub struct MirrorBuffer {
 
 /// Renders the mirror buffer of reflector `mesh` for `camera` at w×h: one ray per texel centre
 /// from the mirrored camera, starting where it crosses the plane (the plane itself and what lies
-/// behind it left out), shaded with the light-mapped scene (diffuse only, as 000 §4.5.1).
+/// behind it left out), shaded with the light-mapped scene (diffuse only, as 000 §4.5.1; the
+/// frame then adds its view-dependent part, [`crate::frame::shade_mirror_layer`]).
 pub fn render_mirror(
     lit: &LitScene,
     mesh: usize,
@@ -204,10 +205,22 @@ pub fn render_mirror(
     w: usize,
     h: usize,
 ) -> Result<MirrorBuffer> {
+    Ok(render_mirror_with_gbuffer(lit, mesh, camera, w, h)?.0)
+}
+
+/// [`render_mirror`] and the G-buffer of the mirrored camera's view (what a layer of its
+/// view-dependent part is shaded from).
+pub fn render_mirror_with_gbuffer(
+    lit: &LitScene,
+    mesh: usize,
+    camera: &PathCamera,
+    w: usize,
+    h: usize,
+) -> Result<(MirrorBuffer, VisibilityBuffer)> {
     let reflector = ReflectorPlane::of_mesh(lit, mesh, camera.origin)?;
     let plane = reflector.plane;
     let cam = mirror_camera(camera, &plane);
-    let (mut view, _) = render_view(lit, mesh, &cam, w, h, |d| {
+    let (mut view, gb) = render_view(lit, mesh, &cam, w, h, |d| {
         // Start on the plane: what lies between the mirrored eye and the plane is behind the
         // reflector in the real view.
         let denom = d.dot(plane.normal);
@@ -218,11 +231,14 @@ pub fn render_mirror(
         }
     })?;
     view.front = Some(plane);
-    Ok(MirrorBuffer {
-        reflector,
-        plane,
-        view,
-    })
+    Ok((
+        MirrorBuffer {
+            reflector,
+            plane,
+            view,
+        },
+        gb,
+    ))
 }
 
 /// Renders what `camera` sees at w×h with mesh `mesh` left out: the light arriving through a

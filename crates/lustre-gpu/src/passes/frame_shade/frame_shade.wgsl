@@ -31,7 +31,8 @@ struct Params {
     // the light-mapped image alone; a see-through layer's tiles, mirror::ScreenTiles), 0).
     tiles: vec4<u32>,
     // x: 1 when see-through buffers are not read (a see-through layer's own shading,
-    // frame::shade_see_through_layer), 0 otherwise.
+    // frame::shade_see_through_layer, or a mirror layer's), 0 otherwise; y: 1 when mirror
+    // buffers are not read (a mirror layer's own shading, frame::shade_mirror_layer).
     flags: vec4<u32>,
     // samples_main's share: samples first..end of each pixel's n (x, y), 0, 0.
     chunk: vec4<u32>,
@@ -747,7 +748,8 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
         rel2 = p - cubes[2u * cube2].xyz;
     }
     let see_through = select(bitcast<u32>(r5.w), NONE, u.flags.x != 0u);
-    let pt = Point(p, n, wo, bitcast<u32>(r4.w), see_through, cube, rel, cube2, rel2, w2);
+    let mirror = select(bitcast<u32>(r4.w), NONE, u.flags.y != 0u);
+    let pt = Point(p, n, wo, mirror, see_through, cube, rel, cube2, rel2, w2);
     if (pt.cube == NONE && pt.mirror == NONE && pt.see_through == NONE) {
         return vec3<f32>(0.0);
     }

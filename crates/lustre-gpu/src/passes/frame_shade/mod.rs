@@ -608,7 +608,7 @@ impl FrameShadePass {
             camera,
             k,
             (req, frame),
-            (None, true),
+            (None, true, true),
             out,
         )
     }
@@ -661,7 +661,7 @@ impl FrameShadePass {
             camera,
             1,
             (&req, 0),
-            (Some(tiles), false),
+            (Some(tiles), false, true),
             out,
         )?;
         let mut enc = ctx
@@ -674,8 +674,67 @@ impl FrameShadePass {
         Ok(())
     }
 
-    /// One run of the pass: the tiles shaded (all: `None`) and whether see-through buffers are
-    /// read.
+    /// The mirror layer of mirror buffer `view` (w×h), as
+    /// `lustre_shade::frame::shade_mirror_layer`: its light-mapped level 0 plus the
+    /// view-dependent part of every pixel of its G-buffer `gbuffer` as the mirrored camera
+    /// `camera` sees it, with `SEE_THROUGH_SAMPLES` regular samples, read from the probes only
+    /// (no mirror or see-through buffer), written into `out` (w×h at k = 1) and copied over the
+    /// view's level 0; the caller rebuilds its levels and the scene's copy. Submitted, not waited
+    /// for. Errors: sizes.
+    pub fn shade_mirror_layer(
+        &self,
+        ctx: &GpuContext,
+        scene: &FrameShadeScene,
+        gbuffer: &GBufferTarget,
+        view: &GpuViewBuffer,
+        camera: &PathCamera,
+        out: &FrameShadeTarget,
+    ) -> Result<()> {
+        let (w, h) = (view.width as u32, view.height as u32);
+        if (out.width, out.height) != (w, h) {
+            return Err(invalid(
+                "mirror layer",
+                format!(
+                    "a {}×{} output for a {w}×{h} mirror buffer",
+                    out.width, out.height
+                ),
+            ));
+        }
+        let lit = Lit {
+            buffer: &view.radiance,
+            width: w,
+            height: h,
+        };
+        let req = FrameRequest {
+            method: Method::Regular,
+            samples: lustre_shade::frame::SEE_THROUGH_SAMPLES as u32,
+            rays: 1,
+            frames: 1,
+            seed: 0,
+        };
+        self.dispatch(
+            ctx,
+            scene,
+            gbuffer,
+            lit,
+            camera,
+            1,
+            (&req, 0),
+            (None, false, false),
+            out,
+        )?;
+        let mut enc = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("mirror layer"),
+            });
+        enc.copy_buffer_to_buffer(&out.out, 0, &view.radiance, 0, out.out.size());
+        ctx.queue.submit([enc.finish()]);
+        Ok(())
+    }
+
+    /// One run of the pass: the tiles shaded (all: `None`) and whether see-through buffers and
+    /// mirror buffers are read.
     #[allow(clippy::too_many_arguments)]
     fn dispatch(
         &self,
@@ -686,7 +745,7 @@ impl FrameShadePass {
         camera: &PathCamera,
         k: u32,
         (req, frame): (&FrameRequest, u32),
-        (tiles, see_through): (Option<&ScreenTiles>, bool),
+        (tiles, see_through, mirrors): (Option<&ScreenTiles>, bool, bool),
         out: &FrameShadeTarget,
     ) -> Result<()> {
         walkthrough_request(req).map_err(|e| invalid("frame request", e.to_string()))?;
@@ -743,7 +802,7 @@ impl FrameShadePass {
             ),
         };
         u.push(tile_u);
-        u.push([u32::from(!see_through), 0, 0, 0]);
+        u.push([u32::from(!see_through), u32::from(!mirrors), 0, 0]);
         // The largest n of a pixel: the frame's, or an object's own budget.
         let n = req.samples.max(scene.own_samples);
         let chunks: Vec<u32> = (0..n).step_by(SAMPLES_PER_DISPATCH as usize).collect();
