@@ -19,7 +19,7 @@ use lustre_shade::frame::{
     render_frame, shade_gbuffer_view_dependent, shade_mirror_layer, shade_see_through_layer,
     view_meshes, FrameLight,
 };
-use lustre_shade::mirror::{mirror_camera, ScreenTiles};
+use lustre_shade::mirror::{mirror_camera, ScreenTiles, ViewBuffer};
 use lustre_shade::probe::{LitScene, ProbeOptions};
 use lustre_shade::request::{FrameRequest, Method};
 use lustre_trace::bake::render::Lightmapped;
@@ -68,6 +68,17 @@ fn gpu_and_twin(
     (frame, twin_stats.glossy_hits, db)
 }
 
+/// A w×h view buffer's level 0 as an image.
+fn level0(view: &ViewBuffer, (w, h): (usize, usize)) -> Image {
+    let texels = view.texels.iter();
+    Image::from_data(
+        w,
+        h,
+        texels.map(|t| t.radiance.0.map(|c| c as f32)).collect(),
+    )
+    .expect("image")
+}
+
 /// The see-through and mirror layers of a GPU frame against their CPU twins
 /// ([`shade_see_through_layer`] on the read-back see-through G-buffers and mirror buffers,
 /// [`shade_mirror_layer`] on the read-back mirror G-buffers): the lowest PSNR over the layers,
@@ -93,16 +104,7 @@ fn layer_parity(
         let tiles = ScreenTiles::of_mesh(lit, m, camera, w, h);
         let (twin, stats) =
             shade_see_through_layer(lit, light, &buffers, camera, &gb, &tiles).expect("CPU layer");
-        let view = &buffers.see_throughs[i];
-        let gpu = Image::from_data(
-            w,
-            h,
-            view.texels
-                .iter()
-                .map(|t| t.radiance.0.map(|c| c as f32))
-                .collect(),
-        )
-        .expect("image");
+        let gpu = level0(&buffers.see_throughs[i], (w, h));
         worst = worst.min(psnr(&gpu, &twin, 1.0).expect("psnr"));
         glossy += stats.glossy_hits;
     }
@@ -113,16 +115,7 @@ fn layer_parity(
         let gb = gb.read_back(ctx).expect("mirror G-buffer read-back");
         let cam = mirror_camera(camera, &frame.reflectors[i].plane);
         let (twin, stats) = shade_mirror_layer(lit, light, &buffers, &cam, &gb).expect("CPU layer");
-        let view = &buffers.mirrors[i].view;
-        let gpu = Image::from_data(
-            w,
-            h,
-            view.texels
-                .iter()
-                .map(|t| t.radiance.0.map(|c| c as f32))
-                .collect(),
-        )
-        .expect("image");
+        let gpu = level0(&buffers.mirrors[i].view, (w, h));
         worst = worst.min(psnr(&gpu, &twin, 1.0).expect("psnr"));
         glossy += stats.glossy_hits;
     }

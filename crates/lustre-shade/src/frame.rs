@@ -743,14 +743,20 @@ pub fn shade_see_through_layer(
     gb: &VisibilityBuffer,
     tiles: &ScreenTiles,
 ) -> Result<(Image, FrameStats)> {
-    let req = FrameRequest {
+    let req = layer_request();
+    shade_gbuffer_region(lit, light, buffers, camera, gb, 1, &req, Some(tiles), false)
+}
+
+/// What a view buffer's layer is shaded with ([`shade_see_through_layer`],
+/// [`shade_mirror_layer`]): [`SEE_THROUGH_SAMPLES`] regular samples, one ray, one frame.
+pub fn layer_request() -> FrameRequest {
+    FrameRequest {
         method: Method::Regular,
         samples: SEE_THROUGH_SAMPLES as u32,
         rays: 1,
         frames: 1,
         seed: 0,
-    };
-    shade_gbuffer_region(lit, light, buffers, camera, gb, 1, &req, Some(tiles), false)
+    }
 }
 
 /// The mirror layer (000 §4.5.1 shades mirror buffers diffuse only): what a mirror buffer
@@ -765,13 +771,7 @@ pub fn shade_mirror_layer(
     camera: &PathCamera,
     gb: &VisibilityBuffer,
 ) -> Result<(Image, FrameStats)> {
-    let req = FrameRequest {
-        method: Method::Regular,
-        samples: SEE_THROUGH_SAMPLES as u32,
-        rays: 1,
-        frames: 1,
-        seed: 0,
-    };
+    let req = layer_request();
     let plain = buffers.probes_only();
     shade_gbuffer_region(lit, light, &plain, camera, gb, 1, &req, None, false)
 }

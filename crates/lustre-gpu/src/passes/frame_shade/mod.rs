@@ -46,7 +46,9 @@ use crate::view_buffer::GpuViewBuffer;
 use crate::wgsl;
 use glam::DVec3;
 
-use lustre_shade::frame::{walkthrough_request, FrameBuffers, FrameLight, FrameStats, FrameTables};
+use lustre_shade::frame::{
+    layer_request, walkthrough_request, FrameBuffers, FrameLight, FrameStats, FrameTables,
+};
 use lustre_shade::integrator::BoundingPlane;
 use lustre_shade::mirror::ScreenTiles;
 use lustre_shade::probe::LitScene;
@@ -631,47 +633,8 @@ impl FrameShadePass {
         tiles: &ScreenTiles,
         out: &FrameShadeTarget,
     ) -> Result<()> {
-        let (w, h) = (view.width as u32, view.height as u32);
-        if (out.width, out.height) != (w, h) {
-            return Err(invalid(
-                "see-through layer",
-                format!(
-                    "a {}×{} output for a {w}×{h} view buffer",
-                    out.width, out.height
-                ),
-            ));
-        }
-        let lit = Lit {
-            buffer: &view.radiance,
-            width: w,
-            height: h,
-        };
-        let req = FrameRequest {
-            method: Method::Regular,
-            samples: lustre_shade::frame::SEE_THROUGH_SAMPLES as u32,
-            rays: 1,
-            frames: 1,
-            seed: 0,
-        };
-        self.dispatch(
-            ctx,
-            scene,
-            gbuffer,
-            lit,
-            camera,
-            1,
-            (&req, 0),
-            (Some(tiles), false, true),
-            out,
-        )?;
-        let mut enc = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("see-through layer"),
-            });
-        enc.copy_buffer_to_buffer(&out.out, 0, &view.radiance, 0, out.out.size());
-        ctx.queue.submit([enc.finish()]);
-        Ok(())
+        let layer = (Some(tiles), true, "see-through layer");
+        self.shade_layer(ctx, scene, gbuffer, view, camera, layer, out)
     }
 
     /// The mirror layer of mirror buffer `view` (w×h), as
@@ -690,12 +653,29 @@ impl FrameShadePass {
         camera: &PathCamera,
         out: &FrameShadeTarget,
     ) -> Result<()> {
+        let layer = (None, false, "mirror layer");
+        self.shade_layer(ctx, scene, gbuffer, view, camera, layer, out)
+    }
+
+    /// A view buffer's layer: (the tiles shaded, all when `None`; whether mirror buffers are
+    /// read; its name), see-through buffers never read; `lustre_shade::frame::layer_request`.
+    #[allow(clippy::too_many_arguments)]
+    fn shade_layer(
+        &self,
+        ctx: &GpuContext,
+        scene: &FrameShadeScene,
+        gbuffer: &GBufferTarget,
+        view: &GpuViewBuffer,
+        camera: &PathCamera,
+        (tiles, mirrors, what): (Option<&ScreenTiles>, bool, &str),
+        out: &FrameShadeTarget,
+    ) -> Result<()> {
         let (w, h) = (view.width as u32, view.height as u32);
         if (out.width, out.height) != (w, h) {
             return Err(invalid(
-                "mirror layer",
+                what,
                 format!(
-                    "a {}×{} output for a {w}×{h} mirror buffer",
+                    "a {}×{} output for a {w}×{h} view buffer",
                     out.width, out.height
                 ),
             ));
@@ -705,13 +685,7 @@ impl FrameShadePass {
             width: w,
             height: h,
         };
-        let req = FrameRequest {
-            method: Method::Regular,
-            samples: lustre_shade::frame::SEE_THROUGH_SAMPLES as u32,
-            rays: 1,
-            frames: 1,
-            seed: 0,
-        };
+        let req = layer_request();
         self.dispatch(
             ctx,
             scene,
@@ -720,14 +694,12 @@ impl FrameShadePass {
             camera,
             1,
             (&req, 0),
-            (None, false, false),
+            (tiles, false, mirrors),
             out,
         )?;
         let mut enc = ctx
             .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("mirror layer"),
-            });
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(what) });
         enc.copy_buffer_to_buffer(&out.out, 0, &view.radiance, 0, out.out.size());
         ctx.queue.submit([enc.finish()]);
         Ok(())
