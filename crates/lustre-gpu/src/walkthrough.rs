@@ -692,10 +692,11 @@ fn render_camera(
         timer.start(ctx)?;
         let (wu, hu) = (w as u32, h as u32);
         let out = FrameShadeTarget::new(ctx, wu, hu, 1)?;
-        for (i, gb) in mirror_gbuffers.iter().enumerate() {
+        for (i, (gb, &m)) in mirror_gbuffers.iter().zip(&reflector_meshes).enumerate() {
             let cam = mirror_camera(camera, &reflectors[i].plane);
+            let tiles = ScreenTiles::of_mesh(lit, m, camera, w, h);
             walk.shade
-                .shade_mirror_layer(ctx, &scene, gb, &views[i], &cam, &out)?;
+                .shade_mirror_layer(ctx, &scene, gb, &views[i], &cam, &tiles, &out)?;
             walk.views.build_levels(ctx, &views[i])?;
         }
         for (i, view) in views.iter().enumerate().take(reflectors.len()) {

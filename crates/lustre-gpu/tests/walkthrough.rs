@@ -91,7 +91,7 @@ fn layer_parity(
     camera: &PathCamera,
     (w, h): (usize, usize),
 ) -> (f64, u64) {
-    let (_, transmissive) = view_meshes(lit);
+    let (reflector_meshes, transmissive) = view_meshes(lit);
     assert_eq!(transmissive.len(), frame.see_through_gbuffers.len());
     let buffers = frame_buffers(ctx, lit, &frame.views, &frame.reflectors, &frame.tables);
     let (mut worst, mut glossy) = (f64::INFINITY, 0);
@@ -111,10 +111,17 @@ fn layer_parity(
     // The mirror layers: each mirror buffer's view-dependent part as its mirrored camera sees
     // it ([`shade_mirror_layer`] on the read-back mirror G-buffers).
     assert_eq!(frame.reflectors.len(), frame.mirror_gbuffers.len());
-    for (i, gb) in frame.mirror_gbuffers.iter().enumerate() {
+    for (i, (gb, &m)) in frame
+        .mirror_gbuffers
+        .iter()
+        .zip(&reflector_meshes)
+        .enumerate()
+    {
         let gb = gb.read_back(ctx).expect("mirror G-buffer read-back");
         let cam = mirror_camera(camera, &frame.reflectors[i].plane);
-        let (twin, stats) = shade_mirror_layer(lit, light, &buffers, &cam, &gb).expect("CPU layer");
+        let tiles = ScreenTiles::of_mesh(lit, m, camera, w, h);
+        let (twin, stats) =
+            shade_mirror_layer(lit, light, &buffers, &cam, &gb, &tiles).expect("CPU layer");
         let gpu = level0(&buffers.mirrors[i].view, (w, h));
         worst = worst.min(psnr(&gpu, &twin, 1.0).expect("psnr"));
         glossy += stats.glossy_hits;

@@ -134,9 +134,10 @@ impl FrameBuffers {
         // The mirror layers: what each mirror buffer shows gains its view-dependent part as the
         // mirrored camera sees it (a gold sphere reflected in a floor is no longer black), read
         // from the probes only.
-        for (i, gb) in mirror_gbuffers.iter().enumerate() {
+        for (i, (gb, &m)) in mirror_gbuffers.iter().zip(&reflectors).enumerate() {
             let cam = mirror_camera(camera, &buffers.mirrors[i].plane);
-            let (layer, _) = shade_mirror_layer(lit, light, &buffers, &cam, gb)?;
+            let tiles = ScreenTiles::of_mesh(lit, m, camera, w, h);
+            let (layer, _) = shade_mirror_layer(lit, light, &buffers, &cam, gb, &tiles)?;
             buffers.mirrors[i].view.set_radiance(&layer.data);
         }
         // The see-through pass: the camera's view without each transmissive probe object, its
@@ -760,8 +761,10 @@ pub fn layer_request() -> FrameRequest {
 }
 
 /// The mirror layer (000 §4.5.1 shades mirror buffers diffuse only): what a mirror buffer
-/// shows, light-mapped plus its own view-dependent part as the mirrored camera `camera` sees it,
-/// from its w×h G-buffer `gb` with [`SEE_THROUGH_SAMPLES`] regular samples, read from the probes
+/// shows, light-mapped plus its own view-dependent part as the mirrored camera `camera` sees it
+/// in the covered `tiles` (the reflector's screen rectangle as the real camera sees it, widened:
+/// mirror pixel (x, y) is the reflection of the real camera's pixel (x, y)), from its w×h
+/// G-buffer `gb` with [`SEE_THROUGH_SAMPLES`] regular samples, read from the probes
 /// of `buffers` (its view buffers are not read: they belong to the real camera). The CPU twin of
 /// lustre-gpu's mirror layer pass.
 pub fn shade_mirror_layer(
@@ -770,10 +773,11 @@ pub fn shade_mirror_layer(
     buffers: &FrameBuffers,
     camera: &PathCamera,
     gb: &VisibilityBuffer,
+    tiles: &ScreenTiles,
 ) -> Result<(Image, FrameStats)> {
     let req = layer_request();
     let plain = buffers.probes_only();
-    shade_gbuffer_region(lit, light, &plain, camera, gb, 1, &req, None, false)
+    shade_gbuffer_region(lit, light, &plain, camera, gb, 1, &req, Some(tiles), false)
 }
 
 /// [`shade_gbuffer_view_dependent`] with the view-dependent part only in the output pixels of

@@ -693,7 +693,7 @@ pub fn run(args: &RenderArgs) -> anyhow::Result<()> {
         type Stage = fn(&GpuFrameTimes) -> f64;
         let stages: [(&str, Stage); 4] = [
             (
-                "see-through layers (in the mirror and see-through passes)",
+                "mirror and see-through layers (in the mirror and see-through passes)",
                 |t| t.layers_ms,
             ),
             ("G-buffer", |t| t.gbuffer_ms),

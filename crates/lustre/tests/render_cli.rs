@@ -350,7 +350,7 @@ fn render_without_a_scene_renders_the_built_in_room() {
     assert!(psnr > 28.0, "GPU vs CPU frame: {psnr} dB");
     let times = std::fs::read_to_string(dir.path().join("times.csv")).unwrap();
     for stage in [
-        "GPU see-through layers",
+        "GPU mirror and see-through layers",
         "GPU G-buffer",
         "GPU light-map shading",
         "GPU view-dependent pass",

@@ -639,11 +639,12 @@ impl FrameShadePass {
 
     /// The mirror layer of mirror buffer `view` (w×h), as
     /// `lustre_shade::frame::shade_mirror_layer`: its light-mapped level 0 plus the
-    /// view-dependent part of every pixel of its G-buffer `gbuffer` as the mirrored camera
-    /// `camera` sees it, with `SEE_THROUGH_SAMPLES` regular samples, read from the probes only
-    /// (no mirror or see-through buffer), written into `out` (w×h at k = 1) and copied over the
-    /// view's level 0; the caller rebuilds its levels and the scene's copy. Submitted, not waited
-    /// for. Errors: sizes.
+    /// view-dependent part of the pixels in the covered `tiles` of its G-buffer `gbuffer` as the
+    /// mirrored camera `camera` sees it, with `SEE_THROUGH_SAMPLES` regular samples, read from
+    /// the probes only (no mirror or see-through buffer), written into `out` (w×h at k = 1) and
+    /// copied over the view's level 0; the caller rebuilds its levels and the scene's copy.
+    /// Submitted, not waited for. Errors: sizes.
+    #[allow(clippy::too_many_arguments)]
     pub fn shade_mirror_layer(
         &self,
         ctx: &GpuContext,
@@ -651,9 +652,10 @@ impl FrameShadePass {
         gbuffer: &GBufferTarget,
         view: &GpuViewBuffer,
         camera: &PathCamera,
+        tiles: &ScreenTiles,
         out: &FrameShadeTarget,
     ) -> Result<()> {
-        let layer = (None, false, "mirror layer");
+        let layer = (Some(tiles), false, "mirror layer");
         self.shade_layer(ctx, scene, gbuffer, view, camera, layer, out)
     }
 
