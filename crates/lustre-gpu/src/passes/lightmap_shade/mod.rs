@@ -243,10 +243,9 @@ pub(crate) fn shading_records(
 impl GpuLightmapScene {
     /// Uploads what shading needs: per triangle of `g` (the geometry `lit` was built for) its
     /// normals, uv0, light-map page and uv1, emission and material; the materials' diffuse
-    /// albedo (`bases` as `diffuse_path_scene` returns them); the light-map pages of `atlas`;
+    /// albedo (`lit`'s [`Lightmapped::bases`]); the light-map pages of `atlas`;
     /// `environment`. Errors: texture references beyond the scene's (named), pages or textures
     /// beyond the device's limits.
-    #[allow(clippy::too_many_arguments)]
     pub fn upload(
         ctx: &GpuContext,
         scene: &Scene,
@@ -254,7 +253,6 @@ impl GpuLightmapScene {
         pages: &[Vec<[f32; 3]>],
         lit: &Lightmapped,
         g: &Geometry,
-        bases: &[BaseAlbedo],
         environment: Option<&EnvLight>,
     ) -> Result<Self> {
         let limits = ctx.device.limits();
@@ -270,7 +268,7 @@ impl GpuLightmapScene {
             scene,
             lit,
             g,
-            bases,
+            lit.bases(),
             Vec::new(),
             limits.max_storage_buffer_binding_size as usize,
         )?;
@@ -684,8 +682,7 @@ impl LightmapFrameScene {
                 format!("{}: the scene has no triangles", scene.source.display()),
             ));
         }
-        let lit = Lightmapped::new(scene, atlas, pages, &ps.geometry, bases.clone())
-            .map_err(trace_err)?;
+        let lit = Lightmapped::new(scene, atlas, pages, &ps.geometry, bases).map_err(trace_err)?;
         let geometry = GpuGeometry::upload(ctx, scene, &ps.geometry)?;
         let shading = GpuLightmapScene::upload(
             ctx,
@@ -694,7 +691,6 @@ impl LightmapFrameScene {
             pages,
             &lit,
             &ps.geometry,
-            &bases,
             ps.environment.as_ref(),
         )?;
         Ok(LightmapFrameScene { geometry, shading })
