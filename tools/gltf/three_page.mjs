@@ -4,33 +4,14 @@
 // `node three_page.mjs FILE.glb [OUT.png]` (OUT.png: the frame with light maps). Prints one JSON
 // line: { file, with: {...}, without: {...}, console } and exits 1 when the page fails or logs an
 // error.
-import { createServer } from "node:http";
-import { readFile } from "node:fs/promises";
 import { writeFile } from "node:fs/promises";
 import path from "node:path";
 import puppeteer from "puppeteer-core";
+import { serve } from "./serve.mjs";
 
 const [file, out] = process.argv.slice(2);
 const here = path.dirname(new URL(import.meta.url).pathname);
-const types = { ".html": "text/html", ".js": "text/javascript", ".glb": "model/gltf-binary" };
-const server = createServer(async (req, res) => {
-  const url = new URL(req.url, "http://x");
-  if (url.pathname === "/favicon.ico") {
-    res.writeHead(204);
-    res.end();
-    return;
-  }
-  const local = url.pathname === "/scene.glb" ? path.resolve(file) : path.join(here, path.normalize(url.pathname));
-  try {
-    const body = await readFile(local);
-    res.writeHead(200, { "content-type": types[path.extname(local)] ?? "application/octet-stream" });
-    res.end(body);
-  } catch {
-    res.writeHead(404);
-    res.end();
-  }
-});
-await new Promise((r) => server.listen(0, "127.0.0.1", r));
+const server = await serve((p) => (p === "/scene.glb" ? path.resolve(file) : path.join(here, path.normalize(p))));
 const port = server.address().port;
 const browser = await puppeteer.launch({
   executablePath: process.env.CHROMIUM ?? "/usr/bin/chromium",

@@ -3,7 +3,7 @@
 //! [`record_texture_readback`]).
 
 use crate::context::GpuContext;
-use crate::error::{scope_result, wgpu_error, Result};
+use crate::error::{push_scope, scope_result, wgpu_error, Result, Scope};
 use wgpu::util::DeviceExt;
 
 /// A buffer holding `contents`, for `usage`.
@@ -114,7 +114,7 @@ pub(crate) fn compute_pipelines<const N: usize>(
     entries: &[wgpu::BindGroupLayoutEntry],
     entry_points: [&str; N],
 ) -> Result<([wgpu::ComputePipeline; N], wgpu::BindGroupLayout)> {
-    let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let scope = push_scope(ctx);
     let module = ctx
         .device
         .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -156,7 +156,13 @@ pub(crate) fn read_buffer(
     buffer: &wgpu::Buffer,
     label: &'static str,
 ) -> Result<Vec<u8>> {
-    let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let scope = push_scope(ctx);
+    let staging = staged_copy(ctx, buffer, label);
+    map_read(ctx, &staging, label, scope)
+}
+
+/// A MAP_READ staging buffer holding a copy of the whole of `buffer` (the copy submitted).
+fn staged_copy(ctx: &GpuContext, buffer: &wgpu::Buffer, label: &'static str) -> wgpu::Buffer {
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
         size: buffer.size(),
@@ -168,7 +174,7 @@ pub(crate) fn read_buffer(
         .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
     enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
     ctx.queue.submit([enc.finish()]);
-    map_read(ctx, &staging, label, scope)
+    staging
 }
 
 /// Maps `buffer` (MAP_READ, its copy already submitted), waits, checks `scope` and returns
@@ -177,7 +183,7 @@ pub(crate) fn map_read(
     ctx: &GpuContext,
     buffer: &wgpu::Buffer,
     stage: &'static str,
-    scope: wgpu::ErrorScopeGuard,
+    scope: Scope,
 ) -> Result<Vec<u8>> {
     let slice = buffer.slice(..);
     let (tx, rx) = std::sync::mpsc::channel();
@@ -240,4 +246,78 @@ pub fn record_texture_readback(
         },
     );
     (buffer, padded)
+}
+
+/// The bytes of the whole of `buffer` (COPY_SRC) without blocking: the copy into a staging
+/// buffer is recorded and submitted now, its mapping requested, and the future completes when
+/// the mapping has. In a browser the page's event loop completes the mapping; natively the
+/// device is polled first, so the future is ready when first polled.
+pub(crate) fn read_buffer_later(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    label: &'static str,
+) -> Result<impl std::future::Future<Output = Result<Vec<u8>>> + 'static> {
+    let staging = staged_copy(ctx, buffer, label);
+    let mapped = Mapping::default();
+    let done = mapped.clone();
+    staging
+        .slice(..)
+        .map_async(wgpu::MapMode::Read, move |r| done.finish(r));
+    ctx.wait()?;
+    Ok(async move {
+        mapped.await.map_err(|e| wgpu_error(label, e))?;
+        let out = staging
+            .slice(..)
+            .get_mapped_range()
+            .map_err(|e| wgpu_error(label, e))?
+            .to_vec();
+        staging.unmap();
+        Ok(out)
+    })
+}
+
+/// A mapping's outcome once known, and the task waiting for it.
+#[derive(Debug, Default)]
+struct MappingState {
+    done: Option<std::result::Result<(), wgpu::BufferAsyncError>>,
+    waker: Option<std::task::Waker>,
+}
+
+/// A buffer mapping in flight, as a future: `map_async`'s callback calls [`Mapping::finish`].
+#[derive(Clone, Debug, Default)]
+struct Mapping(std::sync::Arc<std::sync::Mutex<MappingState>>);
+
+impl Mapping {
+    fn finish(&self, r: std::result::Result<(), wgpu::BufferAsyncError>) {
+        let waker = match self.0.lock() {
+            Ok(mut s) => {
+                s.done = Some(r);
+                s.waker.take()
+            }
+            Err(_) => None,
+        };
+        if let Some(w) = waker {
+            w.wake();
+        }
+    }
+}
+
+impl std::future::Future for Mapping {
+    type Output = std::result::Result<(), String>;
+
+    fn poll(
+        self: std::pin::Pin<&mut Self>,
+        cx: &mut std::task::Context<'_>,
+    ) -> std::task::Poll<Self::Output> {
+        let Ok(mut s) = self.0.lock() else {
+            return std::task::Poll::Ready(Err("the mapping's state was poisoned".into()));
+        };
+        match s.done.take() {
+            Some(r) => std::task::Poll::Ready(r.map_err(|e| e.to_string())),
+            None => {
+                s.waker = Some(cx.waker().clone());
+                std::task::Poll::Pending
+            }
+        }
+    }
 }

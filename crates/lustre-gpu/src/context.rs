@@ -14,6 +14,10 @@ pub struct GpuContext {
     /// Whether Rgba32Float textures can be filtered (`FLOAT32_FILTERABLE`); without it the
     /// environment is uploaded as Rgba16Float.
     pub float32_filterable: bool,
+    /// The instance and the adapter the device came from, kept while it lives: Chromium loses
+    /// a device ("A valid external Instance reference no longer exists") once they are
+    /// collected.
+    origin: Option<(wgpu::Instance, wgpu::Adapter)>,
 }
 
 impl GpuContext {
@@ -23,9 +27,17 @@ impl GpuContext {
         pollster::block_on(Self::new_async())
     }
 
-    async fn new_async() -> Result<Self> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    /// [`GpuContext::new`] without blocking: what a browser (wasm32, WebGPU) calls, where
+    /// nothing may block the page.
+    pub async fn new_async() -> Result<Self> {
+        #[allow(unused_mut)]
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        // In a browser, WebGPU only: the passes are compute shaders, which WebGL lacks.
+        #[cfg(target_arch = "wasm32")]
+        {
+            desc.backends = wgpu::Backends::BROWSER_WEBGPU;
+        }
+        let instance = wgpu::Instance::new(desc);
         let adapter = instance
             .request_adapter(&wgpu::RequestAdapterOptions {
                 power_preference: wgpu::PowerPreference::HighPerformance,
@@ -35,6 +47,15 @@ impl GpuContext {
             })
             .await
             .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let mut ctx = Self::from_adapter(&adapter).await?;
+        ctx.origin = Some((instance, adapter));
+        Ok(ctx)
+    }
+
+    /// A device on `adapter` (one that must also draw to a window or a canvas is asked for with
+    /// its surface; keep its instance alive as long as the device), with the adapter's own limits, `FLOAT32_FILTERABLE` and `TIMESTAMP_QUERY`
+    /// where it has them.
+    pub async fn from_adapter(adapter: &wgpu::Adapter) -> Result<Self> {
         let info = adapter.get_info();
         let float32_filterable = adapter
             .features()
@@ -67,6 +88,7 @@ impl GpuContext {
             queue,
             info,
             float32_filterable,
+            origin: None,
         })
     }
 

@@ -55,10 +55,42 @@ pub(crate) fn wgpu_error(stage: &'static str, e: impl std::fmt::Display) -> GpuE
     }
 }
 
-/// Pops a validation scope: the first error wgpu reported in it, as a [`GpuError::Wgpu`].
-pub(crate) fn scope_result(scope: wgpu::ErrorScopeGuard, stage: &'static str) -> Result<()> {
-    match pollster::block_on(scope.pop()) {
-        Some(e) => Err(wgpu_error(stage, e)),
-        None => Ok(()),
+/// A validation scope around some GPU work ([`push_scope`], closed by [`scope_result`]).
+///
+/// Natively the scope is popped and its answer awaited, so the work's first validation error
+/// comes back as a [`GpuError::Wgpu`] naming the stage. In a browser (wasm32) WebGPU answers a
+/// pop only after control returns to the page's event loop, which a frame cannot wait for:
+/// there no scope is pushed, and an error reaches the device's uncaptured-error handler (the
+/// page reports it on its console and on screen).
+#[derive(Debug)]
+pub(crate) struct Scope(#[cfg(not(target_arch = "wasm32"))] wgpu::ErrorScopeGuard);
+
+/// Opens a validation scope on `ctx`'s device.
+pub(crate) fn push_scope(ctx: &crate::context::GpuContext) -> Scope {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        Scope(ctx.device.push_error_scope(wgpu::ErrorFilter::Validation))
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        let _ = ctx;
+        Scope()
+    }
+}
+
+/// Closes a validation scope: the first error wgpu reported in it, as a [`GpuError::Wgpu`]
+/// (always `Ok` in a browser: see [`Scope`]).
+pub(crate) fn scope_result(scope: Scope, stage: &'static str) -> Result<()> {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        match pollster::block_on(scope.0.pop()) {
+            Some(e) => Err(wgpu_error(stage, e)),
+            None => Ok(()),
+        }
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        let _ = (scope, stage);
+        Ok(())
     }
 }

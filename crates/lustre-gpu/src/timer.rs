@@ -1,11 +1,15 @@
 //! Timing of GPU work: the GPU's own timestamps (wgpu `TIMESTAMP_QUERY`, requested by
 //! [`GpuContext::new`] only where the adapter offers it) bracketing everything submitted between
 //! [`GpuTimer::start`] and [`GpuTimer::stop`], and always the wall time from `start` until the
-//! queue has drained (device polling). Without the feature only the wall time is reported.
+//! queue has drained (device polling). Without the feature only the wall time is reported. In a
+//! browser (wasm32) nothing can wait for the GPU: no timestamps are read and the wall time is
+//! that of recording and submitting.
 
 use crate::context::GpuContext;
-use crate::error::{scope_result, wgpu_error, Result};
-use std::time::Instant;
+use crate::error::{push_scope, scope_result, wgpu_error, Result};
+// std's Instant panics in a browser (wasm32): web-time's is std's natively, `performance.now()`
+// there.
+use web_time::Instant;
 
 /// One measured interval.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,35 +38,38 @@ pub struct GpuTimer {
 impl GpuTimer {
     /// A timer on `ctx`: GPU timestamps where the device has `TIMESTAMP_QUERY`.
     pub fn new(ctx: &GpuContext) -> Self {
-        let queries = ctx
-            .device
-            .features()
-            .contains(wgpu::Features::TIMESTAMP_QUERY)
-            .then(|| {
-                let buffer = |label: &str, usage: wgpu::BufferUsages| {
-                    ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some(label),
-                        size: 16,
-                        usage,
-                        mapped_at_creation: false,
-                    })
-                };
-                Queries {
-                    set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
-                        label: Some("gpu timer"),
-                        ty: wgpu::QueryType::Timestamp,
-                        count: 2,
-                    }),
-                    resolve: buffer(
-                        "gpu timer resolve",
-                        wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-                    ),
-                    readback: buffer(
-                        "gpu timer readback",
-                        wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    ),
-                }
-            });
+        // In a browser a timestamp read-back would have to wait for the page's event loop:
+        // wall time only there.
+        let queries = (!cfg!(target_arch = "wasm32")
+            && ctx
+                .device
+                .features()
+                .contains(wgpu::Features::TIMESTAMP_QUERY))
+        .then(|| {
+            let buffer = |label: &str, usage: wgpu::BufferUsages| {
+                ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: 16,
+                    usage,
+                    mapped_at_creation: false,
+                })
+            };
+            Queries {
+                set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("gpu timer"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: 2,
+                }),
+                resolve: buffer(
+                    "gpu timer resolve",
+                    wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                ),
+                readback: buffer(
+                    "gpu timer readback",
+                    wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                ),
+            }
+        });
         GpuTimer {
             queries,
             started: None,
@@ -98,7 +105,7 @@ impl GpuTimer {
                 wall_ms: t0.elapsed().as_secs_f64() * 1e3,
             });
         };
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         mark(ctx, &q.set, 1, Some(q));
         let slice = q.readback.slice(..);
         let (tx, rx) = std::sync::mpsc::channel();

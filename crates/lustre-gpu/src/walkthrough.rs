@@ -49,13 +49,34 @@ pub struct WalkthroughPasses {
 }
 
 impl WalkthroughPasses {
-    /// Compiles every pass of the walkthrough frame.
+    /// Compiles every pass of the walkthrough frame, the view-dependent pass with every
+    /// material kind (what a material editor needs).
     pub fn new(ctx: &GpuContext) -> Result<Self> {
+        Self::with_kinds(ctx, crate::material::kinds::all_sampled())
+    }
+
+    /// Compiles every pass of the walkthrough frame, the view-dependent pass with the material
+    /// kinds of `scene` only ([`FrameShadePass::for_kinds`]): what a renderer that does not
+    /// change materials compiles. A material the GPU cannot pack adds nothing here; the
+    /// walkthrough refuses it by name.
+    pub fn for_scene(ctx: &GpuContext, scene: &lustre_scene::Scene) -> Result<Self> {
+        let kinds = scene
+            .materials
+            .iter()
+            .filter_map(|m| pack_material(m, &mut vec![]).ok())
+            .filter(|b| b.kind != crate::material::KIND_NONE)
+            .fold(0, |mask, b| {
+                mask | crate::material::kinds::sampled_kinds(b.kind)
+            });
+        Self::with_kinds(ctx, kinds)
+    }
+
+    fn with_kinds(ctx: &GpuContext, kinds: u32) -> Result<Self> {
         Ok(WalkthroughPasses {
             gbuffer: GBufferPass::new(ctx)?,
             lightmap: LightmapShadePass::new(ctx)?,
             views: GpuViewPass::new(ctx)?,
-            shade: FrameShadePass::new(ctx)?,
+            shade: FrameShadePass::for_kinds(ctx, kinds)?,
             capture: GpuProbeCapture::new(ctx)?,
         })
     }
@@ -220,10 +241,7 @@ impl GpuWalkthrough {
             probes,
             environment,
             capture_ms,
-            timestamps: ctx
-                .device
-                .features()
-                .contains(wgpu::Features::TIMESTAMP_QUERY),
+            timestamps: timer.has_timestamps(),
             capture,
             probe_generation: 0,
         })
@@ -420,6 +438,8 @@ pub struct GpuFrameSession {
     targets: Option<Targets>,
     frame: Option<CameraFrame>,
     shaded: Option<Shaded>,
+    /// Steps leave the view-dependent pass's counts on the GPU ([`GpuFrameSession::without_counts`]).
+    skip_counts: bool,
 }
 
 /// Every field of a camera, bit for bit (origin, forward, right, up, tan ½fov).
@@ -435,6 +455,17 @@ impl GpuFrameSession {
     /// A session with nothing allocated; the first [`GpuFrameSession::step`] allocates.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// A session whose steps never wait for the GPU: the view-dependent pass's counts (glossy
+    /// hits, lookups) are not read back, and [`GpuStep::stats`] holds zeros for them. What a
+    /// browser needs (it cannot wait inside a frame) and what a viewer that does not show the
+    /// counts can take.
+    pub fn without_counts() -> Self {
+        GpuFrameSession {
+            skip_counts: true,
+            ..Self::default()
+        }
     }
 
     /// Renders, refines or keeps the w×h frame of `lit` from `camera` (type docs) and returns
@@ -547,7 +578,11 @@ impl GpuFrameSession {
                     &targets.out,
                 )?;
                 times.shade_ms = ms(timer.stop(ctx)?);
-                let mut stats = targets.out.stats(ctx)?;
+                let mut stats = if self.skip_counts {
+                    FrameStats::default()
+                } else {
+                    targets.out.stats(ctx)?
+                };
                 stats.mirrors = frame.reflectors.len();
                 stats.see_throughs = frame.see_throughs;
                 Shaded {

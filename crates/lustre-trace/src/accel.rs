@@ -9,12 +9,13 @@
 
 use crate::{Result, TraceError};
 use glam::{DVec3, Vec3A};
-use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::CwBvh;
+use obvhs::ploc::PlocBuilder;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
-use std::time::Duration;
 
 /// A ray hit: the triangle (index into the input), the distance along the (unit or not)
 /// direction, and the barycentric weights of the triangle's three vertices.
@@ -151,6 +152,23 @@ fn to3a(p: DVec3) -> Vec3A {
     Vec3A::new(p.x as f32, p.y as f32, p.z as f32)
 }
 
+/// A compressed wide BVH of `triangles` with obvhs's medium-quality parameters: the steps of
+/// obvhs's `build_cwbvh_from_tris` (PLOC, reinsertion, conversion to CWBVH) without its build
+/// timer, std's `Instant`, which panics in a browser (wasm32).
+fn build_cwbvh(triangles: &[Triangle]) -> CwBvh {
+    let config = BvhBuildParams::medium_build();
+    let mut bvh2 = PlocBuilder::with_capacity(triangles.len()).build(
+        config.ploc_search_distance,
+        triangles,
+        (0..triangles.len() as u32).collect::<Vec<_>>(),
+        config.sort_precision,
+        config.search_depth_threshold,
+    );
+    bvh2.uses_spatial_splits = config.pre_split;
+    ReinsertionOptimizer::default().run(&mut bvh2, config.reinsertion_batch_ratio, None);
+    bvh2_to_cwbvh(&bvh2, config.max_prims_per_leaf.clamp(1, 3), true, false)
+}
+
 impl Accel {
     /// Builds the BVH over `triangles` (world-space vertices). Errors on a non-finite vertex
     /// (naming the triangle). An empty soup is valid: every ray misses.
@@ -168,13 +186,7 @@ impl Accel {
                 v2: to3a(t[2]),
             });
         }
-        let bvh = (!tris.is_empty()).then(|| {
-            build_cwbvh_from_tris(
-                &tris,
-                BvhBuildParams::medium_build(),
-                &mut Duration::default(),
-            )
-        });
+        let bvh = (!tris.is_empty()).then(|| build_cwbvh(&tris));
         let prims = bvh
             .as_ref()
             .map_or_else(Vec::new, |b| b.primitive_indices.clone());

@@ -45,13 +45,19 @@ pub fn display_value(v: f64, exposure: f64) -> f64 {
 
 /// Encodes interleaved 8-bit RGB as PNG and writes it atomically.
 fn write_png_bytes(path: &Path, width: usize, height: usize, rgb: Vec<u8>) -> Result<()> {
+    let bytes = encode_png(path, width, height, rgb)?;
+    lustre_brdf::error::write_atomic(path, &bytes)?;
+    Ok(())
+}
+
+/// An 8-bit RGB PNG file's bytes (`path` names it in errors).
+fn encode_png(path: &Path, width: usize, height: usize, rgb: Vec<u8>) -> Result<Vec<u8>> {
     let buf = image::RgbImage::from_raw(width as u32, height as u32, rgb)
         .ok_or_else(|| encode_error(path, "PNG", "buffer size mismatch"))?;
     let mut bytes = Vec::new();
     buf.write_to(&mut Cursor::new(&mut bytes), image::ImageFormat::Png)
         .map_err(|e| encode_error(path, "PNG", e))?;
-    lustre_brdf::error::write_atomic(path, &bytes)?;
-    Ok(())
+    Ok(bytes)
 }
 
 fn encode_error(path: &Path, what: &str, e: impl std::fmt::Display) -> TraceError {
@@ -160,8 +166,15 @@ impl Image {
 
     /// Writes an 8-bit sRGB PNG ([`Image::to_srgb8_dithered`]) atomically.
     pub fn write_png_dithered(&self, path: &Path, exposure: f64, seed: u64) -> Result<()> {
-        write_png_bytes(
-            path,
+        let bytes = self.encode_png_dithered(exposure, seed)?;
+        lustre_brdf::error::write_atomic(path, &bytes)?;
+        Ok(())
+    }
+
+    /// The PNG file [`Image::write_png_dithered`] writes, in memory.
+    pub fn encode_png_dithered(&self, exposure: f64, seed: u64) -> Result<Vec<u8>> {
+        encode_png(
+            Path::new("(in memory)"),
             self.width,
             self.height,
             self.to_srgb8_dithered(exposure, seed),

@@ -123,7 +123,9 @@ pub fn run(args: &ExportArgs) -> anyhow::Result<()> {
 
 /// The glTF material of a material given by a catalog specification: the metallic-roughness
 /// model fitted to it (Ngan L2), and a line saying so with its error.
-fn spec_fit(m: &lustre_scene::material::Material) -> Option<(serde_json::Value, String)> {
+pub(crate) fn spec_fit(
+    m: &lustre_scene::material::Material,
+) -> Option<(serde_json::Value, String)> {
     let lustre_scene::material::MaterialKind::Spec(s) = &m.kind else {
         return None;
     };

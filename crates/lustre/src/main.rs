@@ -11,6 +11,7 @@ mod fit_cmd;
 mod merl_cmd;
 mod output;
 mod plot_cmd;
+mod publish_cmd;
 mod reference_cmd;
 mod render_cmd;
 mod scene_cmd;
@@ -70,6 +71,9 @@ enum Command {
     /// Take results to other tools: a material as glTF 2.0 or Mitsuba 3 (a model fitted to it,
     /// with its error), a baked scene as one glTF 2.0 file with its light maps.
     Export(export_cmd::ExportArgs),
+    /// A baked scene as a static web page: index.html, the walkthrough's passes compiled to
+    /// WebAssembly on the browser's WebGPU, and the scene with its light maps.
+    Publish(publish_cmd::PublishArgs),
     /// List built-in materials, analytic models, published fits, the 100 MERL materials and
     /// where data comes from.
     List,
@@ -173,6 +177,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Scene(args) => scene_cmd::run(&args),
         Command::Score(args) => score_cmd::run(&args),
         Command::Export(args) => export_cmd::run(&args),
+        Command::Publish(args) => output::in_folder(&args.out, || publish_cmd::run(&args)),
         Command::List => list(),
         Command::Info { spec, strict } => info(&spec, strict),
     }

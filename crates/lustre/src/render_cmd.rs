@@ -9,7 +9,10 @@ use anyhow::{bail, Context};
 use clap::builder::TypedValueParser;
 use indicatif::{ProgressBar, ProgressStyle};
 use lustre_env::pyramid::CubePyramid;
-use lustre_gpu::{GpuContext, GpuFrameSession, GpuFrameTimes, GpuWalkthrough, LightmapFrameScene};
+use lustre_gpu::{
+    GpuContext, GpuFrameSession, GpuFrameTimes, GpuWalkthrough, LightmapFrameScene,
+    WalkthroughPasses,
+};
 use lustre_scene::camera_path_file::CameraPathFile;
 use lustre_scene::lightmap::LightmapAtlas;
 use lustre_scene::material_edit::{parse_assignment, set_named};
@@ -176,7 +179,7 @@ pub struct RenderArgs {
 }
 
 /// A scene with its light-map atlas and baked pages.
-type Baked = (Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>);
+pub(crate) type Baked = (Scene, LightmapAtlas, Vec<Vec<[f32; 3]>>);
 
 /// A scene file with baked light maps: the scene, its atlas and its pages.
 fn load_baked(path: &Path) -> anyhow::Result<Baked> {
@@ -338,7 +341,7 @@ fn fingerprint(path: &Path, scene: &Scene, options: &str) -> String {
 }
 
 /// The built-in room with its light maps, baked into `out/bake` (tiles reused on the next run).
-fn builtin(out: &Path, environment: Option<Environment>) -> anyhow::Result<Baked> {
+pub(crate) fn builtin(out: &Path, environment: Option<Environment>) -> anyhow::Result<Baked> {
     let bar = ProgressBar::new(0);
     bar.set_style(
         ProgressStyle::with_template(
@@ -765,7 +768,9 @@ fn gpu_renderer(
     let ctx = GpuContext::new().context("no GPU adapter")?;
     let uploaded = LightmapFrameScene::upload(&ctx, scene, atlas, pages)
         .context("uploading the scene to the GPU")?;
-    let walk = GpuWalkthrough::new(&ctx, lit, uploaded, probe_opts, environment)
+    // The view-dependent pass compiles the scene's material kinds only.
+    let passes = WalkthroughPasses::for_scene(&ctx, scene).context("compiling the GPU passes")?;
+    let walk = GpuWalkthrough::with_passes(&ctx, passes, lit, uploaded, probe_opts, environment)
         .context("preparing the scene for the GPU (its materials, then its probes)")?;
     Ok((ctx, walk))
 }

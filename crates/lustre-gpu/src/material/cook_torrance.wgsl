@@ -288,7 +288,7 @@ fn ct_sample(lobes: CtLobes, dist: u32, wo: vec3<f32>, u: vec2<f32>) -> BsdfSamp
         return mix_no_sample();
     }
     let pdf = ct_mixture_pdf(lobes, dist, wi, wo);
-    if (!(pdf > 0.0 && pdf <= 3.4028235e38)) {
+    if (!(pdf > 0.0 && pdf <= 0x1.fffffep+127f)) {
         return mix_no_sample();
     }
     return BsdfSample(wi, pdf, vec3<f32>(0.0), 0u);

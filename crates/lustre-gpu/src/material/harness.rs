@@ -6,7 +6,7 @@ use super::kinds::BSDF;
 use super::GpuBsdf;
 use crate::bindings::{buffer_entry, compute_pipeline, map_read, storage_buffer, storage_entry};
 use crate::context::GpuContext;
-use crate::error::{invalid, Result};
+use crate::error::{invalid, push_scope, Result};
 use crate::wgsl;
 use std::sync::OnceLock;
 
@@ -83,7 +83,7 @@ pub fn evaluate_models(
             ]
         })
         .collect();
-    let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let scope = push_scope(ctx);
     let out_bytes = (input.len().max(1) * 16) as u64;
     let results = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("model results"),

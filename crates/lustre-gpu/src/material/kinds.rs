@@ -318,6 +318,11 @@ fn is_sampled(k: &Kind) -> bool {
 }
 
 fn bsdf_source() -> String {
+    bsdf_dispatch(is_sampled)
+}
+
+/// bsdf.wgsl's generated source with its switches over the kinds `keep` keeps.
+fn bsdf_dispatch(keep: impl Fn(&Kind) -> bool + Copy) -> String {
     format!(
         "// module bsdf: the dispatch by kind to the sampled models' sample / eval / pdf, \
          generated from\n\
@@ -327,20 +332,16 @@ fn bsdf_source() -> String {
          fn bsdf_eval(b: GpuBsdf, wi: vec3<f32>, wo: vec3<f32>) -> vec3<f32> {{\n{}}}\n\n\
          fn bsdf_pdf(b: GpuBsdf, wi: vec3<f32>, wo: vec3<f32>) -> f32 {{\n{}}}\n",
         switch(
-            is_sampled,
+            keep,
             |p| format!("{p}_sample({p}_unpack(b.p), wo, u)"),
             "no_sample()"
         ),
         switch(
-            is_sampled,
+            keep,
             |p| format!("{p}_eval({p}_unpack(b.p), wi, wo)"),
             "vec3<f32>(0.0)"
         ),
-        switch(
-            is_sampled,
-            |p| format!("{p}_pdf({p}_unpack(b.p), wi, wo)"),
-            "0.0"
-        ),
+        switch(keep, |p| format!("{p}_pdf({p}_unpack(b.p), wi, wo)"), "0.0"),
     )
 }
 
@@ -352,12 +353,17 @@ pub const TEXTURED: Module = Module {
     deps: &[&BSDF, &material::textured::PARAMS],
 };
 
-fn textured_source() -> String {
-    let cases = switch(
-        |k| matches!(k.ops, Ops::Sampled { textured: true }),
+/// `textured_bsdf`'s switch over the textured kinds `keep` keeps.
+fn textured_cases(keep: impl Fn(&Kind) -> bool) -> String {
+    switch(
+        |k| matches!(k.ops, Ops::Sampled { textured: true }) && keep(k),
         |p| format!("{p}_textured(b, c, s)"),
         "b",
-    );
+    )
+}
+
+fn textured_source() -> String {
+    let cases = textured_cases(|_| true);
     format!(
         "{}\n\
          // The record `b` (FLAG_TEXTURED) with its parameters at the pixel: rgb and s as listed \
@@ -422,6 +428,26 @@ pub fn record_sampling(kinds: u32) -> (String, String) {
             switch(keep, |p| format!("{p}_pdf({p}_unpack(b.p), wi, wo)"), "0.0")
         ),
     )
+}
+
+/// `src`, a pass composed with [`BSDF`] (and [`TEXTURED`]), with their dispatch switches
+/// restricted to the sampled kinds in the bit mask `kinds` ([`sampled_kinds`] of a scene's
+/// records): a record of another kind then samples nothing and evaluates to 0, as an unknown
+/// kind. A pass compiles its scene's models only (a browser's SwiftShader took minutes over
+/// every model's, and llvmpipe ≈ 62 s more for the adaptive passes). `None` when `src` does not
+/// hold the generated switches.
+pub fn restrict_kinds(src: &str, kinds: u32) -> Option<String> {
+    let keep = move |k: &Kind| is_sampled(k) && kinds & 1u32.checked_shl(k.code).unwrap_or(0) != 0;
+    let (all, only) = (bsdf_dispatch(is_sampled), bsdf_dispatch(keep));
+    if !src.contains(&all) {
+        return None;
+    }
+    let mut out = src.replacen(&all, &only, 1);
+    let (all, only) = (textured_cases(|_| true), textured_cases(keep));
+    if out.contains(&all) {
+        out = out.replacen(&all, &only, 1);
+    }
+    Some(out)
 }
 
 /// The mask of every sampled kind.

@@ -173,7 +173,7 @@ fn kurt_sample(m: Kurt, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
     }
     let wi = select(wi_u, mirror_z(wi_u), flip);
     let pdf = kurt_pdf(m, wi, wo);
-    if (!(pdf > 0.0 && pdf <= 3.4028235e38)) {
+    if (!(pdf > 0.0 && pdf <= 0x1.fffffep+127f)) {
         return mix_no_sample();
     }
     return BsdfSample(wi, pdf, kurt_eval(m, wi, wo), 0u);

@@ -93,11 +93,14 @@ fn cube_bilinear(level: vec4<u32>, d: vec3<f32>) -> vec3<f32> {
     let fv = vv - j0f;
     let i0 = i32(i0f);
     let j0 = i32(j0f);
-    let a = cube_fetch(level, face, i0, j0);
-    let b = cube_fetch(level, face, i0 + 1, j0);
-    let c = cube_fetch(level, face, i0, j0 + 1);
-    let e = cube_fetch(level, face, i0 + 1, j0 + 1);
-    return (1.0 - fv) * ((1.0 - fu) * a + fu * b) + fv * ((1.0 - fu) * c + fu * e);
+    // The four texels (i0 + di, j0 + dj), di = q & 1, dj = q >> 1, from one call site: a
+    // compiler that inlines every call (SwiftShader, a browser's software WebGPU) did not
+    // finish compiling the walkthrough's sampling pass with four.
+    var t: array<vec3<f32>, 4>;
+    for (var q = 0; q < 4; q++) {
+        t[q] = cube_fetch(level, face, i0 + (q & 1), j0 + (q >> 1u));
+    }
+    return (1.0 - fv) * ((1.0 - fu) * t[0] + fu * t[1]) + fv * ((1.0 - fu) * t[2] + fu * t[3]);
 }
 
 // CubePyramid::sample over the `count` levels from level record `first`: trilinear between

@@ -83,5 +83,5 @@ fn mix_no_sample() -> BsdfSample {
 
 // Whether every component is finite (neither NaN nor ±∞).
 fn mix_finite3(v: vec3<f32>) -> bool {
-    return all(abs(v) <= vec3<f32>(3.4028235e38));
+    return all(abs(v) <= vec3<f32>(0x1.fffffep+127f));
 }

@@ -22,7 +22,7 @@ use crate::bindings::{
 };
 use crate::context::GpuContext;
 use crate::cube_storage::{pack_pyramid, PackedPyramid};
-use crate::error::{invalid, Result};
+use crate::error::{invalid, push_scope, Result};
 use crate::material::kinds::sampled_kinds;
 use crate::material::measured::{
     pack_tabulated, Evaluates, GpuTabulatedDims, MaterialPipelines, PackedBrdfs, EVALUATED,
@@ -627,7 +627,7 @@ impl AdaptivePass {
         };
 
         self.timer.start(ctx)?;
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let storage = wgpu::BufferUsages::STORAGE;
         let surfel_buf = buffer_init(
             ctx,
@@ -811,7 +811,7 @@ impl AdaptivePass {
         let values_dst = copy(&values, "adaptive values readback");
         let shaded_dst = copy(&shaded, "adaptive shaded readback");
         let value_bytes = map_read(ctx, &values_dst, "adaptive pass", scope)?;
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let shaded_bytes = map_read(ctx, &shaded_dst, "adaptive pass", scope)?;
         let value_px = bytemuck::cast_slice::<u8, [f32; 4]>(&value_bytes);
         let shaded_px = bytemuck::cast_slice::<u8, [u32; 2]>(&shaded_bytes);

@@ -10,7 +10,7 @@
 
 use crate::bindings::{buffer_entry, buffer_init, map_read, storage_entry, uniform_entry};
 use crate::context::GpuContext;
-use crate::error::{invalid, Result};
+use crate::error::{invalid, push_scope, Result};
 use crate::material::measured::{
     Evaluates, MaterialPipelines, MeasuredBrdf, PackedBrdfs, EVALUATED,
 };
@@ -459,7 +459,7 @@ impl BandwidthPass {
             first: 0,
         };
         self.timer.start(ctx)?;
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let surfel_buf = buffer_init(
             ctx,
             "bandwidth surfels",

@@ -36,68 +36,98 @@ struct Params {
     flags: vec4<u32>,
     // samples_main's share: samples first..end of each pixel's n (x, y), 0, 0.
     chunk: vec4<u32>,
+    // The first vec4 of each part of the arena (at_tris … at_tex_info).
+    parts: array<vec4<u32>, 5>,
 };
 
 @group(0) @binding(0) var<uniform> u: Params;
 @group(0) @binding(1) var prim_tex: texture_2d<u32>;
 @group(0) @binding(2) var bary_tex: texture_2d<f32>;
-// 7 vec4 per triangle (frame_shade.rs `FrameShadeScene::new`).
-@group(0) @binding(3) var<storage, read> tris: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read> bsdfs: array<GpuBsdf>;
-@group(0) @binding(5) var<storage, read> tables: array<f32>;
-// Cube maps: every level of every cube, RGBA f32, face-major, row-major.
-@group(0) @binding(6) var<storage, read> cube_texels: array<vec4<f32>>;
-// Per cube level: (first texel, face size, first ring entry, 0).
-@group(0) @binding(7) var<storage, read> cube_levels: array<vec4<u32>>;
-// Per cube: (centre xyz, first level bits), (level count, first plane, plane count, 0) as bits.
-@group(0) @binding(8) var<storage, read> cubes: array<vec4<f32>>;
-// Per bounding plane: (point xyz, 0), (normal xyz, 0), relative to the cube's centre.
-@group(0) @binding(9) var<storage, read> planes: array<vec4<f32>>;
-// Per cube level, per face, the 4(n + 1) texels one texel beyond the edges: up to three global
-// texel indices and their count.
-@group(0) @binding(10) var<storage, read> ring: array<vec4<i32>>;
-@group(0) @binding(11) var<storage, read> view_radiance: array<vec4<f32>>;
-@group(0) @binding(12) var<storage, read> view_geometry: array<vec4<f32>>;
-// Per view buffer, 8 vec4: camera origin, forward, right, up (w: tan(fov_y / 2) in origin.w);
-// (width, height, levels, first radiance texel) bits; (first geometry vec4, has front, 0, 0)
-// bits; front point; front normal.
-@group(0) @binding(13) var<storage, read> views: array<vec4<f32>>;
-@group(0) @binding(14) var<storage, read> lightmapped: array<vec4<f32>>;
-@group(0) @binding(15) var<storage, read_write> accum: array<vec4<f32>>;
-@group(0) @binding(16) var<storage, read_write> out_px: array<vec4<f32>>;
+// Everything the pass reads besides the G-buffer, the light-mapped image and the tile mask, in
+// one buffer (frame_shade.rs `FrameShadeScene`, parts at `u.parts`): WebGPU allows as few as 8
+// storage buffers per shader stage. Read as vec4<f32> (`arena`) and, for the parts that hold
+// integers, as vec4<u32> (`arena_u`, the same buffer).
+@group(0) @binding(3) var<storage, read> arena: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> arena_u: array<vec4<u32>>;
+@group(0) @binding(5) var<storage, read> lightmapped: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> accum: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read_write> out_px: array<vec4<f32>>;
 // (glossy hits, lookups), summed per workgroup first.
-@group(0) @binding(17) var<storage, read_write> counts: array<atomic<u32>, 2>;
-// The light-map pass's records (lightmap_shade.rs `shading_records`), read for the diffuse
-// albedo kd at each pixel (`Lightmapped::albedo`): 8 vec4 per triangle, 4 per material
-// (material_albedo.wgsl), the textures (texture_sample.wgsl; the material parameters' too).
-@group(0) @binding(18) var<storage, read> albedo_tris: array<vec4<f32>>;
-@group(0) @binding(19) var<storage, read> mats: array<vec4<f32>>;
-@group(0) @binding(20) var<storage, read> texels: array<vec4<f32>>;
-@group(0) @binding(21) var<storage, read> tex_info: array<vec4<u32>>;
+@group(0) @binding(8) var<storage, read_write> counts: array<atomic<u32>, 2>;
+// Per SCREEN_TILE² tile of the output (row-major): 1 where covered (read when u.tiles.z = 1).
+@group(0) @binding(9) var<storage, read> tile_mask: array<u32>;
+// Per G-buffer pixel: the view-dependent radiance summed over the dispatches so far.
+@group(0) @binding(10) var<storage, read_write> partial: array<vec4<f32>>;
+
+// The parts of the arena (their first vec4; frame_shade.rs `Part`), in this order:
+// - tris: 7 vec4 per triangle (frame_shade.rs `FrameShadeScene::new`);
+// - bsdfs: the material records (GpuBsdf), 9 vec4 each (`load_bsdf`);
+// - tables: the materials' tables (f32, 4 a vec4; `bsdf_table`);
+// - cube_texels: every level of every cube, RGBA f32, face-major, row-major;
+// - cube_levels (u32): per cube level (first texel, face size, first ring entry, 0);
+// - cubes: per cube (centre xyz, first level bits), (level count, first plane, plane count, a
+//   room probe) as bits;
+// - planes: per bounding plane (point xyz, 0), (normal xyz, 0), relative to the cube's centre;
+// - ring (u32, read as i32): per cube level, per face, the 4(n + 1) texels one texel beyond
+//   the edges: up to three global texel indices and their count;
+// - view_radiance, view_geometry: the view buffers' levels;
+// - views: per view buffer, 8 vec4: camera origin, forward, right, up (w: tan(fov_y / 2) in
+//   origin.w); (width, height, levels, first radiance texel) bits; (first geometry vec4, has
+//   front, slab thickness, relative index); front point; front normal;
+// - params: per material, 5 vec4 (`pack_material_params`): the textured parameters (rgb, three
+//   scalars) and the normal map, read where the record is flagged;
+// - tangents: per triangle of a normal-mapped material (its record's r6.w): the corners'
+//   tangents (xyz, w: the bitangent's sign, 0: derive T from ∂p/∂u) and (∂p/∂v, 0);
+// - albedo_tris, mats, texels, tex_info (u32): the light-map pass's records
+//   (lightmap_shade.rs `shading_records`), read for the diffuse albedo kd at each pixel
+//   (`Lightmapped::albedo`): 8 vec4 per triangle, 4 per material (material_albedo.wgsl), the
+//   textures (texture_sample.wgsl; the material parameters' too).
+fn at_tris() -> u32 { return u.parts[0].x; }
+fn at_bsdfs() -> u32 { return u.parts[0].y; }
+fn at_tables() -> u32 { return u.parts[0].z; }
+fn at_cube_texels() -> u32 { return u.parts[0].w; }
+fn at_cube_levels() -> u32 { return u.parts[1].x; }
+fn at_cubes() -> u32 { return u.parts[1].y; }
+fn at_planes() -> u32 { return u.parts[1].z; }
+fn at_ring() -> u32 { return u.parts[1].w; }
+fn at_view_radiance() -> u32 { return u.parts[2].x; }
+fn at_view_geometry() -> u32 { return u.parts[2].y; }
+fn at_views() -> u32 { return u.parts[2].z; }
+fn at_params() -> u32 { return u.parts[2].w; }
+fn at_tangents() -> u32 { return u.parts[3].x; }
+fn at_albedo_tris() -> u32 { return u.parts[3].y; }
+fn at_mats() -> u32 { return u.parts[3].z; }
+fn at_texels() -> u32 { return u.parts[3].w; }
+fn at_tex_info() -> u32 { return u.parts[4].x; }
+
+// Material record `m` (GpuBsdf: kind, flags, two pads, 8 vec4).
+fn load_bsdf(m: u32) -> GpuBsdf {
+    let o = at_bsdfs() + 9u * m;
+    let h = arena_u[o];
+    var b: GpuBsdf;
+    b.kind = h.x;
+    b.flags = h.y;
+    b.pad0 = h.z;
+    b.pad1 = h.w;
+    for (var i = 0u; i < 8u; i++) {
+        b.p[i] = arena[o + 1u + i];
+    }
+    return b;
+}
 
 // texture_sample.wgsl's texels and per-texture records.
 fn texture_texel(i: u32) -> vec4<f32> {
-    return texels[i];
+    return arena[at_texels() + i];
 }
 
 fn texture_info(t: u32) -> vec4<u32> {
-    return tex_info[t];
+    return arena_u[at_tex_info() + t];
 }
 
 // material_albedo.wgsl's material rows.
 fn material_row(i: u32) -> vec4<f32> {
-    return mats[i];
+    return arena[at_mats() + i];
 }
-// Per material, 5 vec4 (frame_shade.rs `pack_material_params`): the textured parameters (rgb,
-// three scalars) and the normal map, read where the record is flagged.
-@group(0) @binding(22) var<storage, read> params: array<vec4<f32>>;
-// Per triangle of a normal-mapped material (its record's r6.w): the corners' tangents (xyz,
-// w: the bitangent's sign, 0: derive T from ∂p/∂u) and (∂p/∂v, 0).
-@group(0) @binding(23) var<storage, read> tangents: array<vec4<f32>>;
-// Per SCREEN_TILE² tile of the output (row-major): 1 where covered (read when u.tiles.z = 1).
-@group(0) @binding(24) var<storage, read> tile_mask: array<u32>;
-// Per G-buffer pixel: the view-dependent radiance summed over the dispatches so far.
-@group(0) @binding(25) var<storage, read_write> partial: array<vec4<f32>>;
 var<workgroup> wg_counts: array<atomic<u32>, 2>;
 
 // lustre_shade::mirror::SCREEN_TILE.
@@ -114,7 +144,7 @@ const BIG: f32 = 3.4e38;
 
 // The rough plastic's transmittance tables (rough_plastic.wgsl's hook).
 fn bsdf_table(i: u32) -> f32 {
-    return tables[i];
+    return arena[at_tables() + i / 4u][i % 4u];
 }
 
 fn finite3(c: vec3<f32>) -> bool {
@@ -124,27 +154,27 @@ fn finite3(c: vec3<f32>) -> bool {
 // ---- cube maps (module cube_storage): its texels, levels and rings are this pass's.
 
 fn cube_texel(i: u32) -> vec3<f32> {
-    return cube_texels[i].xyz;
+    return arena[at_cube_texels() + i].xyz;
 }
 
 fn cube_ring(i: u32) -> vec4<i32> {
-    return ring[i];
+    return bitcast<vec4<i32>>(arena_u[at_ring() + i]);
 }
 
 fn cube_level(i: u32) -> vec4<u32> {
-    return cube_levels[i];
+    return arena_u[at_cube_levels() + i];
 }
 
 // CubePyramid::sample on cube `cube` of the pass.
 fn cube_sample(cube: u32, d: vec3<f32>, lod_in: f32) -> vec3<f32> {
-    let first = bitcast<u32>(cubes[2u * cube].w);
-    let count = bitcast<u32>(cubes[2u * cube + 1u].x);
+    let first = bitcast<u32>(arena[at_cubes() + 2u * cube].w);
+    let count = bitcast<u32>(arena[at_cubes() + 2u * cube + 1u].x);
     return cube_trilinear(first, count, d, lod_in);
 }
 
 // integrator::corrected_direction over the cube's planes (planes.wgsl).
 fn cube_direction(cube: u32, rel: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
-    let info = cubes[2u * cube + 1u];
+    let info = arena[at_cubes() + 2u * cube + 1u];
     let first = bitcast<u32>(info.y);
     let count = bitcast<u32>(info.z);
     if (count == 0u) {
@@ -152,7 +182,7 @@ fn cube_direction(cube: u32, rel: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     }
     var best = -1.0;
     for (var k = 0u; k < count; k++) {
-        let pl = BoundingPlane(planes[2u * (first + k)].xyz, planes[2u * (first + k) + 1u].xyz);
+        let pl = BoundingPlane(arena[at_planes() + 2u * (first + k)].xyz, arena[at_planes() + 2u * (first + k) + 1u].xyz);
         best = nearer_plane(best, pl, rel, wi);
     }
     return corrected_lookup(best, rel, wi);
@@ -162,25 +192,25 @@ fn cube_direction(cube: u32, rel: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
 // (probe::outside_plane: by more than 10⁻³ of the plane's distance).
 // probe::plane_depth: the least signed distance of `rel` to cube `cube`'s bounding planes.
 fn cube_depth(cube: u32, rel: vec3<f32>) -> f32 {
-    let info = cubes[2u * cube + 1u];
+    let info = arena[at_cubes() + 2u * cube + 1u];
     let first = bitcast<u32>(info.y);
     let count = bitcast<u32>(info.z);
     var d = BIG;
     for (var k = 0u; k < count; k++) {
-        let point = planes[2u * (first + k)].xyz;
-        let normal = planes[2u * (first + k) + 1u].xyz;
+        let point = arena[at_planes() + 2u * (first + k)].xyz;
+        let normal = arena[at_planes() + 2u * (first + k) + 1u].xyz;
         d = min(d, dot(rel - point, normal));
     }
     return d;
 }
 
 fn cube_outside(cube: u32, rel: vec3<f32>) -> bool {
-    let info = cubes[2u * cube + 1u];
+    let info = arena[at_cubes() + 2u * cube + 1u];
     let first = bitcast<u32>(info.y);
     let count = bitcast<u32>(info.z);
     for (var k = 0u; k < count; k++) {
-        let point = planes[2u * (first + k)].xyz;
-        let normal = planes[2u * (first + k) + 1u].xyz;
+        let point = arena[at_planes() + 2u * (first + k)].xyz;
+        let normal = arena[at_planes() + 2u * (first + k) + 1u].xyz;
         if (dot(rel - point, normal) < -1e-3 * length(point)) {
             return true;
         }
@@ -222,12 +252,12 @@ struct View {
 
 fn load_view(v: u32) -> View {
     let b = 8u * v;
-    let s = views[b + 4u];
-    let g = views[b + 5u];
-    return View(views[b].xyz, views[b + 1u].xyz, views[b + 2u].xyz, views[b + 3u].xyz,
-                views[b].w, bitcast<u32>(s.x), bitcast<u32>(s.y), bitcast<u32>(s.z),
+    let s = arena[at_views() + b + 4u];
+    let g = arena[at_views() + b + 5u];
+    return View(arena[at_views() + b].xyz, arena[at_views() + b + 1u].xyz, arena[at_views() + b + 2u].xyz, arena[at_views() + b + 3u].xyz,
+                arena[at_views() + b].w, bitcast<u32>(s.x), bitcast<u32>(s.y), bitcast<u32>(s.z),
                 bitcast<u32>(s.w), bitcast<u32>(g.x), bitcast<u32>(g.y) == 1u,
-                views[b + 7u].xyz, g.zw);
+                arena[at_views() + b + 7u].xyz, g.zw);
 }
 
 // mirror::project_dir: image position of direction v (z = 0: none).
@@ -284,8 +314,8 @@ struct Located {
 
 // One tangent-plane step of ViewBuffer::locate from texel t.
 fn locate_step(view: View, t: u32, p: vec3<f32>, wi: vec3<f32>) -> Located {
-    let g = view_geometry[view.geometry + 2u * t];
-    let n = view_geometry[view.geometry + 2u * t + 1u].xyz;
+    let g = arena[at_view_geometry() + view.geometry + 2u * t];
+    let n = arena[at_view_geometry() + view.geometry + 2u * t + 1u].xyz;
     if (g.w > 0.5) {
         let hit = ray_plane(p, wi, g.xyz, n);
         if (hit.w > 0.0) {
@@ -377,10 +407,10 @@ fn view_bilinear(view: View, level: u32, x: f32, y: f32) -> vec3<f32> {
     let y1 = min(y0 + 1u, lh - 1u);
     let tx = fx - f32(x0);
     let ty = fy - f32(y0);
-    let a = view_radiance[off + y0 * lw + x0].xyz;
-    let b = view_radiance[off + y0 * lw + x1].xyz;
-    let c = view_radiance[off + y1 * lw + x0].xyz;
-    let e = view_radiance[off + y1 * lw + x1].xyz;
+    let a = arena[at_view_radiance() + off + y0 * lw + x0].xyz;
+    let b = arena[at_view_radiance() + off + y0 * lw + x1].xyz;
+    let c = arena[at_view_radiance() + off + y1 * lw + x0].xyz;
+    let e = arena[at_view_radiance() + off + y1 * lw + x1].xyz;
     return (a * (1.0 - tx) + b * tx) * (1.0 - ty) + (c * (1.0 - tx) + e * tx) * ty;
 }
 
@@ -449,33 +479,47 @@ fn read_view(v: u32, pt: Point, wi: vec3<f32>, pdf: f32, total: f32, ck: bool) -
     return vec4<f32>(view_sample(view, loc.xy.x, loc.xy.y, lod), 1.0);
 }
 
-// frame::view_dependent's fetch.
+// frame::view_dependent's fetch. Each view and cube read has one call site (in a loop): a
+// compiler that inlines every call (SwiftShader, a browser's software WebGPU) compiled the
+// pass's sampling loop for minutes with one site per source.
 fn fetch(pt: Point, wi: vec3<f32>, pdf: f32, total: f32, ck: bool) -> vec3<f32> {
-    if (pt.mirror != NONE) {
-        let c = read_view(pt.mirror, pt, wi, pdf, total, ck);
-        if (c.w > 0.0) {
-            return c.xyz;
+    // The mirror buffer, then the see-through buffer (wi leaving through the other side): the
+    // first that holds the point.
+    for (var k = 0u; k < 2u; k++) {
+        var v = pt.mirror;
+        if (k == 1u) {
+            v = NONE;
+            if (pt.see_through != NONE && dot(wi, pt.n) * dot(pt.wo, pt.n) < 0.0) {
+                v = pt.see_through;
+            }
+        }
+        if (v != NONE) {
+            let c = read_view(v, pt, wi, pdf, total, ck);
+            if (c.w > 0.0) {
+                return c.xyz;
+            }
         }
     }
-    if (pt.see_through != NONE && dot(wi, pt.n) * dot(pt.wo, pt.n) < 0.0) {
-        let c = read_view(pt.see_through, pt, wi, pdf, total, ck);
-        if (c.w > 0.0) {
-            return c.xyz;
+    // The probe, or two blended by depth.
+    var c = vec3<f32>(0.0);
+    for (var j = 0u; j < 2u; j++) {
+        let cube = select(pt.cube, pt.cube2, j == 1u);
+        if (cube == NONE) {
+            break;
+        }
+        let r = read_cube(cube, select(pt.rel, pt.rel2, j == 1u), wi, pdf, total, ck);
+        if (j == 0u) {
+            c = r;
+        } else {
+            c = c * (1.0 - pt.w2) + r * pt.w2;
         }
     }
-    if (pt.cube == NONE) {
-        return vec3<f32>(0.0);
-    }
-    let c = read_cube(pt.cube, pt.rel, wi, pdf, total, ck);
-    if (pt.cube2 == NONE) {
-        return c;
-    }
-    return c * (1.0 - pt.w2) + read_cube(pt.cube2, pt.rel2, wi, pdf, total, ck) * pt.w2;
+    return c;
 }
 
 // One cube's filtered radiance along wi (rel: the point relative to its centre).
 fn read_cube(cube: u32, rel: vec3<f32>, wi: vec3<f32>, pdf: f32, total: f32, ck: bool) -> vec3<f32> {
-    let face = f32(cube_levels[bitcast<u32>(cubes[2u * cube].w)].y);
+    let face = f32(arena_u[at_cube_levels() + bitcast<u32>(arena[at_cubes() + 2u * cube].w)].y);
     var lod = 0.0;
     if (pdf >= 0.0) {
         if (ck) {
@@ -503,44 +547,36 @@ fn integrate(b: GpuBsdf, kd: vec3<f32>, t: vec3<f32>, bt: vec3<f32>, pt: Point,
              wo_l: vec3<f32>, n: u32, seed: vec2<u32>, first: u32, end: u32) -> vec4<f32> {
     var sum = vec3<f32>(0.0);
     var lookups = 0u;
-    if ((b.flags & FLAG_DELTA_ONLY) != 0u && n >= 2u) {
-        if (first > 0u) {
-            return vec4<f32>(0.0);
-        }
-        // Dirac lobes only: the branches at both ends of the lobe choice, each once.
-        var seen = vec3<f32>(0.0);
-        var have = false;
-        for (var e = 0u; e < 2u; e++) {
-            let u1 = select(1e-9, ONE_MINUS_EPS, e == 1u);
-            let s = bsdf_sample(b, wo_l, vec2<f32>(u1, 0.5));
-            if (s.pdf == 0.0 || !finite3(s.wi)) {
-                continue;
-            }
-            let dd = s.wi - seen;
-            if (have && dot(dd, dd) < 1e-18) {
-                continue;
-            }
-            seen = s.wi;
-            have = true;
-            lookups += 1u;
-            let wi = to_world(s.wi, t, bt, pt.n);
-            sum += fetch(pt, wi, -1.0, f32(n), false) * (s.value * abs(s.wi.z));
-        }
-        return vec4<f32>(sum, f32(lookups));
+    // Dirac lobes only: the branches at both ends of the lobe choice, each once (iterations 0
+    // and 1 of the loop below, in the first dispatch only). One loop samples and fetches for
+    // both cases: one call site each (see fetch).
+    let dirac = (b.flags & FLAG_DELTA_ONLY) != 0u && n >= 2u;
+    if (dirac && first > 0u) {
+        return vec4<f32>(0.0);
     }
+    var seen = vec3<f32>(0.0);
+    var have = false;
     // CK's points 0..first took 2·first SplitMix64 draws: the state steps over them at once.
     var state = add64(seed, mul64(vec2<u32>(2u * first, 0u), vec2<u32>(0x7F4A7C15u, 0x9E3779B9u)));
     let f = u.method.y;
-    let ck = u.method.x == METHOD_CK;
+    let ck = u.method.x == METHOD_CK && !dirac;
     var total = f32(n);
     var off = vec2<u32>(0u);
-    if (u.method.x == METHOD_PROGRESSIVE) {
+    if (u.method.x == METHOD_PROGRESSIVE && !dirac) {
         total = f32(n * (f + 1u));
         off = r2_bits(f);
     }
-    for (var i = first; i < min(end, n); i++) {
+    var i = first;
+    var stop = min(end, n);
+    if (dirac) {
+        i = 0u;
+        stop = 2u;
+    }
+    for (; i < stop; i++) {
         var uv: vec2<f32>;
-        if (ck) {
+        if (dirac) {
+            uv = vec2<f32>(select(1e-9, ONE_MINUS_EPS, i == 1u), 0.5);
+        } else if (ck) {
             let a = ck_draw(&state);
             uv = vec2<f32>(a, ck_draw(&state));
         } else {
@@ -552,29 +588,46 @@ fn integrate(b: GpuBsdf, kd: vec3<f32>, t: vec3<f32>, bt: vec3<f32>, pt: Point,
             }
         }
         let s = bsdf_sample(b, wo_l, uv);
-        if (!(s.pdf > 0.0) || !finite3(s.wi)) {
-            continue;
-        }
         var weight: vec3<f32>;
-        if (s.delta == 1u) {
-            weight = s.value * (abs(s.wi.z) / s.pdf);
-        } else {
-            var fv = s.value;
-            if (s.wi.z * wo_l.z > 0.0) {
-                fv = s.value - kd * (1.0 / PI);
-            }
-            weight = fv * (abs(s.wi.z) / s.pdf);
-        }
-        if (!finite3(weight) || all(weight == vec3<f32>(0.0))) {
-            continue;
-        }
         var pdf = s.pdf;
-        if (s.delta == 1u) {
+        if (dirac) {
+            if (s.pdf == 0.0 || !finite3(s.wi)) {
+                continue;
+            }
+            let dd = s.wi - seen;
+            if (have && dot(dd, dd) < 1e-18) {
+                continue;
+            }
+            seen = s.wi;
+            have = true;
+            weight = s.value * abs(s.wi.z);
             pdf = -1.0;
+        } else {
+            if (!(s.pdf > 0.0) || !finite3(s.wi)) {
+                continue;
+            }
+            if (s.delta == 1u) {
+                weight = s.value * (abs(s.wi.z) / s.pdf);
+            } else {
+                var fv = s.value;
+                if (s.wi.z * wo_l.z > 0.0) {
+                    fv = s.value - kd * (1.0 / PI);
+                }
+                weight = fv * (abs(s.wi.z) / s.pdf);
+            }
+            if (!finite3(weight) || all(weight == vec3<f32>(0.0))) {
+                continue;
+            }
+            if (s.delta == 1u) {
+                pdf = -1.0;
+            }
         }
         lookups += 1u;
         let wi = to_world(s.wi, t, bt, pt.n);
         sum += fetch(pt, wi, pdf, total, ck) * weight;
+    }
+    if (dirac) {
+        return vec4<f32>(sum, f32(lookups));
     }
     return vec4<f32>(sum / f32(n), f32(lookups));
 }
@@ -592,17 +645,17 @@ fn basis_tangent(n: vec3<f32>) -> vec3<f32> {
 // whole (the progressive average is clamped, not its frames).
 fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> vec3<f32> {
     let base = prim * TRI_STRIDE;
-    let r0 = tris[base];
-    let r1 = tris[base + 1u];
-    let r2 = tris[base + 2u];
-    let r3 = tris[base + 3u];
-    let r4 = tris[base + 4u];
-    let r5 = tris[base + 5u];
+    let r0 = arena[at_tris() + base];
+    let r1 = arena[at_tris() + base + 1u];
+    let r2 = arena[at_tris() + base + 2u];
+    let r3 = arena[at_tris() + base + 3u];
+    let r4 = arena[at_tris() + base + 4u];
+    let r5 = arena[at_tris() + base + 5u];
     let material = bitcast<u32>(r0.w);
     if (material == NONE) {
         return vec3<f32>(0.0);
     }
-    var b = bsdfs[material];
+    var b = load_bsdf(material);
     if (b.kind == KIND_NONE) {
         return vec3<f32>(0.0);
     }
@@ -620,16 +673,16 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
     // Lightmapped::albedo at the pixel: zero off the light map or on the back of a one-sided
     // material, else diffuse_albedo at (uv0, uv1 / page size).
     let ab = prim * 8u;
-    let q3 = albedo_tris[ab + 3u];
-    let q4 = albedo_tris[ab + 4u];
-    let q5 = albedo_tris[ab + 5u];
+    let q3 = arena[at_albedo_tris() + ab + 3u];
+    let q4 = arena[at_albedo_tris() + ab + 4u];
+    let q5 = arena[at_albedo_tris() + ab + 5u];
     let uv0 = q3.xy * bary.x + q3.zw * bary.y + q4.xy * bary.z;
-    let n_lm = albedo_tris[ab].xyz * bary.x + albedo_tris[ab + 1u].xyz * bary.y
-        + albedo_tris[ab + 2u].xyz * bary.z;
+    let n_lm = arena[at_albedo_tris() + ab].xyz * bary.x + arena[at_albedo_tris() + ab + 1u].xyz * bary.y
+        + arena[at_albedo_tris() + ab + 2u].xyz * bary.z;
     let front = dot(n_lm, -d) > 0.0;
     var kd = vec3<f32>(0.0);
-    if (bitcast<u32>(albedo_tris[ab + 6u].w) != NO_PAGE
-        && (front || mats[4u * material + 1u].z > 0.5)) {
+    if (bitcast<u32>(arena[at_albedo_tris() + ab + 6u].w) != NO_PAGE
+        && (front || arena[at_mats() + 4u * material + 1u].z > 0.5)) {
         let uv1 = (q4.zw * bary.x + q5.xy * bary.y + q5.zw * bary.z)
             / vec2<f32>(f32(u.method.w), f32(u.seed.w));
         kd = albedo(material, uv0, uv1);
@@ -642,33 +695,33 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
     // uv0: Material::with_bsdf_at with [uv0; 2]).
     let q = 5u * material;
     if ((b.flags & FLAG_TEXTURED) != 0u) {
-        let c = params[q];
+        let c = arena[at_params() + q];
         var rgb = c.xyz;
         let ct = bitcast<i32>(c.w);
         if (ct >= 0) {
             rgb = c.xyz * texture_sample(u32(ct), uv0).xyz;
         }
-        let s = vec3<f32>(scalar_at(params[q + 1u], uv0, uv0), scalar_at(params[q + 2u], uv0, uv0),
-                          scalar_at(params[q + 3u], uv0, uv0));
+        let s = vec3<f32>(scalar_at(arena[at_params() + q + 1u], uv0, uv0), scalar_at(arena[at_params() + q + 2u], uv0, uv0),
+                          scalar_at(arena[at_params() + q + 3u], uv0, uv0));
         b = textured_bsdf(b, rgb, s);
     }
     // ShadingFrame::new(ns, ∂p/∂u), or with the normal map (PathTracer::shading_point): the
     // mapped normal, its tangent from the mesh's tangents, else ∂p/∂u with glTF's handedness.
-    let r6 = tris[base + 6u];
+    let r6 = arena[at_tris() + base + 6u];
     let dpdu = r6.xyz;
     var n = ns;
     var t_hint = dpdu;
     if ((b.flags & FLAG_NORMAL_MAPPED) != 0u) {
-        let nm = params[q + 4u];
+        let nm = arena[at_params() + q + 4u];
         let n_ts = tangent_space_normal(texture_sample(bitcast<u32>(nm.y), uv0), nm.x);
         let tb = bitcast<u32>(r6.w);
-        let t0 = tangents[tb];
+        let t0 = arena[at_tangents() + tb];
         var tg = dpdu;
         var hand = 1.0;
         if (t0.w != 0.0) {
-            tg = t0.xyz * bary.x + tangents[tb + 1u].xyz * bary.y + tangents[tb + 2u].xyz * bary.z;
+            tg = t0.xyz * bary.x + arena[at_tangents() + tb + 1u].xyz * bary.y + arena[at_tangents() + tb + 2u].xyz * bary.z;
             hand = t0.w;
-        } else if (dot(cross(ns, dpdu), tangents[tb + 3u].xyz) > 0.0) {
+        } else if (dot(cross(ns, dpdu), arena[at_tangents() + tb + 3u].xyz) > 0.0) {
             hand = -1.0;
         }
         let m = mapped_normal(ns, tg, hand, n_ts);
@@ -704,11 +757,11 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
         var i0 = NONE;
         var i1 = NONE;
         for (var c = 0u; c < u.method.z; c++) {
-            let dc = cubes[2u * c].xyz - p;
+            let dc = arena[at_cubes() + 2u * c].xyz - p;
             let d2 = dot(dc, dc);
             var rank = 2u;
             if (!cube_outside(c, -dc)) {
-                rank = select(1u, 0u, bitcast<u32>(cubes[2u * c + 1u].w) != 0u);
+                rank = select(1u, 0u, bitcast<u32>(arena[at_cubes() + 2u * c + 1u].w) != 0u);
             }
             if (rank < best_rank || (rank == best_rank && d2 < best)) {
                 best = d2;
@@ -741,11 +794,11 @@ fn shade_point(prim: u32, bary: vec3<f32>, d: vec3<f32>, gx: u32, gy: u32) -> ve
     }
     var rel = vec3<f32>(0.0);
     if (cube != NONE && cube < u.method.z) {
-        rel = p - cubes[2u * cube].xyz;
+        rel = p - arena[at_cubes() + 2u * cube].xyz;
     }
     var rel2 = vec3<f32>(0.0);
     if (cube2 != NONE) {
-        rel2 = p - cubes[2u * cube2].xyz;
+        rel2 = p - arena[at_cubes() + 2u * cube2].xyz;
     }
     let see_through = select(bitcast<u32>(r5.w), NONE, u.flags.x != 0u);
     let mirror = select(bitcast<u32>(r4.w), NONE, u.flags.y != 0u);

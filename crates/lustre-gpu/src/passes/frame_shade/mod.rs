@@ -29,12 +29,12 @@
 //! on the GPU across calls in the target's accumulation buffer; frame 0 resets it).
 
 use crate::bindings::{
-    buffer_entry, buffer_init, compute_pipelines, read_buffer, storage_buffer, storage_entry,
-    texture_entry, uniform_entry,
+    buffer_entry, buffer_init, compute_pipelines, read_buffer, read_buffer_later, storage_buffer,
+    storage_entry, texture_entry, uniform_entry,
 };
 use crate::context::GpuContext;
 use crate::cube_storage::ring_entries;
-use crate::error::{invalid, scope_result, wgpu_error, Result};
+use crate::error::{invalid, push_scope, scope_result, wgpu_error, Result};
 use crate::material::{
     self, pack_material, pack_material_params, GpuBsdf, FLAG_NORMAL_MAPPED, MATERIAL_PARAMS,
 };
@@ -61,27 +61,19 @@ use std::sync::OnceLock;
 /// per-pixel parameter records ([`pack_material_params`]) and tangents, the cube maps, the view
 /// buffers, and what the per-pixel diffuse albedo kd is read from (the light-map pass's
 /// triangle and material records and textures, [`crate::passes::lightmap_shade`]).
+///
+/// All of it is one storage buffer, the arena, in [`PARTS`] parts (frame_shade.wgsl's `at_*`):
+/// WebGPU guarantees only 8 storage buffers per shader stage (a browser's SwiftShader offers
+/// 10), and the pass had 23.
 #[derive(Debug)]
 pub struct FrameShadeScene {
-    tris: wgpu::Buffer,
-    bsdfs: wgpu::Buffer,
-    tables: wgpu::Buffer,
-    cube_texels: wgpu::Buffer,
-    cube_levels: wgpu::Buffer,
-    cubes: wgpu::Buffer,
-    planes: wgpu::Buffer,
-    ring: wgpu::Buffer,
-    view_radiance: wgpu::Buffer,
-    view_geometry: wgpu::Buffer,
-    views: wgpu::Buffer,
-    params: wgpu::Buffer,
-    tangents: wgpu::Buffer,
-    albedo_tris: wgpu::Buffer,
-    albedo_mats: wgpu::Buffer,
-    texels: wgpu::Buffer,
-    texture_info: wgpu::Buffer,
-    /// Per view buffer: its first texel in `view_radiance`.
+    arena: wgpu::Buffer,
+    /// The first vec4 of each part, in frame_shade.wgsl's order.
+    parts: [u32; PARTS],
+    /// Per view buffer: its first texel in the arena.
     view_offsets: Vec<u32>,
+    /// The end of the view buffers' radiance in the arena (vec4).
+    view_end: u32,
     page: [u32; 2],
     probes: u32,
     environment: u32,
@@ -91,36 +83,88 @@ pub struct FrameShadeScene {
     pub materials: Vec<GpuBsdf>,
 }
 
-const NONE: u32 = u32::MAX;
+/// The arena's parts: triangles, material records, material tables, cube texels, cube levels,
+/// cubes, bounding planes, cube rings, view radiance, view geometry, view records, material
+/// parameters, tangents, and the light-map pass's triangles, materials, texels and texture
+/// records.
+pub const PARTS: usize = 17;
 
-/// Concatenates GPU buffers into one (on the GPU), returning it and each part's offset in
-/// elements of `elem` bytes.
-fn concat(
-    ctx: &GpuContext,
-    label: &str,
-    parts: &[&wgpu::Buffer],
-    elem: u64,
-) -> (wgpu::Buffer, Vec<u32>) {
-    let total: u64 = parts.iter().map(|b| b.size()).sum();
-    let out = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: total.max(elem),
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut enc = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
-    let mut offsets = Vec::with_capacity(parts.len());
-    let mut at = 0;
-    for b in parts {
-        offsets.push((at / elem) as u32);
-        enc.copy_buffer_to_buffer(b, 0, &out, at, b.size());
-        at += b.size();
-    }
-    ctx.queue.submit([enc.finish()]);
-    (out, offsets)
+/// The arena being laid out: host data written at its offset, GPU buffers copied there.
+#[derive(Default)]
+struct Arena<'a> {
+    /// Bytes so far (a multiple of 16).
+    len: u64,
+    parts: Vec<u32>,
+    host: Vec<(u64, Vec<u8>)>,
+    gpu: Vec<(u64, &'a wgpu::Buffer)>,
 }
+
+impl<'a> Arena<'a> {
+    /// Starts the next part with `data` (host data, padded to whole vec4).
+    fn host<T: bytemuck::Pod>(&mut self, data: &[T]) {
+        self.parts.push((self.len / 16) as u32);
+        let bytes: Vec<u8> = bytemuck::cast_slice(data).to_vec();
+        let n = bytes.len() as u64;
+        self.host.push((self.len, bytes));
+        self.len += n.div_ceil(16) * 16;
+    }
+
+    /// Starts the next part with GPU buffers `bufs` one after the other (each a whole number of
+    /// vec4); returns each one's first vec4 in the arena.
+    fn gpu(&mut self, bufs: &[&'a wgpu::Buffer]) -> Vec<u32> {
+        self.parts.push((self.len / 16) as u32);
+        bufs.iter()
+            .map(|b| {
+                let at = (self.len / 16) as u32;
+                self.gpu.push((self.len, b));
+                self.len += b.size().div_ceil(16) * 16;
+                at
+            })
+            .collect()
+    }
+
+    /// The buffer: host parts written, GPU parts copied (submitted). Errors: beyond the
+    /// device's largest storage buffer binding (named with both sizes).
+    fn build(self, ctx: &GpuContext) -> Result<(wgpu::Buffer, Vec<u32>)> {
+        let limits = ctx.device.limits();
+        let limit = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        let size = self.len.max(16);
+        if size > limit {
+            return Err(invalid(
+                "scene",
+                format!(
+                    "the view-dependent pass's data (geometry, materials, textures, probes and                      view buffers) take {}, more than this GPU's largest storage buffer binding                      ({}, max_storage_buffer_binding_size)",
+                    lustre_brdf::budget::bytes(size),
+                    lustre_brdf::budget::bytes(limit)
+                ),
+            ));
+        }
+        let arena = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame arena"),
+            size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        for (at, bytes) in &self.host {
+            // write_buffer needs a multiple of 4 bytes: every part is.
+            ctx.queue.write_buffer(&arena, *at, bytes);
+        }
+        let mut enc = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("frame arena"),
+            });
+        for (at, b) in &self.gpu {
+            enc.copy_buffer_to_buffer(b, 0, &arena, *at, b.size());
+        }
+        ctx.queue.submit([enc.finish()]);
+        Ok((arena, self.parts))
+    }
+}
+
+const NONE: u32 = u32::MAX;
 
 impl FrameShadeScene {
     /// Uploads the CPU frame's incident light (`light`'s probes, else its environment) and
@@ -210,10 +254,6 @@ impl FrameShadeScene {
                     .copy_from_slice(&pack_material_params(scene, m, &mut slots)?);
             }
         }
-        // kd per pixel (`Lightmapped::albedo`): the light-map pass's records, their textures
-        // after the parameters'.
-        let limit = ctx.device.limits().max_storage_buffer_binding_size as usize;
-        let albedo = shading_records(scene, lit.lit, g, lit.lit.bases(), slots, limit)?;
         let atlas = lit.lit.atlas();
         // Per triangle: 7 vec4 (frame_shade.wgsl `shade_point`); per triangle of a
         // normal-mapped material, 4 vec4 in `tangents`.
@@ -293,7 +333,8 @@ impl FrameShadeScene {
             .iter()
             .flat_map(|(p, ..)| p.levels.iter())
             .collect();
-        let (cube_texels, offsets) = concat(ctx, "frame cube texels", &level_buffers, 16);
+        // Each level's first texel, relative to the cube texels' part.
+        let offsets = relative_offsets(&level_buffers);
         let mut cube_levels: Vec<[u32; 4]> = vec![];
         let mut cubes: Vec<[f32; 4]> = vec![];
         let mut planes: Vec<[f32; 4]> = vec![];
@@ -317,11 +358,10 @@ impl FrameShadeScene {
                 planes.push(v4(b.normal, 0.0));
             }
         }
-        // View buffers.
+        // View buffers: each one's radiance and geometry relative to their parts.
         let radiance: Vec<&wgpu::Buffer> = views.iter().map(|v| &v.radiance).collect();
         let geometry: Vec<&wgpu::Buffer> = views.iter().map(|v| &v.geometry).collect();
-        let (view_radiance, r_off) = concat(ctx, "frame view radiance", &radiance, 16);
-        let (view_geometry, g_off) = concat(ctx, "frame view geometry", &geometry, 16);
+        let (r_off, g_off) = (relative_offsets(&radiance), relative_offsets(&geometry));
         let mut view_records: Vec<[f32; 4]> = vec![];
         for (i, v) in views.iter().enumerate() {
             let c = &v.camera;
@@ -353,25 +393,46 @@ impl FrameShadeScene {
                 v4(front.map_or(DVec3::ZERO, |f| f.normal), 0.0),
             ]);
         }
+        // The arena, in frame_shade.wgsl's order.
+        let mut arena = Arena::default();
+        arena.host(&tris);
+        arena.host(&materials);
+        arena.host(&tables);
+        arena.gpu(&level_buffers);
+        arena.host(&cube_levels);
+        arena.host(&cubes);
+        arena.host(&planes);
+        arena.host(&ring);
+        let radiance_at = arena.gpu(&radiance);
+        let view_end = (arena.len / 16) as u32;
+        arena.gpu(&geometry);
+        arena.host(&view_records);
+        arena.host(&params);
+        arena.host(&tangents);
+        // kd per pixel (`Lightmapped::albedo`): the light-map pass's records, their textures
+        // after the parameters', within what the rest of the arena leaves.
+        let limits = ctx.device.limits();
+        let limit = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        let left = usize::try_from(limit.saturating_sub(arena.len)).unwrap_or(usize::MAX);
+        let albedo = shading_records(scene, lit.lit, g, lit.lit.bases(), slots, left)?;
+        arena.host(&albedo.tris);
+        arena.host(&albedo.mats);
+        arena.host(&albedo.texels);
+        arena.host(&albedo.info);
+        let (arena, parts) = arena.build(ctx)?;
+        let parts: [u32; PARTS] = parts.try_into().map_err(|p: Vec<u32>| {
+            invalid(
+                "frame arena",
+                format!("{} parts, the pass reads {PARTS}", p.len()),
+            )
+        })?;
         Ok(FrameShadeScene {
-            tris: storage_buffer(ctx, "frame triangles", &tris),
-            bsdfs: storage_buffer(ctx, "frame materials", &materials),
-            tables: storage_buffer(ctx, "frame material tables", &tables),
-            cube_texels,
-            cube_levels: storage_buffer(ctx, "frame cube levels", &cube_levels),
-            cubes: storage_buffer(ctx, "frame cubes", &cubes),
-            planes: storage_buffer(ctx, "frame planes", &planes),
-            ring: storage_buffer(ctx, "frame cube rings", &ring),
-            view_radiance,
-            view_geometry,
-            views: storage_buffer(ctx, "frame views", &view_records),
-            params: storage_buffer(ctx, "frame material parameters", &params),
-            tangents: storage_buffer(ctx, "frame tangents", &tangents),
-            albedo_tris: storage_buffer(ctx, "frame albedo triangles", &albedo.tris),
-            albedo_mats: storage_buffer(ctx, "frame albedo materials", &albedo.mats),
-            texels: storage_buffer(ctx, "frame texels", &albedo.texels),
-            texture_info: storage_buffer(ctx, "frame textures", &albedo.info),
-            view_offsets: r_off,
+            arena,
+            parts,
+            view_offsets: radiance_at,
+            view_end,
             page: [atlas.width, atlas.height],
             probes: probes.len() as u32,
             environment: env_index,
@@ -381,7 +442,27 @@ impl FrameShadeScene {
     }
 }
 
+/// Each buffer's first vec4 when `bufs` are laid one after the other.
+fn relative_offsets(bufs: &[&wgpu::Buffer]) -> Vec<u32> {
+    let mut at = 0;
+    bufs.iter()
+        .map(|b| {
+            let o = (at / 16) as u32;
+            at += b.size().div_ceil(16) * 16;
+            o
+        })
+        .collect()
+}
+
 impl FrameShadeScene {
+    /// The sampled material kinds its records need (bit mask, `material::kinds::sampled_kinds`).
+    pub fn kinds(&self) -> u32 {
+        self.materials
+            .iter()
+            .filter(|b| b.kind != material::KIND_NONE)
+            .fold(0, |m, b| m | material::kinds::sampled_kinds(b.kind))
+    }
+
     /// Copies view buffer `index`'s radiance (every level) into the pass's concatenation,
     /// after `view` was shaded again (a see-through layer). Submitted, not waited for.
     /// Errors: no such view, a buffer of another size.
@@ -393,10 +474,12 @@ impl FrameShadeScene {
             )
         })?;
         let start = u64::from(at) * 16;
-        let end = self
-            .view_offsets
-            .get(index + 1)
-            .map_or(self.view_radiance.size(), |&o| u64::from(o) * 16);
+        let end = u64::from(
+            self.view_offsets
+                .get(index + 1)
+                .copied()
+                .unwrap_or(self.view_end),
+        ) * 16;
         if view.radiance.size() != end - start {
             return Err(invalid(
                 "view buffer",
@@ -412,7 +495,7 @@ impl FrameShadeScene {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("view refresh"),
             });
-        enc.copy_buffer_to_buffer(&view.radiance, 0, &self.view_radiance, start, end - start);
+        enc.copy_buffer_to_buffer(&view.radiance, 0, &self.arena, start, end - start);
         ctx.queue.submit([enc.finish()]);
         Ok(())
     }
@@ -509,6 +592,22 @@ impl FrameShadeTarget {
         .map_err(|e| wgpu_error("frame readback", e))
     }
 
+    /// [`FrameShadeTarget::read_back`] without blocking (a browser's page cannot wait for the
+    /// GPU): the copy is recorded now, the future completes when the GPU has finished it.
+    pub fn read_back_async(
+        &self,
+        ctx: &GpuContext,
+    ) -> impl std::future::Future<Output = Result<Image>> + 'static {
+        let pending = read_buffer_later(ctx, &self.out, "frame readback");
+        let (w, h) = (self.width as usize, self.height as usize);
+        async move {
+            let bytes = pending?.await?;
+            let px: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+            Image::from_data(w, h, px.iter().map(|p| [p[0], p[1], p[2]]).collect())
+                .map_err(|e| wgpu_error("frame readback", e))
+        }
+    }
+
     /// The counts of the last call (one progressive frame): G-buffer pixels with a
     /// view-dependent part, lookups.
     pub fn stats(&self, ctx: &GpuContext) -> Result<FrameStats> {
@@ -543,11 +642,26 @@ pub struct FrameShadePass {
     samples: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
+    /// The sampled material kinds compiled in (bit mask, `material::kinds::sampled_kinds`).
+    kinds: u32,
 }
 
 impl FrameShadePass {
-    /// Compiles `frame_shade.wgsl` with its modules.
+    /// Compiles `frame_shade.wgsl` with its modules, every sampled material kind.
     pub fn new(ctx: &GpuContext) -> Result<Self> {
+        Self::for_kinds(ctx, material::kinds::all_sampled())
+    }
+
+    /// Compiles `frame_shade.wgsl` with the sampled material kinds in the bit mask `kinds` only
+    /// ([`FrameShadeScene::kinds`] of the scenes it will shade; `material::kinds::
+    /// restrict_kinds`): a scene with another kind is refused at [`FrameShadePass::shade`].
+    pub fn for_kinds(ctx: &GpuContext, kinds: u32) -> Result<Self> {
+        let src = material::kinds::restrict_kinds(frame_shade_wgsl(), kinds).ok_or_else(|| {
+            invalid(
+                "frame_shade.wgsl",
+                "the material dispatch was not found to restrict",
+            )
+        })?;
         let mut entries = vec![
             uniform_entry(0),
             texture_entry(
@@ -561,15 +675,17 @@ impl FrameShadePass {
                 wgpu::TextureViewDimension::D2,
             ),
         ];
-        entries.extend((3..15).map(|b| storage_entry(b, true)));
-        entries.extend((15..18).map(|b| storage_entry(b, false)));
-        entries.extend((18..25).map(|b| storage_entry(b, true)));
-        entries.push(storage_entry(25, false));
+        // The arena twice (as vec4<f32> and vec4<u32>), the light-mapped image; accumulation,
+        // output, counts; the tile mask; the sample sums.
+        entries.extend((3..6).map(|b| storage_entry(b, true)));
+        entries.extend((6..9).map(|b| storage_entry(b, false)));
+        entries.push(storage_entry(9, true));
+        entries.push(storage_entry(10, false));
         let ([samples, resolve], layout) = compute_pipelines(
             ctx,
             "frame_shade.wgsl",
             "compiling frame_shade.wgsl",
-            frame_shade_wgsl(),
+            &src,
             &entries,
             ["samples_main", "main"],
         )?;
@@ -577,6 +693,7 @@ impl FrameShadePass {
             samples,
             resolve,
             layout,
+            kinds,
         })
     }
 
@@ -723,6 +840,16 @@ impl FrameShadePass {
         out: &FrameShadeTarget,
     ) -> Result<()> {
         walkthrough_request(req).map_err(|e| invalid("frame request", e.to_string()))?;
+        if scene.kinds() & !self.kinds != 0 {
+            return Err(invalid(
+                "frame shading",
+                format!(
+                    "the scene's materials need the kinds {:#x}, the pass was compiled for {:#x}",
+                    scene.kinds(),
+                    self.kinds
+                ),
+            ));
+        }
         if k == 0
             || gbuffer.width != out.width * k
             || gbuffer.height != out.height * k
@@ -742,7 +869,7 @@ impl FrameShadePass {
                 ),
             ));
         }
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let cam = camera_uniform(camera, gbuffer.width, gbuffer.height, 0.0);
         let mut u: Vec<[u32; 4]> = cam.iter().map(|v| v.map(f32::to_bits)).collect();
         let method = match req.method {
@@ -787,6 +914,12 @@ impl FrameShadePass {
             .map(|&first| {
                 let mut u = u.clone();
                 u.push([first, first + SAMPLES_PER_DISPATCH, 0, 0]);
+                u.extend(
+                    scene
+                        .parts
+                        .chunks(4)
+                        .map(|c| std::array::from_fn(|i| c.get(i).copied().unwrap_or(0))),
+                );
                 let uniform = buffer_init(
                     ctx,
                     "frame uniform",
@@ -850,19 +983,10 @@ impl FrameShadePass {
                     binding: 2,
                     resource: wgpu::BindingResource::TextureView(bary),
                 },
-                buffer_entry(3, &scene.tris),
-                buffer_entry(4, &scene.bsdfs),
-                buffer_entry(5, &scene.tables),
-                buffer_entry(6, &scene.cube_texels),
-                buffer_entry(7, &scene.cube_levels),
-                buffer_entry(8, &scene.cubes),
-                buffer_entry(9, &scene.planes),
-                buffer_entry(10, &scene.ring),
-                buffer_entry(11, &scene.view_radiance),
-                buffer_entry(12, &scene.view_geometry),
-                buffer_entry(13, &scene.views),
+                buffer_entry(3, &scene.arena),
+                buffer_entry(4, &scene.arena),
                 wgpu::BindGroupEntry {
-                    binding: 14,
+                    binding: 5,
                     resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                         buffer: lightmapped.buffer,
                         offset: 0,
@@ -871,17 +995,11 @@ impl FrameShadePass {
                         ),
                     }),
                 },
-                buffer_entry(15, &out.accum),
-                buffer_entry(16, &out.out),
-                buffer_entry(17, &out.counts),
-                buffer_entry(18, &scene.albedo_tris),
-                buffer_entry(19, &scene.albedo_mats),
-                buffer_entry(20, &scene.texels),
-                buffer_entry(21, &scene.texture_info),
-                buffer_entry(22, &scene.params),
-                buffer_entry(23, &scene.tangents),
-                buffer_entry(24, mask),
-                buffer_entry(25, &out.partial),
+                buffer_entry(6, &out.accum),
+                buffer_entry(7, &out.out),
+                buffer_entry(8, &out.counts),
+                buffer_entry(9, mask),
+                buffer_entry(10, &out.partial),
             ],
         })
     }
@@ -916,7 +1034,11 @@ mod tests {
         for (src, types) in [
             (
                 frame_shade_wgsl(),
-                &[("Params", 11 * 16), ("GpuBsdf", 144)][..],
+                // 11 vec4 of camera and request, then the arena's part offsets, 4 a vec4.
+                &[
+                    ("Params", (11 + PARTS.div_ceil(4) as u32) * 16),
+                    ("GpuBsdf", 144),
+                ][..],
             ),
             (models.as_str(), &[("GpuBsdf", 144)][..]),
         ] {
@@ -936,6 +1058,27 @@ mod tests {
             }
         }
         assert_eq!(std::mem::size_of::<GpuBsdf>(), 144);
+        // Restricted to some kinds (or none), the pass still validates, and the dispatch keeps
+        // exactly the kinds asked for.
+        for kinds in [
+            0,
+            1 << material::KIND_ROUGH_PLASTIC,
+            material::all_sampled(),
+        ] {
+            let src = material::restrict_kinds(frame_shade_wgsl(), kinds).expect("restricted");
+            crate::wgsl::validated(&src);
+            let calls = |p: &str| src.matches(&format!("return {p}_sample(")).count();
+            assert_eq!(
+                calls("rough_plastic"),
+                usize::from(kinds != 0),
+                "{kinds:#x}"
+            );
+            assert_eq!(
+                calls("kurt"),
+                usize::from(kinds == material::all_sampled()),
+                "{kinds:#x}"
+            );
+        }
     }
 
     /// The WGSL's copies of the coating grid's and the screen tiles' constants are lustre-brdf's

@@ -18,7 +18,7 @@
 use crate::bindings::record_texture_readback;
 use crate::bindings::{buffer_init, map_read};
 use crate::context::GpuContext;
-use crate::error::{invalid, scope_result, Result};
+use crate::error::{invalid, push_scope, scope_result, Result};
 use crate::wgsl;
 use glam::DVec3;
 use lustre_scene::Scene;
@@ -271,7 +271,7 @@ impl GBufferTarget {
                 format!("{w}×{h} must be between 1×1 and {max}×{max}"),
             ));
         }
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let tex = |label: &str, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
             ctx.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
@@ -343,7 +343,7 @@ pub(crate) fn read_texture(
     h: u32,
     bpp: u32,
 ) -> Result<Vec<u8>> {
-    let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let scope = push_scope(ctx);
     let mut enc = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -445,7 +445,7 @@ pub struct GBufferPass {
 impl GBufferPass {
     /// Compiles `gbuffer.wgsl`.
     pub fn new(ctx: &GpuContext) -> Result<Self> {
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let module = ctx
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -557,7 +557,7 @@ impl GBufferPass {
         opts: &DrawOptions,
     ) -> Result<()> {
         let cam = draw_uniform(camera, target.width, target.height, geometry.near, opts)?;
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let uniform = buffer_init(
             ctx,
             "gbuffer camera",

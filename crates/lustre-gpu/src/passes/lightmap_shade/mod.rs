@@ -14,7 +14,7 @@
 
 use crate::bindings::{buffer_entry, buffer_init, map_read, texture_entry};
 use crate::context::GpuContext;
-use crate::error::{invalid, scope_result, wgpu_error, Result};
+use crate::error::{invalid, push_scope, scope_result, wgpu_error, Result};
 use crate::passes::gbuffer::{
     camera_uniform, pack_textures, texture_slot, GBufferPass, GBufferTarget, GpuGeometry,
 };
@@ -292,7 +292,7 @@ impl GpuLightmapScene {
                 ),
             ));
         }
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let storage = |label: &str, contents: &[u8]| {
             buffer_init(ctx, label, contents, wgpu::BufferUsages::STORAGE)
         };
@@ -494,7 +494,7 @@ impl LightmapShadePass {
                 ),
             ));
         }
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let cam = camera_uniform(camera, gbuffer.width, gbuffer.height, 0.0);
         let mut u: Vec<[u32; 4]> = cam.iter().map(|v| v.map(f32::to_bits)).collect();
         u.push([
@@ -627,7 +627,7 @@ impl ShadeTarget {
 
     /// Copies the image to the host.
     pub fn read_back(&self, ctx: &GpuContext) -> Result<Image> {
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let mut enc = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {

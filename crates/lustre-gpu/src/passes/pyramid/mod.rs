@@ -10,7 +10,7 @@
 
 use crate::bindings::{buffer_entry, buffer_init, compute_pipeline, storage_entry, uniform_entry};
 use crate::context::GpuContext;
-use crate::error::{invalid, scope_result, wgpu_error, Result};
+use crate::error::{invalid, push_scope, scope_result, wgpu_error, Result};
 use lustre_env::cube::{fetch_sources, solid_angle_table};
 use lustre_env::{CubeMap, CubePyramid, MipFilter};
 
@@ -157,7 +157,7 @@ impl GpuPyramidBuilder {
                 ),
             ));
         }
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let usage = PYRAMID_USAGE;
         let init = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
             buffer_init(ctx, label, contents, usage)
@@ -282,7 +282,7 @@ impl GpuPyramid {
 
     /// Copies every level to the host.
     pub fn read_back(&self, ctx: &GpuContext) -> Result<CubePyramid> {
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let mut enc = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {

@@ -4,7 +4,7 @@
 use crate::bindings::{buffer_entry, buffer_init, compute_pipeline, storage_entry, uniform_entry};
 use crate::context::GpuContext;
 use crate::cube::{linear_sampler, CubeLevelRef, GpuCube};
-use crate::error::{invalid, scope_result, wgpu_error, Result};
+use crate::error::{invalid, push_scope, scope_result, wgpu_error, Result};
 use crate::packed::{
     f3, PackedScene, LOBE_SCHEME_LATTICE, LOBE_SCHEME_PATTERN, LOBE_SCHEME_TAP_LATTICE,
     MAX_LOBE_LOOKUPS, MAX_TAP_LATTICE_BUDGET,
@@ -270,7 +270,7 @@ impl RenderTarget {
 
     /// Copies the target to the host: row-major RGB, row 0 at the top.
     pub fn read_back(&self, ctx: &GpuContext) -> Result<Vec<[f32; 3]>> {
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let mut enc = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -433,10 +433,7 @@ impl GpuRenderer {
             bytemuck::bytes_of(&globals),
             wgpu::BufferUsages::UNIFORM,
         );
-        let scope = self
-            .ctx
-            .device
-            .push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(&self.ctx);
         let bind_group = self
             .ctx
             .device
@@ -479,10 +476,7 @@ impl GpuRenderer {
 
     /// Dispatches the pass over the bound target and waits until the GPU has finished.
     pub fn draw(&self, bindings: &SphereBindings) -> Result<()> {
-        let scope = self
-            .ctx
-            .device
-            .push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(&self.ctx);
         let mut enc = self
             .ctx
             .device

@@ -17,7 +17,7 @@ use crate::bindings::{
     buffer_entry, buffer_init, compute_pipeline, storage_entry, texture_entry, uniform_entry,
 };
 use crate::context::GpuContext;
-use crate::error::{invalid, scope_result, Result};
+use crate::error::{invalid, push_scope, scope_result, Result};
 use crate::passes::gbuffer::{DrawOptions, GBufferPass, GBufferTarget};
 use crate::passes::lightmap_shade::{tex, LightmapFrameScene, LightmapShadePass};
 use crate::passes::probe_capture::mesh_triangles;
@@ -185,7 +185,7 @@ impl GpuViewPass {
             .draw_with(ctx, &scene.geometry, camera, &target, opts)?;
         self.shade
             .shade_into(ctx, &scene.shading, &target, camera, 1, &radiance, 0)?;
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let mut enc = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -240,7 +240,7 @@ impl GpuViewPass {
     /// Rebuilds `view`'s MIP levels from its level 0 (after a see-through layer was copied
     /// over it). Submitted, not waited for.
     pub fn build_levels(&self, ctx: &GpuContext, view: &GpuViewBuffer) -> Result<()> {
-        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = push_scope(ctx);
         let mut enc = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
